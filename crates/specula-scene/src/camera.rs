@@ -1,0 +1,56 @@
+use glam::Vec3;
+
+/// A pinhole camera. It looks from `eye` towards `target`; `up` fixes the roll. The vertical
+/// field of view is kept when an image's aspect ratio differs from `aspect`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Camera {
+    pub eye: Vec3,
+    pub target: Vec3,
+    pub up: Vec3,
+    pub fov_y_deg: f32,
+    /// Width / height the camera was authored for (glTF `aspectRatio`); informative only.
+    pub aspect: Option<f32>,
+}
+
+/// Orthonormal camera frame in world space: `forward` is the viewing direction (-Z of camera
+/// space), `right` is +X and `up` is +Y of camera space.
+#[derive(Clone, Copy, Debug)]
+pub struct CameraFrame {
+    pub right: Vec3,
+    pub up: Vec3,
+    pub forward: Vec3,
+}
+
+impl Camera {
+    pub fn frame(&self) -> CameraFrame {
+        let forward = (self.target - self.eye).normalize();
+        let mut right = forward.cross(self.up);
+        if right.length_squared() < 1e-12 {
+            // `up` parallel to the view direction: any perpendicular will do.
+            right = forward.any_orthonormal_vector();
+        }
+        let right = right.normalize();
+        let up = right.cross(forward);
+        CameraFrame { right, up, forward }
+    }
+
+    /// Unit direction (world space) of the ray through the image point (`x`, `y`) in pixels,
+    /// measured from the top-left corner of a `width` x `height` image.
+    pub fn ray_direction(&self, x: f32, y: f32, width: u32, height: u32) -> Vec3 {
+        let frame = self.frame();
+        let tan_half = (self.fov_y_deg.to_radians() * 0.5).tan();
+        let aspect = width as f32 / height as f32;
+        let ndc_x = (2.0 * x / width as f32 - 1.0) * tan_half * aspect;
+        let ndc_y = (1.0 - 2.0 * y / height as f32) * tan_half;
+        (frame.forward + ndc_x * frame.right + ndc_y * frame.up).normalize()
+    }
+
+    pub fn is_valid(&self) -> bool {
+        self.eye.is_finite()
+            && self.target.is_finite()
+            && self.up.is_finite()
+            && (self.target - self.eye).length_squared() > 0.0
+            && self.fov_y_deg > 0.0
+            && self.fov_y_deg < 180.0
+    }
+}

@@ -1,0 +1,33 @@
+use std::fmt;
+
+/// Everything that can be wrong with a scene's input. Each variant names the file (or built-in
+/// scene) and, where there is one, the line or JSON path.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    #[error("{path}: cannot read: {source}")]
+    Io {
+        path: String,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{path}: {message}")]
+    Invalid { path: String, message: String },
+    #[error("'{name}' is neither a built-in scene ({available}) nor a file with a known extension (.toml, .gltf, .glb, .obj, .ply, .stl)")]
+    UnknownScene { name: String, available: String },
+}
+
+impl SceneError {
+    pub fn invalid(path: impl fmt::Display, message: impl fmt::Display) -> Self {
+        SceneError::Invalid {
+            path: path.to_string(),
+            message: message.to_string(),
+        }
+    }
+
+    pub fn io(path: impl fmt::Display, source: std::io::Error) -> Self {
+        SceneError::Io {
+            path: path.to_string(),
+            source,
+        }
+    }
+}

@@ -1,0 +1,543 @@
+//! TOML scene files: meshes and analytic shapes placed with transforms and materials, a
+//! camera, lights and a background. Every table rejects unknown keys. The format is documented
+//! with an example in `scenes/example.toml`.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use glam::{EulerRot, Mat4, Quat, Vec2, Vec3};
+use serde::Deserialize;
+
+use crate::generators::{self, LensSpec};
+use crate::material::ior_from_abbe;
+use crate::{Background, Camera, Light, Material, MaterialKind, Mesh, Scene, SceneError, Texture};
+
+/// A colour or a grey level.
+#[derive(Deserialize, Clone, Copy, Debug)]
+#[serde(untagged)]
+pub enum Color {
+    Grey(f32),
+    Rgb([f32; 3]),
+}
+
+impl Color {
+    fn vec3(self) -> Vec3 {
+        match self {
+            Color::Grey(g) => Vec3::splat(g),
+            Color::Rgb(c) => Vec3::from_array(c),
+        }
+    }
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    pub name: Option<String>,
+    pub ambient: Option<Color>,
+    pub camera: Option<CameraSpec>,
+    pub background: Option<BackgroundSpec>,
+    #[serde(default)]
+    pub materials: BTreeMap<String, MaterialSpec>,
+    #[serde(default)]
+    pub lights: Vec<LightSpec>,
+    #[serde(default)]
+    pub objects: Vec<ObjectSpec>,
+}
+
+fn default_up() -> [f32; 3] {
+    [0.0, 1.0, 0.0]
+}
+fn default_fov() -> f32 {
+    45.0
+}
+fn one() -> f32 {
+    1.0
+}
+fn yes() -> bool {
+    true
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct CameraSpec {
+    pub eye: [f32; 3],
+    pub target: [f32; 3],
+    #[serde(default = "default_up")]
+    pub up: [f32; 3],
+    #[serde(default = "default_fov")]
+    pub fov_y_deg: f32,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct BackgroundSpec {
+    pub color: Option<Color>,
+    /// Equirectangular image (PNG, HDR, EXR), relative to the scene file.
+    pub image: Option<String>,
+    #[serde(default = "one")]
+    pub intensity: f32,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+pub enum MaterialSpec {
+    Unlit {
+        color: Option<Color>,
+        texture: Option<String>,
+    },
+    Diffuse {
+        color: Option<Color>,
+        texture: Option<String>,
+    },
+    Mirror {
+        /// F0, the reflectance at normal incidence.
+        color: Option<Color>,
+        #[serde(default = "yes")]
+        fresnel: bool,
+    },
+    Dielectric {
+        /// One IOR, or one per RGB channel.
+        ior: Color,
+        /// Abbe number: derives per-channel IORs from a single `ior`.
+        abbe: Option<f32>,
+        #[serde(default)]
+        thin: bool,
+    },
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+pub enum LightSpec {
+    Point {
+        position: [f32; 3],
+        intensity: Color,
+    },
+    Directional {
+        /// The direction light travels.
+        direction: [f32; 3],
+        irradiance: Color,
+    },
+    Spot {
+        position: [f32; 3],
+        direction: [f32; 3],
+        intensity: Color,
+        inner_cone_deg: f32,
+        outer_cone_deg: f32,
+    },
+}
+
+#[derive(Deserialize, Clone, Copy, Debug)]
+#[serde(untagged)]
+pub enum Scale {
+    Uniform(f32),
+    PerAxis([f32; 3]),
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectSpec {
+    pub name: Option<String>,
+    pub material: String,
+    pub translate: Option<[f32; 3]>,
+    /// Euler angles in degrees, applied about X, then Y, then Z.
+    pub rotate_deg: Option<[f32; 3]>,
+    pub scale: Option<Scale>,
+    pub shape: ShapeSpec,
+}
+
+fn n48() -> u32 {
+    48
+}
+fn n24() -> u32 {
+    24
+}
+fn n16() -> u32 {
+    16
+}
+fn n6() -> u32 {
+    6
+}
+fn n8() -> u32 {
+    8
+}
+fn n1() -> u32 {
+    1
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum ShapeSpec {
+    Sphere {
+        radius: f32,
+        #[serde(default = "n48")]
+        segments: u32,
+        #[serde(default = "n24")]
+        rings: u32,
+    },
+    Cap {
+        radius_of_curvature: f32,
+        aperture: f32,
+        #[serde(default)]
+        concave: bool,
+        #[serde(default = "n16")]
+        rings: u32,
+        #[serde(default = "n48")]
+        segments: u32,
+    },
+    /// Bicubic Bézier patch: 16 control points, row by row (default: the door mirror).
+    Patch {
+        control: Option<Vec<[f32; 3]>>,
+        #[serde(default = "n6")]
+        resolution: u32,
+    },
+    Lens {
+        /// Signed radii (optics convention, light along +Z); `inf` for a flat surface.
+        front_radius: f32,
+        back_radius: f32,
+        center_thickness: f32,
+        diameter: f32,
+        #[serde(default = "n16")]
+        rings: u32,
+        #[serde(default = "n48")]
+        segments: u32,
+    },
+    Box {
+        size: [f32; 3],
+    },
+    Plane {
+        size: [f32; 2],
+        #[serde(default = "n1")]
+        subdivisions: u32,
+    },
+    Teapot {
+        #[serde(default = "n8")]
+        resolution: u32,
+    },
+    /// A mesh file (OBJ, PLY, STL), relative to the scene file. `fit` rescales it so its largest
+    /// extent is `fit` metres, centred over the origin and standing on y = 0.
+    Mesh {
+        file: String,
+        fit: Option<f32>,
+    },
+}
+
+/// Moves and scales meshes together so their joint bounding box is centred over the origin in
+/// X and Z, stands on y = 0, and has `size` as its largest extent.
+pub fn fit_meshes(meshes: &mut [Mesh], size: f32) {
+    let bounds = meshes
+        .iter()
+        .fold(crate::Aabb::EMPTY, |b, m| b.union(&m.bounds()));
+    let largest = bounds.extent().max_element();
+    if largest <= 0.0 {
+        return;
+    }
+    let scale = size / largest;
+    let anchor = Vec3::new(bounds.center().x, bounds.min.y, bounds.center().z);
+    for mesh in meshes {
+        for p in &mut mesh.positions {
+            *p = (*p - anchor) * scale;
+        }
+    }
+}
+
+fn object_transform(object: &ObjectSpec) -> Mat4 {
+    let translate = Vec3::from_array(object.translate.unwrap_or_default());
+    let [rx, ry, rz] = object.rotate_deg.unwrap_or_default().map(f32::to_radians);
+    let rotation = Quat::from_euler(EulerRot::ZYX, rz, ry, rx);
+    let scale = match object.scale.unwrap_or(Scale::Uniform(1.0)) {
+        Scale::Uniform(s) => Vec3::splat(s),
+        Scale::PerAxis(s) => Vec3::from_array(s),
+    };
+    Mat4::from_scale_rotation_translation(scale, rotation, translate)
+}
+
+fn shape_meshes(
+    shape: &ShapeSpec,
+    base: &Path,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<Mesh>, SceneError> {
+    Ok(match shape {
+        ShapeSpec::Sphere {
+            radius,
+            segments,
+            rings,
+        } => vec![generators::sphere(*radius, *segments, *rings)],
+        ShapeSpec::Cap {
+            radius_of_curvature,
+            aperture,
+            concave,
+            rings,
+            segments,
+        } => vec![generators::spherical_cap(
+            *radius_of_curvature,
+            *aperture,
+            *concave,
+            *rings,
+            *segments,
+        )?],
+        ShapeSpec::Patch {
+            control,
+            resolution,
+        } => {
+            let control = match control {
+                None => generators::door_mirror_control_points(),
+                Some(points) if points.len() == 16 => {
+                    let mut c = [[Vec3::ZERO; 4]; 4];
+                    for (k, p) in points.iter().enumerate() {
+                        c[k / 4][k % 4] = Vec3::from_array(*p);
+                    }
+                    c
+                }
+                Some(points) => {
+                    return Err(SceneError::invalid(
+                        "patch",
+                        format!("needs 16 control points, got {}", points.len()),
+                    ))
+                }
+            };
+            vec![generators::bicubic_patch(&control, *resolution)]
+        }
+        ShapeSpec::Lens {
+            front_radius,
+            back_radius,
+            center_thickness,
+            diameter,
+            rings,
+            segments,
+        } => vec![generators::lens(&LensSpec {
+            front_radius: *front_radius,
+            back_radius: *back_radius,
+            center_thickness: *center_thickness,
+            diameter: *diameter,
+            rings: *rings,
+            segments: *segments,
+        })?],
+        ShapeSpec::Box { size } => vec![generators::cuboid(Vec3::from_array(*size))],
+        ShapeSpec::Plane { size, subdivisions } => {
+            vec![generators::plane(Vec2::from_array(*size), *subdivisions)]
+        }
+        ShapeSpec::Teapot { resolution } => vec![generators::teapot(*resolution)],
+        ShapeSpec::Mesh { file, fit } => {
+            let (mut meshes, _, _, mut file_warnings) = super::load_mesh_file(&base.join(file))?;
+            warnings.append(&mut file_warnings);
+            if let Some(size) = fit {
+                fit_meshes(&mut meshes, *size);
+            }
+            meshes
+        }
+    })
+}
+
+fn material_from_spec(
+    name: &str,
+    spec: &MaterialSpec,
+    base: &Path,
+    textures: &mut Vec<Texture>,
+) -> Result<Material, SceneError> {
+    let grey = |c: &Option<Color>, d: f32| c.map(Color::vec3).unwrap_or(Vec3::splat(d));
+    let mut texture_file = None;
+    let material = match spec {
+        MaterialSpec::Unlit { color, texture } => {
+            texture_file = texture.clone();
+            Material::unlit(name, grey(color, 1.0))
+        }
+        MaterialSpec::Diffuse { color, texture } => {
+            texture_file = texture.clone();
+            Material::diffuse(name, grey(color, 0.8))
+        }
+        MaterialSpec::Mirror { color, fresnel } => Material::new(
+            name,
+            MaterialKind::Mirror { fresnel: *fresnel },
+            grey(color, 0.95),
+        ),
+        MaterialSpec::Dielectric { ior, abbe, thin } => {
+            let ior = match (ior, abbe) {
+                (Color::Grey(n), Some(v)) => ior_from_abbe(*n, *v),
+                (Color::Rgb(_), Some(_)) => {
+                    return Err(SceneError::invalid(
+                        format!("materials.{name}"),
+                        "give either one ior with an abbe number, or three iors",
+                    ))
+                }
+                (ior, None) => ior.vec3(),
+            };
+            Material::new(
+                name,
+                MaterialKind::Dielectric {
+                    ior,
+                    thin_walled: *thin,
+                },
+                Vec3::ONE,
+            )
+        }
+    };
+    let mut material = material;
+    if let Some(file) = texture_file {
+        textures.push(Texture::load(&base.join(file), true)?);
+        material.texture = Some(textures.len() - 1);
+    }
+    Ok(material)
+}
+
+/// Parses a scene from TOML text; relative file names resolve against `base`.
+pub fn parse(shown: &str, text: &str, base: &Path) -> Result<Scene, SceneError> {
+    let file: SceneFile = toml::from_str(text).map_err(|e| {
+        SceneError::invalid(shown, e.to_string().trim_end().replace('\n', "\n    "))
+    })?;
+    let at = |path: String, e: SceneError| SceneError::invalid(shown, format!("{path}: {e}"));
+    let mut warnings = Vec::new();
+    let mut textures = Vec::new();
+    let mut materials = Vec::new();
+    let mut material_index = BTreeMap::new();
+    for (name, spec) in &file.materials {
+        let m = material_from_spec(name, spec, base, &mut textures)
+            .map_err(|e| at(format!("materials.{name}"), e))?;
+        material_index.insert(name.clone(), materials.len());
+        materials.push(m);
+    }
+    let mut meshes = Vec::new();
+    for (i, object) in file.objects.iter().enumerate() {
+        let path = format!("objects[{i}]");
+        let Some(&material) = material_index.get(&object.material) else {
+            let known: Vec<&str> = material_index.keys().map(String::as_str).collect();
+            return Err(SceneError::invalid(
+                shown,
+                format!(
+                    "{path}.material: unknown material '{}' (defined: {})",
+                    object.material,
+                    if known.is_empty() {
+                        "none".to_string()
+                    } else {
+                        known.join(", ")
+                    }
+                ),
+            ));
+        };
+        let world_from_object = object_transform(object);
+        if !world_from_object.is_finite() || world_from_object.determinant() == 0.0 {
+            return Err(SceneError::invalid(
+                shown,
+                format!("{path}: transform is singular or not finite"),
+            ));
+        }
+        for mut mesh in shape_meshes(&object.shape, base, &mut warnings)
+            .map_err(|e| at(format!("{path}.shape"), e))?
+        {
+            if let Some(name) = &object.name {
+                mesh.name = name.clone();
+            }
+            mesh.check_topology(shown)?;
+            if mesh.normals.is_empty() {
+                mesh.compute_smooth_normals();
+            }
+            mesh.transform(world_from_object);
+            mesh.material = material;
+            meshes.push(mesh);
+        }
+    }
+    let lights = file
+        .lights
+        .iter()
+        .map(|l| match *l {
+            LightSpec::Point {
+                position,
+                intensity,
+            } => Light::Point {
+                position: Vec3::from_array(position),
+                intensity: intensity.vec3(),
+            },
+            LightSpec::Directional {
+                direction,
+                irradiance,
+            } => Light::Directional {
+                direction: Vec3::from_array(direction).normalize_or_zero(),
+                irradiance: irradiance.vec3(),
+            },
+            LightSpec::Spot {
+                position,
+                direction,
+                intensity,
+                inner_cone_deg,
+                outer_cone_deg,
+            } => Light::Spot {
+                position: Vec3::from_array(position),
+                direction: Vec3::from_array(direction).normalize_or_zero(),
+                intensity: intensity.vec3(),
+                inner_cone: inner_cone_deg.to_radians(),
+                outer_cone: outer_cone_deg.to_radians(),
+            },
+        })
+        .collect::<Vec<_>>();
+    let background = match &file.background {
+        None => Background::Color(Vec3::ZERO),
+        Some(BackgroundSpec {
+            image: Some(image),
+            intensity,
+            color,
+        }) => {
+            if color.is_some() {
+                return Err(SceneError::invalid(
+                    shown,
+                    "background: give either color or image, not both",
+                ));
+            }
+            textures.push(
+                Texture::load(&base.join(image), true)
+                    .map_err(|e| at("background.image".into(), e))?,
+            );
+            Background::Equirect {
+                texture: textures.len() - 1,
+                intensity: *intensity,
+            }
+        }
+        Some(BackgroundSpec { color, .. }) => {
+            Background::Color(color.map(Color::vec3).unwrap_or(Vec3::ZERO))
+        }
+    };
+    let mut scene = Scene {
+        name: file.name.clone().unwrap_or_else(|| shown.to_string()),
+        meshes,
+        materials,
+        textures,
+        lights,
+        camera: Scene::default_camera(&crate::Aabb::EMPTY),
+        background,
+        ambient: file.ambient.map(Color::vec3).unwrap_or(Vec3::ZERO),
+        warnings,
+    };
+    match &file.camera {
+        Some(c) => {
+            scene.camera = Camera {
+                eye: Vec3::from_array(c.eye),
+                target: Vec3::from_array(c.target),
+                up: Vec3::from_array(c.up),
+                fov_y_deg: c.fov_y_deg,
+                aspect: None,
+            }
+        }
+        None => {
+            scene.camera = Scene::default_camera(&scene.bounds());
+            scene.warnings.push(format!(
+                "{shown}: no [camera]; chose a default framing from +Z looking at the bounding box centre"
+            ));
+        }
+    }
+    if scene.lights.is_empty()
+        && scene
+            .materials
+            .iter()
+            .any(|m| m.kind == MaterialKind::Diffuse)
+    {
+        scene.warnings.push(format!(
+            "{shown}: no [[lights]]: diffuse surfaces receive only the ambient light"
+        ));
+    }
+    scene.finalize(shown)?;
+    Ok(scene)
+}
+
+pub fn load(path: &Path) -> Result<Scene, SceneError> {
+    let shown = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| SceneError::io(&shown, e))?;
+    parse(&shown, &text, path.parent().unwrap_or(Path::new(".")))
+}
