@@ -1,0 +1,269 @@
+//! Bounding volume hierarchy over primitives given by their boxes: a binary tree built with the
+//! surface area heuristic (binned, Wald 2007, "On fast construction of SAH-based bounding volume
+//! hierarchies"), stored flat in depth-first order so it can be uploaded to a GPU as is.
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+use specula_scene::Aabb;
+
+/// One node, 32 bytes. An interior node (`count` = 0) has its children at `first` and
+/// `first + 1`; a leaf holds `count` primitives starting at `first` in `Bvh::primitives`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
+pub struct BvhNode {
+    pub min: [f32; 3],
+    pub first: u32,
+    pub max: [f32; 3],
+    pub count: u32,
+}
+
+impl BvhNode {
+    pub fn bounds(&self) -> Aabb {
+        Aabb {
+            min: Vec3::from_array(self.min),
+            max: Vec3::from_array(self.max),
+        }
+    }
+
+    pub fn is_leaf(&self) -> bool {
+        self.count > 0
+    }
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct Bvh {
+    pub nodes: Vec<BvhNode>,
+    /// Primitive indices in leaf order.
+    pub primitives: Vec<u32>,
+}
+
+const BINS: usize = 16;
+const MAX_LEAF: usize = 4;
+/// Deepest level a node may have (the root is level 1).
+pub const MAX_DEPTH: usize = 60;
+/// SAH cost of a traversal step relative to one primitive test.
+const TRAVERSAL_COST: f32 = 1.0;
+
+fn node_from(bounds: Aabb, first: u32, count: u32) -> BvhNode {
+    BvhNode {
+        min: bounds.min.to_array(),
+        first,
+        max: bounds.max.to_array(),
+        count,
+    }
+}
+
+impl Bvh {
+    /// Builds over primitives with boxes `bounds`. Boxes must be finite (empty boxes are fine:
+    /// they are never hit).
+    pub fn build(bounds: &[Aabb]) -> Bvh {
+        let n = bounds.len();
+        let mut bvh = Bvh {
+            nodes: Vec::with_capacity(2 * n.max(1)),
+            primitives: (0..n as u32).collect(),
+        };
+        if n == 0 {
+            bvh.nodes.push(node_from(Aabb::EMPTY, 0, 0));
+            return bvh;
+        }
+        let centroids: Vec<Vec3> = bounds
+            .iter()
+            .map(|b| if b.is_empty() { Vec3::ZERO } else { b.center() })
+            .collect();
+        bvh.nodes.push(node_from(Aabb::EMPTY, 0, n as u32));
+        let mut stack = vec![(0usize, 0usize, n, 1usize)];
+        while let Some((node, start, end, depth)) = stack.pop() {
+            let prims = &mut bvh.primitives[start..end];
+            let node_bounds = prims
+                .iter()
+                .fold(Aabb::EMPTY, |b, &p| b.union(&bounds[p as usize]));
+            bvh.nodes[node] = node_from(node_bounds, start as u32, (end - start) as u32);
+            // Traversal keeps a fixed 64-entry stack: past that depth, nodes stay leaves.
+            if end - start <= 1 || depth >= MAX_DEPTH {
+                continue;
+            }
+            if let Some(mid) = split(prims, bounds, &centroids, &node_bounds) {
+                let left = bvh.nodes.len();
+                bvh.nodes.push(node_from(Aabb::EMPTY, 0, 0));
+                bvh.nodes.push(node_from(Aabb::EMPTY, 0, 0));
+                bvh.nodes[node].first = left as u32;
+                bvh.nodes[node].count = 0;
+                stack.push((left + 1, start + mid, end, depth + 1));
+                stack.push((left, start, start + mid, depth + 1));
+            }
+        }
+        bvh
+    }
+
+    pub fn depth(&self) -> usize {
+        fn depth(nodes: &[BvhNode], i: usize) -> usize {
+            let n = &nodes[i];
+            if n.is_leaf() || nodes.len() == 1 {
+                1
+            } else {
+                1 + depth(nodes, n.first as usize).max(depth(nodes, n.first as usize + 1))
+            }
+        }
+        depth(&self.nodes, 0)
+    }
+
+    /// Checks the tree's invariants: every primitive appears in exactly one leaf; children
+    /// indices are in range and each node is reached once; every node's box contains its
+    /// children's boxes and its primitives' boxes. Returns the first violation found.
+    pub fn validate(&self, bounds: &[Aabb]) -> Result<(), String> {
+        if self.nodes.is_empty() {
+            return Err("no root node".into());
+        }
+        if self.primitives.len() != bounds.len() {
+            return Err(format!(
+                "{} primitive slots for {} primitives",
+                self.primitives.len(),
+                bounds.len()
+            ));
+        }
+        let mut seen_prim = vec![false; bounds.len()];
+        let mut seen_node = vec![false; self.nodes.len()];
+        let mut stack = vec![0usize];
+        let contains = |outer: &Aabb, inner: &Aabb| {
+            inner.is_empty()
+                || (outer.min.cmple(inner.min).all() && outer.max.cmpge(inner.max).all())
+        };
+        while let Some(i) = stack.pop() {
+            if std::mem::replace(&mut seen_node[i], true) {
+                return Err(format!("node {i} is reached twice"));
+            }
+            let node = &self.nodes[i];
+            let node_bounds = node.bounds();
+            if node.is_leaf() || (i == 0 && bounds.is_empty()) {
+                let (first, count) = (node.first as usize, node.count as usize);
+                if first + count > self.primitives.len() {
+                    return Err(format!(
+                        "leaf {i} covers primitives {first}..{} of {}",
+                        first + count,
+                        self.primitives.len()
+                    ));
+                }
+                for &p in &self.primitives[first..first + count] {
+                    let p = p as usize;
+                    if p >= bounds.len() {
+                        return Err(format!("leaf {i} holds primitive {p} of {}", bounds.len()));
+                    }
+                    if std::mem::replace(&mut seen_prim[p], true) {
+                        return Err(format!("primitive {p} is in two leaves"));
+                    }
+                    if !contains(&node_bounds, &bounds[p]) {
+                        return Err(format!("leaf {i}'s box does not contain primitive {p}"));
+                    }
+                }
+            } else {
+                let left = node.first as usize;
+                if left == 0 || left + 1 >= self.nodes.len() {
+                    return Err(format!(
+                        "node {i} has children at {left} of {}",
+                        self.nodes.len()
+                    ));
+                }
+                for child in [left, left + 1] {
+                    if !contains(&node_bounds, &self.nodes[child].bounds()) {
+                        return Err(format!("node {i}'s box does not contain child {child}"));
+                    }
+                    stack.push(child);
+                }
+            }
+        }
+        if let Some(p) = seen_prim.iter().position(|s| !s) {
+            return Err(format!("primitive {p} is in no leaf"));
+        }
+        if let Some(n) = seen_node.iter().position(|s| !s) {
+            return Err(format!("node {n} is unreachable"));
+        }
+        Ok(())
+    }
+}
+
+/// Binned SAH split of `prims` (reordered in place); returns the size of the left part, or
+/// None when a leaf is cheaper.
+fn split(
+    prims: &mut [u32],
+    bounds: &[Aabb],
+    centroids: &[Vec3],
+    node_bounds: &Aabb,
+) -> Option<usize> {
+    let mut centroid_bounds = Aabb::EMPTY;
+    for &p in prims.iter() {
+        centroid_bounds.grow(centroids[p as usize]);
+    }
+    let extent = centroid_bounds.extent();
+    let leaf_cost = prims.len() as f32;
+    let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, bins on the left)
+    for axis in 0..3 {
+        if extent[axis] <= 0.0 {
+            continue;
+        }
+        let scale = BINS as f32 / extent[axis];
+        let bin_of = |p: u32| {
+            (((centroids[p as usize][axis] - centroid_bounds.min[axis]) * scale) as usize)
+                .min(BINS - 1)
+        };
+        let mut bin_bounds = [Aabb::EMPTY; BINS];
+        let mut bin_count = [0usize; BINS];
+        for &p in prims.iter() {
+            let b = bin_of(p);
+            bin_bounds[b] = bin_bounds[b].union(&bounds[p as usize]);
+            bin_count[b] += 1;
+        }
+        let mut right_area = [0.0f32; BINS];
+        let mut right_count = [0usize; BINS];
+        let (mut acc, mut count) = (Aabb::EMPTY, 0);
+        for b in (1..BINS).rev() {
+            acc = acc.union(&bin_bounds[b]);
+            count += bin_count[b];
+            right_area[b] = if acc.is_empty() {
+                0.0
+            } else {
+                acc.surface_area()
+            };
+            right_count[b] = count;
+        }
+        let (mut acc, mut count) = (Aabb::EMPTY, 0);
+        for b in 0..BINS - 1 {
+            acc = acc.union(&bin_bounds[b]);
+            count += bin_count[b];
+            if count == 0 || right_count[b + 1] == 0 {
+                continue;
+            }
+            let left_area = if acc.is_empty() {
+                0.0
+            } else {
+                acc.surface_area()
+            };
+            let cost = left_area * count as f32 + right_area[b + 1] * right_count[b + 1] as f32;
+            if best.is_none_or(|(c, _, _)| cost < c) {
+                best = Some((cost, axis, b + 1));
+            }
+        }
+    }
+    let area = node_bounds.surface_area().max(f32::MIN_POSITIVE);
+    match best {
+        Some((cost, axis, left_bins)) => {
+            let split_cost = TRAVERSAL_COST + cost / area;
+            if split_cost >= leaf_cost && prims.len() <= MAX_LEAF {
+                return None;
+            }
+            let scale = BINS as f32 / extent[axis];
+            let mut mid = 0;
+            for i in 0..prims.len() {
+                let c = centroids[prims[i] as usize][axis];
+                let bin = (((c - centroid_bounds.min[axis]) * scale) as usize).min(BINS - 1);
+                if bin < left_bins {
+                    prims.swap(i, mid);
+                    mid += 1;
+                }
+            }
+            Some(mid)
+        }
+        // All centroids coincide: split in the middle of the list if too many for one leaf.
+        None if prims.len() > MAX_LEAF => Some(prims.len() / 2),
+        None => None,
+    }
+}

@@ -1,0 +1,2 @@
+pub struct Image;
+pub struct ImageError;
