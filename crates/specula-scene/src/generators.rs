@@ -380,12 +380,5 @@ pub fn teapot(n: u32) -> Mesh {
             uv: Vec2::new(u, v),
         });
     }
-    // The data's patches face inwards (Pu × Pv points into the pot): turn them out.
-    for n in &mut mesh.normals {
-        *n = -*n;
-    }
-    for t in &mut mesh.triangles {
-        t.swap(1, 2);
-    }
     finish(mesh)
 }

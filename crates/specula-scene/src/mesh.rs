@@ -234,7 +234,7 @@ impl Mesh {
             );
             let scale = (pb - pa).length_squared().max((pc - pa).length_squared());
             let area2 = (pb - pa).cross(pc - pa).length_squared();
-            area2 > scale * scale * 1e-14 && area2 > 0.0
+            area2 > scale * scale * 1e-12
         });
         before - self.triangles.len()
     }

@@ -1,2 +1,333 @@
-pub fn render() {}
-pub struct RenderSettings;
+//! The exact reference: a Whitted-style ray tracer over the BVH, with DESIGN.md's semantics.
+//!
+//! - unlit: base colour × texture;
+//! - diffuse: albedo/π × Σ lights (irradiance × cos θ, hard shadows by an any-hit ray) plus
+//!   albedo × the scene's ambient radiance;
+//! - mirror: F × L(reflected), F = Schlick(F0, cos θ) or F0 when Fresnel is off;
+//! - dielectric: exact unpolarised Fresnel R; R × L(reflected) + (1 − R) × L(refracted), both
+//!   branches followed; total internal reflection sends everything to the reflected branch; a
+//!   dispersive material (one IOR per channel) splits into one ray per RGB channel; thin-walled
+//!   sheets reflect 2R/(1+R) and pass the rest straight through;
+//! - a ray that leaves the scene sees the background.
+//!
+//! `max_depth` bounds the number of specular bounces on a path (reflections and refractions);
+//! a ray that would exceed it returns black. With `spp` = 1 each pixel gets exactly one ray
+//! through its centre; with more, the samples are stratified in x and in y (Latin hypercube,
+//! jittered within strata, deterministic per pixel) and averaged (box filter).
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+use specula_scene::{MaterialKind, Scene};
+
+use crate::accel::{Hit, Ray, SceneAccel};
+use crate::image_io::Image;
+use crate::optics::{
+    fresnel_dielectric, fresnel_schlick, reflect, refract, thin_sheet_reflectance,
+};
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RenderSettings {
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub max_depth: u32,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        RenderSettings {
+            width: 640,
+            height: 480,
+            spp: 1,
+            max_depth: 8,
+        }
+    }
+}
+
+const TILE: u32 = 16;
+
+/// What the shading at a hit needs: position, normals facing the incoming ray, texture
+/// coordinate, and whether the ray arrived from the back of the surface.
+pub struct SurfacePoint {
+    pub p: Vec3,
+    /// Geometric normal, flipped to face the incoming ray.
+    pub ng: Vec3,
+    /// Interpolated shading normal, on the same side as `ng`.
+    pub ns: Vec3,
+    pub uv: Vec2,
+    /// The ray hit the side opposite to the mesh's stored normals (i.e. it is leaving a solid).
+    pub backface: bool,
+    pub material: usize,
+}
+
+pub fn surface_point(scene: &Scene, ray: &Ray, hit: &Hit) -> SurfacePoint {
+    let mesh = &scene.meshes[hit.mesh as usize];
+    let [i0, i1, i2] = mesh.triangles[hit.triangle as usize].map(|i| i as usize);
+    let b0 = 1.0 - hit.b1 - hit.b2;
+    let (p0, p1, p2) = (mesh.positions[i0], mesh.positions[i1], mesh.positions[i2]);
+    let p = p0 * b0 + p1 * hit.b1 + p2 * hit.b2;
+    let mut ng = (p1 - p0).cross(p2 - p0).normalize();
+    let mut ns = (mesh.normals[i0] * b0 + mesh.normals[i1] * hit.b1 + mesh.normals[i2] * hit.b2)
+        .try_normalize()
+        .unwrap_or(ng);
+    // Meshes whose stored normals disagree with the winding: trust the normals' side.
+    if ns.dot(ng) < 0.0 {
+        ng = -ng;
+    }
+    let backface = ray.dir.dot(ng) > 0.0;
+    if backface {
+        ng = -ng;
+        ns = -ns;
+    }
+    let uv = if mesh.uvs.is_empty() {
+        Vec2::ZERO
+    } else {
+        mesh.uvs[i0] * b0 + mesh.uvs[i1] * hit.b1 + mesh.uvs[i2] * hit.b2
+    };
+    SurfacePoint {
+        p,
+        ng,
+        ns,
+        uv,
+        backface,
+        material: mesh.material,
+    }
+}
+
+/// Origin for a ray leaving `p` in direction `dir`: pushed off the surface along the geometric
+/// normal, on the side `dir` goes, by an amount relative to the coordinates' magnitude so that
+/// the new ray does not hit the surface it starts on.
+pub fn offset_origin(p: Vec3, ng: Vec3, dir: Vec3) -> Vec3 {
+    let eps = 2e-5 * (1.0 + p.abs().max_element());
+    if dir.dot(ng) >= 0.0 {
+        p + ng * eps
+    } else {
+        p - ng * eps
+    }
+}
+
+pub struct Tracer<'a> {
+    pub scene: &'a Scene,
+    pub accel: &'a SceneAccel,
+    pub max_depth: u32,
+}
+
+impl Tracer<'_> {
+    /// Radiance arriving along `ray` (towards its origin). `channel` is Some(c) once a
+    /// dispersive interface has split the path into one ray per colour channel; then only that
+    /// component of the result is used.
+    pub fn radiance(&self, ray: &Ray, depth: u32, channel: Option<usize>) -> Vec3 {
+        let scene = self.scene;
+        let Some(hit) = self.accel.intersect(ray, f32::INFINITY) else {
+            return scene.background.radiance(ray.dir, &scene.textures);
+        };
+        let sp = surface_point(scene, ray, &hit);
+        let material = &scene.materials[sp.material];
+        let base = || {
+            let texture = material
+                .texture
+                .map(|t| scene.textures[t].sample(sp.uv))
+                .unwrap_or(Vec3::ONE);
+            material.color * texture
+        };
+        match material.kind {
+            MaterialKind::Unlit => base(),
+            MaterialKind::Diffuse => {
+                let albedo = base();
+                let mut irradiance = Vec3::ZERO;
+                for light in &scene.lights {
+                    let sample = light.sample(sp.p);
+                    let cos = sp.ns.dot(sample.to_light);
+                    if cos <= 0.0 || sample.irradiance == Vec3::ZERO {
+                        continue;
+                    }
+                    let shadow = Ray {
+                        origin: offset_origin(sp.p, sp.ng, sample.to_light),
+                        dir: sample.to_light,
+                    };
+                    if !self.accel.occluded(&shadow, sample.distance) {
+                        irradiance += sample.irradiance * cos;
+                    }
+                }
+                albedo * (irradiance / std::f32::consts::PI + scene.ambient)
+            }
+            MaterialKind::Mirror { fresnel } => {
+                if depth >= self.max_depth {
+                    return Vec3::ZERO;
+                }
+                let cos_i = -ray.dir.dot(sp.ns);
+                let f = if fresnel {
+                    fresnel_schlick(material.color, cos_i)
+                } else {
+                    material.color
+                };
+                f * self.spawn(&sp, reflect(ray.dir, sp.ns), depth, channel)
+            }
+            MaterialKind::Dielectric { ior, thin_walled } => {
+                if depth >= self.max_depth {
+                    return Vec3::ZERO;
+                }
+                let dispersive = ior.x != ior.y || ior.y != ior.z;
+                match channel {
+                    None if dispersive => {
+                        let mut sum = Vec3::ZERO;
+                        for c in 0..3 {
+                            sum[c] =
+                                self.dielectric(ray, &sp, ior[c], thin_walled, depth, Some(c))[c];
+                        }
+                        sum
+                    }
+                    None => self.dielectric(ray, &sp, ior.x, thin_walled, depth, None),
+                    Some(c) => self.dielectric(ray, &sp, ior[c], thin_walled, depth, Some(c)),
+                }
+            }
+        }
+    }
+
+    fn spawn(&self, sp: &SurfacePoint, dir: Vec3, depth: u32, channel: Option<usize>) -> Vec3 {
+        let ray = Ray {
+            origin: offset_origin(sp.p, sp.ng, dir),
+            dir,
+        };
+        self.radiance(&ray, depth + 1, channel)
+    }
+
+    fn dielectric(
+        &self,
+        ray: &Ray,
+        sp: &SurfacePoint,
+        ior: f32,
+        thin: bool,
+        depth: u32,
+        channel: Option<usize>,
+    ) -> Vec3 {
+        let cos_i = (-ray.dir.dot(sp.ns)).clamp(0.0, 1.0);
+        let reflected = reflect(ray.dir, sp.ns);
+        if thin {
+            let r = thin_sheet_reflectance(cos_i, ior);
+            return r * self.spawn(sp, reflected, depth, channel)
+                + (1.0 - r) * self.spawn(sp, ray.dir, depth, channel);
+        }
+        // Leaving the solid when the ray hit its back face.
+        let eta = if sp.backface { ior } else { 1.0 / ior };
+        let r = fresnel_dielectric(cos_i, eta);
+        match refract(ray.dir, sp.ns, eta) {
+            Some(transmitted) if r < 1.0 => {
+                let t = self.spawn(sp, transmitted.normalize(), depth, channel);
+                let rr = if r > 0.0 {
+                    self.spawn(sp, reflected, depth, channel)
+                } else {
+                    Vec3::ZERO
+                };
+                r * rr + (1.0 - r) * t
+            }
+            _ => self.spawn(sp, reflected, depth, channel),
+        }
+    }
+}
+
+/// Small deterministic hash-based generator (PCG output function) for sample jitter.
+fn hash(mut x: u32) -> u32 {
+    x = x.wrapping_mul(747796405).wrapping_add(2891336453);
+    let word = ((x >> ((x >> 28) + 4)) ^ x).wrapping_mul(277803737);
+    (word >> 22) ^ word
+}
+
+fn unit_float(x: u32) -> f32 {
+    (hash(x) >> 8) as f32 / (1u32 << 24) as f32
+}
+
+/// Offsets in [0,1)² of the `spp` samples of pixel (`x`, `y`): the centre for one sample,
+/// otherwise one sample per row stratum and per column stratum (Latin hypercube), jittered.
+pub fn pixel_samples(x: u32, y: u32, spp: u32) -> Vec<Vec2> {
+    if spp <= 1 {
+        return vec![Vec2::splat(0.5)];
+    }
+    let seed = hash(x.wrapping_mul(73856093) ^ y.wrapping_mul(19349663));
+    let mut columns: Vec<u32> = (0..spp).collect();
+    // Fisher–Yates shuffle of the column strata.
+    for i in (1..spp as usize).rev() {
+        let j = (hash(seed.wrapping_add(i as u32)) as usize) % (i + 1);
+        columns.swap(i, j);
+    }
+    (0..spp)
+        .map(|i| {
+            let jx = unit_float(seed ^ (i * 2 + 1).wrapping_mul(0x9E3779B9));
+            let jy = unit_float(seed ^ (i * 2 + 2).wrapping_mul(0x85EBCA6B));
+            Vec2::new(
+                (columns[i as usize] as f32 + jx) / spp as f32,
+                (i as f32 + jy) / spp as f32,
+            )
+        })
+        .collect()
+}
+
+/// Renders the scene's camera view. `progress(done, total)` is called as tiles finish (from
+/// worker threads).
+pub fn render(
+    scene: &Scene,
+    accel: &SceneAccel,
+    settings: &RenderSettings,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Image {
+    let RenderSettings {
+        width,
+        height,
+        spp,
+        max_depth,
+    } = *settings;
+    let tracer = Tracer {
+        scene,
+        accel,
+        max_depth,
+    };
+    let tiles_x = width.div_ceil(TILE);
+    let tiles_y = height.div_ceil(TILE);
+    let total = (tiles_x * tiles_y) as usize;
+    let done = AtomicUsize::new(0);
+    let tiles: Vec<(u32, u32, Vec<Vec3>)> = (0..tiles_x * tiles_y)
+        .into_par_iter()
+        .map(|tile| {
+            let (x0, y0) = ((tile % tiles_x) * TILE, (tile / tiles_x) * TILE);
+            let mut pixels = Vec::with_capacity((TILE * TILE) as usize);
+            for y in y0..(y0 + TILE).min(height) {
+                for x in x0..(x0 + TILE).min(width) {
+                    let samples = pixel_samples(x, y, spp);
+                    let sum: Vec3 = samples
+                        .iter()
+                        .map(|s| {
+                            let dir = scene.camera.ray_direction(
+                                x as f32 + s.x,
+                                y as f32 + s.y,
+                                width,
+                                height,
+                            );
+                            tracer.radiance(
+                                &Ray {
+                                    origin: scene.camera.eye,
+                                    dir,
+                                },
+                                0,
+                                None,
+                            )
+                        })
+                        .sum();
+                    pixels.push(sum / samples.len() as f32);
+                }
+            }
+            progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
+            (x0, y0, pixels)
+        })
+        .collect();
+    let mut image = Image::new(width, height);
+    for (x0, y0, pixels) in tiles {
+        let tile_width = (x0 + TILE).min(width) - x0;
+        for (i, p) in pixels.into_iter().enumerate() {
+            let (x, y) = (x0 + i as u32 % tile_width, y0 + i as u32 / tile_width);
+            image.pixels[(y * width + x) as usize] = p;
+        }
+    }
+    image
+}
