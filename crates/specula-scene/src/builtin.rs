@@ -531,13 +531,13 @@ fn truck_cover() -> Result<Scene, SceneError> {
     );
     // The bright side window, beside and behind the driver, facing the cover: the concave
     // glass mirrors it towards the driver's eye near the cover's right edge.
-    let window_center = Vec3::new(-0.7, 0.1, 1.1);
+    let window_center = Vec3::new(-0.45, -0.05, 1.1);
     b.add(
         "side window",
         generators::plane(Vec2::new(0.6, 0.5), 1),
         window,
         Mat4::from_rotation_translation(
-            Quat::from_rotation_arc(Vec3::Y, (-window_center).normalize()),
+            Quat::from_rotation_arc(Vec3::Y, (Vec3::new(0.1, 0.0, 0.0) - window_center).normalize()),
             window_center,
         ),
     );
