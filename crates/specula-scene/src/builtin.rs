@@ -537,7 +537,10 @@ fn truck_cover() -> Result<Scene, SceneError> {
         generators::plane(Vec2::new(0.6, 0.5), 1),
         window,
         Mat4::from_rotation_translation(
-            Quat::from_rotation_arc(Vec3::Y, (Vec3::new(0.1, 0.0, 0.0) - window_center).normalize()),
+            Quat::from_rotation_arc(
+                Vec3::Y,
+                (Vec3::new(0.1, 0.0, 0.0) - window_center).normalize(),
+            ),
             window_center,
         ),
     );
