@@ -68,8 +68,18 @@ fn progress_bar(len: u64, what: &str) -> ProgressBar {
     bar
 }
 
-fn main() -> Result<()> {
-    match Cli::parse().command {
+fn main() -> std::process::ExitCode {
+    match run(Cli::parse()) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
         Command::Scenes => {
             for (name, description) in builtin::list() {
                 let marker = if name == DEFAULT_SCENE {

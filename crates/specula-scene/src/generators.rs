@@ -195,7 +195,8 @@ pub fn door_mirror_control_points() -> [[Vec3; 4]; 4] {
     for (j, row) in control.iter_mut().enumerate() {
         for (i, c) in row.iter_mut().enumerate() {
             let x = -0.10 + 0.2 * i as f32 / 3.0;
-            let y = 0.065 - 0.13 * j as f32 / 3.0;
+            // Rows climb +Y so that Pu × Pv, the patch normal, faces +Z.
+            let y = -0.065 + 0.13 * j as f32 / 3.0;
             let bulge = 0.012 * (1.0 - (x / 0.1).powi(2)) + 0.008 * (1.0 - (y / 0.065).powi(2));
             let outer_wrap = if x > 0.0 { -0.10 * x * x / 0.1 } else { 0.0 };
             *c = Vec3::new(x, y, bulge + outer_wrap);
