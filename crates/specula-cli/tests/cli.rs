@@ -14,7 +14,10 @@ fn scenes_lists_every_built_in_scene_one_line_each() {
     let names = specula_scene::builtin::names();
     assert_eq!(text.lines().count(), names.len());
     for name in names {
-        assert!(text.lines().any(|l| l.starts_with(name)), "{name} missing from:\n{text}");
+        assert!(
+            text.lines().any(|l| l.starts_with(name)),
+            "{name} missing from:\n{text}"
+        );
     }
 }
 
@@ -23,26 +26,55 @@ fn render_writes_png_and_exr_of_the_requested_size() {
     let dir = tempfile::tempdir().unwrap();
     let (png, exr) = (dir.path().join("o.png"), dir.path().join("o.exr"));
     let out = specula()
-        .args(["render", "spectacle-lens", "-W", "40", "-H", "24", "--spp", "2", "--max-depth", "4", "-o"])
+        .args([
+            "render",
+            "spectacle-lens",
+            "-W",
+            "40",
+            "-H",
+            "24",
+            "--spp",
+            "2",
+            "--max-depth",
+            "4",
+            "-o",
+        ])
         .arg(&png)
         .arg("--exr")
         .arg(&exr)
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let png_image = image::open(&png).unwrap();
     assert_eq!((png_image.width(), png_image.height()), (40, 24));
     let exr_image = image::open(&exr).unwrap().to_rgb32f();
     assert_eq!((exr_image.width(), exr_image.height()), (40, 24));
-    assert!(exr_image.pixels().all(|p| p.0.iter().all(|c| c.is_finite() && *c >= 0.0)));
-    assert!(exr_image.pixels().any(|p| p.0.iter().any(|c| *c > 0.01)), "not all black");
+    assert!(exr_image
+        .pixels()
+        .all(|p| p.0.iter().all(|c| c.is_finite() && *c >= 0.0)));
+    assert!(
+        exr_image.pixels().any(|p| p.0.iter().any(|c| *c > 0.01)),
+        "not all black"
+    );
 }
 
 #[test]
 fn render_defaults_to_the_door_mirror_and_keeps_the_camera_aspect() {
     let dir = tempfile::tempdir().unwrap();
-    let out = specula().current_dir(dir.path()).args(["render", "-W", "32"]).output().unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = specula()
+        .current_dir(dir.path())
+        .args(["render", "-W", "32"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert!(String::from_utf8_lossy(&out.stderr).contains("door-mirror"));
     let img = image::open(dir.path().join("out.png")).unwrap();
     assert_eq!((img.width(), img.height()), (32, 24));
@@ -54,17 +86,30 @@ fn bad_input_is_a_clear_error_not_a_panic() {
     let bad = dir.path().join("bad.obj");
     std::fs::write(&bad, "v 0 0 0\nv 1 0 nan\nv 0 1 0\nf 1 2 3\n").unwrap();
     let cases: Vec<(Vec<String>, &str)> = vec![
-        (vec!["render".into(), bad.display().to_string()], "bad.obj:2"),
+        (
+            vec!["render".into(), bad.display().to_string()],
+            "bad.obj:2",
+        ),
         (vec!["render".into(), "nowhere.glb".into()], "nowhere.glb"),
         (vec!["render".into(), "no-such-scene".into()], "door-mirror"),
-        (vec!["render".into(), "--method".into(), "magic".into()], "valid methods: reference"),
+        (
+            vec!["render".into(), "--method".into(), "magic".into()],
+            "valid methods: reference",
+        ),
         (vec!["render".into(), "-W".into(), "0".into()], "0"),
     ];
     for (args, expected) in cases {
-        let out = specula().current_dir(dir.path()).args(&args).output().unwrap();
+        let out = specula()
+            .current_dir(dir.path())
+            .args(&args)
+            .output()
+            .unwrap();
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(!out.status.success(), "{args:?} succeeded");
         assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
-        assert!(stderr.contains(expected), "{args:?}: {stderr:?} should mention {expected:?}");
+        assert!(
+            stderr.contains(expected),
+            "{args:?}: {stderr:?} should mention {expected:?}"
+        );
     }
 }

@@ -63,9 +63,8 @@ fn obj_mtl_maps_to_mirror_dielectric_unlit_and_diffuse() {
         "m.mtl",
         "newmtl chrome\nillum 3\nKs 0.9 0.8 0.7\nnewmtl glass\nillum 7\nNi 1.7\nnewmtl glow\nillum 0\nKd 1 0.5 0\nnewmtl paint\nillum 2\nKd 0.2 0.3 0.4\n",
     );
-    let obj = format!(
-        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nusemtl chrome\nf 1 2 3\nusemtl glass\nf 1 3 4\no b\nusemtl glow\nf 1 2 4\no c\nusemtl paint\nf 2 3 4\n"
-    );
+    let obj =
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nusemtl chrome\nf 1 2 3\nusemtl glass\nf 1 3 4\no b\nusemtl glow\nf 1 2 4\no c\nusemtl paint\nf 2 3 4\n";
     let scene = load(write(dir.path(), "m.obj", obj).to_str().unwrap()).unwrap();
     let kind = |name: &str| {
         scene
@@ -276,7 +275,7 @@ fn stl_truncated_and_nan_are_errors() {
 
 /// One triangle (no NORMAL: flat normals), six primitives with different materials, a camera,
 /// a point and a directional light, and an unsupported extension.
-fn gltf_json(buffer_uri: Option<&str>, buffer_len: usize, index_value_ok: bool) -> String {
+fn gltf_json(buffer_uri: Option<&str>, buffer_len: usize) -> String {
     let uri = buffer_uri
         .map(|u| format!(r#""uri": "{u}","#))
         .unwrap_or_default();
@@ -286,7 +285,6 @@ fn gltf_json(buffer_uri: Option<&str>, buffer_len: usize, index_value_ok: bool) 
         )
     };
     let prims: Vec<String> = (0..6).map(prim).collect();
-    let _ = index_value_ok;
     format!(
         r#"{{
   "asset": {{"version": "2.0"}},
@@ -357,11 +355,11 @@ fn write_texture(dir: &Path) {
 
 fn glb(json: &str, bin: &[u8]) -> Vec<u8> {
     let mut json = json.as_bytes().to_vec();
-    while json.len() % 4 != 0 {
+    while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
     let mut bin = bin.to_vec();
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let total = 12 + 8 + json.len() + 8 + bin.len();
@@ -387,7 +385,7 @@ fn gltf_maps_camera_lights_materials_and_flat_normals() {
     let path = write(
         dir.path(),
         "scene.gltf",
-        gltf_json(Some("tri.bin"), bin.len(), true),
+        gltf_json(Some("tri.bin"), bin.len()),
     );
     let scene = load(path.to_str().unwrap()).unwrap();
     assert_eq!(scene.camera.eye, Vec3::new(0.0, 0.0, 3.0));
@@ -475,7 +473,7 @@ fn glb_loads_and_truncated_glb_is_an_error() {
     let dir = tempfile::tempdir().unwrap();
     write_texture(dir.path());
     let bin = gltf_buffer(0.0, 2);
-    let bytes = glb(&gltf_json(None, bin.len(), true), &bin);
+    let bytes = glb(&gltf_json(None, bin.len()), &bin);
     let scene = load(write(dir.path(), "s.glb", &bytes).to_str().unwrap()).unwrap();
     assert_eq!(scene.meshes.len(), 6);
     let cut = write(dir.path(), "cut.glb", &bytes[..bytes.len() - 30]);
@@ -487,13 +485,13 @@ fn gltf_bad_index_and_nan_name_the_json_path() {
     let dir = tempfile::tempdir().unwrap();
     write_texture(dir.path());
     let bin = gltf_buffer(0.0, 9);
-    let bytes = glb(&gltf_json(None, bin.len(), false), &bin);
+    let bytes = glb(&gltf_json(None, bin.len()), &bin);
     assert_mentions(
         &error_of(&write(dir.path(), "idx.glb", &bytes)),
         &["idx.glb", "meshes[0].primitives[0].indices", "index 9"],
     );
     let bin = gltf_buffer(f32::NAN, 2);
-    let bytes = glb(&gltf_json(None, bin.len(), true), &bin);
+    let bytes = glb(&gltf_json(None, bin.len()), &bin);
     assert_mentions(
         &error_of(&write(dir.path(), "nan.glb", &bytes)),
         &["nan.glb", "POSITION", "not finite"],
@@ -505,7 +503,7 @@ fn gltf_invalid_reference_names_the_json_path() {
     let dir = tempfile::tempdir().unwrap();
     write_texture(dir.path());
     let bin = gltf_buffer(0.0, 2);
-    let json = gltf_json(None, bin.len(), true).replace(r#""mesh": 0"#, r#""mesh": 7"#);
+    let json = gltf_json(None, bin.len()).replace(r#""mesh": 0"#, r#""mesh": 7"#);
     assert_mentions(
         &error_of(&write(dir.path(), "ref.glb", glb(&json, &bin))),
         &["ref.glb", "nodes[1].mesh"],
@@ -517,7 +515,7 @@ fn gltf_without_camera_gets_a_default_framing_and_says_so() {
     let dir = tempfile::tempdir().unwrap();
     write_texture(dir.path());
     let bin = gltf_buffer(0.0, 2);
-    let json = gltf_json(None, bin.len(), true).replace(
+    let json = gltf_json(None, bin.len()).replace(
         r#"{"camera": 0, "translation": [0, 0, 3]}"#,
         r#"{"translation": [0, 0, 3]}"#,
     );
@@ -697,4 +695,12 @@ fn toml_syntax_error_names_the_line() {
         "name = \"a\"\n[camera\neye = 1\n",
     ));
     assert_mentions(&message, &["x.toml", "line 2"]);
+}
+
+#[test]
+fn shipped_example_scene_loads_cleanly() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/example.toml");
+    let scene = load(path.to_str().unwrap()).unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    assert_eq!(scene.meshes.len(), 6);
 }

@@ -252,7 +252,7 @@ impl Loader<'_> {
                 Some(it) => it.into_u32().collect(),
                 None => (0..positions.len() as u32).collect(),
             };
-            if indices.len() % 3 != 0 {
+            if !indices.len().is_multiple_of(3) {
                 return Err(at(format!(
                     ".indices: {} indices is not a multiple of 3",
                     indices.len()

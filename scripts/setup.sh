@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# Installs the system packages specula needs, once (idempotent: installed packages are skipped).
+#   g++                  C++ compiler for nv-flip (FLIP image metric, used by the tests)
+#   mesa-vulkan-drivers  lavapipe, the CPU Vulkan driver wgpu uses on machines without a GPU
+#   libvulkan1           the Vulkan loader
+set -euo pipefail
+packages=(g++ mesa-vulkan-drivers libvulkan1)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  exit 0
+fi
+echo "setup: installing ${missing[*]}"
+sudo_cmd=()
+[ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
+export DEBIAN_FRONTEND=noninteractive
+"${sudo_cmd[@]}" apt-get update -qq
+"${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
