@@ -25,6 +25,10 @@ pub struct Hit {
     pub triangle: u32,
 }
 
+/// 1 + 2γ(3), with γ(n) = nε/(1 − nε) and ε half the machine epsilon (Ize 2013).
+const ROBUST_WIDENING: f32 =
+    1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
+
 /// Per-ray constants of the watertight test and the slab test.
 struct RayData {
     origin: Vec3A,
@@ -67,32 +71,52 @@ impl RayData {
                 c
             }
         });
-        let row = |entries: [(usize, f32); 2]| {
-            let mut r = Vec3A::ZERO;
-            for (axis, value) in entries {
-                r[axis] += value;
-            }
-            r
-        };
+        let (mut to_x, mut to_y, mut to_z) = ([0.0f32; 3], [0.0f32; 3], [0.0f32; 3]);
+        let inv_dz = 1.0 / d[kz];
+        to_x[kx] = 1.0;
+        to_x[kz] = -d[kx] * inv_dz;
+        to_y[ky] = 1.0;
+        to_y[kz] = -d[ky] * inv_dz;
+        to_z[kz] = inv_dz;
         RayData {
             origin: ray.origin.into(),
             inv_dir: Vec3A::ONE / Vec3A::from_array(safe),
-            to_x: row([(kx, 1.0), (kz, -d[kx] / d[kz])]),
-            to_y: row([(ky, 1.0), (kz, -d[ky] / d[kz])]),
-            to_z: row([(kz, 1.0 / d[kz]), (kx, 0.0)]),
+            to_x: Vec3A::from_array(to_x),
+            to_y: Vec3A::from_array(to_y),
+            to_z: Vec3A::from_array(to_z),
         }
     }
 
     /// Entry distance into a node's box, if the ray meets it before `t_max`.
     #[inline(always)]
     fn hit_box(&self, node: &BvhNode, t_max: f32) -> Option<f32> {
-        let t1 = (Vec3A::from_array(node.min) - self.origin) * self.inv_dir;
-        let t2 = (Vec3A::from_array(node.max) - self.origin) * self.inv_dir;
-        let t_near = t1.min(t2).max_element().max(0.0);
+        // Plain compare-and-select maxima (one SSE instruction each), not f32::max, whose NaN
+        // handling costs more than the rest of the test: the direction has no zero components
+        // (see `new`), so no NaN arises here.
+        #[inline(always)]
+        fn max(a: f32, b: f32) -> f32 {
+            if a > b {
+                a
+            } else {
+                b
+            }
+        }
+        #[inline(always)]
+        fn min(a: f32, b: f32) -> f32 {
+            if a < b {
+                a
+            } else {
+                b
+            }
+        }
+        let (lo, hi) = node.corners();
+        let t1 = (lo - self.origin) * self.inv_dir;
+        let t2 = (hi - self.origin) * self.inv_dir;
+        let (near, far) = (t1.min(t2), t1.max(t2));
+        let t_near = max(max(near.x, near.y), max(near.z, 0.0));
         // Robust traversal (Ize 2013): widen the far distance by 2γ(3) so rounding never makes
         // a box the ray touches look missed.
-        let t_far = t1.max(t2).min_element().min(t_max)
-            * (1.0 + 2.0 * 3.0 * f32::EPSILON * 0.5 / (1.0 - 3.0 * f32::EPSILON * 0.5));
+        let t_far = min(min(far.x, far.y), min(far.z, t_max)) * ROBUST_WIDENING;
         (t_near <= t_far).then_some(t_near)
     }
 

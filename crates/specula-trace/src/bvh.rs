@@ -3,12 +3,13 @@
 //! hierarchies"), stored flat in depth-first order so it can be uploaded to a GPU as is.
 
 use bytemuck::{Pod, Zeroable};
-use glam::Vec3;
+use glam::{BVec4A, Vec3, Vec3A, Vec4};
 use specula_scene::Aabb;
 
-/// One node, 32 bytes. An interior node (`count` = 0) has its children at `first` and
-/// `first + 1`; a leaf holds `count` primitives starting at `first` in `Bvh::primitives`.
-#[repr(C)]
+/// One node, 32 bytes, 16-byte aligned so each corner loads as one SIMD register. An interior
+/// node (`count` = 0) has its children at `first` and `first + 1`; a leaf holds `count`
+/// primitives starting at `first` in `Bvh::primitives`.
+#[repr(C, align(16))]
 #[derive(Clone, Copy, Debug, Pod, Zeroable, PartialEq)]
 pub struct BvhNode {
     pub min: [f32; 3],
@@ -25,6 +26,22 @@ impl BvhNode {
         }
     }
 
+    /// The box's corners as SIMD vectors, each loaded whole with its fourth lane (`first` or
+    /// `count`) cleared: those integer bits would read as denormal floats, which are slow.
+    #[inline(always)]
+    pub fn corners(&self) -> (Vec3A, Vec3A) {
+        let lanes: &[f32; 8] = bytemuck::cast_ref(self);
+        let xyz = BVec4A::new(true, true, true, false);
+        let corner = |i: usize| {
+            Vec3A::from_vec4(Vec4::select(
+                xyz,
+                Vec4::from_slice(&lanes[i..i + 4]),
+                Vec4::ZERO,
+            ))
+        };
+        (corner(0), corner(4))
+    }
+
     pub fn is_leaf(&self) -> bool {
         self.count > 0
     }
@@ -37,7 +54,7 @@ pub struct Bvh {
     pub primitives: Vec<u32>,
 }
 
-const BINS: usize = 16;
+const BINS: usize = 32;
 const MAX_LEAF: usize = 4;
 /// Deepest level a node may have (the root is level 1).
 pub const MAX_DEPTH: usize = 60;
