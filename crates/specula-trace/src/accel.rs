@@ -2,10 +2,13 @@
 //! with the watertight ray–triangle test of Woop, Benthin and Wald (JCGT 2013, "Watertight
 //! Ray/Triangle Intersection"): no ray slips through a shared edge or vertex.
 
-use glam::{Vec3, Vec3A};
+use std::mem::MaybeUninit;
+
+use glam::{Vec3, Vec3A, Vec4};
 use specula_scene::{Aabb, Scene};
 
-use crate::bvh::{Bvh, BvhNode};
+use crate::bvh::Bvh;
+use crate::wide_bvh::{WideBvh, WideNode};
 
 #[derive(Clone, Copy, Debug)]
 pub struct Ray {
@@ -32,14 +35,23 @@ const ROBUST_WIDENING: f32 =
 /// Per-ray constants of the watertight test and the slab test.
 struct RayData {
     origin: Vec3A,
-    inv_dir: Vec3A,
-    /// Rows of the shear-and-permute transform of the watertight test: for a vertex `a`
-    /// relative to the origin, `a·to_x = a[kx] − Sx·a[kz]`, `a·to_y = a[ky] − Sy·a[kz]`,
-    /// `a·to_z = Sz·a[kz]`. Each row has one or two non-zero entries, so the dot products are
-    /// bit-identical to the paper's scalar formulas (adding exact zeros changes nothing).
-    to_x: Vec3A,
-    to_y: Vec3A,
-    to_z: Vec3A,
+    /// Origin and inverse direction splatted across four lanes, one per child box.
+    origin_x: Vec4,
+    origin_y: Vec4,
+    origin_z: Vec4,
+    inv_x: Vec4,
+    inv_y: Vec4,
+    inv_z: Vec4,
+    /// Which direction components are negative: the slab test then enters through the max
+    /// planes. Choosing planes by sign (not by min/max) keeps empty, inverted boxes missed.
+    negative: [bool; 3],
+    /// The watertight test's axis permutation and shear (Woop et al. 2013, section 3): `kz`
+    /// is the dominant axis of the direction, kx = (kz + 1) mod 3, ky = (kx + 1) mod 3, and
+    /// (Sx, Sy, Sz) = (d[kx]/d[kz], d[ky]/d[kz], 1/d[kz]). The paper swaps kx and ky when
+    /// d[kz] < 0 to keep the triangle's winding; specula accepts hits from both sides, and the
+    /// swap only negates U, V, W and det together, so it is left out.
+    kz: usize,
+    shear: [f32; 3],
 }
 
 impl RayData {
@@ -57,12 +69,7 @@ impl RayData {
         } else {
             2
         };
-        let mut kx = (kz + 1) % 3;
-        let mut ky = (kx + 1) % 3;
-        // Keep the triangle's winding: swap when the dominant component is negative.
-        if d[kz] < 0.0 {
-            std::mem::swap(&mut kx, &mut ky);
-        }
+        let (kx, ky) = ((kz + 1) % 3, (kz + 2) % 3);
         // Replace zero components by a tiny signed value so the slab test sees ±inf-free data.
         let safe = d.to_array().map(|c| {
             if c.abs() < 1e-30 {
@@ -71,64 +78,66 @@ impl RayData {
                 c
             }
         });
-        let (mut to_x, mut to_y, mut to_z) = ([0.0f32; 3], [0.0f32; 3], [0.0f32; 3]);
-        let inv_dz = 1.0 / d[kz];
-        to_x[kx] = 1.0;
-        to_x[kz] = -d[kx] * inv_dz;
-        to_y[ky] = 1.0;
-        to_y[kz] = -d[ky] * inv_dz;
-        to_z[kz] = inv_dz;
+        let inv_dir = Vec3A::ONE / Vec3A::from_array(safe);
         RayData {
             origin: ray.origin.into(),
-            inv_dir: Vec3A::ONE / Vec3A::from_array(safe),
-            to_x: Vec3A::from_array(to_x),
-            to_y: Vec3A::from_array(to_y),
-            to_z: Vec3A::from_array(to_z),
+            origin_x: Vec4::splat(ray.origin.x),
+            origin_y: Vec4::splat(ray.origin.y),
+            origin_z: Vec4::splat(ray.origin.z),
+            inv_x: Vec4::splat(inv_dir.x),
+            inv_y: Vec4::splat(inv_dir.y),
+            inv_z: Vec4::splat(inv_dir.z),
+            negative: safe.map(|c| c < 0.0),
+            kz,
+            shear: [d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]],
         }
     }
 
-    /// Entry distance into a node's box, if the ray meets it before `t_max`.
+    /// Slab test of a wide node's four child boxes at once: a bit mask of the children the ray
+    /// enters before `t_max`, and the entry distances.
     #[inline(always)]
-    fn hit_box(&self, node: &BvhNode, t_max: f32) -> Option<f32> {
-        // Plain compare-and-select maxima (one SSE instruction each), not f32::max, whose NaN
-        // handling costs more than the rest of the test: the direction has no zero components
-        // (see `new`), so no NaN arises here.
-        #[inline(always)]
-        fn max(a: f32, b: f32) -> f32 {
-            if a > b {
-                a
-            } else {
-                b
-            }
-        }
-        #[inline(always)]
-        fn min(a: f32, b: f32) -> f32 {
-            if a < b {
-                a
-            } else {
-                b
-            }
-        }
-        let (lo, hi) = node.corners();
-        let t1 = (lo - self.origin) * self.inv_dir;
-        let t2 = (hi - self.origin) * self.inv_dir;
-        let (near, far) = (t1.min(t2), t1.max(t2));
-        let t_near = max(max(near.x, near.y), max(near.z, 0.0));
+    fn hit_children(&self, node: &WideNode, t_max: f32) -> (u32, Vec4) {
+        let pick = |negative: bool, lo: Vec4, hi: Vec4| if negative { (hi, lo) } else { (lo, hi) };
+        let (near_x, far_x) = pick(self.negative[0], node.min_x, node.max_x);
+        let (near_y, far_y) = pick(self.negative[1], node.min_y, node.max_y);
+        let (near_z, far_z) = pick(self.negative[2], node.min_z, node.max_z);
+        let t_near = ((near_x - self.origin_x) * self.inv_x)
+            .max((near_y - self.origin_y) * self.inv_y)
+            .max((near_z - self.origin_z) * self.inv_z)
+            .max(Vec4::ZERO);
         // Robust traversal (Ize 2013): widen the far distance by 2γ(3) so rounding never makes
         // a box the ray touches look missed.
-        let t_far = min(min(far.x, far.y), min(far.z, t_max)) * ROBUST_WIDENING;
-        (t_near <= t_far).then_some(t_near)
+        let t_far = ((far_x - self.origin_x) * self.inv_x)
+            .min((far_y - self.origin_y) * self.inv_y)
+            .min((far_z - self.origin_z) * self.inv_z)
+            .min(Vec4::splat(t_max))
+            * ROBUST_WIDENING;
+        (t_near.cmple(t_far).bitmask(), t_near)
     }
 
     /// Watertight ray–triangle test; returns (t, b1, b2) for 0 < t < t_max.
     #[inline(always)]
-    fn hit_triangle(&self, v: &[Vec3A; 3], t_max: f32) -> Option<(f32, f32, f32)> {
+    /// `KZ` is the ray's `kz` as a constant, so that the permutation compiles to fixed lanes.
+    fn hit_triangle<const KZ: usize>(&self, v: &[Vec3A; 3], t_max: f32) -> Option<(f32, f32, f32)> {
+        // (a[kx], a[ky], a[kz]) for kx = (kz + 1) mod 3, ky = (kz + 2) mod 3.
+        #[inline(always)]
+        fn permute<const KZ: usize>(a: Vec3A) -> (f32, f32, f32) {
+            match KZ {
+                0 => (a.y, a.z, a.x),
+                1 => (a.z, a.x, a.y),
+                _ => (a.x, a.y, a.z),
+            }
+        }
+        let [sx, sy, sz] = self.shear;
         let a = v[0] - self.origin;
         let b = v[1] - self.origin;
         let c = v[2] - self.origin;
-        let (ax, ay) = (a.dot(self.to_x), a.dot(self.to_y));
-        let (bx, by) = (b.dot(self.to_x), b.dot(self.to_y));
-        let (cx, cy) = (c.dot(self.to_x), c.dot(self.to_y));
+        let (a_x, a_y, a_z) = permute::<KZ>(a);
+        let (b_x, b_y, b_z) = permute::<KZ>(b);
+        let (c_x, c_y, c_z) = permute::<KZ>(c);
+        let (ax, ay) = (a_x - sx * a_z, a_y - sy * a_z);
+        let (bx, by) = (b_x - sx * b_z, b_y - sy * b_z);
+        let (cx, cy) = (c_x - sx * c_z, c_y - sy * c_z);
         let mut u = cx * by - cy * bx;
         let mut v_ = ax * cy - ay * cx;
         let mut w = bx * ay - by * ax;
@@ -145,7 +154,7 @@ impl RayData {
         if det == 0.0 {
             return None;
         }
-        let (az, bz, cz) = (a.dot(self.to_z), b.dot(self.to_z), c.dot(self.to_z));
+        let (az, bz, cz) = (sz * a_z, sz * b_z, sz * c_z);
         let t_scaled = u * az + v_ * bz + w * cz;
         // t = t_scaled / det must lie in (0, t_max): compare without dividing, sign-aware.
         if det > 0.0 {
@@ -162,7 +171,10 @@ impl RayData {
 
 /// A scene's triangles (world space) in BVH leaf order, with the BVH over them.
 pub struct SceneAccel {
+    /// The binary tree (the form a GPU gets).
     pub bvh: Bvh,
+    /// The same tree collapsed to 4-wide nodes, which CPU queries traverse.
+    pub wide: WideBvh,
     /// Triangle vertices in leaf order.
     pub triangles: Vec<[Vec3A; 3]>,
     /// (mesh, triangle) of each entry of `triangles`.
@@ -198,8 +210,10 @@ impl SceneAccel {
             .map(|&p| triangles[p as usize].map(Vec3A::from))
             .collect();
         let ids_ordered = bvh.primitives.iter().map(|&p| ids[p as usize]).collect();
+        let wide = WideBvh::from_binary(&bvh);
         SceneAccel {
             bvh,
+            wide,
             triangles: triangles_ordered,
             ids: ids_ordered,
         }
@@ -208,11 +222,19 @@ impl SceneAccel {
     /// Closest hit with 0 < t < `t_max`.
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
         let data = RayData::new(ray);
+        match data.kz {
+            0 => self.intersect_kz::<0>(&data, t_max),
+            1 => self.intersect_kz::<1>(&data, t_max),
+            _ => self.intersect_kz::<2>(&data, t_max),
+        }
+    }
+
+    fn intersect_kz<const KZ: usize>(&self, data: &RayData, t_max: f32) -> Option<Hit> {
         let mut best: Option<(f32, f32, f32, usize)> = None;
         let mut t_best = t_max;
-        self.traverse(&data, &mut t_best, |leaf_first, leaf_count, t_best| {
+        self.traverse(data, &mut t_best, |leaf_first, leaf_count, t_best| {
             for i in leaf_first..leaf_first + leaf_count {
-                if let Some((t, b1, b2)) = data.hit_triangle(&self.triangles[i], *t_best) {
+                if let Some((t, b1, b2)) = data.hit_triangle::<KZ>(&self.triangles[i], *t_best) {
                     *t_best = t;
                     best = Some((t, b1, b2, i));
                 }
@@ -231,18 +253,28 @@ impl SceneAccel {
     /// Whether anything lies on the ray with 0 < t < `t_max`.
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
         let data = RayData::new(ray);
+        match data.kz {
+            0 => self.occluded_kz::<0>(&data, t_max),
+            1 => self.occluded_kz::<1>(&data, t_max),
+            _ => self.occluded_kz::<2>(&data, t_max),
+        }
+    }
+
+    fn occluded_kz<const KZ: usize>(&self, data: &RayData, t_max: f32) -> bool {
         let mut t = t_max;
         let mut found = false;
-        self.traverse(&data, &mut t, |first, count, t_max| {
-            found = (first..first + count)
-                .any(|i| data.hit_triangle(&self.triangles[i], *t_max).is_some());
+        self.traverse(data, &mut t, |first, count, t_max| {
+            found = (first..first + count).any(|i| {
+                data.hit_triangle::<KZ>(&self.triangles[i], *t_max)
+                    .is_some()
+            });
             found
         });
         found
     }
 
-    /// Front-to-back traversal; `leaf` tests a leaf's triangles (and may shrink `t_max`) and
-    /// returns true to stop.
+    /// Front-to-back traversal of the wide tree; `leaf` tests a leaf's triangles (and may
+    /// shrink `t_max`) and returns true to stop.
     #[inline(always)]
     fn traverse(
         &self,
@@ -250,55 +282,69 @@ impl SceneAccel {
         t_max: &mut f32,
         mut leaf: impl FnMut(usize, usize, &mut f32) -> bool,
     ) {
-        let nodes = &self.bvh.nodes;
-        if self.triangles.is_empty() || data.hit_box(&nodes[0], *t_max).is_none() {
+        if self.triangles.is_empty() {
             return;
         }
-        let mut stack = [(0u32, 0.0f32); 64];
+        // Entries are (index, count, entry distance): count 0 is a node, > 0 a leaf. Each level
+        // adds at most three entries and the tree is at most MAX_DEPTH deep.
+        const STACK: usize = 4 * crate::bvh::MAX_DEPTH + 4;
+        // Left uninitialised: zeroing 3 KiB per ray costs more than a primary ray's traversal.
+        let mut stack = [const { MaybeUninit::<(u32, u32, f32)>::uninit() }; STACK];
         let mut top = 0;
-        let mut current = 0usize;
+        let mut current = (0u32, 0u32);
         loop {
-            let node = &nodes[current];
-            if node.is_leaf() {
-                if leaf(node.first as usize, node.count as usize, t_max) {
+            let (index, count) = current;
+            if count > 0 {
+                if leaf(index as usize, count as usize, t_max) {
                     return;
                 }
             } else {
-                let left = node.first as usize;
-                let hit_left = data.hit_box(&nodes[left], *t_max);
-                let hit_right = data.hit_box(&nodes[left + 1], *t_max);
-                match (hit_left, hit_right) {
-                    (Some(tl), Some(tr)) => {
-                        let (near, far, t_far) = if tl <= tr {
-                            (left, left + 1, tr)
-                        } else {
-                            (left + 1, left, tl)
-                        };
-                        stack[top] = (far as u32, t_far);
+                let node = &self.wide.nodes[index as usize];
+                let (mut mask, t_near) = data.hit_children(node, *t_max);
+                if mask != 0 {
+                    let first = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if mask == 0 {
+                        // One child hit, the common case: descend without touching the stack.
+                        current = (node.index[first], node.count[first]);
+                        continue;
+                    }
+                    // Several: keep them sorted by entry distance, farthest first, then
+                    // descend into the nearest and push the rest.
+                    let t = t_near.to_array();
+                    let mut hits = [(0u32, 0u32, 0.0f32); 4];
+                    hits[0] = (node.index[first], node.count[first], t[first]);
+                    let mut n = 1;
+                    while mask != 0 {
+                        let slot = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        let entry = (node.index[slot], node.count[slot], t[slot]);
+                        let mut i = n;
+                        while i > 0 && hits[i - 1].2 < entry.2 {
+                            hits[i] = hits[i - 1];
+                            i -= 1;
+                        }
+                        hits[i] = entry;
+                        n += 1;
+                    }
+                    for &hit in &hits[..n - 1] {
+                        stack[top].write(hit);
                         top += 1;
-                        current = near;
-                        continue;
                     }
-                    (Some(_), None) => {
-                        current = left;
-                        continue;
-                    }
-                    (None, Some(_)) => {
-                        current = left + 1;
-                        continue;
-                    }
-                    (None, None) => {}
+                    current = (hits[n - 1].0, hits[n - 1].1);
+                    continue;
                 }
             }
-            // Pop the nearest pending node that can still hold a closer hit.
+            // Pop the nearest pending entry that can still hold a closer hit.
             loop {
                 if top == 0 {
                     return;
                 }
                 top -= 1;
-                let (node, t_entry) = stack[top];
+                // SAFETY: every entry below `top` was written before `top` moved past it.
+                let (index, count, t_entry) = unsafe { stack[top].assume_init() };
                 if t_entry <= *t_max {
-                    current = node as usize;
+                    current = (index, count);
                     break;
                 }
             }

@@ -11,6 +11,7 @@ pub mod image_io;
 pub mod optics;
 pub mod primary_rays;
 pub mod reference;
+pub mod wide_bvh;
 
 pub use accel::{Hit, Ray, SceneAccel};
 pub use bvh::{Bvh, BvhNode};

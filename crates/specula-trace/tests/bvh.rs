@@ -16,9 +16,21 @@ fn boxes(triangles: &[[Vec3; 3]]) -> Vec<Aabb> {
         .collect()
 }
 
+/// The accelerator, with both of its trees checked: the binary one and the 4-wide one
+/// collapsed from it (against the triangles in leaf order).
 fn accel(triangles: &[[Vec3; 3]]) -> SceneAccel {
     let ids = (0..triangles.len() as u32).map(|i| (0, i)).collect();
-    SceneAccel::from_triangles(triangles.to_vec(), ids)
+    let accel = SceneAccel::from_triangles(triangles.to_vec(), ids);
+    accel
+        .bvh
+        .validate(&boxes(triangles))
+        .unwrap_or_else(|e| panic!("invalid BVH: {e}"));
+    let leaf_order: Vec<[Vec3; 3]> = accel.triangles.iter().map(|t| t.map(Vec3::from)).collect();
+    accel
+        .wide
+        .validate(&boxes(&leaf_order))
+        .unwrap_or_else(|e| panic!("invalid wide BVH: {e}"));
+    accel
 }
 
 fn validated(triangles: &[[Vec3; 3]]) -> Bvh {
@@ -124,6 +136,7 @@ fn spread_triangles(s: f32) -> Vec<[Vec3; 3]> {
 fn huge_coordinates() {
     // Surface areas overflow to infinity at this scale: the build must still be valid.
     validated(&spread_triangles(1e30));
+    accel(&spread_triangles(1e30));
     // Queries stay exact at geographic scales (10,000 km in metres); the watertight test's
     // products overflow f32 far beyond that (around 1e12), which no scene here approaches.
     let s = 1e7f32;
@@ -141,8 +154,10 @@ fn huge_coordinates() {
 #[test]
 fn coplanar_triangles_and_coincident_centroids() {
     validated(&grid(16, 0.0));
+    accel(&grid(16, 0.0));
     // Many copies of one triangle: every centroid is the same point.
     let copies = vec![[Vec3::ZERO, Vec3::X, Vec3::Y]; 100];
+    accel(&copies);
     let bvh = validated(&copies);
     assert!(bvh.depth() <= specula_trace::bvh::MAX_DEPTH);
 }
@@ -206,4 +221,28 @@ proptest! {
             }
         }
     }
+}
+
+#[test]
+fn validators_catch_corrupted_trees() {
+    let triangles = grid(8, 0.0);
+    let bounds = boxes(&triangles);
+    let mut bvh = Bvh::build(&bounds);
+    bvh.nodes[1].max[0] -= 0.5;
+    assert!(bvh
+        .validate(&bounds)
+        .unwrap_err()
+        .contains("does not contain"));
+    let mut bvh = Bvh::build(&bounds);
+    bvh.primitives[0] = bvh.primitives[1];
+    assert!(bvh.validate(&bounds).is_err());
+
+    let mut a = accel(&triangles);
+    let leaf_order: Vec<[Vec3; 3]> = a.triangles.iter().map(|t| t.map(Vec3::from)).collect();
+    a.wide.nodes[0].max_x[0] -= 0.5;
+    assert!(a
+        .wide
+        .validate(&boxes(&leaf_order))
+        .unwrap_err()
+        .contains("does not contain"));
 }
