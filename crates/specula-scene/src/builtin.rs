@@ -56,19 +56,11 @@ struct SceneBuilder {
 
 impl SceneBuilder {
     fn new(name: &str, camera: Camera, background: Vec3, ambient: f32) -> Self {
-        SceneBuilder {
-            scene: Scene {
-                name: name.to_string(),
-                meshes: vec![],
-                materials: vec![],
-                textures: vec![],
-                lights: vec![],
-                camera,
-                background: Background::Color(background),
-                ambient: Vec3::splat(ambient),
-                warnings: vec![],
-            },
-        }
+        let mut scene = Scene::new(name);
+        scene.camera = camera;
+        scene.background = Background::Color(background);
+        scene.ambient = Vec3::splat(ambient);
+        SceneBuilder { scene }
     }
 
     fn material(&mut self, material: Material) -> usize {

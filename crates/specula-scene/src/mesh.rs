@@ -58,10 +58,6 @@ impl Aabb {
         let e = self.extent();
         2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
     }
-
-    pub fn contains(&self, p: Vec3) -> bool {
-        p.cmpge(self.min).all() && p.cmple(self.max).all()
-    }
 }
 
 /// An indexed triangle mesh. Scenes keep meshes in world space; generators return them in object
@@ -78,22 +74,6 @@ pub struct Mesh {
 }
 
 impl Mesh {
-    /// A mesh with area-weighted smooth normals.
-    pub fn with_smooth_normals(
-        name: impl Into<String>,
-        positions: Vec<Vec3>,
-        triangles: Vec<[u32; 3]>,
-    ) -> Mesh {
-        let mut mesh = Mesh {
-            name: name.into(),
-            positions,
-            triangles,
-            ..Default::default()
-        };
-        mesh.compute_smooth_normals();
-        mesh
-    }
-
     pub fn bounds(&self) -> Aabb {
         let mut b = Aabb::EMPTY;
         for &p in &self.positions {

@@ -52,6 +52,31 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// A scene with nothing in it yet: black background, no ambient light, and a placeholder
+    /// camera that loaders replace (or frame with [`Scene::use_default_camera`]).
+    pub fn new(name: impl Into<String>) -> Scene {
+        Scene {
+            name: name.into(),
+            meshes: vec![],
+            materials: vec![],
+            textures: vec![],
+            lights: vec![],
+            camera: Scene::default_camera(&Aabb::EMPTY),
+            background: Background::Color(Vec3::ZERO),
+            ambient: Vec3::ZERO,
+            warnings: vec![],
+        }
+    }
+
+    /// For a file that has no camera: frames the scene with [`Scene::default_camera`] and says
+    /// so in a warning naming `source`.
+    pub fn use_default_camera(&mut self, source: &str) {
+        self.camera = Scene::default_camera(&self.bounds());
+        self.warnings.push(format!(
+            "{source}: no camera; chose a default framing from +Z looking at the bounding box centre"
+        ));
+    }
+
     pub fn bounds(&self) -> Aabb {
         self.meshes
             .iter()

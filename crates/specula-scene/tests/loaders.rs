@@ -683,7 +683,7 @@ fn toml_without_camera_warns_and_frames_the_scene() {
     assert!(scene
         .warnings
         .iter()
-        .any(|w| w.contains("c.toml") && w.contains("no [camera]")));
+        .any(|w| w.contains("c.toml") && w.contains("no camera")));
 }
 
 #[test]

@@ -3,7 +3,7 @@
 
 use glam::{Mat4, Vec3};
 use specula_scene::generators::{self, LensSpec};
-use specula_scene::{Background, Camera, Material, Mesh, Scene};
+use specula_scene::{Material, Mesh, Scene};
 use specula_trace::optics::*;
 use specula_trace::reference::{offset_origin, surface_point};
 use specula_trace::{Ray, SceneAccel};
@@ -11,23 +11,10 @@ use specula_trace::{Ray, SceneAccel};
 fn one_mesh_scene(mut mesh: Mesh, material: Material, world_from_object: Mat4) -> Scene {
     mesh.transform(world_from_object);
     mesh.material = 0;
-    Scene {
-        name: "test".into(),
-        meshes: vec![mesh],
-        materials: vec![material],
-        textures: vec![],
-        lights: vec![],
-        camera: Camera {
-            eye: Vec3::Z,
-            target: Vec3::ZERO,
-            up: Vec3::Y,
-            fov_y_deg: 45.0,
-            aspect: None,
-        },
-        background: Background::Color(Vec3::ZERO),
-        ambient: Vec3::ZERO,
-        warnings: vec![],
-    }
+    let mut scene = Scene::new("test");
+    scene.meshes.push(mesh);
+    scene.materials.push(material);
+    scene
 }
 
 /// Follows only the refracted branch (or the reflected one for mirrors) through the scene, as

@@ -7,17 +7,9 @@ use specula_trace::reference::pixel_samples;
 use specula_trace::{render, Image, RenderSettings, SceneAccel};
 
 fn scene(objects: Vec<(Mesh, Material, Mat4)>, background: Background, camera: Camera) -> Scene {
-    let mut s = Scene {
-        name: "test".into(),
-        meshes: vec![],
-        materials: vec![],
-        textures: vec![],
-        lights: vec![],
-        camera,
-        background,
-        ambient: Vec3::ZERO,
-        warnings: vec![],
-    };
+    let mut s = Scene::new("test");
+    s.camera = camera;
+    s.background = background;
     for (mut mesh, material, world_from_object) in objects {
         mesh.transform(world_from_object);
         mesh.material = s.materials.len();

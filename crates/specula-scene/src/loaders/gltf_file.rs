@@ -6,7 +6,7 @@ use std::path::Path;
 use glam::{Mat4, Vec2, Vec3};
 
 use crate::material::ior_from_abbe;
-use crate::{Background, Camera, Light, Material, MaterialKind, Mesh, Scene, SceneError, Texture};
+use crate::{Camera, Light, Material, MaterialKind, Mesh, Scene, SceneError, Texture};
 
 const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_unlit",
@@ -353,17 +353,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
         shown: shown.clone(),
         buffers: &buffers,
         images: &images,
-        scene: Scene {
-            name: shown.clone(),
-            meshes: vec![],
-            materials: vec![],
-            textures: vec![],
-            lights: vec![],
-            camera: Scene::default_camera(&crate::Aabb::EMPTY),
-            background: Background::Color(Vec3::ZERO),
-            ambient: Vec3::ZERO,
-            warnings: vec![],
-        },
+        scene: Scene::new(&shown),
         material_map: HashMap::new(),
         texture_map: HashMap::new(),
         camera_found: false,
@@ -389,10 +379,7 @@ pub fn load(path: &Path) -> Result<Scene, SceneError> {
     let camera_found = loader.camera_found;
     let mut scene = loader.scene;
     if !camera_found {
-        scene.camera = Scene::default_camera(&scene.bounds());
-        scene.warnings.push(format!(
-            "{shown}: no camera in the scene; chose a default framing from +Z looking at the bounding box centre"
-        ));
+        scene.use_default_camera(&shown);
     }
     if scene.lights.is_empty()
         && scene

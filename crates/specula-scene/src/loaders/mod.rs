@@ -15,14 +15,17 @@ use crate::{Background, Light, Material, Mesh, Scene, SceneError};
 
 pub use obj::parse_obj;
 
+fn lowercase_extension(path: &Path) -> String {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+        .unwrap_or_default()
+}
+
 /// Loads any supported file, chosen by extension (case-insensitive).
 pub fn load_file(path: &Path) -> Result<Scene, SceneError> {
     let shown = path.display().to_string();
-    let extension = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase())
-        .unwrap_or_default();
+    let extension = lowercase_extension(path);
     if !matches!(
         extension.as_str(),
         "toml" | "gltf" | "glb" | "obj" | "ply" | "stl"
@@ -57,11 +60,7 @@ pub type MeshFile = (Vec<Mesh>, Vec<Material>, Vec<crate::Texture>, Vec<String>)
 
 pub fn load_mesh_file(path: &Path) -> Result<MeshFile, SceneError> {
     let shown = path.display().to_string();
-    let extension = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(|e| e.to_ascii_lowercase())
-        .unwrap_or_default();
+    let extension = lowercase_extension(path);
     let bytes = std::fs::read(path).map_err(|e| SceneError::io(&shown, e))?;
     let bytes = if shown.ends_with(".gz") {
         gunzip(&shown, &bytes)?
@@ -110,21 +109,12 @@ fn scene_from_meshes(
     materials: Vec<Material>,
     textures: Vec<crate::Texture>,
 ) -> Scene {
-    let mut scene = Scene {
-        name: shown.to_string(),
-        meshes,
-        materials,
-        textures,
-        lights: vec![],
-        camera: Scene::default_camera(&crate::Aabb::EMPTY),
-        background: Background::Color(Vec3::splat(0.05)),
-        ambient: Vec3::ZERO,
-        warnings: vec![],
-    };
-    scene.camera = Scene::default_camera(&scene.bounds());
-    scene.warnings.push(format!(
-        "{shown}: no camera in the file; chose a default framing from +Z looking at the bounding box centre"
-    ));
+    let mut scene = Scene::new(shown);
+    scene.meshes = meshes;
+    scene.materials = materials;
+    scene.textures = textures;
+    scene.background = Background::Color(Vec3::splat(0.05));
+    scene.use_default_camera(shown);
     add_default_lighting(&mut scene, shown);
     scene
 }

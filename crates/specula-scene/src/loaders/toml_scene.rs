@@ -494,17 +494,14 @@ pub fn parse(shown: &str, text: &str, base: &Path) -> Result<Scene, SceneError> 
             Background::Color(color.map(Color::vec3).unwrap_or(Vec3::ZERO))
         }
     };
-    let mut scene = Scene {
-        name: file.name.clone().unwrap_or_else(|| shown.to_string()),
-        meshes,
-        materials,
-        textures,
-        lights,
-        camera: Scene::default_camera(&crate::Aabb::EMPTY),
-        background,
-        ambient: file.ambient.map(Color::vec3).unwrap_or(Vec3::ZERO),
-        warnings,
-    };
+    let mut scene = Scene::new(file.name.clone().unwrap_or_else(|| shown.to_string()));
+    scene.meshes = meshes;
+    scene.materials = materials;
+    scene.textures = textures;
+    scene.lights = lights;
+    scene.background = background;
+    scene.ambient = file.ambient.map(Color::vec3).unwrap_or(Vec3::ZERO);
+    scene.warnings = warnings;
     match &file.camera {
         Some(c) => {
             scene.camera = Camera {
@@ -515,12 +512,7 @@ pub fn parse(shown: &str, text: &str, base: &Path) -> Result<Scene, SceneError> 
                 aspect: None,
             }
         }
-        None => {
-            scene.camera = Scene::default_camera(&scene.bounds());
-            scene.warnings.push(format!(
-                "{shown}: no [camera]; chose a default framing from +Z looking at the bounding box centre"
-            ));
-        }
+        None => scene.use_default_camera(shown),
     }
     if scene.lights.is_empty()
         && scene
