@@ -263,3 +263,41 @@ fn one_sample_is_the_pixel_centre_and_more_are_stratified_in_both_axes() {
         assert_eq!(samples, pixel_samples(3, 7, spp), "deterministic");
     }
 }
+
+#[test]
+fn thin_sheet_transmits_like_a_thick_slab_at_normal_incidence() {
+    // A sheet's 2R/(1+R) reflectance leaves (1−R)/(1+R) = T²/(1−R²) transmitted: the same as
+    // the slab above, with no thickness.
+    let (backdrop, m) = wall(20.0);
+    let (sheet, sheet_m) = wall(3.0);
+    let thin = Material::new(
+        "sheet",
+        MaterialKind::Dielectric {
+            ior: Vec3::splat(1.5),
+            thin_walled: true,
+        },
+        Vec3::ONE,
+    );
+    let s = scene(
+        vec![
+            (
+                backdrop,
+                Material::unlit("white", Vec3::ONE),
+                Mat4::from_translation(Vec3::new(0.0, 0.0, -3.0)) * m,
+            ),
+            (
+                sheet,
+                thin,
+                Mat4::from_translation(Vec3::new(0.0, 0.0, 1.0)) * sheet_m,
+            ),
+        ],
+        Background::Color(Vec3::ZERO),
+        looking_down_z(5.0),
+    );
+    let expected = 0.96f32 / 1.04;
+    let got = render_small(&s, 5, 8).get(2, 2);
+    assert!(
+        (got - Vec3::splat(expected)).abs().max_element() < 1e-5,
+        "{got:?} vs {expected}"
+    );
+}
