@@ -3,4 +3,6 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
+# Mesa prints a harmless "XDG_RUNTIME_DIR is invalid" line per device without this.
+export NODEVICE_SELECT=1
 cargo test --workspace "$@"

@@ -1,0 +1,175 @@
+use std::future::Future;
+
+/// Everything that can go wrong on the GPU side, as values: library code never panics on a
+/// wgpu error.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    #[error("no Vulkan adapter found ({0}). On Debian/Ubuntu install Mesa's Vulkan driver: `apt-get install mesa-vulkan-drivers libvulkan1` (or run scripts/setup.sh)")]
+    NoAdapter(String),
+    #[error("cannot open the GPU device: {0}")]
+    Device(String),
+    #[error("wgpu validation error in {stage}: {message}")]
+    Validation { stage: String, message: String },
+    #[error("GPU readback failed: {0}")]
+    Readback(String),
+}
+
+/// Where a technique's per-stage timings come from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TimingSource {
+    /// GPU timestamp queries (the adapter supports them).
+    GpuTimestamps,
+    /// Wall-clock time on the CPU around each stage, waiting for the GPU to finish.
+    CpuWallClock,
+}
+
+/// A headless wgpu device on the Vulkan backend.
+pub struct GpuContext {
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub adapter_info: wgpu::AdapterInfo,
+    pub timing: TimingSource,
+}
+
+impl GpuContext {
+    /// Opens the best Vulkan adapter: `HighPerformance` so a real GPU wins over lavapipe where
+    /// both exist. The GL backend is never used (it lacks float render targets).
+    pub fn new() -> Result<GpuContext, GpuError> {
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
+            backends: wgpu::Backends::VULKAN,
+            ..wgpu::InstanceDescriptor::new_without_display_handle()
+        });
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            compatible_surface: None,
+            force_fallback_adapter: false,
+            ..Default::default()
+        }))
+        .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
+        let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY);
+        let required_features = if timestamps {
+            wgpu::Features::TIMESTAMP_QUERY
+        } else {
+            wgpu::Features::empty()
+        };
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("specula"),
+            required_features,
+            required_limits: adapter.limits(),
+            ..Default::default()
+        }))
+        .map_err(|e| GpuError::Device(e.to_string()))?;
+        Ok(GpuContext {
+            device,
+            queue,
+            adapter_info: adapter.get_info(),
+            timing: if timestamps {
+                TimingSource::GpuTimestamps
+            } else {
+                TimingSource::CpuWallClock
+            },
+        })
+    }
+
+    /// A one-line description of the adapter, e.g. "llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan, Cpu)".
+    pub fn describe(&self) -> String {
+        format!(
+            "{} ({:?}, {:?})",
+            self.adapter_info.name, self.adapter_info.backend, self.adapter_info.device_type
+        )
+    }
+
+    /// Runs `work` inside a validation error scope: any wgpu validation error it causes comes
+    /// back as `GpuError::Validation` naming `stage`, instead of wgpu's default panic.
+    pub fn validated<T>(&self, stage: &str, work: impl FnOnce() -> T) -> Result<T, GpuError> {
+        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let value = work();
+        match block_on(scope.pop()) {
+            Some(error) => Err(GpuError::Validation {
+                stage: stage.to_string(),
+                message: error.to_string(),
+            }),
+            None => Ok(value),
+        }
+    }
+
+    /// Blocks until all submitted work is done.
+    pub fn wait(&self) -> Result<(), GpuError> {
+        self.device
+            .poll(wgpu::PollType::Wait {
+                submission_index: None,
+                timeout: None,
+            })
+            .map(|_| ())
+            .map_err(|e| GpuError::Readback(e.to_string()))
+    }
+
+    /// Reads a 2D texture (mip 0, layer `layer`) back to the CPU as tightly packed rows of
+    /// `bytes_per_texel` bytes, undoing wgpu's 256-byte row alignment.
+    pub fn read_texture(&self, texture: &wgpu::Texture, layer: u32) -> Result<Vec<u8>, GpuError> {
+        let bytes_per_texel = texture.format().block_copy_size(None).ok_or_else(|| {
+            GpuError::Readback(format!("format {:?} cannot be copied", texture.format()))
+        })?;
+        let (width, height) = (texture.width(), texture.height());
+        let unpadded = width * bytes_per_texel;
+        let padded = unpadded.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
+            * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size: (padded * height) as u64,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        encoder.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo {
+                texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d {
+                    x: 0,
+                    y: 0,
+                    z: layer,
+                },
+                aspect: wgpu::TextureAspect::All,
+            },
+            wgpu::TexelCopyBufferInfo {
+                buffer: &buffer,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(padded),
+                    rows_per_image: Some(height),
+                },
+            },
+            wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: 1,
+            },
+        );
+        self.queue.submit([encoder.finish()]);
+        let slice = buffer.slice(..);
+        let (sender, receiver) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |result| {
+            let _ = sender.send(result);
+        });
+        self.wait()?;
+        receiver
+            .recv()
+            .map_err(|e| GpuError::Readback(e.to_string()))?
+            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        let mapped = slice
+            .get_mapped_range()
+            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        let mut out = Vec::with_capacity((unpadded * height) as usize);
+        for row in mapped.chunks_exact(padded as usize) {
+            out.extend_from_slice(&row[..unpadded as usize]);
+        }
+        drop(mapped);
+        buffer.unmap();
+        Ok(out)
+    }
+}
+
+fn block_on<F: Future>(future: F) -> F::Output {
+    pollster::block_on(future)
+}
