@@ -1,0 +1,344 @@
+//! The scene uploaded to the GPU once per scene change: un-indexed world-space vertices
+//! (three per triangle, so each carries its mesh and triangle ID for the ID buffer), materials,
+//! textures (all texels in one storage buffer, sampled in WGSL exactly as the CPU samples them)
+//! and lights.
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+use specula_scene::{Aabb, Background, Light, MaterialKind, Scene};
+use wgpu::util::DeviceExt;
+
+/// One vertex: world position, mesh index, world normal, triangle index, texture coordinate.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuVertex {
+    pub position: [f32; 3],
+    pub mesh: u32,
+    pub normal: [f32; 3],
+    pub triangle: u32,
+    pub uv: [f32; 2],
+}
+
+pub const MATERIAL_UNLIT: u32 = 0;
+pub const MATERIAL_DIFFUSE: u32 = 1;
+pub const MATERIAL_MIRROR: u32 = 2;
+pub const MATERIAL_DIELECTRIC: u32 = 3;
+pub const FLAG_FRESNEL: u32 = 1;
+pub const FLAG_THIN: u32 = 2;
+
+/// Host mirror of WGSL `Material` (raster.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuMaterial {
+    pub color: [f32; 3],
+    pub kind: u32,
+    pub ior: [f32; 3],
+    /// Index into the texture table, or -1.
+    pub texture: i32,
+    pub flags: u32,
+    pub pad: [u32; 3],
+}
+
+/// Host mirror of WGSL `TextureInfo`: where a texture's texels start in the texel buffer.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuTextureInfo {
+    pub offset: u32,
+    pub width: u32,
+    pub height: u32,
+    pub pad: u32,
+}
+
+pub const LIGHT_POINT: u32 = 0;
+pub const LIGHT_DIRECTIONAL: u32 = 1;
+pub const LIGHT_SPOT: u32 = 2;
+
+/// Host mirror of WGSL `Light`. `shadow_layer` is the first shadow-map layer of the light (six
+/// for point and spot lights, one for a directional light).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuLight {
+    pub position: [f32; 3],
+    pub kind: u32,
+    pub direction: [f32; 3],
+    pub cos_inner: f32,
+    pub intensity: [f32; 3],
+    pub cos_outer: f32,
+    pub shadow_layer: u32,
+    pub pad: [u32; 3],
+}
+
+/// Host mirror of WGSL `SceneInfo`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuSceneInfo {
+    pub ambient: [f32; 3],
+    pub light_count: u32,
+    pub background: [f32; 3],
+    /// Texture index of an equirectangular background, or -1 for a constant colour.
+    pub background_texture: i32,
+    pub background_intensity: f32,
+    pub pad: [u32; 3],
+}
+
+pub struct GpuScene {
+    pub vertices: wgpu::Buffer,
+    pub vertex_count: u32,
+    pub materials: wgpu::Buffer,
+    pub mesh_materials: wgpu::Buffer,
+    pub texture_infos: wgpu::Buffer,
+    pub texels: wgpu::Buffer,
+    pub lights: wgpu::Buffer,
+    pub info: wgpu::Buffer,
+    pub gpu_lights: Vec<GpuLight>,
+    pub bounds: Aabb,
+}
+
+fn storage<T: Pod>(
+    device: &wgpu::Device,
+    label: &str,
+    items: &[T],
+    placeholder: T,
+) -> wgpu::Buffer {
+    // Storage bindings may not be empty.
+    let contents: Vec<T> = if items.is_empty() {
+        vec![placeholder]
+    } else {
+        items.to_vec()
+    };
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: bytemuck::cast_slice(&contents),
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+    })
+}
+
+impl GpuScene {
+    pub fn upload(device: &wgpu::Device, scene: &Scene) -> GpuScene {
+        let mut vertices = Vec::with_capacity(scene.triangle_count() * 3);
+        for (m, mesh) in scene.meshes.iter().enumerate() {
+            for (t, tri) in mesh.triangles.iter().enumerate() {
+                for &i in tri {
+                    let i = i as usize;
+                    vertices.push(GpuVertex {
+                        position: mesh.positions[i].to_array(),
+                        mesh: m as u32,
+                        normal: mesh.normals[i].to_array(),
+                        triangle: t as u32,
+                        uv: mesh
+                            .uvs
+                            .get(i)
+                            .map(|uv| uv.to_array())
+                            .unwrap_or([0.0, 0.0]),
+                    });
+                }
+            }
+        }
+        let materials: Vec<GpuMaterial> = scene
+            .materials
+            .iter()
+            .map(|m| {
+                let (kind, ior, flags) = match m.kind {
+                    MaterialKind::Unlit => (MATERIAL_UNLIT, Vec3::ONE, 0),
+                    MaterialKind::Diffuse => (MATERIAL_DIFFUSE, Vec3::ONE, 0),
+                    MaterialKind::Mirror { fresnel } => (
+                        MATERIAL_MIRROR,
+                        Vec3::ONE,
+                        if fresnel { FLAG_FRESNEL } else { 0 },
+                    ),
+                    MaterialKind::Dielectric { ior, thin_walled } => (
+                        MATERIAL_DIELECTRIC,
+                        ior,
+                        if thin_walled { FLAG_THIN } else { 0 },
+                    ),
+                };
+                GpuMaterial {
+                    color: m.color.to_array(),
+                    kind,
+                    ior: ior.to_array(),
+                    texture: m.texture.map(|t| t as i32).unwrap_or(-1),
+                    flags,
+                    pad: [0; 3],
+                }
+            })
+            .collect();
+        let mesh_materials: Vec<u32> = scene.meshes.iter().map(|m| m.material as u32).collect();
+        let mut texels: Vec<[f32; 4]> = Vec::new();
+        let texture_infos: Vec<GpuTextureInfo> = scene
+            .textures
+            .iter()
+            .map(|t| {
+                let offset = texels.len() as u32;
+                texels.extend(t.texels.iter().map(|c| [c.x, c.y, c.z, 1.0]));
+                GpuTextureInfo {
+                    offset,
+                    width: t.width,
+                    height: t.height,
+                    pad: 0,
+                }
+            })
+            .collect();
+        let mut gpu_lights = Vec::new();
+        let mut layer = 0;
+        for light in &scene.lights {
+            let (kind, position, direction, intensity, cos_inner, cos_outer, layers) = match *light
+            {
+                Light::Point {
+                    position,
+                    intensity,
+                } => (LIGHT_POINT, position, Vec3::Z, intensity, 1.0, 1.0, 6),
+                Light::Directional {
+                    direction,
+                    irradiance,
+                } => (
+                    LIGHT_DIRECTIONAL,
+                    Vec3::ZERO,
+                    direction,
+                    irradiance,
+                    1.0,
+                    1.0,
+                    1,
+                ),
+                Light::Spot {
+                    position,
+                    direction,
+                    intensity,
+                    inner_cone,
+                    outer_cone,
+                } => (
+                    LIGHT_SPOT,
+                    position,
+                    direction,
+                    intensity,
+                    inner_cone.cos(),
+                    outer_cone.cos(),
+                    6,
+                ),
+            };
+            gpu_lights.push(GpuLight {
+                position: position.to_array(),
+                kind,
+                direction: direction.to_array(),
+                cos_inner,
+                intensity: intensity.to_array(),
+                cos_outer,
+                shadow_layer: layer,
+                pad: [0; 3],
+            });
+            layer += layers;
+        }
+        let (background, background_texture, background_intensity) = match scene.background {
+            Background::Color(c) => (c, -1, 1.0),
+            Background::Equirect { texture, intensity } => (Vec3::ZERO, texture as i32, intensity),
+        };
+        let info = GpuSceneInfo {
+            ambient: scene.ambient.to_array(),
+            light_count: gpu_lights.len() as u32,
+            background: background.to_array(),
+            background_texture,
+            background_intensity,
+            pad: [0; 3],
+        };
+        let vertex_count = vertices.len() as u32;
+        if vertices.is_empty() {
+            vertices.push(GpuVertex::zeroed());
+        }
+        GpuScene {
+            vertices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("scene vertices"),
+                contents: bytemuck::cast_slice(&vertices),
+                usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE,
+            }),
+            vertex_count,
+            materials: storage(device, "materials", &materials, GpuMaterial::zeroed()),
+            mesh_materials: storage(device, "mesh materials", &mesh_materials, 0),
+            texture_infos: storage(
+                device,
+                "texture infos",
+                &texture_infos,
+                GpuTextureInfo::zeroed(),
+            ),
+            texels: storage(device, "texels", &texels, [0.0; 4]),
+            lights: storage(device, "lights", &gpu_lights, GpuLight::zeroed()),
+            info: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("scene info"),
+                contents: bytemuck::bytes_of(&info),
+                usage: wgpu::BufferUsages::UNIFORM,
+            }),
+            gpu_lights,
+            bounds: scene.bounds(),
+        }
+    }
+
+    /// Number of shadow-map layers the lights need.
+    pub fn shadow_layers(&self) -> u32 {
+        self.gpu_lights
+            .iter()
+            .map(|l| if l.kind == LIGHT_DIRECTIONAL { 1 } else { 6 })
+            .sum()
+    }
+}
+
+impl GpuScene {
+    /// Layout of bind group 1, shared by every technique's shaders (shaders/common/scene.wgsl).
+    pub fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+        let storage = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: true },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("scene"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                storage(1),
+                storage(2),
+                storage(3),
+                storage(4),
+                storage(5),
+            ],
+        })
+    }
+
+    pub fn bind_group(
+        &self,
+        device: &wgpu::Device,
+        layout: &wgpu::BindGroupLayout,
+    ) -> wgpu::BindGroup {
+        let buffers = [
+            &self.info,
+            &self.materials,
+            &self.mesh_materials,
+            &self.texture_infos,
+            &self.texels,
+            &self.lights,
+        ];
+        let entries: Vec<wgpu::BindGroupEntry> = buffers
+            .iter()
+            .enumerate()
+            .map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("scene"),
+            layout,
+            entries: &entries,
+        })
+    }
+}

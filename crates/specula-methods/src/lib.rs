@@ -1,0 +1,8 @@
+//! specula's techniques: one folder each, with its WGSL beside its Rust, all behind one
+//! [`Technique`] trait; plus what they share: the scene uploaded to the GPU ([`GpuScene`]) and
+//! the scene raster pass with its G-buffer ([`raster`]).
+
+pub mod gpu_scene;
+pub mod raster;
+
+pub use gpu_scene::GpuScene;

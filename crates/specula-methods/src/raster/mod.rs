@@ -1,0 +1,576 @@
+//! The scene raster pass every technique starts from: it draws the background and all
+//! geometry with depth, shades the non-specular surfaces (unlit; Lambert with the scene's
+//! lights, distance shadow maps and ambient) and leaves specular ones black, and writes a
+//! G-buffer: world position, normal, and mesh + triangle IDs (the ID buffer vertex tracing
+//! needs).
+//!
+//! Approximations against the reference: shadows come from distance shadow maps (six 90° faces
+//! per point or spot light, one orthographic map per directional light) instead of shadow rays,
+//! so shadow edges are accurate to a shadow-map texel and a normal offset of 1.5 texels plus a
+//! bias of 2 texels avoid self-shadowing; everything else is the reference's shading, evaluated
+//! at the same pixel centres.
+//!
+//! Parameters: `shadow_resolution` (default 1024) — texels per side of each shadow map; higher
+//! sharpens shadow edges at a cost of resolution² per layer in memory and in the prepare pass.
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3};
+use specula_gpu::shaders::{self, CameraUniform};
+use specula_gpu::{GpuContext, GpuError};
+use specula_scene::Camera;
+use specula_trace::Image;
+
+use crate::gpu_scene::{GpuScene, GpuVertex, LIGHT_DIRECTIONAL};
+
+const SHADER: &str = include_str!("raster.wgsl");
+
+/// The raster shader's full source (common files prepended).
+pub fn shader_source() -> String {
+    shaders::compose(&["camera.wgsl", "scene.wgsl"], SHADER)
+}
+
+pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+pub const IDS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
+pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+const SHADOW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
+
+/// Host mirror of WGSL `ShadowView`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct ShadowView {
+    pub clip_from_world: [[f32; 4]; 4],
+    pub origin: [f32; 3],
+    pub directional: u32,
+    pub direction: [f32; 3],
+    pub texel_size: f32,
+}
+
+/// Render targets of one frame. `ids` holds (mesh + 1, triangle); 0 marks the background.
+pub struct GBuffer {
+    pub width: u32,
+    pub height: u32,
+    pub color: wgpu::Texture,
+    pub position: wgpu::Texture,
+    pub normal: wgpu::Texture,
+    pub ids: wgpu::Texture,
+    pub depth: wgpu::Texture,
+}
+
+impl GBuffer {
+    /// The shaded colour as an image.
+    pub fn read_color(&self, ctx: &GpuContext) -> Result<Image, GpuError> {
+        read_rgba32f(ctx, &self.color)
+    }
+
+    /// Per pixel: (mesh index + 1, triangle index); mesh 0 is the background.
+    pub fn read_ids(&self, ctx: &GpuContext) -> Result<Vec<[u32; 2]>, GpuError> {
+        Ok(bytemuck::cast_slice(&ctx.read_texture(&self.ids, 0)?).to_vec())
+    }
+}
+
+pub fn read_rgba32f(ctx: &GpuContext, texture: &wgpu::Texture) -> Result<Image, GpuError> {
+    let bytes = ctx.read_texture(texture, 0)?;
+    let texels: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
+    Ok(Image {
+        width: texture.width(),
+        height: texture.height(),
+        pixels: texels.iter().map(|t| Vec3::new(t[0], t[1], t[2])).collect(),
+    })
+}
+
+/// Near and far planes that hold the whole scene as seen from `eye`.
+pub fn depth_range(scene_bounds: &specula_scene::Aabb, eye: Vec3) -> (f32, f32) {
+    let radius = scene_bounds.radius().max(1e-3);
+    let far = (scene_bounds.center() - eye).length() + radius * 1.01;
+    (far * 1e-5, far)
+}
+
+pub fn camera_uniform(
+    camera: &Camera,
+    scene_bounds: &specula_scene::Aabb,
+    width: u32,
+    height: u32,
+) -> CameraUniform {
+    let frame = camera.frame();
+    let (near, far) = depth_range(scene_bounds, camera.eye);
+    CameraUniform::new(
+        camera.eye,
+        frame.right,
+        frame.up,
+        frame.forward,
+        camera.fov_y_deg,
+        width,
+        height,
+        near,
+        far,
+    )
+}
+
+pub struct RasterPass {
+    scene_pipeline: wgpu::RenderPipeline,
+    background_pipeline: wgpu::RenderPipeline,
+    camera_layout: wgpu::BindGroupLayout,
+    scene_bind_group: wgpu::BindGroup,
+    shadow_bind_group: wgpu::BindGroup,
+    /// Kept alive for the bind groups that use them.
+    _shadow_maps: wgpu::Texture,
+    _shadow_views: wgpu::Buffer,
+}
+
+fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+fn vertex_layout() -> wgpu::VertexBufferLayout<'static> {
+    const ATTRIBUTES: [wgpu::VertexAttribute; 5] = wgpu::vertex_attr_array![
+        0 => Float32x3, 1 => Uint32, 2 => Float32x3, 3 => Uint32, 4 => Float32x2
+    ];
+    wgpu::VertexBufferLayout {
+        array_stride: std::mem::size_of::<GpuVertex>() as u64,
+        step_mode: wgpu::VertexStepMode::Vertex,
+        attributes: &ATTRIBUTES,
+    }
+}
+
+fn target(format: wgpu::TextureFormat) -> Option<wgpu::ColorTargetState> {
+    Some(wgpu::ColorTargetState {
+        format,
+        blend: None,
+        write_mask: wgpu::ColorWrites::ALL,
+    })
+}
+
+/// The six 90° views of a cube around `position`, in the order +X, -X, +Y, -Y, +Z, -Z.
+fn cube_views(position: Vec3, near: f32, far: f32, resolution: u32) -> [ShadowView; 6] {
+    let faces = [
+        (Vec3::X, -Vec3::Y),
+        (-Vec3::X, -Vec3::Y),
+        (Vec3::Y, Vec3::Z),
+        (-Vec3::Y, -Vec3::Z),
+        (Vec3::Z, -Vec3::Y),
+        (-Vec3::Z, -Vec3::Y),
+    ];
+    let projection = Mat4::perspective_rh(std::f32::consts::FRAC_PI_2, 1.0, near, far);
+    faces.map(|(forward, up)| ShadowView {
+        clip_from_world: (projection * Mat4::look_to_rh(position, forward, up)).to_cols_array_2d(),
+        origin: position.to_array(),
+        directional: 0,
+        direction: forward.to_array(),
+        texel_size: 2.0 / resolution as f32,
+    })
+}
+
+impl RasterPass {
+    /// Builds the pipelines and renders the shadow maps (they depend on the scene only).
+    pub fn new(
+        ctx: &GpuContext,
+        gpu_scene: &GpuScene,
+        shadow_resolution: u32,
+    ) -> Result<RasterPass, GpuError> {
+        ctx.validated("raster pass set-up", || {
+            Self::build(ctx, gpu_scene, shadow_resolution)
+        })
+    }
+
+    fn build(ctx: &GpuContext, gpu_scene: &GpuScene, shadow_resolution: u32) -> RasterPass {
+        let device = &ctx.device;
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("raster.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(shader_source().into()),
+        });
+        let camera_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("camera"),
+            entries: &[uniform_entry(0)],
+        });
+        let shadow_view_layout =
+            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("shadow view"),
+                entries: &[uniform_entry(1)],
+            });
+        let scene_layout = GpuScene::bind_group_layout(device);
+        let shadow_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("shadows"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Storage { read_only: true },
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                        view_dimension: wgpu::TextureViewDimension::D2Array,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+            ],
+        });
+        let g_buffer_targets = [
+            target(COLOR_FORMAT),
+            target(COLOR_FORMAT),
+            target(COLOR_FORMAT),
+            target(IDS_FORMAT),
+        ];
+        let layout = |layouts: &[Option<&wgpu::BindGroupLayout>]| {
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: None,
+                bind_group_layouts: layouts,
+                ..Default::default()
+            })
+        };
+        let scene_pipeline_layout = layout(&[
+            Some(&camera_layout),
+            Some(&scene_layout),
+            Some(&shadow_layout),
+        ]);
+        let depth = |write: bool, compare| {
+            Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(write),
+                depth_compare: Some(compare),
+                stencil: Default::default(),
+                bias: Default::default(),
+            })
+        };
+        let scene_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("scene raster"),
+            layout: Some(&scene_pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_scene"),
+                compilation_options: Default::default(),
+                buffers: &[Some(vertex_layout())],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: depth(true, wgpu::CompareFunction::Less),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_scene"),
+                compilation_options: Default::default(),
+                targets: &g_buffer_targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let background_pipeline_layout = layout(&[Some(&camera_layout), Some(&scene_layout)]);
+        let background_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("background"),
+            layout: Some(&background_pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_background"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: depth(false, wgpu::CompareFunction::Always),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_background"),
+                compilation_options: Default::default(),
+                targets: &g_buffer_targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let shadow_pipeline_layout = layout(&[Some(&shadow_view_layout)]);
+        let shadow_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("shadow map"),
+            layout: Some(&shadow_pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_shadow"),
+                compilation_options: Default::default(),
+                buffers: &[Some(vertex_layout())],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: depth(true, wgpu::CompareFunction::Less),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_shadow"),
+                compilation_options: Default::default(),
+                targets: &[target(SHADOW_FORMAT)],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+
+        // Shadow views: six per point or spot light, one per directional light.
+        let bounds = gpu_scene.bounds;
+        let (center, radius) = (bounds.center(), bounds.radius().max(1e-3));
+        let mut views = Vec::new();
+        for light in &gpu_scene.gpu_lights {
+            if light.kind == LIGHT_DIRECTIONAL {
+                let direction = Vec3::from_array(light.direction).normalize();
+                let eye = center - direction * 2.0 * radius;
+                let up = direction.any_orthonormal_vector();
+                let projection =
+                    Mat4::orthographic_rh(-radius, radius, -radius, radius, 0.0, 4.0 * radius);
+                views.push(ShadowView {
+                    clip_from_world: (projection * Mat4::look_to_rh(eye, direction, up))
+                        .to_cols_array_2d(),
+                    origin: eye.to_array(),
+                    directional: 1,
+                    direction: direction.to_array(),
+                    texel_size: 2.0 * radius / shadow_resolution as f32,
+                });
+            } else {
+                let position = Vec3::from_array(light.position);
+                let far = (center - position).length() + radius * 1.01;
+                views.extend(cube_views(position, far * 1e-5, far, shadow_resolution));
+            }
+        }
+        let layers = (views.len() as u32).max(1);
+        let shadow_maps = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("shadow maps"),
+            size: wgpu::Extent3d {
+                width: shadow_resolution,
+                height: shadow_resolution,
+                depth_or_array_layers: layers,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: SHADOW_FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let shadow_depth = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("shadow depth"),
+            size: wgpu::Extent3d {
+                width: shadow_resolution,
+                height: shadow_resolution,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: DEPTH_FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            view_formats: &[],
+        });
+        let shadow_depth_view = shadow_depth.create_view(&Default::default());
+        let mut encoder = device.create_command_encoder(&Default::default());
+        let mut view_buffers = Vec::new();
+        for (layer, view) in views.iter().enumerate() {
+            use wgpu::util::DeviceExt;
+            let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("shadow view"),
+                contents: bytemuck::bytes_of(view),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: None,
+                layout: &shadow_view_layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: buffer.as_entire_binding(),
+                }],
+            });
+            let layer_view = shadow_maps.create_view(&wgpu::TextureViewDescriptor {
+                dimension: Some(wgpu::TextureViewDimension::D2),
+                base_array_layer: layer as u32,
+                array_layer_count: Some(1),
+                ..Default::default()
+            });
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("shadow map"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &layer_view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color {
+                            r: 3.0e38,
+                            g: 0.0,
+                            b: 0.0,
+                            a: 0.0,
+                        }),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &shadow_depth_view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                ..Default::default()
+            });
+            pass.set_pipeline(&shadow_pipeline);
+            pass.set_bind_group(0, &bind_group, &[]);
+            pass.set_vertex_buffer(0, gpu_scene.vertices.slice(..));
+            pass.draw(0..gpu_scene.vertex_count, 0..1);
+            drop(pass);
+            view_buffers.push(buffer);
+        }
+        ctx.queue.submit([encoder.finish()]);
+        use wgpu::util::DeviceExt;
+        let placeholder = [ShadowView::zeroed()];
+        let shadow_views = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("shadow views"),
+            contents: bytemuck::cast_slice(if views.is_empty() {
+                &placeholder[..]
+            } else {
+                &views
+            }),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let shadow_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("shadows"),
+            layout: &shadow_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: shadow_views.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&shadow_maps.create_view(
+                        &wgpu::TextureViewDescriptor {
+                            dimension: Some(wgpu::TextureViewDimension::D2Array),
+                            ..Default::default()
+                        },
+                    )),
+                },
+            ],
+        });
+        RasterPass {
+            scene_bind_group: gpu_scene.bind_group(device, &scene_layout),
+            scene_pipeline,
+            background_pipeline,
+            camera_layout,
+            shadow_bind_group,
+            _shadow_maps: shadow_maps,
+            _shadow_views: shadow_views,
+        }
+    }
+
+    /// Rasterises the scene for `camera` into a new G-buffer.
+    pub fn render(
+        &self,
+        ctx: &GpuContext,
+        gpu_scene: &GpuScene,
+        camera: &CameraUniform,
+    ) -> Result<GBuffer, GpuError> {
+        ctx.validated("scene raster", || self.draw(ctx, gpu_scene, camera))
+    }
+
+    fn draw(&self, ctx: &GpuContext, gpu_scene: &GpuScene, camera: &CameraUniform) -> GBuffer {
+        use wgpu::util::DeviceExt;
+        let device = &ctx.device;
+        let (width, height) = (camera.width as u32, camera.height as u32);
+        let texture = |label, format, usage| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d {
+                    width,
+                    height,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC;
+        let g = GBuffer {
+            width,
+            height,
+            color: texture(
+                "color",
+                COLOR_FORMAT,
+                usage | wgpu::TextureUsages::STORAGE_BINDING,
+            ),
+            position: texture("position", COLOR_FORMAT, usage),
+            normal: texture("normal", COLOR_FORMAT, usage),
+            ids: texture("ids", IDS_FORMAT, usage),
+            depth: texture("depth", DEPTH_FORMAT, usage),
+        };
+        let camera_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("camera"),
+            contents: bytemuck::bytes_of(camera),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let camera_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("camera"),
+            layout: &self.camera_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: camera_buffer.as_entire_binding(),
+            }],
+        });
+        let views =
+            [&g.color, &g.position, &g.normal, &g.ids].map(|t| t.create_view(&Default::default()));
+        let depth_view = g.depth.create_view(&Default::default());
+        let attachments: Vec<Option<wgpu::RenderPassColorAttachment>> = views
+            .iter()
+            .map(|view| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })
+            })
+            .collect();
+        let mut encoder = device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("scene raster"),
+                color_attachments: &attachments,
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &depth_view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                ..Default::default()
+            });
+            pass.set_bind_group(0, &camera_bind_group, &[]);
+            pass.set_bind_group(1, &self.scene_bind_group, &[]);
+            pass.set_pipeline(&self.background_pipeline);
+            pass.draw(0..3, 0..1);
+            pass.set_pipeline(&self.scene_pipeline);
+            pass.set_bind_group(2, &self.shadow_bind_group, &[]);
+            pass.set_vertex_buffer(0, gpu_scene.vertices.slice(..));
+            pass.draw(0..gpu_scene.vertex_count, 0..1);
+        }
+        ctx.queue.submit([encoder.finish()]);
+        g
+    }
+}
