@@ -92,6 +92,9 @@ pub struct GpuScene {
     pub info: wgpu::Buffer,
     pub gpu_lights: Vec<GpuLight>,
     pub bounds: Aabb,
+    /// Each mesh's range in `vertices` (meshes are uploaded in order, three vertices per
+    /// triangle), so that a pass can leave one out.
+    pub mesh_vertex_ranges: Vec<std::ops::Range<u32>>,
 }
 
 fn storage<T: Pod>(
@@ -116,7 +119,9 @@ fn storage<T: Pod>(
 impl GpuScene {
     pub fn upload(device: &wgpu::Device, scene: &Scene) -> GpuScene {
         let mut vertices = Vec::with_capacity(scene.triangle_count() * 3);
+        let mut mesh_vertex_ranges = Vec::with_capacity(scene.meshes.len());
         for (m, mesh) in scene.meshes.iter().enumerate() {
+            let start = vertices.len() as u32;
             for (t, tri) in mesh.triangles.iter().enumerate() {
                 for &i in tri {
                     let i = i as usize;
@@ -133,6 +138,7 @@ impl GpuScene {
                     });
                 }
             }
+            mesh_vertex_ranges.push(start..vertices.len() as u32);
         }
         let materials: Vec<GpuMaterial> = scene
             .materials
@@ -267,6 +273,7 @@ impl GpuScene {
             }),
             gpu_lights,
             bounds: scene.bounds(),
+            mesh_vertex_ranges,
         }
     }
 

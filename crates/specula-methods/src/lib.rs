@@ -2,7 +2,10 @@
 //! [`Technique`] trait; plus what they share: the scene uploaded to the GPU ([`GpuScene`]) and
 //! the scene raster pass with its G-buffer ([`raster`]).
 
+pub mod envmap;
 pub mod gpu_scene;
 pub mod raster;
+pub mod technique;
 
 pub use gpu_scene::GpuScene;
+pub use technique::{by_name, Frame, StageTime, Technique, TechniqueError, METHODS};

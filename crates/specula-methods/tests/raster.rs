@@ -44,7 +44,7 @@ fn check(scene_name: &str) -> f32 {
     let gpu_scene = GpuScene::upload(&ctx.device, &scene);
     let pass = RasterPass::new(&ctx, &gpu_scene, 1024).unwrap();
     let camera = raster::camera_uniform(&scene.camera, &scene.bounds(), width, height);
-    let g = pass.render(&ctx, &gpu_scene, &camera).unwrap();
+    let g = pass.render(&ctx, &gpu_scene, &camera, None).unwrap();
     let mut image = g.read_color(&ctx).unwrap();
     let ids = g.read_ids(&ctx).unwrap();
     assert!(image.pixels.iter().all(|p| p.is_finite()));

@@ -150,7 +150,7 @@ fn target(format: wgpu::TextureFormat) -> Option<wgpu::ColorTargetState> {
 }
 
 /// The six 90° views of a cube around `position`, in the order +X, -X, +Y, -Y, +Z, -Z.
-fn cube_views(position: Vec3, near: f32, far: f32, resolution: u32) -> [ShadowView; 6] {
+pub fn cube_views(position: Vec3, near: f32, far: f32, resolution: u32) -> [ShadowView; 6] {
     let faces = [
         (Vec3::X, -Vec3::Y),
         (-Vec3::X, -Vec3::Y),
@@ -470,17 +470,27 @@ impl RasterPass {
         }
     }
 
-    /// Rasterises the scene for `camera` into a new G-buffer.
+    /// Rasterises the scene for `camera` into a new G-buffer; `hidden_mesh`, if given, is left
+    /// out (a reflector rendering its own environment).
     pub fn render(
         &self,
         ctx: &GpuContext,
         gpu_scene: &GpuScene,
         camera: &CameraUniform,
+        hidden_mesh: Option<usize>,
     ) -> Result<GBuffer, GpuError> {
-        ctx.validated("scene raster", || self.draw(ctx, gpu_scene, camera))
+        ctx.validated("scene raster", || {
+            self.draw(ctx, gpu_scene, camera, hidden_mesh)
+        })
     }
 
-    fn draw(&self, ctx: &GpuContext, gpu_scene: &GpuScene, camera: &CameraUniform) -> GBuffer {
+    fn draw(
+        &self,
+        ctx: &GpuContext,
+        gpu_scene: &GpuScene,
+        camera: &CameraUniform,
+        hidden_mesh: Option<usize>,
+    ) -> GBuffer {
         use wgpu::util::DeviceExt;
         let device = &ctx.device;
         let (width, height) = (camera.width as u32, camera.height as u32);
@@ -568,7 +578,14 @@ impl RasterPass {
             pass.set_pipeline(&self.scene_pipeline);
             pass.set_bind_group(2, &self.shadow_bind_group, &[]);
             pass.set_vertex_buffer(0, gpu_scene.vertices.slice(..));
-            pass.draw(0..gpu_scene.vertex_count, 0..1);
+            match hidden_mesh {
+                None => pass.draw(0..gpu_scene.vertex_count, 0..1),
+                Some(hidden) => {
+                    let ranges = &gpu_scene.mesh_vertex_ranges;
+                    pass.draw(0..ranges[hidden].start, 0..1);
+                    pass.draw(ranges[hidden].end..gpu_scene.vertex_count, 0..1);
+                }
+            }
         }
         ctx.queue.submit([encoder.finish()]);
         g

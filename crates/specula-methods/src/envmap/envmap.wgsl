@@ -1,0 +1,142 @@
+// envmap: shades the specular pixels of the G-buffer from per-reflector environment cube maps
+// (six faces in a 2D array, looked up by projecting the direction with each face's own
+// view-projection, so lookups match how the faces were rendered).
+// Prepended: optics.wgsl, camera.wgsl, scene.wgsl.
+
+struct EnvView {
+    clip_from_world: mat4x4<f32>,
+};
+
+struct Reflector {
+    center: vec3<f32>,
+    radius: f32,
+    first_layer: u32,
+    two_interface: u32,
+    pad0: u32,
+    pad1: u32,
+};
+
+@group(0) @binding(0) var<uniform> camera: Camera;
+@group(0) @binding(1) var g_color: texture_2d<f32>;
+@group(0) @binding(2) var g_position: texture_2d<f32>;
+@group(0) @binding(3) var g_normal: texture_2d<f32>;
+@group(0) @binding(4) var g_ids: texture_2d<u32>;
+@group(0) @binding(5) var env_faces: texture_2d_array<f32>;
+@group(0) @binding(6) var<storage, read> env_views: array<EnvView>;
+@group(0) @binding(7) var<storage, read> reflectors: array<Reflector>;
+// Reflector index of each mesh, or -1.
+@group(0) @binding(8) var<storage, read> mesh_reflector: array<i32>;
+
+fn env_texel(layer: u32, x: i32, y: i32, size: i32) -> vec3<f32> {
+    return textureLoad(env_faces, vec2<i32>(clamp(x, 0, size - 1), clamp(y, 0, size - 1)), i32(layer), 0).xyz;
+}
+
+// Radiance the cube map of `r` holds in direction `d` (as seen from the reflector's centre).
+fn env_lookup(r: Reflector, d: vec3<f32>) -> vec3<f32> {
+    let a = abs(d);
+    var face = 0u;
+    if (a.x >= a.y && a.x >= a.z) {
+        face = select(1u, 0u, d.x > 0.0);
+    } else if (a.y >= a.z) {
+        face = select(3u, 2u, d.y > 0.0);
+    } else {
+        face = select(5u, 4u, d.z > 0.0);
+    }
+    let layer = r.first_layer + face;
+    let clip = env_views[layer].clip_from_world * vec4<f32>(r.center + d, 1.0);
+    let ndc = clip.xy / clip.w;
+    let size = i32(textureDimensions(env_faces).x);
+    let x = (ndc.x * 0.5 + 0.5) * f32(size) - 0.5;
+    let y = (0.5 - ndc.y * 0.5) * f32(size) - 0.5;
+    let x0 = floor(x);
+    let y0 = floor(y);
+    let fx = x - x0;
+    let fy = y - y0;
+    let xi = i32(x0);
+    let yi = i32(y0);
+    let top = mix(env_texel(layer, xi, yi, size), env_texel(layer, xi + 1, yi, size), fx);
+    let bottom = mix(env_texel(layer, xi, yi + 1, size), env_texel(layer, xi + 1, yi + 1, size), fx);
+    return mix(top, bottom, fy);
+}
+
+// Far intersection of the ray p + t·d (p inside) with the reflector's bounding sphere.
+fn exit_point(r: Reflector, p: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
+    let oc = p - r.center;
+    let b = dot(oc, d);
+    let c = dot(oc, oc) - r.radius * r.radius;
+    let t = -b + sqrt(max(b * b - c, 0.0));
+    return p + d * t;
+}
+
+// Transmitted radiance of one colour channel through a solid dielectric of index `ior`.
+fn transmitted(r: Reflector, p: vec3<f32>, d: vec3<f32>, n: vec3<f32>, ior: f32, channel: u32) -> f32 {
+    let t_in = refract(d, n, 1.0 / ior);
+    if (r.two_interface == 0u) {
+        // Single interface: the environment seen along the refracted ray.
+        return env_lookup(r, t_in)[channel];
+    }
+    // Naive second interface: leave through the bounding sphere, refracting at its normal.
+    let exit = exit_point(r, p, t_in);
+    let n_out = normalize(exit - r.center);
+    let cos_exit = dot(t_in, n_out);
+    let r_exit = fresnel_dielectric(cos_exit, ior);
+    var t_out = refract(t_in, -n_out, ior);
+    if (dot(t_out, t_out) == 0.0) {
+        t_out = reflect(t_in, -n_out);
+    }
+    return env_lookup(r, t_out)[channel] * (1.0 - r_exit);
+}
+
+struct FullscreenOut {
+    @builtin(position) clip: vec4<f32>,
+};
+
+@vertex
+fn vs_fullscreen(@builtin(vertex_index) i: u32) -> FullscreenOut {
+    var out: FullscreenOut;
+    let xy = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u)) * 2.0 - 1.0;
+    out.clip = vec4<f32>(xy, 0.0, 1.0);
+    return out;
+}
+
+@fragment
+fn fs_shade(in: FullscreenOut) -> @location(0) vec4<f32> {
+    let pixel = vec2<i32>(in.clip.xy);
+    let base = textureLoad(g_color, pixel, 0);
+    let ids = textureLoad(g_ids, pixel, 0).xy;
+    if (ids.x == 0u) {
+        return base;
+    }
+    let mesh = ids.x - 1u;
+    let reflector_index = mesh_reflector[mesh];
+    if (reflector_index < 0) {
+        return base;
+    }
+    let r = reflectors[reflector_index];
+    let material = materials[mesh_materials[mesh]];
+    let p = textureLoad(g_position, pixel, 0).xyz;
+    let n = textureLoad(g_normal, pixel, 0).xyz;
+    let d = normalize(p - camera.eye_world);
+    let cos_i = -dot(d, n);
+    let reflected = env_lookup(r, reflect(d, n));
+    var color = vec3<f32>(0.0);
+    if (material.kind == MATERIAL_MIRROR) {
+        var f = material.color;
+        if ((material.flags & FLAG_FRESNEL) != 0u) {
+            f = fresnel_schlick(material.color, cos_i);
+        }
+        color = f * reflected;
+    } else if ((material.flags & FLAG_THIN) != 0u) {
+        let straight = env_lookup(r, d);
+        for (var c = 0u; c < 3u; c++) {
+            let rs = thin_sheet_reflectance(cos_i, material.ior[c]);
+            color[c] = rs * reflected[c] + (1.0 - rs) * straight[c];
+        }
+    } else {
+        for (var c = 0u; c < 3u; c++) {
+            let rf = fresnel_dielectric(cos_i, 1.0 / material.ior[c]);
+            color[c] = rf * reflected[c] + (1.0 - rf) * transmitted(r, p, d, n, material.ior[c], c);
+        }
+    }
+    return vec4<f32>(color, 1.0);
+}

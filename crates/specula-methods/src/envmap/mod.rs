@@ -1,0 +1,456 @@
+//! `envmap`: classic dynamic environment mapping, the baseline the papers argue against.
+//!
+//! Paper: none (the standard technique; Umenhoffer et al., `001_7674acf89cfed11c.txt`, and
+//! Kakimoto et al., `000_00fe11db0f879bd7.txt`, both compare against it).
+//!
+//! Steps, per frame:
+//! 1. the scene raster pass (G-buffer) for the camera;
+//! 2. for each specular mesh (a "reflector"), a cube map of the scene rendered from the centre
+//!    of its bounding box, with the reflector itself left out;
+//! 3. a full-screen pass that shades each specular pixel: mirrors look up the reflected
+//!    direction (Schlick Fresnel or F0); dielectrics mix the reflected lookup with the
+//!    transmitted one by exact Fresnel, per colour channel (so dispersion shows); thin sheets
+//!    look straight through.
+//!
+//! Approximations and artifacts: every lookup pretends the environment is infinitely far, so
+//! nearby objects appear in the wrong place and at the wrong size (exact only for a distant
+//! environment, or at the centre of the cube map); other specular objects appear black in a
+//! reflector's cube map (no inter-reflection); the two-interface variant leaves the refractor
+//! through its bounding sphere instead of its real back surface and ignores internal
+//! reflection.
+//!
+//! Parameters:
+//! - `resolution` (default 256): texels per cube-map face side. Higher sharpens reflections;
+//!   cost is 6 × resolution² rasterised texels per reflector per frame.
+//! - `two_interface` (default true): refract a second time at the bounding sphere (the naive
+//!   two-interface variant); false looks up the environment right after the first refraction.
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+use specula_gpu::shaders::{self, CameraUniform};
+use specula_gpu::{GpuContext, GpuError, TimingSource};
+use specula_scene::{Camera, Scene};
+use wgpu::util::DeviceExt;
+
+use crate::gpu_scene::GpuScene;
+use crate::raster::{self, RasterPass};
+use crate::technique::{Frame, StageClock, Technique, TechniqueError};
+
+const SHADER: &str = include_str!("envmap.wgsl");
+
+pub fn shader_source() -> String {
+    shaders::compose(&["optics.wgsl", "camera.wgsl", "scene.wgsl"], SHADER)
+}
+
+/// Host mirror of WGSL `Reflector`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct GpuReflector {
+    center: [f32; 3],
+    radius: f32,
+    first_layer: u32,
+    two_interface: u32,
+    pad: [u32; 2],
+}
+
+struct Prepared {
+    gpu_scene: GpuScene,
+    raster: RasterPass,
+    /// (mesh index, centre, radius) of each reflector.
+    reflectors: Vec<(usize, Vec3, f32)>,
+    env_faces: wgpu::Texture,
+    env_views: wgpu::Buffer,
+    reflector_buffer: wgpu::Buffer,
+    mesh_reflector: wgpu::Buffer,
+    face_cameras: Vec<CameraUniform>,
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+    scene_bind_group: wgpu::BindGroup,
+}
+
+pub struct EnvMap {
+    pub resolution: u32,
+    pub two_interface: bool,
+    pub shadow_resolution: u32,
+    prepared: Option<Prepared>,
+}
+
+impl Default for EnvMap {
+    fn default() -> Self {
+        EnvMap {
+            resolution: 256,
+            two_interface: true,
+            shadow_resolution: 1024,
+            prepared: None,
+        }
+    }
+}
+
+fn texture_entry(
+    binding: u32,
+    sample_type: wgpu::TextureSampleType,
+    dimension: wgpu::TextureViewDimension,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Texture {
+            sample_type,
+            view_dimension: dimension,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
+fn buffer_entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Buffer {
+            ty,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+impl EnvMap {
+    fn build(&self, ctx: &GpuContext, scene: &Scene) -> Result<Prepared, GpuError> {
+        let device = &ctx.device;
+        let gpu_scene = GpuScene::upload(device, scene);
+        let raster = RasterPass::new(ctx, &gpu_scene, self.shadow_resolution)?;
+        ctx.validated("envmap set-up", || {
+            let reflectors: Vec<(usize, Vec3, f32)> = scene
+                .meshes
+                .iter()
+                .enumerate()
+                .filter(|(_, m)| scene.materials[m.material].is_specular())
+                .map(|(i, m)| {
+                    // The tightest sphere around the box centre: farthest vertex, not the
+                    // box's half-diagonal.
+                    let center = m.bounds().center();
+                    let radius = m
+                        .positions
+                        .iter()
+                        .map(|p| (*p - center).length())
+                        .fold(0.0, f32::max);
+                    (i, center, radius)
+                })
+                .collect();
+            let bounds = scene.bounds();
+            let mut face_cameras = Vec::new();
+            let mut views: Vec<[[f32; 4]; 4]> = Vec::new();
+            let mut gpu_reflectors = Vec::new();
+            for (k, &(_, center, radius)) in reflectors.iter().enumerate() {
+                let (near, far) = raster::depth_range(&bounds, center);
+                for view in raster::cube_views(center, near, far, self.resolution) {
+                    let forward = Vec3::from_array(view.direction);
+                    let up = match view.direction {
+                        d if d[1].abs() > 0.5 => Vec3::Z * d[1].signum(),
+                        _ => -Vec3::Y,
+                    };
+                    let camera = CameraUniform::new(
+                        center,
+                        forward.cross(up),
+                        up,
+                        forward,
+                        90.0,
+                        self.resolution,
+                        self.resolution,
+                        near,
+                        far,
+                    );
+                    views.push(camera.clip_from_world);
+                    face_cameras.push(camera);
+                }
+                gpu_reflectors.push(GpuReflector {
+                    center: center.to_array(),
+                    radius,
+                    first_layer: 6 * k as u32,
+                    two_interface: self.two_interface as u32,
+                    pad: [0; 2],
+                });
+            }
+            let mut mesh_reflector = vec![-1i32; scene.meshes.len().max(1)];
+            for (k, &(mesh, ..)) in reflectors.iter().enumerate() {
+                mesh_reflector[mesh] = k as i32;
+            }
+            let layers = (6 * reflectors.len() as u32).max(1);
+            let env_faces = device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("environment faces"),
+                size: wgpu::Extent3d {
+                    width: self.resolution,
+                    height: self.resolution,
+                    depth_or_array_layers: layers,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: raster::COLOR_FORMAT,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                view_formats: &[],
+            });
+            let storage = |label, contents: &[u8]| {
+                device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(label),
+                    contents,
+                    usage: wgpu::BufferUsages::STORAGE,
+                })
+            };
+            if views.is_empty() {
+                views.push([[0.0; 4]; 4]);
+                gpu_reflectors.push(GpuReflector::zeroed());
+            }
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("envmap.wgsl"),
+                source: wgpu::ShaderSource::Wgsl(shader_source().into()),
+            });
+            use wgpu::{BufferBindingType as B, TextureSampleType as S, TextureViewDimension as D};
+            let float = S::Float { filterable: false };
+            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("envmap"),
+                entries: &[
+                    buffer_entry(0, B::Uniform),
+                    texture_entry(1, float, D::D2),
+                    texture_entry(2, float, D::D2),
+                    texture_entry(3, float, D::D2),
+                    texture_entry(4, S::Uint, D::D2),
+                    texture_entry(5, float, D::D2Array),
+                    buffer_entry(6, B::Storage { read_only: true }),
+                    buffer_entry(7, B::Storage { read_only: true }),
+                    buffer_entry(8, B::Storage { read_only: true }),
+                ],
+            });
+            let scene_layout = GpuScene::bind_group_layout(device);
+            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("envmap"),
+                bind_group_layouts: &[Some(&layout), Some(&scene_layout)],
+                ..Default::default()
+            });
+            let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("envmap shade"),
+                layout: Some(&pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_fullscreen"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: Default::default(),
+                depth_stencil: None,
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_shade"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format: raster::COLOR_FORMAT,
+                        blend: None,
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            });
+            Prepared {
+                scene_bind_group: gpu_scene.bind_group(device, &scene_layout),
+                env_views: storage("environment views", bytemuck::cast_slice(&views)),
+                reflector_buffer: storage("reflectors", bytemuck::cast_slice(&gpu_reflectors)),
+                mesh_reflector: storage("mesh reflectors", bytemuck::cast_slice(&mesh_reflector)),
+                gpu_scene,
+                raster,
+                reflectors,
+                env_faces,
+                face_cameras,
+                pipeline,
+                layout,
+            }
+        })
+    }
+}
+
+impl Technique for EnvMap {
+    fn name(&self) -> &'static str {
+        "envmap"
+    }
+
+    fn parameters(&self) -> Vec<(String, String)> {
+        vec![
+            ("resolution".into(), self.resolution.to_string()),
+            ("two_interface".into(), self.two_interface.to_string()),
+            (
+                "shadow_resolution".into(),
+                self.shadow_resolution.to_string(),
+            ),
+        ]
+    }
+
+    fn prepare(&mut self, ctx: &GpuContext, scene: &Scene) -> Result<(), TechniqueError> {
+        self.prepared = Some(self.build(ctx, scene)?);
+        Ok(())
+    }
+
+    fn render(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &Scene,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+    ) -> Result<Frame, TechniqueError> {
+        let p = self.prepared.as_ref().ok_or(TechniqueError::NotPrepared {
+            technique: "envmap",
+        })?;
+        let device = &ctx.device;
+        let mut clock = StageClock::start();
+        let camera_uniform = raster::camera_uniform(camera, &scene.bounds(), width, height);
+        let g = p.raster.render(ctx, &p.gpu_scene, &camera_uniform, None)?;
+        clock.lap(ctx, "g-buffer")?;
+        for (k, &(mesh, ..)) in p.reflectors.iter().enumerate() {
+            for face in 0..6 {
+                let layer = 6 * k + face;
+                let face_g =
+                    p.raster
+                        .render(ctx, &p.gpu_scene, &p.face_cameras[layer], Some(mesh))?;
+                let mut encoder = device.create_command_encoder(&Default::default());
+                encoder.copy_texture_to_texture(
+                    face_g.color.as_image_copy(),
+                    wgpu::TexelCopyTextureInfo {
+                        texture: &p.env_faces,
+                        mip_level: 0,
+                        origin: wgpu::Origin3d {
+                            x: 0,
+                            y: 0,
+                            z: layer as u32,
+                        },
+                        aspect: wgpu::TextureAspect::All,
+                    },
+                    wgpu::Extent3d {
+                        width: self.resolution,
+                        height: self.resolution,
+                        depth_or_array_layers: 1,
+                    },
+                );
+                ctx.queue.submit([encoder.finish()]);
+            }
+        }
+        clock.lap(ctx, "environment cube maps")?;
+        let output = ctx.validated("envmap shade", || {
+            let output = device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("envmap output"),
+                size: wgpu::Extent3d {
+                    width,
+                    height,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: raster::COLOR_FORMAT,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            });
+            let camera_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("camera"),
+                contents: bytemuck::bytes_of(&camera_uniform),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+            let view = |t: &wgpu::Texture| t.create_view(&Default::default());
+            let faces_view = p.env_faces.create_view(&wgpu::TextureViewDescriptor {
+                dimension: Some(wgpu::TextureViewDimension::D2Array),
+                ..Default::default()
+            });
+            let (color, position, normal, ids) = (
+                view(&g.color),
+                view(&g.position),
+                view(&g.normal),
+                view(&g.ids),
+            );
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("envmap"),
+                layout: &p.layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: camera_buffer.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::TextureView(&color),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: wgpu::BindingResource::TextureView(&position),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 3,
+                        resource: wgpu::BindingResource::TextureView(&normal),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 4,
+                        resource: wgpu::BindingResource::TextureView(&ids),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 5,
+                        resource: wgpu::BindingResource::TextureView(&faces_view),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 6,
+                        resource: p.env_views.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 7,
+                        resource: p.reflector_buffer.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 8,
+                        resource: p.mesh_reflector.as_entire_binding(),
+                    },
+                ],
+            });
+            let output_view = view(&output);
+            let mut encoder = device.create_command_encoder(&Default::default());
+            {
+                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("envmap shade"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: &output_view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    ..Default::default()
+                });
+                pass.set_pipeline(&p.pipeline);
+                pass.set_bind_group(0, &bind_group, &[]);
+                pass.set_bind_group(1, &p.scene_bind_group, &[]);
+                pass.draw(0..3, 0..1);
+            }
+            ctx.queue.submit([encoder.finish()]);
+            output
+        })?;
+        clock.lap(ctx, "shading")?;
+        let image = raster::read_rgba32f(ctx, &output)?;
+        clock.lap(ctx, "readback")?;
+        let faces = 6 * p.reflectors.len() as u64;
+        Ok(Frame {
+            image,
+            stages: clock.stages,
+            counters: vec![
+                ("reflectors".into(), p.reflectors.len() as u64),
+                ("cube map faces rendered".into(), faces),
+                (
+                    "cube map texels".into(),
+                    faces * (self.resolution as u64).pow(2),
+                ),
+                ("raster passes".into(), 1 + faces),
+            ],
+            timing: TimingSource::CpuWallClock,
+        })
+    }
+}

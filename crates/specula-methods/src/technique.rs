@@ -1,0 +1,100 @@
+//! The one interface every technique implements, and the registry of techniques by name.
+
+use specula_gpu::{GpuContext, GpuError, TimingSource};
+use specula_scene::{Camera, Scene};
+use specula_trace::Image;
+
+#[derive(Debug, thiserror::Error)]
+pub enum TechniqueError {
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+    #[error("unknown method '{name}'; valid methods: {valid}")]
+    UnknownMethod { name: String, valid: String },
+    #[error("{technique}: render called before prepare")]
+    NotPrepared { technique: &'static str },
+}
+
+/// Time spent in one stage of a frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StageTime {
+    pub stage: String,
+    pub milliseconds: f64,
+}
+
+/// One rendered frame: the image (linear radiance), where the time went, and what the
+/// technique counted (passes, texels, rays...).
+#[derive(Clone, Debug)]
+pub struct Frame {
+    pub image: Image,
+    pub stages: Vec<StageTime>,
+    pub counters: Vec<(String, u64)>,
+    pub timing: TimingSource,
+}
+
+impl Frame {
+    pub fn total_milliseconds(&self) -> f64 {
+        self.stages.iter().map(|s| s.milliseconds).sum()
+    }
+}
+
+/// A reflection/refraction technique. `prepare` runs once per scene or geometry change;
+/// `render` once per frame for a camera.
+pub trait Technique {
+    /// The name users type (`--method`).
+    fn name(&self) -> &'static str;
+    /// Parameters and their current values, for reports.
+    fn parameters(&self) -> Vec<(String, String)>;
+    fn prepare(&mut self, ctx: &GpuContext, scene: &Scene) -> Result<(), TechniqueError>;
+    fn render(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &Scene,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+    ) -> Result<Frame, TechniqueError>;
+}
+
+/// Measures stages by wall-clock time on the CPU, waiting for the GPU at the end of each.
+pub struct StageClock {
+    start: std::time::Instant,
+    pub stages: Vec<StageTime>,
+}
+
+impl StageClock {
+    pub fn start() -> Self {
+        StageClock {
+            start: std::time::Instant::now(),
+            stages: Vec::new(),
+        }
+    }
+
+    /// Ends the current stage (after the GPU has finished it) and starts the next.
+    pub fn lap(&mut self, ctx: &GpuContext, stage: &str) -> Result<(), GpuError> {
+        ctx.wait()?;
+        let now = std::time::Instant::now();
+        self.stages.push(StageTime {
+            stage: stage.to_string(),
+            milliseconds: (now - self.start).as_secs_f64() * 1e3,
+        });
+        self.start = now;
+        Ok(())
+    }
+}
+
+/// GPU technique names, in the order reports list them.
+pub const METHODS: &[&str] = &["envmap"];
+
+/// A new, unprepared technique by name.
+pub fn by_name(name: &str) -> Result<Box<dyn Technique>, TechniqueError> {
+    match name {
+        "envmap" => Ok(Box::new(crate::envmap::EnvMap::default())),
+        _ => Err(TechniqueError::UnknownMethod {
+            name: name.to_string(),
+            valid: std::iter::once("reference")
+                .chain(METHODS.iter().copied())
+                .collect::<Vec<_>>()
+                .join(", "),
+        }),
+    }
+}
