@@ -1,0 +1,328 @@
+//! `specula compare`: renders the reference and each technique from the same camera at the same
+//! resolution and reports, per technique, its error on the reflector/refractor pixels (a mask
+//! from the G-buffer's IDs), an error heat-map, its time per stage and its speed-up over the
+//! reference; written as a self-contained HTML page and as JSON (schema:
+//! docs/compare.schema.json).
+
+pub mod metrics;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use base64::Engine;
+use serde::Serialize;
+use specula_gpu::{GpuContext, TimingSource};
+use specula_methods::raster::{self, RasterPass};
+use specula_methods::{by_name, GpuScene, TechniqueError};
+use specula_scene::Scene;
+use specula_trace::{render, Image, RenderSettings, SceneAccel};
+
+pub use metrics::Metrics;
+
+#[derive(Debug, thiserror::Error)]
+pub enum CompareError {
+    #[error(transparent)]
+    Technique(#[from] TechniqueError),
+    #[error(transparent)]
+    Gpu(#[from] specula_gpu::GpuError),
+    #[error("{path}: {message}")]
+    Write { path: String, message: String },
+    #[error("the scene has no mirror or dielectric surface in view: nothing to compare")]
+    EmptyMask,
+}
+
+#[derive(Clone, Debug)]
+pub struct Options {
+    pub width: u32,
+    pub height: u32,
+    pub methods: Vec<String>,
+    /// Samples per pixel of the reference (1 = pixel centres, as the techniques).
+    pub spp: u32,
+    pub max_depth: u32,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct StageReport {
+    pub stage: String,
+    pub ms: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct ReferenceReport {
+    pub spp: u32,
+    pub max_depth: u32,
+    pub total_ms: f64,
+    pub image: String,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct MethodReport {
+    pub method: String,
+    pub parameters: BTreeMap<String, String>,
+    /// "gpu-timestamps" or "cpu-wall-clock".
+    pub timing: String,
+    pub stages: Vec<StageReport>,
+    pub total_ms: f64,
+    pub speedup_over_reference: f64,
+    pub counters: BTreeMap<String, u64>,
+    pub metrics: Metrics,
+    pub image: String,
+    pub heat_map: String,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    pub schema_version: u32,
+    pub scene: String,
+    pub width: u32,
+    pub height: u32,
+    pub adapter: String,
+    /// Pixels whose primary visible surface (G-buffer ID) is a mirror or dielectric.
+    pub mask_pixels: usize,
+    pub reference: ReferenceReport,
+    pub methods: Vec<MethodReport>,
+}
+
+/// The report plus the images it refers to.
+pub struct Comparison {
+    pub report: Report,
+    pub reference: Image,
+    /// (image, heat-map) per method, in report order.
+    pub method_images: Vec<(Image, image::RgbImage)>,
+}
+
+fn timing_name(t: TimingSource) -> &'static str {
+    match t {
+        TimingSource::GpuTimestamps => "gpu-timestamps",
+        TimingSource::CpuWallClock => "cpu-wall-clock",
+    }
+}
+
+/// Runs the comparison. `progress` is told what is happening (for a progress bar).
+pub fn compare(
+    scene: &Scene,
+    ctx: &GpuContext,
+    options: &Options,
+    progress: &dyn Fn(&str),
+) -> Result<Comparison, CompareError> {
+    let (width, height) = (options.width, options.height);
+    // Build every technique first so an unknown name fails before any long work.
+    let mut techniques = options
+        .methods
+        .iter()
+        .map(|m| by_name(m))
+        .collect::<Result<Vec<_>, _>>()?;
+
+    progress("reference");
+    let start = Instant::now();
+    let accel = SceneAccel::new(scene);
+    let settings = RenderSettings {
+        width,
+        height,
+        spp: options.spp,
+        max_depth: options.max_depth,
+    };
+    let reference = render(scene, &accel, &settings, &|_, _| {});
+    let reference_ms = start.elapsed().as_secs_f64() * 1e3;
+
+    progress("mask");
+    let gpu_scene = GpuScene::upload(&ctx.device, scene);
+    let raster_pass = RasterPass::new(ctx, &gpu_scene, 256)?;
+    let camera = raster::camera_uniform(&scene.camera, &scene.bounds(), width, height);
+    let ids = raster_pass
+        .render(ctx, &gpu_scene, &camera, None)?
+        .read_ids(ctx)?;
+    let mask: Vec<bool> = ids
+        .iter()
+        .map(|id| {
+            id[0] != 0 && scene.materials[scene.meshes[id[0] as usize - 1].material].is_specular()
+        })
+        .collect();
+    let mask_pixels = mask.iter().filter(|&&m| m).count();
+    if mask_pixels == 0 {
+        return Err(CompareError::EmptyMask);
+    }
+
+    let mut methods = Vec::new();
+    let mut method_images = Vec::new();
+    for technique in techniques.iter_mut() {
+        progress(technique.name());
+        technique.prepare(ctx, scene)?;
+        let frame = technique.render(ctx, scene, &scene.camera, width, height)?;
+        let flip = metrics::flip_map(&reference, &frame.image);
+        let metrics = metrics::measure(&reference, &frame.image, &flip, &mask);
+        let total_ms = frame.total_milliseconds();
+        methods.push(MethodReport {
+            method: technique.name().to_string(),
+            parameters: technique.parameters().into_iter().collect(),
+            timing: timing_name(frame.timing).to_string(),
+            stages: frame
+                .stages
+                .iter()
+                .map(|s| StageReport {
+                    stage: s.stage.clone(),
+                    ms: s.milliseconds,
+                })
+                .collect(),
+            total_ms,
+            speedup_over_reference: reference_ms / total_ms.max(1e-9),
+            counters: frame.counters.iter().cloned().collect(),
+            metrics,
+            image: format!("{}.png", technique.name()),
+            heat_map: format!("{}-flip.png", technique.name()),
+        });
+        method_images.push((frame.image, metrics::heat_map(&flip, width, height)));
+    }
+    Ok(Comparison {
+        report: Report {
+            schema_version: 1,
+            scene: scene.name.clone(),
+            width,
+            height,
+            adapter: ctx.describe(),
+            mask_pixels,
+            reference: ReferenceReport {
+                spp: options.spp,
+                max_depth: options.max_depth,
+                total_ms: reference_ms,
+                image: "reference.png".into(),
+            },
+            methods,
+        },
+        reference,
+        method_images,
+    })
+}
+
+fn write_error(path: &Path, e: impl std::fmt::Display) -> CompareError {
+    CompareError::Write {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    }
+}
+
+fn png_bytes(img: &image::RgbImage) -> Vec<u8> {
+    let mut bytes = Vec::new();
+    img.write_to(
+        &mut std::io::Cursor::new(&mut bytes),
+        image::ImageFormat::Png,
+    )
+    .expect("PNG encodes in memory");
+    bytes
+}
+
+fn data_uri(img: &image::RgbImage) -> String {
+    format!(
+        "data:image/png;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(png_bytes(img))
+    )
+}
+
+fn escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+impl Comparison {
+    /// Writes `report.html` (self-contained: images embedded), `report.json` and the PNGs into
+    /// `dir`; returns the HTML's path.
+    pub fn write_report(&self, dir: &Path) -> Result<PathBuf, CompareError> {
+        std::fs::create_dir_all(dir).map_err(|e| write_error(dir, e))?;
+        let save = |name: &str, img: &image::RgbImage| {
+            let path = dir.join(name);
+            img.save(&path).map_err(|e| write_error(&path, e))
+        };
+        let reference = self.reference.to_srgb8();
+        save(&self.report.reference.image, &reference)?;
+        for (m, (img, heat)) in self.report.methods.iter().zip(&self.method_images) {
+            save(&m.image, &img.to_srgb8())?;
+            save(&m.heat_map, heat)?;
+        }
+        self.write_json(&dir.join("report.json"))?;
+        let path = dir.join("report.html");
+        std::fs::write(&path, self.html()).map_err(|e| write_error(&path, e))?;
+        Ok(path)
+    }
+
+    pub fn write_json(&self, path: &Path) -> Result<(), CompareError> {
+        let text = serde_json::to_string_pretty(&self.report).map_err(|e| write_error(path, e))?;
+        std::fs::write(path, text).map_err(|e| write_error(path, e))
+    }
+
+    pub fn html(&self) -> String {
+        let r = &self.report;
+        let mut rows = String::new();
+        for m in &r.methods {
+            let stages: Vec<String> = m
+                .stages
+                .iter()
+                .map(|s| format!("{} {:.2}", escape(&s.stage), s.ms))
+                .collect();
+            rows.push_str(&format!(
+                "<tr><td>{}</td><td>{:.4}</td><td>{}</td><td>{:.4}</td><td>{:.1} %</td><td>{:.2}</td><td>{:.1}×</td><td>{}</td><td>{}</td></tr>\n",
+                escape(&m.method),
+                m.metrics.rmse,
+                m.metrics.psnr_db.map(|p| format!("{p:.1}")).unwrap_or_else(|| "∞".into()),
+                m.metrics.mean_flip,
+                m.metrics.share_flip_over_0_1 * 100.0,
+                m.total_ms,
+                m.speedup_over_reference,
+                stages.join("<br>"),
+                escape(&m.timing),
+            ));
+        }
+        let mut figures = format!(
+            "<figure><img src=\"{}\"><figcaption>reference ({} spp, depth {}, {:.1} ms)</figcaption></figure>\n",
+            data_uri(&self.reference.to_srgb8()),
+            r.reference.spp,
+            r.reference.max_depth,
+            r.reference.total_ms
+        );
+        for (m, (img, heat)) in r.methods.iter().zip(&self.method_images) {
+            let params: Vec<String> = m
+                .parameters
+                .iter()
+                .map(|(k, v)| format!("{}={}", escape(k), escape(v)))
+                .collect();
+            figures.push_str(&format!(
+                "<figure><img src=\"{}\"><figcaption>{} ({})</figcaption></figure>\n<figure><img src=\"{}\"><figcaption>{}: FLIP error (black = none, yellow = large)</figcaption></figure>\n",
+                data_uri(&img.to_srgb8()),
+                escape(&m.method),
+                params.join(", "),
+                data_uri(heat),
+                escape(&m.method)
+            ));
+        }
+        format!(
+            r#"<!DOCTYPE html>
+<html><head><meta charset="utf-8"><title>specula compare: {scene}</title>
+<style>
+body {{ font-family: sans-serif; margin: 2em; background: #fafafa; }}
+table {{ border-collapse: collapse; margin: 1em 0; }}
+td, th {{ border: 1px solid #bbb; padding: 4px 8px; text-align: right; vertical-align: top; }}
+td:first-child, th:first-child {{ text-align: left; }}
+figure {{ display: inline-block; margin: 0.5em; }}
+img {{ image-rendering: pixelated; width: {display_width}px; }}
+</style></head><body>
+<h1>specula compare: {scene}</h1>
+<p>{width}×{height} pixels on {adapter}. Errors are measured on the {mask} pixels whose visible surface is a mirror or
+dielectric (from the G-buffer's IDs): RMSE and PSNR on linear radiance clamped to [0, 1]; FLIP on the sRGB images.
+Speed-up is the reference's render time over the technique's frame time.</p>
+<table>
+<tr><th>method</th><th>RMSE</th><th>PSNR (dB)</th><th>mean FLIP</th><th>FLIP &gt; 0.1</th><th>frame (ms)</th><th>speed-up</th><th>stages (ms)</th><th>timing</th></tr>
+{rows}</table>
+{figures}
+</body></html>
+"#,
+            scene = escape(&r.scene),
+            width = r.width,
+            height = r.height,
+            adapter = escape(&r.adapter),
+            mask = r.mask_pixels,
+            display_width = r.width.clamp(256, 512),
+        )
+    }
+}

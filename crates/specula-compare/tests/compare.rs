@@ -1,0 +1,73 @@
+//! `compare` end to end on a built-in scene, with the JSON checked against its schema.
+
+use specula_compare::{compare, Options};
+
+#[test]
+fn compare_writes_a_report_and_json_that_matches_the_schema() {
+    let Some(ctx) = specula_gpu::test_context("compare end to end") else {
+        return;
+    };
+    let scene = specula_scene::load("door-mirror").unwrap();
+    let options = Options {
+        width: 64,
+        height: 48,
+        methods: vec!["envmap".into()],
+        spp: 1,
+        max_depth: 8,
+    };
+    let comparison = compare(&scene, &ctx, &options, &|_| {}).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let html = comparison.write_report(dir.path()).unwrap();
+    let text = std::fs::read_to_string(&html).unwrap();
+    assert!(text.contains("data:image/png;base64,") && text.contains("envmap"));
+    for file in [
+        "reference.png",
+        "envmap.png",
+        "envmap-flip.png",
+        "report.json",
+    ] {
+        assert!(dir.path().join(file).exists(), "{file} missing");
+    }
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap())
+            .unwrap();
+    let schema: serde_json::Value =
+        serde_json::from_str(include_str!("../../../docs/compare.schema.json")).unwrap();
+    let validator = jsonschema::validator_for(&schema).unwrap();
+    let errors: Vec<String> = validator
+        .iter_errors(&json)
+        .map(|e| format!("{e} at {}", e.instance_path()))
+        .collect();
+    assert!(errors.is_empty(), "{errors:?}");
+    let m = &comparison.report.methods[0];
+    assert!(m.metrics.mask_pixels > 100);
+    assert!(
+        m.metrics.mean_flip < 0.2,
+        "envmap on the door mirror: mean FLIP {}",
+        m.metrics.mean_flip
+    );
+    assert!(m.speedup_over_reference > 0.0);
+}
+
+#[test]
+fn unknown_methods_are_named_with_the_valid_ones() {
+    let Some(ctx) = specula_gpu::test_context("compare unknown method") else {
+        return;
+    };
+    let scene = specula_scene::load("door-mirror").unwrap();
+    let options = Options {
+        width: 16,
+        height: 16,
+        methods: vec!["magic".into()],
+        spp: 1,
+        max_depth: 8,
+    };
+    let message = compare(&scene, &ctx, &options, &|_| {})
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        message.contains("magic") && message.contains("envmap") && message.contains("reference"),
+        "{message}"
+    );
+}
