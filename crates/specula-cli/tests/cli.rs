@@ -113,3 +113,89 @@ fn bad_input_is_a_clear_error_not_a_panic() {
         );
     }
 }
+
+fn has_gpu(test: &str) -> bool {
+    specula_gpu::test_context(test).is_some()
+}
+
+#[test]
+fn render_with_a_gpu_method() {
+    if !has_gpu("render_with_a_gpu_method") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = specula()
+        .current_dir(dir.path())
+        .args(["render", "teapot-box", "--method", "envmap", "-W", "48"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let img = image::open(dir.path().join("out.png")).unwrap();
+    assert_eq!((img.width(), img.height()), (48, 36));
+}
+
+#[test]
+fn compare_with_no_arguments_reports_every_method_on_the_default_scene() {
+    if !has_gpu("compare_with_no_arguments") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = specula()
+        .current_dir(dir.path())
+        .args(["compare", "-W", "64", "--json", "r.json"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("door-mirror") && stdout.contains("envmap"),
+        "{stdout}"
+    );
+    assert!(dir.path().join("specula-report/report.html").exists());
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("r.json")).unwrap()).unwrap();
+    assert_eq!(json["methods"][0]["method"], "envmap");
+}
+
+#[test]
+fn bench_reports_median_and_spread_per_stage() {
+    if !has_gpu("bench_reports_median_and_spread") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = specula()
+        .current_dir(dir.path())
+        .args([
+            "bench",
+            "door-mirror",
+            "--methods",
+            "envmap",
+            "--frames",
+            "3",
+            "-W",
+            "32",
+            "--json",
+            "b.json",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("b.json")).unwrap()).unwrap();
+    let frame = &json[0]["frame"];
+    assert!(frame["min_ms"].as_f64().unwrap() <= frame["median_ms"].as_f64().unwrap());
+    assert!(frame["median_ms"].as_f64().unwrap() <= frame["max_ms"].as_f64().unwrap());
+    assert!(json[0]["stages"].as_array().unwrap().len() >= 3);
+}

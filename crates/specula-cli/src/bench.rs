@@ -1,0 +1,110 @@
+//! `specula bench`: per method, a warm-up then N timed frames; the median and the spread (min,
+//! max) of the frame time and of each stage.
+
+use anyhow::Result;
+use serde::Serialize;
+use specula_gpu::GpuContext;
+use specula_scene::Scene;
+
+/// Frames rendered and thrown away before timing (pipeline creation, first-use costs).
+const WARM_UP_FRAMES: u32 = 2;
+
+#[derive(Debug, Serialize)]
+pub struct Spread {
+    pub median_ms: f64,
+    pub min_ms: f64,
+    pub max_ms: f64,
+}
+
+#[derive(Debug, Serialize)]
+pub struct MethodBench {
+    pub method: String,
+    pub frames: u32,
+    pub width: u32,
+    pub height: u32,
+    pub adapter: String,
+    pub timing: String,
+    pub prepare_ms: f64,
+    pub frame: Spread,
+    pub stages: Vec<(String, Spread)>,
+}
+
+fn spread(mut values: Vec<f64>) -> Spread {
+    values.sort_by(f64::total_cmp);
+    let n = values.len();
+    let median = if n % 2 == 1 {
+        values[n / 2]
+    } else {
+        0.5 * (values[n / 2 - 1] + values[n / 2])
+    };
+    Spread {
+        median_ms: median,
+        min_ms: values[0],
+        max_ms: values[n - 1],
+    }
+}
+
+pub fn run(
+    scene: &Scene,
+    ctx: &GpuContext,
+    methods: &[String],
+    width: u32,
+    height: u32,
+    frames: u32,
+) -> Result<Vec<MethodBench>> {
+    let mut results = Vec::new();
+    for name in methods {
+        let mut technique = specula_methods::by_name(name)?;
+        let start = std::time::Instant::now();
+        technique.prepare(ctx, scene)?;
+        let prepare_ms = start.elapsed().as_secs_f64() * 1e3;
+        let bar = indicatif::ProgressBar::new((WARM_UP_FRAMES + frames) as u64);
+        bar.set_message(name.clone());
+        let mut totals = Vec::new();
+        let mut stages: Vec<(String, Vec<f64>)> = Vec::new();
+        let mut timing = String::new();
+        for i in 0..WARM_UP_FRAMES + frames {
+            let frame = technique.render(ctx, scene, &scene.camera, width, height)?;
+            bar.inc(1);
+            if i < WARM_UP_FRAMES {
+                continue;
+            }
+            timing = format!("{:?}", frame.timing);
+            totals.push(frame.total_milliseconds());
+            for s in &frame.stages {
+                match stages.iter_mut().find(|(n, _)| *n == s.stage) {
+                    Some((_, v)) => v.push(s.milliseconds),
+                    None => stages.push((s.stage.clone(), vec![s.milliseconds])),
+                }
+            }
+        }
+        bar.finish_and_clear();
+        results.push(MethodBench {
+            method: name.clone(),
+            frames,
+            width,
+            height,
+            adapter: ctx.describe(),
+            timing,
+            prepare_ms,
+            frame: spread(totals),
+            stages: stages.into_iter().map(|(n, v)| (n, spread(v))).collect(),
+        });
+    }
+    Ok(results)
+}
+
+pub fn print(results: &[MethodBench]) {
+    for r in results {
+        println!(
+            "{} ({}x{}, {} frames on {}, {}): prepare {:.1} ms; frame median {:.2} ms (min {:.2}, max {:.2})",
+            r.method, r.width, r.height, r.frames, r.adapter, r.timing, r.prepare_ms, r.frame.median_ms, r.frame.min_ms, r.frame.max_ms
+        );
+        for (stage, s) in &r.stages {
+            println!(
+                "    {stage:<24} median {:>9.2} ms  (min {:.2}, max {:.2})",
+                s.median_ms, s.min_ms, s.max_ms
+            );
+        }
+    }
+}
