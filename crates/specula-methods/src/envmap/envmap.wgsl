@@ -11,7 +11,9 @@ struct Reflector {
     center: vec3<f32>,
     radius: f32,
     first_layer: u32,
-    two_interface: u32,
+    // How rays leave a solid refractor: 0 = they do not (one interface), 1 = through the
+    // bounding sphere, 2 = through a face parallel to the entry face (a thin slab).
+    exit_model: u32,
     pad0: u32,
     pad1: u32,
 };
@@ -71,13 +73,16 @@ fn exit_point(r: Reflector, p: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
 // Transmitted radiance of one colour channel through a solid dielectric of index `ior`.
 fn transmitted(r: Reflector, p: vec3<f32>, d: vec3<f32>, n: vec3<f32>, ior: f32, channel: u32) -> f32 {
     let t_in = refract(d, n, 1.0 / ior);
-    if (r.two_interface == 0u) {
+    if (r.exit_model == 0u) {
         // Single interface: the environment seen along the refracted ray.
         return env_lookup(r, t_in)[channel];
     }
-    // Naive second interface: leave through the bounding sphere, refracting at its normal.
-    let exit = exit_point(r, p, t_in);
-    let n_out = normalize(exit - r.center);
+    // Naive second interface: the bounding sphere's normal where the ray leaves it, or the
+    // entry face's own normal (a slab of parallel faces).
+    var n_out = -n;
+    if (r.exit_model == 1u) {
+        n_out = normalize(exit_point(r, p, t_in) - r.center);
+    }
     let cos_exit = dot(t_in, n_out);
     let r_exit = fresnel_dielectric(cos_exit, ior);
     var t_out = refract(t_in, -n_out, ior);

@@ -15,15 +15,20 @@
 //! Approximations and artifacts: every lookup pretends the environment is infinitely far, so
 //! nearby objects appear in the wrong place and at the wrong size (exact only for a distant
 //! environment, or at the centre of the cube map); other specular objects appear black in a
-//! reflector's cube map (no inter-reflection); the two-interface variant leaves the refractor
-//! through its bounding sphere instead of its real back surface and ignores internal
-//! reflection.
+//! reflector's cube map (no inter-reflection); the two-interface variants leave the refractor
+//! through a bounding sphere or a parallel face instead of its real back surface, and ignore
+//! internal reflection.
 //!
 //! Parameters:
 //! - `resolution` (default 256): texels per cube-map face side. Higher sharpens reflections;
 //!   cost is 6 × resolution² rasterised texels per reflector per frame.
-//! - `two_interface` (default true): refract a second time at the bounding sphere (the naive
-//!   two-interface variant); false looks up the environment right after the first refraction.
+//! - `exit` (default `slab`): the naive second interface of solid refractors. `none` looks the
+//!   environment up right after the first refraction (single interface); `sphere` refracts
+//!   again where the ray leaves the bounding sphere (exact for a sphere); `slab` refracts again
+//!   at a face parallel to the entry face (exact for thin shells with parallel faces). The
+//!   default is the one with the lowest RMSE on the built-in refraction scenes (glass-dragon
+//!   0.092 vs 0.097 none / 0.102 sphere; spectacle-lens 0.176 vs 0.191 / 0.205, at 320×240);
+//!   costs are equal.
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -49,7 +54,7 @@ struct GpuReflector {
     center: [f32; 3],
     radius: f32,
     first_layer: u32,
-    two_interface: u32,
+    exit_model: u32,
     pad: [u32; 2],
 }
 
@@ -68,18 +73,39 @@ struct Prepared {
     scene_bind_group: wgpu::BindGroup,
 }
 
+/// Where a ray that refracted into a solid leaves it (`envmap`'s second interface).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Exit {
+    /// No second interface: the environment is looked up along the first refracted ray.
+    None = 0,
+    /// Through the refractor's bounding sphere, refracting at the sphere's normal.
+    Sphere = 1,
+    /// Through a face parallel to the entry face (a thin slab), refracting at its normal.
+    Slab = 2,
+}
+
 pub struct EnvMap {
     pub resolution: u32,
-    pub two_interface: bool,
+    pub exit: Exit,
     pub shadow_resolution: u32,
     prepared: Option<Prepared>,
+}
+
+impl EnvMap {
+    pub fn new(resolution: u32, exit: Exit) -> Self {
+        EnvMap {
+            resolution,
+            exit,
+            ..Default::default()
+        }
+    }
 }
 
 impl Default for EnvMap {
     fn default() -> Self {
         EnvMap {
             resolution: 256,
-            two_interface: true,
+            exit: Exit::Slab,
             shadow_resolution: 1024,
             prepared: None,
         }
@@ -169,7 +195,7 @@ impl EnvMap {
                     center: center.to_array(),
                     radius,
                     first_layer: 6 * k as u32,
-                    two_interface: self.two_interface as u32,
+                    exit_model: self.exit as u32,
                     pad: [0; 2],
                 });
             }
@@ -279,7 +305,7 @@ impl Technique for EnvMap {
     fn parameters(&self) -> Vec<(String, String)> {
         vec![
             ("resolution".into(), self.resolution.to_string()),
-            ("two_interface".into(), self.two_interface.to_string()),
+            ("exit".into(), format!("{:?}", self.exit).to_lowercase()),
             (
                 "shadow_resolution".into(),
                 self.shadow_resolution.to_string(),
