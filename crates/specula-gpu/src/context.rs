@@ -46,9 +46,12 @@ impl GpuContext {
             ..Default::default()
         }))
         .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
-        let timestamps = adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY);
+        // Stage timings write timestamps between submissions, which needs both features.
+        let timestamp_features =
+            wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
+        let timestamps = adapter.features().contains(timestamp_features);
         let required_features = if timestamps {
-            wgpu::Features::TIMESTAMP_QUERY
+            timestamp_features
         } else {
             wgpu::Features::empty()
         };

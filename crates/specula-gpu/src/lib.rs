@@ -4,8 +4,10 @@
 
 mod context;
 pub mod shaders;
+mod timer;
 
 pub use context::{GpuContext, GpuError, TimingSource};
+pub use timer::{StageTime, StageTimer};
 
 /// The context for GPU tests: `None` (after a loud SKIPPED line) when this machine has no
 /// Vulkan adapter. Under CI (`CI` set) a missing adapter is a failure instead, because CI

@@ -1,5 +1,6 @@
 //! The one interface every technique implements, and the registry of techniques by name.
 
+pub use specula_gpu::StageTime;
 use specula_gpu::{GpuContext, GpuError, TimingSource};
 use specula_scene::{Camera, Scene};
 use specula_trace::Image;
@@ -12,13 +13,6 @@ pub enum TechniqueError {
     UnknownMethod { name: String, valid: String },
     #[error("{technique}: render called before prepare")]
     NotPrepared { technique: &'static str },
-}
-
-/// Time spent in one stage of a frame.
-#[derive(Clone, Debug, PartialEq)]
-pub struct StageTime {
-    pub stage: String,
-    pub milliseconds: f64,
 }
 
 /// One rendered frame: the image (linear radiance), where the time went, and what the
@@ -53,33 +47,6 @@ pub trait Technique {
         width: u32,
         height: u32,
     ) -> Result<Frame, TechniqueError>;
-}
-
-/// Measures stages by wall-clock time on the CPU, waiting for the GPU at the end of each.
-pub struct StageClock {
-    start: std::time::Instant,
-    pub stages: Vec<StageTime>,
-}
-
-impl StageClock {
-    pub fn start() -> Self {
-        StageClock {
-            start: std::time::Instant::now(),
-            stages: Vec::new(),
-        }
-    }
-
-    /// Ends the current stage (after the GPU has finished it) and starts the next.
-    pub fn lap(&mut self, ctx: &GpuContext, stage: &str) -> Result<(), GpuError> {
-        ctx.wait()?;
-        let now = std::time::Instant::now();
-        self.stages.push(StageTime {
-            stage: stage.to_string(),
-            milliseconds: (now - self.start).as_secs_f64() * 1e3,
-        });
-        self.start = now;
-        Ok(())
-    }
 }
 
 /// GPU technique names, in the order reports list them.

@@ -33,13 +33,13 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use specula_gpu::shaders::{self, CameraUniform};
-use specula_gpu::{GpuContext, GpuError, TimingSource};
+use specula_gpu::{GpuContext, GpuError, StageTimer};
 use specula_scene::{Camera, Scene};
 use wgpu::util::DeviceExt;
 
 use crate::gpu_scene::GpuScene;
 use crate::raster::{self, RasterPass};
-use crate::technique::{Frame, StageClock, Technique, TechniqueError};
+use crate::technique::{Frame, Technique, TechniqueError};
 
 const SHADER: &str = include_str!("envmap.wgsl");
 
@@ -330,7 +330,7 @@ impl Technique for EnvMap {
             technique: "envmap",
         })?;
         let device = &ctx.device;
-        let mut clock = StageClock::start();
+        let mut clock = StageTimer::start(ctx);
         let camera_uniform = raster::camera_uniform(camera, &scene.bounds(), width, height);
         let g = p.raster.render(ctx, &p.gpu_scene, &camera_uniform, None)?;
         clock.lap(ctx, "g-buffer")?;
@@ -464,9 +464,10 @@ impl Technique for EnvMap {
         let image = raster::read_rgba32f(ctx, &output)?;
         clock.lap(ctx, "readback")?;
         let faces = 6 * p.reflectors.len() as u64;
+        let (stages, timing) = clock.finish(ctx)?;
         Ok(Frame {
             image,
-            stages: clock.stages,
+            stages,
             counters: vec![
                 ("reflectors".into(), p.reflectors.len() as u64),
                 ("cube map faces rendered".into(), faces),
@@ -476,7 +477,7 @@ impl Technique for EnvMap {
                 ),
                 ("raster passes".into(), 1 + faces),
             ],
-            timing: TimingSource::CpuWallClock,
+            timing,
         })
     }
 }
