@@ -32,16 +32,30 @@ pub struct GpuContext {
 }
 
 impl GpuContext {
-    /// Opens the best Vulkan adapter: `HighPerformance` so a real GPU wins over lavapipe where
-    /// both exist. The GL backend is never used (it lacks float render targets).
-    pub fn new() -> Result<GpuContext, GpuError> {
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
+    /// A Vulkan-only wgpu instance. The GL backend is never used (it lacks float render
+    /// targets).
+    pub fn vulkan_instance() -> wgpu::Instance {
+        wgpu::Instance::new(wgpu::InstanceDescriptor {
             backends: wgpu::Backends::VULKAN,
             ..wgpu::InstanceDescriptor::new_without_display_handle()
-        });
+        })
+    }
+
+    /// A headless context on the best Vulkan adapter.
+    pub fn new() -> Result<GpuContext, GpuError> {
+        Self::with_surface(&Self::vulkan_instance(), None)
+    }
+
+    /// Opens the best Vulkan adapter of `instance` (`HighPerformance`, so a real GPU wins over
+    /// lavapipe where both exist) that can present to `surface` when one is given (the viewer's
+    /// window; create it from the same instance).
+    pub fn with_surface(
+        instance: &wgpu::Instance,
+        surface: Option<&wgpu::Surface<'_>>,
+    ) -> Result<GpuContext, GpuError> {
         let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
             power_preference: wgpu::PowerPreference::HighPerformance,
-            compatible_surface: None,
+            compatible_surface: surface,
             force_fallback_adapter: false,
             ..Default::default()
         }))
