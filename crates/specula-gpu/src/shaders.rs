@@ -8,12 +8,14 @@ use glam::{Mat4, Vec3};
 pub const OPTICS: &str = include_str!("../../../shaders/common/optics.wgsl");
 pub const CAMERA: &str = include_str!("../../../shaders/common/camera.wgsl");
 pub const SCENE: &str = include_str!("../../../shaders/common/scene.wgsl");
+pub const CUBEMAP: &str = include_str!("../../../shaders/common/cubemap.wgsl");
 
 /// Every common WGSL file, by name, for validation and composition.
 pub const COMMON: &[(&str, &str)] = &[
     ("optics.wgsl", OPTICS),
     ("camera.wgsl", CAMERA),
     ("scene.wgsl", SCENE),
+    ("cubemap.wgsl", CUBEMAP),
 ];
 
 /// A shader's full source: the named common files, then the technique's own code.

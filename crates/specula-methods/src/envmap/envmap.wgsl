@@ -1,7 +1,6 @@
 // envmap: shades the specular pixels of the G-buffer from per-reflector environment cube maps
-// (six faces in a 2D array, looked up by projecting the direction with each face's own
-// view-projection, so lookups match how the faces were rendered).
-// Prepended: optics.wgsl, camera.wgsl, scene.wgsl.
+// (six faces in a 2D array; see cubemap.wgsl).
+// Prepended: optics.wgsl, camera.wgsl, scene.wgsl, cubemap.wgsl.
 
 struct EnvView {
     clip_from_world: mat4x4<f32>,
@@ -35,21 +34,11 @@ fn env_texel(layer: u32, x: i32, y: i32, size: i32) -> vec3<f32> {
 
 // Radiance the cube map of `r` holds in direction `d` (as seen from the reflector's centre).
 fn env_lookup(r: Reflector, d: vec3<f32>) -> vec3<f32> {
-    let a = abs(d);
-    var face = 0u;
-    if (a.x >= a.y && a.x >= a.z) {
-        face = select(1u, 0u, d.x > 0.0);
-    } else if (a.y >= a.z) {
-        face = select(3u, 2u, d.y > 0.0);
-    } else {
-        face = select(5u, 4u, d.z > 0.0);
-    }
-    let layer = r.first_layer + face;
-    let clip = env_views[layer].clip_from_world * vec4<f32>(r.center + d, 1.0);
-    let ndc = clip.xy / clip.w;
+    let layer = r.first_layer + cube_face(d);
+    let uv = face_uv(env_views[layer].clip_from_world, r.center + d);
     let size = i32(textureDimensions(env_faces).x);
-    let x = (ndc.x * 0.5 + 0.5) * f32(size) - 0.5;
-    let y = (0.5 - ndc.y * 0.5) * f32(size) - 0.5;
+    let x = uv.x * f32(size) - 0.5;
+    let y = uv.y * f32(size) - 0.5;
     let x0 = floor(x);
     let y0 = floor(y);
     let fx = x - x0;

@@ -44,18 +44,21 @@ use crate::technique::{Frame, Technique, TechniqueError};
 const SHADER: &str = include_str!("envmap.wgsl");
 
 pub fn shader_source() -> String {
-    shaders::compose(&["optics.wgsl", "camera.wgsl", "scene.wgsl"], SHADER)
+    shaders::compose(
+        &["optics.wgsl", "camera.wgsl", "scene.wgsl", "cubemap.wgsl"],
+        SHADER,
+    )
 }
 
 /// Host mirror of WGSL `Reflector`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct GpuReflector {
-    center: [f32; 3],
-    radius: f32,
-    first_layer: u32,
-    exit_model: u32,
-    pad: [u32; 2],
+pub struct GpuReflector {
+    pub center: [f32; 3],
+    pub radius: f32,
+    pub first_layer: u32,
+    pub exit_model: u32,
+    pub pad: [u32; 2],
 }
 
 struct Prepared {

@@ -26,7 +26,7 @@ const SHADER: &str = include_str!("raster.wgsl");
 
 /// The raster shader's full source (common files prepended).
 pub fn shader_source() -> String {
-    shaders::compose(&["camera.wgsl", "scene.wgsl"], SHADER)
+    shaders::compose(&["camera.wgsl", "scene.wgsl", "cubemap.wgsl"], SHADER)
 }
 
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;

@@ -2,7 +2,7 @@
 // are shaded (unlit; Lambert with the scene's lights, distance shadow maps and ambient);
 // specular ones are left black for the technique to fill. Writes the G-buffer techniques reuse:
 // world position (w = 1 on geometry), shading normal facing the eye, and mesh + triangle IDs.
-// Prepended: camera.wgsl, scene.wgsl.
+// Prepended: camera.wgsl, scene.wgsl, cubemap.wgsl.
 
 struct ShadowView {
     clip_from_world: mat4x4<f32>,
@@ -66,16 +66,7 @@ fn shadow_metric(view: ShadowView, p: vec3<f32>) -> f32 {
 fn light_visibility(light: Light, p: vec3<f32>, n: vec3<f32>) -> f32 {
     var layer = light.shadow_layer;
     if (light.kind != LIGHT_DIRECTIONAL) {
-        // Cube faces in the order +X, -X, +Y, -Y, +Z, -Z.
-        let v = p - light.position;
-        let a = abs(v);
-        if (a.x >= a.y && a.x >= a.z) {
-            layer += select(1u, 0u, v.x > 0.0);
-        } else if (a.y >= a.z) {
-            layer += select(3u, 2u, v.y > 0.0);
-        } else {
-            layer += select(5u, 4u, v.z > 0.0);
-        }
+        layer += cube_face(p - light.position);
     }
     let view = shadow_views[layer];
     let size = textureDimensions(shadow_maps);
@@ -87,9 +78,7 @@ fn light_visibility(light: Light, p: vec3<f32>, n: vec3<f32>) -> f32 {
     let to_light = light_sample(light, p).to_light;
     let n_light = select(-n, n, dot(n, to_light) >= 0.0);
     let p_offset = p + n_light * texel_world * 1.5;
-    let clip = view.clip_from_world * vec4<f32>(p_offset, 1.0);
-    let ndc = clip.xy / clip.w;
-    let uv = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
+    let uv = face_uv(view.clip_from_world, p_offset);
     if (any(uv < vec2<f32>(0.0)) || any(uv >= vec2<f32>(1.0))) {
         return 1.0;
     }

@@ -1,0 +1,136 @@
+//! Every technique shader validates with naga, and every host struct that mirrors a WGSL one
+//! has the same size and member offsets as naga computes for it.
+
+use std::mem::{offset_of, size_of};
+
+use specula_methods::envmap::{self, GpuReflector};
+use specula_methods::gpu_scene::{GpuLight, GpuMaterial, GpuSceneInfo, GpuTextureInfo};
+use specula_methods::raster::{self, ShadowView};
+
+fn parse(name: &str, source: &str) -> naga::Module {
+    let module = naga::front::wgsl::parse_str(source)
+        .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(source)));
+    naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::all(),
+    )
+    .validate(&module)
+    .unwrap_or_else(|e| panic!("{name}: {e:?}"));
+    module
+}
+
+/// Asserts that WGSL struct `name` has `size` bytes and, member by member (padding members
+/// included), the host offsets given in declaration order.
+fn assert_layout(module: &naga::Module, name: &str, size: usize, host: &[usize]) {
+    let (members, span) = module
+        .types
+        .iter()
+        .find_map(|(_, ty)| match (&ty.name, &ty.inner) {
+            (Some(n), naga::TypeInner::Struct { members, span }) if n == name => {
+                Some((members.clone(), *span))
+            }
+            _ => None,
+        })
+        .unwrap_or_else(|| panic!("no WGSL struct {name}"));
+    assert_eq!(
+        span as usize, size,
+        "{name}: WGSL size {span} vs host {size}"
+    );
+    // Host padding arrays cover several WGSL padding scalars: compare the leading members.
+    for (member, &offset) in members.iter().zip(host) {
+        assert_eq!(
+            member.offset as usize,
+            offset,
+            "{name}.{}",
+            member.name.as_deref().unwrap_or("?")
+        );
+    }
+}
+
+#[test]
+fn technique_shaders_validate() {
+    parse("raster.wgsl", &raster::shader_source());
+    parse("envmap.wgsl", &envmap::shader_source());
+}
+
+#[test]
+fn host_structs_match_wgsl_layouts() {
+    let module = parse("raster.wgsl", &raster::shader_source());
+    assert_layout(
+        &module,
+        "Material",
+        size_of::<GpuMaterial>(),
+        &[
+            offset_of!(GpuMaterial, color),
+            offset_of!(GpuMaterial, kind),
+            offset_of!(GpuMaterial, ior),
+            offset_of!(GpuMaterial, texture),
+            offset_of!(GpuMaterial, flags),
+            offset_of!(GpuMaterial, pad),
+        ],
+    );
+    assert_layout(
+        &module,
+        "TextureInfo",
+        size_of::<GpuTextureInfo>(),
+        &[
+            offset_of!(GpuTextureInfo, offset),
+            offset_of!(GpuTextureInfo, width),
+            offset_of!(GpuTextureInfo, height),
+            offset_of!(GpuTextureInfo, pad),
+        ],
+    );
+    assert_layout(
+        &module,
+        "Light",
+        size_of::<GpuLight>(),
+        &[
+            offset_of!(GpuLight, position),
+            offset_of!(GpuLight, kind),
+            offset_of!(GpuLight, direction),
+            offset_of!(GpuLight, cos_inner),
+            offset_of!(GpuLight, intensity),
+            offset_of!(GpuLight, cos_outer),
+            offset_of!(GpuLight, shadow_layer),
+            offset_of!(GpuLight, pad),
+        ],
+    );
+    assert_layout(
+        &module,
+        "SceneInfo",
+        size_of::<GpuSceneInfo>(),
+        &[
+            offset_of!(GpuSceneInfo, ambient),
+            offset_of!(GpuSceneInfo, light_count),
+            offset_of!(GpuSceneInfo, background),
+            offset_of!(GpuSceneInfo, background_texture),
+            offset_of!(GpuSceneInfo, background_intensity),
+            offset_of!(GpuSceneInfo, pad),
+        ],
+    );
+    assert_layout(
+        &module,
+        "ShadowView",
+        size_of::<ShadowView>(),
+        &[
+            offset_of!(ShadowView, clip_from_world),
+            offset_of!(ShadowView, origin),
+            offset_of!(ShadowView, directional),
+            offset_of!(ShadowView, direction),
+            offset_of!(ShadowView, texel_size),
+        ],
+    );
+    let module = parse("envmap.wgsl", &envmap::shader_source());
+    assert_layout(
+        &module,
+        "Reflector",
+        size_of::<GpuReflector>(),
+        &[
+            offset_of!(GpuReflector, center),
+            offset_of!(GpuReflector, radius),
+            offset_of!(GpuReflector, first_layer),
+            offset_of!(GpuReflector, exit_model),
+            offset_of!(GpuReflector, pad),
+        ],
+    );
+}
