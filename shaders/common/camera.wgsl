@@ -20,3 +20,10 @@ fn camera_ray_direction(camera: Camera, pixel: vec2<f32>) -> vec3<f32> {
     let ndc_y = (1.0 - 2.0 * pixel.y / camera.height) * camera.tan_half_fov_y;
     return normalize(camera.forward_world + ndc_x * camera.right_world + ndc_y * camera.up_world);
 }
+
+// Clip position of vertex `i` (0, 1, 2) of one triangle that covers the whole screen, at the
+// far plane.
+fn fullscreen_triangle(i: u32) -> vec4<f32> {
+    let xy = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u)) * 2.0 - 1.0;
+    return vec4<f32>(xy, 1.0, 1.0);
+}

@@ -5,6 +5,7 @@
 mod context;
 pub mod shaders;
 mod timer;
+pub mod util;
 
 pub use context::{GpuContext, GpuError, TimingSource};
 pub use timer::{StageTime, StageTimer};

@@ -6,15 +6,7 @@ use specula_gpu::shaders::{self, CameraUniform};
 use wgpu::util::DeviceExt;
 
 fn validate(name: &str, source: &str) -> naga::Module {
-    let module = naga::front::wgsl::parse_str(source)
-        .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(source)));
-    naga::valid::Validator::new(
-        naga::valid::ValidationFlags::all(),
-        naga::valid::Capabilities::all(),
-    )
-    .validate(&module)
-    .unwrap_or_else(|e| panic!("{name}: {e:?}"));
-    module
+    specula_gpu::util::validate_wgsl(name, source).unwrap_or_else(|e| panic!("{e}"))
 }
 
 #[test]

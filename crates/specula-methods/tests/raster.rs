@@ -120,16 +120,3 @@ fn teapot_box_non_specular_pixels_match_the_reference() {
 fn mirror_teapot_bunny_non_specular_pixels_match_the_reference() {
     check("mirror-teapot-bunny");
 }
-
-#[test]
-fn raster_shader_validates() {
-    let source = raster::shader_source();
-    let module = naga::front::wgsl::parse_str(&source)
-        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(&source)));
-    naga::valid::Validator::new(
-        naga::valid::ValidationFlags::all(),
-        naga::valid::Capabilities::all(),
-    )
-    .validate(&module)
-    .unwrap();
-}

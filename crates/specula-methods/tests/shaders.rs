@@ -8,15 +8,7 @@ use specula_methods::gpu_scene::{GpuLight, GpuMaterial, GpuSceneInfo, GpuTexture
 use specula_methods::raster::{self, ShadowView};
 
 fn parse(name: &str, source: &str) -> naga::Module {
-    let module = naga::front::wgsl::parse_str(source)
-        .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(source)));
-    naga::valid::Validator::new(
-        naga::valid::ValidationFlags::all(),
-        naga::valid::Capabilities::all(),
-    )
-    .validate(&module)
-    .unwrap_or_else(|e| panic!("{name}: {e:?}"));
-    module
+    specula_gpu::util::validate_wgsl(name, source).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Asserts that WGSL struct `name` has `size` bytes and, member by member (padding members

@@ -88,8 +88,7 @@ struct FullscreenOut {
 @vertex
 fn vs_fullscreen(@builtin(vertex_index) i: u32) -> FullscreenOut {
     var out: FullscreenOut;
-    let xy = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u)) * 2.0 - 1.0;
-    out.clip = vec4<f32>(xy, 0.0, 1.0);
+    out.clip = fullscreen_triangle(i);
     return out;
 }
 

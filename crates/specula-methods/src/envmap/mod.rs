@@ -33,6 +33,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use specula_gpu::shaders::{self, CameraUniform};
+use specula_gpu::util::{render_pipeline, texture_2d, PipelineSpec};
 use specula_gpu::{GpuContext, GpuError, StageTimer};
 use specula_scene::{Camera, Scene};
 use wgpu::util::DeviceExt;
@@ -258,31 +259,19 @@ impl EnvMap {
                 bind_group_layouts: &[Some(&layout), Some(&scene_layout)],
                 ..Default::default()
             });
-            let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("envmap shade"),
-                layout: Some(&pipeline_layout),
-                vertex: wgpu::VertexState {
+            let pipeline = render_pipeline(
+                device,
+                &PipelineSpec {
+                    label: "envmap shade",
+                    layout: &pipeline_layout,
                     module: &module,
-                    entry_point: Some("vs_fullscreen"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
+                    vertex_entry: "vs_fullscreen",
+                    fragment_entry: "fs_shade",
+                    vertex_buffers: &[],
+                    depth: None,
+                    targets: &[raster::COLOR_FORMAT],
                 },
-                primitive: Default::default(),
-                depth_stencil: None,
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_shade"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(wgpu::ColorTargetState {
-                        format: raster::COLOR_FORMAT,
-                        blend: None,
-                        write_mask: wgpu::ColorWrites::ALL,
-                    })],
-                }),
-                multiview_mask: None,
-                cache: None,
-            });
+            );
             Prepared {
                 scene_bind_group: gpu_scene.bind_group(device, &scene_layout),
                 env_views: storage("environment views", bytemuck::cast_slice(&views)),
@@ -367,20 +356,14 @@ impl Technique for EnvMap {
         }
         clock.lap(ctx, "environment cube maps")?;
         let output = ctx.validated("envmap shade", || {
-            let output = device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("envmap output"),
-                size: wgpu::Extent3d {
-                    width,
-                    height,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: raster::COLOR_FORMAT,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-                view_formats: &[],
-            });
+            let output = texture_2d(
+                device,
+                "envmap output",
+                width,
+                height,
+                raster::COLOR_FORMAT,
+                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            );
             let camera_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("camera"),
                 contents: bytemuck::bytes_of(&camera_uniform),

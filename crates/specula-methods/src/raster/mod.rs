@@ -16,6 +16,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 use specula_gpu::shaders::{self, CameraUniform};
+use specula_gpu::util::{render_pipeline, texture_2d, PipelineSpec};
 use specula_gpu::{GpuContext, GpuError};
 use specula_scene::Camera;
 use specula_trace::Image;
@@ -33,6 +34,9 @@ pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 pub const IDS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 const SHADOW_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::R32Float;
+/// Colour, position, normal, IDs.
+const G_BUFFER_FORMATS: [wgpu::TextureFormat; 4] =
+    [COLOR_FORMAT, COLOR_FORMAT, COLOR_FORMAT, IDS_FORMAT];
 
 /// Host mirror of WGSL `ShadowView`.
 #[repr(C)]
@@ -141,14 +145,6 @@ fn vertex_layout() -> wgpu::VertexBufferLayout<'static> {
     }
 }
 
-fn target(format: wgpu::TextureFormat) -> Option<wgpu::ColorTargetState> {
-    Some(wgpu::ColorTargetState {
-        format,
-        blend: None,
-        write_mask: wgpu::ColorWrites::ALL,
-    })
-}
-
 /// The six 90° views of a cube around `position`, in the order +X, -X, +Y, -Y, +Z, -Z.
 pub fn cube_views(position: Vec3, near: f32, far: f32, resolution: u32) -> [ShadowView; 6] {
     let faces = [
@@ -222,12 +218,6 @@ impl RasterPass {
                 },
             ],
         });
-        let g_buffer_targets = [
-            target(COLOR_FORMAT),
-            target(COLOR_FORMAT),
-            target(COLOR_FORMAT),
-            target(IDS_FORMAT),
-        ];
         let layout = |layouts: &[Option<&wgpu::BindGroupLayout>]| {
             device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: None,
@@ -249,71 +239,47 @@ impl RasterPass {
                 bias: Default::default(),
             })
         };
-        let scene_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("scene raster"),
-            layout: Some(&scene_pipeline_layout),
-            vertex: wgpu::VertexState {
+        let scene_pipeline = render_pipeline(
+            device,
+            &PipelineSpec {
+                label: "scene raster",
+                layout: &scene_pipeline_layout,
                 module: &module,
-                entry_point: Some("vs_scene"),
-                compilation_options: Default::default(),
-                buffers: &[Some(vertex_layout())],
+                vertex_entry: "vs_scene",
+                fragment_entry: "fs_scene",
+                vertex_buffers: &[Some(vertex_layout())],
+                depth: depth(true, wgpu::CompareFunction::Less),
+                targets: &G_BUFFER_FORMATS,
             },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: depth(true, wgpu::CompareFunction::Less),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_scene"),
-                compilation_options: Default::default(),
-                targets: &g_buffer_targets,
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        );
         let background_pipeline_layout = layout(&[Some(&camera_layout), Some(&scene_layout)]);
-        let background_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("background"),
-            layout: Some(&background_pipeline_layout),
-            vertex: wgpu::VertexState {
+        let background_pipeline = render_pipeline(
+            device,
+            &PipelineSpec {
+                label: "background",
+                layout: &background_pipeline_layout,
                 module: &module,
-                entry_point: Some("vs_background"),
-                compilation_options: Default::default(),
-                buffers: &[],
+                vertex_entry: "vs_background",
+                fragment_entry: "fs_background",
+                vertex_buffers: &[],
+                depth: depth(false, wgpu::CompareFunction::Always),
+                targets: &G_BUFFER_FORMATS,
             },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: depth(false, wgpu::CompareFunction::Always),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_background"),
-                compilation_options: Default::default(),
-                targets: &g_buffer_targets,
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        );
         let shadow_pipeline_layout = layout(&[Some(&shadow_view_layout)]);
-        let shadow_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("shadow map"),
-            layout: Some(&shadow_pipeline_layout),
-            vertex: wgpu::VertexState {
+        let shadow_pipeline = render_pipeline(
+            device,
+            &PipelineSpec {
+                label: "shadow map",
+                layout: &shadow_pipeline_layout,
                 module: &module,
-                entry_point: Some("vs_shadow"),
-                compilation_options: Default::default(),
-                buffers: &[Some(vertex_layout())],
+                vertex_entry: "vs_shadow",
+                fragment_entry: "fs_shadow",
+                vertex_buffers: &[Some(vertex_layout())],
+                depth: depth(true, wgpu::CompareFunction::Less),
+                targets: &[SHADOW_FORMAT],
             },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: depth(true, wgpu::CompareFunction::Less),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_shadow"),
-                compilation_options: Default::default(),
-                targets: &[target(SHADOW_FORMAT)],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        );
 
         // Shadow views: six per point or spot light, one per directional light.
         let bounds = gpu_scene.bounds;
@@ -357,20 +323,14 @@ impl RasterPass {
                 | wgpu::TextureUsages::COPY_SRC,
             view_formats: &[],
         });
-        let shadow_depth = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("shadow depth"),
-            size: wgpu::Extent3d {
-                width: shadow_resolution,
-                height: shadow_resolution,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: DEPTH_FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-            view_formats: &[],
-        });
+        let shadow_depth = texture_2d(
+            device,
+            "shadow depth",
+            shadow_resolution,
+            shadow_resolution,
+            DEPTH_FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        );
         let shadow_depth_view = shadow_depth.create_view(&Default::default());
         let mut encoder = device.create_command_encoder(&Default::default());
         let mut view_buffers = Vec::new();
@@ -494,22 +454,8 @@ impl RasterPass {
         use wgpu::util::DeviceExt;
         let device = &ctx.device;
         let (width, height) = (camera.width as u32, camera.height as u32);
-        let texture = |label, format, usage| {
-            device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size: wgpu::Extent3d {
-                    width,
-                    height,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage,
-                view_formats: &[],
-            })
-        };
+        let texture =
+            |label, format, usage| texture_2d(device, label, width, height, format, usage);
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
             | wgpu::TextureUsages::TEXTURE_BINDING
             | wgpu::TextureUsages::COPY_SRC;

@@ -121,12 +121,10 @@ struct BackgroundOut {
     @builtin(position) clip: vec4<f32>,
 };
 
-// One triangle covering the screen.
 @vertex
 fn vs_background(@builtin(vertex_index) i: u32) -> BackgroundOut {
     var out: BackgroundOut;
-    let xy = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u)) * 2.0 - 1.0;
-    out.clip = vec4<f32>(xy, 1.0, 1.0);
+    out.clip = fullscreen_triangle(i);
     return out;
 }
 
