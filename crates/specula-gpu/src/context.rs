@@ -1,4 +1,5 @@
 use std::future::Future;
+use std::sync::{Arc, Mutex};
 
 /// Everything that can go wrong on the GPU side, as values: library code never panics on a
 /// wgpu error.
@@ -29,6 +30,9 @@ pub struct GpuContext {
     pub queue: wgpu::Queue,
     pub adapter_info: wgpu::AdapterInfo,
     pub timing: TimingSource,
+    /// wgpu errors raised outside any error scope. wgpu's default is to panic on them; here
+    /// they are collected and returned as an error by the next [`GpuContext::wait`].
+    uncaptured: Arc<Mutex<Vec<String>>>,
 }
 
 impl GpuContext {
@@ -76,7 +80,15 @@ impl GpuContext {
             ..Default::default()
         }))
         .map_err(|e| GpuError::Device(e.to_string()))?;
+        let uncaptured = Arc::new(Mutex::new(Vec::new()));
+        let sink = uncaptured.clone();
+        device.on_uncaptured_error(Arc::new(move |error: wgpu::Error| {
+            sink.lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .push(error.to_string());
+        }));
         Ok(GpuContext {
+            uncaptured,
             device,
             queue,
             adapter_info: adapter.get_info(),
@@ -110,15 +122,25 @@ impl GpuContext {
         }
     }
 
-    /// Blocks until all submitted work is done.
+    /// Blocks until all submitted work is done; reports any wgpu error raised outside an error
+    /// scope since the last wait.
     pub fn wait(&self) -> Result<(), GpuError> {
         self.device
             .poll(wgpu::PollType::Wait {
                 submission_index: None,
                 timeout: None,
             })
-            .map(|_| ())
-            .map_err(|e| GpuError::Readback(e.to_string()))
+            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        let errors =
+            std::mem::take(&mut *self.uncaptured.lock().unwrap_or_else(|e| e.into_inner()));
+        if errors.is_empty() {
+            Ok(())
+        } else {
+            Err(GpuError::Validation {
+                stage: "outside any error scope".into(),
+                message: errors.join("; "),
+            })
+        }
     }
 
     /// Reads a 2D texture (mip 0, layer `layer`) back to the CPU as tightly packed rows of

@@ -86,3 +86,18 @@ fn validation_errors_are_values_not_panics() {
     }
     assert!(ctx.validated("fine", || 1 + 1).is_ok());
 }
+
+#[test]
+fn errors_outside_scopes_come_back_from_wait_instead_of_panicking() {
+    let Some(ctx) = test_context("errors_outside_scopes") else {
+        return;
+    };
+    let _bad = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("bad"),
+        size: 16,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::STORAGE,
+        mapped_at_creation: false,
+    });
+    assert!(matches!(ctx.wait(), Err(GpuError::Validation { .. })));
+    assert!(ctx.wait().is_ok(), "reported once");
+}
