@@ -19,6 +19,7 @@ pub struct Spread {
 #[derive(Debug, Serialize)]
 pub struct MethodBench {
     pub method: String,
+    pub parameters: Vec<(String, String)>,
     pub frames: u32,
     pub width: u32,
     pub height: u32,
@@ -48,6 +49,7 @@ pub fn run(
     scene: &Scene,
     ctx: &GpuContext,
     methods: &[String],
+    parameters: &[String],
     width: u32,
     height: u32,
     frames: u32,
@@ -55,6 +57,7 @@ pub fn run(
     let mut results = Vec::new();
     for name in methods {
         let mut technique = specula_methods::by_name(name)?;
+        specula_methods::apply_parameters(technique.as_mut(), parameters)?;
         let start = std::time::Instant::now();
         technique.prepare(ctx, scene)?;
         let prepare_ms = start.elapsed().as_secs_f64() * 1e3;
@@ -81,6 +84,7 @@ pub fn run(
         bar.finish_and_clear();
         results.push(MethodBench {
             method: name.clone(),
+            parameters: technique.parameters(),
             frames,
             width,
             height,

@@ -49,6 +49,9 @@ enum Command {
         /// Maximum number of specular bounces on a path.
         #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(0..=64))]
         max_depth: u32,
+        /// A technique parameter, NAME=VALUE (repeatable), e.g. `-p resolution=512`.
+        #[arg(short = 'p', long = "param")]
+        params: Vec<String>,
         /// PNG output file.
         #[arg(short, long, default_value = "out.png")]
         output: PathBuf,
@@ -66,6 +69,9 @@ enum Command {
         /// Folder for report.html, report.json and the images.
         #[arg(long, default_value = "specula-report")]
         report: PathBuf,
+        /// A technique parameter, NAME=VALUE (repeatable), e.g. `-p resolution=512`.
+        #[arg(short = 'p', long = "param")]
+        params: Vec<String>,
         /// Also write the JSON report here.
         #[arg(long)]
         json: Option<PathBuf>,
@@ -87,6 +93,9 @@ enum Command {
         methods: Option<Vec<String>>,
         #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=100000))]
         frames: u32,
+        /// A technique parameter, NAME=VALUE (repeatable), e.g. `-p resolution=512`.
+        #[arg(short = 'p', long = "param")]
+        params: Vec<String>,
         #[arg(long)]
         json: Option<PathBuf>,
         #[arg(short = 'W', long, default_value_t = 640, value_parser = clap::value_parser!(u32).range(1..=16384))]
@@ -175,6 +184,7 @@ fn run(cli: Cli) -> Result<()> {
             max_depth,
             output,
             exr,
+            params,
         } => {
             let scene = load_scene(&scene)?;
             let height = height_for(&scene, width, height);
@@ -203,6 +213,7 @@ fn run(cli: Cli) -> Result<()> {
                 (image, summary)
             } else {
                 let mut technique = specula_methods::by_name(&method)?;
+                specula_methods::apply_parameters(technique.as_mut(), &params)?;
                 let ctx = gpu()?;
                 technique.prepare(&ctx, &scene)?;
                 let frame = technique.render(&ctx, &scene, &scene.camera, width, height)?;
@@ -236,9 +247,11 @@ fn run(cli: Cli) -> Result<()> {
             height,
             spp,
             max_depth,
+            params,
         } => {
             let scene = load_scene(&scene)?;
             let options = specula_compare::Options {
+                parameters: params,
                 width,
                 height: height_for(&scene, width, height),
                 methods: methods.unwrap_or_else(all_methods),
@@ -289,6 +302,7 @@ fn run(cli: Cli) -> Result<()> {
             json,
             width,
             height,
+            params,
         } => {
             let scene = load_scene(&scene)?;
             let height = height_for(&scene, width, height);
@@ -297,6 +311,7 @@ fn run(cli: Cli) -> Result<()> {
                 &scene,
                 &ctx,
                 &methods.unwrap_or_else(all_methods),
+                &params,
                 width,
                 height,
                 frames,

@@ -97,6 +97,36 @@ fn bad_input_is_a_clear_error_not_a_panic() {
             "valid methods: reference",
         ),
         (vec!["render".into(), "-W".into(), "0".into()], "0"),
+        (
+            vec![
+                "render".into(),
+                "--method".into(),
+                "envmap".into(),
+                "-p".into(),
+                "exit=portal".into(),
+            ],
+            "expected none, sphere or slab",
+        ),
+        (
+            vec![
+                "render".into(),
+                "--method".into(),
+                "envmap".into(),
+                "-p".into(),
+                "colour=1".into(),
+            ],
+            "parameters are resolution, exit and shadow_resolution",
+        ),
+        (
+            vec![
+                "render".into(),
+                "--method".into(),
+                "envmap".into(),
+                "-p".into(),
+                "resolution".into(),
+            ],
+            "NAME=VALUE",
+        ),
     ];
     for (args, expected) in cases {
         let out = specula()
@@ -126,7 +156,18 @@ fn render_with_a_gpu_method() {
     let dir = tempfile::tempdir().unwrap();
     let out = specula()
         .current_dir(dir.path())
-        .args(["render", "teapot-box", "--method", "envmap", "-W", "48"])
+        .args([
+            "render",
+            "teapot-box",
+            "--method",
+            "envmap",
+            "-W",
+            "48",
+            "-p",
+            "resolution=32",
+            "-p",
+            "exit=sphere",
+        ])
         .output()
         .unwrap();
     assert!(

@@ -41,6 +41,8 @@ pub struct Options {
     /// Samples per pixel of the reference (1 = pixel centres, as the techniques).
     pub spp: u32,
     pub max_depth: u32,
+    /// `name=value` technique parameters, applied to every method that has them.
+    pub parameters: Vec<String>,
 }
 
 #[derive(Clone, Debug, Serialize)]

@@ -14,6 +14,7 @@ fn compare_writes_a_report_and_json_that_matches_the_schema() {
         methods: vec!["envmap".into()],
         spp: 1,
         max_depth: 8,
+        parameters: vec![],
     };
     let comparison = compare(&scene, &ctx, &options, &|_| {}).unwrap();
     let dir = tempfile::tempdir().unwrap();
@@ -61,6 +62,7 @@ fn unknown_methods_are_named_with_the_valid_ones() {
         methods: vec!["magic".into()],
         spp: 1,
         max_depth: 8,
+        parameters: vec![],
     };
     let message = compare(&scene, &ctx, &options, &|_| {})
         .err()

@@ -8,4 +8,6 @@ pub mod raster;
 pub mod technique;
 
 pub use gpu_scene::GpuScene;
-pub use technique::{by_name, Frame, StageTime, Technique, TechniqueError, METHODS};
+pub use technique::{
+    apply_parameters, by_name, Frame, StageTime, Technique, TechniqueError, METHODS,
+};

@@ -13,6 +13,13 @@ pub enum TechniqueError {
     UnknownMethod { name: String, valid: String },
     #[error("{technique}: render called before prepare")]
     NotPrepared { technique: &'static str },
+    #[error("{technique}: bad parameter '{name}={value}': {reason}")]
+    BadParameter {
+        technique: &'static str,
+        name: String,
+        value: String,
+        reason: String,
+    },
 }
 
 /// One rendered frame: the image (linear radiance), where the time went, and what the
@@ -38,6 +45,9 @@ pub trait Technique {
     fn name(&self) -> &'static str;
     /// Parameters and their current values, for reports.
     fn parameters(&self) -> Vec<(String, String)>;
+    /// Sets a parameter by its name in [`Technique::parameters`]; takes effect at the next
+    /// `prepare`. Unknown names and unparsable values are errors naming the valid choices.
+    fn set_parameter(&mut self, name: &str, value: &str) -> Result<(), TechniqueError>;
     fn prepare(&mut self, ctx: &GpuContext, scene: &Scene) -> Result<(), TechniqueError>;
     fn render(
         &mut self,
@@ -64,4 +74,24 @@ pub fn by_name(name: &str) -> Result<Box<dyn Technique>, TechniqueError> {
                 .join(", "),
         }),
     }
+}
+
+/// Applies `name=value` settings to a technique, in order.
+pub fn apply_parameters(
+    technique: &mut dyn Technique,
+    settings: &[String],
+) -> Result<(), TechniqueError> {
+    for setting in settings {
+        let (name, value) =
+            setting
+                .split_once('=')
+                .ok_or_else(|| TechniqueError::BadParameter {
+                    technique: technique.name(),
+                    name: setting.clone(),
+                    value: String::new(),
+                    reason: "expected NAME=VALUE".into(),
+                })?;
+        technique.set_parameter(name.trim(), value.trim())?;
+    }
+    Ok(())
 }

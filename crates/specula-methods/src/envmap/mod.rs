@@ -305,6 +305,41 @@ impl Technique for EnvMap {
         ]
     }
 
+    fn set_parameter(&mut self, name: &str, value: &str) -> Result<(), TechniqueError> {
+        let bad = |reason: &str| TechniqueError::BadParameter {
+            technique: "envmap",
+            name: name.to_string(),
+            value: value.to_string(),
+            reason: reason.to_string(),
+        };
+        let size = || {
+            value
+                .parse::<u32>()
+                .ok()
+                .filter(|v| (1..=8192).contains(v))
+                .ok_or_else(|| bad("expected a whole number of texels from 1 to 8192"))
+        };
+        match name {
+            "resolution" => self.resolution = size()?,
+            "shadow_resolution" => self.shadow_resolution = size()?,
+            "exit" => {
+                self.exit = match value {
+                    "none" => Exit::None,
+                    "sphere" => Exit::Sphere,
+                    "slab" => Exit::Slab,
+                    _ => return Err(bad("expected none, sphere or slab")),
+                }
+            }
+            _ => {
+                return Err(bad(
+                    "envmap's parameters are resolution, exit and shadow_resolution",
+                ))
+            }
+        }
+        self.prepared = None;
+        Ok(())
+    }
+
     fn prepare(&mut self, ctx: &GpuContext, scene: &Scene) -> Result<(), TechniqueError> {
         self.prepared = Some(self.build(ctx, scene)?);
         Ok(())
