@@ -4,6 +4,7 @@
 
 pub mod envmap;
 pub mod gpu_scene;
+pub mod pvrr;
 pub mod raster;
 pub mod technique;
 

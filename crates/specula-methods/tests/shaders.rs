@@ -5,6 +5,7 @@ use std::mem::{offset_of, size_of};
 
 use specula_methods::envmap::{self, GpuReflector};
 use specula_methods::gpu_scene::{GpuLight, GpuMaterial, GpuSceneInfo, GpuTextureInfo};
+use specula_methods::pvrr::{self, GpuMirrorMaterial};
 use specula_methods::raster::{self, ShadowView};
 
 fn parse(name: &str, source: &str) -> naga::Module {
@@ -43,6 +44,7 @@ fn assert_layout(module: &naga::Module, name: &str, size: usize, host: &[usize])
 fn technique_shaders_validate() {
     parse("raster.wgsl", &raster::shader_source());
     parse("envmap.wgsl", &envmap::shader_source());
+    parse("pvrr.wgsl", &pvrr::shader_source());
 }
 
 #[test]
@@ -123,6 +125,16 @@ fn host_structs_match_wgsl_layouts() {
             offset_of!(GpuReflector, first_layer),
             offset_of!(GpuReflector, exit_model),
             offset_of!(GpuReflector, pad),
+        ],
+    );
+    let module = parse("pvrr.wgsl", &pvrr::shader_source());
+    assert_layout(
+        &module,
+        "MirrorMaterial",
+        size_of::<GpuMirrorMaterial>(),
+        &[
+            offset_of!(GpuMirrorMaterial, f0),
+            offset_of!(GpuMirrorMaterial, fresnel),
         ],
     );
 }

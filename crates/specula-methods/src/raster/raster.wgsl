@@ -26,7 +26,9 @@ struct VertexIn {
 };
 
 struct VertexOut {
-    @builtin(position) clip: vec4<f32>,
+    // Invariant: passes that redraw a surface over this depth (with LessEqual) must get
+    // bit-identical depths.
+    @builtin(position) @invariant clip: vec4<f32>,
     @location(0) position: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) uv: vec2<f32>,

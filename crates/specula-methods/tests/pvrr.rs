@@ -1,0 +1,173 @@
+//! `pvrr`: at the mirror's vertices the image shows what the ray tracer shows; in between, the
+//! error falls as the mirror is refined.
+
+use glam::Vec3;
+use specula_methods::by_name;
+use specula_scene::Scene;
+use specula_trace::{render, Image, RenderSettings, SceneAccel};
+
+const SIZE: u32 = 256;
+
+/// Pixel of world point `p`, if it is in the image.
+fn pixel_of(scene: &Scene, p: Vec3) -> Option<(u32, u32)> {
+    let f = scene.camera.frame();
+    let q = p - scene.camera.eye;
+    let z = q.dot(f.forward);
+    let tan = (scene.camera.fov_y_deg.to_radians() * 0.5).tan();
+    let (x, y) = (q.dot(f.right) / (z * tan), q.dot(f.up) / (z * tan));
+    let (px, py) = ((x + 1.0) * 0.5 * SIZE as f32, (1.0 - y) * 0.5 * SIZE as f32);
+    (z > 0.0 && px >= 0.0 && py >= 0.0 && px < SIZE as f32 && py < SIZE as f32)
+        .then_some((px as u32, py as u32))
+}
+
+/// Mean colour difference to the reference at the pixels holding the mirror's vertices, and at
+/// the pixels holding its triangles' centroids.
+fn vertex_and_centroid_errors(scene: &Scene, reference: &Image, image: &Image) -> (f32, f32) {
+    let accel = SceneAccel::new(scene);
+    let mirror = scene
+        .meshes
+        .iter()
+        .position(|m| m.name == "door mirror")
+        .unwrap();
+    let mesh = &scene.meshes[mirror];
+    let visible = |p: Vec3| {
+        let dir = (p - scene.camera.eye).normalize();
+        let hit = accel.intersect(
+            &specula_trace::Ray {
+                origin: scene.camera.eye,
+                dir,
+            },
+            f32::INFINITY,
+        );
+        hit.is_some_and(|h| h.mesh as usize == mirror)
+    };
+    let error_at = |points: &mut dyn Iterator<Item = Vec3>| {
+        let errors: Vec<f32> = points
+            .filter(|&p| visible(p))
+            .filter_map(|p| pixel_of(scene, p))
+            .map(|(x, y)| (image.get(x, y) - reference.get(x, y)).abs().max_element())
+            .collect();
+        assert!(errors.len() > 10);
+        errors.iter().sum::<f32>() / errors.len() as f32
+    };
+    // Vertices pulled 0.1 % towards the mirror's centre so their pixel is on the mirror.
+    let center = mesh.bounds().center();
+    let vertices = error_at(&mut mesh.positions.iter().map(|&v| v + (center - v) * 0.001));
+    let centroids = error_at(
+        &mut mesh
+            .triangles
+            .iter()
+            .map(|t| t.iter().map(|&i| mesh.positions[i as usize]).sum::<Vec3>() / 3.0),
+    );
+    (vertices, centroids)
+}
+
+#[test]
+fn vertices_show_the_ray_traced_reflection() {
+    let Some(ctx) = specula_gpu::test_context("pvrr vertices") else {
+        return;
+    };
+    let scene = specula_scene::load("door-mirror").unwrap();
+    let accel = SceneAccel::new(&scene);
+    let reference = render(
+        &scene,
+        &accel,
+        &RenderSettings {
+            width: SIZE,
+            height: SIZE,
+            spp: 1,
+            max_depth: 8,
+        },
+        &|_, _| {},
+    );
+    let mut pvrr = by_name("pvrr").unwrap();
+    pvrr.prepare(&ctx, &scene).unwrap();
+    let frame = pvrr
+        .render(&ctx, &scene, &scene.camera, SIZE, SIZE)
+        .unwrap();
+    assert!(frame.image.pixels.iter().all(|p| p.is_finite()));
+    let (at_vertices, at_centroids) = vertex_and_centroid_errors(&scene, &reference, &frame.image);
+    eprintln!("pvrr door-mirror {SIZE}²: mean error at vertex pixels {at_vertices:.4}, at centroid pixels {at_centroids:.4}");
+    assert!(at_vertices < 0.01, "at vertices {at_vertices}");
+    assert!(
+        at_vertices * 4.0 < at_centroids,
+        "vertices {at_vertices} vs centroids {at_centroids}"
+    );
+}
+
+/// RMSE over the mirror's pixels, pvrr against the reference, with the door mirror tessellated
+/// into `n` × `n` quads.
+fn mirror_rmse(ctx: &specula_gpu::GpuContext, n: u32) -> f32 {
+    let mut scene = specula_scene::load("door-mirror").unwrap();
+    let mirror = scene
+        .meshes
+        .iter()
+        .position(|m| m.name == "door mirror")
+        .unwrap();
+    let material = scene.meshes[mirror].material;
+    let mut refined = specula_scene::generators::bicubic_patch(
+        &specula_scene::generators::door_mirror_control_points(),
+        n,
+    );
+    refined.material = material;
+    refined.name = "door mirror".into();
+    scene.meshes[mirror] = refined;
+    let accel = SceneAccel::new(&scene);
+    let reference = render(
+        &scene,
+        &accel,
+        &RenderSettings {
+            width: SIZE,
+            height: SIZE,
+            spp: 1,
+            max_depth: 8,
+        },
+        &|_, _| {},
+    );
+    let mut pvrr = by_name("pvrr").unwrap();
+    pvrr.prepare(ctx, &scene).unwrap();
+    let image = pvrr
+        .render(ctx, &scene, &scene.camera, SIZE, SIZE)
+        .unwrap()
+        .image;
+    let (mut sum, mut count) = (0.0, 0);
+    for y in 0..SIZE {
+        for x in 0..SIZE {
+            let dir = scene
+                .camera
+                .ray_direction(x as f32 + 0.5, y as f32 + 0.5, SIZE, SIZE);
+            let hit = accel.intersect(
+                &specula_trace::Ray {
+                    origin: scene.camera.eye,
+                    dir,
+                },
+                f32::INFINITY,
+            );
+            if hit.is_some_and(|h| h.mesh as usize == mirror) {
+                sum += (image.get(x, y) - reference.get(x, y)).length_squared() / 3.0;
+                count += 1;
+            }
+        }
+    }
+    (sum / count as f32).sqrt()
+}
+
+#[test]
+fn error_falls_as_the_mirror_is_refined() {
+    let Some(ctx) = specula_gpu::test_context("pvrr refinement") else {
+        return;
+    };
+    let errors: Vec<(u32, f32)> = [6, 12, 24]
+        .iter()
+        .map(|&n| ((n + 1) * (n + 1), mirror_rmse(&ctx, n)))
+        .collect();
+    eprintln!("pvrr door-mirror {SIZE}², (vertices, RMSE on mirror pixels): {errors:?}");
+    for pair in errors.windows(2) {
+        assert!(
+            pair[1].1 < pair[0].1,
+            "refining from {} to {} vertices did not reduce the error: {errors:?}",
+            pair[0].0,
+            pair[1].0
+        );
+    }
+}
