@@ -171,3 +171,101 @@ fn error_falls_as_the_mirror_is_refined() {
         );
     }
 }
+
+/// A concave spherical mirror (R = 2 m) facing a camera 3 m away, with objects well beyond its
+/// focal region behind the camera: reflection lines converge in front of the mirror, so the
+/// virtual viewpoint lies on the far side of the convergence point and the map is reversed.
+fn concave_scene() -> Scene {
+    use glam::Mat4;
+    use specula_scene::{generators, Background, Camera, Light, Material};
+    let mut scene = Scene::new("concave");
+    let mut add = |mut mesh: specula_scene::Mesh,
+                   material: Material,
+                   world_from_object: Mat4,
+                   scene: &mut Scene| {
+        mesh.transform(world_from_object);
+        mesh.material = scene.materials.len();
+        mesh.name = material.name.clone();
+        scene.materials.push(material);
+        scene.meshes.push(mesh);
+    };
+    let cap = generators::spherical_cap(2.0, 0.8, true, 6, 24).unwrap();
+    add(
+        cap,
+        Material::mirror("door mirror", Vec3::splat(0.9)),
+        Mat4::IDENTITY,
+        &mut scene,
+    );
+    for (k, color) in [
+        Vec3::new(0.8, 0.1, 0.1),
+        Vec3::new(0.1, 0.7, 0.2),
+        Vec3::new(0.2, 0.3, 0.9),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let x = -3.0 + 3.0 * k as f32;
+        add(
+            generators::cuboid(Vec3::new(2.0, 4.0, 1.0)),
+            Material::diffuse("block", color),
+            Mat4::from_translation(Vec3::new(x, 0.5, 12.0)),
+            &mut scene,
+        );
+    }
+    add(
+        generators::plane(glam::Vec2::splat(60.0), 1),
+        Material::diffuse("ground", Vec3::splat(0.5)),
+        Mat4::from_translation(Vec3::new(0.0, -1.5, 0.0)),
+        &mut scene,
+    );
+    scene.lights.push(Light::Directional {
+        direction: Vec3::new(-0.3, -1.0, -0.5).normalize(),
+        irradiance: Vec3::splat(2.0),
+    });
+    scene.ambient = Vec3::splat(0.2);
+    scene.background = Background::Color(Vec3::new(0.5, 0.6, 0.8));
+    scene.camera = Camera {
+        eye: Vec3::new(0.2, 0.1, 3.0),
+        target: Vec3::ZERO,
+        up: Vec3::Y,
+        fov_y_deg: 12.0,
+        aspect: None,
+    };
+    scene
+}
+
+#[test]
+fn concave_mirror_vertices_show_the_ray_traced_reflection() {
+    let Some(ctx) = specula_gpu::test_context("pvrr concave") else {
+        return;
+    };
+    let scene = concave_scene();
+    let accel = SceneAccel::new(&scene);
+    let reference = render(
+        &scene,
+        &accel,
+        &RenderSettings {
+            width: SIZE,
+            height: SIZE,
+            spp: 1,
+            max_depth: 8,
+        },
+        &|_, _| {},
+    );
+    let mut pvrr = by_name("pvrr").unwrap();
+    pvrr.prepare(&ctx, &scene).unwrap();
+    let frame = pvrr
+        .render(&ctx, &scene, &scene.camera, SIZE, SIZE)
+        .unwrap();
+    assert!(frame.image.pixels.iter().all(|p| p.is_finite()));
+    let (at_vertices, at_centroids) = vertex_and_centroid_errors(&scene, &reference, &frame.image);
+    eprintln!("pvrr concave {SIZE}²: mean error at vertex pixels {at_vertices:.4}, at centroid pixels {at_centroids:.4}");
+    frame
+        .image
+        .save_png(&std::env::temp_dir().join("pvrr-concave.png"))
+        .unwrap();
+    reference
+        .save_png(&std::env::temp_dir().join("pvrr-concave-reference.png"))
+        .unwrap();
+    assert!(at_vertices < 0.02, "at vertices {at_vertices}");
+}

@@ -21,10 +21,15 @@
 //! objects hidden from the virtual viewpoint but visible along some reflection ray (or the
 //! reverse) show the wrong surface (the paper's occlusion inconsistency, §6).
 //!
-//! Not yet (issue 4): concave mirrors (vertices behind the virtual viewpoint: the view volume
-//! then falls back to a near plane at 1/1000 of the far distance), subdivision of large
-//! reflectors, multiple reflection, lens refraction and chromatic aberration, the verification
-//! overlay. Dielectric surfaces are left as the scene raster leaves them (black).
+//! Concave mirrors (§4.2) go through the same construction: their reflection lines converge in
+//! front of the mirror, the least-squares viewpoint lands near the convergence point with the
+//! mirror behind it (the near plane then sits at 1/1000 of the far distance), and the map comes
+//! out reversed, as in the paper's Figure 8. Not handled: the "zooming region" — objects between
+//! the mirror and the convergence point lie behind the viewpoint and are missing from the map.
+//!
+//! Not yet (issue 4): subdivision of large reflectors, the principal-curvature up vector,
+//! multiple reflection, lens refraction and chromatic aberration, the verification overlay.
+//! Dielectric surfaces are left as the scene raster leaves them (black).
 //!
 //! Parameters:
 //! - `resolution` (default 512): reflection-map height in texels (the width follows the view
