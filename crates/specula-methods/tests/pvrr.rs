@@ -179,10 +179,10 @@ fn concave_scene() -> Scene {
     use glam::Mat4;
     use specula_scene::{generators, Background, Camera, Light, Material};
     let mut scene = Scene::new("concave");
-    let mut add = |mut mesh: specula_scene::Mesh,
-                   material: Material,
-                   world_from_object: Mat4,
-                   scene: &mut Scene| {
+    let add = |mut mesh: specula_scene::Mesh,
+               material: Material,
+               world_from_object: Mat4,
+               scene: &mut Scene| {
         mesh.transform(world_from_object);
         mesh.material = scene.materials.len();
         mesh.name = material.name.clone();
