@@ -217,6 +217,9 @@ fn run(cli: Cli) -> Result<()> {
                 let ctx = gpu()?;
                 technique.prepare(&ctx, &scene)?;
                 let frame = technique.render(&ctx, &scene, &scene.camera, width, height)?;
+                for warning in &frame.warnings {
+                    eprintln!("warning: {warning}");
+                }
                 let summary = format!(
                     "{method} {width}x{height} in {:.1} ms",
                     frame.total_milliseconds()
@@ -277,6 +280,9 @@ fn run(cli: Cli) -> Result<()> {
                 "{:<16}{:>9}{:>11}{:>11}{:>11}{:>12}{:>10}",
                 "method", "RMSE", "PSNR dB", "mean FLIP", "FLIP>0.1", "frame ms", "speed-up"
             );
+            for warning in r.methods.iter().flat_map(|m| &m.warnings) {
+                eprintln!("warning: {warning}");
+            }
             for m in &r.methods {
                 println!(
                     "{:<16}{:>9.4}{:>11}{:>11.4}{:>10.1}%{:>12.2}{:>9.1}x",

@@ -72,6 +72,8 @@ pub struct MethodReport {
     pub metrics: Metrics,
     pub image: String,
     pub heat_map: String,
+    /// Fallbacks the technique reported for this frame.
+    pub warnings: Vec<String>,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -176,6 +178,7 @@ pub fn compare(
             metrics,
             image: format!("{}.png", technique.name()),
             heat_map: format!("{}-flip.png", technique.name()),
+            warnings: frame.warnings.clone(),
         });
         method_images.push((frame.image, metrics::heat_map(&flip, width, height)));
     }
@@ -266,6 +269,12 @@ impl Comparison {
                 .iter()
                 .map(|s| format!("{} {:.2}", escape(&s.stage), s.ms))
                 .collect();
+            for warning in &m.warnings {
+                rows.push_str(&format!(
+                    "<tr><td colspan=\"9\">⚠ {}</td></tr>\n",
+                    escape(warning)
+                ));
+            }
             rows.push_str(&format!(
                 "<tr><td>{}</td><td>{:.4}</td><td>{}</td><td>{:.4}</td><td>{:.1} %</td><td>{:.2}</td><td>{:.1}×</td><td>{}</td><td>{}</td></tr>\n",
                 escape(&m.method),

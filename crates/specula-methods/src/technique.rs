@@ -30,6 +30,8 @@ pub struct Frame {
     pub stages: Vec<StageTime>,
     pub counters: Vec<(String, u64)>,
     pub timing: TimingSource,
+    /// What the technique had to approximate or fall back on this frame (said once per cause).
+    pub warnings: Vec<String>,
 }
 
 impl Frame {

@@ -269,3 +269,36 @@ fn concave_mirror_vertices_show_the_ray_traced_reflection() {
         .unwrap();
     assert!(at_vertices < 0.02, "at vertices {at_vertices}");
 }
+
+#[test]
+fn parallel_reflection_lines_fall_back_with_a_warning_and_no_nan() {
+    let Some(ctx) = specula_gpu::test_context("pvrr parallel lines") else {
+        return;
+    };
+    let mut scene = specula_scene::load("door-mirror").unwrap();
+    // A flat mirror seen from 100 km through a telephoto lens: every reflection line is
+    // parallel to within 2e-6 rad, so the least-squares viewpoint does not exist.
+    let mirror = scene
+        .meshes
+        .iter()
+        .position(|m| m.name == "door mirror")
+        .unwrap();
+    let material = scene.meshes[mirror].material;
+    let mut flat = specula_scene::generators::plane(glam::Vec2::new(0.2, 0.13), 6);
+    flat.transform(glam::Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2));
+    flat.material = material;
+    flat.name = "door mirror".into();
+    scene.meshes[mirror] = flat;
+    scene.camera.eye = Vec3::new(0.0, 0.0, 1.0e5);
+    scene.camera.target = Vec3::ZERO;
+    scene.camera.fov_y_deg = 2.0e-4;
+    let mut pvrr = by_name("pvrr").unwrap();
+    pvrr.prepare(&ctx, &scene).unwrap();
+    let frame = pvrr.render(&ctx, &scene, &scene.camera, 32, 32).unwrap();
+    assert!(
+        frame.image.pixels.iter().all(|p| p.is_finite()),
+        "NaN or inf pixels"
+    );
+    assert_eq!(frame.warnings.len(), 1, "{:?}", frame.warnings);
+    assert!(frame.warnings[0].contains("door mirror") && frame.warnings[0].contains("parallel"));
+}

@@ -499,6 +499,7 @@ impl Technique for EnvMap {
                 ("raster passes".into(), 1 + faces),
             ],
             timing,
+            warnings: Vec::new(),
         })
     }
 }

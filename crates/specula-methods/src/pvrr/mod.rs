@@ -83,6 +83,8 @@ pub struct VirtualView {
     pub hits: Vec<Vec3>,
     /// Per mesh vertex: whether the reflection ray hit the scene.
     pub hit_scene: Vec<bool>,
+    /// Set when the construction degenerated and a fallback was used (says which).
+    pub fallback: Option<String>,
 }
 
 /// Steps 1–3 for one mirror mesh seen from `eye`: hit points, virtual viewpoint, view volume.
@@ -127,11 +129,18 @@ pub fn virtual_view(
         .sum::<Vec3>()
         .normalize_or(Vec3::Z);
     let center = m.bounds().center();
-    let viewpoint = if a.determinant().abs() > 1e-9 * (m.positions.len() as f32).powi(3) {
-        a.inverse() * b
-    } else {
-        // Parallel reflection lines (a flat mirror seen from infinitely far): look from behind.
-        center - mean_dir * m.bounds().radius().max(1e-3) * 10.0
+    let mut fallback = None;
+    let solvable = a.determinant().abs() > 1e-6 * (m.positions.len() as f32).powi(3);
+    let viewpoint = match solvable.then(|| a.inverse() * b).filter(|c| c.is_finite()) {
+        Some(c) => c,
+        None => {
+            fallback = Some(format!(
+                "pvrr: mirror '{}': its {} reflection lines are (nearly) parallel, so no least-squares viewpoint exists; looking along their mean direction from 10 mirror radii behind the mirror instead",
+                m.name,
+                m.positions.len()
+            ));
+            center - mean_dir * m.bounds().radius().max(1e-3) * 10.0
+        }
     };
     let up_hint = if mean_dir.y.abs() > 0.99 {
         Vec3::Z
@@ -194,6 +203,7 @@ pub fn virtual_view(
         camera,
         hits: traced.iter().map(|t| t.1).collect(),
         hit_scene: traced.iter().map(|t| t.2).collect(),
+        fallback,
     }
 }
 
@@ -513,6 +523,7 @@ impl Technique for Pvrr {
                 ),
             ],
             timing,
+            warnings: views.iter().filter_map(|v| v.fallback.clone()).collect(),
         })
     }
 }
