@@ -302,3 +302,61 @@ fn parallel_reflection_lines_fall_back_with_a_warning_and_no_nan() {
     assert_eq!(frame.warnings.len(), 1, "{:?}", frame.warnings);
     assert!(frame.warnings[0].contains("door mirror") && frame.warnings[0].contains("parallel"));
 }
+
+#[test]
+fn verification_markers_sit_on_the_vertices() {
+    let Some(ctx) = specula_gpu::test_context("pvrr markers") else {
+        return;
+    };
+    let scene = specula_scene::load("door-mirror").unwrap();
+    let mut pvrr = by_name("pvrr").unwrap();
+    pvrr.set_parameter("markers", "true").unwrap();
+    pvrr.prepare(&ctx, &scene).unwrap();
+    let image = pvrr
+        .render(&ctx, &scene, &scene.camera, SIZE, SIZE)
+        .unwrap()
+        .image;
+    image
+        .save_png(&std::env::temp_dir().join("pvrr-markers.png"))
+        .unwrap();
+    let accel = SceneAccel::new(&scene);
+    let mirror = scene
+        .meshes
+        .iter()
+        .position(|m| m.name == "door mirror")
+        .unwrap();
+    let mesh = &scene.meshes[mirror];
+    let center = mesh.bounds().center();
+    let (mut red, mut total) = (0, 0);
+    // Interior vertices of the 7 × 7 grid: a boundary vertex's ball is half outside the mirror.
+    let interior = |k: usize| (1..6).contains(&(k % 7)) && (1..6).contains(&(k / 7));
+    for (_, &v) in mesh
+        .positions
+        .iter()
+        .enumerate()
+        .filter(|(k, _)| interior(*k))
+    {
+        let v = v + (center - v) * 0.001;
+        let dir = (v - scene.camera.eye).normalize();
+        let hit = accel.intersect(
+            &specula_trace::Ray {
+                origin: scene.camera.eye,
+                dir,
+            },
+            f32::INFINITY,
+        );
+        let Some((x, y)) =
+            pixel_of(&scene, v).filter(|_| hit.is_some_and(|h| h.mesh as usize == mirror))
+        else {
+            continue;
+        };
+        total += 1;
+        let c = image.get(x, y);
+        red += (c.x > 0.5 && c.y < 0.25 && c.z < 0.25) as u32;
+    }
+    eprintln!("pvrr markers: {red} of {total} visible interior vertices show their red ball");
+    assert!(
+        total > 10 && red as f32 >= 0.9 * total as f32,
+        "{red} of {total}"
+    );
+}

@@ -36,6 +36,9 @@
 //!   volume's aspect ratio). Higher sharpens the reflection between vertices; costs one
 //!   rasterisation of that size per mirror per frame.
 //! - `shadow_resolution` (default 1024): shadow maps of the scene raster (see `raster`).
+//! - `markers` (default false): the paper's verification overlay (Figures 1 and 14): a small
+//!   red ball at every vertex's exact hit point P, drawn in both passes, so each ball should sit
+//!   on its vertex in the picture. Costs one small sphere per mirror vertex per pass.
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat3, Vec3, Vec4};
@@ -214,6 +217,46 @@ pub fn map_uv(view: &CameraUniform, p: Vec3) -> [f32; 2] {
     [ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5]
 }
 
+/// Small red balls at every hit point P, sized to a constant angle (1.2 %) as seen from their
+/// virtual viewpoint; `marker_mesh` is the extra mesh index whose material is the marker's.
+fn marker_vertices(
+    device: &wgpu::Device,
+    marker_mesh: u32,
+    views: &[VirtualView],
+) -> (wgpu::Buffer, u32) {
+    use crate::gpu_scene::GpuVertex;
+    let ball = specula_scene::generators::sphere(1.0, 8, 4);
+    let mut vertices = Vec::new();
+    for view in views {
+        let eye = Vec3::from_array(view.camera.eye_world);
+        for &p in &view.hits {
+            let radius = (p - eye).length() * 0.012;
+            for tri in &ball.triangles {
+                for &i in tri {
+                    let n = ball.normals[i as usize];
+                    vertices.push(GpuVertex {
+                        position: (p + ball.positions[i as usize] * radius).to_array(),
+                        mesh: marker_mesh,
+                        normal: n.to_array(),
+                        triangle: 0,
+                        uv: [0.0, 0.0],
+                    });
+                }
+            }
+        }
+    }
+    let count = vertices.len() as u32;
+    if vertices.is_empty() {
+        vertices.push(GpuVertex::zeroed());
+    }
+    let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("pvrr markers"),
+        contents: bytemuck::cast_slice(&vertices),
+        usage: wgpu::BufferUsages::VERTEX,
+    });
+    (buffer, count)
+}
+
 struct Prepared {
     gpu_scene: GpuScene,
     raster: RasterPass,
@@ -226,6 +269,7 @@ struct Prepared {
 pub struct Pvrr {
     pub resolution: u32,
     pub shadow_resolution: u32,
+    pub markers: bool,
     prepared: Option<Prepared>,
 }
 
@@ -234,6 +278,7 @@ impl Default for Pvrr {
         Pvrr {
             resolution: 512,
             shadow_resolution: 1024,
+            markers: false,
             prepared: None,
         }
     }
@@ -251,7 +296,19 @@ fn entry(binding: u32, ty: wgpu::BindingType) -> wgpu::BindGroupLayoutEntry {
 impl Pvrr {
     fn build(&self, ctx: &GpuContext, scene: &Scene) -> Result<Prepared, GpuError> {
         let device = &ctx.device;
-        let gpu_scene = GpuScene::upload(device, scene);
+        // Markers are drawn as one extra, empty mesh (index `scene.meshes.len()`) whose
+        // material is unlit red.
+        let mut uploaded = scene.clone();
+        if self.markers {
+            uploaded
+                .materials
+                .push(specula_scene::Material::unlit("pvrr marker", Vec3::X));
+            uploaded.meshes.push(specula_scene::Mesh {
+                material: uploaded.materials.len() - 1,
+                ..Default::default()
+            });
+        }
+        let gpu_scene = GpuScene::upload(device, &uploaded);
         let raster = RasterPass::new(ctx, &gpu_scene, self.shadow_resolution)?;
         ctx.validated("pvrr set-up", || {
             let uniform = wgpu::BindingType::Buffer {
@@ -348,6 +405,16 @@ impl Technique for Pvrr {
     }
 
     fn set_parameter(&mut self, name: &str, value: &str) -> Result<(), TechniqueError> {
+        if name == "markers" {
+            self.markers = value.parse().map_err(|_| TechniqueError::BadParameter {
+                technique: "pvrr",
+                name: name.into(),
+                value: value.into(),
+                reason: "expected true or false".into(),
+            })?;
+            self.prepared = None;
+            return Ok(());
+        }
         let parsed = value.parse::<u32>().ok().filter(|v| (1..=8192).contains(v));
         let target = match name {
             "resolution" => &mut self.resolution,
@@ -357,7 +424,8 @@ impl Technique for Pvrr {
                     technique: "pvrr",
                     name: name.into(),
                     value: value.into(),
-                    reason: "pvrr's parameters are resolution and shadow_resolution".into(),
+                    reason: "pvrr's parameters are resolution, shadow_resolution and markers"
+                        .into(),
                 })
             }
         };
@@ -391,19 +459,28 @@ impl Technique for Pvrr {
         let device = &ctx.device;
         let mut timer = StageTimer::start(ctx);
         let camera_uniform = raster::camera_uniform(camera, &scene.bounds(), width, height);
-        let g = p.raster.render(ctx, &p.gpu_scene, &camera_uniform, None)?;
-        timer.lap(ctx, "g-buffer")?;
         let views: Vec<VirtualView> = p
             .mirrors
             .iter()
             .map(|&m| virtual_view(scene, &p.accel, m, camera.eye, self.resolution))
             .collect();
         timer.lap(ctx, "per-vertex rays")?;
+        let markers = self
+            .markers
+            .then(|| marker_vertices(device, scene.meshes.len() as u32, &views));
+        let extra = markers.as_ref().map(|(buffer, count)| (buffer, *count));
+        let g = p
+            .raster
+            .render_with(ctx, &p.gpu_scene, &camera_uniform, None, extra)?;
+        timer.lap(ctx, "g-buffer")?;
         let maps = p
             .mirrors
             .iter()
             .zip(&views)
-            .map(|(&m, view)| p.raster.render(ctx, &p.gpu_scene, &view.camera, Some(m)))
+            .map(|(&m, view)| {
+                p.raster
+                    .render_with(ctx, &p.gpu_scene, &view.camera, Some(m), extra)
+            })
             .collect::<Result<Vec<_>, _>>()?;
         timer.lap(ctx, "reflection maps (1st pass)")?;
         ctx.validated("pvrr 2nd pass", || {

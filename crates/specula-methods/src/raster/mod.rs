@@ -439,8 +439,21 @@ impl RasterPass {
         camera: &CameraUniform,
         hidden_mesh: Option<usize>,
     ) -> Result<GBuffer, GpuError> {
+        self.render_with(ctx, gpu_scene, camera, hidden_mesh, None)
+    }
+
+    /// As [`RasterPass::render`], also drawing `extra` (a vertex buffer laid out as
+    /// `GpuVertex`, and its vertex count) after the scene: per-frame geometry such as markers.
+    pub fn render_with(
+        &self,
+        ctx: &GpuContext,
+        gpu_scene: &GpuScene,
+        camera: &CameraUniform,
+        hidden_mesh: Option<usize>,
+        extra: Option<(&wgpu::Buffer, u32)>,
+    ) -> Result<GBuffer, GpuError> {
         ctx.validated("scene raster", || {
-            self.draw(ctx, gpu_scene, camera, hidden_mesh)
+            self.draw(ctx, gpu_scene, camera, hidden_mesh, extra)
         })
     }
 
@@ -450,6 +463,7 @@ impl RasterPass {
         gpu_scene: &GpuScene,
         camera: &CameraUniform,
         hidden_mesh: Option<usize>,
+        extra: Option<(&wgpu::Buffer, u32)>,
     ) -> GBuffer {
         use wgpu::util::DeviceExt;
         let device = &ctx.device;
@@ -531,6 +545,10 @@ impl RasterPass {
                     pass.draw(0..ranges[hidden].start, 0..1);
                     pass.draw(ranges[hidden].end..gpu_scene.vertex_count, 0..1);
                 }
+            }
+            if let Some((buffer, count)) = extra {
+                pass.set_vertex_buffer(0, buffer.slice(..));
+                pass.draw(0..count, 0..1);
             }
         }
         ctx.queue.submit([encoder.finish()]);
