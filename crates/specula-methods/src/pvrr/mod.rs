@@ -1,4 +1,5 @@
-//! `pvrr`: per-vertex reflection (the core of §3; the rest of the paper is not here yet).
+//! `pvrr`: per-vertex reflection (§3 and concave mirrors of §4.2; refraction and the rest of
+//! §4 are not here yet).
 //!
 //! Paper: Kakimoto, Tatsukawa, Chun, Nishita, *Real-time reflection and refraction on a
 //! per-vertex basis* (`../shared/seeds/000_00fe11db0f879bd7.txt`).
@@ -27,9 +28,13 @@
 //! out reversed, as in the paper's Figure 8. Not handled: the "zooming region" — objects between
 //! the mirror and the convergence point lie behind the viewpoint and are missing from the map.
 //!
+//! When all reflection lines are (nearly) parallel no least-squares viewpoint exists: the view
+//! then looks along their mean direction from 10 mirror radii behind the mirror, and the frame
+//! carries a warning saying so.
+//!
 //! Not yet (issue 4): subdivision of large reflectors, the principal-curvature up vector,
-//! multiple reflection, lens refraction and chromatic aberration, the verification overlay.
-//! Dielectric surfaces are left as the scene raster leaves them (black).
+//! multiple reflection, lens refraction and chromatic aberration. Dielectric surfaces are left
+//! as the scene raster leaves them (black).
 //!
 //! Parameters:
 //! - `resolution` (default 512): reflection-map height in texels (the width follows the view
