@@ -62,30 +62,33 @@ fn vertex_and_centroid_errors(scene: &Scene, reference: &Image, image: &Image) -
     (vertices, centroids)
 }
 
+/// The reference image and a pvrr frame (checked free of NaN) of `scene` at SIZE².
+fn reference_and_pvrr(
+    ctx: &specula_gpu::GpuContext,
+    scene: &Scene,
+) -> (Image, specula_methods::Frame) {
+    let accel = SceneAccel::new(scene);
+    let settings = RenderSettings {
+        width: SIZE,
+        height: SIZE,
+        spp: 1,
+        max_depth: 8,
+    };
+    let reference = render(scene, &accel, &settings, &|_, _| {});
+    let mut pvrr = by_name("pvrr").unwrap();
+    pvrr.prepare(ctx, scene).unwrap();
+    let frame = pvrr.render(ctx, scene, &scene.camera, SIZE, SIZE).unwrap();
+    assert!(frame.image.pixels.iter().all(|p| p.is_finite()));
+    (reference, frame)
+}
+
 #[test]
 fn vertices_show_the_ray_traced_reflection() {
     let Some(ctx) = specula_gpu::test_context("pvrr vertices") else {
         return;
     };
     let scene = specula_scene::load("door-mirror").unwrap();
-    let accel = SceneAccel::new(&scene);
-    let reference = render(
-        &scene,
-        &accel,
-        &RenderSettings {
-            width: SIZE,
-            height: SIZE,
-            spp: 1,
-            max_depth: 8,
-        },
-        &|_, _| {},
-    );
-    let mut pvrr = by_name("pvrr").unwrap();
-    pvrr.prepare(&ctx, &scene).unwrap();
-    let frame = pvrr
-        .render(&ctx, &scene, &scene.camera, SIZE, SIZE)
-        .unwrap();
-    assert!(frame.image.pixels.iter().all(|p| p.is_finite()));
+    let (reference, frame) = reference_and_pvrr(&ctx, &scene);
     let (at_vertices, at_centroids) = vertex_and_centroid_errors(&scene, &reference, &frame.image);
     eprintln!("pvrr door-mirror {SIZE}²: mean error at vertex pixels {at_vertices:.4}, at centroid pixels {at_centroids:.4}");
     assert!(at_vertices < 0.01, "at vertices {at_vertices}");
@@ -240,33 +243,9 @@ fn concave_mirror_vertices_show_the_ray_traced_reflection() {
         return;
     };
     let scene = concave_scene();
-    let accel = SceneAccel::new(&scene);
-    let reference = render(
-        &scene,
-        &accel,
-        &RenderSettings {
-            width: SIZE,
-            height: SIZE,
-            spp: 1,
-            max_depth: 8,
-        },
-        &|_, _| {},
-    );
-    let mut pvrr = by_name("pvrr").unwrap();
-    pvrr.prepare(&ctx, &scene).unwrap();
-    let frame = pvrr
-        .render(&ctx, &scene, &scene.camera, SIZE, SIZE)
-        .unwrap();
-    assert!(frame.image.pixels.iter().all(|p| p.is_finite()));
+    let (reference, frame) = reference_and_pvrr(&ctx, &scene);
     let (at_vertices, at_centroids) = vertex_and_centroid_errors(&scene, &reference, &frame.image);
     eprintln!("pvrr concave {SIZE}²: mean error at vertex pixels {at_vertices:.4}, at centroid pixels {at_centroids:.4}");
-    frame
-        .image
-        .save_png(&std::env::temp_dir().join("pvrr-concave.png"))
-        .unwrap();
-    reference
-        .save_png(&std::env::temp_dir().join("pvrr-concave-reference.png"))
-        .unwrap();
     assert!(at_vertices < 0.02, "at vertices {at_vertices}");
 }
 
@@ -316,9 +295,6 @@ fn verification_markers_sit_on_the_vertices() {
         .render(&ctx, &scene, &scene.camera, SIZE, SIZE)
         .unwrap()
         .image;
-    image
-        .save_png(&std::env::temp_dir().join("pvrr-markers.png"))
-        .unwrap();
     let accel = SceneAccel::new(&scene);
     let mirror = scene
         .meshes
