@@ -101,20 +101,12 @@ fn vertices_show_the_ray_traced_reflection() {
 /// RMSE over the mirror's pixels, pvrr against the reference, with the door mirror tessellated
 /// into `n` × `n` quads.
 fn mirror_rmse(ctx: &specula_gpu::GpuContext, n: u32) -> f32 {
-    let mut scene = specula_scene::load("door-mirror").unwrap();
+    let scene = specula_scene::builtin::door_mirror_tessellated(n).unwrap();
     let mirror = scene
         .meshes
         .iter()
         .position(|m| m.name == "door mirror")
         .unwrap();
-    let material = scene.meshes[mirror].material;
-    let mut refined = specula_scene::generators::bicubic_patch(
-        &specula_scene::generators::door_mirror_control_points(),
-        n,
-    );
-    refined.material = material;
-    refined.name = "door mirror".into();
-    scene.meshes[mirror] = refined;
     let accel = SceneAccel::new(&scene);
     let reference = render(
         &scene,

@@ -173,6 +173,13 @@ fn colour_chart() -> Texture {
 }
 
 fn door_mirror() -> Result<Scene, SceneError> {
+    door_mirror_tessellated(6)
+}
+
+/// The `door-mirror` scene with its mirror patch cut into `quads` × `quads` quads
+/// ((quads + 1)² vertices; the built-in scene uses 6, i.e. 49 vertices), for studies of how
+/// accuracy scales with tessellation.
+pub fn door_mirror_tessellated(quads: u32) -> Result<Scene, SceneError> {
     let mut b = SceneBuilder::new(
         "door-mirror",
         camera([0.28, 0.06, 0.75], [0.0, 0.0, 0.0], 22.0),
@@ -190,8 +197,8 @@ fn door_mirror() -> Result<Scene, SceneError> {
         Vec3::new(0.85, 0.85, 0.8),
     ]
     .map(|c| b.material(Material::diffuse("building", c)));
-    // A 7 × 7 vertex patch: 49 vertices, as in the paper's door mirror.
-    let patch = generators::bicubic_patch(&generators::door_mirror_control_points(), 6);
+    // By default a 7 × 7 vertex patch: 49 vertices, as in the paper's door mirror.
+    let patch = generators::bicubic_patch(&generators::door_mirror_control_points(), quads);
     b.add("door mirror", patch, mirror, Mat4::IDENTITY);
     b.add(
         "mirror housing",

@@ -1,0 +1,89 @@
+//! pvrr's scalable-accuracy claim as a table: the door mirror tessellated ever finer, with the
+//! error on the mirror's pixels against the reference and the frame time of each, in one run.
+//!
+//!   cargo bench -p specula-methods --bench pvrr_sweep
+//!
+//! Prints a Markdown table (recorded in docs/benchmarks.md). Frame time: median of 5 frames after
+//! 2 warm-up frames, from the technique's own stage timings.
+
+use std::time::Instant;
+
+use specula_methods::by_name;
+use specula_trace::{render, RenderSettings, SceneAccel};
+
+const SIZE: u32 = 512;
+
+fn main() {
+    let Ok(ctx) = specula_gpu::GpuContext::new() else {
+        eprintln!("!!! SKIPPED: no Vulkan adapter (install mesa-vulkan-drivers libvulkan1) !!!");
+        return;
+    };
+    println!("pvrr on door-mirror at {SIZE}x{SIZE} on {}", ctx.describe());
+    println!("| mirror vertices | RMSE (mirror pixels) | PSNR dB | pvrr frame ms (median of 5) | reference ms |");
+    println!("|---|---|---|---|---|");
+    for quads in [6u32, 13, 27, 56] {
+        let scene = specula_scene::builtin::door_mirror_tessellated(quads).expect("scene builds");
+        let mirror = scene
+            .meshes
+            .iter()
+            .position(|m| m.name == "door mirror")
+            .expect("mirror");
+        let start = Instant::now();
+        let accel = SceneAccel::new(&scene);
+        let reference = render(
+            &scene,
+            &accel,
+            &RenderSettings {
+                width: SIZE,
+                height: SIZE,
+                spp: 1,
+                max_depth: 8,
+            },
+            &|_, _| {},
+        );
+        let reference_ms = start.elapsed().as_secs_f64() * 1e3;
+        let mut pvrr = by_name("pvrr").expect("pvrr exists");
+        pvrr.prepare(&ctx, &scene).expect("prepare");
+        let mut times = Vec::new();
+        let mut image = None;
+        for frame in 0..7 {
+            let f = pvrr
+                .render(&ctx, &scene, &scene.camera, SIZE, SIZE)
+                .expect("render");
+            if frame >= 2 {
+                times.push(f.total_milliseconds());
+            }
+            image = Some(f.image);
+        }
+        times.sort_by(f64::total_cmp);
+        let image = image.expect("rendered");
+        let (mut sum, mut count) = (0.0f64, 0usize);
+        for y in 0..SIZE {
+            for x in 0..SIZE {
+                let dir = scene
+                    .camera
+                    .ray_direction(x as f32 + 0.5, y as f32 + 0.5, SIZE, SIZE);
+                let hit = accel.intersect(
+                    &specula_trace::Ray {
+                        origin: scene.camera.eye,
+                        dir,
+                    },
+                    f32::INFINITY,
+                );
+                if hit.is_some_and(|h| h.mesh as usize == mirror) {
+                    let d = image.get(x, y).clamp(glam::Vec3::ZERO, glam::Vec3::ONE)
+                        - reference.get(x, y).clamp(glam::Vec3::ZERO, glam::Vec3::ONE);
+                    sum += (d.length_squared() / 3.0) as f64;
+                    count += 1;
+                }
+            }
+        }
+        let rmse = (sum / count.max(1) as f64).sqrt();
+        println!(
+            "| {} | {rmse:.4} | {:.1} | {:.1} | {reference_ms:.1} |",
+            (quads + 1) * (quads + 1),
+            20.0 * (1.0 / rmse).log10(),
+            times[times.len() / 2]
+        );
+    }
+}
