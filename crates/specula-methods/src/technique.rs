@@ -98,3 +98,36 @@ pub fn apply_parameters(
     }
     Ok(())
 }
+
+/// A parameter setting being parsed, for uniform error messages across techniques.
+pub struct Setting<'a> {
+    pub technique: &'static str,
+    pub name: &'a str,
+    pub value: &'a str,
+}
+
+impl Setting<'_> {
+    pub fn bad(&self, reason: &str) -> TechniqueError {
+        TechniqueError::BadParameter {
+            technique: self.technique,
+            name: self.name.to_string(),
+            value: self.value.to_string(),
+            reason: reason.to_string(),
+        }
+    }
+
+    /// A texture or map size in texels, 1 to 8192.
+    pub fn texels(&self) -> Result<u32, TechniqueError> {
+        self.value
+            .parse::<u32>()
+            .ok()
+            .filter(|v| (1..=8192).contains(v))
+            .ok_or_else(|| self.bad("expected a whole number of texels from 1 to 8192"))
+    }
+
+    pub fn flag(&self) -> Result<bool, TechniqueError> {
+        self.value
+            .parse()
+            .map_err(|_| self.bad("expected true or false"))
+    }
+}

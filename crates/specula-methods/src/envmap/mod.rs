@@ -40,7 +40,7 @@ use wgpu::util::DeviceExt;
 
 use crate::gpu_scene::GpuScene;
 use crate::raster::{self, RasterPass};
-use crate::technique::{Frame, Technique, TechniqueError};
+use crate::technique::{Frame, Setting, Technique, TechniqueError};
 
 const SHADER: &str = include_str!("envmap.wgsl");
 
@@ -306,34 +306,26 @@ impl Technique for EnvMap {
     }
 
     fn set_parameter(&mut self, name: &str, value: &str) -> Result<(), TechniqueError> {
-        let bad = |reason: &str| TechniqueError::BadParameter {
+        let setting = Setting {
             technique: "envmap",
-            name: name.to_string(),
-            value: value.to_string(),
-            reason: reason.to_string(),
-        };
-        let size = || {
-            value
-                .parse::<u32>()
-                .ok()
-                .filter(|v| (1..=8192).contains(v))
-                .ok_or_else(|| bad("expected a whole number of texels from 1 to 8192"))
+            name,
+            value,
         };
         match name {
-            "resolution" => self.resolution = size()?,
-            "shadow_resolution" => self.shadow_resolution = size()?,
+            "resolution" => self.resolution = setting.texels()?,
+            "shadow_resolution" => self.shadow_resolution = setting.texels()?,
             "exit" => {
                 self.exit = match value {
                     "none" => Exit::None,
                     "sphere" => Exit::Sphere,
                     "slab" => Exit::Slab,
-                    _ => return Err(bad("expected none, sphere or slab")),
+                    _ => return Err(setting.bad("expected none, sphere or slab")),
                 }
             }
             _ => {
-                return Err(bad(
-                    "envmap's parameters are resolution, exit and shadow_resolution",
-                ))
+                return Err(
+                    setting.bad("envmap's parameters are resolution, exit and shadow_resolution")
+                )
             }
         }
         self.prepared = None;

@@ -58,7 +58,7 @@ use wgpu::util::DeviceExt;
 
 use crate::gpu_scene::GpuScene;
 use crate::raster::{self, RasterPass};
-use crate::technique::{Frame, Technique, TechniqueError};
+use crate::technique::{Frame, Setting, Technique, TechniqueError};
 
 const SHADER: &str = include_str!("pvrr.wgsl");
 
@@ -410,36 +410,21 @@ impl Technique for Pvrr {
     }
 
     fn set_parameter(&mut self, name: &str, value: &str) -> Result<(), TechniqueError> {
-        if name == "markers" {
-            self.markers = value.parse().map_err(|_| TechniqueError::BadParameter {
-                technique: "pvrr",
-                name: name.into(),
-                value: value.into(),
-                reason: "expected true or false".into(),
-            })?;
-            self.prepared = None;
-            return Ok(());
-        }
-        let parsed = value.parse::<u32>().ok().filter(|v| (1..=8192).contains(v));
-        let target = match name {
-            "resolution" => &mut self.resolution,
-            "shadow_resolution" => &mut self.shadow_resolution,
-            _ => {
-                return Err(TechniqueError::BadParameter {
-                    technique: "pvrr",
-                    name: name.into(),
-                    value: value.into(),
-                    reason: "pvrr's parameters are resolution, shadow_resolution and markers"
-                        .into(),
-                })
-            }
-        };
-        *target = parsed.ok_or_else(|| TechniqueError::BadParameter {
+        let setting = Setting {
             technique: "pvrr",
-            name: name.into(),
-            value: value.into(),
-            reason: "expected a whole number of texels from 1 to 8192".into(),
-        })?;
+            name,
+            value,
+        };
+        match name {
+            "resolution" => self.resolution = setting.texels()?,
+            "shadow_resolution" => self.shadow_resolution = setting.texels()?,
+            "markers" => self.markers = setting.flag()?,
+            _ => {
+                return Err(
+                    setting.bad("pvrr's parameters are resolution, shadow_resolution and markers")
+                )
+            }
+        }
         self.prepared = None;
         Ok(())
     }
