@@ -5,6 +5,7 @@ use glam::{Mat4, Vec3};
 use specula_methods::envmap::{EnvMap, Exit};
 use specula_methods::{by_name, Technique};
 use specula_scene::{generators, Background, Camera, Material, MaterialKind, Scene, Texture};
+use specula_trace::reference::primary_hits;
 use specula_trace::{render, Image, RenderSettings, SceneAccel};
 
 const SIZE: u32 = 96;
@@ -12,31 +13,19 @@ const SIZE: u32 = 96;
 /// RMSE over the pixels whose primary ray hits a specular surface.
 fn specular_rmse(scene: &Scene, reference: &Image, image: &Image) -> (f32, usize) {
     let accel = SceneAccel::new(scene);
-    let mut sum = 0.0;
-    let mut count = 0;
-    for y in 0..SIZE {
-        for x in 0..SIZE {
-            let dir = scene
-                .camera
-                .ray_direction(x as f32 + 0.5, y as f32 + 0.5, SIZE, SIZE);
-            let Some(hit) = accel.intersect(
-                &specula_trace::Ray {
-                    origin: scene.camera.eye,
-                    dir,
-                },
-                f32::INFINITY,
-            ) else {
-                continue;
-            };
-            if !scene.materials[scene.meshes[hit.mesh as usize].material].is_specular() {
-                continue;
-            }
-            let i = (y * SIZE + x) as usize;
-            sum += (image.pixels[i] - reference.pixels[i]).length_squared() / 3.0;
-            count += 1;
-        }
-    }
-    ((sum / count as f32).sqrt(), count)
+    let hits = primary_hits(scene, &accel, SIZE, SIZE);
+    let specular: Vec<usize> = (0..hits.len())
+        .filter(|&i| {
+            hits[i].is_some_and(|h| {
+                scene.materials[scene.meshes[h.mesh as usize].material].is_specular()
+            })
+        })
+        .collect();
+    let sum: f32 = specular
+        .iter()
+        .map(|&i| (image.pixels[i] - reference.pixels[i]).length_squared() / 3.0)
+        .sum();
+    ((sum / specular.len() as f32).sqrt(), specular.len())
 }
 
 fn compare(scene: &Scene, max_depth: u32) -> Option<(f32, usize)> {

@@ -4,6 +4,7 @@
 use glam::Vec3;
 use specula_methods::by_name;
 use specula_scene::Scene;
+use specula_trace::reference::primary_hits;
 use specula_trace::{render, Image, RenderSettings, SceneAccel};
 
 const SIZE: u32 = 256;
@@ -125,26 +126,15 @@ fn mirror_rmse(ctx: &specula_gpu::GpuContext, n: u32) -> f32 {
         .render(ctx, &scene, &scene.camera, SIZE, SIZE)
         .unwrap()
         .image;
-    let (mut sum, mut count) = (0.0, 0);
-    for y in 0..SIZE {
-        for x in 0..SIZE {
-            let dir = scene
-                .camera
-                .ray_direction(x as f32 + 0.5, y as f32 + 0.5, SIZE, SIZE);
-            let hit = accel.intersect(
-                &specula_trace::Ray {
-                    origin: scene.camera.eye,
-                    dir,
-                },
-                f32::INFINITY,
-            );
-            if hit.is_some_and(|h| h.mesh as usize == mirror) {
-                sum += (image.get(x, y) - reference.get(x, y)).length_squared() / 3.0;
-                count += 1;
-            }
-        }
-    }
-    (sum / count as f32).sqrt()
+    let hits = primary_hits(&scene, &accel, SIZE, SIZE);
+    let on_mirror: Vec<usize> = (0..hits.len())
+        .filter(|&i| hits[i].is_some_and(|h| h.mesh as usize == mirror))
+        .collect();
+    let sum: f32 = on_mirror
+        .iter()
+        .map(|&i| (image.pixels[i] - reference.pixels[i]).length_squared() / 3.0)
+        .sum();
+    (sum / on_mirror.len() as f32).sqrt()
 }
 
 #[test]

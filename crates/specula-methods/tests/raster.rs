@@ -82,23 +82,12 @@ fn check(scene_name: &str) -> f32 {
         );
     }
     // The ID buffer agrees with the reference's primary hits.
-    let mut agree = 0;
-    for y in 0..height {
-        for x in 0..width {
-            let dir = scene
-                .camera
-                .ray_direction(x as f32 + 0.5, y as f32 + 0.5, width, height);
-            let hit = accel.intersect(
-                &specula_trace::Ray {
-                    origin: scene.camera.eye,
-                    dir,
-                },
-                f32::INFINITY,
-            );
-            let expected = hit.map(|h| [h.mesh + 1, h.triangle]).unwrap_or([0, 0]);
-            agree += (ids[(y * width + x) as usize] == expected) as u32;
-        }
-    }
+    let hits = specula_trace::reference::primary_hits(&scene, &accel, width, height);
+    let agree = hits
+        .iter()
+        .zip(&ids)
+        .filter(|(hit, id)| hit.map(|h| [h.mesh + 1, h.triangle]).unwrap_or([0, 0]) == **id)
+        .count();
     let share = agree as f32 / (width * height) as f32;
     eprintln!(
         "{scene_name}: ID buffer agrees with the reference's primary hits on {:.2} % of pixels",

@@ -331,3 +331,29 @@ pub fn render(
     }
     image
 }
+
+/// The closest hit of the ray through each pixel centre of a `width` × `height` image (row
+/// by row from the top-left), as the reference's primary rays with one sample per pixel.
+pub fn primary_hits(
+    scene: &Scene,
+    accel: &SceneAccel,
+    width: u32,
+    height: u32,
+) -> Vec<Option<Hit>> {
+    (0..width * height)
+        .into_par_iter()
+        .map(|i| {
+            let (x, y) = (i % width, i / width);
+            let dir = scene
+                .camera
+                .ray_direction(x as f32 + 0.5, y as f32 + 0.5, width, height);
+            accel.intersect(
+                &Ray {
+                    origin: scene.camera.eye,
+                    dir,
+                },
+                f32::INFINITY,
+            )
+        })
+        .collect()
+}

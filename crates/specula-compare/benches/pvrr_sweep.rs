@@ -1,14 +1,17 @@
 //! pvrr's scalable-accuracy claim as a table: the door mirror tessellated ever finer, with the
 //! error on the mirror's pixels against the reference and the frame time of each, in one run.
 //!
-//!   cargo bench -p specula-methods --bench pvrr_sweep
+//!   cargo bench -p specula-compare --bench pvrr_sweep
 //!
-//! Prints a Markdown table (recorded in docs/benchmarks.md). Frame time: median of 5 frames after
+//! Prints a Markdown table (recorded in docs/benchmarks.md); RMSE and PSNR as `compare` measures
+//! them (linear radiance clamped to [0, 1]), over the pixels whose primary ray hits the mirror. Frame time: median of 5 frames after
 //! 2 warm-up frames, from the technique's own stage timings.
 
 use std::time::Instant;
 
+use specula_compare::metrics::{flip_map, measure};
 use specula_methods::by_name;
+use specula_trace::reference::primary_hits;
 use specula_trace::{render, RenderSettings, SceneAccel};
 
 const SIZE: u32 = 512;
@@ -57,32 +60,17 @@ fn main() {
         }
         times.sort_by(f64::total_cmp);
         let image = image.expect("rendered");
-        let (mut sum, mut count) = (0.0f64, 0usize);
-        for y in 0..SIZE {
-            for x in 0..SIZE {
-                let dir = scene
-                    .camera
-                    .ray_direction(x as f32 + 0.5, y as f32 + 0.5, SIZE, SIZE);
-                let hit = accel.intersect(
-                    &specula_trace::Ray {
-                        origin: scene.camera.eye,
-                        dir,
-                    },
-                    f32::INFINITY,
-                );
-                if hit.is_some_and(|h| h.mesh as usize == mirror) {
-                    let d = image.get(x, y).clamp(glam::Vec3::ZERO, glam::Vec3::ONE)
-                        - reference.get(x, y).clamp(glam::Vec3::ZERO, glam::Vec3::ONE);
-                    sum += (d.length_squared() / 3.0) as f64;
-                    count += 1;
-                }
-            }
-        }
-        let rmse = (sum / count.max(1) as f64).sqrt();
+        let hits = primary_hits(&scene, &accel, SIZE, SIZE);
+        let mask: Vec<bool> = hits
+            .iter()
+            .map(|h| h.is_some_and(|h| h.mesh as usize == mirror))
+            .collect();
+        let metrics = measure(&reference, &image, &flip_map(&reference, &image), &mask);
         println!(
-            "| {} | {rmse:.4} | {:.1} | {:.1} | {reference_ms:.1} |",
+            "| {} | {:.4} | {:.1} | {:.1} | {reference_ms:.1} |",
             (quads + 1) * (quads + 1),
-            20.0 * (1.0 / rmse).log10(),
+            metrics.rmse,
+            metrics.psnr_db.unwrap_or(f64::INFINITY),
             times[times.len() / 2]
         );
     }
