@@ -220,9 +220,15 @@ fn run(cli: Cli) -> Result<()> {
                 for warning in &frame.warnings {
                     eprintln!("warning: {warning}");
                 }
+                let counters: Vec<String> = frame
+                    .counters
+                    .iter()
+                    .map(|(name, value)| format!("{name} {value}"))
+                    .collect();
                 let summary = format!(
-                    "{method} {width}x{height} in {:.1} ms",
-                    frame.total_milliseconds()
+                    "{method} {width}x{height} in {:.1} ms ({})",
+                    frame.total_milliseconds(),
+                    counters.join(", ")
                 );
                 (frame.image, summary)
             };

@@ -36,6 +36,8 @@ pub struct PipelineSpec<'a> {
     pub vertex_buffers: &'a [Option<wgpu::VertexBufferLayout<'a>>],
     pub depth: Option<wgpu::DepthStencilState>,
     pub targets: &'a [wgpu::TextureFormat],
+    /// Channels written to every target.
+    pub write_mask: wgpu::ColorWrites,
 }
 
 pub fn render_pipeline(device: &wgpu::Device, spec: &PipelineSpec) -> wgpu::RenderPipeline {
@@ -46,7 +48,7 @@ pub fn render_pipeline(device: &wgpu::Device, spec: &PipelineSpec) -> wgpu::Rend
             Some(wgpu::ColorTargetState {
                 format,
                 blend: None,
-                write_mask: wgpu::ColorWrites::ALL,
+                write_mask: spec.write_mask,
             })
         })
         .collect();

@@ -125,6 +125,11 @@ impl Setting<'_> {
             .ok_or_else(|| self.bad("expected a whole number of texels from 1 to 8192"))
     }
 
+    /// A finite number, if the value is one.
+    pub fn number(&self) -> Option<f32> {
+        self.value.parse::<f32>().ok().filter(|v| v.is_finite())
+    }
+
     pub fn flag(&self) -> Result<bool, TechniqueError> {
         self.value
             .parse()

@@ -270,6 +270,7 @@ impl EnvMap {
                     vertex_buffers: &[],
                     depth: None,
                     targets: &[raster::COLOR_FORMAT],
+                    write_mask: wgpu::ColorWrites::ALL,
                 },
             );
             Prepared {

@@ -1,66 +1,120 @@
-//! `pvrr`: per-vertex reflection (§3 and concave mirrors of §4.2; refraction and the rest of
-//! §4 are not here yet).
+//! `pvrr`: per-vertex reflection and refraction.
 //!
 //! Paper: Kakimoto, Tatsukawa, Chun, Nishita, *Real-time reflection and refraction on a
 //! per-vertex basis* (`../shared/seeds/000_00fe11db0f879bd7.txt`).
 //!
-//! Steps, per frame and per mirror mesh:
-//! 1. for every vertex V, the ray from the eye is reflected about V's normal and traced through
-//!    the scene's BVH (in parallel) to its nearest hit P (or a point far along it);
-//! 2. the virtual viewpoint is the point nearest, in the least-squares sense, to all reflection
-//!    lines: (Σ (I − r rᵀ)) c = Σ (I − r rᵀ) V;
-//! 3. the view volume looks along the mean reflection direction, its near plane just in front
-//!    of the mirror, its far plane past every P, its sides containing every V and P;
-//! 4. 1st pass: the scene, without the mirror, is rasterised from the virtual viewpoint into a
-//!    reflection map;
-//! 5. each vertex's texture coordinate is the projection of its P into that map;
-//! 6. 2nd pass: the mirror is drawn over the scene raster with those coordinates (Schlick
-//!    Fresnel or F0), so every vertex shows exactly its ray-traced point P.
+//! Every mesh with a mirror or dielectric material is a reflector. Steps, per frame:
+//! 1. for every reflector vertex V the eye's ray is followed exactly, in parallel through the
+//!    scene's BVH: reflected about V's normal at a mirror; at a lens (§4.5) refracted into the
+//!    solid at V, traced to where it leaves, refracted out — once per colour channel when the
+//!    material's three indices differ (chromatic aberration). The segment leaving the
+//!    reflector is traced to its nearest hit P (`rays`);
+//! 2. the reflector's visible triangles form patches (`view`): a patch's virtual viewpoint is
+//!    the point nearest, in the least-squares sense, to its vertices' exit lines,
+//!    (Σ (I − r rᵀ)) c = Σ (I − r rᵀ) o; its view volume looks along the mean exit direction,
+//!    near plane just in front of the reflector, far plane past every P, sides containing every
+//!    exit segment between the two. Of the up vectors — the world's, and the patch's two
+//!    principal curvature directions (§4.3) — the one giving the smallest cross-section wins,
+//!    which fits the volume to cylinders and saddles;
+//! 3. adaptive subdivision (§4.1, the paper's future work): a patch whose field of view
+//!    exceeds `max_fov`, or with a P at or behind its near plane, is split in two at its median
+//!    triangle centroid, until every patch is acceptable, is one triangle, or `max_patches` is
+//!    reached. Neighbouring patches share their boundary vertices, which show the same P in
+//!    both patches, so the images meet there exactly (§4.1's continuity);
+//! 4. 1st pass: per patch, the scene without the reflector is rasterised from the virtual
+//!    viewpoint into a reflection map. With `depth` ≥ 2 the other reflectors in that map are
+//!    themselves drawn by pvrr from the virtual viewpoint, recursively (§4.4, multiple
+//!    reflection);
+//! 5. each vertex's texture coordinate is the projection of its P into its patch's map;
+//! 6. 2nd pass: the reflector's patches are drawn over the scene raster with those coordinates,
+//!    so every vertex shows exactly its ray-traced P: a mirror times its Fresnel term (Schlick
+//!    or F0), a lens times the exact Fresnel transmittance along the path; for three indices,
+//!    three draws with red, green and blue colour masks share one 1st pass.
 //!
-//! Approximations and artifacts: between vertices the reflection is the 1st-pass image warped
-//! linearly, so error grows with triangle size and curvature (it falls as the mesh is refined);
-//! objects hidden from the virtual viewpoint but visible along some reflection ray (or the
-//! reverse) show the wrong surface (the paper's occlusion inconsistency, §6).
+//! Approximations and artifacts: between vertices the map is warped linearly, so error grows
+//! with triangle size and curvature and falls as the mesh is refined (a reflector with fewer
+//! than 9 visible vertices raises a warning); objects hidden from the virtual viewpoint but
+//! seen along some exit ray, or the reverse, show the wrong surface (the occlusion
+//! inconsistency of §6); a reflector does not appear in its own map (no self-reflection); a
+//! lens shows only its transmitted light (the ≈ 5 % surface reflection is left out) along one
+//! path (no multiple internal paths). In multiple reflection, the inner reflector's rays start
+//! at the outer one's virtual viewpoint, not at the exact bounce points.
 //!
-//! Concave mirrors (§4.2) go through the same construction: their reflection lines converge in
-//! front of the mirror, the least-squares viewpoint lands near the convergence point with the
-//! mirror behind it (the near plane then sits at 1/1000 of the far distance), and the map comes
-//! out reversed, as in the paper's Figure 8. Not handled: the "zooming region" — objects between
-//! the mirror and the convergence point lie behind the viewpoint and are missing from the map.
+//! Concave mirrors (§4.2) go through the same construction: the viewpoint lands near the
+//! convergence point with the mirror behind it and the map comes out reversed (Figure 8).
+//! The "zooming region" — P between the mirror and the convergence point, so behind the
+//! viewpoint — cannot be shown by any forward view: subdivision first tries smaller patches,
+//! and vertices still unresolved are drawn with magenta stripes and named in a warning.
 //!
-//! When all reflection lines are (nearly) parallel no least-squares viewpoint exists: the view
-//! then looks along their mean direction from 10 mirror radii behind the mirror, and the frame
-//! carries a warning saying so.
+//! When a patch's exit lines are (nearly) parallel no least-squares viewpoint exists: the view
+//! then looks along their mean direction from 10 patch radii behind it, with a warning.
 //!
-//! Not yet (issue 4): subdivision of large reflectors, the principal-curvature up vector,
-//! multiple reflection, lens refraction and chromatic aberration. Dielectric surfaces are left
-//! as the scene raster leaves them (black).
+//! Cached mode (§5): with `cached=true` a reflector's exit segments, patches and viewpoints are
+//! kept in the eye's frame and reused while the reflector's vertices do not move relative to
+//! the eye (a spectacle lens worn, a door mirror seen by the driver); only the exit segments'
+//! hits P, the view volumes and the two passes are redone.
 //!
 //! Parameters:
-//! - `resolution` (default 512): reflection-map height in texels (the width follows the view
-//!   volume's aspect ratio). Higher sharpens the reflection between vertices; costs one
-//!   rasterisation of that size per mirror per frame.
+//! - `resolution` (default 512): reflection-map height in texels of an undivided reflector
+//!   (the width follows the view volume's aspect ratio); patches share it in proportion to
+//!   the solid angle each covers (height × √share, at least 16). Higher sharpens the
+//!   reflection between vertices; costs rasterising about that many texels per frame.
 //! - `shadow_resolution` (default 1024): shadow maps of the scene raster (see `raster`).
+//! - `max_fov` (default 90, degrees): the widest view volume a patch may keep. Lower gives
+//!   more, less distorted maps (more 1st passes).
+//! - `max_patches` (default 256): the most patches per reflector; each costs a 1st pass.
+//! - `depth` (default 2): reflectors seen in reflectors, levels deep (1: other reflectors
+//!   appear in maps as the scene raster draws them). Each level multiplies the 1st passes by
+//!   the patches of the reflectors it shows.
+//! - `ior` (default `material`): the dielectric's indices; one value, or three (red, green,
+//!   blue; the paper's Figure 15 uses 1.60,1.61,1.62), overrides the material's.
+//! - `cached` (default false): the cached mode above.
 //! - `markers` (default false): the paper's verification overlay (Figures 1 and 14): a small
-//!   red ball at every vertex's exact hit point P, drawn in both passes, so each ball should sit
-//!   on its vertex in the picture. Costs one small sphere per mirror vertex per pass.
+//!   red ball at every visible vertex's exact hit P (per channel), drawn in every pass, so each
+//!   ball should sit on its vertex in the picture. Balls are 1.2 % of their distance from the
+//!   reflector, at most 0.3 × the distance to the nearest neighbouring vertex's P.
+
+mod rays;
+mod view;
+
+pub use rays::{EyeFrame, Interaction, MeshPaths, Segment};
+pub use view::{least_squares_viewpoint, principal_directions, Extents, Patch, ViewBasis};
 
 use bytemuck::{Pod, Zeroable};
-use glam::{Mat3, Vec3, Vec4};
-use rayon::prelude::*;
+use glam::{Vec3, Vec4};
 use specula_gpu::shaders::{self, CameraUniform};
 use specula_gpu::util::{render_pipeline, PipelineSpec};
 use specula_gpu::{GpuContext, GpuError, StageTimer};
 use specula_scene::{Camera, MaterialKind, Scene};
-use specula_trace::reference::offset_origin;
-use specula_trace::{optics, Ray, SceneAccel};
+use specula_trace::SceneAccel;
 use wgpu::util::DeviceExt;
 
 use crate::gpu_scene::GpuScene;
-use crate::raster::{self, RasterPass};
+use crate::raster::{self, GBuffer, RasterPass};
 use crate::technique::{Frame, Setting, Technique, TechniqueError};
+use rays::{trace_hits, trace_paths, ChannelPaths};
+use view::{PatchInput, PatchLimits};
 
 const SHADER: &str = include_str!("pvrr.wgsl");
+
+/// The smallest map height a patch gets, however little of the view it covers.
+const MIN_MAP_TEXELS: u32 = 16;
+
+/// Approximate solid angle of `triangles` of `mesh` seen from `eye`.
+fn solid_angle(mesh: &specula_scene::Mesh, triangles: &[u32], eye: Vec3) -> f32 {
+    triangles
+        .iter()
+        .map(|&t| {
+            let [a, b, c] = mesh.triangles[t as usize].map(|i| mesh.positions[i as usize]);
+            let area_normal = 0.5 * (b - a).cross(c - a);
+            let to_eye = eye - (a + b + c) / 3.0;
+            area_normal.dot(to_eye).abs() / to_eye.length().powi(3).max(f32::MIN_POSITIVE)
+        })
+        .sum()
+}
+
+/// Fewer visible vertices than this, and the linear warp between them is too coarse to trust.
+const MIN_VISIBLE_VERTICES: usize = 9;
 
 pub fn shader_source() -> String {
     shaders::compose(&["optics.wgsl", "camera.wgsl"], SHADER)
@@ -74,179 +128,130 @@ pub struct GpuMirrorMaterial {
     pub fresnel: u32,
 }
 
-/// One corner of a mirror triangle for the 2nd pass.
+/// One corner of a reflector triangle for the 2nd pass.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 struct MirrorVertex {
     position: [f32; 3],
     normal: [f32; 3],
     uv: [f32; 2],
+    /// Fresnel transmittance along a lens path; 1 on mirrors.
+    weight: f32,
+    /// 1 where the vertex's P could not be placed in its patch's map (zooming region).
+    unresolved: f32,
 }
 
-/// Where the 1st pass looks from, and each vertex's hit point P.
-#[derive(Clone, Debug)]
-pub struct VirtualView {
-    pub camera: CameraUniform,
-    /// Per mesh vertex: the reflection ray's hit point (or a far point along it).
-    pub hits: Vec<Vec3>,
-    /// Per mesh vertex: whether the reflection ray hit the scene.
-    pub hit_scene: Vec<bool>,
-    /// Set when the construction degenerated and a fallback was used (says which).
-    pub fallback: Option<String>,
-}
-
-/// Steps 1–3 for one mirror mesh seen from `eye`: hit points, virtual viewpoint, view volume.
-pub fn virtual_view(
-    scene: &Scene,
-    accel: &SceneAccel,
-    mesh: usize,
-    eye: Vec3,
-    resolution: u32,
-) -> VirtualView {
-    let m = &scene.meshes[mesh];
-    let bounds = scene.bounds();
-    let far_distance = (bounds.radius() * 4.0).max(1.0);
-    let traced: Vec<(Vec3, Vec3, bool)> = m
-        .positions
-        .par_iter()
-        .zip(&m.normals)
-        .map(|(&v, &n)| {
-            let d = (v - eye).normalize();
-            let n = if d.dot(n) > 0.0 { -n } else { n };
-            let r = optics::reflect(d, n);
-            let ray = Ray {
-                origin: offset_origin(v, n, r),
-                dir: r,
-            };
-            match accel.intersect(&ray, f32::INFINITY) {
-                Some(hit) => (r, ray.origin + r * hit.t, true),
-                None => (r, v + r * far_distance, false),
-            }
-        })
-        .collect();
-    // Least-squares point nearest to all reflection lines.
-    let (mut a, mut b) = (Mat3::ZERO, Vec3::ZERO);
-    for (&v, &(r, _, _)) in m.positions.iter().zip(&traced) {
-        let projector = Mat3::IDENTITY - Mat3::from_cols(r * r.x, r * r.y, r * r.z);
-        a += projector;
-        b += projector * v;
-    }
-    let mean_dir = traced
-        .iter()
-        .map(|t| t.0)
-        .sum::<Vec3>()
-        .normalize_or(Vec3::Z);
-    let center = m.bounds().center();
-    let mut fallback = None;
-    let solvable = a.determinant().abs() > 1e-6 * (m.positions.len() as f32).powi(3);
-    let viewpoint = match solvable.then(|| a.inverse() * b).filter(|c| c.is_finite()) {
-        Some(c) => c,
-        None => {
-            fallback = Some(format!(
-                "pvrr: mirror '{}': its {} reflection lines are (nearly) parallel, so no least-squares viewpoint exists; looking along their mean direction from 10 mirror radii behind the mirror instead",
-                m.name,
-                m.positions.len()
-            ));
-            center - mean_dir * m.bounds().radius().max(1e-3) * 10.0
-        }
-    };
-    let up_hint = if mean_dir.y.abs() > 0.99 {
-        Vec3::Z
-    } else {
-        Vec3::Y
-    };
-    let right = mean_dir.cross(up_hint).normalize();
-    let up = right.cross(mean_dir);
-    let to_view = |p: Vec3| {
-        let q = p - viewpoint;
-        Vec3::new(q.dot(right), q.dot(up), q.dot(mean_dir))
-    };
-    let far = traced
-        .iter()
-        .map(|t| to_view(t.1).z)
-        .fold(0.0f32, f32::max)
-        .max(1e-3)
-        * 1.05;
-    let mirror_depth = m
-        .positions
-        .iter()
-        .map(|&v| to_view(v).z)
-        .fold(f32::NEG_INFINITY, f32::max);
-    let near = if mirror_depth > 0.0 {
-        (mirror_depth * 1.0001).min(far * 0.5)
-    } else {
-        far * 1e-3
-    };
-    let (mut tan_x, mut tan_y) = (1e-3f32, 1e-3f32);
-    for p in m
-        .positions
-        .iter()
-        .copied()
-        .chain(traced.iter().map(|t| t.1))
-    {
-        let q = to_view(p);
-        if q.z > 1e-6 {
-            tan_x = tan_x.max(q.x.abs() / q.z);
-            tan_y = tan_y.max(q.y.abs() / q.z);
-        }
-    }
-    let (tan_x, tan_y) = (tan_x.min(50.0) * 1.02, tan_y.min(50.0) * 1.02);
-    let height = resolution.max(1);
-    let width =
-        ((resolution as f32 * tan_x / tan_y).round() as u32).clamp(1, 4 * resolution.max(1));
-    // The aspect CameraUniform derives from the texel size must still cover tan_x.
-    let tan_y = tan_y.max(tan_x * height as f32 / width as f32);
-    let camera = CameraUniform::new(
-        viewpoint,
-        right,
-        up,
-        mean_dir,
-        2.0 * tan_y.atan().to_degrees(),
-        width,
-        height,
-        near,
-        far,
-    );
-    VirtualView {
-        camera,
-        hits: traced.iter().map(|t| t.1).collect(),
-        hit_scene: traced.iter().map(|t| t.2).collect(),
-        fallback,
-    }
-}
-
-/// Texture coordinate ((0, 0) = top-left) of `p` in the reflection map of `view`.
+/// Texture coordinate ((0, 0) = top-left) of `p` in the map rendered with `view`.
 pub fn map_uv(view: &CameraUniform, p: Vec3) -> [f32; 2] {
     let clip = glam::Mat4::from_cols_array_2d(&view.clip_from_world) * Vec4::from((p, 1.0));
-    let ndc = clip.truncate() / clip.w;
+    let ndc = clip.truncate() / clip.w.abs().max(1e-20);
     [ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5]
 }
 
-/// Small red balls at every hit point P, sized to a constant angle (1.2 %) as seen from their
-/// virtual viewpoint; `marker_mesh` is the extra mesh index whose material is the marker's.
+/// One patch ready to draw: its 1st pass camera and, per colour channel, its triangles'
+/// corners with texture coordinates into that map.
+struct PatchDraw {
+    camera: CameraUniform,
+    channels: Vec<Vec<MirrorVertex>>,
+}
+
+/// One reflector seen from one eye, ready for both passes.
+struct ReflectorDraw {
+    mesh: usize,
+    material: GpuMirrorMaterial,
+    patches: Vec<PatchDraw>,
+}
+
+/// A reflector's eye-relative state kept by the cached mode.
+struct CachedReflector {
+    /// The mesh's vertices in the eye's frame when the state was computed.
+    key: Vec<Vec3>,
+    paths: MeshPaths,
+    patches: Vec<Patch>,
+}
+
+/// Per-frame tallies for the frame's counters and warnings.
+#[derive(Default)]
+struct Tally {
+    rays: u64,
+    patches: u64,
+    map_texels: u64,
+    unresolved: u64,
+    cache_hits: u64,
+    principal_up: u64,
+    warnings: Vec<String>,
+}
+
+struct Prepared {
+    gpu_scene: GpuScene,
+    raster: RasterPass,
+    accel: SceneAccel,
+    /// Every mirror and dielectric mesh, with how it bends rays.
+    reflectors: Vec<(usize, Interaction)>,
+    /// 2nd pass pipelines writing all channels, then red, green, blue only.
+    pipelines: [wgpu::RenderPipeline; 4],
+    layout: wgpu::BindGroupLayout,
+}
+
+pub struct Pvrr {
+    pub resolution: u32,
+    pub shadow_resolution: u32,
+    pub max_fov_deg: f32,
+    pub max_patches: usize,
+    pub depth: u32,
+    pub ior: Option<Vec3>,
+    pub cached: bool,
+    pub markers: bool,
+    prepared: Option<Prepared>,
+    cache: Vec<Option<CachedReflector>>,
+}
+
+impl Default for Pvrr {
+    fn default() -> Self {
+        Pvrr {
+            resolution: 512,
+            shadow_resolution: 1024,
+            max_fov_deg: 90.0,
+            max_patches: 256,
+            depth: 2,
+            ior: None,
+            cached: false,
+            markers: false,
+            prepared: None,
+            cache: Vec::new(),
+        }
+    }
+}
+
+fn entry(binding: u32, ty: wgpu::BindingType) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+        ty,
+        count: None,
+    }
+}
+
+/// Red balls at `points` (centre, radius), as `GpuVertex` triangles of mesh `marker_mesh`.
 fn marker_vertices(
     device: &wgpu::Device,
     marker_mesh: u32,
-    views: &[VirtualView],
+    balls: &[(Vec3, f32)],
 ) -> (wgpu::Buffer, u32) {
     use crate::gpu_scene::GpuVertex;
     let ball = specula_scene::generators::sphere(1.0, 8, 4);
     let mut vertices = Vec::new();
-    for view in views {
-        let eye = Vec3::from_array(view.camera.eye_world);
-        for &p in &view.hits {
-            let radius = (p - eye).length() * 0.012;
-            for tri in &ball.triangles {
-                for &i in tri {
-                    let n = ball.normals[i as usize];
-                    vertices.push(GpuVertex {
-                        position: (p + ball.positions[i as usize] * radius).to_array(),
-                        mesh: marker_mesh,
-                        normal: n.to_array(),
-                        triangle: 0,
-                        uv: [0.0, 0.0],
-                    });
-                }
+    for &(p, radius) in balls {
+        for tri in &ball.triangles {
+            for &i in tri {
+                let n = ball.normals[i as usize];
+                vertices.push(GpuVertex {
+                    position: (p + ball.positions[i as usize] * radius).to_array(),
+                    mesh: marker_mesh,
+                    normal: n.to_array(),
+                    triangle: 0,
+                    uv: [0.0, 0.0],
+                });
             }
         }
     }
@@ -262,39 +267,313 @@ fn marker_vertices(
     (buffer, count)
 }
 
-struct Prepared {
-    gpu_scene: GpuScene,
-    raster: RasterPass,
-    accel: SceneAccel,
-    mirrors: Vec<usize>,
-    pipeline: wgpu::RenderPipeline,
-    layout: wgpu::BindGroupLayout,
-}
-
-pub struct Pvrr {
-    pub resolution: u32,
-    pub shadow_resolution: u32,
-    pub markers: bool,
-    prepared: Option<Prepared>,
-}
-
-impl Default for Pvrr {
-    fn default() -> Self {
-        Pvrr {
-            resolution: 512,
-            shadow_resolution: 1024,
-            markers: false,
-            prepared: None,
+/// Marker balls for one channel's hits: 1.2 % of the distance from the exit point, capped at
+/// 0.3 × the distance to the nearest neighbouring vertex's P so that balls stay apart.
+fn marker_balls(
+    mesh: &specula_scene::Mesh,
+    visible: &[bool],
+    exits: &[Segment],
+    hits: &[Vec3],
+) -> Vec<(Vec3, f32)> {
+    let mut nearest = vec![f32::INFINITY; hits.len()];
+    for tri in &mesh.triangles {
+        for k in 0..3 {
+            let (i, j) = (tri[k] as usize, tri[(k + 1) % 3] as usize);
+            let d = (hits[i] - hits[j]).length();
+            if d > 0.0 {
+                nearest[i] = nearest[i].min(d);
+                nearest[j] = nearest[j].min(d);
+            }
         }
+    }
+    (0..hits.len())
+        .filter(|&i| visible[i])
+        .map(|i| {
+            let radius = ((hits[i] - exits[i].origin).length() * 0.012).min(0.3 * nearest[i]);
+            (hits[i], radius)
+        })
+        .collect()
+}
+
+/// `paths` and `patches` with every point and direction carried by `point` and `vector` (to or
+/// from the eye's frame).
+fn map_state(
+    paths: &MeshPaths,
+    patches: &[Patch],
+    point: impl Fn(Vec3) -> Vec3,
+    vector: impl Fn(Vec3) -> Vec3,
+) -> (MeshPaths, Vec<Patch>) {
+    let channels = paths
+        .channels
+        .iter()
+        .map(|c| ChannelPaths {
+            exits: c
+                .exits
+                .iter()
+                .map(|s| Segment {
+                    origin: point(s.origin),
+                    dir: vector(s.dir),
+                })
+                .collect(),
+            weights: c.weights.clone(),
+        })
+        .collect();
+    let patches = patches
+        .iter()
+        .map(|patch| Patch {
+            basis: ViewBasis {
+                viewpoint: point(patch.basis.viewpoint),
+                right: vector(patch.basis.right),
+                up: vector(patch.basis.up),
+                forward: vector(patch.basis.forward),
+            },
+            ..patch.clone()
+        })
+        .collect();
+    let paths = MeshPaths {
+        visible: paths.visible.clone(),
+        channels,
+        rays: paths.rays,
+    };
+    (paths, patches)
+}
+
+impl CachedReflector {
+    fn matches(&self, key: &[Vec3]) -> bool {
+        self.key.len() == key.len()
+            && self
+                .key
+                .iter()
+                .zip(key)
+                .all(|(a, b)| (*a - *b).abs().max_element() <= 1e-6 * (1.0 + a.abs().max_element()))
     }
 }
 
-fn entry(binding: u32, ty: wgpu::BindingType) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-        ty,
-        count: None,
+/// What a level of the recursion draws: its reflectors, and (top level, `markers`) the balls.
+#[derive(Default)]
+struct LevelPlan {
+    reflectors: Vec<ReflectorDraw>,
+    balls: Vec<(Vec3, f32)>,
+}
+
+/// The settings steps 1–3 need.
+struct PlanSettings {
+    resolution: u32,
+    limits: PatchLimits,
+    markers: bool,
+}
+
+/// Steps 1–3 and 5 for every reflector but `hidden`, seen from `eye`. `cache` (top level, cached
+/// mode) holds eye-relative state per mesh; `top` says whether warnings are reported.
+#[allow(clippy::too_many_arguments)]
+fn plan_level(
+    p: &Prepared,
+    settings: &PlanSettings,
+    scene: &Scene,
+    eye: Vec3,
+    hidden: Option<usize>,
+    mut cache: Option<(&mut Vec<Option<CachedReflector>>, &EyeFrame)>,
+    tally: &mut Tally,
+    top: bool,
+) -> LevelPlan {
+    let mut plan = LevelPlan::default();
+    let far_distance = (scene.bounds().radius() * 4.0).max(1.0);
+    for (mesh, interaction) in &p.reflectors {
+        let mesh = *mesh;
+        if Some(mesh) == hidden {
+            continue;
+        }
+        let m = &scene.meshes[mesh];
+        let slot = cache.as_mut().map(|(slots, frame)| {
+            if slots.len() < scene.meshes.len() {
+                slots.resize_with(scene.meshes.len(), || None);
+            }
+            let key: Vec<Vec3> = m
+                .positions
+                .iter()
+                .map(|&v| frame.point_to_local(v))
+                .collect();
+            (&mut slots[mesh], **frame, key)
+        });
+        let reused = slot.as_ref().and_then(|(slot, frame, key)| {
+            slot.as_ref().filter(|c| c.matches(key)).map(|c| {
+                map_state(
+                    &c.paths,
+                    &c.patches,
+                    |q| frame.point_to_world(q),
+                    |v| frame.vector_to_world(v),
+                )
+            })
+        });
+        let (paths, reused_patches) = match reused {
+            Some((paths, patches)) => {
+                tally.cache_hits += 1;
+                (paths, Some(patches))
+            }
+            None => {
+                let paths = trace_paths(scene, &p.accel, mesh, eye, interaction);
+                tally.rays += paths.rays;
+                (paths, None)
+            }
+        };
+        let hits: Vec<Vec<Vec3>> = paths
+            .channels
+            .iter()
+            .map(|c| trace_hits(&p.accel, &c.exits, far_distance))
+            .collect();
+        tally.rays += (hits.len() * m.positions.len()) as u64;
+        let primary = paths.channels.len() / 2;
+        let input = PatchInput {
+            mesh: m,
+            visible: &paths.visible,
+            primary: &paths.channels[primary].exits,
+            segments: paths
+                .channels
+                .iter()
+                .zip(&hits)
+                .map(|(c, h)| c.exits.iter().zip(h).map(|(s, &p)| (s.origin, p)).collect())
+                .collect(),
+        };
+        let patches: Vec<Patch> = match reused_patches {
+            Some(patches) => patches
+                .into_iter()
+                .map(|patch| Patch {
+                    extents: input.extents_for(&patch),
+                    ..patch
+                })
+                .collect(),
+            None => {
+                let patches = input.patches(&settings.limits);
+                if let Some((slot, frame, key)) = slot {
+                    let (paths, patches) = map_state(
+                        &paths,
+                        &patches,
+                        |q| frame.point_to_local(q),
+                        |v| frame.vector_to_local(v),
+                    );
+                    *slot = Some(CachedReflector {
+                        key,
+                        paths,
+                        patches,
+                    });
+                }
+                patches
+            }
+        };
+        let mut unresolved = vec![false; m.positions.len()];
+        let solid_angles: Vec<f32> = patches
+            .iter()
+            .map(|patch| solid_angle(m, &patch.triangles, eye))
+            .collect();
+        let total_solid_angle = solid_angles.iter().sum::<f32>().max(f32::MIN_POSITIVE);
+        let draws = patches
+            .iter()
+            .zip(&solid_angles)
+            .map(|(patch, &solid_angle)| {
+                // The reflector's map budget is shared by its patches in proportion to how
+                // much of the view each covers.
+                let share = (solid_angle / total_solid_angle).clamp(0.0, 1.0);
+                let height = ((settings.resolution as f32 * share.sqrt()).round() as u32)
+                    .clamp(MIN_MAP_TEXELS.min(settings.resolution), settings.resolution);
+                let camera = patch.extents.camera(&patch.basis, height);
+                tally.map_texels += (camera.width * camera.height) as u64;
+                let channels = paths
+                    .channels
+                    .iter()
+                    .zip(&hits)
+                    .map(|(channel, h)| {
+                        patch
+                            .triangles
+                            .iter()
+                            .flat_map(|&t| m.triangles[t as usize])
+                            .map(|i| {
+                                let i = i as usize;
+                                let hit = h[i];
+                                let behind = paths.visible[i] && patch.basis.local(hit).z <= 0.0;
+                                unresolved[i] |= behind;
+                                MirrorVertex {
+                                    position: m.positions[i].to_array(),
+                                    normal: m.normals[i].to_array(),
+                                    uv: map_uv(&camera, hit),
+                                    weight: channel.weights[i],
+                                    unresolved: behind as u32 as f32,
+                                }
+                            })
+                            .collect()
+                    })
+                    .collect();
+                PatchDraw { camera, channels }
+            })
+            .collect();
+        let unresolved = unresolved.iter().filter(|&&u| u).count();
+        tally.patches += patches.len() as u64;
+        tally.principal_up += patches.iter().filter(|p| p.principal_up).count() as u64;
+        tally.unresolved += unresolved as u64;
+        if top {
+            let visible = paths.visible.iter().filter(|&&v| v).count();
+            report(tally, m, visible, unresolved, &patches, &settings.limits);
+        }
+        if settings.markers {
+            for (channel, h) in paths.channels.iter().zip(&hits) {
+                plan.balls
+                    .extend(marker_balls(m, &paths.visible, &channel.exits, h));
+            }
+        }
+        let material = &scene.materials[m.material];
+        let material = match material.kind {
+            MaterialKind::Mirror { fresnel } => GpuMirrorMaterial {
+                f0: material.color.to_array(),
+                fresnel: fresnel as u32,
+            },
+            _ => GpuMirrorMaterial {
+                f0: [1.0; 3],
+                fresnel: 0,
+            },
+        };
+        plan.reflectors.push(ReflectorDraw {
+            mesh,
+            material,
+            patches: draws,
+        });
+    }
+    plan
+}
+
+/// The top level's warnings about one reflector.
+fn report(
+    tally: &mut Tally,
+    mesh: &specula_scene::Mesh,
+    visible: usize,
+    unresolved: usize,
+    patches: &[Patch],
+    limits: &PatchLimits,
+) {
+    if let Some(fallback) = patches.iter().find_map(|p| p.fallback.clone()) {
+        tally.warnings.push(fallback);
+    }
+    if visible > 0 && visible < MIN_VISIBLE_VERTICES {
+        tally.warnings.push(format!(
+            "pvrr: mirror '{}' shows only {visible} vertices; between vertices the reflection is a linear warp, so tessellate it more finely (the paper's door mirror has 49)",
+            mesh.name
+        ));
+    }
+    if unresolved > 0 {
+        tally.warnings.push(format!(
+            "pvrr: mirror '{}': {unresolved} vertices see a point between the surface and their rays' convergence (a concave mirror's zooming region), which no forward view shows; they are drawn with magenta stripes",
+            mesh.name
+        ));
+    }
+    let wide = patches
+        .iter()
+        .filter(|p| p.extents.fov_deg() > limits.max_fov_deg)
+        .count();
+    if wide > 0 {
+        tally.warnings.push(format!(
+            "pvrr: mirror '{}': {wide} of {} patches still span more than max_fov = {}° (single triangles, or the max_patches limit reached)",
+            mesh.name,
+            patches.len(),
+            limits.max_fov_deg
+        ));
     }
 }
 
@@ -345,175 +624,139 @@ impl Pvrr {
                 label: Some("pvrr.wgsl"),
                 source: wgpu::ShaderSource::Wgsl(shader_source().into()),
             });
-            const ATTRIBUTES: [wgpu::VertexAttribute; 3] =
-                wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2];
-            let pipeline = render_pipeline(
-                device,
-                &PipelineSpec {
-                    label: "pvrr mirror",
-                    layout: &pipeline_layout,
-                    module: &module,
-                    vertex_entry: "vs_mirror",
-                    fragment_entry: "fs_mirror",
-                    vertex_buffers: &[Some(wgpu::VertexBufferLayout {
-                        array_stride: std::mem::size_of::<MirrorVertex>() as u64,
-                        step_mode: wgpu::VertexStepMode::Vertex,
-                        attributes: &ATTRIBUTES,
-                    })],
-                    depth: Some(wgpu::DepthStencilState {
-                        format: raster::DEPTH_FORMAT,
-                        depth_write_enabled: Some(false),
-                        depth_compare: Some(wgpu::CompareFunction::LessEqual),
-                        stencil: Default::default(),
-                        bias: Default::default(),
-                    }),
-                    targets: &[raster::COLOR_FORMAT],
-                },
-            );
-            let mirrors = scene
+            const ATTRIBUTES: [wgpu::VertexAttribute; 5] = wgpu::vertex_attr_array![
+                0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32, 4 => Float32
+            ];
+            let pipeline = |write_mask| {
+                render_pipeline(
+                    device,
+                    &PipelineSpec {
+                        label: "pvrr mirror",
+                        layout: &pipeline_layout,
+                        module: &module,
+                        vertex_entry: "vs_mirror",
+                        fragment_entry: "fs_mirror",
+                        vertex_buffers: &[Some(wgpu::VertexBufferLayout {
+                            array_stride: std::mem::size_of::<MirrorVertex>() as u64,
+                            step_mode: wgpu::VertexStepMode::Vertex,
+                            attributes: &ATTRIBUTES,
+                        })],
+                        depth: Some(wgpu::DepthStencilState {
+                            format: raster::DEPTH_FORMAT,
+                            depth_write_enabled: Some(false),
+                            depth_compare: Some(wgpu::CompareFunction::LessEqual),
+                            stencil: Default::default(),
+                            bias: Default::default(),
+                        }),
+                        targets: &[raster::COLOR_FORMAT],
+                        write_mask,
+                    },
+                )
+            };
+            let pipelines = [
+                wgpu::ColorWrites::ALL,
+                wgpu::ColorWrites::RED,
+                wgpu::ColorWrites::GREEN,
+                wgpu::ColorWrites::BLUE,
+            ]
+            .map(pipeline);
+            let reflectors = scene
                 .meshes
                 .iter()
                 .enumerate()
-                .filter(|(_, m)| {
-                    matches!(
-                        scene.materials[m.material].kind,
-                        MaterialKind::Mirror { .. }
-                    )
+                .filter_map(|(i, m)| {
+                    Interaction::of(&scene.materials[m.material].kind, self.ior).map(|x| (i, x))
                 })
-                .map(|(i, _)| i)
                 .collect();
             Prepared {
                 gpu_scene,
                 raster,
                 accel: SceneAccel::new(scene),
-                mirrors,
-                pipeline,
+                reflectors,
+                pipelines,
                 layout,
             }
         })
     }
 }
 
-impl Technique for Pvrr {
-    fn name(&self) -> &'static str {
-        "pvrr"
-    }
+/// Step 4: the reflection map of every patch in `plan`; below `depth` 2 the scene raster
+/// without the patch's reflector, otherwise that raster with the other reflectors drawn by
+/// pvrr from the patch's virtual viewpoint (§4.4).
+#[allow(clippy::too_many_arguments)]
+fn render_maps(
+    ctx: &GpuContext,
+    p: &Prepared,
+    settings: &PlanSettings,
+    scene: &Scene,
+    plan: &LevelPlan,
+    depth: u32,
+    markers: Option<(&wgpu::Buffer, u32)>,
+    tally: &mut Tally,
+) -> Result<Vec<Vec<GBuffer>>, GpuError> {
+    plan.reflectors
+        .iter()
+        .map(|reflector| {
+            reflector
+                .patches
+                .iter()
+                .map(|patch| {
+                    let hidden = Some(reflector.mesh);
+                    let g =
+                        p.raster
+                            .render_with(ctx, &p.gpu_scene, &patch.camera, hidden, markers)?;
+                    if depth > 1 {
+                        let eye = Vec3::from_array(patch.camera.eye_world);
+                        let inner = plan_level(p, settings, scene, eye, hidden, None, tally, false);
+                        let maps = render_maps(
+                            ctx,
+                            p,
+                            settings,
+                            scene,
+                            &inner,
+                            depth - 1,
+                            markers,
+                            tally,
+                        )?;
+                        second_pass(ctx, p, &patch.camera, &g, &inner, &maps)?;
+                    }
+                    Ok(g)
+                })
+                .collect()
+        })
+        .collect()
+}
 
-    fn parameters(&self) -> Vec<(String, String)> {
-        vec![
-            ("resolution".into(), self.resolution.to_string()),
-            (
-                "shadow_resolution".into(),
-                self.shadow_resolution.to_string(),
-            ),
-        ]
+/// Step 6: every reflector of `plan` drawn over `g` (rendered with `camera`) from its maps.
+fn second_pass(
+    ctx: &GpuContext,
+    p: &Prepared,
+    camera: &CameraUniform,
+    g: &GBuffer,
+    plan: &LevelPlan,
+    maps: &[Vec<GBuffer>],
+) -> Result<(), GpuError> {
+    if plan.reflectors.is_empty() {
+        return Ok(());
     }
-
-    fn set_parameter(&mut self, name: &str, value: &str) -> Result<(), TechniqueError> {
-        let setting = Setting {
-            technique: "pvrr",
-            name,
-            value,
-        };
-        match name {
-            "resolution" => self.resolution = setting.texels()?,
-            "shadow_resolution" => self.shadow_resolution = setting.texels()?,
-            "markers" => self.markers = setting.flag()?,
-            _ => {
-                return Err(
-                    setting.bad("pvrr's parameters are resolution, shadow_resolution and markers")
-                )
-            }
-        }
-        self.prepared = None;
-        Ok(())
-    }
-
-    fn prepare(&mut self, ctx: &GpuContext, scene: &Scene) -> Result<(), TechniqueError> {
-        self.prepared = Some(self.build(ctx, scene)?);
-        Ok(())
-    }
-
-    fn render(
-        &mut self,
-        ctx: &GpuContext,
-        scene: &Scene,
-        camera: &Camera,
-        width: u32,
-        height: u32,
-    ) -> Result<Frame, TechniqueError> {
-        let p = self
-            .prepared
-            .as_ref()
-            .ok_or(TechniqueError::NotPrepared { technique: "pvrr" })?;
-        let device = &ctx.device;
-        let mut timer = StageTimer::start(ctx);
-        let camera_uniform = raster::camera_uniform(camera, &scene.bounds(), width, height);
-        let views: Vec<VirtualView> = p
-            .mirrors
-            .iter()
-            .map(|&m| virtual_view(scene, &p.accel, m, camera.eye, self.resolution))
-            .collect();
-        timer.lap(ctx, "per-vertex rays")?;
-        let markers = self
-            .markers
-            .then(|| marker_vertices(device, scene.meshes.len() as u32, &views));
-        let extra = markers.as_ref().map(|(buffer, count)| (buffer, *count));
-        let g = p
-            .raster
-            .render_with(ctx, &p.gpu_scene, &camera_uniform, None, extra)?;
-        timer.lap(ctx, "g-buffer")?;
-        let maps = p
-            .mirrors
-            .iter()
-            .zip(&views)
-            .map(|(&m, view)| {
-                p.raster
-                    .render_with(ctx, &p.gpu_scene, &view.camera, Some(m), extra)
-            })
-            .collect::<Result<Vec<_>, _>>()?;
-        timer.lap(ctx, "reflection maps (1st pass)")?;
-        ctx.validated("pvrr 2nd pass", || {
-            let camera_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("camera"),
-                contents: bytemuck::bytes_of(&camera_uniform),
+    let device = &ctx.device;
+    ctx.validated("pvrr 2nd pass", || {
+        let camera_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("camera"),
+            contents: bytemuck::bytes_of(camera),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let color_view = g.color.create_view(&Default::default());
+        let depth_view = g.depth.create_view(&Default::default());
+        // (pipeline, bind group, vertices, count) per draw.
+        let mut draws = Vec::new();
+        for (reflector, maps) in plan.reflectors.iter().zip(maps) {
+            let material_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("mirror material"),
+                contents: bytemuck::bytes_of(&reflector.material),
                 usage: wgpu::BufferUsages::UNIFORM,
             });
-            let color_view = g.color.create_view(&Default::default());
-            let depth_view = g.depth.create_view(&Default::default());
-            let mut encoder = device.create_command_encoder(&Default::default());
-            let mut resources = Vec::new();
-            for ((&m, view), map) in p.mirrors.iter().zip(&views).zip(&maps) {
-                let mesh = &scene.meshes[m];
-                let material = &scene.materials[mesh.material];
-                let vertices: Vec<MirrorVertex> = mesh
-                    .triangles
-                    .iter()
-                    .flatten()
-                    .map(|&i| {
-                        let i = i as usize;
-                        MirrorVertex {
-                            position: mesh.positions[i].to_array(),
-                            normal: mesh.normals[i].to_array(),
-                            uv: map_uv(&view.camera, view.hits[i]),
-                        }
-                    })
-                    .collect();
-                let vertex_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("mirror vertices"),
-                    contents: bytemuck::cast_slice(&vertices),
-                    usage: wgpu::BufferUsages::VERTEX,
-                });
-                let fresnel = matches!(material.kind, MaterialKind::Mirror { fresnel: true });
-                let material_buffer =
-                    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                        label: Some("mirror material"),
-                        contents: bytemuck::bytes_of(&GpuMirrorMaterial {
-                            f0: material.color.to_array(),
-                            fresnel: fresnel as u32,
-                        }),
-                        usage: wgpu::BufferUsages::UNIFORM,
-                    });
+            for (patch, map) in reflector.patches.iter().zip(maps) {
                 let map_view = map.color.create_view(&Default::default());
                 let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some("pvrr mirror"),
@@ -533,64 +776,217 @@ impl Technique for Pvrr {
                         },
                     ],
                 });
-                resources.push((vertex_buffer, bind_group, vertices.len() as u32));
-            }
-            {
-                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("pvrr 2nd pass"),
-                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                        view: &color_view,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Load,
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })],
-                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                        view: &depth_view,
-                        depth_ops: Some(wgpu::Operations {
-                            load: wgpu::LoadOp::Load,
-                            store: wgpu::StoreOp::Store,
-                        }),
-                        stencil_ops: None,
-                    }),
-                    ..Default::default()
-                });
-                pass.set_pipeline(&p.pipeline);
-                for (vertex_buffer, bind_group, count) in &resources {
-                    pass.set_bind_group(0, bind_group, &[]);
-                    pass.set_vertex_buffer(0, vertex_buffer.slice(..));
-                    pass.draw(0..*count, 0..1);
+                let masked = patch.channels.len() == 3;
+                for (c, vertices) in patch.channels.iter().enumerate() {
+                    if vertices.is_empty() {
+                        continue;
+                    }
+                    let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some("mirror vertices"),
+                        contents: bytemuck::cast_slice(vertices),
+                        usage: wgpu::BufferUsages::VERTEX,
+                    });
+                    let pipeline = &p.pipelines[if masked { c + 1 } else { 0 }];
+                    draws.push((pipeline, bind_group.clone(), buffer, vertices.len() as u32));
                 }
             }
-            ctx.queue.submit([encoder.finish()]);
-        })?;
+        }
+        let mut encoder = device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("pvrr 2nd pass"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: &color_view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &depth_view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                ..Default::default()
+            });
+            for (pipeline, bind_group, buffer, count) in &draws {
+                pass.set_pipeline(pipeline);
+                pass.set_bind_group(0, bind_group, &[]);
+                pass.set_vertex_buffer(0, buffer.slice(..));
+                pass.draw(0..*count, 0..1);
+            }
+        }
+        ctx.queue.submit([encoder.finish()]);
+    })
+}
+
+impl Technique for Pvrr {
+    fn name(&self) -> &'static str {
+        "pvrr"
+    }
+
+    fn parameters(&self) -> Vec<(String, String)> {
+        let ior = match self.ior {
+            None => "material".to_string(),
+            Some(i) => format!("{},{},{}", i.x, i.y, i.z),
+        };
+        vec![
+            ("resolution".into(), self.resolution.to_string()),
+            (
+                "shadow_resolution".into(),
+                self.shadow_resolution.to_string(),
+            ),
+            ("max_fov".into(), self.max_fov_deg.to_string()),
+            ("max_patches".into(), self.max_patches.to_string()),
+            ("depth".into(), self.depth.to_string()),
+            ("ior".into(), ior),
+            ("cached".into(), self.cached.to_string()),
+        ]
+    }
+
+    fn set_parameter(&mut self, name: &str, value: &str) -> Result<(), TechniqueError> {
+        let setting = Setting {
+            technique: "pvrr",
+            name,
+            value,
+        };
+        match name {
+            "resolution" => self.resolution = setting.texels()?,
+            "shadow_resolution" => self.shadow_resolution = setting.texels()?,
+            "markers" => self.markers = setting.flag()?,
+            "cached" => self.cached = setting.flag()?,
+            "max_fov" => {
+                self.max_fov_deg = setting
+                    .number()
+                    .filter(|f| (1.0..=170.0).contains(f))
+                    .ok_or_else(|| setting.bad("expected degrees from 1 to 170"))?
+            }
+            "max_patches" => {
+                self.max_patches = value
+                    .parse()
+                    .ok()
+                    .filter(|n| (1..=4096).contains(n))
+                    .ok_or_else(|| setting.bad("expected a count from 1 to 4096"))?
+            }
+            "depth" => {
+                self.depth = value
+                    .parse()
+                    .ok()
+                    .filter(|n| (1..=4).contains(n))
+                    .ok_or_else(|| setting.bad("expected a recursion depth from 1 to 4"))?
+            }
+            "ior" => self.ior = parse_ior(&setting)?,
+            _ => {
+                return Err(setting.bad(
+                    "pvrr's parameters are resolution, shadow_resolution, max_fov, max_patches, depth, ior, cached and markers",
+                ))
+            }
+        }
+        self.prepared = None;
+        self.cache.clear();
+        Ok(())
+    }
+
+    fn prepare(&mut self, ctx: &GpuContext, scene: &Scene) -> Result<(), TechniqueError> {
+        self.prepared = Some(self.build(ctx, scene)?);
+        self.cache.clear();
+        Ok(())
+    }
+
+    fn render(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &Scene,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+    ) -> Result<Frame, TechniqueError> {
+        let p = self
+            .prepared
+            .as_ref()
+            .ok_or(TechniqueError::NotPrepared { technique: "pvrr" })?;
+        let mut timer = StageTimer::start(ctx);
+        let camera_uniform = raster::camera_uniform(camera, &scene.bounds(), width, height);
+        let settings = PlanSettings {
+            resolution: self.resolution,
+            limits: PatchLimits {
+                max_fov_deg: self.max_fov_deg,
+                max_patches: self.max_patches,
+            },
+            markers: self.markers,
+        };
+        let frame = camera.frame();
+        let eye_frame = EyeFrame {
+            origin: camera.eye,
+            right: frame.right,
+            up: frame.up,
+            forward: frame.forward,
+        };
+        let mut tally = Tally::default();
+        let cache = self.cached.then_some((&mut self.cache, &eye_frame));
+        let plan = plan_level(
+            p, &settings, scene, camera.eye, None, cache, &mut tally, true,
+        );
+        timer.lap(ctx, "per-vertex rays")?;
+        let markers = self
+            .markers
+            .then(|| marker_vertices(&ctx.device, scene.meshes.len() as u32, &plan.balls));
+        let extra = markers.as_ref().map(|(buffer, count)| (buffer, *count));
+        let maps = render_maps(
+            ctx, p, &settings, scene, &plan, self.depth, extra, &mut tally,
+        )?;
+        timer.lap(ctx, "reflection maps (1st pass)")?;
+        let g = p
+            .raster
+            .render_with(ctx, &p.gpu_scene, &camera_uniform, None, extra)?;
+        timer.lap(ctx, "g-buffer")?;
+        second_pass(ctx, p, &camera_uniform, &g, &plan, &maps)?;
         timer.lap(ctx, "mirror (2nd pass)")?;
         let image = raster::read_rgba32f(ctx, &g.color)?;
         timer.lap(ctx, "readback")?;
         let (stages, timing) = timer.finish(ctx)?;
-        let vertex_rays: u64 = p
-            .mirrors
-            .iter()
-            .map(|&m| scene.meshes[m].positions.len() as u64)
-            .sum();
         Ok(Frame {
             image,
             stages,
             counters: vec![
-                ("mirrors".into(), p.mirrors.len() as u64),
-                ("per-vertex rays".into(), vertex_rays),
+                ("mirrors".into(), plan.reflectors.len() as u64),
+                ("per-vertex rays".into(), tally.rays),
+                ("patches".into(), tally.patches),
                 (
-                    "reflection map texels".into(),
-                    views
-                        .iter()
-                        .map(|v| (v.camera.width * v.camera.height) as u64)
-                        .sum(),
+                    "patches with a principal up vector".into(),
+                    tally.principal_up,
                 ),
+                ("reflection map texels".into(), tally.map_texels),
+                ("unresolved vertices".into(), tally.unresolved),
+                ("reflectors from the cache".into(), tally.cache_hits),
             ],
             timing,
-            warnings: views.iter().filter_map(|v| v.fallback.clone()).collect(),
+            warnings: tally.warnings,
         })
+    }
+}
+
+/// `material`, one index, or three (red, green, blue), each in (1, 4].
+fn parse_ior(setting: &Setting) -> Result<Option<Vec3>, TechniqueError> {
+    if setting.value == "material" {
+        return Ok(None);
+    }
+    let values: Vec<f32> = setting
+        .value
+        .split(',')
+        .map(|v| v.trim().parse::<f32>().ok().filter(|i| *i > 1.0 && *i <= 4.0))
+        .collect::<Option<_>>()
+        .ok_or_else(|| {
+            setting.bad("expected `material`, one index of refraction or three (red,green,blue), each above 1 and at most 4")
+        })?;
+    match values[..] {
+        [i] => Ok(Some(Vec3::splat(i))),
+        [r, g, b] => Ok(Some(Vec3::new(r, g, b))),
+        _ => Err(setting.bad("expected one index of refraction or three (red,green,blue)")),
     }
 }

@@ -1,4 +1,4 @@
-// pvrr, 2nd pass: draws the mirror over the scene raster with per-vertex texture coordinates
+// pvrr, 2nd pass: draws a mirror or lens over the scene raster with per-vertex texture coordinates
 // into the reflection map (1st pass), so each vertex shows exactly its ray-traced hit point.
 // Prepended: optics.wgsl, camera.wgsl.
 
@@ -15,6 +15,8 @@ struct VertexIn {
     @location(0) position: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) uv: vec2<f32>,
+    @location(3) weight: f32,
+    @location(4) unresolved: f32,
 };
 
 struct VertexOut {
@@ -24,6 +26,8 @@ struct VertexOut {
     @location(0) position: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) uv: vec2<f32>,
+    @location(3) weight: f32,
+    @location(4) unresolved: f32,
 };
 
 @vertex
@@ -33,6 +37,8 @@ fn vs_mirror(v: VertexIn) -> VertexOut {
     out.position = v.position;
     out.normal = v.normal;
     out.uv = v.uv;
+    out.weight = v.weight;
+    out.unresolved = v.unresolved;
     return out;
 }
 
@@ -63,5 +69,12 @@ fn fs_mirror(in: VertexOut) -> @location(0) vec4<f32> {
     if (mirror.fresnel != 0u) {
         f = fresnel_schlick(mirror.f0, -dot(d, n));
     }
-    return vec4<f32>(f * sample_map(in.uv), 1.0);
+    // Vertices whose hit the map cannot show (zooming region): marked, not guessed.
+    if (in.unresolved > 0.0) {
+        let stripe = (i32(floor((in.clip.x + in.clip.y) / 6.0)) & 1) == 0;
+        if (stripe) {
+            return vec4<f32>(1.0, 0.0, 1.0, 1.0);
+        }
+    }
+    return vec4<f32>(in.weight * f * sample_map(in.uv), 1.0);
 }

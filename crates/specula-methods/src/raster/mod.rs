@@ -250,6 +250,7 @@ impl RasterPass {
                 vertex_buffers: &[Some(vertex_layout())],
                 depth: depth(true, wgpu::CompareFunction::Less),
                 targets: &G_BUFFER_FORMATS,
+                write_mask: wgpu::ColorWrites::ALL,
             },
         );
         let background_pipeline_layout = layout(&[Some(&camera_layout), Some(&scene_layout)]);
@@ -264,6 +265,7 @@ impl RasterPass {
                 vertex_buffers: &[],
                 depth: depth(false, wgpu::CompareFunction::Always),
                 targets: &G_BUFFER_FORMATS,
+                write_mask: wgpu::ColorWrites::ALL,
             },
         );
         let shadow_pipeline_layout = layout(&[Some(&shadow_view_layout)]);
@@ -278,6 +280,7 @@ impl RasterPass {
                 vertex_buffers: &[Some(vertex_layout())],
                 depth: depth(true, wgpu::CompareFunction::Less),
                 targets: &[SHADOW_FORMAT],
+                write_mask: wgpu::ColorWrites::ALL,
             },
         );
 

@@ -1,0 +1,269 @@
+//! Step 1 of pvrr: the exact path of the eye's ray through every reflector vertex — reflected
+//! once at a mirror vertex, or refracted at a lens vertex, traced through the solid and
+//! refracted again where it leaves (§4.5) — ending in the segment that leaves the reflector,
+//! and that segment's nearest hit P in the scene.
+
+use glam::Vec3;
+use rayon::prelude::*;
+use specula_scene::{MaterialKind, Scene};
+use specula_trace::optics::{fresnel_dielectric, reflect, refract};
+use specula_trace::reference::{offset_origin, surface_point};
+use specula_trace::{Ray, SceneAccel};
+
+/// Internal reflections followed inside a solid before a path is given up as trapped.
+const MAX_INTERNAL_BOUNCES: u32 = 8;
+
+/// How a reflector's vertices turn the eye's rays.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Interaction {
+    Reflect,
+    /// Refraction through a solid, one index per colour channel that is drawn separately
+    /// (one entry when the three are equal).
+    Refract {
+        iors: Vec<f32>,
+    },
+    /// A thin-walled sheet: rays pass straight through, attenuated by the sheet's reflectance.
+    Sheet {
+        ior: f32,
+    },
+}
+
+impl Interaction {
+    /// The interaction of `material`; `ior_override` replaces a dielectric's indices.
+    pub fn of(kind: &MaterialKind, ior_override: Option<Vec3>) -> Option<Interaction> {
+        match *kind {
+            MaterialKind::Mirror { .. } => Some(Interaction::Reflect),
+            MaterialKind::Dielectric { ior, thin_walled } => {
+                let ior = ior_override.unwrap_or(ior);
+                Some(if thin_walled {
+                    Interaction::Sheet { ior: ior.y }
+                } else if ior.x == ior.y && ior.y == ior.z {
+                    Interaction::Refract { iors: vec![ior.y] }
+                } else {
+                    Interaction::Refract {
+                        iors: ior.to_array().to_vec(),
+                    }
+                })
+            }
+            _ => None,
+        }
+    }
+
+    pub fn channels(&self) -> usize {
+        match self {
+            Interaction::Refract { iors } => iors.len(),
+            _ => 1,
+        }
+    }
+}
+
+/// The straight piece of a path after it leaves the reflector.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Segment {
+    pub origin: Vec3,
+    pub dir: Vec3,
+}
+
+/// One colour channel's paths, per mesh vertex.
+#[derive(Clone, Debug)]
+pub struct ChannelPaths {
+    pub exits: Vec<Segment>,
+    /// Fraction of the light that survives the surfaces crossed (Fresnel transmittance; 1 at
+    /// mirrors, whose Fresnel term the 2nd pass applies).
+    pub weights: Vec<f32>,
+}
+
+/// Paths for every vertex of one reflector mesh, seen from one eye.
+#[derive(Clone, Debug)]
+pub struct MeshPaths {
+    /// Whether the eye sees the vertex's side of the surface, i.e. the mesh does not hide the
+    /// vertex from the eye. Only these vertices shape the virtual viewpoints.
+    pub visible: Vec<bool>,
+    pub channels: Vec<ChannelPaths>,
+    /// Rays cast for these paths (visibility, inside the solid).
+    pub rays: u64,
+}
+
+/// Step 1 for `mesh` seen from `eye`: visibility and exit segments, in parallel.
+pub fn trace_paths(
+    scene: &Scene,
+    accel: &SceneAccel,
+    mesh: usize,
+    eye: Vec3,
+    interaction: &Interaction,
+) -> MeshPaths {
+    let m = &scene.meshes[mesh];
+    let visible: Vec<bool> = m
+        .positions
+        .par_iter()
+        .map(|&v| {
+            let to_vertex = v - eye;
+            let distance = to_vertex.length();
+            let ray = Ray {
+                origin: eye,
+                dir: to_vertex / distance,
+            };
+            accel
+                .intersect(&ray, distance * (1.0 - 1e-4))
+                .is_none_or(|hit| hit.mesh as usize != mesh)
+        })
+        .collect();
+    let ior_per_channel: Vec<Option<f32>> = match interaction {
+        Interaction::Reflect => vec![None],
+        Interaction::Refract { iors } => iors.iter().map(|&i| Some(i)).collect(),
+        Interaction::Sheet { .. } => vec![None],
+    };
+    let mut rays = m.positions.len() as u64;
+    let channels = ior_per_channel
+        .iter()
+        .map(|&ior| {
+            let traced: Vec<(Segment, f32, u64)> = m
+                .positions
+                .par_iter()
+                .zip(&m.normals)
+                .map(|(&v, &n)| {
+                    let d = (v - eye).normalize_or(Vec3::NEG_Z);
+                    match (interaction, ior) {
+                        (Interaction::Refract { .. }, Some(ior)) => {
+                            refract_through(scene, accel, mesh, v, n, d, ior)
+                        }
+                        (Interaction::Sheet { ior }, _) => {
+                            let n = if d.dot(n) > 0.0 { -n } else { n };
+                            let r = specula_trace::optics::thin_sheet_reflectance(-d.dot(n), *ior);
+                            let exit = Segment {
+                                origin: offset_origin(v, n, d),
+                                dir: d,
+                            };
+                            (exit, 1.0 - r, 0)
+                        }
+                        _ => {
+                            let n = if d.dot(n) > 0.0 { -n } else { n };
+                            let r = reflect(d, n);
+                            let exit = Segment {
+                                origin: offset_origin(v, n, r),
+                                dir: r,
+                            };
+                            (exit, 1.0, 0)
+                        }
+                    }
+                })
+                .collect();
+            rays += traced.iter().map(|t| t.2).sum::<u64>();
+            ChannelPaths {
+                exits: traced.iter().map(|t| t.0).collect(),
+                weights: traced.iter().map(|t| t.1).collect(),
+            }
+        })
+        .collect();
+    MeshPaths {
+        visible,
+        channels,
+        rays,
+    }
+}
+
+/// Refracts the eye ray `d` into the solid at vertex `v` (normal `n`), follows it through the
+/// solid (internal reflection where total) and refracts it out where it leaves `mesh`.
+/// Returns the exit segment, the Fresnel transmittance along the way and the rays cast.
+fn refract_through(
+    scene: &Scene,
+    accel: &SceneAccel,
+    mesh: usize,
+    v: Vec3,
+    n: Vec3,
+    d: Vec3,
+    ior: f32,
+) -> (Segment, f32, u64) {
+    let (n, eta) = if d.dot(n) < 0.0 {
+        (n, 1.0 / ior)
+    } else {
+        (-n, ior)
+    };
+    let Some(inside) = refract(d, n, eta) else {
+        let r = reflect(d, n);
+        let exit = Segment {
+            origin: offset_origin(v, n, r),
+            dir: r,
+        };
+        return (exit, 1.0, 0);
+    };
+    let mut weight = 1.0 - fresnel_dielectric(-d.dot(n), eta);
+    let mut ray = Ray {
+        origin: offset_origin(v, n, inside),
+        dir: inside.normalize(),
+    };
+    let mut rays = 0;
+    for _ in 0..MAX_INTERNAL_BOUNCES {
+        rays += 1;
+        let Some(hit) = accel.intersect(&ray, f32::INFINITY) else {
+            break;
+        };
+        if hit.mesh as usize != mesh {
+            break;
+        }
+        let sp = surface_point(scene, &ray, &hit);
+        let eta = if sp.backface { ior } else { 1.0 / ior };
+        let (dir, leaving) = match refract(ray.dir, sp.ns, eta) {
+            Some(t) => {
+                weight *= 1.0 - fresnel_dielectric(-ray.dir.dot(sp.ns), eta);
+                (t.normalize(), sp.backface)
+            }
+            None => (reflect(ray.dir, sp.ns), false),
+        };
+        ray = Ray {
+            origin: offset_origin(sp.p, sp.ng, dir),
+            dir,
+        };
+        if leaving {
+            break;
+        }
+    }
+    let exit = Segment {
+        origin: ray.origin,
+        dir: ray.dir,
+    };
+    (exit, weight, rays)
+}
+
+/// The second half of step 1: every exit segment traced to its nearest hit P (or a point
+/// `far_distance` along it when it leaves the scene).
+pub fn trace_hits(accel: &SceneAccel, exits: &[Segment], far_distance: f32) -> Vec<Vec3> {
+    exits
+        .par_iter()
+        .map(|s| {
+            let ray = Ray {
+                origin: s.origin,
+                dir: s.dir,
+            };
+            match accel.intersect(&ray, f32::INFINITY) {
+                Some(hit) => s.origin + s.dir * hit.t,
+                None => s.origin + s.dir * far_distance,
+            }
+        })
+        .collect()
+}
+
+/// A rigid frame (the eye's) for expressing paths relative to it, so that a lens fixed to the
+/// eye can reuse them as both move (the cached mode of §5).
+#[derive(Clone, Copy, Debug)]
+pub struct EyeFrame {
+    pub origin: Vec3,
+    pub right: Vec3,
+    pub up: Vec3,
+    pub forward: Vec3,
+}
+
+impl EyeFrame {
+    pub fn point_to_local(&self, p: Vec3) -> Vec3 {
+        self.vector_to_local(p - self.origin)
+    }
+    pub fn vector_to_local(&self, v: Vec3) -> Vec3 {
+        Vec3::new(v.dot(self.right), v.dot(self.up), v.dot(self.forward))
+    }
+    pub fn point_to_world(&self, p: Vec3) -> Vec3 {
+        self.origin + self.vector_to_world(p)
+    }
+    pub fn vector_to_world(&self, v: Vec3) -> Vec3 {
+        self.right * v.x + self.up * v.y + self.forward * v.z
+    }
+}

@@ -1,0 +1,383 @@
+//! Steps 2–3 of pvrr: virtual viewpoints and view volumes, one per patch of a reflector, with
+//! the adaptive subdivision of §4.1 and the principal-curvature up vector of §4.3.
+
+use glam::{Mat3, Vec3};
+use specula_gpu::shaders::CameraUniform;
+use specula_scene::Mesh;
+
+use super::rays::Segment;
+
+/// Where a patch's 1st pass looks from and along.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViewBasis {
+    pub viewpoint: Vec3,
+    pub right: Vec3,
+    pub up: Vec3,
+    pub forward: Vec3,
+}
+
+impl ViewBasis {
+    /// `p` in this basis: x right, y up, z depth along `forward`.
+    pub fn local(&self, p: Vec3) -> Vec3 {
+        let q = p - self.viewpoint;
+        Vec3::new(q.dot(self.right), q.dot(self.up), q.dot(self.forward))
+    }
+}
+
+/// The view volume of a basis around a set of exit segments and hit points.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Extents {
+    pub near: f32,
+    pub far: f32,
+    pub tan_x: f32,
+    pub tan_y: f32,
+    /// How many hit points lie behind the viewpoint, where no map looking forward shows them.
+    pub behind: usize,
+}
+
+/// A limit on the view volume's half-angle tangents: beyond it the perspective map is useless.
+const MAX_TAN: f32 = 50.0;
+
+impl Extents {
+    /// Full field of view (degrees) across the wider of the two axes.
+    pub fn fov_deg(&self) -> f32 {
+        2.0 * self.tan_x.max(self.tan_y).atan().to_degrees()
+    }
+
+    /// Near plane just in front of the segments' origins (the mirror), far plane past every
+    /// hit, sides containing the part of every segment between them.
+    pub fn new(basis: &ViewBasis, segments: &[(Vec3, Vec3)]) -> Extents {
+        let far = segments
+            .iter()
+            .map(|&(_, p)| basis.local(p).z)
+            .fold(0.0f32, f32::max)
+            .max(1e-3)
+            * 1.05;
+        let mirror_depth = segments
+            .iter()
+            .map(|&(o, _)| basis.local(o).z)
+            .fold(f32::NEG_INFINITY, f32::max);
+        let near = if mirror_depth > 0.0 {
+            (mirror_depth * 1.0001).min(far * 0.5)
+        } else {
+            far * 1e-3
+        };
+        let (mut tan_x, mut tan_y) = (1e-3f32, 1e-3f32);
+        let mut behind = 0;
+        for &(o, p) in segments {
+            let (o, p) = (basis.local(o), basis.local(p));
+            if p.z <= 0.0 {
+                behind += 1;
+                continue;
+            }
+            // The segment enters the volume where it crosses the near plane (or at its origin).
+            // A P before the near plane (an object touching the mirror) still projects; the
+            // map shows what lies beyond the plane in its direction.
+            let entry = if p.z <= near {
+                p
+            } else if o.z >= near {
+                o
+            } else {
+                o + (p - o) * ((near - o.z) / (p.z - o.z))
+            };
+            for q in [entry, p] {
+                tan_x = tan_x.max(q.x.abs() / q.z);
+                tan_y = tan_y.max(q.y.abs() / q.z);
+            }
+        }
+        Extents {
+            near,
+            far,
+            tan_x: tan_x.min(MAX_TAN) * 1.02,
+            tan_y: tan_y.min(MAX_TAN) * 1.02,
+            behind,
+        }
+    }
+
+    /// The 1st pass camera: height `resolution` texels, width following the aspect ratio.
+    pub fn camera(&self, basis: &ViewBasis, resolution: u32) -> CameraUniform {
+        let height = resolution.max(1);
+        let width = ((height as f32 * self.tan_x / self.tan_y).round() as u32).clamp(1, 4 * height);
+        // The aspect CameraUniform derives from the texel counts must still cover tan_x.
+        let tan_y = self.tan_y.max(self.tan_x * height as f32 / width as f32);
+        CameraUniform::new(
+            basis.viewpoint,
+            basis.right,
+            basis.up,
+            basis.forward,
+            2.0 * tan_y.atan().to_degrees(),
+            width,
+            height,
+            self.near,
+            self.far,
+        )
+    }
+}
+
+/// The point nearest, in the least-squares sense, to all lines:
+/// (Σ (I − r rᵀ)) c = Σ (I − r rᵀ) o. None when the lines are (nearly) parallel.
+pub fn least_squares_viewpoint<'a>(lines: impl Iterator<Item = &'a Segment>) -> Option<Vec3> {
+    let (mut a, mut b, mut count) = (Mat3::ZERO, Vec3::ZERO, 0usize);
+    for s in lines {
+        let r = s.dir;
+        let projector = Mat3::IDENTITY - Mat3::from_cols(r * r.x, r * r.y, r * r.z);
+        a += projector;
+        b += projector * s.origin;
+        count += 1;
+    }
+    let solvable = a.determinant().abs() > 1e-6 * (count as f32).powi(3);
+    solvable.then(|| a.inverse() * b).filter(|c| c.is_finite())
+}
+
+/// Principal curvature directions of a patch: the shape operator S (dn = S dp in the tangent
+/// plane of the patch's mean normal) fitted by least squares over the patch's edges, then
+/// diagonalised. None for a patch too small or degenerate to fit.
+pub fn principal_directions(mesh: &Mesh, triangles: &[u32]) -> Option<[Vec3; 2]> {
+    let mean_normal = triangles
+        .iter()
+        .flat_map(|&t| mesh.triangles[t as usize])
+        .map(|i| mesh.normals[i as usize])
+        .sum::<Vec3>()
+        .try_normalize()?;
+    let t1 = mean_normal.any_orthonormal_vector();
+    let t2 = mean_normal.cross(t1);
+    // Σ dp dpᵀ and Σ dn dpᵀ as 2 × 2 matrices (row-major).
+    let (mut pp, mut np) = ([0.0f32; 4], [0.0f32; 4]);
+    for &t in triangles {
+        let tri = mesh.triangles[t as usize];
+        for k in 0..3 {
+            let (i, j) = (tri[k] as usize, tri[(k + 1) % 3] as usize);
+            let dp = mesh.positions[j] - mesh.positions[i];
+            let dn = mesh.normals[j] - mesh.normals[i];
+            let (p, n) = ([dp.dot(t1), dp.dot(t2)], [dn.dot(t1), dn.dot(t2)]);
+            for r in 0..2 {
+                for c in 0..2 {
+                    pp[r * 2 + c] += p[r] * p[c];
+                    np[r * 2 + c] += n[r] * p[c];
+                }
+            }
+        }
+    }
+    let det = pp[0] * pp[3] - pp[1] * pp[2];
+    if det.abs() <= 1e-12 * (pp[0] + pp[3]).powi(2) || det == 0.0 {
+        return None;
+    }
+    let inv = [pp[3] / det, -pp[1] / det, -pp[2] / det, pp[0] / det];
+    let s = [
+        np[0] * inv[0] + np[1] * inv[2],
+        np[0] * inv[1] + np[1] * inv[3],
+        np[2] * inv[0] + np[3] * inv[2],
+        np[2] * inv[1] + np[3] * inv[3],
+    ];
+    let (s11, s12, s22) = (s[0], 0.5 * (s[1] + s[2]), s[3]);
+    let angle = 0.5 * (2.0 * s12).atan2(s11 - s22);
+    let e1 = t1 * angle.cos() + t2 * angle.sin();
+    Some([e1, mean_normal.cross(e1)])
+}
+
+/// Candidate frames looking along `forward` from `viewpoint`: the world-up one, then one per
+/// principal direction (§4.3), each direction projected onto the image plane as the up vector.
+fn candidate_bases(viewpoint: Vec3, forward: Vec3, principal: Option<[Vec3; 2]>) -> Vec<ViewBasis> {
+    let world_up = if forward.y.abs() > 0.99 {
+        Vec3::Z
+    } else {
+        Vec3::Y
+    };
+    let mut ups = vec![world_up];
+    if let Some(dirs) = principal {
+        ups.extend(dirs);
+    }
+    ups.into_iter()
+        .filter_map(|up_hint| {
+            let right = forward.cross(up_hint).try_normalize()?;
+            Some(ViewBasis {
+                viewpoint,
+                right,
+                up: right.cross(forward),
+                forward,
+            })
+        })
+        .collect()
+}
+
+/// Whether a view volume is good enough to keep as it is.
+fn acceptable(extents: &Extents, max_fov_deg: f32) -> bool {
+    extents.behind == 0 && extents.fov_deg() <= max_fov_deg
+}
+
+/// One patch of a reflector: its triangles (indices into the mesh's), and its 1st pass view.
+#[derive(Clone, Debug)]
+pub struct Patch {
+    pub triangles: Vec<u32>,
+    pub basis: ViewBasis,
+    pub extents: Extents,
+    /// Whether the up vector is a principal direction (§4.3) rather than the world's up.
+    pub principal_up: bool,
+    /// Set when no least-squares viewpoint existed and a fallback view was used.
+    pub fallback: Option<String>,
+}
+
+/// What the patch construction needs per vertex.
+pub struct PatchInput<'a> {
+    pub mesh: &'a Mesh,
+    pub visible: &'a [bool],
+    /// Exit segments of the channel that places the viewpoint.
+    pub primary: &'a [Segment],
+    /// Per channel, per vertex: (exit segment origin, hit point P).
+    pub segments: Vec<Vec<(Vec3, Vec3)>>,
+}
+
+pub struct PatchLimits {
+    pub max_fov_deg: f32,
+    pub max_patches: usize,
+}
+
+impl PatchInput<'_> {
+    fn patch_vertices(&self, triangles: &[u32]) -> Vec<usize> {
+        let mut vertices: Vec<usize> = triangles
+            .iter()
+            .flat_map(|&t| self.mesh.triangles[t as usize])
+            .map(|i| i as usize)
+            .collect();
+        vertices.sort_unstable();
+        vertices.dedup();
+        let visible: Vec<usize> = vertices
+            .iter()
+            .copied()
+            .filter(|&v| self.visible[v])
+            .collect();
+        if visible.is_empty() {
+            vertices
+        } else {
+            visible
+        }
+    }
+
+    fn segments_of(&self, vertices: &[usize]) -> Vec<(Vec3, Vec3)> {
+        self.segments
+            .iter()
+            .flat_map(|channel| vertices.iter().map(move |&v| channel[v]))
+            .collect()
+    }
+
+    /// Viewpoint, basis and extents for the triangles `triangles`, choosing among the up
+    /// vectors the one with the smallest view-volume cross-section.
+    fn view(&self, triangles: &[u32]) -> Patch {
+        let vertices = self.patch_vertices(triangles);
+        let lines: Vec<Segment> = vertices.iter().map(|&v| self.primary[v]).collect();
+        let forward = lines
+            .iter()
+            .map(|s| s.dir)
+            .sum::<Vec3>()
+            .normalize_or(Vec3::Z);
+        let origins_center =
+            lines.iter().map(|s| s.origin).sum::<Vec3>() / lines.len().max(1) as f32;
+        let mut fallback = None;
+        let viewpoint = match least_squares_viewpoint(lines.iter()) {
+            Some(c) => c,
+            None => {
+                let radius = lines
+                    .iter()
+                    .map(|s| (s.origin - origins_center).length())
+                    .fold(1e-3f32, f32::max);
+                fallback = Some(format!(
+                    "pvrr: mirror '{}': {} reflection lines are (nearly) parallel, so no least-squares viewpoint exists; looking along their mean direction from 10 mirror radii behind the mirror instead",
+                    self.mesh.name,
+                    lines.len()
+                ));
+                origins_center - forward * radius * 10.0
+            }
+        };
+        let segments = self.segments_of(&vertices);
+        let principal = principal_directions(self.mesh, triangles);
+        candidate_bases(viewpoint, forward, principal)
+            .into_iter()
+            .enumerate()
+            .map(|(k, basis)| {
+                let extents = Extents::new(&basis, &segments);
+                Patch {
+                    triangles: triangles.to_vec(),
+                    basis,
+                    extents,
+                    principal_up: k > 0,
+                    fallback: fallback.clone(),
+                }
+            })
+            .min_by(|a, b| {
+                let area = |p: &Patch| p.extents.tan_x * p.extents.tan_y;
+                area(a).total_cmp(&area(b))
+            })
+            .expect("the world-up basis always exists")
+    }
+
+    /// Extents of an already chosen basis for the current hits (the cached mode).
+    pub fn extents_for(&self, patch: &Patch) -> Extents {
+        let vertices = self.patch_vertices(&patch.triangles);
+        Extents::new(&patch.basis, &self.segments_of(&vertices))
+    }
+
+    /// §4.1's adaptive subdivision: the reflector's triangles that the eye can see are split in
+    /// halves (at the median centroid along the longest axis) until each patch's view volume
+    /// is under the field-of-view limit with every hit in front of its near plane. Adjacent
+    /// patches share their boundary vertices, whose hit points P are the same in both, so the
+    /// images meet there exactly.
+    pub fn patches(&self, limits: &PatchLimits) -> Vec<Patch> {
+        let triangles: Vec<u32> = (0..self.mesh.triangles.len() as u32)
+            .filter(|&t| {
+                self.mesh.triangles[t as usize]
+                    .iter()
+                    .any(|&i| self.visible[i as usize])
+            })
+            .collect();
+        if triangles.is_empty() {
+            return Vec::new();
+        }
+        // Always split the worst patch first, so that a limited budget goes where the view
+        // volumes are worst: hits behind the viewpoint, then the widest field of view.
+        let badness = |p: &Patch| {
+            if p.extents.behind > 0 {
+                1000.0 + p.extents.behind as f32
+            } else {
+                p.extents.fov_deg()
+            }
+        };
+        let mut patches = vec![self.view(&triangles)];
+        while patches.len() < limits.max_patches {
+            let worst = patches
+                .iter()
+                .enumerate()
+                .filter(|(_, p)| {
+                    !acceptable(&p.extents, limits.max_fov_deg) && p.triangles.len() > 1
+                })
+                .max_by(|a, b| badness(a.1).total_cmp(&badness(b.1)))
+                .map(|(k, _)| k);
+            let Some(worst) = worst else {
+                break;
+            };
+            let patch = patches.swap_remove(worst);
+            let (a, b) = self.split(&patch.triangles);
+            patches.push(self.view(&a));
+            patches.push(self.view(&b));
+        }
+        patches
+    }
+
+    fn split(&self, triangles: &[u32]) -> (Vec<u32>, Vec<u32>) {
+        let centroid = |t: u32| {
+            self.mesh.triangles[t as usize]
+                .iter()
+                .map(|&i| self.mesh.positions[i as usize])
+                .sum::<Vec3>()
+                / 3.0
+        };
+        let (lo, hi) = triangles.iter().fold(
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+            |(lo, hi), &t| (lo.min(centroid(t)), hi.max(centroid(t))),
+        );
+        let axis = (hi - lo).max_position();
+        let mut sorted = triangles.to_vec();
+        sorted.sort_by(|&a, &b| centroid(a)[axis].total_cmp(&centroid(b)[axis]));
+        let second = sorted.split_off(sorted.len() / 2);
+        (sorted, second)
+    }
+}
