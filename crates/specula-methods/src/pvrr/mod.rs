@@ -70,9 +70,12 @@
 //!   blue; the paper's Figure 15 uses 1.60,1.61,1.62), overrides the material's.
 //! - `cached` (default false): the cached mode above.
 //! - `markers` (default false): the paper's verification overlay (Figures 1 and 14): a small
-//!   red ball at every visible vertex's exact hit P (per channel), drawn in every pass, so each
-//!   ball should sit on its vertex in the picture. Balls are 1.2 % of their distance from the
-//!   reflector, at most 0.3 × the distance to the nearest neighbouring vertex's P.
+//!   red ball at every visible vertex's exact hit P, drawn in every pass, so each ball should
+//!   sit on its vertex in the picture. A dispersive lens gets a red, a green and a blue ball
+//!   per vertex, at its three channels' P, each seen through its own channel (so white where
+//!   all three sit on the vertex). Balls are 1.2 % of their distance from the
+//!   reflector (`marker_size`, default 0.012), at most 0.3 × the distance to the nearest
+//!   neighbouring vertex's P.
 
 mod rays;
 mod view;
@@ -96,6 +99,9 @@ use rays::{trace_hits, trace_paths, ChannelPaths};
 use view::{PatchInput, PatchLimits};
 
 const SHADER: &str = include_str!("pvrr.wgsl");
+
+/// Radiance of the marker balls.
+pub const MARKER_RADIANCE: f32 = 4.0;
 
 /// The smallest map height a patch gets, however little of the view it covers.
 const MIN_MAP_TEXELS: u32 = 16;
@@ -202,6 +208,7 @@ pub struct Pvrr {
     pub ior: Option<Vec3>,
     pub cached: bool,
     pub markers: bool,
+    pub marker_size: f32,
     prepared: Option<Prepared>,
     cache: Vec<Option<CachedReflector>>,
 }
@@ -217,6 +224,7 @@ impl Default for Pvrr {
             ior: None,
             cached: false,
             markers: false,
+            marker_size: 0.012,
             prepared: None,
             cache: Vec::new(),
         }
@@ -232,16 +240,18 @@ fn entry(binding: u32, ty: wgpu::BindingType) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
-/// Red balls at `points` (centre, radius), as `GpuVertex` triangles of mesh `marker_mesh`.
+/// Marker balls (centre, radius, colour channel) as `GpuVertex` triangles of the marker mesh
+/// `first_marker_mesh` + channel.
 fn marker_vertices(
     device: &wgpu::Device,
-    marker_mesh: u32,
-    balls: &[(Vec3, f32)],
+    first_marker_mesh: u32,
+    balls: &[Ball],
 ) -> (wgpu::Buffer, u32) {
     use crate::gpu_scene::GpuVertex;
     let ball = specula_scene::generators::sphere(1.0, 8, 4);
     let mut vertices = Vec::new();
-    for &(p, radius) in balls {
+    for &(p, radius, channel) in balls {
+        let marker_mesh = first_marker_mesh + channel;
         for tri in &ball.triangles {
             for &i in tri {
                 let n = ball.normals[i as usize];
@@ -267,14 +277,19 @@ fn marker_vertices(
     (buffer, count)
 }
 
-/// Marker balls for one channel's hits: 1.2 % of the distance from the exit point, capped at
+/// A marker ball: centre, radius, colour channel (0 red, 1 green, 2 blue).
+type Ball = (Vec3, f32, u32);
+
+/// Marker balls for one channel's hits: `size` × the distance from the exit point, capped at
 /// 0.3 × the distance to the nearest neighbouring vertex's P so that balls stay apart.
 fn marker_balls(
+    size: f32,
+    channel: u32,
     mesh: &specula_scene::Mesh,
     visible: &[bool],
     exits: &[Segment],
     hits: &[Vec3],
-) -> Vec<(Vec3, f32)> {
+) -> Vec<Ball> {
     let mut nearest = vec![f32::INFINITY; hits.len()];
     for tri in &mesh.triangles {
         for k in 0..3 {
@@ -289,8 +304,8 @@ fn marker_balls(
     (0..hits.len())
         .filter(|&i| visible[i])
         .map(|i| {
-            let radius = ((hits[i] - exits[i].origin).length() * 0.012).min(0.3 * nearest[i]);
-            (hits[i], radius)
+            let radius = ((hits[i] - exits[i].origin).length() * size).min(0.3 * nearest[i]);
+            (hits[i], radius, channel)
         })
         .collect()
 }
@@ -353,14 +368,15 @@ impl CachedReflector {
 #[derive(Default)]
 struct LevelPlan {
     reflectors: Vec<ReflectorDraw>,
-    balls: Vec<(Vec3, f32)>,
+    balls: Vec<Ball>,
 }
 
 /// The settings steps 1–3 need.
 struct PlanSettings {
     resolution: u32,
     limits: PatchLimits,
-    markers: bool,
+    /// Marker radius as a fraction of its distance from the reflector; None: no markers.
+    markers: Option<f32>,
 }
 
 /// Steps 1–3 and 5 for every reflector but `hidden`, seen from `eye`. `cache` (top level, cached
@@ -513,10 +529,16 @@ fn plan_level(
             let visible = paths.visible.iter().filter(|&&v| v).count();
             report(tally, m, visible, unresolved, &patches, &settings.limits);
         }
-        if settings.markers {
-            for (channel, h) in paths.channels.iter().zip(&hits) {
-                plan.balls
-                    .extend(marker_balls(m, &paths.visible, &channel.exits, h));
+        if let Some(size) = settings.markers {
+            for (c, (channel, h)) in paths.channels.iter().zip(&hits).enumerate() {
+                plan.balls.extend(marker_balls(
+                    size,
+                    c as u32,
+                    m,
+                    &paths.visible,
+                    &channel.exits,
+                    h,
+                ));
             }
         }
         let material = &scene.materials[m.material];
@@ -580,17 +602,21 @@ fn report(
 impl Pvrr {
     fn build(&self, ctx: &GpuContext, scene: &Scene) -> Result<Prepared, GpuError> {
         let device = &ctx.device;
-        // Markers are drawn as one extra, empty mesh (index `scene.meshes.len()`) whose
-        // material is unlit red.
+        // Markers are drawn as three extra, empty meshes (from index `scene.meshes.len()`),
+        // unlit red, green and blue (one per colour channel of a dispersive lens), so bright
+        // (4, beyond any lit surface) that a test can find them in the float image.
         let mut uploaded = scene.clone();
         if self.markers {
-            uploaded
-                .materials
-                .push(specula_scene::Material::unlit("pvrr marker", Vec3::X));
-            uploaded.meshes.push(specula_scene::Mesh {
-                material: uploaded.materials.len() - 1,
-                ..Default::default()
-            });
+            for color in [Vec3::X, Vec3::Y, Vec3::Z] {
+                uploaded.materials.push(specula_scene::Material::unlit(
+                    "pvrr marker",
+                    color * MARKER_RADIANCE,
+                ));
+                uploaded.meshes.push(specula_scene::Mesh {
+                    material: uploaded.materials.len() - 1,
+                    ..Default::default()
+                });
+            }
         }
         let gpu_scene = GpuScene::upload(device, &uploaded);
         let raster = RasterPass::new(ctx, &gpu_scene, self.shadow_resolution)?;
@@ -859,6 +885,12 @@ impl Technique for Pvrr {
             "resolution" => self.resolution = setting.texels()?,
             "shadow_resolution" => self.shadow_resolution = setting.texels()?,
             "markers" => self.markers = setting.flag()?,
+            "marker_size" => {
+                self.marker_size = setting
+                    .number()
+                    .filter(|f| *f > 0.0 && *f <= 0.1)
+                    .ok_or_else(|| setting.bad("expected a fraction of the distance, above 0 and at most 0.1"))?
+            }
             "cached" => self.cached = setting.flag()?,
             "max_fov" => {
                 self.max_fov_deg = setting
@@ -883,7 +915,7 @@ impl Technique for Pvrr {
             "ior" => self.ior = parse_ior(&setting)?,
             _ => {
                 return Err(setting.bad(
-                    "pvrr's parameters are resolution, shadow_resolution, max_fov, max_patches, depth, ior, cached and markers",
+                    "pvrr's parameters are resolution, shadow_resolution, max_fov, max_patches, depth, ior, cached, markers and marker_size",
                 ))
             }
         }
@@ -918,7 +950,7 @@ impl Technique for Pvrr {
                 max_fov_deg: self.max_fov_deg,
                 max_patches: self.max_patches,
             },
-            markers: self.markers,
+            markers: self.markers.then_some(self.marker_size),
         };
         let frame = camera.frame();
         let eye_frame = EyeFrame {
