@@ -24,15 +24,27 @@ fn pixel_of(scene: &Scene, p: Vec3) -> Option<(u32, u32)> {
 /// Mean colour difference to the reference at the pixels holding the mirror's vertices, and at
 /// the pixels holding its triangles' centroids.
 fn vertex_and_centroid_errors(scene: &Scene, reference: &Image, image: &Image) -> (f32, f32) {
+    reflector_errors(scene, "door mirror", reference, image)
+}
+
+/// As `vertex_and_centroid_errors`, for the mesh named `reflector`.
+fn reflector_errors(
+    scene: &Scene,
+    reflector: &str,
+    reference: &Image,
+    image: &Image,
+) -> (f32, f32) {
     let accel = SceneAccel::new(scene);
     let mirror = scene
         .meshes
         .iter()
-        .position(|m| m.name == "door mirror")
+        .position(|m| m.name == reflector)
         .unwrap();
     let mesh = &scene.meshes[mirror];
+    // Seen directly: the eye's ray meets the reflector at the point itself, not in front.
     let visible = |p: Vec3| {
-        let dir = (p - scene.camera.eye).normalize();
+        let distance = (p - scene.camera.eye).length();
+        let dir = (p - scene.camera.eye) / distance;
         let hit = accel.intersect(
             &specula_trace::Ray {
                 origin: scene.camera.eye,
@@ -40,7 +52,7 @@ fn vertex_and_centroid_errors(scene: &Scene, reference: &Image, image: &Image) -
             },
             f32::INFINITY,
         );
-        hit.is_some_and(|h| h.mesh as usize == mirror)
+        hit.is_some_and(|h| h.mesh as usize == mirror && h.t > distance * (1.0 - 2e-3))
     };
     let error_at = |points: &mut dyn Iterator<Item = Vec3>| {
         let errors: Vec<f32> = points
@@ -49,6 +61,18 @@ fn vertex_and_centroid_errors(scene: &Scene, reference: &Image, image: &Image) -
             .map(|(x, y)| (image.get(x, y) - reference.get(x, y)).abs().max_element())
             .collect();
         assert!(errors.len() > 10);
+        if std::env::var("SPECULA_DEBUG_ERRORS").is_ok() {
+            let mut sorted = errors.clone();
+            sorted.sort_by(f32::total_cmp);
+            let q = |f: f32| sorted[((sorted.len() - 1) as f32 * f) as usize];
+            eprintln!(
+                "  errors: n {} median {:.4} p90 {:.4} max {:.4}",
+                sorted.len(),
+                q(0.5),
+                q(0.9),
+                q(1.0)
+            );
+        }
         errors.iter().sum::<f32>() / errors.len() as f32
     };
     // Vertices pulled 0.1 % towards the mirror's centre so their pixel is on the mirror.
@@ -68,6 +92,15 @@ fn reference_and_pvrr(
     ctx: &specula_gpu::GpuContext,
     scene: &Scene,
 ) -> (Image, specula_methods::Frame) {
+    reference_and_pvrr_with(ctx, scene, &[])
+}
+
+/// As `reference_and_pvrr`, with pvrr parameters.
+fn reference_and_pvrr_with(
+    ctx: &specula_gpu::GpuContext,
+    scene: &Scene,
+    params: &[(&str, &str)],
+) -> (Image, specula_methods::Frame) {
     let accel = SceneAccel::new(scene);
     let settings = RenderSettings {
         width: SIZE,
@@ -76,10 +109,7 @@ fn reference_and_pvrr(
         max_depth: 8,
     };
     let reference = render(scene, &accel, &settings, &|_, _| {});
-    let mut pvrr = by_name("pvrr").unwrap();
-    pvrr.prepare(ctx, scene).unwrap();
-    let frame = pvrr.render(ctx, scene, &scene.camera, SIZE, SIZE).unwrap();
-    assert!(frame.image.pixels.iter().all(|p| p.is_finite()));
+    let frame = pvrr_frame(ctx, scene, params);
     (reference, frame)
 }
 
@@ -262,4 +292,395 @@ fn parallel_reflection_lines_fall_back_with_a_warning_and_no_nan() {
     );
     assert_eq!(frame.warnings.len(), 1, "{:?}", frame.warnings);
     assert!(frame.warnings[0].contains("door mirror") && frame.warnings[0].contains("parallel"));
+}
+
+/// A pvrr frame of `scene` at SIZE² with `params`, checked free of NaN.
+fn pvrr_frame(
+    ctx: &specula_gpu::GpuContext,
+    scene: &Scene,
+    params: &[(&str, &str)],
+) -> specula_methods::Frame {
+    let mut pvrr = by_name("pvrr").unwrap();
+    for (name, value) in params {
+        pvrr.set_parameter(name, value).unwrap();
+    }
+    pvrr.prepare(ctx, scene).unwrap();
+    let frame = pvrr.render(ctx, scene, &scene.camera, SIZE, SIZE).unwrap();
+    assert!(frame.image.pixels.iter().all(|p| p.is_finite()));
+    frame
+}
+
+fn counter(frame: &specula_methods::Frame, name: &str) -> u64 {
+    frame
+        .counters
+        .iter()
+        .find(|(n, _)| n == name)
+        .unwrap_or_else(|| panic!("no counter {name}"))
+        .1
+}
+
+#[test]
+fn lens_vertices_show_the_ray_traced_double_refraction_per_channel() {
+    let Some(ctx) = specula_gpu::test_context("pvrr lens") else {
+        return;
+    };
+    // Three indices (1.60, 1.61, 1.62): three draws with colour masks; the reference traces
+    // each channel with its own index, so a wrong mask or index shows at the vertices.
+    let scene = specula_scene::load("spectacle-lens").unwrap();
+    let (reference, frame) = reference_and_pvrr(&ctx, &scene);
+    let errors = lens_vertex_errors(&scene, &reference, &frame.image);
+    // Pixel centres lie up to 0.7 px from their vertex: where the picture changes sharply
+    // (chart edges, the lens rim) that alone makes a difference, so the bound is on most
+    // vertices rather than on the mean.
+    let within =
+        |errors: &[f32]| errors.iter().filter(|&&e| e < 0.02).count() as f32 / errors.len() as f32;
+    eprintln!(
+        "pvrr spectacle-lens {SIZE}²: {} visible vertices, {:.1} % within 0.02 of the reference",
+        errors.len(),
+        100.0 * within(&errors)
+    );
+    assert!(within(&errors) > 0.8);
+    // Colour masks: with strongly dispersive glass (1.3 / 1.6 / 1.9) each channel's picture
+    // differs, so drawing every channel with one index is visibly wrong at the vertices.
+    let mut dispersive = scene.clone();
+    let lens = dispersive
+        .meshes
+        .iter()
+        .find(|m| m.name == "spectacle lens")
+        .unwrap()
+        .material;
+    dispersive.materials[lens].kind = specula_scene::MaterialKind::Dielectric {
+        ior: Vec3::new(1.3, 1.6, 1.9),
+        thin_walled: false,
+    };
+    let (reference, frame) = reference_and_pvrr(&ctx, &dispersive);
+    let three = lens_vertex_errors(&dispersive, &reference, &frame.image);
+    let frame = pvrr_frame(&ctx, &dispersive, &[("ior", "1.6")]);
+    let one = lens_vertex_errors(&dispersive, &reference, &frame.image);
+    eprintln!(
+        "  indices 1.3 / 1.6 / 1.9: {:.1} % within 0.02; all channels at 1.6: {:.1} %",
+        100.0 * within(&three),
+        100.0 * within(&one)
+    );
+    assert!(within(&three) > 0.8);
+    assert!(within(&one) < within(&three) - 0.1);
+}
+
+/// Per visible lens vertex: largest channel difference to the reference at its pixel.
+fn lens_vertex_errors(scene: &Scene, reference: &Image, image: &Image) -> Vec<f32> {
+    let accel = SceneAccel::new(scene);
+    let lens = scene
+        .meshes
+        .iter()
+        .position(|m| m.name == "spectacle lens")
+        .unwrap();
+    scene.meshes[lens]
+        .positions
+        .iter()
+        .filter(|&&v| {
+            let distance = (v - scene.camera.eye).length();
+            let ray = specula_trace::Ray {
+                origin: scene.camera.eye,
+                dir: (v - scene.camera.eye) / distance,
+            };
+            accel
+                .intersect(&ray, distance * (1.0 + 1e-4))
+                .is_some_and(|h| h.mesh as usize == lens && h.t > distance * (1.0 - 2e-3))
+        })
+        .filter_map(|&v| pixel_of(scene, v))
+        .map(|(x, y)| (image.get(x, y) - reference.get(x, y)).abs().max_element())
+        .collect()
+}
+
+/// `scene` with the mesh named `name` moved by `offset`.
+fn moved(scene: &Scene, name: &str, offset: Vec3) -> Scene {
+    let mut scene = scene.clone();
+    for mesh in scene.meshes.iter_mut().filter(|m| m.name == name) {
+        mesh.transform(glam::Mat4::from_translation(offset));
+    }
+    scene.finalize("test scene").unwrap();
+    scene
+}
+
+#[test]
+fn cached_mode_reuses_paths_while_the_lens_moves_with_the_eye() {
+    let Some(ctx) = specula_gpu::test_context("pvrr cached") else {
+        return;
+    };
+    let scene = specula_scene::load("spectacle-lens").unwrap();
+    let mut pvrr = by_name("pvrr").unwrap();
+    pvrr.set_parameter("cached", "true").unwrap();
+    let mut frame_of = |scene: &Scene| {
+        pvrr.prepare(&ctx, scene).unwrap();
+        pvrr.render(&ctx, scene, &scene.camera, SIZE, SIZE).unwrap()
+    };
+    let first = frame_of(&scene);
+    let second = frame_of(&scene);
+    assert_eq!(counter(&first, "reflectors from the cache"), 0);
+    assert_eq!(counter(&second, "reflectors from the cache"), 1);
+    assert!(counter(&second, "per-vertex rays") < counter(&first, "per-vertex rays"));
+    assert_eq!(first.image.pixels, second.image.pixels);
+    // Head moves, lens with it: cached, and as the uncached technique draws it.
+    let offset = Vec3::new(0.05, 0.02, 0.03);
+    let mut worn = moved(&scene, "spectacle lens", offset);
+    worn.camera.eye += offset;
+    worn.camera.target += offset;
+    let cached = frame_of(&worn);
+    assert_eq!(counter(&cached, "reflectors from the cache"), 1);
+    let fresh = pvrr_frame(&ctx, &worn, &[]);
+    let difference = cached
+        .image
+        .pixels
+        .iter()
+        .zip(&fresh.image.pixels)
+        .map(|(a, b)| (*a - *b).abs().max_element())
+        .sum::<f32>()
+        / fresh.image.pixels.len() as f32;
+    eprintln!(
+        "pvrr cached vs fresh after moving eye and lens together: mean difference {difference:.6}"
+    );
+    assert!(difference < 1e-3, "{difference}");
+    // The lens alone moves: recomputed.
+    let slipped = moved(&scene, "spectacle lens", Vec3::new(0.0, 0.01, 0.0));
+    assert_eq!(counter(&frame_of(&slipped), "reflectors from the cache"), 0);
+}
+
+#[test]
+fn subdivided_patches_meet_at_their_shared_vertices() {
+    let Some(ctx) = specula_gpu::test_context("pvrr patches") else {
+        return;
+    };
+    let scene = specula_scene::load("door-mirror").unwrap();
+    let (reference, whole) = reference_and_pvrr(&ctx, &scene);
+    let split = pvrr_frame(&ctx, &scene, &[("max_fov", "12")]);
+    assert_eq!(counter(&whole, "patches"), 1);
+    assert!(counter(&split, "patches") >= 4, "{:?}", split.counters);
+    let (whole_error, _) = vertex_and_centroid_errors(&scene, &reference, &whole.image);
+    let (split_error, split_centroids) =
+        vertex_and_centroid_errors(&scene, &reference, &split.image);
+    let rmse = |image: &Image| {
+        let sum: f32 = image
+            .pixels
+            .iter()
+            .zip(&reference.pixels)
+            .map(|(a, b)| (*a - *b).length_squared() / 3.0)
+            .sum();
+        (sum / image.pixels.len() as f32).sqrt()
+    };
+    eprintln!(
+        "pvrr door-mirror in {} patches: vertex error {split_error:.4} (one patch {whole_error:.4}), centroids {split_centroids:.4}; image RMSE {:.4} (one patch {:.4})",
+        counter(&split, "patches"),
+        rmse(&split.image),
+        rmse(&whole.image)
+    );
+    // Every patch shows its vertices exactly, and the seams add no error of their own.
+    assert!(split_error < 0.01, "{split_error}");
+    assert!(rmse(&split.image) < rmse(&whole.image) * 1.1);
+}
+
+/// A closed sphere mirror seen from outside: its visible reflection directions span almost
+/// every direction, far more than one view volume can hold.
+fn sphere_scene() -> Scene {
+    let mut scene = concave_scene();
+    let mut ball = specula_scene::generators::sphere(0.5, 32, 16);
+    ball.material = scene.meshes[0].material;
+    ball.name = "door mirror".into();
+    scene.meshes[0] = ball;
+    scene.camera.fov_y_deg = 25.0;
+    scene.finalize("test scene").unwrap();
+    scene
+}
+
+#[test]
+fn a_sphere_is_subdivided_until_every_patch_fits_the_field_of_view() {
+    let Some(ctx) = specula_gpu::test_context("pvrr sphere") else {
+        return;
+    };
+    let scene = sphere_scene();
+    let (reference, frame) = reference_and_pvrr_with(&ctx, &scene, &[("max_fov", "100")]);
+    let (at_vertices, _) = vertex_and_centroid_errors(&scene, &reference, &frame.image);
+    let one = pvrr_frame(&ctx, &scene, &[("max_patches", "1")]);
+    let (one_patch, _) = vertex_and_centroid_errors(&scene, &reference, &one.image);
+    eprintln!(
+        "pvrr sphere: {} patches, vertex error {at_vertices:.4}; one patch: {one_patch:.4}, warnings {:?}",
+        counter(&frame, "patches"),
+        one.warnings
+    );
+    assert!(counter(&frame, "patches") > 4);
+    assert!(
+        !frame.warnings.iter().any(|w| w.contains("max_fov")),
+        "{:?}",
+        frame.warnings
+    );
+    assert!(one.warnings.iter().any(|w| w.contains("max_fov")));
+    assert!(at_vertices < 0.02, "{at_vertices}");
+    assert!(at_vertices < one_patch, "{at_vertices} vs {one_patch}");
+}
+
+#[test]
+fn principal_directions_of_a_rolled_cylinder_follow_its_axis() {
+    use specula_methods::pvrr::principal_directions;
+    // A cylindrical strip (radius 0.1 m, axis along y), rolled 30° about the view axis z.
+    let (radius, roll) = (0.1f32, 30f32.to_radians());
+    let mut mesh = specula_scene::Mesh::default();
+    let n = 8;
+    for j in 0..=n {
+        for i in 0..=n {
+            let angle = (i as f32 / n as f32 - 0.5) * 1.2;
+            let y = (j as f32 / n as f32 - 0.5) * 0.2;
+            let normal = Vec3::new(angle.sin(), 0.0, angle.cos());
+            mesh.positions.push(normal * radius + Vec3::Y * y);
+            mesh.normals.push(normal);
+        }
+    }
+    for j in 0..n {
+        for i in 0..n {
+            let k = j * (n + 1) + i;
+            mesh.triangles.push([k, k + 1, k + n + 2]);
+            mesh.triangles.push([k, k + n + 2, k + n + 1]);
+        }
+    }
+    mesh.transform(glam::Mat4::from_rotation_z(roll));
+    let all: Vec<u32> = (0..mesh.triangles.len() as u32).collect();
+    let [e1, e2] = principal_directions(&mesh, &all).unwrap();
+    let axis = glam::Quat::from_rotation_z(roll) * Vec3::Y;
+    let along = e1.dot(axis).abs().max(e2.dot(axis).abs());
+    eprintln!("principal directions {e1} {e2}, axis {axis}: |cos| {along:.5}");
+    assert!(along > 0.999, "{along}");
+    assert!(e1.dot(e2).abs() < 1e-4);
+}
+
+/// Two mirrors: the camera sees mirror A (named "door mirror"), which shows mirror B.
+fn two_mirror_scene() -> Scene {
+    use glam::Mat4;
+    let mut scene = concave_scene();
+    let material = scene.meshes[0].material;
+    let mut a = specula_scene::generators::spherical_cap(3.0, 0.8, false, 8, 32).unwrap();
+    a.material = material;
+    a.name = "door mirror".into();
+    scene.meshes[0] = a;
+    let mut b = specula_scene::generators::plane(glam::Vec2::new(1.4, 1.4), 10);
+    // Facing mirror A, off to the side of the camera.
+    b.transform(
+        Mat4::from_translation(Vec3::new(-1.6, 0.0, 3.0))
+            * Mat4::from_rotation_y(-0.5)
+            * Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2),
+    );
+    b.material = material;
+    b.name = "mirror B".into();
+    scene.meshes.push(b);
+    scene.camera.eye = Vec3::new(1.6, 0.0, 3.0);
+    scene.camera.fov_y_deg = 20.0;
+    scene.finalize("test scene").unwrap();
+    scene
+}
+
+#[test]
+fn a_mirror_seen_in_a_mirror_is_drawn_at_depth_two() {
+    let Some(ctx) = specula_gpu::test_context("pvrr multiple") else {
+        return;
+    };
+    let scene = two_mirror_scene();
+    let (reference, deep) = reference_and_pvrr_with(&ctx, &scene, &[("depth", "2")]);
+    let shallow = pvrr_frame(&ctx, &scene, &[("depth", "1")]);
+    let (deep_error, _) = vertex_and_centroid_errors(&scene, &reference, &deep.image);
+    let (shallow_error, _) = vertex_and_centroid_errors(&scene, &reference, &shallow.image);
+    eprintln!(
+        "pvrr mirror in mirror: vertex error depth 2 {deep_error:.4}, depth 1 {shallow_error:.4}"
+    );
+    assert!(
+        deep_error * 2.0 < shallow_error,
+        "{deep_error} vs {shallow_error}"
+    );
+}
+
+#[test]
+fn the_zooming_region_of_a_concave_mirror_is_marked_and_reported() {
+    let Some(ctx) = specula_gpu::test_context("pvrr zooming") else {
+        return;
+    };
+    let mut scene = concave_scene();
+    // A box between the mirror (R = 2 m) and its focal region: reflections see it before
+    // their rays converge.
+    let mut block = specula_scene::generators::cuboid(Vec3::splat(0.15));
+    block.transform(glam::Mat4::from_translation(Vec3::new(0.25, 0.2, 0.4)));
+    block.material = scene.meshes[1].material;
+    block.name = "block".into();
+    scene.meshes.push(block);
+    scene.finalize("test scene").unwrap();
+    let frame = pvrr_frame(&ctx, &scene, &[]);
+    let marked = frame
+        .image
+        .pixels
+        .iter()
+        .filter(|p| p.x > 0.99 && p.y < 0.01 && p.z > 0.99)
+        .count();
+    eprintln!(
+        "pvrr zooming region: {} unresolved vertices, {marked} magenta pixels, warnings {:?}",
+        counter(&frame, "unresolved vertices"),
+        frame.warnings
+    );
+    assert!(counter(&frame, "unresolved vertices") > 0);
+    assert!(marked > 0);
+    assert!(frame.warnings.iter().any(|w| w.contains("zooming region")));
+    // Without the box nothing is marked.
+    let clean = pvrr_frame(&ctx, &concave_scene(), &[]);
+    assert_eq!(counter(&clean, "unresolved vertices"), 0);
+}
+
+#[test]
+fn a_mirror_with_too_few_vertices_is_reported() {
+    let Some(ctx) = specula_gpu::test_context("pvrr few vertices") else {
+        return;
+    };
+    let mut scene = specula_scene::load("door-mirror").unwrap();
+    let mirror = scene
+        .meshes
+        .iter()
+        .position(|m| m.name == "door mirror")
+        .unwrap();
+    let mut quad = specula_scene::generators::plane(glam::Vec2::new(0.2, 0.13), 1);
+    quad.transform(glam::Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2));
+    quad.material = scene.meshes[mirror].material;
+    quad.name = "door mirror".into();
+    scene.meshes[mirror] = quad;
+    scene.finalize("test scene").unwrap();
+    let frame = pvrr_frame(&ctx, &scene, &[]);
+    assert!(
+        frame
+            .warnings
+            .iter()
+            .any(|w| w.contains("door mirror") && w.contains("only 4 vertices")),
+        "{:?}",
+        frame.warnings
+    );
+}
+
+#[test]
+fn bad_parameters_are_named_in_the_error() {
+    let mut pvrr = by_name("pvrr").unwrap();
+    for (name, value) in [
+        ("ior", "glass"),
+        ("ior", "0.5"),
+        ("ior", "1.5,1.6"),
+        ("max_fov", "0"),
+        ("max_fov", "NaN"),
+        ("depth", "9"),
+        ("max_patches", "0"),
+        ("marker_size", "-1"),
+        ("cached", "maybe"),
+    ] {
+        let error = pvrr.set_parameter(name, value).unwrap_err().to_string();
+        assert!(
+            error.contains(name) && error.contains(value),
+            "{name}={value}: {error}"
+        );
+    }
+    for (name, value) in [
+        ("ior", "1.60,1.61,1.62"),
+        ("ior", "material"),
+        ("depth", "3"),
+    ] {
+        pvrr.set_parameter(name, value).unwrap();
+    }
 }

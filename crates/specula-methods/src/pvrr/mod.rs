@@ -12,8 +12,8 @@
 //! 2. the reflector's visible triangles form patches (`view`): a patch's virtual viewpoint is
 //!    the point nearest, in the least-squares sense, to its vertices' exit lines,
 //!    (Σ (I − r rᵀ)) c = Σ (I − r rᵀ) o; its view volume looks along the mean exit direction,
-//!    near plane just in front of the reflector, far plane past every P, sides containing every
-//!    exit segment between the two. Of the up vectors — the world's, and the patch's two
+//!    near plane just in front of the reflector, far plane past every P and the whole scene,
+//!    sides containing every exit segment between the two. Of the up vectors — the world's, and the patch's two
 //!    principal curvature directions (§4.3) — the one giving the smallest cross-section wins,
 //!    which fits the volume to cylinders and saddles;
 //! 3. adaptive subdivision (§4.1, the paper's future work): a patch whose field of view
@@ -51,8 +51,9 @@
 //!
 //! Cached mode (§5): with `cached=true` a reflector's exit segments, patches and viewpoints are
 //! kept in the eye's frame and reused while the reflector's vertices do not move relative to
-//! the eye (a spectacle lens worn, a door mirror seen by the driver); only the exit segments'
-//! hits P, the view volumes and the two passes are redone.
+//! the eye (a spectacle lens worn, a door mirror seen by the driver), also across `prepare`
+//! of a moved scene; only the exit segments' hits P, the view volumes and the two passes are
+//! redone.
 //!
 //! Parameters:
 //! - `resolution` (default 512): reflection-map height in texels of an undivided reflector
@@ -170,8 +171,10 @@ struct ReflectorDraw {
 
 /// A reflector's eye-relative state kept by the cached mode.
 struct CachedReflector {
-    /// The mesh's vertices in the eye's frame when the state was computed.
+    /// The mesh's vertices in the eye's frame when the state was computed, and its
+    /// interaction: the state is valid while both are unchanged.
     key: Vec<Vec3>,
+    interaction: Interaction,
     paths: MeshPaths,
     patches: Vec<Patch>,
 }
@@ -354,8 +357,9 @@ fn map_state(
 }
 
 impl CachedReflector {
-    fn matches(&self, key: &[Vec3]) -> bool {
-        self.key.len() == key.len()
+    fn matches(&self, key: &[Vec3], interaction: &Interaction) -> bool {
+        self.interaction == *interaction
+            && self.key.len() == key.len()
             && self
                 .key
                 .iter()
@@ -394,6 +398,16 @@ fn plan_level(
 ) -> LevelPlan {
     let mut plan = LevelPlan::default();
     let far_distance = (scene.bounds().radius() * 4.0).max(1.0);
+    let bounds = scene.bounds();
+    let scene_corners: Vec<Vec3> = (0..8)
+        .map(|k| {
+            Vec3::select(
+                glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0),
+                bounds.max,
+                bounds.min,
+            )
+        })
+        .collect();
     for (mesh, interaction) in &p.reflectors {
         let mesh = *mesh;
         if Some(mesh) == hidden {
@@ -412,14 +426,16 @@ fn plan_level(
             (&mut slots[mesh], **frame, key)
         });
         let reused = slot.as_ref().and_then(|(slot, frame, key)| {
-            slot.as_ref().filter(|c| c.matches(key)).map(|c| {
-                map_state(
-                    &c.paths,
-                    &c.patches,
-                    |q| frame.point_to_world(q),
-                    |v| frame.vector_to_world(v),
-                )
-            })
+            slot.as_ref()
+                .filter(|c| c.matches(key, interaction))
+                .map(|c| {
+                    map_state(
+                        &c.paths,
+                        &c.patches,
+                        |q| frame.point_to_world(q),
+                        |v| frame.vector_to_world(v),
+                    )
+                })
         });
         let (paths, reused_patches) = match reused {
             Some((paths, patches)) => {
@@ -449,6 +465,7 @@ fn plan_level(
                 .zip(&hits)
                 .map(|(c, h)| c.exits.iter().zip(h).map(|(s, &p)| (s.origin, p)).collect())
                 .collect(),
+            scene_corners: scene_corners.clone(),
         };
         let patches: Vec<Patch> = match reused_patches {
             Some(patches) => patches
@@ -469,6 +486,7 @@ fn plan_level(
                     );
                     *slot = Some(CachedReflector {
                         key,
+                        interaction: interaction.clone(),
                         paths,
                         patches,
                     });
@@ -925,8 +943,8 @@ impl Technique for Pvrr {
     }
 
     fn prepare(&mut self, ctx: &GpuContext, scene: &Scene) -> Result<(), TechniqueError> {
+        // The cache survives: its entries are checked against the new scene's geometry.
         self.prepared = Some(self.build(ctx, scene)?);
-        self.cache.clear();
         Ok(())
     }
 

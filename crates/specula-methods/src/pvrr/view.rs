@@ -45,11 +45,15 @@ impl Extents {
     }
 
     /// Near plane just in front of the segments' origins (the mirror), far plane past every
-    /// hit, sides containing the part of every segment between them.
-    pub fn new(basis: &ViewBasis, segments: &[(Vec3, Vec3)]) -> Extents {
+    /// hit and every corner of the scene's bounds `scene_corners` (so that the map holds what
+    /// lies beyond the hits between vertices), sides containing the part of every segment
+    /// between them.
+    pub fn new(basis: &ViewBasis, segments: &[(Vec3, Vec3)], scene_corners: &[Vec3]) -> Extents {
         let far = segments
             .iter()
-            .map(|&(_, p)| basis.local(p).z)
+            .map(|&(_, p)| p)
+            .chain(scene_corners.iter().copied())
+            .map(|p| basis.local(p).z)
             .fold(0.0f32, f32::max)
             .max(1e-3)
             * 1.05;
@@ -225,6 +229,8 @@ pub struct PatchInput<'a> {
     pub primary: &'a [Segment],
     /// Per channel, per vertex: (exit segment origin, hit point P).
     pub segments: Vec<Vec<(Vec3, Vec3)>>,
+    /// The corners of the scene's bounding box, for the far plane.
+    pub scene_corners: Vec<Vec3>,
 }
 
 pub struct PatchLimits {
@@ -294,7 +300,7 @@ impl PatchInput<'_> {
             .into_iter()
             .enumerate()
             .map(|(k, basis)| {
-                let extents = Extents::new(&basis, &segments);
+                let extents = Extents::new(&basis, &segments, &self.scene_corners);
                 Patch {
                     triangles: triangles.to_vec(),
                     basis,
@@ -313,7 +319,11 @@ impl PatchInput<'_> {
     /// Extents of an already chosen basis for the current hits (the cached mode).
     pub fn extents_for(&self, patch: &Patch) -> Extents {
         let vertices = self.patch_vertices(&patch.triangles);
-        Extents::new(&patch.basis, &self.segments_of(&vertices))
+        Extents::new(
+            &patch.basis,
+            &self.segments_of(&vertices),
+            &self.scene_corners,
+        )
     }
 
     /// §4.1's adaptive subdivision: the reflector's triangles that the eye can see are split in
