@@ -418,6 +418,11 @@ fn cached_mode_reuses_paths_while_the_lens_moves_with_the_eye() {
     let second = frame_of(&scene);
     assert_eq!(counter(&first, "reflectors from the cache"), 0);
     assert_eq!(counter(&second, "reflectors from the cache"), 1);
+    eprintln!(
+        "pvrr cached: per-vertex rays {} uncached, {} cached",
+        counter(&first, "per-vertex rays"),
+        counter(&second, "per-vertex rays")
+    );
     assert!(counter(&second, "per-vertex rays") < counter(&first, "per-vertex rays"));
     assert_eq!(first.image.pixels, second.image.pixels);
     // Head moves, lens with it: cached, and as the uncached technique draws it.
