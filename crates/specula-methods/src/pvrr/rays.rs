@@ -48,13 +48,6 @@ impl Interaction {
             _ => None,
         }
     }
-
-    pub fn channels(&self) -> usize {
-        match self {
-            Interaction::Refract { iors } => iors.len(),
-            _ => 1,
-        }
-    }
 }
 
 /// The straight piece of a path after it leaves the reflector.
