@@ -118,16 +118,33 @@ impl Setting<'_> {
 
     /// A texture or map size in texels, 1 to 8192.
     pub fn texels(&self) -> Result<u32, TechniqueError> {
+        self.count(1..=8192, "a whole number of texels from 1 to 8192")
+    }
+
+    /// A whole number in `range`; `expected` says what in the error.
+    pub fn count(
+        &self,
+        range: std::ops::RangeInclusive<u32>,
+        expected: &str,
+    ) -> Result<u32, TechniqueError> {
         self.value
             .parse::<u32>()
             .ok()
-            .filter(|v| (1..=8192).contains(v))
-            .ok_or_else(|| self.bad("expected a whole number of texels from 1 to 8192"))
+            .filter(|v| range.contains(v))
+            .ok_or_else(|| self.bad(&format!("expected {expected}")))
     }
 
-    /// A finite number, if the value is one.
-    pub fn number(&self) -> Option<f32> {
-        self.value.parse::<f32>().ok().filter(|v| v.is_finite())
+    /// A number in `range`; `expected` says what in the error.
+    pub fn number_in(
+        &self,
+        range: std::ops::RangeInclusive<f32>,
+        expected: &str,
+    ) -> Result<f32, TechniqueError> {
+        self.value
+            .parse::<f32>()
+            .ok()
+            .filter(|v| range.contains(v))
+            .ok_or_else(|| self.bad(&format!("expected {expected}")))
     }
 
     pub fn flag(&self) -> Result<bool, TechniqueError> {

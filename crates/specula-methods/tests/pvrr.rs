@@ -261,25 +261,35 @@ fn concave_mirror_vertices_show_the_ray_traced_reflection() {
     assert!(at_vertices < 0.02, "at vertices {at_vertices}");
 }
 
+/// `scene` with its mesh named "door mirror" replaced by `mirror` (same name and material).
+fn with_mirror(mut scene: Scene, mut mirror: specula_scene::Mesh) -> Scene {
+    let index = scene
+        .meshes
+        .iter()
+        .position(|m| m.name == "door mirror")
+        .unwrap();
+    mirror.material = scene.meshes[index].material;
+    mirror.name = "door mirror".into();
+    scene.meshes[index] = mirror;
+    scene.finalize("test scene").unwrap();
+    scene
+}
+
+/// A flat door mirror, `quads` × `quads` quads, facing +Z.
+fn flat_mirror(quads: u32) -> specula_scene::Mesh {
+    let mut flat = specula_scene::generators::plane(glam::Vec2::new(0.2, 0.13), quads);
+    flat.transform(glam::Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2));
+    flat
+}
+
 #[test]
 fn parallel_reflection_lines_fall_back_with_a_warning_and_no_nan() {
     let Some(ctx) = specula_gpu::test_context("pvrr parallel lines") else {
         return;
     };
-    let mut scene = specula_scene::load("door-mirror").unwrap();
     // A flat mirror seen from 100 km through a telephoto lens: every reflection line is
     // parallel to within 2e-6 rad, so the least-squares viewpoint does not exist.
-    let mirror = scene
-        .meshes
-        .iter()
-        .position(|m| m.name == "door mirror")
-        .unwrap();
-    let material = scene.meshes[mirror].material;
-    let mut flat = specula_scene::generators::plane(glam::Vec2::new(0.2, 0.13), 6);
-    flat.transform(glam::Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2));
-    flat.material = material;
-    flat.name = "door mirror".into();
-    scene.meshes[mirror] = flat;
+    let mut scene = with_mirror(specula_scene::load("door-mirror").unwrap(), flat_mirror(6));
     scene.camera.eye = Vec3::new(0.0, 0.0, 1.0e5);
     scene.camera.target = Vec3::ZERO;
     scene.camera.fov_y_deg = 2.0e-4;
@@ -486,13 +496,11 @@ fn subdivided_patches_meet_at_their_shared_vertices() {
 /// A closed sphere mirror seen from outside: its visible reflection directions span almost
 /// every direction, far more than one view volume can hold.
 fn sphere_scene() -> Scene {
-    let mut scene = concave_scene();
-    let mut ball = specula_scene::generators::sphere(0.5, 32, 16);
-    ball.material = scene.meshes[0].material;
-    ball.name = "door mirror".into();
-    scene.meshes[0] = ball;
+    let mut scene = with_mirror(
+        concave_scene(),
+        specula_scene::generators::sphere(0.5, 32, 16),
+    );
     scene.camera.fov_y_deg = 25.0;
-    scene.finalize("test scene").unwrap();
     scene
 }
 
@@ -558,12 +566,9 @@ fn principal_directions_of_a_rolled_cylinder_follow_its_axis() {
 /// Two mirrors: the camera sees mirror A (named "door mirror"), which shows mirror B.
 fn two_mirror_scene() -> Scene {
     use glam::Mat4;
-    let mut scene = concave_scene();
+    let a = specula_scene::generators::spherical_cap(3.0, 0.8, false, 8, 32).unwrap();
+    let mut scene = with_mirror(concave_scene(), a);
     let material = scene.meshes[0].material;
-    let mut a = specula_scene::generators::spherical_cap(3.0, 0.8, false, 8, 32).unwrap();
-    a.material = material;
-    a.name = "door mirror".into();
-    scene.meshes[0] = a;
     let mut b = specula_scene::generators::plane(glam::Vec2::new(1.4, 1.4), 10);
     // Facing mirror A, off to the side of the camera.
     b.transform(
@@ -638,18 +643,7 @@ fn a_mirror_with_too_few_vertices_is_reported() {
     let Some(ctx) = specula_gpu::test_context("pvrr few vertices") else {
         return;
     };
-    let mut scene = specula_scene::load("door-mirror").unwrap();
-    let mirror = scene
-        .meshes
-        .iter()
-        .position(|m| m.name == "door mirror")
-        .unwrap();
-    let mut quad = specula_scene::generators::plane(glam::Vec2::new(0.2, 0.13), 1);
-    quad.transform(glam::Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2));
-    quad.material = scene.meshes[mirror].material;
-    quad.name = "door mirror".into();
-    scene.meshes[mirror] = quad;
-    scene.finalize("test scene").unwrap();
+    let scene = with_mirror(specula_scene::load("door-mirror").unwrap(), flat_mirror(1));
     let frame = pvrr_frame(&ctx, &scene, &[]);
     assert!(
         frame

@@ -107,19 +107,6 @@ pub const MARKER_RADIANCE: f32 = 4.0;
 /// The smallest map height a patch gets, however little of the view it covers.
 const MIN_MAP_TEXELS: u32 = 16;
 
-/// Approximate solid angle of `triangles` of `mesh` seen from `eye`.
-fn solid_angle(mesh: &specula_scene::Mesh, triangles: &[u32], eye: Vec3) -> f32 {
-    triangles
-        .iter()
-        .map(|&t| {
-            let [a, b, c] = mesh.triangles[t as usize].map(|i| mesh.positions[i as usize]);
-            let area_normal = 0.5 * (b - a).cross(c - a);
-            let to_eye = eye - (a + b + c) / 3.0;
-            area_normal.dot(to_eye).abs() / to_eye.length().powi(3).max(f32::MIN_POSITIVE)
-        })
-        .sum()
-}
-
 /// Fewer visible vertices than this, and the linear warp between them is too coarse to trust.
 const MIN_VISIBLE_VERTICES: usize = 9;
 
@@ -179,6 +166,36 @@ struct CachedReflector {
     patches: Vec<Patch>,
 }
 
+/// A mirror or dielectric mesh: how it bends rays and how its 2nd pass shades.
+struct Reflector {
+    mesh: usize,
+    interaction: Interaction,
+    material: GpuMirrorMaterial,
+}
+
+impl Reflector {
+    fn of(scene: &Scene, mesh: usize, ior_override: Option<Vec3>) -> Option<Reflector> {
+        let material = &scene.materials[scene.meshes[mesh].material];
+        let interaction = Interaction::of(&material.kind, ior_override)?;
+        let material = match material.kind {
+            MaterialKind::Mirror { fresnel } => GpuMirrorMaterial {
+                f0: material.color.to_array(),
+                fresnel: fresnel as u32,
+            },
+            // A lens's 2nd pass is weighted by the path's exact Fresnel transmittance instead.
+            _ => GpuMirrorMaterial {
+                f0: [1.0; 3],
+                fresnel: 0,
+            },
+        };
+        Some(Reflector {
+            mesh,
+            interaction,
+            material,
+        })
+    }
+}
+
 /// Per-frame tallies for the frame's counters and warnings.
 #[derive(Default)]
 struct Tally {
@@ -195,8 +212,12 @@ struct Prepared {
     gpu_scene: GpuScene,
     raster: RasterPass,
     accel: SceneAccel,
-    /// Every mirror and dielectric mesh, with how it bends rays.
-    reflectors: Vec<(usize, Interaction)>,
+    /// Every mirror and dielectric mesh.
+    reflectors: Vec<Reflector>,
+    /// Corners of the scene's bounds, which every map's far plane must hold.
+    scene_corners: Vec<Vec3>,
+    /// How far along an exit ray that leaves the scene its P is put.
+    far_distance: f32,
     /// 2nd pass pipelines writing all channels, then red, green, blue only.
     pipelines: [wgpu::RenderPipeline; 4],
     layout: wgpu::BindGroupLayout,
@@ -383,6 +404,19 @@ struct PlanSettings {
     markers: Option<f32>,
 }
 
+/// Approximate solid angle of `triangles` of `mesh` seen from `eye`.
+fn solid_angle(mesh: &specula_scene::Mesh, triangles: &[u32], eye: Vec3) -> f32 {
+    triangles
+        .iter()
+        .map(|&t| {
+            let [a, b, c] = mesh.triangles[t as usize].map(|i| mesh.positions[i as usize]);
+            let area_normal = 0.5 * (b - a).cross(c - a);
+            let to_eye = eye - (a + b + c) / 3.0;
+            area_normal.dot(to_eye).abs() / to_eye.length().powi(3).max(f32::MIN_POSITIVE)
+        })
+        .sum()
+}
+
 /// Steps 1–3 and 5 for every reflector but `hidden`, seen from `eye`. `cache` (top level, cached
 /// mode) holds eye-relative state per mesh; `top` says whether warnings are reported.
 #[allow(clippy::too_many_arguments)]
@@ -397,186 +431,190 @@ fn plan_level(
     top: bool,
 ) -> LevelPlan {
     let mut plan = LevelPlan::default();
-    let far_distance = (scene.bounds().radius() * 4.0).max(1.0);
-    let bounds = scene.bounds();
-    let scene_corners: Vec<Vec3> = (0..8)
-        .map(|k| {
-            Vec3::select(
-                glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0),
-                bounds.max,
-                bounds.min,
-            )
-        })
-        .collect();
-    for (mesh, interaction) in &p.reflectors {
-        let mesh = *mesh;
-        if Some(mesh) == hidden {
-            continue;
-        }
-        let m = &scene.meshes[mesh];
+    for reflector in p.reflectors.iter().filter(|r| Some(r.mesh) != hidden) {
         let slot = cache.as_mut().map(|(slots, frame)| {
             if slots.len() < scene.meshes.len() {
                 slots.resize_with(scene.meshes.len(), || None);
             }
-            let key: Vec<Vec3> = m
-                .positions
-                .iter()
-                .map(|&v| frame.point_to_local(v))
-                .collect();
-            (&mut slots[mesh], **frame, key)
+            (&mut slots[reflector.mesh], **frame)
         });
-        let reused = slot.as_ref().and_then(|(slot, frame, key)| {
-            slot.as_ref()
-                .filter(|c| c.matches(key, interaction))
-                .map(|c| {
-                    map_state(
-                        &c.paths,
-                        &c.patches,
-                        |q| frame.point_to_world(q),
-                        |v| frame.vector_to_world(v),
-                    )
-                })
-        });
-        let (paths, reused_patches) = match reused {
-            Some((paths, patches)) => {
-                tally.cache_hits += 1;
-                (paths, Some(patches))
-            }
-            None => {
-                let paths = trace_paths(scene, &p.accel, mesh, eye, interaction);
-                tally.rays += paths.rays;
-                (paths, None)
-            }
-        };
-        let hits: Vec<Vec<Vec3>> = paths
+        plan_reflector(
+            p, settings, scene, reflector, eye, slot, tally, top, &mut plan,
+        );
+    }
+    plan
+}
+
+/// The eye-relative state of `mesh` from `slot` if it is still valid there (the cached
+/// mode), carried into world space.
+fn reuse(
+    slot: &Option<CachedReflector>,
+    frame: &EyeFrame,
+    key: &[Vec3],
+    interaction: &Interaction,
+) -> Option<(MeshPaths, Vec<Patch>)> {
+    let cached = slot.as_ref().filter(|c| c.matches(key, interaction))?;
+    Some(map_state(
+        &cached.paths,
+        &cached.patches,
+        |q| frame.point_to_world(q),
+        |v| frame.vector_to_world(v),
+    ))
+}
+
+/// Steps 1–3 and 5 for one reflector, appended to `plan`. `slot` is its cache entry and the
+/// eye's frame in the cached mode.
+#[allow(clippy::too_many_arguments)]
+fn plan_reflector(
+    p: &Prepared,
+    settings: &PlanSettings,
+    scene: &Scene,
+    reflector: &Reflector,
+    eye: Vec3,
+    slot: Option<(&mut Option<CachedReflector>, EyeFrame)>,
+    tally: &mut Tally,
+    top: bool,
+    plan: &mut LevelPlan,
+) {
+    let (mesh, interaction) = (reflector.mesh, &reflector.interaction);
+    let m = &scene.meshes[mesh];
+    let key: Option<Vec<Vec3>> = slot.as_ref().map(|(_, frame)| {
+        m.positions
+            .iter()
+            .map(|&v| frame.point_to_local(v))
+            .collect()
+    });
+    let reused = slot
+        .as_ref()
+        .zip(key.as_ref())
+        .and_then(|((slot, frame), key)| reuse(slot, frame, key, interaction));
+    let (paths, reused_patches) = match reused {
+        Some((paths, patches)) => {
+            tally.cache_hits += 1;
+            (paths, Some(patches))
+        }
+        None => {
+            let paths = trace_paths(scene, &p.accel, mesh, eye, interaction);
+            tally.rays += paths.rays;
+            (paths, None)
+        }
+    };
+    let hits: Vec<Vec<Vec3>> = paths
+        .channels
+        .iter()
+        .map(|c| trace_hits(&p.accel, &c.exits, p.far_distance))
+        .collect();
+    tally.rays += (hits.len() * m.positions.len()) as u64;
+    let primary = paths.channels.len() / 2;
+    let input = PatchInput {
+        mesh: m,
+        visible: &paths.visible,
+        primary: &paths.channels[primary].exits,
+        segments: paths
             .channels
             .iter()
-            .map(|c| trace_hits(&p.accel, &c.exits, far_distance))
-            .collect();
-        tally.rays += (hits.len() * m.positions.len()) as u64;
-        let primary = paths.channels.len() / 2;
-        let input = PatchInput {
-            mesh: m,
-            visible: &paths.visible,
-            primary: &paths.channels[primary].exits,
-            segments: paths
+            .zip(&hits)
+            .map(|(c, h)| c.exits.iter().zip(h).map(|(s, &p)| (s.origin, p)).collect())
+            .collect(),
+        scene_corners: &p.scene_corners,
+    };
+    let patches: Vec<Patch> = match reused_patches {
+        Some(patches) => patches
+            .into_iter()
+            .map(|patch| Patch {
+                extents: input.extents_for(&patch),
+                ..patch
+            })
+            .collect(),
+        None => {
+            let patches = input.patches(&settings.limits);
+            if let Some(((slot, frame), key)) = slot.zip(key) {
+                let (paths, patches) = map_state(
+                    &paths,
+                    &patches,
+                    |q| frame.point_to_local(q),
+                    |v| frame.vector_to_local(v),
+                );
+                *slot = Some(CachedReflector {
+                    key,
+                    interaction: interaction.clone(),
+                    paths,
+                    patches,
+                });
+            }
+            patches
+        }
+    };
+    let mut unresolved = vec![false; m.positions.len()];
+    let solid_angles: Vec<f32> = patches
+        .iter()
+        .map(|patch| solid_angle(m, &patch.triangles, eye))
+        .collect();
+    let total_solid_angle = solid_angles.iter().sum::<f32>().max(f32::MIN_POSITIVE);
+    let draws = patches
+        .iter()
+        .zip(&solid_angles)
+        .map(|(patch, &solid_angle)| {
+            // The reflector's map budget is shared by its patches in proportion to how
+            // much of the view each covers.
+            let share = (solid_angle / total_solid_angle).clamp(0.0, 1.0);
+            let height = ((settings.resolution as f32 * share.sqrt()).round() as u32)
+                .clamp(MIN_MAP_TEXELS.min(settings.resolution), settings.resolution);
+            let camera = patch.extents.camera(&patch.basis, height);
+            tally.map_texels += (camera.width * camera.height) as u64;
+            let channels = paths
                 .channels
                 .iter()
                 .zip(&hits)
-                .map(|(c, h)| c.exits.iter().zip(h).map(|(s, &p)| (s.origin, p)).collect())
-                .collect(),
-            scene_corners: scene_corners.clone(),
-        };
-        let patches: Vec<Patch> = match reused_patches {
-            Some(patches) => patches
-                .into_iter()
-                .map(|patch| Patch {
-                    extents: input.extents_for(&patch),
-                    ..patch
+                .map(|(channel, h)| {
+                    patch
+                        .triangles
+                        .iter()
+                        .flat_map(|&t| m.triangles[t as usize])
+                        .map(|i| {
+                            let i = i as usize;
+                            let hit = h[i];
+                            let behind = paths.visible[i] && patch.basis.local(hit).z <= 0.0;
+                            unresolved[i] |= behind;
+                            MirrorVertex {
+                                position: m.positions[i].to_array(),
+                                normal: m.normals[i].to_array(),
+                                uv: map_uv(&camera, hit),
+                                weight: channel.weights[i],
+                                unresolved: behind as u32 as f32,
+                            }
+                        })
+                        .collect()
                 })
-                .collect(),
-            None => {
-                let patches = input.patches(&settings.limits);
-                if let Some((slot, frame, key)) = slot {
-                    let (paths, patches) = map_state(
-                        &paths,
-                        &patches,
-                        |q| frame.point_to_local(q),
-                        |v| frame.vector_to_local(v),
-                    );
-                    *slot = Some(CachedReflector {
-                        key,
-                        interaction: interaction.clone(),
-                        paths,
-                        patches,
-                    });
-                }
-                patches
-            }
-        };
-        let mut unresolved = vec![false; m.positions.len()];
-        let solid_angles: Vec<f32> = patches
-            .iter()
-            .map(|patch| solid_angle(m, &patch.triangles, eye))
-            .collect();
-        let total_solid_angle = solid_angles.iter().sum::<f32>().max(f32::MIN_POSITIVE);
-        let draws = patches
-            .iter()
-            .zip(&solid_angles)
-            .map(|(patch, &solid_angle)| {
-                // The reflector's map budget is shared by its patches in proportion to how
-                // much of the view each covers.
-                let share = (solid_angle / total_solid_angle).clamp(0.0, 1.0);
-                let height = ((settings.resolution as f32 * share.sqrt()).round() as u32)
-                    .clamp(MIN_MAP_TEXELS.min(settings.resolution), settings.resolution);
-                let camera = patch.extents.camera(&patch.basis, height);
-                tally.map_texels += (camera.width * camera.height) as u64;
-                let channels = paths
-                    .channels
-                    .iter()
-                    .zip(&hits)
-                    .map(|(channel, h)| {
-                        patch
-                            .triangles
-                            .iter()
-                            .flat_map(|&t| m.triangles[t as usize])
-                            .map(|i| {
-                                let i = i as usize;
-                                let hit = h[i];
-                                let behind = paths.visible[i] && patch.basis.local(hit).z <= 0.0;
-                                unresolved[i] |= behind;
-                                MirrorVertex {
-                                    position: m.positions[i].to_array(),
-                                    normal: m.normals[i].to_array(),
-                                    uv: map_uv(&camera, hit),
-                                    weight: channel.weights[i],
-                                    unresolved: behind as u32 as f32,
-                                }
-                            })
-                            .collect()
-                    })
-                    .collect();
-                PatchDraw { camera, channels }
-            })
-            .collect();
-        let unresolved = unresolved.iter().filter(|&&u| u).count();
-        tally.patches += patches.len() as u64;
-        tally.principal_up += patches.iter().filter(|p| p.principal_up).count() as u64;
-        tally.unresolved += unresolved as u64;
-        if top {
-            let visible = paths.visible.iter().filter(|&&v| v).count();
-            report(tally, m, visible, unresolved, &patches, &settings.limits);
-        }
-        if let Some(size) = settings.markers {
-            for (c, (channel, h)) in paths.channels.iter().zip(&hits).enumerate() {
-                plan.balls.extend(marker_balls(
-                    size,
-                    c as u32,
-                    m,
-                    &paths.visible,
-                    &channel.exits,
-                    h,
-                ));
-            }
-        }
-        let material = &scene.materials[m.material];
-        let material = match material.kind {
-            MaterialKind::Mirror { fresnel } => GpuMirrorMaterial {
-                f0: material.color.to_array(),
-                fresnel: fresnel as u32,
-            },
-            _ => GpuMirrorMaterial {
-                f0: [1.0; 3],
-                fresnel: 0,
-            },
-        };
-        plan.reflectors.push(ReflectorDraw {
-            mesh,
-            material,
-            patches: draws,
-        });
+                .collect();
+            PatchDraw { camera, channels }
+        })
+        .collect();
+    let unresolved = unresolved.iter().filter(|&&u| u).count();
+    tally.patches += patches.len() as u64;
+    tally.principal_up += patches.iter().filter(|p| p.principal_up).count() as u64;
+    tally.unresolved += unresolved as u64;
+    if top {
+        let visible = paths.visible.iter().filter(|&&v| v).count();
+        report(tally, m, visible, unresolved, &patches, &settings.limits);
     }
-    plan
+    if let Some(size) = settings.markers {
+        for (c, (channel, h)) in paths.channels.iter().zip(&hits).enumerate() {
+            plan.balls.extend(marker_balls(
+                size,
+                c as u32,
+                m,
+                &paths.visible,
+                &channel.exits,
+                h,
+            ));
+        }
+    }
+    plan.reflectors.push(ReflectorDraw {
+        mesh,
+        material: reflector.material,
+        patches: draws,
+    });
 }
 
 /// The top level's warnings about one reflector.
@@ -704,12 +742,17 @@ impl Pvrr {
                 wgpu::ColorWrites::BLUE,
             ]
             .map(pipeline);
-            let reflectors = scene
-                .meshes
-                .iter()
-                .enumerate()
-                .filter_map(|(i, m)| {
-                    Interaction::of(&scene.materials[m.material].kind, self.ior).map(|x| (i, x))
+            let reflectors = (0..scene.meshes.len())
+                .filter_map(|mesh| Reflector::of(scene, mesh, self.ior))
+                .collect();
+            let bounds = scene.bounds();
+            let scene_corners = (0..8)
+                .map(|k| {
+                    Vec3::select(
+                        glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0),
+                        bounds.max,
+                        bounds.min,
+                    )
                 })
                 .collect();
             Prepared {
@@ -717,6 +760,8 @@ impl Pvrr {
                 raster,
                 accel: SceneAccel::new(scene),
                 reflectors,
+                scene_corners,
+                far_distance: (bounds.radius() * 4.0).max(1.0),
                 pipelines,
                 layout,
             }
@@ -904,32 +949,17 @@ impl Technique for Pvrr {
             "shadow_resolution" => self.shadow_resolution = setting.texels()?,
             "markers" => self.markers = setting.flag()?,
             "marker_size" => {
-                self.marker_size = setting
-                    .number()
-                    .filter(|f| *f > 0.0 && *f <= 0.1)
-                    .ok_or_else(|| setting.bad("expected a fraction of the distance, above 0 and at most 0.1"))?
+                self.marker_size = setting.number_in(
+                    f32::MIN_POSITIVE..=0.1,
+                    "a fraction of the distance, above 0 and at most 0.1",
+                )?
             }
             "cached" => self.cached = setting.flag()?,
-            "max_fov" => {
-                self.max_fov_deg = setting
-                    .number()
-                    .filter(|f| (1.0..=170.0).contains(f))
-                    .ok_or_else(|| setting.bad("expected degrees from 1 to 170"))?
-            }
+            "max_fov" => self.max_fov_deg = setting.number_in(1.0..=170.0, "degrees from 1 to 170")?,
             "max_patches" => {
-                self.max_patches = value
-                    .parse()
-                    .ok()
-                    .filter(|n| (1..=4096).contains(n))
-                    .ok_or_else(|| setting.bad("expected a count from 1 to 4096"))?
+                self.max_patches = setting.count(1..=4096, "a count from 1 to 4096")? as usize
             }
-            "depth" => {
-                self.depth = value
-                    .parse()
-                    .ok()
-                    .filter(|n| (1..=4).contains(n))
-                    .ok_or_else(|| setting.bad("expected a recursion depth from 1 to 4"))?
-            }
+            "depth" => self.depth = setting.count(1..=4, "a recursion depth from 1 to 4")?,
             "ior" => self.ior = parse_ior(&setting)?,
             _ => {
                 return Err(setting.bad(

@@ -230,7 +230,7 @@ pub struct PatchInput<'a> {
     /// Per channel, per vertex: (exit segment origin, hit point P).
     pub segments: Vec<Vec<(Vec3, Vec3)>>,
     /// The corners of the scene's bounding box, for the far plane.
-    pub scene_corners: Vec<Vec3>,
+    pub scene_corners: &'a [Vec3],
 }
 
 pub struct PatchLimits {
@@ -300,7 +300,7 @@ impl PatchInput<'_> {
             .into_iter()
             .enumerate()
             .map(|(k, basis)| {
-                let extents = Extents::new(&basis, &segments, &self.scene_corners);
+                let extents = Extents::new(&basis, &segments, self.scene_corners);
                 Patch {
                     triangles: triangles.to_vec(),
                     basis,
@@ -322,7 +322,7 @@ impl PatchInput<'_> {
         Extents::new(
             &patch.basis,
             &self.segments_of(&vertices),
-            &self.scene_corners,
+            self.scene_corners,
         )
     }
 
