@@ -101,39 +101,38 @@ pub fn trace_paths(
                 .is_none_or(|hit| hit.mesh as usize != mesh)
         })
         .collect();
-    let ior_per_channel: Vec<Option<f32>> = match interaction {
-        Interaction::Reflect => vec![None],
-        Interaction::Refract { iors } => iors.iter().map(|&i| Some(i)).collect(),
-        Interaction::Sheet { .. } => vec![None],
+    let channel_count = match interaction {
+        Interaction::Refract { iors } => iors.len(),
+        Interaction::Reflect | Interaction::Sheet { .. } => 1,
     };
     let mut rays = m.positions.len() as u64;
-    let channels = ior_per_channel
-        .iter()
-        .map(|&ior| {
+    let channels = (0..channel_count)
+        .map(|channel| {
             let traced: Vec<(Segment, f32, u64)> = m
                 .positions
                 .par_iter()
                 .zip(&m.normals)
                 .map(|(&v, &n)| {
                     let d = (v - eye).normalize_or(Vec3::NEG_Z);
-                    match (interaction, ior) {
-                        (Interaction::Refract { .. }, Some(ior)) => {
-                            refract_through(scene, accel, mesh, v, n, d, ior)
+                    // The normal on the eye's side, for the open surfaces.
+                    let facing = if d.dot(n) > 0.0 { -n } else { n };
+                    match interaction {
+                        Interaction::Refract { iors } => {
+                            refract_through(scene, accel, mesh, v, n, d, iors[channel])
                         }
-                        (Interaction::Sheet { ior }, _) => {
-                            let n = if d.dot(n) > 0.0 { -n } else { n };
-                            let r = specula_trace::optics::thin_sheet_reflectance(-d.dot(n), *ior);
+                        Interaction::Sheet { ior } => {
+                            let r =
+                                specula_trace::optics::thin_sheet_reflectance(-d.dot(facing), *ior);
                             let exit = Segment {
-                                origin: offset_origin(v, n, d),
+                                origin: offset_origin(v, facing, d),
                                 dir: d,
                             };
                             (exit, 1.0 - r, 0)
                         }
-                        _ => {
-                            let n = if d.dot(n) > 0.0 { -n } else { n };
-                            let r = reflect(d, n);
+                        Interaction::Reflect => {
+                            let r = reflect(d, facing);
                             let exit = Segment {
-                                origin: offset_origin(v, n, r),
+                                origin: offset_origin(v, facing, r),
                                 dir: r,
                             };
                             (exit, 1.0, 0)
