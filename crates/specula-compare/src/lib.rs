@@ -15,7 +15,7 @@ use base64::Engine;
 use serde::Serialize;
 use specula_gpu::{GpuContext, TimingSource};
 use specula_methods::raster::{self, RasterPass};
-use specula_methods::{by_name, GpuScene, TechniqueError};
+use specula_methods::{apply_known_parameters, by_name, GpuScene, TechniqueError};
 use specula_scene::Scene;
 use specula_trace::{render, Image, RenderSettings, SceneAccel};
 
@@ -29,6 +29,8 @@ pub enum CompareError {
     Gpu(#[from] specula_gpu::GpuError),
     #[error("{path}: {message}")]
     Write { path: String, message: String },
+    #[error("parameter '{setting}' belongs to none of the methods compared ({methods})")]
+    UnusedParameter { setting: String, methods: String },
     #[error("the scene has no mirror or dielectric surface in view: nothing to compare")]
     EmptyMask,
 }
@@ -118,6 +120,19 @@ pub fn compare(
         .iter()
         .map(|m| by_name(m))
         .collect::<Result<Vec<_>, _>>()?;
+    let mut used = vec![false; options.parameters.len()];
+    for technique in techniques.iter_mut() {
+        let applied = apply_known_parameters(technique.as_mut(), &options.parameters)?;
+        for (u, a) in used.iter_mut().zip(applied) {
+            *u |= a;
+        }
+    }
+    if let Some(i) = used.iter().position(|u| !u) {
+        return Err(CompareError::UnusedParameter {
+            setting: options.parameters[i].clone(),
+            methods: options.methods.join(", "),
+        });
+    }
 
     progress("reference");
     let start = Instant::now();

@@ -73,3 +73,37 @@ fn unknown_methods_are_named_with_the_valid_ones() {
         "{message}"
     );
 }
+
+#[test]
+fn parameters_reach_the_methods_that_have_them_and_unknown_ones_are_errors() {
+    let Some(ctx) = specula_gpu::test_context("compare parameters") else {
+        return;
+    };
+    let scene = specula_scene::load("door-mirror").unwrap();
+    let options = |parameters: Vec<String>| Options {
+        width: 32,
+        height: 24,
+        methods: vec!["envmap".into(), "pvrr".into()],
+        spp: 1,
+        max_depth: 8,
+        parameters,
+    };
+    let comparison = compare(
+        &scene,
+        &ctx,
+        &options(vec!["exit=sphere".into(), "max_fov=30".into()]),
+        &|_| {},
+    )
+    .unwrap();
+    let methods = &comparison.report.methods;
+    assert_eq!(methods[0].parameters["exit"], "sphere");
+    assert_eq!(methods[1].parameters["max_fov"], "30");
+    let message = compare(&scene, &ctx, &options(vec!["sharpness=2".into()]), &|_| {})
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        message.contains("sharpness=2") && message.contains("envmap, pvrr"),
+        "{message}"
+    );
+}

@@ -10,5 +10,6 @@ pub mod technique;
 
 pub use gpu_scene::GpuScene;
 pub use technique::{
-    apply_parameters, by_name, Frame, StageTime, Technique, TechniqueError, METHODS,
+    apply_known_parameters, apply_parameters, by_name, Frame, StageTime, Technique, TechniqueError,
+    METHODS,
 };

@@ -99,6 +99,26 @@ pub fn apply_parameters(
     Ok(())
 }
 
+/// Applies those of the `name=value` settings whose name `technique` lists in its
+/// [`Technique::parameters`], in order; returns, per setting, whether it was applied. For runs
+/// over several techniques, where a parameter belongs to some of them only.
+pub fn apply_known_parameters(
+    technique: &mut dyn Technique,
+    settings: &[String],
+) -> Result<Vec<bool>, TechniqueError> {
+    let known: Vec<String> = technique.parameters().into_iter().map(|(n, _)| n).collect();
+    let mut applied = Vec::with_capacity(settings.len());
+    for setting in settings {
+        let name = setting.split_once('=').map(|(n, _)| n.trim());
+        let used = name.is_some_and(|n| known.iter().any(|k| k == n));
+        if used {
+            apply_parameters(technique, std::slice::from_ref(setting))?;
+        }
+        applied.push(used);
+    }
+    Ok(applied)
+}
+
 /// A parameter setting being parsed, for uniform error messages across techniques.
 pub struct Setting<'a> {
     pub technique: &'static str,
