@@ -9,6 +9,7 @@ pub const OPTICS: &str = include_str!("../../../shaders/common/optics.wgsl");
 pub const CAMERA: &str = include_str!("../../../shaders/common/camera.wgsl");
 pub const SCENE: &str = include_str!("../../../shaders/common/scene.wgsl");
 pub const CUBEMAP: &str = include_str!("../../../shaders/common/cubemap.wgsl");
+pub const LIGHTING: &str = include_str!("../../../shaders/common/lighting.wgsl");
 
 /// Every common WGSL file, by name, for validation and composition.
 pub const COMMON: &[(&str, &str)] = &[
@@ -16,6 +17,7 @@ pub const COMMON: &[(&str, &str)] = &[
     ("camera.wgsl", CAMERA),
     ("scene.wgsl", SCENE),
     ("cubemap.wgsl", CUBEMAP),
+    ("lighting.wgsl", LIGHTING),
 ];
 
 /// A shader's full source: the named common files, then the technique's own code.

@@ -27,7 +27,10 @@ const SHADER: &str = include_str!("raster.wgsl");
 
 /// The raster shader's full source (common files prepended).
 pub fn shader_source() -> String {
-    shaders::compose(&["camera.wgsl", "scene.wgsl", "cubemap.wgsl"], SHADER)
+    shaders::compose(
+        &["camera.wgsl", "scene.wgsl", "cubemap.wgsl", "lighting.wgsl"],
+        SHADER,
+    )
 }
 
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
@@ -115,6 +118,7 @@ pub struct RasterPass {
     background_pipeline: wgpu::RenderPipeline,
     camera_layout: wgpu::BindGroupLayout,
     scene_bind_group: wgpu::BindGroup,
+    shadow_layout: wgpu::BindGroupLayout,
     shadow_bind_group: wgpu::BindGroup,
     /// Kept alive for the bind groups that use them.
     _shadow_maps: wgpu::Texture,
@@ -134,7 +138,8 @@ fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
-fn vertex_layout() -> wgpu::VertexBufferLayout<'static> {
+/// How [`GpuVertex`] buffers are laid out for a vertex shader (locations 0 to 4).
+pub fn vertex_layout() -> wgpu::VertexBufferLayout<'static> {
     const ATTRIBUTES: [wgpu::VertexAttribute; 5] = wgpu::vertex_attr_array![
         0 => Float32x3, 1 => Uint32, 2 => Float32x3, 3 => Uint32, 4 => Float32x2
     ];
@@ -145,18 +150,20 @@ fn vertex_layout() -> wgpu::VertexBufferLayout<'static> {
     }
 }
 
-/// The six 90° views of a cube around `position`, in the order +X, -X, +Y, -Y, +Z, -Z.
+/// (forward, up) of the six cube faces, in the order +X, -X, +Y, -Y, +Z, -Z (cubemap.wgsl).
+pub const CUBE_FACES: [(Vec3, Vec3); 6] = [
+    (Vec3::X, Vec3::NEG_Y),
+    (Vec3::NEG_X, Vec3::NEG_Y),
+    (Vec3::Y, Vec3::Z),
+    (Vec3::NEG_Y, Vec3::NEG_Z),
+    (Vec3::Z, Vec3::NEG_Y),
+    (Vec3::NEG_Z, Vec3::NEG_Y),
+];
+
+/// The six 90° views of a cube around `position`, in the order of [`CUBE_FACES`].
 pub fn cube_views(position: Vec3, near: f32, far: f32, resolution: u32) -> [ShadowView; 6] {
-    let faces = [
-        (Vec3::X, -Vec3::Y),
-        (-Vec3::X, -Vec3::Y),
-        (Vec3::Y, Vec3::Z),
-        (-Vec3::Y, -Vec3::Z),
-        (Vec3::Z, -Vec3::Y),
-        (-Vec3::Z, -Vec3::Y),
-    ];
     let projection = Mat4::perspective_rh(std::f32::consts::FRAC_PI_2, 1.0, near, far);
-    faces.map(|(forward, up)| ShadowView {
+    CUBE_FACES.map(|(forward, up)| ShadowView {
         clip_from_world: (projection * Mat4::look_to_rh(position, forward, up)).to_cols_array_2d(),
         origin: position.to_array(),
         directional: 0,
@@ -427,10 +434,21 @@ impl RasterPass {
             scene_pipeline,
             background_pipeline,
             camera_layout,
+            shadow_layout,
             shadow_bind_group,
             _shadow_maps: shadow_maps,
             _shadow_views: shadow_views,
         }
+    }
+
+    /// Layout of bind group 2 of lighting.wgsl (the lights' shadow maps).
+    pub fn shadow_layout(&self) -> &wgpu::BindGroupLayout {
+        &self.shadow_layout
+    }
+
+    /// Bind group 2 of lighting.wgsl, for passes that shade surfaces as this one does.
+    pub fn shadow_bind_group(&self) -> &wgpu::BindGroup {
+        &self.shadow_bind_group
     }
 
     /// Rasterises the scene for `camera` into a new G-buffer; `hidden_mesh`, if given, is left
