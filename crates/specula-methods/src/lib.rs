@@ -2,6 +2,7 @@
 //! [`Technique`] trait; plus what they share: the scene uploaded to the GPU ([`GpuScene`]) and
 //! the scene raster pass with its G-buffer ([`raster`]).
 
+pub mod distance_maps;
 pub mod envmap;
 pub mod gpu_scene;
 pub mod pvrr;

@@ -62,13 +62,14 @@ pub trait Technique {
 }
 
 /// GPU technique names, in the order reports list them.
-pub const METHODS: &[&str] = &["envmap", "pvrr"];
+pub const METHODS: &[&str] = &["envmap", "pvrr", "distance-maps"];
 
 /// A new, unprepared technique by name.
 pub fn by_name(name: &str) -> Result<Box<dyn Technique>, TechniqueError> {
     match name {
         "envmap" => Ok(Box::new(crate::envmap::EnvMap::default())),
         "pvrr" => Ok(Box::new(crate::pvrr::Pvrr::default())),
+        "distance-maps" => Ok(Box::new(crate::distance_maps::DistanceMaps::default())),
         _ => Err(TechniqueError::UnknownMethod {
             name: name.to_string(),
             valid: std::iter::once("reference")

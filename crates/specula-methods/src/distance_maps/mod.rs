@@ -1,0 +1,920 @@
+//! `distance-maps`: multiple specular reflections and refractions traced in layered distance
+//! cube maps.
+//!
+//! Paper: Umenhoffer, Patow, Szirmay-Kalos, *Robust multiple specular reflections and
+//! refractions*, GPU Gems 3, ch. 17 (`../shared/seeds/001_7674acf89cfed11c.txt`).
+//!
+//! Steps, per frame:
+//! 1. the scene raster pass (G-buffer) for the camera;
+//! 2. for each specular mesh (a "reflector"), a layered distance map about its reference point
+//!    (the centre of its bounding box): per layer six 90° faces, each texel holding the material
+//!    (diffuse radiance, or F0 and the sign-coded index of refraction, see `codes.wgsl`), the
+//!    surface normal and the distance from the reference point; texels that see nothing hold
+//!    distance -1. Layers come from depth peeling (`layers=N`: the N nearest surfaces in each
+//!    direction; what lies beyond the N-th is lost) or from the paper's simplified three layers
+//!    (`layers=simple`: the front faces of all specular meshes as seen from the reference point,
+//!    their back faces, and everything diffuse). The maps are redrawn every frame, so anything
+//!    that moves is seen where it is;
+//! 3. with min-max acceleration, the smallest and largest distance of each layer (a compute
+//!    reduction);
+//! 4. a full-screen pass over the reflector pixels: the reflected or refracted ray is traced in
+//!    the reflector's map: per layer a linear search marching uniformly in texture space
+//!    (`d = a·t/(1 − t)`) between the layer's min and max spheres, restarting where nothing is
+//!    visible; the layer with the nearest bracket wins and a secant search refines the hit. At a
+//!    specular hit the path reflects or refracts again with the normal stored in the map (Schlick
+//!    Fresnel, F0 from the index and extinction coefficient, total internal reflection), up to
+//!    `max_depth` bounces; at a diffuse hit it takes the stored radiance.
+//!
+//! Beyond the paper: at the first surface of a dielectric both branches are traced (the paper's
+//! loop follows only the refracted one, dropping the surface reflection); dispersive materials
+//! are traced once per colour channel; Schlick's formula takes the angle on the air side when a
+//! ray leaves a solid; thin-walled sheets pass rays straight through.
+//!
+//! Approximations and artifacts:
+//! - sampling: the scene is seen as a height field per layer, sampled at `resolution`; the
+//!   distance is interpolated bilinearly, so a hit is exact on planes (the secant step) and off
+//!   by the interpolation error elsewhere; radiance and normals are interpolated over texels of
+//!   the same material, so textures blur at the map's resolution; at silhouettes, where a layer
+//!   jumps between objects, the interpolated distance joins them (spurious surfaces);
+//! - limited layers: surfaces beyond the last layer in a direction are missing; reflections
+//!   that should see them see the layer in front (or nothing);
+//! - thin objects: the linear search can step over a surface thinner than its step (the
+//!   paper's Figure 17-6); fewer `linear_steps` miss more;
+//! - the first `2 / resolution` of |x| along each secondary ray is skipped, so that the
+//!   interpolated copy of the surface a ray leaves is not taken for its hit;
+//! - diffuse radiance is stored as seen from the reference point: exact for Lambertian and unlit
+//!   surfaces (their radiance does not depend on direction), with the raster pass's shadow maps;
+//! - away from the first surface, a dielectric hit follows one branch (refraction, or
+//!   reflection under total internal reflection); paths longer than `max_depth` are black, as
+//!   in the reference.
+//!
+//! Parameters:
+//! - `resolution` (default 512, the paper's): texels per face side. Higher resolves finer
+//!   geometry and texture and makes hits more exact; cost 6 × resolution² texels per layer per
+//!   reflector per frame, and longer linear searches (steps follow the texels a ray spans).
+//! - `layers` (default `simple`, the paper's three layers): `simple`, or a number 1 to 8 of
+//!   depth-peeled layers. More layers capture surfaces hidden from the reference point; each
+//!   costs a rasterisation of the scene into six faces and a linear search per ray.
+//! - `linear_steps` (default 80): the most steps of a linear search per layer. Fewer misses thin
+//!   objects and gives stair steps where the secant search cannot recover; cost is linear.
+//! - `secant_steps` (default 10): secant iterations after the linear search (0: the linear
+//!   search's overshooting sample is the hit). Removes stair-stepping; exact on planes in one.
+//! - `max_depth` (default 2): the most specular bounces on a path. Each costs one more trace.
+//! - `min_max` (default true): min-max acceleration; marches only between each layer's smallest
+//!   and largest distance (the same image, fewer steps wasted; the paper: 25 → 50 fps).
+//! - `output` (default `radiance`): `first-hit` writes, instead of radiance, the world position
+//!   where each reflector pixel's first secondary ray hits (-1e30 where it finds nothing), to
+//!   check the search.
+//! - `shadow_resolution` (default 1024): the raster pass's shadow maps.
+
+use bytemuck::{Pod, Zeroable};
+use specula_gpu::shaders::{self, CameraUniform};
+use specula_gpu::util::{render_pipeline, texture_2d, PipelineSpec};
+use specula_gpu::{GpuContext, StageTimer};
+use specula_scene::{Camera, MaterialKind, Scene};
+use wgpu::util::DeviceExt;
+
+use crate::gpu_scene::GpuScene;
+use crate::raster::{self, RasterPass, CUBE_FACES};
+use crate::technique::{Frame, Setting, Technique, TechniqueError};
+
+const CODES: &str = include_str!("codes.wgsl");
+const LAYERS_SHADER: &str = include_str!("layers.wgsl");
+const RANGES_SHADER: &str = include_str!("ranges.wgsl");
+const TRACE_SHADER: &str = include_str!("trace.wgsl");
+
+/// The layer pass's full source.
+pub fn layers_shader_source() -> String {
+    shaders::compose(
+        &["camera.wgsl", "scene.wgsl", "cubemap.wgsl", "lighting.wgsl"],
+        &format!("{CODES}\n{LAYERS_SHADER}"),
+    )
+}
+
+/// The min-max reduction's source.
+pub fn ranges_shader_source() -> String {
+    RANGES_SHADER.to_string()
+}
+
+/// The tracing pass's full source.
+pub fn trace_shader_source() -> String {
+    shaders::compose(
+        &["optics.wgsl", "camera.wgsl", "scene.wgsl", "cubemap.wgsl"],
+        &format!("{CODES}\n{TRACE_SHADER}"),
+    )
+}
+
+const MAP_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+
+/// How a reflector's map is split into layers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Layers {
+    /// The paper's three: specular front faces, specular back faces, everything diffuse.
+    Simple,
+    /// Depth peeling: the given number of nearest surfaces per direction.
+    Peeled(u32),
+}
+
+impl Layers {
+    pub fn count(self) -> u32 {
+        match self {
+            Layers::Simple => 3,
+            Layers::Peeled(n) => n,
+        }
+    }
+}
+
+/// What the tracing pass writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Output {
+    Radiance = 0,
+    /// World position of the first secondary hit (see the module doc).
+    FirstHit = 1,
+}
+
+/// Host mirror of WGSL `LayerView` (layers.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuLayerView {
+    pub clip_from_world: [[f32; 4]; 4],
+    pub origin: [f32; 3],
+    pub select: u32,
+    pub peel: u32,
+    pub pad: [u32; 3],
+}
+
+const KEEP_ALL: u32 = 0;
+const KEEP_SPECULAR_FACING: u32 = 1;
+const KEEP_SPECULAR_AWAY: u32 = 2;
+const KEEP_NON_SPECULAR: u32 = 3;
+
+/// Host mirror of WGSL `TraceSettings` (trace.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuTraceSettings {
+    pub layers: u32,
+    pub linear_steps: u32,
+    pub secant_steps: u32,
+    pub max_depth: u32,
+    pub min_max: u32,
+    pub dispersive: u32,
+    pub output: u32,
+    pub resolution: f32,
+}
+
+/// Host mirror of WGSL `MapReflector`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuMapReflector {
+    pub origin: [f32; 3],
+    pub first_map: u32,
+}
+
+/// Host mirror of WGSL `Face`: a cube face's right, up and forward (w unused).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuFace {
+    pub right: [f32; 4],
+    pub up: [f32; 4],
+    pub forward: [f32; 4],
+}
+
+/// The bases the faces are rendered with (`Mat4::look_to_rh` of [`CUBE_FACES`]).
+pub fn face_bases() -> [GpuFace; 6] {
+    CUBE_FACES.map(|(forward, up)| {
+        let right = forward.cross(up).normalize();
+        let up = right.cross(forward);
+        GpuFace {
+            right: right.extend(0.0).to_array(),
+            up: up.extend(0.0).to_array(),
+            forward: forward.extend(0.0).to_array(),
+        }
+    })
+}
+
+/// One face of one layer of one reflector's map, drawn every frame.
+struct LayerDraw {
+    bind_group: wgpu::BindGroup,
+    material_target: wgpu::TextureView,
+    geometry_target: wgpu::TextureView,
+    /// Vertex ranges of the meshes the layer can hold.
+    vertex_ranges: Vec<std::ops::Range<u32>>,
+}
+
+struct Prepared {
+    gpu_scene: GpuScene,
+    raster: RasterPass,
+    reflectors: Vec<usize>,
+    material_maps: wgpu::Texture,
+    geometry_maps: wgpu::Texture,
+    depth: wgpu::TextureView,
+    draws: Vec<LayerDraw>,
+    layer_pipeline: wgpu::RenderPipeline,
+    layer_scene_bind_group: wgpu::BindGroup,
+    range_pipeline: wgpu::ComputePipeline,
+    range_bind_group: wgpu::BindGroup,
+    ranges: wgpu::Buffer,
+    map_count: u32,
+    trace_pipeline: wgpu::RenderPipeline,
+    trace_layout: wgpu::BindGroupLayout,
+    trace_scene_bind_group: wgpu::BindGroup,
+    settings: wgpu::Buffer,
+    reflector_buffer: wgpu::Buffer,
+    mesh_reflector: wgpu::Buffer,
+    faces: wgpu::Buffer,
+}
+
+pub struct DistanceMaps {
+    pub resolution: u32,
+    pub layers: Layers,
+    pub linear_steps: u32,
+    pub secant_steps: u32,
+    pub max_depth: u32,
+    pub min_max: bool,
+    pub output: Output,
+    pub shadow_resolution: u32,
+    prepared: Option<Prepared>,
+}
+
+impl Default for DistanceMaps {
+    fn default() -> Self {
+        DistanceMaps {
+            resolution: 512,
+            layers: Layers::Simple,
+            linear_steps: 80,
+            secant_steps: 10,
+            max_depth: 2,
+            min_max: true,
+            output: Output::Radiance,
+            shadow_resolution: 1024,
+            prepared: None,
+        }
+    }
+}
+
+fn entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    ty: wgpu::BindingType,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty,
+        count: None,
+    }
+}
+
+fn texture_type(
+    sample_type: wgpu::TextureSampleType,
+    dimension: wgpu::TextureViewDimension,
+) -> wgpu::BindingType {
+    wgpu::BindingType::Texture {
+        sample_type,
+        view_dimension: dimension,
+        multisampled: false,
+    }
+}
+
+fn buffer_type(ty: wgpu::BufferBindingType) -> wgpu::BindingType {
+    wgpu::BindingType::Buffer {
+        ty,
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    }
+}
+
+/// Contiguous vertex ranges of the meshes for which `keep` holds.
+fn vertex_ranges(gpu_scene: &GpuScene, keep: impl Fn(usize) -> bool) -> Vec<std::ops::Range<u32>> {
+    let mut ranges: Vec<std::ops::Range<u32>> = Vec::new();
+    for (mesh, range) in gpu_scene.mesh_vertex_ranges.iter().enumerate() {
+        if !keep(mesh) || range.is_empty() {
+            continue;
+        }
+        match ranges.last_mut() {
+            Some(last) if last.end == range.start => last.end = range.end,
+            _ => ranges.push(range.clone()),
+        }
+    }
+    ranges
+}
+
+impl DistanceMaps {
+    fn build(&self, ctx: &GpuContext, scene: &Scene) -> Result<Prepared, TechniqueError> {
+        let device = &ctx.device;
+        let gpu_scene = GpuScene::upload(device, scene);
+        let raster = RasterPass::new(ctx, &gpu_scene, self.shadow_resolution)?;
+        let specular = |mesh: usize| scene.materials[scene.meshes[mesh].material].is_specular();
+        let reflectors: Vec<usize> = (0..scene.meshes.len()).filter(|&m| specular(m)).collect();
+        let layer_count = self.layers.count();
+        let map_count = (reflectors.len() as u32 * layer_count).max(1);
+        let array_layers = 6 * map_count;
+        let limit = device.limits().max_texture_array_layers;
+        if array_layers > limit {
+            return Err(TechniqueError::BadParameter {
+                technique: "distance-maps",
+                name: "layers".into(),
+                value: layer_count.to_string(),
+                reason: format!(
+                    "{} reflectors × {layer_count} layers × 6 faces = {array_layers} cube faces; this adapter holds at most {limit}",
+                    reflectors.len()
+                ),
+            });
+        }
+        Ok(ctx.validated("distance-maps set-up", || {
+            let map_texture = |label| {
+                device.create_texture(&wgpu::TextureDescriptor {
+                    label: Some(label),
+                    size: wgpu::Extent3d {
+                        width: self.resolution,
+                        height: self.resolution,
+                        depth_or_array_layers: array_layers,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format: MAP_FORMAT,
+                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                        | wgpu::TextureUsages::TEXTURE_BINDING,
+                    view_formats: &[],
+                })
+            };
+            let material_maps = map_texture("distance-map materials");
+            let geometry_maps = map_texture("distance-map geometry");
+            let depth = texture_2d(
+                device,
+                "distance-map depth",
+                self.resolution,
+                self.resolution,
+                raster::DEPTH_FORMAT,
+                wgpu::TextureUsages::RENDER_ATTACHMENT,
+            )
+            .create_view(&Default::default());
+            // Bound as the "previous layer" where a layer does not peel.
+            let placeholder = map_texture_1x1(device);
+            let layer_view = |texture: &wgpu::Texture, layer: u32, dimension| {
+                texture.create_view(&wgpu::TextureViewDescriptor {
+                    dimension: Some(dimension),
+                    base_array_layer: layer,
+                    array_layer_count: Some(1),
+                    ..Default::default()
+                })
+            };
+
+            use wgpu::{BufferBindingType as B, ShaderStages as St, TextureSampleType as S, TextureViewDimension as D};
+            let float = S::Float { filterable: false };
+            let layer_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("distance-map layer"),
+                entries: &[
+                    entry(0, St::VERTEX_FRAGMENT, buffer_type(B::Uniform)),
+                    entry(1, St::FRAGMENT, texture_type(float, D::D2Array)),
+                ],
+            });
+            let scene_layout = GpuScene::bind_group_layout(device);
+            let layer_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("distance_maps/layers.wgsl"),
+                source: wgpu::ShaderSource::Wgsl(layers_shader_source().into()),
+            });
+            let layer_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("distance-map layer"),
+                bind_group_layouts: &[Some(&layer_layout), Some(&scene_layout), Some(raster.shadow_layout())],
+                ..Default::default()
+            });
+            let layer_pipeline = render_pipeline(
+                device,
+                &PipelineSpec {
+                    label: "distance-map layer",
+                    layout: &layer_pipeline_layout,
+                    module: &layer_module,
+                    vertex_entry: "vs_layer",
+                    fragment_entry: "fs_layer",
+                    vertex_buffers: &[Some(raster::vertex_layout())],
+                    depth: Some(wgpu::DepthStencilState {
+                        format: raster::DEPTH_FORMAT,
+                        depth_write_enabled: Some(true),
+                        depth_compare: Some(wgpu::CompareFunction::Less),
+                        stencil: Default::default(),
+                        bias: Default::default(),
+                    }),
+                    targets: &[MAP_FORMAT, MAP_FORMAT],
+                    write_mask: wgpu::ColorWrites::ALL,
+                },
+            );
+
+            let bounds = scene.bounds();
+            let all = vertex_ranges(&gpu_scene, |_| true);
+            let specular_ranges = vertex_ranges(&gpu_scene, specular);
+            let diffuse_ranges = vertex_ranges(&gpu_scene, |m| !specular(m));
+            let mut draws = Vec::new();
+            let mut gpu_reflectors = Vec::new();
+            for (k, &mesh) in reflectors.iter().enumerate() {
+                let origin = scene.meshes[mesh].bounds().center();
+                let first_map = k as u32 * layer_count;
+                gpu_reflectors.push(GpuMapReflector {
+                    origin: origin.to_array(),
+                    first_map,
+                });
+                let (near, far) = raster::depth_range(&bounds, origin);
+                let views = raster::cube_views(origin, near, far, self.resolution);
+                for j in 0..layer_count {
+                    let (select, peel, ranges) = match self.layers {
+                        Layers::Simple => match j {
+                            0 => (KEEP_SPECULAR_FACING, 0, &specular_ranges),
+                            1 => (KEEP_SPECULAR_AWAY, 0, &specular_ranges),
+                            _ => (KEEP_NON_SPECULAR, 0, &diffuse_ranges),
+                        },
+                        Layers::Peeled(_) => (KEEP_ALL, u32::from(j > 0), &all),
+                    };
+                    for (f, view) in views.iter().enumerate() {
+                        let array_layer = (first_map + j) * 6 + f as u32;
+                        let uniform = GpuLayerView {
+                            clip_from_world: view.clip_from_world,
+                            origin: origin.to_array(),
+                            select,
+                            peel,
+                            pad: [0; 3],
+                        };
+                        let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                            label: Some("distance-map layer view"),
+                            contents: bytemuck::bytes_of(&uniform),
+                            usage: wgpu::BufferUsages::UNIFORM,
+                        });
+                        let previous = if peel == 1 {
+                            layer_view(&geometry_maps, array_layer - 6, D::D2Array)
+                        } else {
+                            layer_view(&placeholder, 0, D::D2Array)
+                        };
+                        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                            label: Some("distance-map layer"),
+                            layout: &layer_layout,
+                            entries: &[
+                                wgpu::BindGroupEntry {
+                                    binding: 0,
+                                    resource: buffer.as_entire_binding(),
+                                },
+                                wgpu::BindGroupEntry {
+                                    binding: 1,
+                                    resource: wgpu::BindingResource::TextureView(&previous),
+                                },
+                            ],
+                        });
+                        draws.push(LayerDraw {
+                            bind_group,
+                            material_target: layer_view(&material_maps, array_layer, D::D2),
+                            geometry_target: layer_view(&geometry_maps, array_layer, D::D2),
+                            vertex_ranges: ranges.clone(),
+                        });
+                    }
+                }
+            }
+
+            // Min-max reduction.
+            let ranges = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("distance-map ranges"),
+                size: 8 * map_count as u64,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let range_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("distance-map ranges"),
+                entries: &[
+                    entry(0, St::COMPUTE, texture_type(float, D::D2Array)),
+                    entry(1, St::COMPUTE, buffer_type(B::Storage { read_only: false })),
+                ],
+            });
+            let range_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("distance_maps/ranges.wgsl"),
+                source: wgpu::ShaderSource::Wgsl(ranges_shader_source().into()),
+            });
+            let range_pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("distance-map ranges"),
+                layout: Some(&device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                    label: Some("distance-map ranges"),
+                    bind_group_layouts: &[Some(&range_layout)],
+                    ..Default::default()
+                })),
+                module: &range_module,
+                entry_point: Some("cs_range"),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+            let whole_array = |texture: &wgpu::Texture| {
+                texture.create_view(&wgpu::TextureViewDescriptor {
+                    dimension: Some(D::D2Array),
+                    ..Default::default()
+                })
+            };
+            let range_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("distance-map ranges"),
+                layout: &range_layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: wgpu::BindingResource::TextureView(&whole_array(&geometry_maps)),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: ranges.as_entire_binding(),
+                    },
+                ],
+            });
+
+            // Tracing pass.
+            let trace_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("distance-map trace"),
+                entries: &[
+                    entry(0, St::FRAGMENT, buffer_type(B::Uniform)),
+                    entry(1, St::FRAGMENT, buffer_type(B::Uniform)),
+                    entry(2, St::FRAGMENT, texture_type(float, D::D2)),
+                    entry(3, St::FRAGMENT, texture_type(float, D::D2)),
+                    entry(4, St::FRAGMENT, texture_type(float, D::D2)),
+                    entry(5, St::FRAGMENT, texture_type(S::Uint, D::D2)),
+                    entry(6, St::FRAGMENT, texture_type(float, D::D2Array)),
+                    entry(7, St::FRAGMENT, texture_type(float, D::D2Array)),
+                    entry(8, St::FRAGMENT, buffer_type(B::Storage { read_only: true })),
+                    entry(9, St::FRAGMENT, buffer_type(B::Storage { read_only: true })),
+                    entry(10, St::FRAGMENT, buffer_type(B::Storage { read_only: true })),
+                    entry(11, St::FRAGMENT, buffer_type(B::Storage { read_only: true })),
+                ],
+            });
+            let trace_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("distance_maps/trace.wgsl"),
+                source: wgpu::ShaderSource::Wgsl(trace_shader_source().into()),
+            });
+            let trace_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("distance-map trace"),
+                bind_group_layouts: &[Some(&trace_layout), Some(&scene_layout)],
+                ..Default::default()
+            });
+            let trace_pipeline = render_pipeline(
+                device,
+                &PipelineSpec {
+                    label: "distance-map trace",
+                    layout: &trace_pipeline_layout,
+                    module: &trace_module,
+                    vertex_entry: "vs_fullscreen",
+                    fragment_entry: "fs_shade",
+                    vertex_buffers: &[],
+                    depth: None,
+                    targets: &[raster::COLOR_FORMAT],
+                    write_mask: wgpu::ColorWrites::ALL,
+                },
+            );
+            let dispersive = scene.materials.iter().any(|m| {
+                matches!(m.kind, MaterialKind::Dielectric { ior, .. } if ior.x != ior.y || ior.y != ior.z)
+            });
+            let settings = GpuTraceSettings {
+                layers: layer_count,
+                linear_steps: self.linear_steps,
+                secant_steps: self.secant_steps,
+                max_depth: self.max_depth,
+                min_max: u32::from(self.min_max),
+                dispersive: u32::from(dispersive),
+                output: self.output as u32,
+                resolution: self.resolution as f32,
+            };
+            let mut mesh_reflector = vec![-1i32; scene.meshes.len().max(1)];
+            for (k, &mesh) in reflectors.iter().enumerate() {
+                mesh_reflector[mesh] = k as i32;
+            }
+            if gpu_reflectors.is_empty() {
+                gpu_reflectors.push(GpuMapReflector::zeroed());
+            }
+            let storage = |label, contents: &[u8]| {
+                device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(label),
+                    contents,
+                    usage: wgpu::BufferUsages::STORAGE,
+                })
+            };
+            Prepared {
+                layer_scene_bind_group: gpu_scene.bind_group(device, &scene_layout),
+                trace_scene_bind_group: gpu_scene.bind_group(device, &scene_layout),
+                settings: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("distance-map trace settings"),
+                    contents: bytemuck::bytes_of(&settings),
+                    usage: wgpu::BufferUsages::UNIFORM,
+                }),
+                reflector_buffer: storage("distance-map reflectors", bytemuck::cast_slice(&gpu_reflectors)),
+                mesh_reflector: storage("distance-map mesh reflectors", bytemuck::cast_slice(&mesh_reflector)),
+                faces: storage("cube faces", bytemuck::cast_slice(&face_bases())),
+                gpu_scene,
+                raster,
+                reflectors,
+                material_maps,
+                geometry_maps,
+                depth,
+                draws,
+                layer_pipeline,
+                range_pipeline,
+                range_bind_group,
+                ranges,
+                map_count,
+                trace_pipeline,
+                trace_layout,
+            }
+        })?)
+    }
+}
+
+fn map_texture_1x1(device: &wgpu::Device) -> wgpu::Texture {
+    texture_2d(
+        device,
+        "distance-map placeholder",
+        1,
+        1,
+        MAP_FORMAT,
+        wgpu::TextureUsages::TEXTURE_BINDING,
+    )
+}
+
+impl Prepared {
+    /// Draws every face of every layer of every map.
+    fn draw_maps(&self, ctx: &GpuContext) {
+        let device = &ctx.device;
+        let mut encoder = device.create_command_encoder(&Default::default());
+        for draw in &self.draws {
+            let attachment = |view| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color {
+                            r: 0.0,
+                            g: 0.0,
+                            b: 0.0,
+                            a: -1.0,
+                        }),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })
+            };
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("distance-map layer"),
+                color_attachments: &[
+                    attachment(&draw.material_target),
+                    attachment(&draw.geometry_target),
+                ],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &self.depth,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Discard,
+                    }),
+                    stencil_ops: None,
+                }),
+                ..Default::default()
+            });
+            pass.set_pipeline(&self.layer_pipeline);
+            pass.set_bind_group(0, &draw.bind_group, &[]);
+            pass.set_bind_group(1, &self.layer_scene_bind_group, &[]);
+            pass.set_bind_group(2, self.raster.shadow_bind_group(), &[]);
+            pass.set_vertex_buffer(0, self.gpu_scene.vertices.slice(..));
+            for range in &draw.vertex_ranges {
+                pass.draw(range.clone(), 0..1);
+            }
+        }
+        ctx.queue.submit([encoder.finish()]);
+    }
+
+    /// Min-max acceleration: each layer's smallest and largest distance.
+    fn reduce_ranges(&self, ctx: &GpuContext) {
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
+        let cleared: Vec<u32> = (0..self.map_count)
+            .flat_map(|_| [f32::MAX.to_bits(), 0])
+            .collect();
+        ctx.queue
+            .write_buffer(&self.ranges, 0, bytemuck::cast_slice(&cleared));
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&self.range_pipeline);
+            pass.set_bind_group(0, &self.range_bind_group, &[]);
+            let groups = self.material_maps.width().div_ceil(8);
+            pass.dispatch_workgroups(groups, groups, self.map_count);
+        }
+        ctx.queue.submit([encoder.finish()]);
+    }
+}
+
+impl Technique for DistanceMaps {
+    fn name(&self) -> &'static str {
+        "distance-maps"
+    }
+
+    fn parameters(&self) -> Vec<(String, String)> {
+        let layers = match self.layers {
+            Layers::Simple => "simple".to_string(),
+            Layers::Peeled(n) => n.to_string(),
+        };
+        let output = match self.output {
+            Output::Radiance => "radiance",
+            Output::FirstHit => "first-hit",
+        };
+        vec![
+            ("resolution".into(), self.resolution.to_string()),
+            ("layers".into(), layers),
+            ("linear_steps".into(), self.linear_steps.to_string()),
+            ("secant_steps".into(), self.secant_steps.to_string()),
+            ("max_depth".into(), self.max_depth.to_string()),
+            ("min_max".into(), self.min_max.to_string()),
+            ("output".into(), output.into()),
+            (
+                "shadow_resolution".into(),
+                self.shadow_resolution.to_string(),
+            ),
+        ]
+    }
+
+    fn set_parameter(&mut self, name: &str, value: &str) -> Result<(), TechniqueError> {
+        let setting = Setting {
+            technique: "distance-maps",
+            name,
+            value,
+        };
+        match name {
+            "resolution" => self.resolution = setting.texels()?,
+            "shadow_resolution" => self.shadow_resolution = setting.texels()?,
+            "layers" => {
+                self.layers = match value {
+                    "simple" => Layers::Simple,
+                    _ => Layers::Peeled(setting.count(
+                        1..=8,
+                        "simple (the paper's three layers) or a number of depth-peeled layers from 1 to 8",
+                    )?),
+                }
+            }
+            "linear_steps" => {
+                self.linear_steps = setting.count(1..=1000, "a whole number of steps from 1 to 1000")?
+            }
+            "secant_steps" => {
+                self.secant_steps = setting.count(0..=100, "a whole number of iterations from 0 to 100")?
+            }
+            "max_depth" => {
+                self.max_depth = setting.count(0..=16, "a whole number of bounces from 0 to 16")?
+            }
+            "min_max" => self.min_max = setting.flag()?,
+            "output" => {
+                self.output = match value {
+                    "radiance" => Output::Radiance,
+                    "first-hit" => Output::FirstHit,
+                    _ => return Err(setting.bad("expected radiance or first-hit")),
+                }
+            }
+            _ => {
+                return Err(setting.bad(
+                    "distance-maps' parameters are resolution, layers, linear_steps, secant_steps, max_depth, min_max, output and shadow_resolution",
+                ))
+            }
+        }
+        self.prepared = None;
+        Ok(())
+    }
+
+    fn prepare(&mut self, ctx: &GpuContext, scene: &Scene) -> Result<(), TechniqueError> {
+        self.prepared = Some(self.build(ctx, scene)?);
+        Ok(())
+    }
+
+    fn render(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &Scene,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+    ) -> Result<Frame, TechniqueError> {
+        let p = self.prepared.as_ref().ok_or(TechniqueError::NotPrepared {
+            technique: "distance-maps",
+        })?;
+        let mut clock = StageTimer::start(ctx);
+        let camera_uniform = raster::camera_uniform(camera, &scene.bounds(), width, height);
+        let g = p.raster.render(ctx, &p.gpu_scene, &camera_uniform, None)?;
+        clock.lap(ctx, "g-buffer")?;
+        ctx.validated("distance-map layers", || p.draw_maps(ctx))?;
+        clock.lap(ctx, "distance maps")?;
+        if self.min_max {
+            ctx.validated("distance-map ranges", || p.reduce_ranges(ctx))?;
+            clock.lap(ctx, "min-max")?;
+        }
+        let output = ctx.validated("distance-map trace", || {
+            trace(ctx, p, &camera_uniform, &g, width, height)
+        })?;
+        clock.lap(ctx, "tracing")?;
+        let image = raster::read_rgba32f(ctx, &output)?;
+        clock.lap(ctx, "readback")?;
+        let faces = p.draws.len() as u64;
+        let (stages, timing) = clock.finish(ctx)?;
+        Ok(Frame {
+            image,
+            stages,
+            counters: vec![
+                ("reflectors".into(), p.reflectors.len() as u64),
+                ("layers per map".into(), self.layers.count() as u64),
+                ("cube map faces rendered".into(), faces),
+                (
+                    "distance map texels".into(),
+                    faces * (self.resolution as u64).pow(2),
+                ),
+                ("raster passes".into(), 1 + faces),
+            ],
+            timing,
+            warnings: Vec::new(),
+        })
+    }
+}
+
+/// The tracing pass over the G-buffer, into a new output texture.
+fn trace(
+    ctx: &GpuContext,
+    p: &Prepared,
+    camera: &CameraUniform,
+    g: &raster::GBuffer,
+    width: u32,
+    height: u32,
+) -> wgpu::Texture {
+    let device = &ctx.device;
+    let output = texture_2d(
+        device,
+        "distance-maps output",
+        width,
+        height,
+        raster::COLOR_FORMAT,
+        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+    );
+    let camera_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("camera"),
+        contents: bytemuck::bytes_of(camera),
+        usage: wgpu::BufferUsages::UNIFORM,
+    });
+    let view = |t: &wgpu::Texture| t.create_view(&Default::default());
+    let array = |t: &wgpu::Texture| {
+        t.create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        })
+    };
+    let views = [
+        view(&g.color),
+        view(&g.position),
+        view(&g.normal),
+        view(&g.ids),
+        array(&p.material_maps),
+        array(&p.geometry_maps),
+    ];
+    let mut entries = vec![
+        wgpu::BindGroupEntry {
+            binding: 0,
+            resource: camera_buffer.as_entire_binding(),
+        },
+        wgpu::BindGroupEntry {
+            binding: 1,
+            resource: p.settings.as_entire_binding(),
+        },
+    ];
+    for (i, v) in views.iter().enumerate() {
+        entries.push(wgpu::BindGroupEntry {
+            binding: 2 + i as u32,
+            resource: wgpu::BindingResource::TextureView(v),
+        });
+    }
+    for (binding, buffer) in [
+        (8, &p.reflector_buffer),
+        (9, &p.mesh_reflector),
+        (10, &p.ranges),
+        (11, &p.faces),
+    ] {
+        entries.push(wgpu::BindGroupEntry {
+            binding,
+            resource: buffer.as_entire_binding(),
+        });
+    }
+    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("distance-map trace"),
+        layout: &p.trace_layout,
+        entries: &entries,
+    });
+    let output_view = view(&output);
+    let mut encoder = device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("distance-map trace"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &output_view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            ..Default::default()
+        });
+        pass.set_pipeline(&p.trace_pipeline);
+        pass.set_bind_group(0, &bind_group, &[]);
+        pass.set_bind_group(1, &p.trace_scene_bind_group, &[]);
+        pass.draw(0..3, 0..1);
+    }
+    ctx.queue.submit([encoder.finish()]);
+    output
+}

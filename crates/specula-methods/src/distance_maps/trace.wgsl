@@ -1,0 +1,399 @@
+// distance-maps, steps 2 and 3: shades each reflector pixel of the G-buffer by tracing its
+// secondary rays in the reflector's layered distance map (linear search per layer, secant
+// search in the nearest layer) and following the specular path to a diffuse surface.
+// Prepended: optics.wgsl, camera.wgsl, scene.wgsl, cubemap.wgsl, codes.wgsl.
+
+const OUTPUT_RADIANCE: u32 = 0u;
+const OUTPUT_FIRST_HIT: u32 = 1u;
+// First-hit output where the first secondary ray finds nothing.
+const NO_HIT: f32 = -1.0e30;
+const FAR: f32 = 3.0e38;
+
+struct TraceSettings {
+    // Layers per map.
+    layers: u32,
+    linear_steps: u32,
+    secant_steps: u32,
+    max_depth: u32,
+    min_max: u32,
+    // 1 when some dielectric has one index per channel: paths are then traced per channel.
+    dispersive: u32,
+    output: u32,
+    // Texels per face side.
+    resolution: f32,
+};
+
+// A reflector's map: its reference point and the index of its first layer (array layer of face
+// f of layer j: (first_map + j) * 6 + f).
+struct MapReflector {
+    origin: vec3<f32>,
+    first_map: u32,
+};
+
+// Right, up and forward of a cube face, as the faces were rendered (raster::CUBE_FACES).
+struct Face {
+    right: vec4<f32>,
+    up: vec4<f32>,
+    forward: vec4<f32>,
+};
+
+@group(0) @binding(0) var<uniform> camera: Camera;
+@group(0) @binding(1) var<uniform> settings: TraceSettings;
+@group(0) @binding(2) var g_color: texture_2d<f32>;
+@group(0) @binding(3) var g_position: texture_2d<f32>;
+@group(0) @binding(4) var g_normal: texture_2d<f32>;
+@group(0) @binding(5) var g_ids: texture_2d<u32>;
+@group(0) @binding(6) var map_material: texture_2d_array<f32>;
+@group(0) @binding(7) var map_geometry: texture_2d_array<f32>;
+@group(0) @binding(8) var<storage, read> reflectors: array<MapReflector>;
+// Reflector index of each mesh, or -1.
+@group(0) @binding(9) var<storage, read> mesh_reflector: array<i32>;
+// (min, max) distance of each map as float bits; min > max for an empty one.
+@group(0) @binding(10) var<storage, read> ranges: array<u32>;
+@group(0) @binding(11) var<storage, read> faces: array<Face, 6>;
+
+// Where direction `d` falls in map `map`: array layer, the top-left texel of its bilinear
+// footprint, and the weights within it.
+struct Footprint {
+    layer: i32,
+    corner: vec2<i32>,
+    weights: vec4<f32>,
+    nearest: u32,
+};
+
+fn footprint(map: u32, d: vec3<f32>) -> Footprint {
+    let face = cube_face(d);
+    let f = faces[face];
+    let z = dot(f.forward.xyz, d);
+    let uv = vec2<f32>(0.5 + 0.5 * dot(f.right.xyz, d) / z, 0.5 - 0.5 * dot(f.up.xyz, d) / z);
+    let texel = uv * settings.resolution - 0.5;
+    let base = floor(texel);
+    let w = texel - base;
+    var fp: Footprint;
+    fp.layer = i32(map * 6u + face);
+    fp.corner = vec2<i32>(base);
+    fp.weights = vec4<f32>((1.0 - w.x) * (1.0 - w.y), w.x * (1.0 - w.y), (1.0 - w.x) * w.y, w.x * w.y);
+    fp.nearest = u32(select(0, 1, w.x >= 0.5)) + u32(select(0, 2, w.y >= 0.5));
+    return fp;
+}
+
+// Texel `i` (0..3: top-left, top-right, bottom-left, bottom-right) of a footprint, clamped to
+// the face (a lookup beside a face edge reuses the edge texels).
+fn footprint_texel(fp: Footprint, i: u32) -> vec2<i32> {
+    let size = i32(settings.resolution);
+    let offset = vec2<i32>(i32(i & 1u), i32(i >> 1u));
+    return clamp(fp.corner + offset, vec2<i32>(0), vec2<i32>(size - 1));
+}
+
+// |l'|: the distance the map stores in direction `d`, bilinear over the valid texels; -1
+// where the nearest texel sees nothing.
+fn map_distance(map: u32, d: vec3<f32>) -> f32 {
+    let fp = footprint(map, d);
+    var sum = 0.0;
+    var total = 0.0;
+    for (var i = 0u; i < 4u; i++) {
+        let stored = textureLoad(map_geometry, footprint_texel(fp, i), fp.layer, 0).w;
+        if (stored <= 0.0) {
+            if (i == fp.nearest) {
+                return -1.0;
+            }
+            continue;
+        }
+        sum += fp.weights[i] * stored;
+        total += fp.weights[i];
+    }
+    return sum / total;
+}
+
+// The surface a map shows in direction `d`: material and code of the nearest texel; diffuse
+// radiance and the normal interpolated over the footprint's texels of the same material.
+struct MapSurface {
+    rgb: vec3<f32>,
+    code: f32,
+    normal: vec3<f32>,
+};
+
+fn map_surface(map: u32, d: vec3<f32>) -> MapSurface {
+    let fp = footprint(map, d);
+    let nearest = textureLoad(map_material, footprint_texel(fp, fp.nearest), fp.layer, 0);
+    var rgb = vec3<f32>(0.0);
+    var normal = vec3<f32>(0.0);
+    var total = 0.0;
+    for (var i = 0u; i < 4u; i++) {
+        let xy = footprint_texel(fp, i);
+        let material = textureLoad(map_material, xy, fp.layer, 0);
+        let geometry = textureLoad(map_geometry, xy, fp.layer, 0);
+        if (geometry.w > 0.0 && material.w == nearest.w) {
+            rgb += fp.weights[i] * material.xyz;
+            normal += fp.weights[i] * geometry.xyz;
+            total += fp.weights[i];
+        }
+    }
+    var s: MapSurface;
+    s.code = nearest.w;
+    // Material constants (F0) are not interpolated.
+    s.rgb = select(nearest.xyz, rgb / max(total, 1e-8), nearest.w == CODE_DIFFUSE);
+    s.normal = normalize(normal);
+    return s;
+}
+
+// Min-max acceleration: the part [d0, d1] of the ray x + R d (|R| = 1, from d_start on) that lies
+// between the spheres of the map's smallest and largest distance; d1 < d0 when there is none.
+fn marched_range(map: u32, x: vec3<f32>, r: vec3<f32>, d_start: f32) -> vec2<f32> {
+    if (settings.min_max == 0u) {
+        return vec2<f32>(d_start, FAR);
+    }
+    let r_min = bitcast<f32>(ranges[2u * map]) * 0.9999;
+    let r_max = bitcast<f32>(ranges[2u * map + 1u]) * 1.0001;
+    if (r_min > r_max) {
+        return vec2<f32>(1.0, 0.0);
+    }
+    let b = dot(x, r);
+    let xx = dot(x, x);
+    let disc_max = b * b - (xx - r_max * r_max);
+    if (disc_max < 0.0) {
+        return vec2<f32>(1.0, 0.0);
+    }
+    var d0 = max(d_start, -b - sqrt(disc_max));
+    let d1 = -b + sqrt(disc_max);
+    if (xx < r_min * r_min) {
+        // Nothing is nearer than r_min: skip to where the ray leaves that sphere.
+        d0 = max(d0, -b + sqrt(max(b * b - (xx - r_min * r_min), 0.0)));
+    }
+    return vec2<f32>(d0, d1);
+}
+
+// An undershooting (|l| < |l'|) and an overshooting ray parameter, consecutive along the
+// search: the ray crosses the layer between them.
+struct Bracket {
+    found: bool,
+    dl: f32,
+    llp: f32,
+    dp: f32,
+    ppp: f32,
+};
+
+// The paper's linear search, marching uniformly in texture space: the points r'(t) = s (1 - t)
+// + e t between the projections s and e of the ray's start and end on the unit sphere map to ray
+// parameters d = a t / (1 - t), a = |x| / |R|. The step count follows the texels the segment
+// spans, at most `linear_steps`.
+fn linear_search(map: u32, x: vec3<f32>, r: vec3<f32>, range: vec2<f32>) -> Bracket {
+    let a = max(length(x), 1e-6);
+    let t0 = range.x / (range.x + a);
+    let t1 = select(range.y / (range.y + a), 1.0, range.y >= FAR);
+    let texels = length(r - x / a) * (t1 - t0) * settings.resolution * 0.5;
+    let steps = clamp(u32(ceil(texels)), 1u, settings.linear_steps);
+    let dt = (t1 - t0) / f32(steps);
+    var b: Bracket;
+    var undershoot = false;
+    var overshoot = false;
+    for (var i = 0u; i <= steps; i++) {
+        let t = t0 + dt * f32(i);
+        if (t >= 1.0) {
+            break;
+        }
+        let d = a * t / (1.0 - t);
+        let p = x + r * d;
+        let stored = map_distance(map, p);
+        if (stored > 0.0) {
+            let ratio = length(p) / stored;
+            if (ratio < 1.0) {
+                b.dl = d;
+                b.llp = ratio;
+                undershoot = true;
+            } else {
+                b.dp = d;
+                b.ppp = ratio;
+                overshoot = true;
+            }
+            if (undershoot && overshoot) {
+                b.found = true;
+                return b;
+            }
+        } else {
+            // Nothing visible: restart.
+            undershoot = false;
+            overshoot = false;
+        }
+    }
+    return b;
+}
+
+struct Hit {
+    found: bool,
+    map: u32,
+    d: f32,
+};
+
+// Hit(): the linear search in every layer of the reflector's map; the layer with the nearest
+// overshooting parameter holds the first hit, which the secant search then refines.
+fn trace_ray(first_map: u32, x: vec3<f32>, r: vec3<f32>) -> Hit {
+    // Start a texel's width (at the start point's distance) away, so that the interpolated
+    // copy of the surface the ray leaves is not taken for a hit.
+    let d_start = length(x) * 2.0 / settings.resolution;
+    var best: Hit;
+    var bracket: Bracket;
+    best.d = FAR;
+    for (var j = 0u; j < settings.layers; j++) {
+        let map = first_map + j;
+        let range = marched_range(map, x, r, d_start);
+        if (range.y <= range.x) {
+            continue;
+        }
+        let b = linear_search(map, x, r, range);
+        if (b.found && b.dp < best.d) {
+            best.found = true;
+            best.map = map;
+            best.d = b.dp;
+            bracket = b;
+        }
+    }
+    if (!best.found) {
+        return best;
+    }
+    var dl = bracket.dl;
+    var llp = bracket.llp;
+    var dp = bracket.dp;
+    var ppp = bracket.ppp;
+    for (var i = 0u; i < settings.secant_steps; i++) {
+        let d_new = dl + (dp - dl) * (1.0 - llp) / (ppp - llp);
+        best.d = d_new;
+        let p = x + r * d_new;
+        let stored = map_distance(best.map, p);
+        if (stored <= 0.0) {
+            break;
+        }
+        let ratio = length(p) / stored;
+        if (ratio < 0.9999) {
+            llp = ratio;
+            dl = d_new;
+        } else if (ratio > 1.0001) {
+            ppp = ratio;
+            dp = d_new;
+        } else {
+            break;
+        }
+    }
+    return best;
+}
+
+// Radiance arriving at the eye along a specular path that starts at `p_world` (seen along unit
+// `v`, normal `n` facing the eye, surface `first` as (rgb, code)). `channel` 0..2 traces one
+// colour channel's index of refraction, 3 all channels with the green one. At dielectrics the
+// path refracts (reflects under total internal reflection); `reflect_first` takes the reflected
+// branch at the first surface instead. A path that needs more than `max_depth` bounces is
+// black, as in the reference.
+fn trace_path(reflector: MapReflector, p_world: vec3<f32>, v: vec3<f32>, n: vec3<f32>, first: vec4<f32>, channel: u32, reflect_first: bool) -> vec3<f32> {
+    var x = p_world - reflector.origin;
+    var dir = v;
+    var normal = n;
+    var surface = first;
+    var weight = vec3<f32>(1.0);
+    for (var depth = 0u; depth < settings.max_depth; depth++) {
+        let code = surface.w;
+        let cos_v = abs(dot(normal, dir));
+        var r: vec3<f32>;
+        if (code < 0.0) {
+            r = reflect(dir, normal);
+            weight *= select(surface.xyz, fresnel_schlick(surface.xyz, cos_v), code == CODE_MIRROR_SCHLICK);
+        } else {
+            let iors = ior_from_f0(surface.xyz);
+            let ior = select(iors[min(channel, 2u)], iors.y, channel == 3u);
+            let f0 = (ior - 1.0) * (ior - 1.0) / ((ior + 1.0) * (ior + 1.0));
+            let branch_reflect = depth == 0u && reflect_first;
+            if (code > THIN_OFFSET) {
+                let f = f0 + (1.0 - f0) * pow(1.0 - cos_v, 5.0);
+                let sheet = 2.0 * f / (1.0 + f);
+                if (branch_reflect) {
+                    r = reflect(dir, normal);
+                    weight *= sheet;
+                } else {
+                    r = dir;
+                    weight *= 1.0 - sheet;
+                }
+            } else {
+                // The stored normal points out of the solid: a ray along it is leaving.
+                var n_in = normal;
+                var eta = 1.0 / ior;
+                if (dot(dir, normal) > 0.0) {
+                    n_in = -normal;
+                    eta = ior;
+                }
+                let t = refract(dir, n_in, eta);
+                let total = dot(t, t) == 0.0;
+                // Schlick with the angle on the air side.
+                let cos_air = select(cos_v, abs(dot(t, n_in)), eta > 1.0 && !total);
+                let f = select(f0 + (1.0 - f0) * pow(1.0 - cos_air, 5.0), 1.0, total);
+                if (branch_reflect || total) {
+                    r = reflect(dir, n_in);
+                    weight *= f;
+                } else {
+                    r = t;
+                    weight *= 1.0 - f;
+                }
+            }
+        }
+        let hit = trace_ray(reflector.first_map, x, r);
+        if (settings.output == OUTPUT_FIRST_HIT) {
+            return select(vec3<f32>(NO_HIT), reflector.origin + x + r * hit.d, hit.found);
+        }
+        if (!hit.found) {
+            return weight * background_radiance(r);
+        }
+        let l = x + r * hit.d;
+        let s = map_surface(hit.map, l);
+        if (s.code == CODE_DIFFUSE) {
+            return weight * s.rgb;
+        }
+        x = l;
+        dir = r;
+        normal = s.normal;
+        surface = vec4<f32>(s.rgb, s.code);
+    }
+    return vec3<f32>(0.0);
+}
+
+struct FullscreenOut {
+    @builtin(position) clip: vec4<f32>,
+};
+
+@vertex
+fn vs_fullscreen(@builtin(vertex_index) i: u32) -> FullscreenOut {
+    var out: FullscreenOut;
+    out.clip = fullscreen_triangle(i);
+    return out;
+}
+
+@fragment
+fn fs_shade(in: FullscreenOut) -> @location(0) vec4<f32> {
+    let pixel = vec2<i32>(in.clip.xy);
+    let base = textureLoad(g_color, pixel, 0);
+    let ids = textureLoad(g_ids, pixel, 0).xy;
+    if (ids.x == 0u) {
+        return base;
+    }
+    let mesh = ids.x - 1u;
+    let reflector_index = mesh_reflector[mesh];
+    if (reflector_index < 0) {
+        return base;
+    }
+    let reflector = reflectors[reflector_index];
+    let material = materials[mesh_materials[mesh]];
+    let first = specular_code(material);
+    let p = textureLoad(g_position, pixel, 0).xyz;
+    let n = textureLoad(g_normal, pixel, 0).xyz;
+    let v = normalize(p - camera.eye_world);
+    let dielectric = material.kind == MATERIAL_DIELECTRIC;
+    if (settings.output == OUTPUT_FIRST_HIT || !(dielectric && settings.dispersive == 1u)) {
+        var color = trace_path(reflector, p, v, n, first, 3u, false);
+        if (dielectric && settings.output == OUTPUT_RADIANCE) {
+            color += trace_path(reflector, p, v, n, first, 3u, true);
+        }
+        return vec4<f32>(color, 1.0);
+    }
+    var color = vec3<f32>(0.0);
+    for (var c = 0u; c < 3u; c++) {
+        color[c] = trace_path(reflector, p, v, n, first, c, false)[c] + trace_path(reflector, p, v, n, first, c, true)[c];
+    }
+    return vec4<f32>(color, 1.0);
+}
