@@ -1,5 +1,5 @@
 // What a distance-map texel says about its surface: the material map holds (rgb, code), the
-// geometry map (normal, distance). Codes follow the paper's sign coding of the index of
+// geometry map (octahedral normal, mesh index + 1, distance). Codes follow the paper's sign coding of the index of
 // refraction: 0 = diffuse (rgb = the radiance the surface sends towards the reference point),
 // negative = reflector (rgb = F0; -1 with Schlick's Fresnel, -2 with exactly F0), positive =
 // refractor (rgb = F0 per channel, from which the per-channel indices follow; the code is the
@@ -40,4 +40,22 @@ fn specular_code(material: Material) -> vec4<f32> {
 
 fn is_specular(material: Material) -> bool {
     return material.kind == MATERIAL_MIRROR || material.kind == MATERIAL_DIELECTRIC;
+}
+
+// Octahedral encoding of a unit normal in two numbers (so that the geometry map has room for
+// the mesh index).
+fn octahedral_encode(n: vec3<f32>) -> vec2<f32> {
+    let p = n.xy / (abs(n.x) + abs(n.y) + abs(n.z));
+    if (n.z < 0.0) {
+        return (1.0 - abs(p.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), p >= vec2<f32>(0.0));
+    }
+    return p;
+}
+
+fn octahedral_decode(e: vec2<f32>) -> vec3<f32> {
+    var n = vec3<f32>(e, 1.0 - abs(e.x) - abs(e.y));
+    let t = max(-n.z, 0.0);
+    n.x += select(t, -t, n.x >= 0.0);
+    n.y += select(t, -t, n.y >= 0.0);
+    return normalize(n);
 }

@@ -100,6 +100,6 @@ fn fs_layer(in: LayerVertex) -> LayerTexel {
         let n_seen = select(-n, n, facing);
         out.material = vec4<f32>(surface_radiance(material, in.position, n_seen, in.uv), CODE_DIFFUSE);
     }
-    out.geometry = vec4<f32>(n, distance);
+    out.geometry = vec4<f32>(octahedral_encode(n), f32(in.mesh + 1u), distance);
     return out;
 }

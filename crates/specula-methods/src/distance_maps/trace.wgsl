@@ -85,28 +85,39 @@ fn footprint_texel(fp: Footprint, i: u32) -> vec2<i32> {
     return clamp(fp.corner + offset, vec2<i32>(0), vec2<i32>(size - 1));
 }
 
-// |l'|: the distance the map stores in direction `d`, bilinear over the valid texels; -1
-// where the nearest texel sees nothing.
-fn map_distance(map: u32, d: vec3<f32>) -> f32 {
+// What the map stores in a direction: |l'|, bilinear over the footprint's texels that show the
+// same mesh as the nearest one (so that a silhouette does not blend two objects into a
+// spurious surface between them), and that mesh (index + 1). Distance -1 where the nearest
+// texel sees nothing.
+struct Stored {
+    distance: f32,
+    mesh: f32,
+};
+
+fn map_distance(map: u32, d: vec3<f32>) -> Stored {
     let fp = footprint(map, d);
+    let nearest = textureLoad(map_geometry, footprint_texel(fp, fp.nearest), fp.layer, 0);
+    var stored: Stored;
+    stored.distance = -1.0;
+    stored.mesh = nearest.z;
+    if (nearest.w <= 0.0) {
+        return stored;
+    }
     var sum = 0.0;
     var total = 0.0;
     for (var i = 0u; i < 4u; i++) {
-        let stored = textureLoad(map_geometry, footprint_texel(fp, i), fp.layer, 0).w;
-        if (stored <= 0.0) {
-            if (i == fp.nearest) {
-                return -1.0;
-            }
-            continue;
+        let texel = textureLoad(map_geometry, footprint_texel(fp, i), fp.layer, 0);
+        if (texel.w > 0.0 && texel.z == nearest.z) {
+            sum += fp.weights[i] * texel.w;
+            total += fp.weights[i];
         }
-        sum += fp.weights[i] * stored;
-        total += fp.weights[i];
     }
-    return sum / total;
+    stored.distance = sum / total;
+    return stored;
 }
 
 // The surface a map shows in direction `d`: material and code of the nearest texel; diffuse
-// radiance and the normal interpolated over the footprint's texels of the same material.
+// radiance and the normal interpolated over the footprint's texels of the same mesh.
 struct MapSurface {
     rgb: vec3<f32>,
     code: f32,
@@ -115,7 +126,9 @@ struct MapSurface {
 
 fn map_surface(map: u32, d: vec3<f32>) -> MapSurface {
     let fp = footprint(map, d);
-    let nearest = textureLoad(map_material, footprint_texel(fp, fp.nearest), fp.layer, 0);
+    let nearest_xy = footprint_texel(fp, fp.nearest);
+    let nearest = textureLoad(map_material, nearest_xy, fp.layer, 0);
+    let nearest_mesh = textureLoad(map_geometry, nearest_xy, fp.layer, 0).z;
     var rgb = vec3<f32>(0.0);
     var normal = vec3<f32>(0.0);
     var total = 0.0;
@@ -123,9 +136,9 @@ fn map_surface(map: u32, d: vec3<f32>) -> MapSurface {
         let xy = footprint_texel(fp, i);
         let material = textureLoad(map_material, xy, fp.layer, 0);
         let geometry = textureLoad(map_geometry, xy, fp.layer, 0);
-        if (geometry.w > 0.0 && material.w == nearest.w) {
+        if (geometry.w > 0.0 && geometry.z == nearest_mesh) {
             rgb += fp.weights[i] * material.xyz;
-            normal += fp.weights[i] * geometry.xyz;
+            normal += fp.weights[i] * octahedral_decode(geometry.xy);
             total += fp.weights[i];
         }
     }
@@ -187,6 +200,7 @@ fn linear_search(map: u32, x: vec3<f32>, r: vec3<f32>, range: vec2<f32>) -> Brac
     var b: Bracket;
     var undershoot = false;
     var overshoot = false;
+    var mesh = 0.0;
     for (var i = 0u; i <= steps; i++) {
         let t = t0 + dt * f32(i);
         if (t >= 1.0) {
@@ -195,8 +209,14 @@ fn linear_search(map: u32, x: vec3<f32>, r: vec3<f32>, range: vec2<f32>) -> Brac
         let d = a * t / (1.0 - t);
         let p = x + r * d;
         let stored = map_distance(map, p);
-        if (stored > 0.0) {
-            let ratio = length(p) / stored;
+        if (stored.mesh != mesh) {
+            // Another object: a change between two samples is a silhouette, not a crossing.
+            undershoot = false;
+            overshoot = false;
+            mesh = stored.mesh;
+        }
+        if (stored.distance > 0.0) {
+            let ratio = length(p) / stored.distance;
             if (ratio < 1.0) {
                 b.dl = d;
                 b.llp = ratio;
@@ -260,10 +280,10 @@ fn trace_ray(first_map: u32, x: vec3<f32>, r: vec3<f32>) -> Hit {
         best.d = d_new;
         let p = x + r * d_new;
         let stored = map_distance(best.map, p);
-        if (stored <= 0.0) {
+        if (stored.distance <= 0.0) {
             break;
         }
-        let ratio = length(p) / stored;
+        let ratio = length(p) / stored.distance;
         if (ratio < 0.9999) {
             llp = ratio;
             dl = d_new;
