@@ -255,7 +255,7 @@ fn min_max_acceleration_keeps_the_image() {
     assert!(!without.stages.iter().any(|s| s.stage == "min-max"));
     let difference = specular_rmse(&scene, &with.image, &without.image);
     eprintln!("teapot-box with and without min-max: RMSE {difference:.4} between them");
-    assert!(difference < 0.02, "{difference}");
+    assert!(difference < 0.01, "{difference}");
 }
 
 #[test]

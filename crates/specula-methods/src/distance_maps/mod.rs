@@ -109,16 +109,18 @@ const MAP_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 /// How a reflector's map is split into layers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Layers {
-    /// The paper's three: specular front faces, specular back faces, everything diffuse.
+    /// The paper's simplified layers: specular front faces, specular back faces, then the
+    /// non-specular surfaces (the paper: one layer; more are depth-peeled).
     Simple,
     /// Depth peeling: the given number of nearest surfaces per direction.
     Peeled(u32),
 }
 
-impl Layers {
-    pub fn count(self) -> u32 {
-        match self {
-            Layers::Simple => 3,
+impl DistanceMaps {
+    /// Layers per reflector map.
+    pub fn layer_count(&self) -> u32 {
+        match self.layers {
+            Layers::Simple => 2 + self.diffuse_layers,
             Layers::Peeled(n) => n,
         }
     }
@@ -168,6 +170,8 @@ pub struct GpuTraceSettings {
 pub struct GpuMapReflector {
     pub origin: [f32; 3],
     pub first_map: u32,
+    pub far: f32,
+    pub pad: [u32; 3],
 }
 
 /// Host mirror of WGSL `Face`: a cube face's right, up and forward (w unused).
@@ -227,6 +231,8 @@ struct Prepared {
 pub struct DistanceMaps {
     pub resolution: u32,
     pub layers: Layers,
+    /// Depth-peeled layers of non-specular surfaces in [`Layers::Simple`].
+    pub diffuse_layers: u32,
     pub linear_steps: u32,
     pub secant_steps: u32,
     pub max_depth: u32,
@@ -241,6 +247,7 @@ impl Default for DistanceMaps {
         DistanceMaps {
             resolution: 512,
             layers: Layers::Simple,
+            diffuse_layers: 1,
             linear_steps: 80,
             secant_steps: 10,
             max_depth: 2,
@@ -306,7 +313,7 @@ impl DistanceMaps {
         let raster = RasterPass::new(ctx, &gpu_scene, self.shadow_resolution)?;
         let specular = |mesh: usize| scene.materials[scene.meshes[mesh].material].is_specular();
         let reflectors: Vec<usize> = (0..scene.meshes.len()).filter(|&m| specular(m)).collect();
-        let layer_count = self.layers.count();
+        let layer_count = self.layer_count();
         let map_count = (reflectors.len() as u32 * layer_count).max(1);
         let array_layers = 6 * map_count;
         let limit = device.limits().max_texture_array_layers;
@@ -410,18 +417,20 @@ impl DistanceMaps {
             for (k, &mesh) in reflectors.iter().enumerate() {
                 let origin = scene.meshes[mesh].bounds().center();
                 let first_map = k as u32 * layer_count;
+                let (near, far) = raster::depth_range(&bounds, origin);
                 gpu_reflectors.push(GpuMapReflector {
                     origin: origin.to_array(),
                     first_map,
+                    far,
+                    pad: [0; 3],
                 });
-                let (near, far) = raster::depth_range(&bounds, origin);
                 let views = raster::cube_views(origin, near, far, self.resolution);
                 for j in 0..layer_count {
                     let (select, peel, ranges) = match self.layers {
                         Layers::Simple => match j {
                             0 => (KEEP_SPECULAR_FACING, 0, &specular_ranges),
                             1 => (KEEP_SPECULAR_AWAY, 0, &specular_ranges),
-                            _ => (KEEP_NON_SPECULAR, 0, &diffuse_ranges),
+                            _ => (KEEP_NON_SPECULAR, u32::from(j > 2), &diffuse_ranges),
                         },
                         Layers::Peeled(_) => (KEEP_ALL, u32::from(j > 0), &all),
                     };
@@ -714,6 +723,7 @@ impl Technique for DistanceMaps {
         vec![
             ("resolution".into(), self.resolution.to_string()),
             ("layers".into(), layers),
+            ("diffuse_layers".into(), self.diffuse_layers.to_string()),
             ("linear_steps".into(), self.linear_steps.to_string()),
             ("secant_steps".into(), self.secant_steps.to_string()),
             ("max_depth".into(), self.max_depth.to_string()),
@@ -743,6 +753,10 @@ impl Technique for DistanceMaps {
                         "simple (the paper's three layers) or a number of depth-peeled layers from 1 to 8",
                     )?),
                 }
+            }
+            "diffuse_layers" => {
+                self.diffuse_layers =
+                    setting.count(1..=6, "a whole number of layers from 1 to 6")?
             }
             "linear_steps" => {
                 self.linear_steps = setting.count(1..=1000, "a whole number of steps from 1 to 1000")?
@@ -810,7 +824,7 @@ impl Technique for DistanceMaps {
             stages,
             counters: vec![
                 ("reflectors".into(), p.reflectors.len() as u64),
-                ("layers per map".into(), self.layers.count() as u64),
+                ("layers per map".into(), self.layer_count() as u64),
                 ("cube map faces rendered".into(), faces),
                 (
                     "distance map texels".into(),

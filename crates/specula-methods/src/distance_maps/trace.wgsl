@@ -23,11 +23,16 @@ struct TraceSettings {
     resolution: f32,
 };
 
-// A reflector's map: its reference point and the index of its first layer (array layer of face
-// f of layer j: (first_map + j) * 6 + f).
+// A reflector's map: its reference point, the index of its first layer (array layer of face f
+// of layer j: (first_map + j) * 6 + f), and the distance beyond which the map holds nothing
+// (its far plane: the whole scene lies within).
 struct MapReflector {
     origin: vec3<f32>,
     first_map: u32,
+    far: f32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 };
 
 // Right, up and forward of a cube face, as the faces were rendered (raster::CUBE_FACES).
@@ -87,7 +92,7 @@ fn footprint_texel(fp: Footprint, i: u32) -> vec2<i32> {
 
 // What the map stores in a direction: |l'|, bilinear over the footprint's texels that show the
 // same mesh as the nearest one (so that a silhouette does not blend two objects into a
-// spurious surface between them), and that mesh (index + 1). Distance -1 where the nearest
+// surface between them), and that mesh (index + 1). Distance -1 where the nearest
 // texel sees nothing.
 struct Stored {
     distance: f32,
@@ -150,14 +155,18 @@ fn map_surface(map: u32, d: vec3<f32>) -> MapSurface {
     return s;
 }
 
-// Min-max acceleration: the part [d0, d1] of the ray x + R d (|R| = 1, from d_start on) that lies
-// between the spheres of the map's smallest and largest distance; d1 < d0 when there is none.
-fn marched_range(map: u32, x: vec3<f32>, r: vec3<f32>, d_start: f32) -> vec2<f32> {
-    if (settings.min_max == 0u) {
-        return vec2<f32>(d_start, FAR);
+// The part [d0, d1] of the ray x + R d (|R| = 1, from d_start on) worth marching in layer `map`:
+// up to where it leaves the map's far sphere; with min-max acceleration, only between the
+// spheres of the layer's smallest and largest distance. d1 < d0 when there is none. The far end
+// is a real sample behind everything, which closes the bracket of a hit on far geometry (the
+// ray's end at infinity cannot be sampled).
+fn marched_range(map: u32, far: f32, x: vec3<f32>, r: vec3<f32>, d_start: f32) -> vec2<f32> {
+    var r_min = 0.0;
+    var r_max = far;
+    if (settings.min_max == 1u) {
+        r_min = bitcast<f32>(ranges[2u * map]) * 0.9999;
+        r_max = bitcast<f32>(ranges[2u * map + 1u]) * 1.0001;
     }
-    let r_min = bitcast<f32>(ranges[2u * map]) * 0.9999;
-    let r_max = bitcast<f32>(ranges[2u * map + 1u]) * 1.0001;
     if (r_min > r_max) {
         return vec2<f32>(1.0, 0.0);
     }
@@ -180,6 +189,11 @@ fn marched_range(map: u32, x: vec3<f32>, r: vec3<f32>, d_start: f32) -> vec2<f32
 // search: the ray crosses the layer between them.
 struct Bracket {
     found: bool,
+    // Whether both samples show the same mesh. Where they do not, the ray went from in front of
+    // one object to behind another at a silhouette (it met the second one, or something hidden
+    // behind the first): the map holds no surface between them to refine on, and the
+    // overshooting sample is taken as the hit. The other way round is no hit.
+    same_mesh: bool,
     dl: f32,
     llp: f32,
     dp: f32,
@@ -193,7 +207,7 @@ struct Bracket {
 fn linear_search(map: u32, x: vec3<f32>, r: vec3<f32>, range: vec2<f32>) -> Bracket {
     let a = max(length(x), 1e-6);
     let t0 = range.x / (range.x + a);
-    let t1 = select(range.y / (range.y + a), 1.0, range.y >= FAR);
+    let t1 = range.y / (range.y + a);
     let texels = length(r - x / a) * (t1 - t0) * settings.resolution * 0.5;
     let steps = clamp(u32(ceil(texels)), 1u, settings.linear_steps);
     let dt = (t1 - t0) / f32(steps);
@@ -203,18 +217,9 @@ fn linear_search(map: u32, x: vec3<f32>, r: vec3<f32>, range: vec2<f32>) -> Brac
     var mesh = 0.0;
     for (var i = 0u; i <= steps; i++) {
         let t = t0 + dt * f32(i);
-        if (t >= 1.0) {
-            break;
-        }
         let d = a * t / (1.0 - t);
         let p = x + r * d;
         let stored = map_distance(map, p);
-        if (stored.mesh != mesh) {
-            // Another object: a change between two samples is a silhouette, not a crossing.
-            undershoot = false;
-            overshoot = false;
-            mesh = stored.mesh;
-        }
         if (stored.distance > 0.0) {
             let ratio = length(p) / stored.distance;
             if (ratio < 1.0) {
@@ -227,9 +232,21 @@ fn linear_search(map: u32, x: vec3<f32>, r: vec3<f32>, range: vec2<f32>) -> Brac
                 overshoot = true;
             }
             if (undershoot && overshoot) {
-                b.found = true;
-                return b;
+                b.same_mesh = stored.mesh == mesh;
+                // Between two meshes, a crossing needs the ray to pass the second one's distance
+                // while stepping onto it: from in front of it (the undershooting point is nearer
+                // than the second mesh here) to behind it. A ray that was already behind it went
+                // round its silhouette; one that comes out from behind an object in front of
+                // another met nothing. Either way, start over from here.
+                let crossed = ratio >= 1.0 && length(x + r * b.dl) < stored.distance;
+                if (b.same_mesh || crossed) {
+                    b.found = true;
+                    return b;
+                }
+                undershoot = ratio < 1.0;
+                overshoot = ratio >= 1.0;
             }
+            mesh = stored.mesh;
         } else {
             // Nothing visible: restart.
             undershoot = false;
@@ -245,53 +262,62 @@ struct Hit {
     d: f32,
 };
 
-// Hit(): the linear search in every layer of the reflector's map; the layer with the nearest
-// overshooting parameter holds the first hit, which the secant search then refines.
-fn trace_ray(first_map: u32, x: vec3<f32>, r: vec3<f32>) -> Hit {
-    // Start a texel's width (at the start point's distance) away, so that the interpolated
-    // copy of the surface the ray leaves is not taken for a hit.
-    let d_start = length(x) * 2.0 / settings.resolution;
-    var best: Hit;
-    var bracket: Bracket;
-    best.d = FAR;
-    for (var j = 0u; j < settings.layers; j++) {
-        let map = first_map + j;
-        let range = marched_range(map, x, r, d_start);
-        if (range.y <= range.x) {
-            continue;
-        }
-        let b = linear_search(map, x, r, range);
-        if (b.found && b.dp < best.d) {
-            best.found = true;
-            best.map = map;
-            best.d = b.dp;
-            bracket = b;
-        }
-    }
-    if (!best.found) {
-        return best;
-    }
+// The secant search from a bracket: the ray parameter where it meets the layer, exact for a
+// planar surface in one step. Without a refinable bracket (a silhouette between two meshes, or
+// no secant steps), the overshooting sample.
+fn secant_search(map: u32, x: vec3<f32>, r: vec3<f32>, bracket: Bracket) -> f32 {
     var dl = bracket.dl;
     var llp = bracket.llp;
     var dp = bracket.dp;
     var ppp = bracket.ppp;
-    for (var i = 0u; i < settings.secant_steps; i++) {
-        let d_new = dl + (dp - dl) * (1.0 - llp) / (ppp - llp);
-        best.d = d_new;
-        let p = x + r * d_new;
-        let stored = map_distance(best.map, p);
+    var d = dp;
+    let steps = select(0u, settings.secant_steps, bracket.same_mesh);
+    for (var i = 0u; i < steps; i++) {
+        d = dl + (dp - dl) * (1.0 - llp) / (ppp - llp);
+        let p = x + r * d;
+        let stored = map_distance(map, p);
         if (stored.distance <= 0.0) {
             break;
         }
         let ratio = length(p) / stored.distance;
         if (ratio < 0.9999) {
             llp = ratio;
-            dl = d_new;
+            dl = d;
         } else if (ratio > 1.0001) {
             ppp = ratio;
-            dp = d_new;
+            dp = d;
         } else {
             break;
+        }
+    }
+    return d;
+}
+
+// Hit(): the linear search in every layer of the reflector's map, each bracket refined by the
+// secant search; the nearest refined hit wins. (The paper refines only the layer with the
+// nearest overshooting sample; where the marching steps are long, as on rays leaving near the
+// reference point, that sample can lie beyond another layer's hit.)
+fn trace_ray(reflector: MapReflector, x: vec3<f32>, r: vec3<f32>) -> Hit {
+    // Start a texel's width (at the start point's distance) away, so that the interpolated
+    // copy of the surface the ray leaves is not taken for a hit.
+    let d_start = length(x) * 2.0 / settings.resolution;
+    var best: Hit;
+    best.d = FAR;
+    for (var j = 0u; j < settings.layers; j++) {
+        let map = reflector.first_map + j;
+        let range = marched_range(map, reflector.far, x, r, d_start);
+        if (range.y <= range.x) {
+            continue;
+        }
+        let bracket = linear_search(map, x, r, range);
+        if (!bracket.found) {
+            continue;
+        }
+        let d = secant_search(map, x, r, bracket);
+        if (d < best.d) {
+            best.found = true;
+            best.map = map;
+            best.d = d;
         }
     }
     return best;
@@ -353,7 +379,7 @@ fn trace_path(reflector: MapReflector, p_world: vec3<f32>, v: vec3<f32>, n: vec3
                 }
             }
         }
-        let hit = trace_ray(reflector.first_map, x, r);
+        let hit = trace_ray(reflector, x, r);
         if (settings.output == OUTPUT_FIRST_HIT) {
             return select(vec3<f32>(NO_HIT), reflector.origin + x + r * hit.d, hit.found);
         }
