@@ -3,6 +3,9 @@
 
 use std::mem::{offset_of, size_of};
 
+use specula_methods::distance_maps::{
+    self, GpuFace, GpuLayerView, GpuMapReflector, GpuTraceSettings,
+};
 use specula_methods::envmap::{self, GpuReflector};
 use specula_methods::gpu_scene::{GpuLight, GpuMaterial, GpuSceneInfo, GpuTextureInfo};
 use specula_methods::pvrr::{self, GpuMirrorMaterial};
@@ -45,6 +48,18 @@ fn technique_shaders_validate() {
     parse("raster.wgsl", &raster::shader_source());
     parse("envmap.wgsl", &envmap::shader_source());
     parse("pvrr.wgsl", &pvrr::shader_source());
+    parse(
+        "distance_maps/layers.wgsl",
+        &distance_maps::layers_shader_source(),
+    );
+    parse(
+        "distance_maps/ranges.wgsl",
+        &distance_maps::ranges_shader_source(),
+    );
+    parse(
+        "distance_maps/trace.wgsl",
+        &distance_maps::trace_shader_source(),
+    );
 }
 
 #[test]
@@ -135,6 +150,62 @@ fn host_structs_match_wgsl_layouts() {
         &[
             offset_of!(GpuMirrorMaterial, f0),
             offset_of!(GpuMirrorMaterial, fresnel),
+        ],
+    );
+    let module = parse(
+        "distance_maps/layers.wgsl",
+        &distance_maps::layers_shader_source(),
+    );
+    assert_layout(
+        &module,
+        "LayerView",
+        size_of::<GpuLayerView>(),
+        &[
+            offset_of!(GpuLayerView, clip_from_world),
+            offset_of!(GpuLayerView, origin),
+            offset_of!(GpuLayerView, select),
+            offset_of!(GpuLayerView, peel),
+            offset_of!(GpuLayerView, pad),
+        ],
+    );
+    let module = parse(
+        "distance_maps/trace.wgsl",
+        &distance_maps::trace_shader_source(),
+    );
+    assert_layout(
+        &module,
+        "TraceSettings",
+        size_of::<GpuTraceSettings>(),
+        &[
+            offset_of!(GpuTraceSettings, layers),
+            offset_of!(GpuTraceSettings, linear_steps),
+            offset_of!(GpuTraceSettings, secant_steps),
+            offset_of!(GpuTraceSettings, max_depth),
+            offset_of!(GpuTraceSettings, min_max),
+            offset_of!(GpuTraceSettings, dispersive),
+            offset_of!(GpuTraceSettings, output),
+            offset_of!(GpuTraceSettings, resolution),
+        ],
+    );
+    assert_layout(
+        &module,
+        "MapReflector",
+        size_of::<GpuMapReflector>(),
+        &[
+            offset_of!(GpuMapReflector, origin),
+            offset_of!(GpuMapReflector, first_map),
+            offset_of!(GpuMapReflector, far),
+            offset_of!(GpuMapReflector, pad),
+        ],
+    );
+    assert_layout(
+        &module,
+        "Face",
+        size_of::<GpuFace>(),
+        &[
+            offset_of!(GpuFace, right),
+            offset_of!(GpuFace, up),
+            offset_of!(GpuFace, forward),
         ],
     );
 }
