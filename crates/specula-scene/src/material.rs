@@ -69,6 +69,15 @@ impl Material {
     }
 }
 
+/// Reflectance at normal incidence (F0) of a conductor with index of refraction `n` and
+/// extinction coefficient `k` per channel, seen from air:
+/// ((n − 1)² + k²) / ((n + 1)² + k²), the formula Umenhoffer et al. (GPU Gems 3, ch. 17) give for
+/// Schlick's Fresnel on metals; k = 0 gives a dielectric's F0.
+pub fn conductor_f0(n: Vec3, k: Vec3) -> Vec3 {
+    let k2 = k * k;
+    ((n - Vec3::ONE) * (n - Vec3::ONE) + k2) / ((n + Vec3::ONE) * (n + Vec3::ONE) + k2)
+}
+
 /// Per-channel IOR (R, G, B) of a glass with d-line index `ior` and Abbe number `abbe`.
 ///
 /// The Abbe number is V = (n_d − 1) / (n_F − n_C); taking the red, green and blue channels at the
@@ -78,4 +87,25 @@ impl Material {
 pub fn ior_from_abbe(ior: f32, abbe: f32) -> Vec3 {
     let half_spread = (ior - 1.0) / abbe * 0.5;
     Vec3::new(ior - half_spread, ior, ior + half_spread)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn conductor_f0_has_the_closed_form_values() {
+        // Glass: ((1.5 − 1) / (1.5 + 1))² = 0.04.
+        assert!(
+            (conductor_f0(Vec3::splat(1.5), Vec3::ZERO) - Vec3::splat(0.04))
+                .abs()
+                .max_element()
+                < 1e-6
+        );
+        // n = 0.2, k = 3: (0.64 + 9) / (1.44 + 9) = 0.923372.
+        let f0 = conductor_f0(Vec3::splat(0.2), Vec3::splat(3.0));
+        assert!((f0.x - 9.64 / 10.44).abs() < 1e-6, "{f0}");
+        // No absorption and index 1: nothing reflects.
+        assert_eq!(conductor_f0(Vec3::ONE, Vec3::ZERO), Vec3::ZERO);
+    }
 }

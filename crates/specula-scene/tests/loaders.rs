@@ -704,3 +704,41 @@ fn shipped_example_scene_loads_cleanly() {
     assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
     assert_eq!(scene.meshes.len(), 6);
 }
+
+#[test]
+fn toml_metal_mirrors_take_f0_from_index_and_extinction() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "quad.obj", QUAD_OBJ);
+    // Gold at red, green and blue (index and extinction from Johnson and Christy's tables).
+    let gold = TOML_SCENE.replace(
+        "color = [0.9, 0.9, 0.9]\nfresnel = false",
+        "ior = [0.18, 0.42, 1.37]\nextinction = [3.42, 2.35, 1.77]",
+    );
+    let scene = load(write(dir.path(), "gold.toml", &gold).to_str().unwrap()).unwrap();
+    let chrome = scene.materials.iter().find(|m| m.name == "chrome").unwrap();
+    let expected = |n: f32, k: f32| ((n - 1.0).powi(2) + k * k) / ((n + 1.0).powi(2) + k * k);
+    for (c, (n, k)) in [(0.18, 3.42), (0.42, 2.35), (1.37, 1.77)]
+        .into_iter()
+        .enumerate()
+    {
+        assert!(
+            (chrome.color[c] - expected(n, k)).abs() < 1e-6,
+            "{}",
+            chrome.color
+        );
+    }
+    assert!(
+        chrome.color.x > chrome.color.z,
+        "gold reflects red more than blue"
+    );
+    let both = TOML_SCENE.replace("fresnel = false", "ior = 0.2");
+    assert_mentions(
+        &error_of(&write(dir.path(), "both.toml", both)),
+        &["both.toml", "materials.chrome", "not both"],
+    );
+    let lone = TOML_SCENE.replace("color = [0.9, 0.9, 0.9]\nfresnel = false", "extinction = 3");
+    assert_mentions(
+        &error_of(&write(dir.path(), "lone.toml", lone)),
+        &["lone.toml", "materials.chrome", "extinction needs ior"],
+    );
+}

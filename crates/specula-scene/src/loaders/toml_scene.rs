@@ -9,7 +9,7 @@ use glam::{EulerRot, Mat4, Quat, Vec2, Vec3};
 use serde::Deserialize;
 
 use crate::generators::{self, LensSpec};
-use crate::material::ior_from_abbe;
+use crate::material::{conductor_f0, ior_from_abbe};
 use crate::{Background, Camera, Light, Material, MaterialKind, Mesh, Scene, SceneError, Texture};
 
 /// A colour or a grey level.
@@ -92,6 +92,11 @@ pub enum MaterialSpec {
     Mirror {
         /// F0, the reflectance at normal incidence.
         color: Option<Color>,
+        /// A metal's index of refraction (one, or one per RGB channel), instead of `color`:
+        /// F0 follows from it and `extinction`.
+        ior: Option<Color>,
+        /// The metal's extinction coefficient k (default 0), with `ior`.
+        extinction: Option<Color>,
         #[serde(default = "yes")]
         fresnel: bool,
     },
@@ -345,11 +350,30 @@ fn material_from_spec(
             texture_file = texture.clone();
             Material::diffuse(name, grey(color, 0.8))
         }
-        MaterialSpec::Mirror { color, fresnel } => Material::new(
-            name,
-            MaterialKind::Mirror { fresnel: *fresnel },
-            grey(color, 0.95),
-        ),
+        MaterialSpec::Mirror {
+            color,
+            ior,
+            extinction,
+            fresnel,
+        } => {
+            let f0 = match (color, ior, extinction) {
+                (Some(_), Some(_), _) => {
+                    return Err(SceneError::invalid(
+                        format!("materials.{name}"),
+                        "give either color (F0) or ior with extinction, not both",
+                    ))
+                }
+                (_, None, Some(_)) => {
+                    return Err(SceneError::invalid(
+                        format!("materials.{name}"),
+                        "extinction needs ior",
+                    ))
+                }
+                (_, Some(n), k) => conductor_f0(n.vec3(), k.map(Color::vec3).unwrap_or(Vec3::ZERO)),
+                (color, None, None) => grey(color, 0.95),
+            };
+            Material::new(name, MaterialKind::Mirror { fresnel: *fresnel }, f0)
+        }
         MaterialSpec::Dielectric { ior, abbe, thin } => {
             let ior = match (ior, abbe) {
                 (Color::Grey(n), Some(v)) => ior_from_abbe(*n, *v),
