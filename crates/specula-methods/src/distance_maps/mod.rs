@@ -792,7 +792,7 @@ impl Technique for DistanceMaps {
             }
             _ => {
                 return Err(setting.bad(
-                    "distance-maps' parameters are resolution, layers, linear_steps, secant_steps, max_depth, min_max, output and shadow_resolution",
+                    "distance-maps' parameters are resolution, layers, diffuse_layers, linear_steps, secant_steps, max_depth, min_max, output and shadow_resolution",
                 ))
             }
         }
@@ -863,14 +863,6 @@ fn trace(
     height: u32,
 ) -> wgpu::Texture {
     let device = &ctx.device;
-    let output = texture_2d(
-        device,
-        "distance-maps output",
-        width,
-        height,
-        raster::COLOR_FORMAT,
-        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-    );
     let camera_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("camera"),
         contents: bytemuck::bytes_of(camera),
@@ -923,29 +915,14 @@ fn trace(
         layout: &p.trace_layout,
         entries: &entries,
     });
-    let output_view = view(&output);
-    let mut encoder = device.create_command_encoder(&Default::default());
-    {
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("distance-map trace"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &output_view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            ..Default::default()
-        });
-        pass.set_pipeline(&p.trace_pipeline);
-        pass.set_bind_group(0, &bind_group, &[]);
-        pass.set_bind_group(1, &p.trace_scene_bind_group, &[]);
-        pass.draw(0..3, 0..1);
-    }
-    ctx.queue.submit([encoder.finish()]);
-    output
+    raster::fullscreen_pass(
+        ctx,
+        "distance-map trace",
+        &p.trace_pipeline,
+        &[&bind_group, &p.trace_scene_bind_group],
+        width,
+        height,
+    )
 }
 
 #[cfg(test)]

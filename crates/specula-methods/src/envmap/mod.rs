@@ -33,7 +33,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use specula_gpu::shaders::{self, CameraUniform};
-use specula_gpu::util::{render_pipeline, texture_2d, PipelineSpec};
+use specula_gpu::util::{render_pipeline, PipelineSpec};
 use specula_gpu::{GpuContext, GpuError, StageTimer};
 use specula_scene::{Camera, Scene};
 use wgpu::util::DeviceExt;
@@ -384,14 +384,6 @@ impl Technique for EnvMap {
         }
         clock.lap(ctx, "environment cube maps")?;
         let output = ctx.validated("envmap shade", || {
-            let output = texture_2d(
-                device,
-                "envmap output",
-                width,
-                height,
-                raster::COLOR_FORMAT,
-                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            );
             let camera_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("camera"),
                 contents: bytemuck::bytes_of(&camera_uniform),
@@ -450,29 +442,14 @@ impl Technique for EnvMap {
                     },
                 ],
             });
-            let output_view = view(&output);
-            let mut encoder = device.create_command_encoder(&Default::default());
-            {
-                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some("envmap shade"),
-                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                        view: &output_view,
-                        depth_slice: None,
-                        resolve_target: None,
-                        ops: wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                            store: wgpu::StoreOp::Store,
-                        },
-                    })],
-                    ..Default::default()
-                });
-                pass.set_pipeline(&p.pipeline);
-                pass.set_bind_group(0, &bind_group, &[]);
-                pass.set_bind_group(1, &p.scene_bind_group, &[]);
-                pass.draw(0..3, 0..1);
-            }
-            ctx.queue.submit([encoder.finish()]);
-            output
+            raster::fullscreen_pass(
+                ctx,
+                "envmap shade",
+                &p.pipeline,
+                &[&bind_group, &p.scene_bind_group],
+                width,
+                height,
+            )
         })?;
         clock.lap(ctx, "shading")?;
         let image = raster::read_rgba32f(ctx, &output)?;

@@ -85,6 +85,52 @@ pub fn read_rgba32f(ctx: &GpuContext, texture: &wgpu::Texture) -> Result<Image, 
     })
 }
 
+/// Draws the full-screen triangle of `pipeline` (vertex entry without buffers) into a new
+/// `width` × `height` colour texture that can be read back, with `bind_groups` bound as groups
+/// 0, 1, ... : the last pass of techniques that shade the G-buffer's pixels.
+pub fn fullscreen_pass(
+    ctx: &GpuContext,
+    label: &str,
+    pipeline: &wgpu::RenderPipeline,
+    bind_groups: &[&wgpu::BindGroup],
+    width: u32,
+    height: u32,
+) -> wgpu::Texture {
+    let device = &ctx.device;
+    let output = texture_2d(
+        device,
+        label,
+        width,
+        height,
+        COLOR_FORMAT,
+        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+    );
+    let output_view = output.create_view(&Default::default());
+    let mut encoder = device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(label),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &output_view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            ..Default::default()
+        });
+        pass.set_pipeline(pipeline);
+        for (group, bind_group) in bind_groups.iter().enumerate() {
+            pass.set_bind_group(group as u32, *bind_group, &[]);
+        }
+        pass.draw(0..3, 0..1);
+    }
+    ctx.queue.submit([encoder.finish()]);
+    output
+}
+
 /// Near and far planes that hold the whole scene as seen from `eye`.
 pub fn depth_range(scene_bounds: &specula_scene::Aabb, eye: Vec3) -> (f32, f32) {
     let radius = scene_bounds.radius().max(1e-3);
