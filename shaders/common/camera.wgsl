@@ -27,3 +27,16 @@ fn fullscreen_triangle(i: u32) -> vec4<f32> {
     let xy = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u)) * 2.0 - 1.0;
     return vec4<f32>(xy, 1.0, 1.0);
 }
+
+// The vertex stage of full-screen passes (draw 3 vertices): `clip.xy` in the fragment stage is
+// the pixel centre.
+struct FullscreenOut {
+    @builtin(position) clip: vec4<f32>,
+};
+
+@vertex
+fn vs_fullscreen(@builtin(vertex_index) i: u32) -> FullscreenOut {
+    var out: FullscreenOut;
+    out.clip = fullscreen_triangle(i);
+    return out;
+}

@@ -90,6 +90,16 @@ fn equirect_uv(d: vec3<f32>) -> vec2<f32> {
     return vec2<f32>(u, v);
 }
 
+// One vertex of the uploaded scene as a vertex shader reads it (host: GpuVertex, laid out by
+// raster::vertex_layout).
+struct SceneVertex {
+    @location(0) position: vec3<f32>,
+    @location(1) mesh: u32,
+    @location(2) normal: vec3<f32>,
+    @location(3) triangle: u32,
+    @location(4) uv: vec2<f32>,
+};
+
 // Bind group 1 of every technique: the uploaded scene (see GpuScene::bind_group_layout).
 @group(1) @binding(0) var<uniform> scene_info: SceneInfo;
 @group(1) @binding(1) var<storage, read> materials: array<Material>;

@@ -25,6 +25,41 @@ pub fn texture_2d(
     })
 }
 
+/// A bind-group-layout entry (no array count).
+pub fn layout_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    ty: wgpu::BindingType,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty,
+        count: None,
+    }
+}
+
+/// A sampled, single-sample texture binding.
+pub fn texture_binding(
+    sample_type: wgpu::TextureSampleType,
+    dimension: wgpu::TextureViewDimension,
+) -> wgpu::BindingType {
+    wgpu::BindingType::Texture {
+        sample_type,
+        view_dimension: dimension,
+        multisampled: false,
+    }
+}
+
+/// A buffer binding without dynamic offset or minimum size.
+pub fn buffer_binding(ty: wgpu::BufferBindingType) -> wgpu::BindingType {
+    wgpu::BindingType::Buffer {
+        ty,
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    }
+}
+
 /// What distinguishes one render pipeline from another here: entry points, vertex buffers,
 /// depth state and colour targets (no blending, triangle lists, no multisampling).
 pub struct PipelineSpec<'a> {

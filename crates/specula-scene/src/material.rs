@@ -60,6 +60,12 @@ impl Material {
         )
     }
 
+    /// True for a dielectric with different indices per colour channel: its paths split per
+    /// channel.
+    pub fn is_dispersive(&self) -> bool {
+        matches!(self.kind, MaterialKind::Dielectric { ior, .. } if ior.x != ior.y || ior.y != ior.z)
+    }
+
     /// True for the surfaces the techniques treat specially (mirrors and dielectrics).
     pub fn is_specular(&self) -> bool {
         matches!(

@@ -169,9 +169,8 @@ impl Tracer<'_> {
                 if depth >= self.max_depth {
                     return Vec3::ZERO;
                 }
-                let dispersive = ior.x != ior.y || ior.y != ior.z;
                 match channel {
-                    None if dispersive => {
+                    None if material.is_dispersive() => {
                         let mut sum = Vec3::ZERO;
                         for c in 0..3 {
                             sum[c] =

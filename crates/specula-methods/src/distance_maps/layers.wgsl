@@ -23,14 +23,6 @@ struct LayerView {
 // The previous layer's geometry for this face (one array layer), read when peeling.
 @group(0) @binding(1) var previous_geometry: texture_2d_array<f32>;
 
-struct VertexIn {
-    @location(0) position: vec3<f32>,
-    @location(1) mesh: u32,
-    @location(2) normal: vec3<f32>,
-    @location(3) triangle: u32,
-    @location(4) uv: vec2<f32>,
-};
-
 struct LayerVertex {
     @builtin(position) clip: vec4<f32>,
     @location(0) position: vec3<f32>,
@@ -45,7 +37,7 @@ struct LayerTexel {
 };
 
 @vertex
-fn vs_layer(v: VertexIn) -> LayerVertex {
+fn vs_layer(v: SceneVertex) -> LayerVertex {
     var out: LayerVertex;
     out.clip = view.clip_from_world * vec4<f32>(v.position, 1.0);
     out.position = v.position;

@@ -84,9 +84,11 @@
 
 use bytemuck::{Pod, Zeroable};
 use specula_gpu::shaders::{self, CameraUniform};
-use specula_gpu::util::{render_pipeline, texture_2d, PipelineSpec};
+use specula_gpu::util::{
+    buffer_binding, layout_entry, render_pipeline, texture_2d, texture_binding, PipelineSpec,
+};
 use specula_gpu::{GpuContext, StageTimer};
-use specula_scene::{Camera, MaterialKind, Scene};
+use specula_scene::{Camera, Scene};
 use wgpu::util::DeviceExt;
 
 use crate::gpu_scene::GpuScene;
@@ -229,14 +231,14 @@ struct Prepared {
     depth: wgpu::TextureView,
     draws: Vec<LayerDraw>,
     layer_pipeline: wgpu::RenderPipeline,
-    layer_scene_bind_group: wgpu::BindGroup,
+    /// Bind group 1 of both the layer and the tracing pass.
+    scene_bind_group: wgpu::BindGroup,
     range_pipeline: wgpu::ComputePipeline,
     range_bind_group: wgpu::BindGroup,
     ranges: wgpu::Buffer,
     map_count: u32,
     trace_pipeline: wgpu::RenderPipeline,
     trace_layout: wgpu::BindGroupLayout,
-    trace_scene_bind_group: wgpu::BindGroup,
     settings: wgpu::Buffer,
     reflector_buffer: wgpu::Buffer,
     mesh_reflector: wgpu::Buffer,
@@ -274,38 +276,6 @@ impl Default for DistanceMaps {
     }
 }
 
-fn entry(
-    binding: u32,
-    visibility: wgpu::ShaderStages,
-    ty: wgpu::BindingType,
-) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility,
-        ty,
-        count: None,
-    }
-}
-
-fn texture_type(
-    sample_type: wgpu::TextureSampleType,
-    dimension: wgpu::TextureViewDimension,
-) -> wgpu::BindingType {
-    wgpu::BindingType::Texture {
-        sample_type,
-        view_dimension: dimension,
-        multisampled: false,
-    }
-}
-
-fn buffer_type(ty: wgpu::BufferBindingType) -> wgpu::BindingType {
-    wgpu::BindingType::Buffer {
-        ty,
-        has_dynamic_offset: false,
-        min_binding_size: None,
-    }
-}
-
 /// Contiguous vertex ranges of the meshes for which `keep` holds.
 fn vertex_ranges(gpu_scene: &GpuScene, keep: impl Fn(usize) -> bool) -> Vec<std::ops::Range<u32>> {
     let mut ranges: Vec<std::ops::Range<u32>> = Vec::new();
@@ -321,13 +291,290 @@ fn vertex_ranges(gpu_scene: &GpuScene, keep: impl Fn(usize) -> bool) -> Vec<std:
     ranges
 }
 
+// What most bindings here are.
+const FLOAT: wgpu::TextureSampleType = wgpu::TextureSampleType::Float { filterable: false };
+const UNIFORM: wgpu::BufferBindingType = wgpu::BufferBindingType::Uniform;
+const READ_ONLY: wgpu::BufferBindingType = wgpu::BufferBindingType::Storage { read_only: true };
+
+/// The layer pass: its bind group 0 layout (view, previous layer) and its pipeline.
+fn layer_pass(
+    device: &wgpu::Device,
+    scene_layout: &wgpu::BindGroupLayout,
+    shadow_layout: &wgpu::BindGroupLayout,
+) -> (wgpu::BindGroupLayout, wgpu::RenderPipeline) {
+    use wgpu::{ShaderStages as St, TextureViewDimension as D};
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("distance-map layer"),
+        entries: &[
+            layout_entry(0, St::VERTEX_FRAGMENT, buffer_binding(UNIFORM)),
+            layout_entry(1, St::FRAGMENT, texture_binding(FLOAT, D::D2Array)),
+        ],
+    });
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("distance_maps/layers.wgsl"),
+        source: wgpu::ShaderSource::Wgsl(layers_shader_source().into()),
+    });
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("distance-map layer"),
+        bind_group_layouts: &[Some(&layout), Some(scene_layout), Some(shadow_layout)],
+        ..Default::default()
+    });
+    let pipeline = render_pipeline(
+        device,
+        &PipelineSpec {
+            label: "distance-map layer",
+            layout: &pipeline_layout,
+            module: &module,
+            vertex_entry: "vs_layer",
+            fragment_entry: "fs_layer",
+            vertex_buffers: &[Some(raster::vertex_layout())],
+            depth: Some(wgpu::DepthStencilState {
+                format: raster::DEPTH_FORMAT,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            targets: &[MAP_FORMAT, MAP_FORMAT],
+            write_mask: wgpu::ColorWrites::ALL,
+        },
+    );
+    (layout, pipeline)
+}
+
+/// The min-max reduction over `geometry_maps`: its pipeline, bind group and the range buffer
+/// (two u32 per map).
+fn range_pass(
+    device: &wgpu::Device,
+    geometry_maps: &wgpu::Texture,
+    map_count: u32,
+) -> (wgpu::ComputePipeline, wgpu::BindGroup, wgpu::Buffer) {
+    use wgpu::{ShaderStages as St, TextureViewDimension as D};
+    let ranges = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("distance-map ranges"),
+        size: 8 * map_count as u64,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("distance-map ranges"),
+        entries: &[
+            layout_entry(0, St::COMPUTE, texture_binding(FLOAT, D::D2Array)),
+            layout_entry(
+                1,
+                St::COMPUTE,
+                buffer_binding(wgpu::BufferBindingType::Storage { read_only: false }),
+            ),
+        ],
+    });
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("distance_maps/ranges.wgsl"),
+        source: wgpu::ShaderSource::Wgsl(ranges_shader_source().into()),
+    });
+    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some("distance-map ranges"),
+        layout: Some(
+            &device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("distance-map ranges"),
+                bind_group_layouts: &[Some(&layout)],
+                ..Default::default()
+            }),
+        ),
+        module: &module,
+        entry_point: Some("cs_range"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("distance-map ranges"),
+        layout: &layout,
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::TextureView(&array_view(geometry_maps)),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: ranges.as_entire_binding(),
+            },
+        ],
+    });
+    (pipeline, bind_group, ranges)
+}
+
+/// The tracing pass: its bind group 0 layout and its pipeline.
+fn trace_pass(
+    device: &wgpu::Device,
+    scene_layout: &wgpu::BindGroupLayout,
+) -> (wgpu::BindGroupLayout, wgpu::RenderPipeline) {
+    use wgpu::{ShaderStages as St, TextureSampleType as S, TextureViewDimension as D};
+    let fragment = |binding, ty| layout_entry(binding, St::FRAGMENT, ty);
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("distance-map trace"),
+        entries: &[
+            fragment(0, buffer_binding(UNIFORM)),
+            fragment(1, buffer_binding(UNIFORM)),
+            fragment(2, texture_binding(FLOAT, D::D2)),
+            fragment(3, texture_binding(FLOAT, D::D2)),
+            fragment(4, texture_binding(FLOAT, D::D2)),
+            fragment(5, texture_binding(S::Uint, D::D2)),
+            fragment(6, texture_binding(FLOAT, D::D2Array)),
+            fragment(7, texture_binding(FLOAT, D::D2Array)),
+            fragment(8, buffer_binding(READ_ONLY)),
+            fragment(9, buffer_binding(READ_ONLY)),
+            fragment(10, buffer_binding(READ_ONLY)),
+            fragment(11, buffer_binding(READ_ONLY)),
+        ],
+    });
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("distance_maps/trace.wgsl"),
+        source: wgpu::ShaderSource::Wgsl(trace_shader_source().into()),
+    });
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("distance-map trace"),
+        bind_group_layouts: &[Some(&layout), Some(scene_layout)],
+        ..Default::default()
+    });
+    let pipeline = render_pipeline(
+        device,
+        &PipelineSpec {
+            label: "distance-map trace",
+            layout: &pipeline_layout,
+            module: &module,
+            vertex_entry: "vs_fullscreen",
+            fragment_entry: "fs_shade",
+            vertex_buffers: &[],
+            depth: None,
+            targets: &[raster::COLOR_FORMAT],
+            write_mask: wgpu::ColorWrites::ALL,
+        },
+    );
+    (layout, pipeline)
+}
+
+/// A view of every layer of an array texture.
+fn array_view(texture: &wgpu::Texture) -> wgpu::TextureView {
+    texture.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        ..Default::default()
+    })
+}
+
+/// A view of one layer of an array texture.
+fn layer_view(
+    texture: &wgpu::Texture,
+    layer: u32,
+    dimension: wgpu::TextureViewDimension,
+) -> wgpu::TextureView {
+    texture.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(dimension),
+        base_array_layer: layer,
+        array_layer_count: Some(1),
+        ..Default::default()
+    })
+}
+
+/// The textures every map's layers are drawn into.
+struct MapTextures {
+    material: wgpu::Texture,
+    geometry: wgpu::Texture,
+    /// Bound as the "previous layer" where a layer does not peel.
+    placeholder: wgpu::Texture,
+}
+
 impl DistanceMaps {
+    /// What draws each layer's six faces, per reflector and layer, and the reflectors as the
+    /// tracing pass sees them.
+    fn layer_draws(
+        &self,
+        device: &wgpu::Device,
+        scene: &Scene,
+        gpu_scene: &GpuScene,
+        reflectors: &[usize],
+        layout: &wgpu::BindGroupLayout,
+        maps: &MapTextures,
+    ) -> (Vec<LayerDraw>, Vec<GpuMapReflector>) {
+        use wgpu::TextureViewDimension as D;
+        let specular = |mesh: usize| scene.materials[scene.meshes[mesh].material].is_specular();
+        let all = vertex_ranges(gpu_scene, |_| true);
+        let specular_ranges = vertex_ranges(gpu_scene, specular);
+        let diffuse_ranges = vertex_ranges(gpu_scene, |m| !specular(m));
+        let bounds = scene.bounds();
+        let layer_count = self.layer_count();
+        let mut draws = Vec::new();
+        let mut gpu_reflectors = Vec::new();
+        for (k, &mesh) in reflectors.iter().enumerate() {
+            let origin = scene.meshes[mesh].bounds().center();
+            let first_map = k as u32 * layer_count;
+            let (near, far) = raster::depth_range(&bounds, origin);
+            gpu_reflectors.push(GpuMapReflector {
+                origin: origin.to_array(),
+                first_map,
+                far,
+                pad: [0; 3],
+            });
+            let views = raster::cube_views(origin, near, far, self.resolution);
+            for j in 0..layer_count {
+                let (select, peel, ranges) = match self.layers {
+                    Layers::Simple => match j {
+                        0 => (KEEP_SPECULAR_FACING, 0, &specular_ranges),
+                        1 => (KEEP_SPECULAR_AWAY, 0, &specular_ranges),
+                        _ => (KEEP_NON_SPECULAR, u32::from(j > 2), &diffuse_ranges),
+                    },
+                    Layers::Peeled(_) => (KEEP_ALL, u32::from(j > 0), &all),
+                };
+                for (f, view) in views.iter().enumerate() {
+                    let array_layer = (first_map + j) * 6 + f as u32;
+                    let uniform = GpuLayerView {
+                        clip_from_world: view.clip_from_world,
+                        origin: origin.to_array(),
+                        select,
+                        peel,
+                        pad: [0; 3],
+                    };
+                    let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                        label: Some("distance-map layer view"),
+                        contents: bytemuck::bytes_of(&uniform),
+                        usage: wgpu::BufferUsages::UNIFORM,
+                    });
+                    let previous = if peel == 1 {
+                        layer_view(&maps.geometry, array_layer - 6, D::D2Array)
+                    } else {
+                        layer_view(&maps.placeholder, 0, D::D2Array)
+                    };
+                    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                        label: Some("distance-map layer"),
+                        layout,
+                        entries: &[
+                            wgpu::BindGroupEntry {
+                                binding: 0,
+                                resource: buffer.as_entire_binding(),
+                            },
+                            wgpu::BindGroupEntry {
+                                binding: 1,
+                                resource: wgpu::BindingResource::TextureView(&previous),
+                            },
+                        ],
+                    });
+                    draws.push(LayerDraw {
+                        bind_group,
+                        material_target: layer_view(&maps.material, array_layer, D::D2),
+                        geometry_target: layer_view(&maps.geometry, array_layer, D::D2),
+                        vertex_ranges: ranges.clone(),
+                    });
+                }
+            }
+        }
+        (draws, gpu_reflectors)
+    }
+
     fn build(&self, ctx: &GpuContext, scene: &Scene) -> Result<Prepared, TechniqueError> {
         let device = &ctx.device;
         let gpu_scene = GpuScene::upload(device, scene);
         let raster = RasterPass::new(ctx, &gpu_scene, self.shadow_resolution)?;
-        let specular = |mesh: usize| scene.materials[scene.meshes[mesh].material].is_specular();
-        let reflectors: Vec<usize> = (0..scene.meshes.len()).filter(|&m| specular(m)).collect();
+        let reflectors: Vec<usize> = (0..scene.meshes.len())
+            .filter(|&m| scene.materials[scene.meshes[m].material].is_specular())
+            .collect();
         let layer_count = self.layer_count();
         let map_count = (reflectors.len() as u32 * layer_count).max(1);
         let array_layers = 6 * map_count;
@@ -338,7 +585,8 @@ impl DistanceMaps {
                 name: "layers".into(),
                 value: layer_count.to_string(),
                 reason: format!(
-                    "{} reflectors × {layer_count} layers × 6 faces = {array_layers} cube faces; this adapter holds at most {limit}",
+                    "{} reflectors × {layer_count} layers × 6 faces = {array_layers} cube faces; \
+                     this adapter holds at most {limit}",
                     reflectors.len()
                 ),
             });
@@ -361,8 +609,18 @@ impl DistanceMaps {
                     view_formats: &[],
                 })
             };
-            let material_maps = map_texture("distance-map materials");
-            let geometry_maps = map_texture("distance-map geometry");
+            let maps = MapTextures {
+                material: map_texture("distance-map materials"),
+                geometry: map_texture("distance-map geometry"),
+                placeholder: texture_2d(
+                    device,
+                    "distance-map placeholder",
+                    1,
+                    1,
+                    MAP_FORMAT,
+                    wgpu::TextureUsages::TEXTURE_BINDING,
+                ),
+            };
             let depth = texture_2d(
                 device,
                 "distance-map depth",
@@ -372,228 +630,21 @@ impl DistanceMaps {
                 wgpu::TextureUsages::RENDER_ATTACHMENT,
             )
             .create_view(&Default::default());
-            // Bound as the "previous layer" where a layer does not peel.
-            let placeholder = map_texture_1x1(device);
-            let layer_view = |texture: &wgpu::Texture, layer: u32, dimension| {
-                texture.create_view(&wgpu::TextureViewDescriptor {
-                    dimension: Some(dimension),
-                    base_array_layer: layer,
-                    array_layer_count: Some(1),
-                    ..Default::default()
-                })
-            };
-
-            use wgpu::{BufferBindingType as B, ShaderStages as St, TextureSampleType as S, TextureViewDimension as D};
-            let float = S::Float { filterable: false };
-            let layer_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("distance-map layer"),
-                entries: &[
-                    entry(0, St::VERTEX_FRAGMENT, buffer_type(B::Uniform)),
-                    entry(1, St::FRAGMENT, texture_type(float, D::D2Array)),
-                ],
-            });
             let scene_layout = GpuScene::bind_group_layout(device);
-            let layer_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("distance_maps/layers.wgsl"),
-                source: wgpu::ShaderSource::Wgsl(layers_shader_source().into()),
-            });
-            let layer_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("distance-map layer"),
-                bind_group_layouts: &[Some(&layer_layout), Some(&scene_layout), Some(raster.shadow_layout())],
-                ..Default::default()
-            });
-            let layer_pipeline = render_pipeline(
-                device,
-                &PipelineSpec {
-                    label: "distance-map layer",
-                    layout: &layer_pipeline_layout,
-                    module: &layer_module,
-                    vertex_entry: "vs_layer",
-                    fragment_entry: "fs_layer",
-                    vertex_buffers: &[Some(raster::vertex_layout())],
-                    depth: Some(wgpu::DepthStencilState {
-                        format: raster::DEPTH_FORMAT,
-                        depth_write_enabled: Some(true),
-                        depth_compare: Some(wgpu::CompareFunction::Less),
-                        stencil: Default::default(),
-                        bias: Default::default(),
-                    }),
-                    targets: &[MAP_FORMAT, MAP_FORMAT],
-                    write_mask: wgpu::ColorWrites::ALL,
-                },
-            );
-
-            let bounds = scene.bounds();
-            let all = vertex_ranges(&gpu_scene, |_| true);
-            let specular_ranges = vertex_ranges(&gpu_scene, specular);
-            let diffuse_ranges = vertex_ranges(&gpu_scene, |m| !specular(m));
-            let mut draws = Vec::new();
-            let mut gpu_reflectors = Vec::new();
-            for (k, &mesh) in reflectors.iter().enumerate() {
-                let origin = scene.meshes[mesh].bounds().center();
-                let first_map = k as u32 * layer_count;
-                let (near, far) = raster::depth_range(&bounds, origin);
-                gpu_reflectors.push(GpuMapReflector {
-                    origin: origin.to_array(),
-                    first_map,
-                    far,
-                    pad: [0; 3],
-                });
-                let views = raster::cube_views(origin, near, far, self.resolution);
-                for j in 0..layer_count {
-                    let (select, peel, ranges) = match self.layers {
-                        Layers::Simple => match j {
-                            0 => (KEEP_SPECULAR_FACING, 0, &specular_ranges),
-                            1 => (KEEP_SPECULAR_AWAY, 0, &specular_ranges),
-                            _ => (KEEP_NON_SPECULAR, u32::from(j > 2), &diffuse_ranges),
-                        },
-                        Layers::Peeled(_) => (KEEP_ALL, u32::from(j > 0), &all),
-                    };
-                    for (f, view) in views.iter().enumerate() {
-                        let array_layer = (first_map + j) * 6 + f as u32;
-                        let uniform = GpuLayerView {
-                            clip_from_world: view.clip_from_world,
-                            origin: origin.to_array(),
-                            select,
-                            peel,
-                            pad: [0; 3],
-                        };
-                        let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                            label: Some("distance-map layer view"),
-                            contents: bytemuck::bytes_of(&uniform),
-                            usage: wgpu::BufferUsages::UNIFORM,
-                        });
-                        let previous = if peel == 1 {
-                            layer_view(&geometry_maps, array_layer - 6, D::D2Array)
-                        } else {
-                            layer_view(&placeholder, 0, D::D2Array)
-                        };
-                        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                            label: Some("distance-map layer"),
-                            layout: &layer_layout,
-                            entries: &[
-                                wgpu::BindGroupEntry {
-                                    binding: 0,
-                                    resource: buffer.as_entire_binding(),
-                                },
-                                wgpu::BindGroupEntry {
-                                    binding: 1,
-                                    resource: wgpu::BindingResource::TextureView(&previous),
-                                },
-                            ],
-                        });
-                        draws.push(LayerDraw {
-                            bind_group,
-                            material_target: layer_view(&material_maps, array_layer, D::D2),
-                            geometry_target: layer_view(&geometry_maps, array_layer, D::D2),
-                            vertex_ranges: ranges.clone(),
-                        });
-                    }
-                }
-            }
-
-            // Min-max reduction.
-            let ranges = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("distance-map ranges"),
-                size: 8 * map_count as u64,
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            let range_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("distance-map ranges"),
-                entries: &[
-                    entry(0, St::COMPUTE, texture_type(float, D::D2Array)),
-                    entry(1, St::COMPUTE, buffer_type(B::Storage { read_only: false })),
-                ],
-            });
-            let range_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("distance_maps/ranges.wgsl"),
-                source: wgpu::ShaderSource::Wgsl(ranges_shader_source().into()),
-            });
-            let range_pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some("distance-map ranges"),
-                layout: Some(&device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                    label: Some("distance-map ranges"),
-                    bind_group_layouts: &[Some(&range_layout)],
-                    ..Default::default()
-                })),
-                module: &range_module,
-                entry_point: Some("cs_range"),
-                compilation_options: Default::default(),
-                cache: None,
-            });
-            let whole_array = |texture: &wgpu::Texture| {
-                texture.create_view(&wgpu::TextureViewDescriptor {
-                    dimension: Some(D::D2Array),
-                    ..Default::default()
-                })
-            };
-            let range_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("distance-map ranges"),
-                layout: &range_layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: wgpu::BindingResource::TextureView(&whole_array(&geometry_maps)),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: ranges.as_entire_binding(),
-                    },
-                ],
-            });
-
-            // Tracing pass.
-            let trace_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("distance-map trace"),
-                entries: &[
-                    entry(0, St::FRAGMENT, buffer_type(B::Uniform)),
-                    entry(1, St::FRAGMENT, buffer_type(B::Uniform)),
-                    entry(2, St::FRAGMENT, texture_type(float, D::D2)),
-                    entry(3, St::FRAGMENT, texture_type(float, D::D2)),
-                    entry(4, St::FRAGMENT, texture_type(float, D::D2)),
-                    entry(5, St::FRAGMENT, texture_type(S::Uint, D::D2)),
-                    entry(6, St::FRAGMENT, texture_type(float, D::D2Array)),
-                    entry(7, St::FRAGMENT, texture_type(float, D::D2Array)),
-                    entry(8, St::FRAGMENT, buffer_type(B::Storage { read_only: true })),
-                    entry(9, St::FRAGMENT, buffer_type(B::Storage { read_only: true })),
-                    entry(10, St::FRAGMENT, buffer_type(B::Storage { read_only: true })),
-                    entry(11, St::FRAGMENT, buffer_type(B::Storage { read_only: true })),
-                ],
-            });
-            let trace_module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("distance_maps/trace.wgsl"),
-                source: wgpu::ShaderSource::Wgsl(trace_shader_source().into()),
-            });
-            let trace_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("distance-map trace"),
-                bind_group_layouts: &[Some(&trace_layout), Some(&scene_layout)],
-                ..Default::default()
-            });
-            let trace_pipeline = render_pipeline(
-                device,
-                &PipelineSpec {
-                    label: "distance-map trace",
-                    layout: &trace_pipeline_layout,
-                    module: &trace_module,
-                    vertex_entry: "vs_fullscreen",
-                    fragment_entry: "fs_shade",
-                    vertex_buffers: &[],
-                    depth: None,
-                    targets: &[raster::COLOR_FORMAT],
-                    write_mask: wgpu::ColorWrites::ALL,
-                },
-            );
-            let dispersive = scene.materials.iter().any(|m| {
-                matches!(m.kind, MaterialKind::Dielectric { ior, .. } if ior.x != ior.y || ior.y != ior.z)
-            });
+            let (layer_layout, layer_pipeline) =
+                layer_pass(device, &scene_layout, raster.shadow_layout());
+            let (draws, mut gpu_reflectors) =
+                self.layer_draws(device, scene, &gpu_scene, &reflectors, &layer_layout, &maps);
+            let (range_pipeline, range_bind_group, ranges) =
+                range_pass(device, &maps.geometry, map_count);
+            let (trace_layout, trace_pipeline) = trace_pass(device, &scene_layout);
             let settings = GpuTraceSettings {
                 layers: layer_count,
                 linear_steps: self.linear_steps,
                 secant_steps: self.secant_steps,
                 max_depth: self.max_depth,
                 min_max: u32::from(self.min_max),
-                dispersive: u32::from(dispersive),
+                dispersive: u32::from(scene.materials.iter().any(|m| m.is_dispersive())),
                 output: self.output as u32,
                 resolution: self.resolution as f32,
             };
@@ -612,21 +663,26 @@ impl DistanceMaps {
                 })
             };
             Prepared {
-                layer_scene_bind_group: gpu_scene.bind_group(device, &scene_layout),
-                trace_scene_bind_group: gpu_scene.bind_group(device, &scene_layout),
+                scene_bind_group: gpu_scene.bind_group(device, &scene_layout),
                 settings: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                     label: Some("distance-map trace settings"),
                     contents: bytemuck::bytes_of(&settings),
                     usage: wgpu::BufferUsages::UNIFORM,
                 }),
-                reflector_buffer: storage("distance-map reflectors", bytemuck::cast_slice(&gpu_reflectors)),
-                mesh_reflector: storage("distance-map mesh reflectors", bytemuck::cast_slice(&mesh_reflector)),
+                reflector_buffer: storage(
+                    "distance-map reflectors",
+                    bytemuck::cast_slice(&gpu_reflectors),
+                ),
+                mesh_reflector: storage(
+                    "distance-map mesh reflectors",
+                    bytemuck::cast_slice(&mesh_reflector),
+                ),
                 faces: storage("cube faces", bytemuck::cast_slice(&face_bases())),
                 gpu_scene,
                 raster,
                 reflectors,
-                material_maps,
-                geometry_maps,
+                material_maps: maps.material,
+                geometry_maps: maps.geometry,
                 depth,
                 draws,
                 layer_pipeline,
@@ -639,17 +695,6 @@ impl DistanceMaps {
             }
         })?)
     }
-}
-
-fn map_texture_1x1(device: &wgpu::Device) -> wgpu::Texture {
-    texture_2d(
-        device,
-        "distance-map placeholder",
-        1,
-        1,
-        MAP_FORMAT,
-        wgpu::TextureUsages::TEXTURE_BINDING,
-    )
 }
 
 impl Prepared {
@@ -692,7 +737,7 @@ impl Prepared {
             });
             pass.set_pipeline(&self.layer_pipeline);
             pass.set_bind_group(0, &draw.bind_group, &[]);
-            pass.set_bind_group(1, &self.layer_scene_bind_group, &[]);
+            pass.set_bind_group(1, &self.scene_bind_group, &[]);
             pass.set_bind_group(2, self.raster.shadow_bind_group(), &[]);
             pass.set_vertex_buffer(0, self.gpu_scene.vertices.slice(..));
             for range in &draw.vertex_ranges {
@@ -765,7 +810,8 @@ impl Technique for DistanceMaps {
                     "simple" => Layers::Simple,
                     _ => Layers::Peeled(setting.count(
                         1..=8,
-                        "simple (the paper's three layers) or a number of depth-peeled layers from 1 to 8",
+                        "simple (the paper's three layers) or a number of depth-peeled layers \
+                         from 1 to 8",
                     )?),
                 }
             }
@@ -774,10 +820,12 @@ impl Technique for DistanceMaps {
                     setting.count(1..=6, "a whole number of layers from 1 to 6")?
             }
             "linear_steps" => {
-                self.linear_steps = setting.count(1..=1000, "a whole number of steps from 1 to 1000")?
+                self.linear_steps =
+                    setting.count(1..=1000, "a whole number of steps from 1 to 1000")?
             }
             "secant_steps" => {
-                self.secant_steps = setting.count(0..=100, "a whole number of iterations from 0 to 100")?
+                self.secant_steps =
+                    setting.count(0..=100, "a whole number of iterations from 0 to 100")?
             }
             "max_depth" => {
                 self.max_depth = setting.count(0..=16, "a whole number of bounces from 0 to 16")?
@@ -790,11 +838,10 @@ impl Technique for DistanceMaps {
                     _ => return Err(setting.bad("expected radiance or first-hit")),
                 }
             }
-            _ => {
-                return Err(setting.bad(
-                    "distance-maps' parameters are resolution, layers, diffuse_layers, linear_steps, secant_steps, max_depth, min_max, output and shadow_resolution",
-                ))
-            }
+            _ => return Err(setting.bad(
+                "distance-maps' parameters are resolution, layers, diffuse_layers, linear_steps, \
+                     secant_steps, max_depth, min_max, output and shadow_resolution",
+            )),
         }
         self.prepared = None;
         Ok(())
@@ -919,7 +966,7 @@ fn trace(
         ctx,
         "distance-map trace",
         &p.trace_pipeline,
-        &[&bind_group, &p.trace_scene_bind_group],
+        &[&bind_group, &p.scene_bind_group],
         width,
         height,
     )

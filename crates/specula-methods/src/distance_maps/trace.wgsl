@@ -399,17 +399,6 @@ fn trace_path(reflector: MapReflector, p_world: vec3<f32>, v: vec3<f32>, n: vec3
     return vec3<f32>(0.0);
 }
 
-struct FullscreenOut {
-    @builtin(position) clip: vec4<f32>,
-};
-
-@vertex
-fn vs_fullscreen(@builtin(vertex_index) i: u32) -> FullscreenOut {
-    var out: FullscreenOut;
-    out.clip = fullscreen_triangle(i);
-    return out;
-}
-
 @fragment
 fn fs_shade(in: FullscreenOut) -> @location(0) vec4<f32> {
     let pixel = vec2<i32>(in.clip.xy);

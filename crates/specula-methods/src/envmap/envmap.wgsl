@@ -81,17 +81,6 @@ fn transmitted(r: Reflector, p: vec3<f32>, d: vec3<f32>, n: vec3<f32>, ior: f32,
     return env_lookup(r, t_out)[channel] * (1.0 - r_exit);
 }
 
-struct FullscreenOut {
-    @builtin(position) clip: vec4<f32>,
-};
-
-@vertex
-fn vs_fullscreen(@builtin(vertex_index) i: u32) -> FullscreenOut {
-    var out: FullscreenOut;
-    out.clip = fullscreen_triangle(i);
-    return out;
-}
-
 @fragment
 fn fs_shade(in: FullscreenOut) -> @location(0) vec4<f32> {
     let pixel = vec2<i32>(in.clip.xy);

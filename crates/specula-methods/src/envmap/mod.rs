@@ -33,7 +33,9 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use specula_gpu::shaders::{self, CameraUniform};
-use specula_gpu::util::{render_pipeline, PipelineSpec};
+use specula_gpu::util::{
+    buffer_binding, layout_entry, render_pipeline, texture_binding, PipelineSpec,
+};
 use specula_gpu::{GpuContext, GpuError, StageTimer};
 use specula_scene::{Camera, Scene};
 use wgpu::util::DeviceExt;
@@ -113,36 +115,6 @@ impl Default for EnvMap {
             shadow_resolution: 1024,
             prepared: None,
         }
-    }
-}
-
-fn texture_entry(
-    binding: u32,
-    sample_type: wgpu::TextureSampleType,
-    dimension: wgpu::TextureViewDimension,
-) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::FRAGMENT,
-        ty: wgpu::BindingType::Texture {
-            sample_type,
-            view_dimension: dimension,
-            multisampled: false,
-        },
-        count: None,
-    }
-}
-
-fn buffer_entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::FRAGMENT,
-        ty: wgpu::BindingType::Buffer {
-            ty,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
     }
 }
 
@@ -237,20 +209,35 @@ impl EnvMap {
                 label: Some("envmap.wgsl"),
                 source: wgpu::ShaderSource::Wgsl(shader_source().into()),
             });
-            use wgpu::{BufferBindingType as B, TextureSampleType as S, TextureViewDimension as D};
+            use wgpu::{
+                BufferBindingType as B, ShaderStages as St, TextureSampleType as S,
+                TextureViewDimension as D,
+            };
             let float = S::Float { filterable: false };
             let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("envmap"),
                 entries: &[
-                    buffer_entry(0, B::Uniform),
-                    texture_entry(1, float, D::D2),
-                    texture_entry(2, float, D::D2),
-                    texture_entry(3, float, D::D2),
-                    texture_entry(4, S::Uint, D::D2),
-                    texture_entry(5, float, D::D2Array),
-                    buffer_entry(6, B::Storage { read_only: true }),
-                    buffer_entry(7, B::Storage { read_only: true }),
-                    buffer_entry(8, B::Storage { read_only: true }),
+                    layout_entry(0, St::FRAGMENT, buffer_binding(B::Uniform)),
+                    layout_entry(1, St::FRAGMENT, texture_binding(float, D::D2)),
+                    layout_entry(2, St::FRAGMENT, texture_binding(float, D::D2)),
+                    layout_entry(3, St::FRAGMENT, texture_binding(float, D::D2)),
+                    layout_entry(4, St::FRAGMENT, texture_binding(S::Uint, D::D2)),
+                    layout_entry(5, St::FRAGMENT, texture_binding(float, D::D2Array)),
+                    layout_entry(
+                        6,
+                        St::FRAGMENT,
+                        buffer_binding(B::Storage { read_only: true }),
+                    ),
+                    layout_entry(
+                        7,
+                        St::FRAGMENT,
+                        buffer_binding(B::Storage { read_only: true }),
+                    ),
+                    layout_entry(
+                        8,
+                        St::FRAGMENT,
+                        buffer_binding(B::Storage { read_only: true }),
+                    ),
                 ],
             });
             let scene_layout = GpuScene::bind_group_layout(device);

@@ -87,7 +87,9 @@ pub use view::{least_squares_viewpoint, principal_directions, Extents, Patch, Vi
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec3, Vec4};
 use specula_gpu::shaders::{self, CameraUniform};
-use specula_gpu::util::{render_pipeline, PipelineSpec};
+use specula_gpu::util::{
+    buffer_binding, layout_entry, render_pipeline, texture_binding, PipelineSpec,
+};
 use specula_gpu::{GpuContext, GpuError, StageTimer};
 use specula_scene::{Camera, MaterialKind, Scene};
 use specula_trace::SceneAccel;
@@ -252,15 +254,6 @@ impl Default for Pvrr {
             prepared: None,
             cache: Vec::new(),
         }
-    }
-}
-
-fn entry(binding: u32, ty: wgpu::BindingType) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-        ty,
-        count: None,
     }
 }
 
@@ -677,24 +670,21 @@ impl Pvrr {
         let gpu_scene = GpuScene::upload(device, &uploaded);
         let raster = RasterPass::new(ctx, &gpu_scene, self.shadow_resolution)?;
         ctx.validated("pvrr set-up", || {
-            let uniform = wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Uniform,
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            };
+            let stages = wgpu::ShaderStages::VERTEX_FRAGMENT;
+            let uniform = buffer_binding(wgpu::BufferBindingType::Uniform);
             let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("pvrr mirror"),
                 entries: &[
-                    entry(0, uniform),
-                    entry(
+                    layout_entry(0, stages, uniform),
+                    layout_entry(
                         1,
-                        wgpu::BindingType::Texture {
-                            sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                            view_dimension: wgpu::TextureViewDimension::D2,
-                            multisampled: false,
-                        },
+                        stages,
+                        texture_binding(
+                            wgpu::TextureSampleType::Float { filterable: false },
+                            wgpu::TextureViewDimension::D2,
+                        ),
                     ),
-                    entry(2, uniform),
+                    layout_entry(2, stages, uniform),
                 ],
             });
             let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {

@@ -313,7 +313,7 @@ impl RasterPass {
                 label: "background",
                 layout: &background_pipeline_layout,
                 module: &module,
-                vertex_entry: "vs_background",
+                vertex_entry: "vs_fullscreen",
                 fragment_entry: "fs_background",
                 vertex_buffers: &[],
                 depth: depth(false, wgpu::CompareFunction::Always),

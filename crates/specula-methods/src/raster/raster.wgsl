@@ -6,14 +6,6 @@
 
 @group(0) @binding(0) var<uniform> camera: Camera;
 
-struct VertexIn {
-    @location(0) position: vec3<f32>,
-    @location(1) mesh: u32,
-    @location(2) normal: vec3<f32>,
-    @location(3) triangle: u32,
-    @location(4) uv: vec2<f32>,
-};
-
 struct VertexOut {
     // Invariant: passes that redraw a surface over this depth (with LessEqual) must get
     // bit-identical depths.
@@ -33,7 +25,7 @@ struct GBuffer {
 };
 
 @vertex
-fn vs_scene(v: VertexIn) -> VertexOut {
+fn vs_scene(v: SceneVertex) -> VertexOut {
     var out: VertexOut;
     out.clip = camera.clip_from_world * vec4<f32>(v.position, 1.0);
     out.position = v.position;
@@ -61,19 +53,8 @@ fn fs_scene(in: VertexOut, @builtin(front_facing) front: bool) -> GBuffer {
     return out;
 }
 
-struct BackgroundOut {
-    @builtin(position) clip: vec4<f32>,
-};
-
-@vertex
-fn vs_background(@builtin(vertex_index) i: u32) -> BackgroundOut {
-    var out: BackgroundOut;
-    out.clip = fullscreen_triangle(i);
-    return out;
-}
-
 @fragment
-fn fs_background(in: BackgroundOut) -> GBuffer {
+fn fs_background(in: FullscreenOut) -> GBuffer {
     var out: GBuffer;
     out.color = vec4<f32>(background_radiance(camera_ray_direction(camera, in.clip.xy)), 1.0);
     out.position = vec4<f32>(0.0);
@@ -91,7 +72,7 @@ struct ShadowOut {
 @group(0) @binding(1) var<uniform> shadow_view: ShadowView;
 
 @vertex
-fn vs_shadow(v: VertexIn) -> ShadowOut {
+fn vs_shadow(v: SceneVertex) -> ShadowOut {
     var out: ShadowOut;
     out.clip = shadow_view.clip_from_world * vec4<f32>(v.position, 1.0);
     out.position = v.position;
