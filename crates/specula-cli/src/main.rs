@@ -8,9 +8,10 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use specula_gpu::GpuContext;
+use specula_methods::{Context as Devices, LiveScene, MethodInfo};
 use specula_scene::builtin::{self, DEFAULT_SCENE};
 use specula_scene::Scene;
-use specula_trace::{render, Image, RenderSettings, SceneAccel};
+use specula_trace::Image;
 
 mod bench;
 
@@ -29,12 +30,14 @@ struct Cli {
 enum Command {
     /// List the built-in scenes.
     Scenes,
+    /// List every method with its parameters: kind and range, default, what a change redoes.
+    Methods,
     /// Render a scene to PNG (sRGB, clamped) and optionally EXR (linear float).
     Render {
         /// Built-in scene name, a .toml scene file, or a mesh/scene file (.gltf .glb .obj .ply .stl).
         #[arg(default_value = DEFAULT_SCENE)]
         scene: String,
-        /// Technique to render with.
+        /// Method to render with (`specula methods` lists them).
         #[arg(long, short, default_value = "reference")]
         method: String,
         /// Image width in pixels.
@@ -43,10 +46,11 @@ enum Command {
         /// Image height in pixels (default: from the width and the camera's aspect ratio, else 480).
         #[arg(short = 'H', long, value_parser = clap::value_parser!(u32).range(1..=16384))]
         height: Option<u32>,
-        /// Samples per pixel: 1 = one ray through each pixel centre; more = stratified jitter.
+        /// Samples per pixel of the reference: 1 = one ray through each pixel centre; more =
+        /// stratified jitter (the reference's `spp` parameter).
         #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4096))]
         spp: u32,
-        /// Maximum number of specular bounces on a path.
+        /// Maximum number of specular bounces on a reference path (its `max_depth` parameter).
         #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(0..=64))]
         max_depth: u32,
         /// A technique parameter, NAME=VALUE (repeatable), e.g. `-p resolution=512`.
@@ -119,17 +123,46 @@ fn height_for(scene: &Scene, width: u32, height: Option<u32>) -> u32 {
     height.unwrap_or(((width as f32 / aspect).round() as u32).max(1))
 }
 
-fn gpu() -> Result<GpuContext> {
-    let ctx = GpuContext::new()?;
-    eprintln!("GPU: {}", ctx.describe());
-    Ok(ctx)
+/// The devices `methods` need: a GPU only where one of them needs it.
+fn context_for(methods: &[&MethodInfo]) -> Result<Devices> {
+    if !methods.iter().any(|m| m.needs_gpu) {
+        return Ok(Devices::default());
+    }
+    let gpu = GpuContext::new()?;
+    eprintln!("GPU: {}", gpu.describe());
+    Ok(Devices::with_gpu(gpu))
 }
 
-fn all_methods() -> Vec<String> {
-    specula_methods::METHODS
+fn method_infos(names: &[String]) -> Result<Vec<&'static MethodInfo>> {
+    Ok(names
         .iter()
-        .map(|m| m.to_string())
-        .collect()
+        .map(|n| specula_methods::method(n))
+        .collect::<Result<_, _>>()?)
+}
+
+/// `specula methods`: every registered method and its parameters, from the registry's specs.
+fn print_methods() {
+    for m in specula_methods::METHODS {
+        let mut traits = Vec::new();
+        if m.exact {
+            traits.push("exact");
+        }
+        traits.push(if m.needs_gpu { "GPU" } else { "CPU" });
+        if m.progressive {
+            traits.push("progressive");
+        }
+        println!("{} ({}): {}", m.name, traits.join(", "), m.summary);
+        for p in m.params {
+            println!(
+                "    {:<18} {} (default {}); change redoes: {}",
+                p.name,
+                p.kind.describe(),
+                p.default,
+                p.invalidates.describe()
+            );
+            println!("    {:<18} {}", "", p.doc);
+        }
+    }
 }
 
 fn spinner() -> ProgressBar {
@@ -138,17 +171,6 @@ fn spinner() -> ProgressBar {
         ProgressStyle::with_template("{spinner} {msg} ({elapsed})").expect("valid template"),
     );
     bar.enable_steady_tick(std::time::Duration::from_millis(120));
-    bar
-}
-
-fn progress_bar(len: u64, what: &str) -> ProgressBar {
-    let bar = ProgressBar::new(len);
-    bar.set_style(
-        ProgressStyle::with_template("{msg:>10} [{bar:40}] {pos}/{len} tiles ({eta} left)")
-            .expect("valid template")
-            .progress_chars("=> "),
-    );
-    bar.set_message(what.to_string());
     bar
 }
 
@@ -175,6 +197,10 @@ fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
+        Command::Methods => {
+            print_methods();
+            Ok(())
+        }
         Command::Render {
             scene,
             method,
@@ -188,50 +214,41 @@ fn run(cli: Cli) -> Result<()> {
         } => {
             let scene = load_scene(&scene)?;
             let height = height_for(&scene, width, height);
+            let info = specula_methods::method(&method)?;
+            let mut technique = (info.create)();
+            if info.exact {
+                specula_methods::apply_parameters(
+                    technique.as_mut(),
+                    &[format!("spp={spp}"), format!("max_depth={max_depth}")],
+                )?;
+            }
+            specula_methods::apply_parameters(technique.as_mut(), &params)?;
+            let ctx = context_for(&[info])?;
             let start = Instant::now();
-            let (image, summary) = if method == "reference" {
-                let accel = SceneAccel::new(&scene);
-                let build = start.elapsed();
-                let settings = RenderSettings {
-                    width,
-                    height,
-                    spp,
-                    max_depth,
-                };
-                let bar = progress_bar(0, "rendering");
-                let start = Instant::now();
-                let image = render(&scene, &accel, &settings, &|done, total| {
-                    bar.set_length(total as u64);
-                    bar.set_position(done as u64);
-                });
-                bar.finish_and_clear();
-                let summary = format!(
-                    "BVH {:.1} ms, {method} {width}x{height} {spp} spp in {:.2} s",
-                    build.as_secs_f64() * 1e3,
-                    start.elapsed().as_secs_f64()
-                );
-                (image, summary)
-            } else {
-                let mut technique = specula_methods::by_name(&method)?;
-                specula_methods::apply_parameters(technique.as_mut(), &params)?;
-                let ctx = gpu()?;
-                technique.prepare(&ctx, &scene)?;
-                let frame = technique.render(&ctx, &scene, &scene.camera, width, height)?;
-                for warning in &frame.warnings {
-                    eprintln!("warning: {warning}");
-                }
-                let counters: Vec<String> = frame
-                    .counters
-                    .iter()
-                    .map(|(name, value)| format!("{name} {value}"))
-                    .collect();
-                let summary = format!(
-                    "{method} {width}x{height} in {:.1} ms ({})",
-                    frame.total_milliseconds(),
-                    counters.join(", ")
-                );
-                (frame.image, summary)
-            };
+            let live = LiveScene::new(scene);
+            let build = start.elapsed();
+            let scene = live.scene();
+            let bar = spinner();
+            bar.set_message(format!("rendering with {method}"));
+            technique.prepare(&ctx, &live)?;
+            let start = Instant::now();
+            let frame = technique.render(&ctx, &live, &scene.camera, width, height)?;
+            let image = frame.image(&ctx)?;
+            bar.finish_and_clear();
+            for warning in &frame.warnings {
+                eprintln!("warning: {warning}");
+            }
+            let counters: Vec<String> = frame
+                .counters
+                .iter()
+                .map(|(name, value)| format!("{name} {value}"))
+                .collect();
+            let summary = format!(
+                "BVH {:.1} ms, {method} {width}x{height} in {:.1} ms ({})",
+                build.as_secs_f64() * 1e3,
+                start.elapsed().as_secs_f64() * 1e3,
+                counters.join(", ")
+            );
             let image: Image = image;
             image.save_png(&output)?;
             if let Some(exr) = &exr {
@@ -263,11 +280,13 @@ fn run(cli: Cli) -> Result<()> {
                 parameters: params,
                 width,
                 height: height_for(&scene, width, height),
-                methods: methods.unwrap_or_else(all_methods),
+                methods: methods.unwrap_or_else(specula_methods::approximate_methods),
                 spp,
                 max_depth,
             };
-            let ctx = gpu()?;
+            let mut infos = method_infos(&options.methods)?;
+            infos.push(specula_methods::exact_method());
+            let ctx = context_for(&infos)?;
             let bar = spinner();
             let comparison = specula_compare::compare(&scene, &ctx, &options, &|stage| {
                 bar.set_message(format!("rendering {stage}"))
@@ -318,16 +337,9 @@ fn run(cli: Cli) -> Result<()> {
         } => {
             let scene = load_scene(&scene)?;
             let height = height_for(&scene, width, height);
-            let ctx = gpu()?;
-            let results = bench::run(
-                &scene,
-                &ctx,
-                &methods.unwrap_or_else(all_methods),
-                &params,
-                width,
-                height,
-                frames,
-            )?;
+            let methods = methods.unwrap_or_else(specula_methods::approximate_methods);
+            let ctx = context_for(&method_infos(&methods)?)?;
+            let results = bench::run(scene, &ctx, &methods, &params, width, height, frames)?;
             bench::print(&results);
             if let Some(json) = json {
                 std::fs::write(&json, serde_json::to_string_pretty(&results)?)

@@ -105,7 +105,7 @@ fn bad_input_is_a_clear_error_not_a_panic() {
                 "-p".into(),
                 "exit=portal".into(),
             ],
-            "expected none, sphere or slab",
+            "expected one of none, sphere, slab",
         ),
         (
             vec![
@@ -115,7 +115,7 @@ fn bad_input_is_a_clear_error_not_a_panic() {
                 "-p".into(),
                 "colour=1".into(),
             ],
-            "parameters are resolution, exit and shadow_resolution",
+            "parameters are resolution, exit, dynamic, shadow_resolution",
         ),
         (
             vec![
@@ -239,4 +239,26 @@ fn bench_reports_median_and_spread_per_stage() {
     assert!(frame["min_ms"].as_f64().unwrap() <= frame["median_ms"].as_f64().unwrap());
     assert!(frame["median_ms"].as_f64().unwrap() <= frame["max_ms"].as_f64().unwrap());
     assert!(json[0]["stages"].as_array().unwrap().len() >= 3);
+}
+
+#[test]
+fn methods_lists_every_method_with_its_parameters_from_the_registry() {
+    let out = specula().arg("methods").output().unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    for info in specula_methods::METHODS {
+        assert!(text.contains(&format!("{} (", info.name)), "{text}");
+        for p in info.params {
+            let line = text
+                .lines()
+                .find(|l| {
+                    l.trim_start().starts_with(&format!("{} ", p.name))
+                        && l.contains(&format!("(default {})", p.default))
+                })
+                .unwrap_or_else(|| panic!("{}.{} missing: {text}", info.name, p.name));
+            assert!(line.contains(&p.kind.describe()), "{line}");
+            assert!(text.contains(p.doc), "{}", p.doc);
+        }
+    }
+    assert!(text.contains("reference (exact, CPU, progressive)"));
 }

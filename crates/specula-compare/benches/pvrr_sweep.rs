@@ -10,7 +10,7 @@
 use std::time::Instant;
 
 use specula_compare::metrics::{flip_map, measure};
-use specula_methods::by_name;
+use specula_methods::{by_name, LiveScene};
 use specula_trace::reference::primary_hits;
 use specula_trace::{render, RenderSettings, SceneAccel};
 
@@ -22,6 +22,7 @@ fn main() {
         return;
     };
     println!("pvrr on door-mirror at {SIZE}x{SIZE} on {}", ctx.describe());
+    let ctx = specula_methods::Context::with_gpu(ctx);
     println!("| mirror vertices | RMSE (mirror pixels) | PSNR dB | pvrr frame ms (median of 5) | reference ms |");
     println!("|---|---|---|---|---|");
     for quads in [6u32, 13, 27, 56] {
@@ -46,17 +47,18 @@ fn main() {
         );
         let reference_ms = start.elapsed().as_secs_f64() * 1e3;
         let mut pvrr = by_name("pvrr").expect("pvrr exists");
-        pvrr.prepare(&ctx, &scene).expect("prepare");
+        let live = LiveScene::new(scene.clone());
+        pvrr.prepare(&ctx, &live).expect("prepare");
         let mut times = Vec::new();
         let mut image = None;
         for frame in 0..7 {
             let f = pvrr
-                .render(&ctx, &scene, &scene.camera, SIZE, SIZE)
+                .render(&ctx, &live, &scene.camera, SIZE, SIZE)
                 .expect("render");
             if frame >= 2 {
                 times.push(f.total_milliseconds());
             }
-            image = Some(f.image);
+            image = Some(f.image(&ctx).expect("readback"));
         }
         times.sort_by(f64::total_cmp);
         let image = image.expect("rendered");

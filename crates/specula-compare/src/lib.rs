@@ -13,11 +13,13 @@ use std::time::Instant;
 
 use base64::Engine;
 use serde::Serialize;
-use specula_gpu::{GpuContext, TimingSource};
-use specula_methods::raster::{self, RasterPass};
-use specula_methods::{apply_known_parameters, by_name, GpuScene, TechniqueError};
+use specula_gpu::TimingSource;
+use specula_methods::{
+    apply_known_parameters, apply_parameters, by_name, Context, LiveScene, TechniqueError,
+};
 use specula_scene::Scene;
-use specula_trace::{render, Image, RenderSettings, SceneAccel};
+use specula_trace::reference::primary_hits;
+use specula_trace::Image;
 
 pub use metrics::Metrics;
 
@@ -45,6 +47,14 @@ pub struct Options {
     pub max_depth: u32,
     /// `name=value` technique parameters, applied to every method that has them.
     pub parameters: Vec<String>,
+}
+
+/// GPU objects a frame created.
+#[derive(Clone, Debug, Serialize)]
+pub struct CreatedReport {
+    pub textures: u64,
+    pub buffers: u64,
+    pub bind_groups: u64,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -76,6 +86,8 @@ pub struct MethodReport {
     pub heat_map: String,
     /// Fallbacks the technique reported for this frame.
     pub warnings: Vec<String>,
+    /// GPU objects the timed frame created (0 in a steady state).
+    pub created: CreatedReport,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -106,10 +118,10 @@ fn timing_name(t: TimingSource) -> &'static str {
     }
 }
 
-/// Runs the comparison. `progress` is told what is happening (for a progress bar).
+/// Runs the comparison: the registry's exact method against each of `options.methods`.
 pub fn compare(
     scene: &Scene,
-    ctx: &GpuContext,
+    ctx: &Context,
     options: &Options,
     progress: &dyn Fn(&str),
 ) -> Result<Comparison, CompareError> {
@@ -136,27 +148,29 @@ pub fn compare(
 
     progress("reference");
     let start = Instant::now();
-    let accel = SceneAccel::new(scene);
-    let settings = RenderSettings {
-        width,
-        height,
-        spp: options.spp,
-        max_depth: options.max_depth,
-    };
-    let reference = render(scene, &accel, &settings, &|_, _| {});
+    let live = LiveScene::new(scene.clone());
+    let mut reference_method = (specula_methods::exact_method().create)();
+    apply_parameters(
+        reference_method.as_mut(),
+        &[
+            format!("spp={}", options.spp),
+            format!("max_depth={}", options.max_depth),
+        ],
+    )?;
+    let reference = reference_method
+        .render(ctx, &live, &scene.camera, width, height)?
+        .image(ctx)?;
     let reference_ms = start.elapsed().as_secs_f64() * 1e3;
 
     progress("mask");
-    let gpu_scene = GpuScene::upload(&ctx.device, scene);
-    let raster_pass = RasterPass::new(ctx, &gpu_scene, 256)?;
-    let camera = raster::camera_uniform(&scene.camera, &scene.bounds(), width, height);
-    let ids = raster_pass
-        .render(ctx, &gpu_scene, &camera, None)?
-        .read_ids(ctx)?;
-    let mask: Vec<bool> = ids
+    // The pixels whose primary ray (through the pixel centre, as the G-buffer's) sees a mirror
+    // or dielectric.
+    let mask: Vec<bool> = primary_hits(scene, live.accel(), width, height)
         .iter()
-        .map(|id| {
-            id[0] != 0 && scene.materials[scene.meshes[id[0] as usize - 1].material].is_specular()
+        .map(|hit| {
+            hit.is_some_and(|h| {
+                scene.materials[scene.meshes[h.mesh as usize].material].is_specular()
+            })
         })
         .collect();
     let mask_pixels = mask.iter().filter(|&&m| m).count();
@@ -168,12 +182,13 @@ pub fn compare(
     let mut method_images = Vec::new();
     for technique in techniques.iter_mut() {
         progress(technique.name());
-        technique.prepare(ctx, scene)?;
+        technique.prepare(ctx, &live)?;
         // One untimed frame first: the first frame pays for shader compilation and first use.
-        technique.render(ctx, scene, &scene.camera, width, height)?;
-        let frame = technique.render(ctx, scene, &scene.camera, width, height)?;
-        let flip = metrics::flip_map(&reference, &frame.image);
-        let metrics = metrics::measure(&reference, &frame.image, &flip, &mask);
+        technique.render(ctx, &live, &scene.camera, width, height)?;
+        let frame = technique.render(ctx, &live, &scene.camera, width, height)?;
+        let image = frame.image(ctx)?;
+        let flip = metrics::flip_map(&reference, &image);
+        let metrics = metrics::measure(&reference, &image, &flip, &mask);
         let total_ms = frame.total_milliseconds();
         methods.push(MethodReport {
             method: technique.name().to_string(),
@@ -194,16 +209,26 @@ pub fn compare(
             image: format!("{}.png", technique.name()),
             heat_map: format!("{}-flip.png", technique.name()),
             warnings: frame.warnings.clone(),
+            created: CreatedReport {
+                textures: frame.created.textures,
+                buffers: frame.created.buffers,
+                bind_groups: frame.created.bind_groups,
+            },
         });
-        method_images.push((frame.image, metrics::heat_map(&flip, width, height)));
+        method_images.push((image, metrics::heat_map(&flip, width, height)));
     }
+    let adapter = ctx
+        .gpu
+        .as_ref()
+        .map(|g| g.describe())
+        .unwrap_or_else(|| "no GPU".into());
     Ok(Comparison {
         report: Report {
             schema_version: 1,
             scene: scene.name.clone(),
             width,
             height,
-            adapter: ctx.describe(),
+            adapter,
             mask_pixels,
             reference: ReferenceReport {
                 spp: options.spp,

@@ -4,7 +4,7 @@ use specula_compare::{compare, Options};
 
 #[test]
 fn compare_writes_a_report_and_json_that_matches_the_schema() {
-    let Some(ctx) = specula_gpu::test_context("compare end to end") else {
+    let Some(ctx) = specula_methods::test_context("compare end to end") else {
         return;
     };
     let scene = specula_scene::load("door-mirror").unwrap();
@@ -52,7 +52,7 @@ fn compare_writes_a_report_and_json_that_matches_the_schema() {
 
 #[test]
 fn unknown_methods_are_named_with_the_valid_ones() {
-    let Some(ctx) = specula_gpu::test_context("compare unknown method") else {
+    let Some(ctx) = specula_methods::test_context("compare unknown method") else {
         return;
     };
     let scene = specula_scene::load("door-mirror").unwrap();
@@ -76,7 +76,7 @@ fn unknown_methods_are_named_with_the_valid_ones() {
 
 #[test]
 fn parameters_reach_the_methods_that_have_them_and_unknown_ones_are_errors() {
-    let Some(ctx) = specula_gpu::test_context("compare parameters") else {
+    let Some(ctx) = specula_methods::test_context("compare parameters") else {
         return;
     };
     let scene = specula_scene::load("door-mirror").unwrap();

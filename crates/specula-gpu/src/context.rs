@@ -1,5 +1,8 @@
 use std::future::Future;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
+
+use wgpu::util::DeviceExt;
 
 /// Everything that can go wrong on the GPU side, as values: library code never panics on a
 /// wgpu error.
@@ -33,7 +36,38 @@ pub struct GpuContext {
     /// wgpu errors raised outside any error scope. wgpu's default is to panic on them; here
     /// they are collected and returned as an error by the next [`GpuContext::wait`].
     uncaptured: Arc<Mutex<Vec<String>>>,
+    created: [AtomicU64; 3],
 }
+
+/// How many GPU textures, buffers and bind groups were created (through [`GpuContext`]'s
+/// `create_*` methods, the only way the project creates them: clippy.toml forbids wgpu's own).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ResourceCounts {
+    pub textures: u64,
+    pub buffers: u64,
+    pub bind_groups: u64,
+}
+
+impl ResourceCounts {
+    pub fn total(&self) -> u64 {
+        self.textures + self.buffers + self.bind_groups
+    }
+}
+
+impl std::ops::Sub for ResourceCounts {
+    type Output = ResourceCounts;
+    fn sub(self, earlier: ResourceCounts) -> ResourceCounts {
+        ResourceCounts {
+            textures: self.textures - earlier.textures,
+            buffers: self.buffers - earlier.buffers,
+            bind_groups: self.bind_groups - earlier.bind_groups,
+        }
+    }
+}
+
+const TEXTURES: usize = 0;
+const BUFFERS: usize = 1;
+const BIND_GROUPS: usize = 2;
 
 impl GpuContext {
     /// A Vulkan-only wgpu instance. The GL backend is never used (it lacks float render
@@ -89,6 +123,7 @@ impl GpuContext {
         }));
         Ok(GpuContext {
             uncaptured,
+            created: Default::default(),
             device,
             queue,
             adapter_info: adapter.get_info(),
@@ -106,6 +141,47 @@ impl GpuContext {
             "{} ({:?}, {:?})",
             self.adapter_info.name, self.adapter_info.backend, self.adapter_info.device_type
         )
+    }
+
+    /// Textures, buffers and bind groups created so far.
+    pub fn resource_counts(&self) -> ResourceCounts {
+        let count = |i: usize| self.created[i].load(Ordering::Relaxed);
+        ResourceCounts {
+            textures: count(TEXTURES),
+            buffers: count(BUFFERS),
+            bind_groups: count(BIND_GROUPS),
+        }
+    }
+
+    fn count(&self, kind: usize) {
+        self.created[kind].fetch_add(1, Ordering::Relaxed);
+    }
+
+    #[allow(clippy::disallowed_methods)]
+    pub fn create_texture(&self, descriptor: &wgpu::TextureDescriptor) -> wgpu::Texture {
+        self.count(TEXTURES);
+        self.device.create_texture(descriptor)
+    }
+
+    #[allow(clippy::disallowed_methods)]
+    pub fn create_buffer(&self, descriptor: &wgpu::BufferDescriptor) -> wgpu::Buffer {
+        self.count(BUFFERS);
+        self.device.create_buffer(descriptor)
+    }
+
+    #[allow(clippy::disallowed_methods)]
+    pub fn create_buffer_init(
+        &self,
+        descriptor: &wgpu::util::BufferInitDescriptor,
+    ) -> wgpu::Buffer {
+        self.count(BUFFERS);
+        self.device.create_buffer_init(descriptor)
+    }
+
+    #[allow(clippy::disallowed_methods)]
+    pub fn create_bind_group(&self, descriptor: &wgpu::BindGroupDescriptor) -> wgpu::BindGroup {
+        self.count(BIND_GROUPS);
+        self.device.create_bind_group(descriptor)
     }
 
     /// Runs `work` inside a validation error scope: any wgpu validation error it causes comes
@@ -153,7 +229,7 @@ impl GpuContext {
         let unpadded = width * bytes_per_texel;
         let padded = unpadded.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
             * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-        let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
+        let buffer = self.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
             size: (padded * height) as u64,
             usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,

@@ -2,12 +2,13 @@
 //! GPU), texture readback with row alignment, validation errors as Rust errors, GPU timestamps
 //! where the adapter has them, and the WGSL shared by the techniques (`shaders/`).
 
+pub mod arena;
 mod context;
 pub mod shaders;
 mod timer;
 pub mod util;
 
-pub use context::{GpuContext, GpuError, TimingSource};
+pub use context::{GpuContext, GpuError, ResourceCounts, TimingSource};
 pub use timer::{StageTime, StageTimer};
 
 /// The context for GPU tests: `None` (after a loud SKIPPED line) when this machine has no

@@ -16,41 +16,67 @@ pub struct StageTime {
 /// Most stage boundaries one frame may mark.
 const MAX_MARKS: u32 = 64;
 
+/// GPU timestamp resources, created once and reused by every frame.
+struct Timestamps {
+    set: wgpu::QuerySet,
+    resolved: wgpu::Buffer,
+    readback: wgpu::Buffer,
+}
+
+/// A technique's stage timer. Make one per technique and call [`StageTimer::start`] at the start
+/// of every frame: its GPU objects are made once, so timing adds nothing to a frame's count.
+#[derive(Default)]
 pub struct StageTimer {
     names: Vec<String>,
-    gpu: Option<(wgpu::QuerySet, u32)>,
-    cpu_last: Instant,
+    gpu: Option<Timestamps>,
+    marks: u32,
+    cpu_last: Option<Instant>,
     cpu_stages: Vec<StageTime>,
 }
 
 impl StageTimer {
-    /// Starts timing: marks the beginning of the first stage.
-    pub fn start(ctx: &GpuContext) -> StageTimer {
-        let gpu = (ctx.timing == TimingSource::GpuTimestamps).then(|| {
-            let set = ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("stage timestamps"),
-                ty: wgpu::QueryType::Timestamp,
-                count: MAX_MARKS,
+    /// Starts a frame: marks the beginning of the first stage.
+    pub fn start(&mut self, ctx: &GpuContext) {
+        if ctx.timing == TimingSource::GpuTimestamps && self.gpu.is_none() {
+            let size = MAX_MARKS as u64 * 8;
+            let buffer = |label, usage| {
+                ctx.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size,
+                    usage,
+                    mapped_at_creation: false,
+                })
+            };
+            self.gpu = Some(Timestamps {
+                set: ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
+                    label: Some("stage timestamps"),
+                    ty: wgpu::QueryType::Timestamp,
+                    count: MAX_MARKS,
+                }),
+                resolved: buffer(
+                    "timestamps",
+                    wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                ),
+                readback: buffer(
+                    "timestamps readback",
+                    wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                ),
             });
-            (set, 0)
-        });
-        let mut timer = StageTimer {
-            names: Vec::new(),
-            gpu,
-            cpu_last: Instant::now(),
-            cpu_stages: Vec::new(),
-        };
-        timer.mark(ctx);
-        timer
+        }
+        self.names.clear();
+        self.cpu_stages.clear();
+        self.marks = 0;
+        self.cpu_last = Some(Instant::now());
+        self.mark(ctx);
     }
 
     fn mark(&mut self, ctx: &GpuContext) {
-        if let Some((set, next)) = &mut self.gpu {
-            if *next < MAX_MARKS {
+        if let Some(t) = &self.gpu {
+            if self.marks < MAX_MARKS {
                 let mut encoder = ctx.device.create_command_encoder(&Default::default());
-                encoder.write_timestamp(set, *next);
+                encoder.write_timestamp(&t.set, self.marks);
                 ctx.queue.submit([encoder.finish()]);
-                *next += 1;
+                self.marks += 1;
             }
         }
     }
@@ -64,38 +90,29 @@ impl StageTimer {
         } else {
             ctx.wait()?;
             let now = Instant::now();
+            let last = self.cpu_last.replace(now).unwrap_or(now);
             self.cpu_stages.push(StageTime {
                 stage: stage.to_string(),
-                milliseconds: (now - self.cpu_last).as_secs_f64() * 1e3,
+                milliseconds: (now - last).as_secs_f64() * 1e3,
             });
-            self.cpu_last = now;
         }
         Ok(())
     }
 
-    /// The stages' times and where they came from.
-    pub fn finish(self, ctx: &GpuContext) -> Result<(Vec<StageTime>, TimingSource), GpuError> {
-        let Some((set, marks)) = self.gpu else {
-            return Ok((self.cpu_stages, TimingSource::CpuWallClock));
+    /// The frame's stage times and where they came from.
+    pub fn finish(&mut self, ctx: &GpuContext) -> Result<(Vec<StageTime>, TimingSource), GpuError> {
+        let Some(t) = &self.gpu else {
+            return Ok((
+                std::mem::take(&mut self.cpu_stages),
+                TimingSource::CpuWallClock,
+            ));
         };
-        let size = marks as u64 * 8;
-        let resolved = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("timestamps"),
-            size,
-            usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
-        let readback = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("timestamps readback"),
-            size,
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
+        let size = self.marks as u64 * 8;
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
-        encoder.resolve_query_set(&set, 0..marks, &resolved, 0);
-        encoder.copy_buffer_to_buffer(&resolved, 0, &readback, 0, size);
+        encoder.resolve_query_set(&t.set, 0..self.marks, &t.resolved, 0);
+        encoder.copy_buffer_to_buffer(&t.resolved, 0, &t.readback, 0, size);
         ctx.queue.submit([encoder.finish()]);
-        let slice = readback.slice(..);
+        let slice = t.readback.slice(..size);
         let (sender, receiver) = std::sync::mpsc::channel();
         slice.map_async(wgpu::MapMode::Read, move |r| {
             let _ = sender.send(r);
@@ -111,10 +128,11 @@ impl StageTimer {
                 .map_err(|e| GpuError::Readback(e.to_string()))?,
         )
         .to_vec();
+        t.readback.unmap();
         let period_ns = ctx.queue.get_timestamp_period() as f64;
         let stages = self
             .names
-            .into_iter()
+            .drain(..)
             .zip(ticks.windows(2))
             .map(|(stage, w)| StageTime {
                 stage,

@@ -2,14 +2,14 @@
 
 /// A single-layer, single-mip 2D texture.
 pub fn texture_2d(
-    device: &wgpu::Device,
+    ctx: &crate::GpuContext,
     label: &str,
     width: u32,
     height: u32,
     format: wgpu::TextureFormat,
     usage: wgpu::TextureUsages,
 ) -> wgpu::Texture {
-    device.create_texture(&wgpu::TextureDescriptor {
+    ctx.create_texture(&wgpu::TextureDescriptor {
         label: Some(label),
         size: wgpu::Extent3d {
             width,
@@ -73,6 +73,8 @@ pub struct PipelineSpec<'a> {
     pub targets: &'a [wgpu::TextureFormat],
     /// Channels written to every target.
     pub write_mask: wgpu::ColorWrites,
+    /// Triangles facing away (`Back`) or towards (`Front`) the view are skipped; None: both kept.
+    pub cull_mode: Option<wgpu::Face>,
 }
 
 pub fn render_pipeline(device: &wgpu::Device, spec: &PipelineSpec) -> wgpu::RenderPipeline {
@@ -96,7 +98,10 @@ pub fn render_pipeline(device: &wgpu::Device, spec: &PipelineSpec) -> wgpu::Rend
             compilation_options: Default::default(),
             buffers: spec.vertex_buffers,
         },
-        primitive: wgpu::PrimitiveState::default(),
+        primitive: wgpu::PrimitiveState {
+            cull_mode: spec.cull_mode,
+            ..Default::default()
+        },
         depth_stencil: spec.depth.clone(),
         multisample: Default::default(),
         fragment: Some(wgpu::FragmentState {
@@ -122,4 +127,41 @@ pub fn validate_wgsl(name: &str, source: &str) -> Result<naga::Module, String> {
     .validate(&module)
     .map_err(|e| format!("{name}: {}", e.emit_to_string(source)))?;
     Ok(module)
+}
+
+/// A bind group whose entry `i` binds `resources[i]` at binding `i`.
+pub fn bind_group(
+    ctx: &crate::GpuContext,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    resources: &[wgpu::BindingResource],
+) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry> = resources
+        .iter()
+        .enumerate()
+        .map(|(i, resource)| wgpu::BindGroupEntry {
+            binding: i as u32,
+            resource: resource.clone(),
+        })
+        .collect();
+    ctx.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout,
+        entries: &entries,
+    })
+}
+
+/// A buffer of `size` bytes that is written in place (`COPY_DST` added to `usage`).
+pub fn writable_buffer(
+    ctx: &crate::GpuContext,
+    label: &str,
+    size: u64,
+    usage: wgpu::BufferUsages,
+) -> wgpu::Buffer {
+    ctx.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: size.max(16),
+        usage: usage | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    })
 }

@@ -8,7 +8,7 @@ fn clear_texture(
     height: u32,
     color: wgpu::Color,
 ) -> wgpu::Texture {
-    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+    let texture = ctx.create_texture(&wgpu::TextureDescriptor {
         label: Some("target"),
         size: wgpu::Extent3d {
             width,
@@ -72,7 +72,7 @@ fn validation_errors_are_values_not_panics() {
     };
     let result = ctx.validated("bad buffer", || {
         // MAP_READ may only be combined with COPY_DST: a validation error.
-        ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        ctx.create_buffer(&wgpu::BufferDescriptor {
             label: Some("bad"),
             size: 16,
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::STORAGE,
@@ -92,7 +92,7 @@ fn errors_outside_scopes_come_back_from_wait_instead_of_panicking() {
     let Some(ctx) = test_context("errors_outside_scopes") else {
         return;
     };
-    let _bad = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+    let _bad = ctx.create_buffer(&wgpu::BufferDescriptor {
         label: Some("bad"),
         size: 16,
         usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::STORAGE,

@@ -3,7 +3,6 @@
 
 use glam::Vec3;
 use specula_gpu::shaders::{self, CameraUniform};
-use wgpu::util::DeviceExt;
 
 fn validate(name: &str, source: &str) -> naga::Module {
     specula_gpu::util::validate_wgsl(name, source).unwrap_or_else(|e| panic!("{e}"))
@@ -114,21 +113,19 @@ fn cpu_and_wgsl_optics_agree() {
             cases.push([d.x, d.y, d.z, eta, n.x, n.y, n.z, 0.04 + k as f32 / 100.0]);
         }
     }
-    let input = ctx
-        .device
-        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("cases"),
-            contents: bytemuck::cast_slice(&cases),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
+    let input = ctx.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("cases"),
+        contents: bytemuck::cast_slice(&cases),
+        usage: wgpu::BufferUsages::STORAGE,
+    });
     let out_size = (cases.len() * 48) as u64;
-    let output = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+    let output = ctx.create_buffer(&wgpu::BufferDescriptor {
         label: Some("outs"),
         size: out_size,
         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         mapped_at_creation: false,
     });
-    let readback = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+    let readback = ctx.create_buffer(&wgpu::BufferDescriptor {
         label: Some("readback"),
         size: out_size,
         usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
@@ -150,7 +147,7 @@ fn cpu_and_wgsl_optics_agree() {
             compilation_options: Default::default(),
             cache: None,
         });
-    let bind_group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+    let bind_group = ctx.create_bind_group(&wgpu::BindGroupDescriptor {
         label: None,
         layout: &pipeline.get_bind_group_layout(0),
         entries: &[

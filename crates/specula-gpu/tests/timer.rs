@@ -5,7 +5,7 @@ use specula_gpu::{test_context, StageTimer, TimingSource};
 
 fn busy_stage(ctx: &specula_gpu::GpuContext) {
     // Clearing a large float target is real GPU work.
-    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+    let texture = ctx.create_texture(&wgpu::TextureDescriptor {
         label: None,
         size: wgpu::Extent3d {
             width: 512,
@@ -43,7 +43,8 @@ fn stages_are_timed_by_the_best_available_source() {
     };
     for source in [ctx.timing, TimingSource::CpuWallClock] {
         ctx.timing = source;
-        let mut timer = StageTimer::start(&ctx);
+        let mut timer = StageTimer::default();
+        timer.start(&ctx);
         busy_stage(&ctx);
         timer.lap(&ctx, "first").unwrap();
         busy_stage(&ctx);
@@ -63,4 +64,22 @@ fn stages_are_timed_by_the_best_available_source() {
             "{source:?}: {stages:?}"
         );
     }
+}
+
+#[test]
+fn a_reused_timer_creates_nothing_after_its_first_frame() {
+    let Some(ctx) = test_context("stage timer reuse") else {
+        return;
+    };
+    let mut timer = StageTimer::default();
+    let mut frame = |ctx: &specula_gpu::GpuContext| {
+        timer.start(ctx);
+        timer.lap(ctx, "only").unwrap();
+        timer.finish(ctx).unwrap()
+    };
+    frame(&ctx);
+    let before = ctx.resource_counts();
+    let (stages, _) = frame(&ctx);
+    assert_eq!(stages.len(), 1);
+    assert_eq!(ctx.resource_counts(), before);
 }

@@ -1,12 +1,16 @@
-//! The scene uploaded to the GPU once per scene change: un-indexed world-space vertices
-//! (three per triangle, so each carries its mesh and triangle ID for the ID buffer), materials,
-//! textures (all texels in one storage buffer, sampled in WGSL exactly as the CPU samples them)
-//! and lights.
+//! The scene uploaded to the GPU once per scene: un-indexed world-space vertices (three per
+//! triangle, so each carries its mesh and triangle ID for the ID buffer), materials, textures
+//! (all texels in one storage buffer, sampled in WGSL exactly as the CPU samples them) and
+//! lights. A moved mesh rewrites its vertex range in place ([`GpuScene::write_mesh`]).
+//!
+//! Three mesh slots past the scene's own meshes, [`GpuScene::marker_mesh`], are unlit red,
+//! green and blue with no triangles: verification overlays (pvrr's markers) draw extra
+//! geometry under those mesh IDs.
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
-use specula_scene::{Aabb, Background, Light, MaterialKind, Scene};
-use wgpu::util::DeviceExt;
+use specula_gpu::GpuContext;
+use specula_scene::{Background, Light, MaterialKind, Mesh, Scene};
 
 /// One vertex: world position, mesh index, world normal, triangle index, texture coordinate.
 #[repr(C)]
@@ -91,25 +95,25 @@ pub struct GpuScene {
     pub lights: wgpu::Buffer,
     pub info: wgpu::Buffer,
     pub gpu_lights: Vec<GpuLight>,
-    pub bounds: Aabb,
+    /// Index of the first marker mesh (the scene's mesh count).
+    pub first_marker_mesh: u32,
     /// Each mesh's range in `vertices` (meshes are uploaded in order, three vertices per
     /// triangle), so that a pass can leave one out.
     pub mesh_vertex_ranges: Vec<std::ops::Range<u32>>,
 }
 
-fn storage<T: Pod>(
-    device: &wgpu::Device,
-    label: &str,
-    items: &[T],
-    placeholder: T,
-) -> wgpu::Buffer {
+/// Radiance of the marker meshes' unlit materials: beyond any lit surface, so that a test can
+/// find them in a float image.
+pub const MARKER_RADIANCE: f32 = 4.0;
+
+fn storage<T: Pod>(ctx: &GpuContext, label: &str, items: &[T], placeholder: T) -> wgpu::Buffer {
     // Storage bindings may not be empty.
     let contents: Vec<T> = if items.is_empty() {
         vec![placeholder]
     } else {
         items.to_vec()
     };
-    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+    ctx.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some(label),
         contents: bytemuck::cast_slice(&contents),
         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
@@ -117,32 +121,54 @@ fn storage<T: Pod>(
 }
 
 impl GpuScene {
-    pub fn upload(device: &wgpu::Device, scene: &Scene) -> GpuScene {
+    /// The vertices of mesh `index`, three per triangle.
+    fn mesh_vertices(index: usize, mesh: &Mesh) -> impl Iterator<Item = GpuVertex> + '_ {
+        mesh.triangles.iter().enumerate().flat_map(move |(t, tri)| {
+            tri.map(|i| {
+                let i = i as usize;
+                GpuVertex {
+                    position: mesh.positions[i].to_array(),
+                    mesh: index as u32,
+                    normal: mesh.normals[i].to_array(),
+                    triangle: t as u32,
+                    uv: mesh
+                        .uvs
+                        .get(i)
+                        .map(|uv| uv.to_array())
+                        .unwrap_or([0.0, 0.0]),
+                }
+            })
+        })
+    }
+
+    /// The mesh ID the marker geometry of colour channel `channel` (0 red, 1 green, 2 blue)
+    /// is drawn under.
+    pub fn marker_mesh(&self, channel: u32) -> u32 {
+        self.first_marker_mesh + channel
+    }
+
+    /// Rewrites mesh `index`'s vertices in place (after a rigid move: same triangles).
+    pub fn write_mesh(&self, ctx: &GpuContext, index: usize, mesh: &Mesh) {
+        let vertices: Vec<GpuVertex> = Self::mesh_vertices(index, mesh).collect();
+        let offset = self.mesh_vertex_ranges[index].start as u64 * size_of::<GpuVertex>() as u64;
+        ctx.queue
+            .write_buffer(&self.vertices, offset, bytemuck::cast_slice(&vertices));
+    }
+
+    pub fn upload(ctx: &GpuContext, scene: &Scene) -> GpuScene {
         let mut vertices = Vec::with_capacity(scene.triangle_count() * 3);
         let mut mesh_vertex_ranges = Vec::with_capacity(scene.meshes.len());
         for (m, mesh) in scene.meshes.iter().enumerate() {
             let start = vertices.len() as u32;
-            for (t, tri) in mesh.triangles.iter().enumerate() {
-                for &i in tri {
-                    let i = i as usize;
-                    vertices.push(GpuVertex {
-                        position: mesh.positions[i].to_array(),
-                        mesh: m as u32,
-                        normal: mesh.normals[i].to_array(),
-                        triangle: t as u32,
-                        uv: mesh
-                            .uvs
-                            .get(i)
-                            .map(|uv| uv.to_array())
-                            .unwrap_or([0.0, 0.0]),
-                    });
-                }
-            }
+            vertices.extend(Self::mesh_vertices(m, mesh));
             mesh_vertex_ranges.push(start..vertices.len() as u32);
         }
+        let markers = [Vec3::X, Vec3::Y, Vec3::Z]
+            .map(|c| specula_scene::Material::unlit("marker", c * MARKER_RADIANCE));
         let materials: Vec<GpuMaterial> = scene
             .materials
             .iter()
+            .chain(&markers)
             .map(|m| {
                 let (kind, ior, flags) = match m.kind {
                     MaterialKind::Unlit => (MATERIAL_UNLIT, Vec3::ONE, 0),
@@ -168,7 +194,13 @@ impl GpuScene {
                 }
             })
             .collect();
-        let mesh_materials: Vec<u32> = scene.meshes.iter().map(|m| m.material as u32).collect();
+        let first_marker_material = scene.materials.len() as u32;
+        let mesh_materials: Vec<u32> = scene
+            .meshes
+            .iter()
+            .map(|m| m.material as u32)
+            .chain((0..3).map(|c| first_marker_material + c))
+            .collect();
         let mut texels: Vec<[f32; 4]> = Vec::new();
         let texture_infos: Vec<GpuTextureInfo> = scene
             .textures
@@ -250,29 +282,31 @@ impl GpuScene {
             vertices.push(GpuVertex::zeroed());
         }
         GpuScene {
-            vertices: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            vertices: ctx.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("scene vertices"),
                 contents: bytemuck::cast_slice(&vertices),
-                usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE,
+                usage: wgpu::BufferUsages::VERTEX
+                    | wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_DST,
             }),
             vertex_count,
-            materials: storage(device, "materials", &materials, GpuMaterial::zeroed()),
-            mesh_materials: storage(device, "mesh materials", &mesh_materials, 0),
+            materials: storage(ctx, "materials", &materials, GpuMaterial::zeroed()),
+            mesh_materials: storage(ctx, "mesh materials", &mesh_materials, 0),
             texture_infos: storage(
-                device,
+                ctx,
                 "texture infos",
                 &texture_infos,
                 GpuTextureInfo::zeroed(),
             ),
-            texels: storage(device, "texels", &texels, [0.0; 4]),
-            lights: storage(device, "lights", &gpu_lights, GpuLight::zeroed()),
-            info: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            texels: storage(ctx, "texels", &texels, [0.0; 4]),
+            lights: storage(ctx, "lights", &gpu_lights, GpuLight::zeroed()),
+            info: ctx.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("scene info"),
                 contents: bytemuck::bytes_of(&info),
                 usage: wgpu::BufferUsages::UNIFORM,
             }),
             gpu_lights,
-            bounds: scene.bounds(),
+            first_marker_mesh: scene.meshes.len() as u32,
             mesh_vertex_ranges,
         }
     }
@@ -321,11 +355,7 @@ impl GpuScene {
         })
     }
 
-    pub fn bind_group(
-        &self,
-        device: &wgpu::Device,
-        layout: &wgpu::BindGroupLayout,
-    ) -> wgpu::BindGroup {
+    pub fn bind_group(&self, ctx: &GpuContext, layout: &wgpu::BindGroupLayout) -> wgpu::BindGroup {
         let buffers = [
             &self.info,
             &self.materials,
@@ -342,7 +372,7 @@ impl GpuScene {
                 resource: b.as_entire_binding(),
             })
             .collect();
-        device.create_bind_group(&wgpu::BindGroupDescriptor {
+        ctx.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("scene"),
             layout,
             entries: &entries,

@@ -1,9 +1,21 @@
-//! The one interface every technique implements, and the registry of techniques by name.
+//! The one interface every technique implements, with its typed parameters.
+//!
+//! Lifecycle: a technique is created unprepared ([`MethodInfo::create`]); `prepare` builds what
+//! depends on the scene (it is optional: `render` builds whatever is missing); `render` draws one
+//! frame for a camera. A rigid move of an object goes through [`LiveScene`] (vertex range written
+//! on the GPU, BVH refitted) and bumps its geometry version; the next `render` of any technique
+//! sees the new version and redraws only what depends on geometry. A parameter change goes
+//! through [`apply_setting`], which parses it by the method's [`ParamSpec`] and tells the
+//! technique what the change invalidates.
+
+use std::fmt;
 
 pub use specula_gpu::StageTime;
-use specula_gpu::{GpuContext, GpuError, TimingSource};
-use specula_scene::{Camera, Scene};
+use specula_gpu::{GpuContext, GpuError, ResourceCounts, TimingSource};
+use specula_scene::Camera;
 use specula_trace::Image;
+
+use crate::live_scene::LiveScene;
 
 #[derive(Debug, thiserror::Error)]
 pub enum TechniqueError {
@@ -11,8 +23,8 @@ pub enum TechniqueError {
     Gpu(#[from] GpuError),
     #[error("unknown method '{name}'; valid methods: {valid}")]
     UnknownMethod { name: String, valid: String },
-    #[error("{technique}: render called before prepare")]
-    NotPrepared { technique: &'static str },
+    #[error("{technique} needs a GPU and this run has none")]
+    NeedsGpu { technique: &'static str },
     #[error("{technique}: bad parameter '{name}={value}': {reason}")]
     BadParameter {
         technique: &'static str,
@@ -22,155 +34,363 @@ pub enum TechniqueError {
     },
 }
 
-/// One rendered frame: the image (linear radiance), where the time went, and what the
+/// What the devices a technique may use: a GPU where the run has one (a CPU technique, or a
+/// process without a GPU, gets none).
+#[derive(Default)]
+pub struct Context {
+    pub gpu: Option<GpuContext>,
+}
+
+impl Context {
+    /// A context with a GPU.
+    pub fn with_gpu(gpu: GpuContext) -> Context {
+        Context { gpu: Some(gpu) }
+    }
+
+    /// The GPU, or the error saying `technique` needs one.
+    pub fn gpu(&self, technique: &'static str) -> Result<&GpuContext, TechniqueError> {
+        self.gpu
+            .as_ref()
+            .ok_or(TechniqueError::NeedsGpu { technique })
+    }
+
+    /// GPU objects created so far (zero without a GPU).
+    pub fn resource_counts(&self) -> ResourceCounts {
+        self.gpu
+            .as_ref()
+            .map(|g| g.resource_counts())
+            .unwrap_or_default()
+    }
+}
+
+/// A frame's pixels: on the GPU (an `Rgba32Float` texture the technique owns and reuses; valid
+/// until its next frame) or on the CPU.
+#[derive(Clone, Debug)]
+pub enum Pixels {
+    Texture(wgpu::Texture),
+    Image(Image),
+}
+
+/// One rendered frame: its pixels (linear radiance), where the time went, and what the
 /// technique counted (passes, texels, rays...).
 #[derive(Clone, Debug)]
 pub struct Frame {
-    pub image: Image,
+    pub pixels: Pixels,
     pub stages: Vec<StageTime>,
     pub counters: Vec<(String, u64)>,
     pub timing: TimingSource,
     /// What the technique had to approximate or fall back on this frame (said once per cause).
     pub warnings: Vec<String>,
+    /// False while a progressive technique can still refine this view: call `render` again.
+    pub converged: bool,
+    /// GPU textures, buffers and bind groups created during this frame.
+    pub created: ResourceCounts,
 }
 
 impl Frame {
     pub fn total_milliseconds(&self) -> f64 {
         self.stages.iter().map(|s| s.milliseconds).sum()
     }
+
+    /// The pixels on the CPU: read back from the GPU where they are there.
+    pub fn image(&self, ctx: &Context) -> Result<Image, TechniqueError> {
+        match &self.pixels {
+            Pixels::Image(image) => Ok(image.clone()),
+            Pixels::Texture(texture) => {
+                Ok(crate::raster::read_rgba32f(ctx.gpu("readback")?, texture)?)
+            }
+        }
+    }
 }
 
-/// A reflection/refraction technique. `prepare` runs once per scene or geometry change;
-/// `render` once per frame for a camera.
-pub trait Technique {
+/// What a parameter's value may be.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ParamKind {
+    /// A whole number in `min..=max`.
+    Integer { min: i64, max: i64 },
+    /// A number in `min..=max`.
+    Number { min: f64, max: f64 },
+    /// `true` or `false`.
+    Flag,
+    /// One of these words.
+    Choice(&'static [&'static str]),
+    /// Free text the technique parses itself; `expected` says what it takes.
+    Text { expected: &'static str },
+}
+
+/// What changing a parameter makes stale.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Invalidates {
+    /// Nothing but a value read each frame (a uniform, a loop bound).
+    Uniform,
+    /// The technique's own GPU resources (maps, pipelines); the scene preparation is kept.
+    Resources,
+    /// Everything the technique prepared for the scene.
+    Scene,
+}
+
+impl Invalidates {
+    pub fn describe(self) -> &'static str {
+        match self {
+            Invalidates::Uniform => "uniform",
+            Invalidates::Resources => "resources",
+            Invalidates::Scene => "scene preparation",
+        }
+    }
+}
+
+/// One parameter of a technique: the single source of its parsing, listing, reports and UI.
+#[derive(Clone, Copy, Debug)]
+pub struct ParamSpec {
+    pub name: &'static str,
+    pub kind: ParamKind,
+    pub default: &'static str,
+    pub doc: &'static str,
+    pub invalidates: Invalidates,
+}
+
+/// A parsed parameter value.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ParamValue {
+    Integer(i64),
+    Number(f64),
+    Flag(bool),
+    Word(String),
+}
+
+impl fmt::Display for ParamValue {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            ParamValue::Integer(v) => write!(f, "{v}"),
+            ParamValue::Number(v) => write!(f, "{v}"),
+            ParamValue::Flag(v) => write!(f, "{v}"),
+            ParamValue::Word(v) => write!(f, "{v}"),
+        }
+    }
+}
+
+impl ParamValue {
+    /// The value as a whole number (integers only; the spec's range has been checked).
+    pub fn integer(&self) -> i64 {
+        match self {
+            ParamValue::Integer(v) => *v,
+            ParamValue::Number(v) => *v as i64,
+            _ => 0,
+        }
+    }
+
+    pub fn number(&self) -> f64 {
+        match self {
+            ParamValue::Integer(v) => *v as f64,
+            ParamValue::Number(v) => *v,
+            _ => 0.0,
+        }
+    }
+
+    pub fn flag(&self) -> bool {
+        matches!(self, ParamValue::Flag(true))
+    }
+
+    pub fn word(&self) -> &str {
+        match self {
+            ParamValue::Word(w) => w,
+            _ => "",
+        }
+    }
+}
+
+impl ParamKind {
+    /// What a value must be, for error messages and listings.
+    pub fn describe(&self) -> String {
+        match self {
+            ParamKind::Integer { min, max } => format!("a whole number from {min} to {max}"),
+            ParamKind::Number { min, max } => format!("a number from {min} to {max}"),
+            ParamKind::Flag => "true or false".into(),
+            ParamKind::Choice(words) => format!("one of {}", words.join(", ")),
+            ParamKind::Text { expected } => expected.to_string(),
+        }
+    }
+}
+
+impl ParamSpec {
+    /// Parses `value` for this parameter of `technique`.
+    pub fn parse(
+        &self,
+        technique: &'static str,
+        value: &str,
+    ) -> Result<ParamValue, TechniqueError> {
+        let bad = || TechniqueError::BadParameter {
+            technique,
+            name: self.name.to_string(),
+            value: value.to_string(),
+            reason: format!("expected {}", self.kind.describe()),
+        };
+        let value = value.trim();
+        match self.kind {
+            ParamKind::Integer { min, max } => value
+                .parse::<i64>()
+                .ok()
+                .filter(|v| (min..=max).contains(v))
+                .map(ParamValue::Integer)
+                .ok_or_else(bad),
+            ParamKind::Number { min, max } => value
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite() && (min..=max).contains(v))
+                .map(ParamValue::Number)
+                .ok_or_else(bad),
+            ParamKind::Flag => value.parse().map(ParamValue::Flag).map_err(|_| bad()),
+            ParamKind::Choice(words) => words
+                .iter()
+                .find(|w| **w == value)
+                .map(|w| ParamValue::Word(w.to_string()))
+                .ok_or_else(bad),
+            ParamKind::Text { .. } => Ok(ParamValue::Word(value.to_string())),
+        }
+    }
+}
+
+/// A registered method: its name, what it is, its parameters and how to make one.
+pub struct MethodInfo {
     /// The name users type (`--method`).
-    fn name(&self) -> &'static str;
-    /// Parameters and their current values, for reports.
-    fn parameters(&self) -> Vec<(String, String)>;
-    /// Sets a parameter by its name in [`Technique::parameters`]; takes effect at the next
-    /// `prepare`. Unknown names and unparsable values are errors naming the valid choices.
-    fn set_parameter(&mut self, name: &str, value: &str) -> Result<(), TechniqueError>;
-    fn prepare(&mut self, ctx: &GpuContext, scene: &Scene) -> Result<(), TechniqueError>;
+    pub name: &'static str,
+    /// One line: what it does and its paper.
+    pub summary: &'static str,
+    /// Its image is the ground truth the others are judged against.
+    pub exact: bool,
+    /// It cannot run without a GPU.
+    pub needs_gpu: bool,
+    /// Its frames refine over calls (see [`Frame::converged`]).
+    pub progressive: bool,
+    pub params: &'static [ParamSpec],
+    pub create: fn() -> Box<dyn Technique>,
+}
+
+impl MethodInfo {
+    pub fn param(&self, name: &str) -> Option<&'static ParamSpec> {
+        self.params.iter().find(|p| p.name == name)
+    }
+}
+
+impl fmt::Debug for MethodInfo {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("MethodInfo")
+            .field("name", &self.name)
+            .finish()
+    }
+}
+
+/// A reflection/refraction technique.
+pub trait Technique {
+    fn info(&self) -> &'static MethodInfo;
+
+    /// The name users type (`--method`).
+    fn name(&self) -> &'static str {
+        self.info().name
+    }
+
+    /// The current value of the parameter `name` of [`MethodInfo::params`], as text.
+    fn parameter(&self, name: &str) -> String;
+
+    /// Sets a parameter, already parsed by its spec (only names in [`MethodInfo::params`]
+    /// arrive). Returns an error where the value is valid for the kind but not for the
+    /// technique (e.g. an unparsable text value).
+    fn set_parameter(&mut self, name: &str, value: &ParamValue) -> Result<(), TechniqueError>;
+
+    /// Drops what a parameter change made stale; it is rebuilt by the next `render`.
+    fn invalidate(&mut self, what: Invalidates);
+
+    /// Builds what depends on the scene now (otherwise the first `render` does).
+    fn prepare(&mut self, ctx: &Context, scene: &LiveScene) -> Result<(), TechniqueError>;
+
+    /// One frame of `camera`'s view at `width` × `height`.
     fn render(
         &mut self,
-        ctx: &GpuContext,
-        scene: &Scene,
+        ctx: &Context,
+        scene: &LiveScene,
         camera: &Camera,
         width: u32,
         height: u32,
     ) -> Result<Frame, TechniqueError>;
-}
 
-/// GPU technique names, in the order reports list them.
-pub const METHODS: &[&str] = &["envmap", "pvrr", "distance-maps"];
-
-/// A new, unprepared technique by name.
-pub fn by_name(name: &str) -> Result<Box<dyn Technique>, TechniqueError> {
-    match name {
-        "envmap" => Ok(Box::new(crate::envmap::EnvMap::default())),
-        "pvrr" => Ok(Box::new(crate::pvrr::Pvrr::default())),
-        "distance-maps" => Ok(Box::new(crate::distance_maps::DistanceMaps::default())),
-        _ => Err(TechniqueError::UnknownMethod {
-            name: name.to_string(),
-            valid: std::iter::once("reference")
-                .chain(METHODS.iter().copied())
-                .collect::<Vec<_>>()
-                .join(", "),
-        }),
+    /// Parameters and their current values, in spec order, for reports.
+    fn parameters(&self) -> Vec<(String, String)> {
+        self.info()
+            .params
+            .iter()
+            .map(|p| (p.name.to_string(), self.parameter(p.name)))
+            .collect()
     }
 }
 
-/// Applies `name=value` settings to a technique, in order.
+/// Parses `NAME=VALUE` and applies it to `technique`, invalidating what the spec says.
+pub fn apply_setting(technique: &mut dyn Technique, setting: &str) -> Result<(), TechniqueError> {
+    let info = technique.info();
+    let bad = |name: &str, value: &str, reason: String| TechniqueError::BadParameter {
+        technique: info.name,
+        name: name.to_string(),
+        value: value.to_string(),
+        reason,
+    };
+    let (name, value) = setting
+        .split_once('=')
+        .ok_or_else(|| bad(setting, "", "expected NAME=VALUE".into()))?;
+    let (name, value) = (name.trim(), value.trim());
+    let spec = info.param(name).ok_or_else(|| {
+        let names: Vec<&str> = info.params.iter().map(|p| p.name).collect();
+        bad(
+            name,
+            value,
+            format!("{}'s parameters are {}", info.name, names.join(", ")),
+        )
+    })?;
+    let parsed = spec.parse(info.name, value)?;
+    technique.set_parameter(name, &parsed)?;
+    technique.invalidate(spec.invalidates);
+    Ok(())
+}
+
+/// Applies `NAME=VALUE` settings to a technique, in order.
 pub fn apply_parameters(
     technique: &mut dyn Technique,
     settings: &[String],
 ) -> Result<(), TechniqueError> {
-    for setting in settings {
-        let (name, value) =
-            setting
-                .split_once('=')
-                .ok_or_else(|| TechniqueError::BadParameter {
-                    technique: technique.name(),
-                    name: setting.clone(),
-                    value: String::new(),
-                    reason: "expected NAME=VALUE".into(),
-                })?;
-        technique.set_parameter(name.trim(), value.trim())?;
-    }
-    Ok(())
+    settings
+        .iter()
+        .try_for_each(|s| apply_setting(technique, s))
 }
 
-/// Applies those of the `name=value` settings whose name `technique` lists in its
-/// [`Technique::parameters`], in order; returns, per setting, whether it was applied. For runs
-/// over several techniques, where a parameter belongs to some of them only.
+/// Applies those of the `NAME=VALUE` settings whose name the technique has, in order; returns,
+/// per setting, whether it was applied. For runs over several techniques, where a parameter
+/// belongs to some of them only.
 pub fn apply_known_parameters(
     technique: &mut dyn Technique,
     settings: &[String],
 ) -> Result<Vec<bool>, TechniqueError> {
-    let known: Vec<String> = technique.parameters().into_iter().map(|(n, _)| n).collect();
+    let info = technique.info();
     let mut applied = Vec::with_capacity(settings.len());
     for setting in settings {
         let name = setting.split_once('=').map(|(n, _)| n.trim());
-        let used = name.is_some_and(|n| known.iter().any(|k| k == n));
+        let used = name.is_some_and(|n| info.param(n).is_some());
         if used {
-            apply_parameters(technique, std::slice::from_ref(setting))?;
+            apply_setting(technique, setting)?;
         }
         applied.push(used);
     }
     Ok(applied)
 }
 
-/// A parameter setting being parsed, for uniform error messages across techniques.
-pub struct Setting<'a> {
-    pub technique: &'static str,
-    pub name: &'a str,
-    pub value: &'a str,
-}
-
-impl Setting<'_> {
-    pub fn bad(&self, reason: &str) -> TechniqueError {
-        TechniqueError::BadParameter {
-            technique: self.technique,
-            name: self.name.to_string(),
-            value: self.value.to_string(),
-            reason: reason.to_string(),
-        }
-    }
-
-    /// A texture or map size in texels, 1 to 8192.
-    pub fn texels(&self) -> Result<u32, TechniqueError> {
-        self.count(1..=8192, "a whole number of texels from 1 to 8192")
-    }
-
-    /// A whole number in `range`; `expected` says what in the error.
-    pub fn count(
-        &self,
-        range: std::ops::RangeInclusive<u32>,
-        expected: &str,
-    ) -> Result<u32, TechniqueError> {
-        self.value
-            .parse::<u32>()
-            .ok()
-            .filter(|v| range.contains(v))
-            .ok_or_else(|| self.bad(&format!("expected {expected}")))
-    }
-
-    /// A number in `range`; `expected` says what in the error.
-    pub fn number_in(
-        &self,
-        range: std::ops::RangeInclusive<f32>,
-        expected: &str,
-    ) -> Result<f32, TechniqueError> {
-        self.value
-            .parse::<f32>()
-            .ok()
-            .filter(|v| range.contains(v))
-            .ok_or_else(|| self.bad(&format!("expected {expected}")))
-    }
-
-    pub fn flag(&self) -> Result<bool, TechniqueError> {
-        self.value
-            .parse()
-            .map_err(|_| self.bad("expected true or false"))
+/// The error a technique returns for a valid-looking value it cannot use.
+pub fn bad_value(
+    technique: &'static str,
+    name: &str,
+    value: &ParamValue,
+    reason: &str,
+) -> TechniqueError {
+    TechniqueError::BadParameter {
+        technique,
+        name: name.to_string(),
+        value: value.to_string(),
+        reason: reason.to_string(),
     }
 }

@@ -3,7 +3,7 @@
 //! parameters do what they claim.
 
 use glam::{Mat4, Vec3};
-use specula_gpu::GpuContext;
+use specula_methods::RenderStill;
 use specula_methods::{apply_parameters, by_name};
 use specula_scene::{generators, Camera, Light, Material, Scene, Texture};
 use specula_trace::accel::Ray;
@@ -60,14 +60,11 @@ fn mirror() -> Material {
 }
 
 /// A frame of `scene` with `params`, checked free of NaN.
-fn frame(ctx: &GpuContext, scene: &Scene, params: &[&str]) -> specula_methods::Frame {
+fn frame(ctx: &specula_methods::Context, scene: &Scene, params: &[&str]) -> specula_methods::Still {
     let mut technique = by_name("distance-maps").unwrap();
     let params: Vec<String> = params.iter().map(|s| s.to_string()).collect();
     apply_parameters(technique.as_mut(), &params).unwrap();
-    technique.prepare(ctx, scene).unwrap();
-    let frame = technique
-        .render(ctx, scene, &scene.camera, SIZE, SIZE)
-        .unwrap();
+    let frame = technique.render_still(ctx, scene, SIZE, SIZE).unwrap();
     assert!(
         frame.image.pixels.iter().all(|p| p.is_finite()),
         "NaN or inf pixels with {params:?}"
@@ -115,7 +112,7 @@ fn specular_rmse(scene: &Scene, reference: &Image, image: &Image) -> f32 {
 
 /// Distance from each first secondary hit that distance-maps found to the exact hit of the same
 /// reflected ray, for the mirror pixels whose exact hit is on a wall; sorted.
-fn first_hit_errors(ctx: &GpuContext, scene: &Scene, params: &[&str]) -> Vec<f32> {
+fn first_hit_errors(ctx: &specula_methods::Context, scene: &Scene, params: &[&str]) -> Vec<f32> {
     let mut all = vec!["output=first-hit"];
     all.extend_from_slice(params);
     let hits_gpu = frame(ctx, scene, &all).image;
@@ -159,7 +156,7 @@ fn quantile(sorted: &[f32], q: f32) -> f32 {
 
 #[test]
 fn secant_search_makes_hits_on_planes_exact() {
-    let Some(ctx) = specula_gpu::test_context("distance-maps planar hits") else {
+    let Some(ctx) = specula_methods::test_context("distance-maps planar hits") else {
         return;
     };
     // The box's walls are planes: the paper's secant step is exact on them in one iteration,
@@ -188,7 +185,7 @@ fn secant_search_makes_hits_on_planes_exact() {
 
 #[test]
 fn bounces_follow_the_reference_depth_by_depth() {
-    let Some(ctx) = specula_gpu::test_context("distance-maps depths") else {
+    let Some(ctx) = specula_methods::test_context("distance-maps depths") else {
         return;
     };
     let scene = specula_scene::load("teapot-box").unwrap();
@@ -229,7 +226,7 @@ fn mirror_and_glass() -> Scene {
 
 #[test]
 fn mirror_and_glass_with_total_internal_reflection_in_one_scene() {
-    let Some(ctx) = specula_gpu::test_context("distance-maps mirror and glass") else {
+    let Some(ctx) = specula_methods::test_context("distance-maps mirror and glass") else {
         return;
     };
     let scene = mirror_and_glass();
@@ -245,7 +242,7 @@ fn mirror_and_glass_with_total_internal_reflection_in_one_scene() {
 
 #[test]
 fn min_max_acceleration_keeps_the_image() {
-    let Some(ctx) = specula_gpu::test_context("distance-maps min-max") else {
+    let Some(ctx) = specula_methods::test_context("distance-maps min-max") else {
         return;
     };
     let scene = specula_scene::load("teapot-box").unwrap();
@@ -260,7 +257,7 @@ fn min_max_acceleration_keeps_the_image() {
 
 #[test]
 fn peeled_layers_see_what_one_layer_cannot() {
-    let Some(ctx) = specula_gpu::test_context("distance-maps layers") else {
+    let Some(ctx) = specula_methods::test_context("distance-maps layers") else {
         return;
     };
     let scene = specula_scene::load("teapot-box").unwrap();
@@ -289,7 +286,7 @@ fn peeled_layers_see_what_one_layer_cannot() {
 
 #[test]
 fn every_builtin_scene_with_a_reflector_renders() {
-    let Some(ctx) = specula_gpu::test_context("distance-maps built-ins") else {
+    let Some(ctx) = specula_methods::test_context("distance-maps built-ins") else {
         return;
     };
     for name in specula_scene::builtin::names() {
@@ -309,13 +306,13 @@ fn bad_parameters_name_the_parameter_and_the_choices() {
     let mut technique = by_name("distance-maps").unwrap();
     for (setting, expected) in [
         ("layers=0", "simple"),
-        ("layers=many", "depth-peeled"),
+        ("layers=many", "one of simple, 1, 2"),
         ("linear_steps=0", "1 to 1000"),
         ("secant_steps=-1", "0 to 100"),
         ("max_depth=99", "0 to 16"),
         ("min_max=perhaps", "true or false"),
         ("output=depth", "first-hit"),
-        ("resolution=0", "texels"),
+        ("resolution=0", "1 to 8192"),
         ("steps=3", "linear_steps"),
     ] {
         let message = apply_parameters(technique.as_mut(), &[setting.to_string()])
@@ -334,15 +331,14 @@ fn bad_parameters_name_the_parameter_and_the_choices() {
 }
 
 #[test]
-fn render_before_prepare_is_an_error() {
-    let Some(ctx) = specula_gpu::test_context("distance-maps unprepared") else {
+fn render_without_prepare_prepares() {
+    let Some(ctx) = specula_methods::test_context("distance-maps unprepared") else {
         return;
     };
     let scene = sphere_in_box(mirror());
+    let live = specula_methods::LiveScene::new(scene.clone());
     let mut technique = by_name("distance-maps").unwrap();
-    let error = technique
-        .render(&ctx, &scene, &scene.camera, 8, 8)
-        .err()
-        .unwrap();
-    assert!(error.to_string().contains("before prepare"), "{error}");
+    apply_parameters(technique.as_mut(), &["resolution=32".to_string()]).unwrap();
+    let frame = technique.render(&ctx, &live, &scene.camera, 8, 8).unwrap();
+    assert_eq!(frame.image(&ctx).unwrap().width, 8);
 }

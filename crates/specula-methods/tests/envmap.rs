@@ -3,6 +3,7 @@
 
 use glam::{Mat4, Vec3};
 use specula_methods::envmap::{EnvMap, Exit};
+use specula_methods::RenderStill;
 use specula_methods::{by_name, Technique};
 use specula_scene::{generators, Background, Camera, Material, MaterialKind, Scene, Texture};
 use specula_trace::reference::primary_hits;
@@ -37,7 +38,7 @@ fn compare_with(
     max_depth: u32,
     mut technique: Box<dyn Technique>,
 ) -> Option<(f32, usize)> {
-    let ctx = specula_gpu::test_context("envmap")?;
+    let ctx = specula_methods::test_context("envmap")?;
     let accel = SceneAccel::new(scene);
     let reference = render(
         scene,
@@ -50,10 +51,7 @@ fn compare_with(
         },
         &|_, _| {},
     );
-    technique.prepare(&ctx, scene).unwrap();
-    let frame = technique
-        .render(&ctx, scene, &scene.camera, SIZE, SIZE)
-        .unwrap();
+    let frame = technique.render_still(&ctx, scene, SIZE, SIZE).unwrap();
     assert!(frame.image.pixels.iter().all(|p| p.is_finite()));
     assert!(frame
         .stages

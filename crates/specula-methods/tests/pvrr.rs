@@ -3,6 +3,7 @@
 
 use glam::Vec3;
 use specula_methods::by_name;
+use specula_methods::RenderStill;
 use specula_scene::Scene;
 use specula_trace::reference::primary_hits;
 use specula_trace::{render, Image, RenderSettings, SceneAccel};
@@ -89,18 +90,18 @@ fn reflector_errors(
 
 /// The reference image and a pvrr frame (checked free of NaN) of `scene` at SIZE².
 fn reference_and_pvrr(
-    ctx: &specula_gpu::GpuContext,
+    ctx: &specula_methods::Context,
     scene: &Scene,
-) -> (Image, specula_methods::Frame) {
+) -> (Image, specula_methods::Still) {
     reference_and_pvrr_with(ctx, scene, &[])
 }
 
 /// As `reference_and_pvrr`, with pvrr parameters.
 fn reference_and_pvrr_with(
-    ctx: &specula_gpu::GpuContext,
+    ctx: &specula_methods::Context,
     scene: &Scene,
     params: &[(&str, &str)],
-) -> (Image, specula_methods::Frame) {
+) -> (Image, specula_methods::Still) {
     let accel = SceneAccel::new(scene);
     let settings = RenderSettings {
         width: SIZE,
@@ -115,7 +116,7 @@ fn reference_and_pvrr_with(
 
 #[test]
 fn vertices_show_the_ray_traced_reflection() {
-    let Some(ctx) = specula_gpu::test_context("pvrr vertices") else {
+    let Some(ctx) = specula_methods::test_context("pvrr vertices") else {
         return;
     };
     let scene = specula_scene::load("door-mirror").unwrap();
@@ -131,7 +132,7 @@ fn vertices_show_the_ray_traced_reflection() {
 
 /// RMSE over the mirror's pixels, pvrr against the reference, with the door mirror tessellated
 /// into `n` × `n` quads.
-fn mirror_rmse(ctx: &specula_gpu::GpuContext, n: u32) -> f32 {
+fn mirror_rmse(ctx: &specula_methods::Context, n: u32) -> f32 {
     let scene = specula_scene::builtin::door_mirror_tessellated(n).unwrap();
     let mirror = scene
         .meshes
@@ -151,11 +152,7 @@ fn mirror_rmse(ctx: &specula_gpu::GpuContext, n: u32) -> f32 {
         &|_, _| {},
     );
     let mut pvrr = by_name("pvrr").unwrap();
-    pvrr.prepare(ctx, &scene).unwrap();
-    let image = pvrr
-        .render(ctx, &scene, &scene.camera, SIZE, SIZE)
-        .unwrap()
-        .image;
+    let image = pvrr.render_still(ctx, &scene, SIZE, SIZE).unwrap().image;
     let hits = primary_hits(&scene, &accel, SIZE, SIZE);
     let on_mirror: Vec<usize> = (0..hits.len())
         .filter(|&i| hits[i].is_some_and(|h| h.mesh as usize == mirror))
@@ -169,7 +166,7 @@ fn mirror_rmse(ctx: &specula_gpu::GpuContext, n: u32) -> f32 {
 
 #[test]
 fn error_falls_as_the_mirror_is_refined() {
-    let Some(ctx) = specula_gpu::test_context("pvrr refinement") else {
+    let Some(ctx) = specula_methods::test_context("pvrr refinement") else {
         return;
     };
     let errors: Vec<(u32, f32)> = [6, 12, 24]
@@ -251,7 +248,7 @@ fn concave_scene() -> Scene {
 
 #[test]
 fn concave_mirror_vertices_show_the_ray_traced_reflection() {
-    let Some(ctx) = specula_gpu::test_context("pvrr concave") else {
+    let Some(ctx) = specula_methods::test_context("pvrr concave") else {
         return;
     };
     let scene = concave_scene();
@@ -284,7 +281,7 @@ fn flat_mirror(quads: u32) -> specula_scene::Mesh {
 
 #[test]
 fn parallel_reflection_lines_fall_back_with_a_warning_and_no_nan() {
-    let Some(ctx) = specula_gpu::test_context("pvrr parallel lines") else {
+    let Some(ctx) = specula_methods::test_context("pvrr parallel lines") else {
         return;
     };
     // A flat mirror seen from 100 km through a telephoto lens: every reflection line is
@@ -294,8 +291,7 @@ fn parallel_reflection_lines_fall_back_with_a_warning_and_no_nan() {
     scene.camera.target = Vec3::ZERO;
     scene.camera.fov_y_deg = 2.0e-4;
     let mut pvrr = by_name("pvrr").unwrap();
-    pvrr.prepare(&ctx, &scene).unwrap();
-    let frame = pvrr.render(&ctx, &scene, &scene.camera, 32, 32).unwrap();
+    let frame = pvrr.render_still(&ctx, &scene, 32, 32).unwrap();
     assert!(
         frame.image.pixels.iter().all(|p| p.is_finite()),
         "NaN or inf pixels"
@@ -306,16 +302,15 @@ fn parallel_reflection_lines_fall_back_with_a_warning_and_no_nan() {
 
 /// A pvrr frame of `scene` at SIZE² with `params`, checked free of NaN.
 fn pvrr_frame(
-    ctx: &specula_gpu::GpuContext,
+    ctx: &specula_methods::Context,
     scene: &Scene,
     params: &[(&str, &str)],
-) -> specula_methods::Frame {
+) -> specula_methods::Still {
     let mut pvrr = by_name("pvrr").unwrap();
     for (name, value) in params {
-        pvrr.set_parameter(name, value).unwrap();
+        specula_methods::apply_setting(pvrr.as_mut(), &format!("{}={}", name, value)).unwrap();
     }
-    pvrr.prepare(ctx, scene).unwrap();
-    let frame = pvrr.render(ctx, scene, &scene.camera, SIZE, SIZE).unwrap();
+    let frame = pvrr.render_still(ctx, scene, SIZE, SIZE).unwrap();
     assert!(frame.image.pixels.iter().all(|p| p.is_finite()));
     frame
 }
@@ -331,7 +326,7 @@ fn counter(frame: &specula_methods::Frame, name: &str) -> u64 {
 
 #[test]
 fn lens_vertices_show_the_ray_traced_double_refraction_per_channel() {
-    let Some(ctx) = specula_gpu::test_context("pvrr lens") else {
+    let Some(ctx) = specula_methods::test_context("pvrr lens") else {
         return;
     };
     // Three indices (1.60, 1.61, 1.62): three draws with colour masks; the reference traces
@@ -414,16 +409,13 @@ fn moved(scene: &Scene, name: &str, offset: Vec3) -> Scene {
 
 #[test]
 fn cached_mode_reuses_paths_while_the_lens_moves_with_the_eye() {
-    let Some(ctx) = specula_gpu::test_context("pvrr cached") else {
+    let Some(ctx) = specula_methods::test_context("pvrr cached") else {
         return;
     };
     let scene = specula_scene::load("spectacle-lens").unwrap();
     let mut pvrr = by_name("pvrr").unwrap();
-    pvrr.set_parameter("cached", "true").unwrap();
-    let mut frame_of = |scene: &Scene| {
-        pvrr.prepare(&ctx, scene).unwrap();
-        pvrr.render(&ctx, scene, &scene.camera, SIZE, SIZE).unwrap()
-    };
+    specula_methods::apply_setting(pvrr.as_mut(), &format!("{}={}", "cached", "true")).unwrap();
+    let mut frame_of = |scene: &Scene| pvrr.render_still(&ctx, scene, SIZE, SIZE).unwrap();
     let first = frame_of(&scene);
     let second = frame_of(&scene);
     assert_eq!(counter(&first, "reflectors from the cache"), 0);
@@ -462,7 +454,7 @@ fn cached_mode_reuses_paths_while_the_lens_moves_with_the_eye() {
 
 #[test]
 fn subdivided_patches_meet_at_their_shared_vertices() {
-    let Some(ctx) = specula_gpu::test_context("pvrr patches") else {
+    let Some(ctx) = specula_methods::test_context("pvrr patches") else {
         return;
     };
     let scene = specula_scene::load("door-mirror").unwrap();
@@ -506,7 +498,7 @@ fn sphere_scene() -> Scene {
 
 #[test]
 fn a_sphere_is_subdivided_until_every_patch_fits_the_field_of_view() {
-    let Some(ctx) = specula_gpu::test_context("pvrr sphere") else {
+    let Some(ctx) = specula_methods::test_context("pvrr sphere") else {
         return;
     };
     let scene = sphere_scene();
@@ -587,7 +579,7 @@ fn two_mirror_scene() -> Scene {
 
 #[test]
 fn a_mirror_seen_in_a_mirror_is_drawn_at_depth_two() {
-    let Some(ctx) = specula_gpu::test_context("pvrr multiple") else {
+    let Some(ctx) = specula_methods::test_context("pvrr multiple") else {
         return;
     };
     let scene = two_mirror_scene();
@@ -606,7 +598,7 @@ fn a_mirror_seen_in_a_mirror_is_drawn_at_depth_two() {
 
 #[test]
 fn the_zooming_region_of_a_concave_mirror_is_marked_and_reported() {
-    let Some(ctx) = specula_gpu::test_context("pvrr zooming") else {
+    let Some(ctx) = specula_methods::test_context("pvrr zooming") else {
         return;
     };
     let mut scene = concave_scene();
@@ -640,7 +632,7 @@ fn the_zooming_region_of_a_concave_mirror_is_marked_and_reported() {
 
 #[test]
 fn a_mirror_with_too_few_vertices_is_reported() {
-    let Some(ctx) = specula_gpu::test_context("pvrr few vertices") else {
+    let Some(ctx) = specula_methods::test_context("pvrr few vertices") else {
         return;
     };
     let scene = with_mirror(specula_scene::load("door-mirror").unwrap(), flat_mirror(1));
@@ -669,7 +661,9 @@ fn bad_parameters_are_named_in_the_error() {
         ("marker_size", "-1"),
         ("cached", "maybe"),
     ] {
-        let error = pvrr.set_parameter(name, value).unwrap_err().to_string();
+        let error = specula_methods::apply_setting(pvrr.as_mut(), &format!("{}={}", name, value))
+            .unwrap_err()
+            .to_string();
         assert!(
             error.contains(name) && error.contains(value),
             "{name}={value}: {error}"
@@ -680,6 +674,6 @@ fn bad_parameters_are_named_in_the_error() {
         ("ior", "material"),
         ("depth", "3"),
     ] {
-        pvrr.set_parameter(name, value).unwrap();
+        specula_methods::apply_setting(pvrr.as_mut(), &format!("{}={}", name, value)).unwrap();
     }
 }

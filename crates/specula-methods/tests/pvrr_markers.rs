@@ -12,6 +12,7 @@
 use glam::{Vec2, Vec3};
 use specula_methods::by_name;
 use specula_methods::pvrr::MARKER_RADIANCE;
+use specula_methods::RenderStill;
 use specula_scene::Scene;
 use specula_trace::reference::primary_hits;
 use specula_trace::{Ray, SceneAccel};
@@ -46,7 +47,7 @@ struct Measured {
 /// Renders `scene` with pvrr with and without markers and measures, for every visible vertex
 /// of mesh `reflector_name`, where its ball appears.
 fn measure(
-    ctx: &specula_gpu::GpuContext,
+    ctx: &specula_methods::Context,
     scene: &Scene,
     reflector_name: &str,
     ior: Option<&str>,
@@ -63,16 +64,12 @@ fn measure(
         ("marker_size", "0.002"),
         ("resolution", "2048"),
     ] {
-        pvrr.set_parameter(name, value).unwrap();
+        specula_methods::apply_setting(pvrr.as_mut(), &format!("{}={}", name, value)).unwrap();
     }
     if let Some(ior) = ior {
-        pvrr.set_parameter("ior", ior).unwrap();
+        specula_methods::apply_setting(pvrr.as_mut(), &format!("{}={}", "ior", ior)).unwrap();
     }
-    pvrr.prepare(ctx, scene).unwrap();
-    let image = pvrr
-        .render(ctx, scene, &scene.camera, RENDER, RENDER)
-        .unwrap()
-        .image;
+    let image = pvrr.render_still(ctx, scene, RENDER, RENDER).unwrap().image;
     assert!(image.pixels.iter().all(|p| p.is_finite()));
     if let Ok(dir) = std::env::var("SPECULA_DEBUG_DIR") {
         let path = format!("{dir}/{reflector_name}-markers.png");
@@ -203,7 +200,7 @@ fn measure(
 }
 
 fn check(name: &str, reflector: &str, ior: Option<&str>) {
-    let Some(ctx) = specula_gpu::test_context(name) else {
+    let Some(ctx) = specula_methods::test_context(name) else {
         return;
     };
     let scene = specula_scene::load(name).unwrap();

@@ -1,7 +1,7 @@
 //! The scene raster pass against the exact reference on the pixels that see no specular
 //! surface (the specular ones are the techniques' job).
 
-use specula_methods::raster::{self, RasterPass};
+use specula_methods::raster::{self, RasterPass, RasterSpec};
 use specula_methods::GpuScene;
 use specula_trace::{render, Image, RenderSettings, SceneAccel};
 
@@ -41,8 +41,8 @@ fn check(scene_name: &str) -> f32 {
         },
         &|_, _| {},
     );
-    let gpu_scene = GpuScene::upload(&ctx.device, &scene);
-    let pass = RasterPass::new(&ctx, &gpu_scene, 1024).unwrap();
+    let gpu_scene = GpuScene::upload(&ctx, &scene);
+    let pass = RasterPass::new(&ctx, &scene, &gpu_scene, RasterSpec::scene(1024)).unwrap();
     let camera = raster::camera_uniform(&scene.camera, &scene.bounds(), width, height);
     let g = pass.render(&ctx, &gpu_scene, &camera, None).unwrap();
     let mut image = g.read_color(&ctx).unwrap();

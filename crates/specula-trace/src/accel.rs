@@ -219,6 +219,39 @@ impl SceneAccel {
         }
     }
 
+    /// Takes the new positions of moved meshes (same triangles, `scene` after the move) by
+    /// refitting the tree's boxes; returns the refitted tree's SAH cost. The caller rebuilds
+    /// (with [`SceneAccel::new`]) when that cost has grown too far past a fresh build's.
+    pub fn refit(&mut self, scene: &Scene) -> f32 {
+        for (triangle, &(mesh, index)) in self.triangles.iter_mut().zip(&self.ids) {
+            let mesh = &scene.meshes[mesh as usize];
+            *triangle =
+                mesh.triangles[index as usize].map(|i| Vec3A::from(mesh.positions[i as usize]));
+        }
+        // `primitives` index the build's input order; the triangles are stored in leaf order,
+        // so the box of input primitive `p` is that of the triangle in `p`'s leaf slot.
+        let bounds = self.primitive_bounds();
+        self.bvh.refit(&bounds);
+        self.wide = WideBvh::from_binary(&self.bvh);
+        self.bvh.sah_cost(&bounds)
+    }
+
+    /// Each triangle's box, in the BVH build's input order (`Bvh::primitives` indexes it).
+    pub fn primitive_bounds(&self) -> Vec<Aabb> {
+        let mut bounds = vec![Aabb::EMPTY; self.triangles.len()];
+        for (slot, &p) in self.bvh.primitives.iter().enumerate() {
+            let mut b = Aabb::EMPTY;
+            self.triangles[slot].iter().for_each(|&v| b.grow(v.into()));
+            bounds[p as usize] = b;
+        }
+        bounds
+    }
+
+    /// The tree's SAH cost ([`Bvh::sah_cost`]).
+    pub fn sah_cost(&self) -> f32 {
+        self.bvh.sah_cost(&self.primitive_bounds())
+    }
+
     /// Closest hit with 0 < t < `t_max`.
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
         let data = RayData::new(ray);

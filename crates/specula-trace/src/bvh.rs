@@ -112,6 +112,54 @@ impl Bvh {
         bvh
     }
 
+    /// Recomputes every node's box bottom-up for primitives that moved (same primitives, new
+    /// `bounds`); the topology is kept. Children always follow their parent in `nodes`, so one
+    /// pass from the back visits every child before its parent.
+    pub fn refit(&mut self, bounds: &[Aabb]) {
+        for i in (0..self.nodes.len()).rev() {
+            let node = self.nodes[i];
+            let first = node.first as usize;
+            let node_bounds = if node.is_leaf() {
+                self.primitives[first..first + node.count as usize]
+                    .iter()
+                    .fold(Aabb::EMPTY, |b, &p| b.union(&bounds[p as usize]))
+            } else if self.nodes.len() == 1 {
+                Aabb::EMPTY
+            } else {
+                self.nodes[first]
+                    .bounds()
+                    .union(&self.nodes[first + 1].bounds())
+            };
+            self.nodes[i].min = node_bounds.min.to_array();
+            self.nodes[i].max = node_bounds.max.to_array();
+        }
+    }
+
+    /// The tree's surface-area-heuristic cost: the summed area of every node's box weighted by
+    /// its work (a traversal step, or its primitive tests), over the summed area of the
+    /// primitives' own boxes (`bounds`). That denominator does not change when primitives move
+    /// rigidly, so a refitted tree's cost compares with the cost it had when it was built: it
+    /// grows as boxes stretch over moved objects.
+    pub fn sah_cost(&self, bounds: &[Aabb]) -> f32 {
+        let area = |b: &Aabb| if b.is_empty() { 0.0 } else { b.surface_area() };
+        let primitives: f32 = bounds.iter().map(area).sum();
+        if primitives <= 0.0 {
+            return 0.0;
+        }
+        self.nodes
+            .iter()
+            .map(|n| {
+                let work = if n.is_leaf() {
+                    n.count as f32
+                } else {
+                    TRAVERSAL_COST
+                };
+                area(&n.bounds()) * work
+            })
+            .sum::<f32>()
+            / primitives
+    }
+
     pub fn depth(&self) -> usize {
         fn depth(nodes: &[BvhNode], i: usize) -> usize {
             let n = &nodes[i];

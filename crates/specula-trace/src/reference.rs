@@ -263,6 +263,35 @@ pub fn pixel_samples(x: u32, y: u32, spp: u32) -> Vec<Vec2> {
         .collect()
 }
 
+/// The radiance of pixel (`x`, `y`) of `camera`'s `width` × `height` view: the mean of its
+/// `spp` samples ([`pixel_samples`]).
+pub fn pixel_radiance(
+    tracer: &Tracer,
+    camera: &specula_scene::Camera,
+    x: u32,
+    y: u32,
+    width: u32,
+    height: u32,
+    spp: u32,
+) -> Vec3 {
+    let samples = pixel_samples(x, y, spp);
+    let sum: Vec3 = samples
+        .iter()
+        .map(|s| {
+            let dir = camera.ray_direction(x as f32 + s.x, y as f32 + s.y, width, height);
+            tracer.radiance(
+                &Ray {
+                    origin: camera.eye,
+                    dir,
+                },
+                0,
+                None,
+            )
+        })
+        .sum();
+    sum / samples.len() as f32
+}
+
 /// Renders the scene's camera view. `progress(done, total)` is called as tiles finish (from
 /// worker threads).
 pub fn render(
@@ -293,27 +322,15 @@ pub fn render(
             let mut pixels = Vec::with_capacity((TILE * TILE) as usize);
             for y in y0..(y0 + TILE).min(height) {
                 for x in x0..(x0 + TILE).min(width) {
-                    let samples = pixel_samples(x, y, spp);
-                    let sum: Vec3 = samples
-                        .iter()
-                        .map(|s| {
-                            let dir = scene.camera.ray_direction(
-                                x as f32 + s.x,
-                                y as f32 + s.y,
-                                width,
-                                height,
-                            );
-                            tracer.radiance(
-                                &Ray {
-                                    origin: scene.camera.eye,
-                                    dir,
-                                },
-                                0,
-                                None,
-                            )
-                        })
-                        .sum();
-                    pixels.push(sum / samples.len() as f32);
+                    pixels.push(pixel_radiance(
+                        &tracer,
+                        &scene.camera,
+                        x,
+                        y,
+                        width,
+                        height,
+                        spp,
+                    ));
                 }
             }
             progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);

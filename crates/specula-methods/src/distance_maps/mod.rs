@@ -14,8 +14,9 @@
 //!    surfaces in each direction; what lies beyond the N-th is lost) or from the paper's
 //!    simplified layers (`layers=simple`: the front faces of all specular meshes as seen from the
 //!    reference point, their back faces, then the non-specular surfaces, depth-peeled into
-//!    `diffuse_layers`). The maps are redrawn every frame, so anything that moves is seen where
-//!    it is;
+//!    `diffuse_layers`). The maps depend on the scene only: they are kept until an object
+//!    moves, or redrawn every frame with `dynamic=true` (the paper's setting, for scenes that
+//!    move all the time);
 //! 3. with min-max acceleration, the smallest and largest distance of each layer (a compute
 //!    reduction);
 //! 4. a full-screen pass over the reflector pixels traces each reflected or refracted ray in the
@@ -80,20 +81,109 @@
 //! - `output` (default `radiance`): `first-hit` writes, instead of radiance, the world position
 //!   where each reflector pixel's first secondary ray hits (-1e30 where it finds nothing), to
 //!   check the search.
+//! - `dynamic` (default false): redraw the maps (and their min-max ranges) every frame even
+//!   when nothing moved; otherwise only after a move.
 //! - `shadow_resolution` (default 1024): the raster pass's shadow maps.
 
 use bytemuck::{Pod, Zeroable};
 use specula_gpu::shaders::{self, CameraUniform};
 use specula_gpu::util::{
-    buffer_binding, layout_entry, render_pipeline, texture_2d, texture_binding, PipelineSpec,
+    bind_group, buffer_binding, layout_entry, render_pipeline, texture_2d, texture_binding,
+    writable_buffer, PipelineSpec,
 };
 use specula_gpu::{GpuContext, StageTimer};
 use specula_scene::{Camera, Scene};
-use wgpu::util::DeviceExt;
 
 use crate::gpu_scene::GpuScene;
-use crate::raster::{self, RasterPass, CUBE_FACES};
-use crate::technique::{Frame, Setting, Technique, TechniqueError};
+use crate::live_scene::LiveScene;
+use crate::raster::{self, OutputTexture, RasterPass, RasterSpec, CUBE_FACES};
+use crate::technique::{
+    Context, Frame, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, Technique,
+    TechniqueError,
+};
+
+pub const PARAMS: &[ParamSpec] = &[
+    ParamSpec {
+        name: "resolution",
+        kind: ParamKind::Integer { min: 1, max: 8192 },
+        default: "512",
+        doc: "texels per face side: finer geometry and more exact hits; 6 x resolution^2 texels per layer",
+        invalidates: Invalidates::Resources,
+    },
+    ParamSpec {
+        name: "layers",
+        kind: ParamKind::Choice(&["simple", "1", "2", "3", "4", "5", "6", "7", "8"]),
+        default: "simple",
+        doc: "the paper's three layers (simple) or that many depth-peeled layers",
+        invalidates: Invalidates::Resources,
+    },
+    ParamSpec {
+        name: "diffuse_layers",
+        kind: ParamKind::Integer { min: 1, max: 6 },
+        default: "1",
+        doc: "with layers=simple, depth-peeled layers of the non-specular surfaces",
+        invalidates: Invalidates::Resources,
+    },
+    ParamSpec {
+        name: "linear_steps",
+        kind: ParamKind::Integer { min: 1, max: 1000 },
+        default: "80",
+        doc: "most linear-search steps per layer; fewer miss thin objects",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "secant_steps",
+        kind: ParamKind::Integer { min: 0, max: 100 },
+        default: "10",
+        doc: "secant iterations after the linear search (0: its overshooting sample is the hit)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "max_depth",
+        kind: ParamKind::Integer { min: 0, max: 16 },
+        default: "2",
+        doc: "most specular bounces on a path",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "min_max",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "min-max acceleration: march only between each layer's nearest and farthest distance",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "output",
+        kind: ParamKind::Choice(&["radiance", "first-hit"]),
+        default: "radiance",
+        doc: "first-hit writes each reflector pixel's first secondary hit position instead",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "dynamic",
+        kind: ParamKind::Flag,
+        default: "false",
+        doc: "redraw the maps every frame (else only after a move)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "shadow_resolution",
+        kind: ParamKind::Integer { min: 1, max: 8192 },
+        default: "1024",
+        doc: "texels per side of the scene raster's shadow maps",
+        invalidates: Invalidates::Scene,
+    },
+];
+
+pub const INFO: MethodInfo = MethodInfo {
+    name: "distance-maps",
+    summary: "layered distance cube maps with linear + secant search (Umenhoffer et al.): multiple reflections and refractions",
+    exact: false,
+    needs_gpu: true,
+    progressive: false,
+    params: PARAMS,
+    create: || Box::new(DistanceMaps::default()),
+};
 
 const CODES: &str = include_str!("codes.wgsl");
 const LAYERS_SHADER: &str = include_str!("layers.wgsl");
@@ -213,8 +303,10 @@ pub fn face_bases() -> [GpuFace; 6] {
     })
 }
 
-/// One face of one layer of one reflector's map, drawn every frame.
+/// One face of one layer of one reflector's map.
 struct LayerDraw {
+    /// Its `GpuLayerView`, rewritten when the reflector moves.
+    view_buffer: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     material_target: wgpu::TextureView,
     geometry_target: wgpu::TextureView,
@@ -223,7 +315,13 @@ struct LayerDraw {
 }
 
 struct Prepared {
-    gpu_scene: GpuScene,
+    scene_id: u64,
+    /// The scene version the layer views, reflector origins and shadow maps were made for.
+    version: u64,
+    /// The scene version the maps were drawn at (None: not yet).
+    maps_drawn_at: Option<u64>,
+    /// The scene version of the maps the min-max ranges were reduced from.
+    ranges_at: Option<u64>,
     raster: RasterPass,
     reflectors: Vec<usize>,
     material_maps: wgpu::Texture,
@@ -243,6 +341,9 @@ struct Prepared {
     reflector_buffer: wgpu::Buffer,
     mesh_reflector: wgpu::Buffer,
     faces: wgpu::Buffer,
+    camera_buffer: wgpu::Buffer,
+    /// Tracing bind group per G-buffer pool slot.
+    trace_bind_groups: Vec<(usize, wgpu::BindGroup)>,
 }
 
 pub struct DistanceMaps {
@@ -255,8 +356,11 @@ pub struct DistanceMaps {
     pub max_depth: u32,
     pub min_max: bool,
     pub output: Output,
+    pub dynamic: bool,
     pub shadow_resolution: u32,
     prepared: Option<Prepared>,
+    timer: StageTimer,
+    output_texture: OutputTexture,
 }
 
 impl Default for DistanceMaps {
@@ -270,8 +374,11 @@ impl Default for DistanceMaps {
             max_depth: 2,
             min_max: true,
             output: Output::Radiance,
+            dynamic: false,
             shadow_resolution: 1024,
             prepared: None,
+            timer: StageTimer::default(),
+            output_texture: OutputTexture::default(),
         }
     }
 }
@@ -337,6 +444,7 @@ fn layer_pass(
             }),
             targets: &[MAP_FORMAT, MAP_FORMAT],
             write_mask: wgpu::ColorWrites::ALL,
+            cull_mode: None,
         },
     );
     (layout, pipeline)
@@ -345,12 +453,13 @@ fn layer_pass(
 /// The min-max reduction over `geometry_maps`: its pipeline, bind group and the range buffer
 /// (two u32 per map).
 fn range_pass(
-    device: &wgpu::Device,
+    ctx: &GpuContext,
     geometry_maps: &wgpu::Texture,
     map_count: u32,
 ) -> (wgpu::ComputePipeline, wgpu::BindGroup, wgpu::Buffer) {
     use wgpu::{ShaderStages as St, TextureViewDimension as D};
-    let ranges = device.create_buffer(&wgpu::BufferDescriptor {
+    let device = &ctx.device;
+    let ranges = ctx.create_buffer(&wgpu::BufferDescriptor {
         label: Some("distance-map ranges"),
         size: 8 * map_count as u64,
         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
@@ -385,7 +494,7 @@ fn range_pass(
         compilation_options: Default::default(),
         cache: None,
     });
-    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+    let bind_group = ctx.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("distance-map ranges"),
         layout: &layout,
         entries: &[
@@ -447,6 +556,7 @@ fn trace_pass(
             depth: None,
             targets: &[raster::COLOR_FORMAT],
             write_mask: wgpu::ColorWrites::ALL,
+            cull_mode: None,
         },
     );
     (layout, pipeline)
@@ -483,25 +593,26 @@ struct MapTextures {
 }
 
 impl DistanceMaps {
-    /// What draws each layer's six faces, per reflector and layer, and the reflectors as the
-    /// tracing pass sees them.
-    fn layer_draws(
+    /// Per face of every layer of every reflector's map (in draw order): its view, and which
+    /// meshes it can hold; and the reflectors as the tracing pass sees them. Depends on where
+    /// the reflectors are.
+    #[allow(clippy::type_complexity)]
+    fn layer_views(
         &self,
-        device: &wgpu::Device,
         scene: &Scene,
         gpu_scene: &GpuScene,
         reflectors: &[usize],
-        layout: &wgpu::BindGroupLayout,
-        maps: &MapTextures,
-    ) -> (Vec<LayerDraw>, Vec<GpuMapReflector>) {
-        use wgpu::TextureViewDimension as D;
+    ) -> (
+        Vec<(GpuLayerView, Vec<std::ops::Range<u32>>)>,
+        Vec<GpuMapReflector>,
+    ) {
         let specular = |mesh: usize| scene.materials[scene.meshes[mesh].material].is_specular();
         let all = vertex_ranges(gpu_scene, |_| true);
         let specular_ranges = vertex_ranges(gpu_scene, specular);
         let diffuse_ranges = vertex_ranges(gpu_scene, |m| !specular(m));
         let bounds = scene.bounds();
         let layer_count = self.layer_count();
-        let mut draws = Vec::new();
+        let mut views_out = Vec::new();
         let mut gpu_reflectors = Vec::new();
         for (k, &mesh) in reflectors.iter().enumerate() {
             let origin = scene.meshes[mesh].bounds().center();
@@ -523,8 +634,7 @@ impl DistanceMaps {
                     },
                     Layers::Peeled(_) => (KEEP_ALL, u32::from(j > 0), &all),
                 };
-                for (f, view) in views.iter().enumerate() {
-                    let array_layer = (first_map + j) * 6 + f as u32;
+                for view in &views {
                     let uniform = GpuLayerView {
                         clip_from_world: view.clip_from_world,
                         origin: origin.to_array(),
@@ -532,46 +642,73 @@ impl DistanceMaps {
                         peel,
                         pad: [0; 3],
                     };
-                    let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                        label: Some("distance-map layer view"),
-                        contents: bytemuck::bytes_of(&uniform),
-                        usage: wgpu::BufferUsages::UNIFORM,
-                    });
-                    let previous = if peel == 1 {
-                        layer_view(&maps.geometry, array_layer - 6, D::D2Array)
-                    } else {
-                        layer_view(&maps.placeholder, 0, D::D2Array)
-                    };
-                    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                        label: Some("distance-map layer"),
-                        layout,
-                        entries: &[
-                            wgpu::BindGroupEntry {
-                                binding: 0,
-                                resource: buffer.as_entire_binding(),
-                            },
-                            wgpu::BindGroupEntry {
-                                binding: 1,
-                                resource: wgpu::BindingResource::TextureView(&previous),
-                            },
-                        ],
-                    });
-                    draws.push(LayerDraw {
-                        bind_group,
-                        material_target: layer_view(&maps.material, array_layer, D::D2),
-                        geometry_target: layer_view(&maps.geometry, array_layer, D::D2),
-                        vertex_ranges: ranges.clone(),
-                    });
+                    views_out.push((uniform, ranges.clone()));
                 }
             }
         }
-        (draws, gpu_reflectors)
+        (views_out, gpu_reflectors)
     }
 
-    fn build(&self, ctx: &GpuContext, scene: &Scene) -> Result<Prepared, TechniqueError> {
+    /// What draws each layer's six faces, per reflector and layer (views written by
+    /// [`Prepared::place`]).
+    fn layer_draws(
+        &self,
+        ctx: &GpuContext,
+        layer_count: u32,
+        face_count: usize,
+        layout: &wgpu::BindGroupLayout,
+        maps: &MapTextures,
+    ) -> Vec<LayerDraw> {
+        use wgpu::TextureViewDimension as D;
+        (0..face_count)
+            .map(|i| {
+                let array_layer = i as u32;
+                let j = (array_layer / 6) % layer_count;
+                let peel = match self.layers {
+                    Layers::Simple => j > 2,
+                    Layers::Peeled(_) => j > 0,
+                };
+                let view_buffer = writable_buffer(
+                    ctx,
+                    "distance-map layer view",
+                    size_of::<GpuLayerView>() as u64,
+                    wgpu::BufferUsages::UNIFORM,
+                );
+                let previous = if peel {
+                    layer_view(&maps.geometry, array_layer - 6, D::D2Array)
+                } else {
+                    layer_view(&maps.placeholder, 0, D::D2Array)
+                };
+                let bind_group = bind_group(
+                    ctx,
+                    "distance-map layer",
+                    layout,
+                    &[
+                        view_buffer.as_entire_binding(),
+                        wgpu::BindingResource::TextureView(&previous),
+                    ],
+                );
+                LayerDraw {
+                    view_buffer,
+                    bind_group,
+                    material_target: layer_view(&maps.material, array_layer, D::D2),
+                    geometry_target: layer_view(&maps.geometry, array_layer, D::D2),
+                    vertex_ranges: Vec::new(),
+                }
+            })
+            .collect()
+    }
+
+    fn build(&self, ctx: &GpuContext, live: &LiveScene) -> Result<Prepared, TechniqueError> {
         let device = &ctx.device;
-        let gpu_scene = GpuScene::upload(device, scene);
-        let raster = RasterPass::new(ctx, &gpu_scene, self.shadow_resolution)?;
+        let scene = live.scene();
+        let gpu_scene = live.gpu(ctx);
+        let raster = RasterPass::new(
+            ctx,
+            scene,
+            gpu_scene,
+            RasterSpec::scene(self.shadow_resolution),
+        )?;
         let reflectors: Vec<usize> = (0..scene.meshes.len())
             .filter(|&m| scene.materials[scene.meshes[m].material].is_specular())
             .collect();
@@ -591,9 +728,9 @@ impl DistanceMaps {
                 ),
             });
         }
-        Ok(ctx.validated("distance-maps set-up", || {
+        let mut prepared = ctx.validated("distance-maps set-up", || {
             let map_texture = |label| {
-                device.create_texture(&wgpu::TextureDescriptor {
+                ctx.create_texture(&wgpu::TextureDescriptor {
                     label: Some(label),
                     size: wgpu::Extent3d {
                         width: self.resolution,
@@ -613,7 +750,7 @@ impl DistanceMaps {
                 material: map_texture("distance-map materials"),
                 geometry: map_texture("distance-map geometry"),
                 placeholder: texture_2d(
-                    device,
+                    ctx,
                     "distance-map placeholder",
                     1,
                     1,
@@ -622,7 +759,7 @@ impl DistanceMaps {
                 ),
             };
             let depth = texture_2d(
-                device,
+                ctx,
                 "distance-map depth",
                 self.resolution,
                 self.resolution,
@@ -633,52 +770,51 @@ impl DistanceMaps {
             let scene_layout = GpuScene::bind_group_layout(device);
             let (layer_layout, layer_pipeline) =
                 layer_pass(device, &scene_layout, raster.shadow_layout());
-            let (draws, mut gpu_reflectors) =
-                self.layer_draws(device, scene, &gpu_scene, &reflectors, &layer_layout, &maps);
+            let draws = self.layer_draws(
+                ctx,
+                layer_count,
+                6 * reflectors.len() * layer_count as usize,
+                &layer_layout,
+                &maps,
+            );
             let (range_pipeline, range_bind_group, ranges) =
-                range_pass(device, &maps.geometry, map_count);
+                range_pass(ctx, &maps.geometry, map_count);
             let (trace_layout, trace_pipeline) = trace_pass(device, &scene_layout);
-            let settings = GpuTraceSettings {
-                layers: layer_count,
-                linear_steps: self.linear_steps,
-                secant_steps: self.secant_steps,
-                max_depth: self.max_depth,
-                min_max: u32::from(self.min_max),
-                dispersive: u32::from(scene.materials.iter().any(|m| m.is_dispersive())),
-                output: self.output as u32,
-                resolution: self.resolution as f32,
-            };
             let mut mesh_reflector = vec![-1i32; scene.meshes.len().max(1)];
             for (k, &mesh) in reflectors.iter().enumerate() {
                 mesh_reflector[mesh] = k as i32;
             }
-            if gpu_reflectors.is_empty() {
-                gpu_reflectors.push(GpuMapReflector::zeroed());
-            }
             let storage = |label, contents: &[u8]| {
-                device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some(label),
-                    contents,
-                    usage: wgpu::BufferUsages::STORAGE,
-                })
+                let buffer = writable_buffer(
+                    ctx,
+                    label,
+                    contents.len() as u64,
+                    wgpu::BufferUsages::STORAGE,
+                );
+                ctx.queue.write_buffer(&buffer, 0, contents);
+                buffer
+            };
+            let uniform = |label, size: usize| {
+                writable_buffer(ctx, label, size as u64, wgpu::BufferUsages::UNIFORM)
             };
             Prepared {
-                scene_bind_group: gpu_scene.bind_group(device, &scene_layout),
-                settings: device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("distance-map trace settings"),
-                    contents: bytemuck::bytes_of(&settings),
-                    usage: wgpu::BufferUsages::UNIFORM,
-                }),
+                scene_id: live.id(),
+                version: live.version(),
+                maps_drawn_at: None,
+                ranges_at: None,
+                scene_bind_group: gpu_scene.bind_group(ctx, &scene_layout),
+                settings: uniform("distance-map trace settings", size_of::<GpuTraceSettings>()),
                 reflector_buffer: storage(
                     "distance-map reflectors",
-                    bytemuck::cast_slice(&gpu_reflectors),
+                    &vec![0u8; reflectors.len().max(1) * size_of::<GpuMapReflector>()],
                 ),
                 mesh_reflector: storage(
                     "distance-map mesh reflectors",
                     bytemuck::cast_slice(&mesh_reflector),
                 ),
                 faces: storage("cube faces", bytemuck::cast_slice(&face_bases())),
-                gpu_scene,
+                camera_buffer: uniform("camera", size_of::<CameraUniform>()),
+                trace_bind_groups: Vec::new(),
                 raster,
                 reflectors,
                 material_maps: maps.material,
@@ -693,13 +829,55 @@ impl DistanceMaps {
                 trace_pipeline,
                 trace_layout,
             }
-        })?)
+        })?;
+        prepared.place(self, ctx, scene, gpu_scene);
+        Ok(prepared)
+    }
+
+    /// The prepared state for `live`, (re)built when missing or made for another scene; after
+    /// a move, the layer views, origins and shadow maps follow the new geometry.
+    fn ensure_prepared(
+        &mut self,
+        ctx: &GpuContext,
+        live: &LiveScene,
+    ) -> Result<(), TechniqueError> {
+        if self.prepared.as_ref().map(|p| p.scene_id) != Some(live.id()) {
+            self.prepared = Some(self.build(ctx, live)?);
+        }
+        let mut p = self.prepared.take().expect("built above");
+        if p.version != live.version() {
+            p.place(self, ctx, live.scene(), live.gpu(ctx));
+            p.raster.redraw_shadows(ctx, live.scene(), live.gpu(ctx))?;
+            p.version = live.version();
+        }
+        self.prepared = Some(p);
+        Ok(())
     }
 }
 
 impl Prepared {
+    /// Writes where every map's faces look from (the reflectors' current centres).
+    fn place(
+        &mut self,
+        maps: &DistanceMaps,
+        ctx: &GpuContext,
+        scene: &Scene,
+        gpu_scene: &GpuScene,
+    ) {
+        let (views, reflectors) = maps.layer_views(scene, gpu_scene, &self.reflectors);
+        for (draw, (view, ranges)) in self.draws.iter_mut().zip(views) {
+            ctx.queue
+                .write_buffer(&draw.view_buffer, 0, bytemuck::bytes_of(&view));
+            draw.vertex_ranges = ranges;
+        }
+        if !reflectors.is_empty() {
+            ctx.queue
+                .write_buffer(&self.reflector_buffer, 0, bytemuck::cast_slice(&reflectors));
+        }
+    }
+
     /// Draws every face of every layer of every map.
-    fn draw_maps(&self, ctx: &GpuContext) {
+    fn draw_maps(&self, ctx: &GpuContext, gpu_scene: &GpuScene) {
         let device = &ctx.device;
         let mut encoder = device.create_command_encoder(&Default::default());
         for draw in &self.draws {
@@ -739,7 +917,7 @@ impl Prepared {
             pass.set_bind_group(0, &draw.bind_group, &[]);
             pass.set_bind_group(1, &self.scene_bind_group, &[]);
             pass.set_bind_group(2, self.raster.shadow_bind_group(), &[]);
-            pass.set_vertex_buffer(0, self.gpu_scene.vertices.slice(..));
+            pass.set_vertex_buffer(0, gpu_scene.vertices.slice(..));
             for range in &draw.vertex_ranges {
                 pass.draw(range.clone(), 0..1);
             }
@@ -767,126 +945,127 @@ impl Prepared {
 }
 
 impl Technique for DistanceMaps {
-    fn name(&self) -> &'static str {
-        "distance-maps"
+    fn info(&self) -> &'static MethodInfo {
+        &INFO
     }
 
-    fn parameters(&self) -> Vec<(String, String)> {
-        let layers = match self.layers {
-            Layers::Simple => "simple".to_string(),
-            Layers::Peeled(n) => n.to_string(),
-        };
-        let output = match self.output {
-            Output::Radiance => "radiance",
-            Output::FirstHit => "first-hit",
-        };
-        vec![
-            ("resolution".into(), self.resolution.to_string()),
-            ("layers".into(), layers),
-            ("diffuse_layers".into(), self.diffuse_layers.to_string()),
-            ("linear_steps".into(), self.linear_steps.to_string()),
-            ("secant_steps".into(), self.secant_steps.to_string()),
-            ("max_depth".into(), self.max_depth.to_string()),
-            ("min_max".into(), self.min_max.to_string()),
-            ("output".into(), output.into()),
-            (
-                "shadow_resolution".into(),
-                self.shadow_resolution.to_string(),
-            ),
-        ]
-    }
-
-    fn set_parameter(&mut self, name: &str, value: &str) -> Result<(), TechniqueError> {
-        let setting = Setting {
-            technique: "distance-maps",
-            name,
-            value,
-        };
+    fn parameter(&self, name: &str) -> String {
         match name {
-            "resolution" => self.resolution = setting.texels()?,
-            "shadow_resolution" => self.shadow_resolution = setting.texels()?,
-            "layers" => {
-                self.layers = match value {
-                    "simple" => Layers::Simple,
-                    _ => Layers::Peeled(setting.count(
-                        1..=8,
-                        "simple (the paper's three layers) or a number of depth-peeled layers \
-                         from 1 to 8",
-                    )?),
-                }
-            }
-            "diffuse_layers" => {
-                self.diffuse_layers =
-                    setting.count(1..=6, "a whole number of layers from 1 to 6")?
-            }
-            "linear_steps" => {
-                self.linear_steps =
-                    setting.count(1..=1000, "a whole number of steps from 1 to 1000")?
-            }
-            "secant_steps" => {
-                self.secant_steps =
-                    setting.count(0..=100, "a whole number of iterations from 0 to 100")?
-            }
-            "max_depth" => {
-                self.max_depth = setting.count(0..=16, "a whole number of bounces from 0 to 16")?
-            }
-            "min_max" => self.min_max = setting.flag()?,
-            "output" => {
-                self.output = match value {
-                    "radiance" => Output::Radiance,
-                    "first-hit" => Output::FirstHit,
-                    _ => return Err(setting.bad("expected radiance or first-hit")),
-                }
-            }
-            _ => return Err(setting.bad(
-                "distance-maps' parameters are resolution, layers, diffuse_layers, linear_steps, \
-                     secant_steps, max_depth, min_max, output and shadow_resolution",
-            )),
+            "resolution" => self.resolution.to_string(),
+            "layers" => match self.layers {
+                Layers::Simple => "simple".to_string(),
+                Layers::Peeled(n) => n.to_string(),
+            },
+            "diffuse_layers" => self.diffuse_layers.to_string(),
+            "linear_steps" => self.linear_steps.to_string(),
+            "secant_steps" => self.secant_steps.to_string(),
+            "max_depth" => self.max_depth.to_string(),
+            "min_max" => self.min_max.to_string(),
+            "output" => match self.output {
+                Output::Radiance => "radiance".into(),
+                Output::FirstHit => "first-hit".into(),
+            },
+            "dynamic" => self.dynamic.to_string(),
+            "shadow_resolution" => self.shadow_resolution.to_string(),
+            _ => String::new(),
         }
-        self.prepared = None;
+    }
+
+    fn set_parameter(&mut self, name: &str, value: &ParamValue) -> Result<(), TechniqueError> {
+        let count = value.integer() as u32;
+        match name {
+            "resolution" => self.resolution = count,
+            "shadow_resolution" => self.shadow_resolution = count,
+            "layers" => {
+                self.layers = match value.word() {
+                    "simple" => Layers::Simple,
+                    n => Layers::Peeled(n.parse().unwrap_or(1)),
+                }
+            }
+            "diffuse_layers" => self.diffuse_layers = count,
+            "linear_steps" => self.linear_steps = count,
+            "secant_steps" => self.secant_steps = count,
+            "max_depth" => self.max_depth = count,
+            "min_max" => self.min_max = value.flag(),
+            "dynamic" => self.dynamic = value.flag(),
+            "output" => {
+                self.output = match value.word() {
+                    "first-hit" => Output::FirstHit,
+                    _ => Output::Radiance,
+                }
+            }
+            _ => {}
+        }
         Ok(())
     }
 
-    fn prepare(&mut self, ctx: &GpuContext, scene: &Scene) -> Result<(), TechniqueError> {
-        self.prepared = Some(self.build(ctx, scene)?);
-        Ok(())
+    fn invalidate(&mut self, what: Invalidates) {
+        // The maps and most passes follow the resolution and layer count: both levels rebuild.
+        if what >= Invalidates::Resources {
+            self.prepared = None;
+        }
+    }
+
+    fn prepare(&mut self, ctx: &Context, scene: &LiveScene) -> Result<(), TechniqueError> {
+        self.ensure_prepared(ctx.gpu(INFO.name)?, scene)
     }
 
     fn render(
         &mut self,
-        ctx: &GpuContext,
-        scene: &Scene,
+        ctx: &Context,
+        live: &LiveScene,
         camera: &Camera,
         width: u32,
         height: u32,
     ) -> Result<Frame, TechniqueError> {
-        let p = self.prepared.as_ref().ok_or(TechniqueError::NotPrepared {
-            technique: "distance-maps",
-        })?;
-        let mut clock = StageTimer::start(ctx);
+        let gpu = ctx.gpu(INFO.name)?;
+        let before = gpu.resource_counts();
+        self.ensure_prepared(gpu, live)?;
+        let scene = live.scene();
+        let gpu_scene = live.gpu(gpu);
+        let settings = GpuTraceSettings {
+            layers: self.layer_count(),
+            linear_steps: self.linear_steps,
+            secant_steps: self.secant_steps,
+            max_depth: self.max_depth,
+            min_max: u32::from(self.min_max),
+            dispersive: u32::from(scene.materials.iter().any(|m| m.is_dispersive())),
+            output: self.output as u32,
+            resolution: self.resolution as f32,
+        };
+        let layer_count = self.layer_count() as u64;
+        let p = self.prepared.as_mut().expect("prepared above");
+        p.raster.begin_frame();
+        self.timer.start(gpu);
+        gpu.queue
+            .write_buffer(&p.settings, 0, bytemuck::bytes_of(&settings));
         let camera_uniform = raster::camera_uniform(camera, &scene.bounds(), width, height);
-        let g = p.raster.render(ctx, &p.gpu_scene, &camera_uniform, None)?;
-        clock.lap(ctx, "g-buffer")?;
-        ctx.validated("distance-map layers", || p.draw_maps(ctx))?;
-        clock.lap(ctx, "distance maps")?;
-        if self.min_max {
-            ctx.validated("distance-map ranges", || p.reduce_ranges(ctx))?;
-            clock.lap(ctx, "min-max")?;
+        let g = p.raster.render(gpu, gpu_scene, &camera_uniform, None)?;
+        self.timer.lap(gpu, "g-buffer")?;
+        let redraw = self.dynamic || p.maps_drawn_at != Some(live.version());
+        let faces = if redraw { p.draws.len() as u64 } else { 0 };
+        if redraw {
+            gpu.validated("distance-map layers", || p.draw_maps(gpu, gpu_scene))?;
+            self.timer.lap(gpu, "distance maps")?;
+            p.maps_drawn_at = Some(live.version());
         }
-        let output = ctx.validated("distance-map trace", || {
-            trace(ctx, p, &camera_uniform, &g, width, height)
+        if self.min_max && (redraw || p.ranges_at != p.maps_drawn_at) {
+            gpu.validated("distance-map ranges", || p.reduce_ranges(gpu))?;
+            self.timer.lap(gpu, "min-max")?;
+            p.ranges_at = p.maps_drawn_at;
+        }
+        let output = self.output_texture.get(gpu, width, height);
+        gpu.validated("distance-map trace", || {
+            trace(gpu, p, &camera_uniform, &g, &output)
         })?;
-        clock.lap(ctx, "tracing")?;
-        let image = raster::read_rgba32f(ctx, &output)?;
-        clock.lap(ctx, "readback")?;
-        let faces = p.draws.len() as u64;
-        let (stages, timing) = clock.finish(ctx)?;
+        self.timer.lap(gpu, "tracing")?;
+        let (stages, timing) = self.timer.finish(gpu)?;
         Ok(Frame {
-            image,
+            pixels: Pixels::Texture(output),
             stages,
             counters: vec![
                 ("reflectors".into(), p.reflectors.len() as u64),
-                ("layers per map".into(), self.layer_count() as u64),
+                ("layers per map".into(), layer_count),
                 ("cube map faces rendered".into(), faces),
                 (
                     "distance map texels".into(),
@@ -896,79 +1075,62 @@ impl Technique for DistanceMaps {
             ],
             timing,
             warnings: Vec::new(),
+            converged: true,
+            created: gpu.resource_counts() - before,
         })
     }
 }
 
-/// The tracing pass over the G-buffer, into a new output texture.
+/// The tracing pass over the G-buffer, into `output`.
 fn trace(
     ctx: &GpuContext,
-    p: &Prepared,
+    p: &mut Prepared,
     camera: &CameraUniform,
     g: &raster::GBuffer,
-    width: u32,
-    height: u32,
-) -> wgpu::Texture {
-    let device = &ctx.device;
-    let camera_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("camera"),
-        contents: bytemuck::bytes_of(camera),
-        usage: wgpu::BufferUsages::UNIFORM,
-    });
-    let view = |t: &wgpu::Texture| t.create_view(&Default::default());
-    let array = |t: &wgpu::Texture| {
-        t.create_view(&wgpu::TextureViewDescriptor {
-            dimension: Some(wgpu::TextureViewDimension::D2Array),
-            ..Default::default()
-        })
-    };
-    let views = [
-        view(&g.color),
-        view(&g.position),
-        view(&g.normal),
-        view(&g.ids),
-        array(&p.material_maps),
-        array(&p.geometry_maps),
-    ];
-    let mut entries = vec![
-        wgpu::BindGroupEntry {
-            binding: 0,
-            resource: camera_buffer.as_entire_binding(),
-        },
-        wgpu::BindGroupEntry {
-            binding: 1,
-            resource: p.settings.as_entire_binding(),
-        },
-    ];
-    for (i, v) in views.iter().enumerate() {
-        entries.push(wgpu::BindGroupEntry {
-            binding: 2 + i as u32,
-            resource: wgpu::BindingResource::TextureView(v),
-        });
+    output: &wgpu::Texture,
+) {
+    ctx.queue
+        .write_buffer(&p.camera_buffer, 0, bytemuck::bytes_of(camera));
+    if !p.trace_bind_groups.iter().any(|(slot, _)| *slot == g.slot) {
+        let view = |t: &wgpu::Texture| t.create_view(&Default::default());
+        let array = |t: &wgpu::Texture| {
+            t.create_view(&wgpu::TextureViewDescriptor {
+                dimension: Some(wgpu::TextureViewDimension::D2Array),
+                ..Default::default()
+            })
+        };
+        let views = [
+            view(&g.color),
+            view(&g.position),
+            view(&g.normal),
+            view(&g.ids),
+            array(&p.material_maps),
+            array(&p.geometry_maps),
+        ];
+        let mut resources = vec![
+            p.camera_buffer.as_entire_binding(),
+            p.settings.as_entire_binding(),
+        ];
+        resources.extend(views.iter().map(wgpu::BindingResource::TextureView));
+        resources.extend(
+            [&p.reflector_buffer, &p.mesh_reflector, &p.ranges, &p.faces]
+                .map(|b| b.as_entire_binding()),
+        );
+        let group = bind_group(ctx, "distance-map trace", &p.trace_layout, &resources);
+        p.trace_bind_groups.push((g.slot, group));
     }
-    for (binding, buffer) in [
-        (8, &p.reflector_buffer),
-        (9, &p.mesh_reflector),
-        (10, &p.ranges),
-        (11, &p.faces),
-    ] {
-        entries.push(wgpu::BindGroupEntry {
-            binding,
-            resource: buffer.as_entire_binding(),
-        });
-    }
-    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("distance-map trace"),
-        layout: &p.trace_layout,
-        entries: &entries,
-    });
+    let group = &p
+        .trace_bind_groups
+        .iter()
+        .find(|(slot, _)| *slot == g.slot)
+        .expect("made above")
+        .1;
     raster::fullscreen_pass(
         ctx,
         "distance-map trace",
         &p.trace_pipeline,
-        &[&bind_group, &p.scene_bind_group],
-        width,
-        height,
+        &[group, &p.scene_bind_group],
+        output,
     )
 }
 

@@ -6,7 +6,9 @@
 //! Steps, per frame:
 //! 1. the scene raster pass (G-buffer) for the camera;
 //! 2. for each specular mesh (a "reflector"), a cube map of the scene rendered from the centre
-//!    of its bounding box, with the reflector itself left out;
+//!    of its bounding box, with the reflector itself left out. The maps depend on the scene
+//!    only: they are drawn again when an object moves (or every frame with `dynamic=true`, as
+//!    a game redraws them for a moving scene);
 //! 3. a full-screen pass that shades each specular pixel: mirrors look up the reflected
 //!    direction (Schlick Fresnel or F0); dielectrics mix the reflected lookup with the
 //!    transmitted one by exact Fresnel, per colour channel (so dispersion shows); thin sheets
@@ -29,20 +31,27 @@
 //!   default is the one with the lowest RMSE on the built-in refraction scenes (glass-dragon
 //!   0.092 vs 0.097 none / 0.102 sphere; spectacle-lens 0.176 vs 0.191 / 0.205, at 320×240);
 //!   costs are equal.
+//! - `dynamic` (default false): redraw the cube maps every frame even when nothing moved (the
+//!   cost of a fully dynamic scene); otherwise they are redrawn only after a move.
+//! - `shadow_resolution` (default 1024): shadow maps of the scene raster (see `raster`).
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use specula_gpu::shaders::{self, CameraUniform};
 use specula_gpu::util::{
-    buffer_binding, layout_entry, render_pipeline, texture_binding, PipelineSpec,
+    bind_group, buffer_binding, layout_entry, render_pipeline, texture_binding, writable_buffer,
+    PipelineSpec,
 };
 use specula_gpu::{GpuContext, GpuError, StageTimer};
 use specula_scene::{Camera, Scene};
-use wgpu::util::DeviceExt;
 
 use crate::gpu_scene::GpuScene;
-use crate::raster::{self, RasterPass};
-use crate::technique::{Frame, Setting, Technique, TechniqueError};
+use crate::live_scene::LiveScene;
+use crate::raster::{self, OutputTexture, RasterPass, RasterSpec};
+use crate::technique::{
+    Context, Frame, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, Technique,
+    TechniqueError,
+};
 
 const SHADER: &str = include_str!("envmap.wgsl");
 
@@ -52,6 +61,47 @@ pub fn shader_source() -> String {
         SHADER,
     )
 }
+
+pub const PARAMS: &[ParamSpec] = &[
+    ParamSpec {
+        name: "resolution",
+        kind: ParamKind::Integer { min: 1, max: 8192 },
+        default: "256",
+        doc: "texels per cube-map face side: sharper reflections, 6 x resolution^2 texels per reflector",
+        invalidates: Invalidates::Resources,
+    },
+    ParamSpec {
+        name: "exit",
+        kind: ParamKind::Choice(&["none", "sphere", "slab"]),
+        default: "slab",
+        doc: "second interface of solid refractors: none, the bounding sphere, or a parallel face",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "dynamic",
+        kind: ParamKind::Flag,
+        default: "false",
+        doc: "redraw the cube maps every frame (else only after a move)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "shadow_resolution",
+        kind: ParamKind::Integer { min: 1, max: 8192 },
+        default: "1024",
+        doc: "texels per side of the scene raster's shadow maps",
+        invalidates: Invalidates::Scene,
+    },
+];
+
+pub const INFO: MethodInfo = MethodInfo {
+    name: "envmap",
+    summary: "classic dynamic cube-map reflection and refraction from each reflector's centre (the baseline)",
+    exact: false,
+    needs_gpu: true,
+    progressive: false,
+    params: PARAMS,
+    create: || Box::new(EnvMap::default()),
+};
 
 /// Host mirror of WGSL `Reflector`.
 #[repr(C)]
@@ -64,19 +114,30 @@ pub struct GpuReflector {
     pub pad: [u32; 2],
 }
 
+/// What depends on the scene (not on `resolution`).
 struct Prepared {
-    gpu_scene: GpuScene,
+    scene_id: u64,
+    /// The scene version the reflector centres, face cameras and shadow maps were made for.
+    version: u64,
     raster: RasterPass,
     /// (mesh index, centre, radius) of each reflector.
     reflectors: Vec<(usize, Vec3, f32)>,
-    env_faces: wgpu::Texture,
     env_views: wgpu::Buffer,
     reflector_buffer: wgpu::Buffer,
     mesh_reflector: wgpu::Buffer,
-    face_cameras: Vec<CameraUniform>,
+    camera_buffer: wgpu::Buffer,
     pipeline: wgpu::RenderPipeline,
     layout: wgpu::BindGroupLayout,
     scene_bind_group: wgpu::BindGroup,
+}
+
+/// The cube maps at one resolution, and the shading bind groups that read them.
+struct Faces {
+    texture: wgpu::Texture,
+    /// Scene version the faces were drawn at (None: never drawn).
+    drawn_at: Option<u64>,
+    /// Shading bind group per G-buffer pool slot.
+    bind_groups: Vec<(usize, wgpu::BindGroup)>,
 }
 
 /// Where a ray that refracted into a solid leaves it (`envmap`'s second interface).
@@ -93,8 +154,12 @@ pub enum Exit {
 pub struct EnvMap {
     pub resolution: u32,
     pub exit: Exit,
+    pub dynamic: bool,
     pub shadow_resolution: u32,
     prepared: Option<Prepared>,
+    faces: Option<Faces>,
+    timer: StageTimer,
+    output: OutputTexture,
 }
 
 impl EnvMap {
@@ -112,99 +177,89 @@ impl Default for EnvMap {
         EnvMap {
             resolution: 256,
             exit: Exit::Slab,
+            dynamic: false,
             shadow_resolution: 1024,
             prepared: None,
+            faces: None,
+            timer: StageTimer::default(),
+            output: OutputTexture::default(),
         }
     }
 }
 
-impl EnvMap {
-    fn build(&self, ctx: &GpuContext, scene: &Scene) -> Result<Prepared, GpuError> {
-        let device = &ctx.device;
-        let gpu_scene = GpuScene::upload(device, scene);
-        let raster = RasterPass::new(ctx, &gpu_scene, self.shadow_resolution)?;
-        ctx.validated("envmap set-up", || {
-            let reflectors: Vec<(usize, Vec3, f32)> = scene
-                .meshes
+/// (mesh index, centre, radius) of every specular mesh: the tightest sphere around the box
+/// centre (farthest vertex, not the box's half-diagonal).
+fn reflectors(scene: &Scene) -> Vec<(usize, Vec3, f32)> {
+    scene
+        .meshes
+        .iter()
+        .enumerate()
+        .filter(|(_, m)| scene.materials[m.material].is_specular())
+        .map(|(i, m)| {
+            let center = m.bounds().center();
+            let radius = m
+                .positions
                 .iter()
-                .enumerate()
-                .filter(|(_, m)| scene.materials[m.material].is_specular())
-                .map(|(i, m)| {
-                    // The tightest sphere around the box centre: farthest vertex, not the
-                    // box's half-diagonal.
-                    let center = m.bounds().center();
-                    let radius = m
-                        .positions
-                        .iter()
-                        .map(|p| (*p - center).length())
-                        .fold(0.0, f32::max);
-                    (i, center, radius)
-                })
-                .collect();
-            let bounds = scene.bounds();
-            let mut face_cameras = Vec::new();
-            let mut views: Vec<[[f32; 4]; 4]> = Vec::new();
-            let mut gpu_reflectors = Vec::new();
-            for (k, &(_, center, radius)) in reflectors.iter().enumerate() {
-                let (near, far) = raster::depth_range(&bounds, center);
-                for view in raster::cube_views(center, near, far, self.resolution) {
-                    let forward = Vec3::from_array(view.direction);
-                    let up = match view.direction {
-                        d if d[1].abs() > 0.5 => Vec3::Z * d[1].signum(),
-                        _ => -Vec3::Y,
-                    };
-                    let camera = CameraUniform::new(
-                        center,
-                        forward.cross(up),
-                        up,
-                        forward,
-                        90.0,
-                        self.resolution,
-                        self.resolution,
-                        near,
-                        far,
-                    );
-                    views.push(camera.clip_from_world);
-                    face_cameras.push(camera);
-                }
-                gpu_reflectors.push(GpuReflector {
-                    center: center.to_array(),
-                    radius,
-                    first_layer: 6 * k as u32,
-                    exit_model: self.exit as u32,
-                    pad: [0; 2],
-                });
-            }
+                .map(|p| (*p - center).length())
+                .fold(0.0, f32::max);
+            (i, center, radius)
+        })
+        .collect()
+}
+
+/// The six face cameras of a cube map around `center` that holds the whole scene.
+fn face_cameras(scene: &Scene, center: Vec3, resolution: u32) -> Vec<CameraUniform> {
+    let (near, far) = raster::depth_range(&scene.bounds(), center);
+    raster::cube_views(center, near, far, resolution)
+        .iter()
+        .map(|view| {
+            let forward = Vec3::from_array(view.direction);
+            let up = match view.direction {
+                d if d[1].abs() > 0.5 => Vec3::Z * d[1].signum(),
+                _ => -Vec3::Y,
+            };
+            CameraUniform::new(
+                center,
+                forward.cross(up),
+                up,
+                forward,
+                90.0,
+                resolution,
+                resolution,
+                near,
+                far,
+            )
+        })
+        .collect()
+}
+
+impl EnvMap {
+    fn build(&self, ctx: &GpuContext, live: &LiveScene) -> Result<Prepared, GpuError> {
+        let device = &ctx.device;
+        let scene = live.scene();
+        let gpu_scene = live.gpu(ctx);
+        let raster = RasterPass::new(
+            ctx,
+            scene,
+            gpu_scene,
+            RasterSpec::scene(self.shadow_resolution),
+        )?;
+        ctx.validated("envmap set-up", || {
+            let reflectors = reflectors(scene);
             let mut mesh_reflector = vec![-1i32; scene.meshes.len().max(1)];
             for (k, &(mesh, ..)) in reflectors.iter().enumerate() {
                 mesh_reflector[mesh] = k as i32;
             }
-            let layers = (6 * reflectors.len() as u32).max(1);
-            let env_faces = device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("environment faces"),
-                size: wgpu::Extent3d {
-                    width: self.resolution,
-                    height: self.resolution,
-                    depth_or_array_layers: layers,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: raster::COLOR_FORMAT,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-                view_formats: &[],
-            });
-            let storage = |label, contents: &[u8]| {
-                device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some(label),
-                    contents,
-                    usage: wgpu::BufferUsages::STORAGE,
-                })
+            let storage = |label, size: usize| {
+                writable_buffer(ctx, label, size as u64, wgpu::BufferUsages::STORAGE)
             };
-            if views.is_empty() {
-                views.push([[0.0; 4]; 4]);
-                gpu_reflectors.push(GpuReflector::zeroed());
-            }
+            let count = reflectors.len().max(1);
+            let mesh_reflector_buffer = storage("mesh reflectors", 4 * mesh_reflector.len());
+            ctx.queue.write_buffer(
+                &mesh_reflector_buffer,
+                0,
+                bytemuck::cast_slice(&mesh_reflector),
+            );
             let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some("envmap.wgsl"),
                 source: wgpu::ShaderSource::Wgsl(shader_source().into()),
@@ -214,6 +269,7 @@ impl EnvMap {
                 TextureViewDimension as D,
             };
             let float = S::Float { filterable: false };
+            let read_only = || buffer_binding(B::Storage { read_only: true });
             let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("envmap"),
                 entries: &[
@@ -223,21 +279,9 @@ impl EnvMap {
                     layout_entry(3, St::FRAGMENT, texture_binding(float, D::D2)),
                     layout_entry(4, St::FRAGMENT, texture_binding(S::Uint, D::D2)),
                     layout_entry(5, St::FRAGMENT, texture_binding(float, D::D2Array)),
-                    layout_entry(
-                        6,
-                        St::FRAGMENT,
-                        buffer_binding(B::Storage { read_only: true }),
-                    ),
-                    layout_entry(
-                        7,
-                        St::FRAGMENT,
-                        buffer_binding(B::Storage { read_only: true }),
-                    ),
-                    layout_entry(
-                        8,
-                        St::FRAGMENT,
-                        buffer_binding(B::Storage { read_only: true }),
-                    ),
+                    layout_entry(6, St::FRAGMENT, read_only()),
+                    layout_entry(7, St::FRAGMENT, read_only()),
+                    layout_entry(8, St::FRAGMENT, read_only()),
                 ],
             });
             let scene_layout = GpuScene::bind_group_layout(device);
@@ -258,100 +302,166 @@ impl EnvMap {
                     depth: None,
                     targets: &[raster::COLOR_FORMAT],
                     write_mask: wgpu::ColorWrites::ALL,
+                    cull_mode: None,
                 },
             );
             Prepared {
-                scene_bind_group: gpu_scene.bind_group(device, &scene_layout),
-                env_views: storage("environment views", bytemuck::cast_slice(&views)),
-                reflector_buffer: storage("reflectors", bytemuck::cast_slice(&gpu_reflectors)),
-                mesh_reflector: storage("mesh reflectors", bytemuck::cast_slice(&mesh_reflector)),
-                gpu_scene,
+                scene_id: live.id(),
+                version: live.version(),
+                scene_bind_group: gpu_scene.bind_group(ctx, &scene_layout),
+                env_views: storage("environment views", 6 * count * 64),
+                reflector_buffer: storage("reflectors", count * size_of::<GpuReflector>()),
+                mesh_reflector: mesh_reflector_buffer,
+                camera_buffer: writable_buffer(
+                    ctx,
+                    "camera",
+                    size_of::<CameraUniform>() as u64,
+                    wgpu::BufferUsages::UNIFORM,
+                ),
                 raster,
                 reflectors,
-                env_faces,
-                face_cameras,
                 pipeline,
                 layout,
             }
         })
     }
+
+    /// The prepared state for `live`, (re)built when missing or made for another scene.
+    fn ensure_prepared(&mut self, ctx: &GpuContext, live: &LiveScene) -> Result<(), GpuError> {
+        if self.prepared.as_ref().map(|p| p.scene_id) != Some(live.id()) {
+            self.prepared = Some(self.build(ctx, live)?);
+            self.faces = None;
+        }
+        Ok(())
+    }
 }
 
 impl Technique for EnvMap {
-    fn name(&self) -> &'static str {
-        "envmap"
+    fn info(&self) -> &'static MethodInfo {
+        &INFO
     }
 
-    fn parameters(&self) -> Vec<(String, String)> {
-        vec![
-            ("resolution".into(), self.resolution.to_string()),
-            ("exit".into(), format!("{:?}", self.exit).to_lowercase()),
-            (
-                "shadow_resolution".into(),
-                self.shadow_resolution.to_string(),
-            ),
-        ]
-    }
-
-    fn set_parameter(&mut self, name: &str, value: &str) -> Result<(), TechniqueError> {
-        let setting = Setting {
-            technique: "envmap",
-            name,
-            value,
-        };
+    fn parameter(&self, name: &str) -> String {
         match name {
-            "resolution" => self.resolution = setting.texels()?,
-            "shadow_resolution" => self.shadow_resolution = setting.texels()?,
+            "resolution" => self.resolution.to_string(),
+            "exit" => format!("{:?}", self.exit).to_lowercase(),
+            "dynamic" => self.dynamic.to_string(),
+            "shadow_resolution" => self.shadow_resolution.to_string(),
+            _ => String::new(),
+        }
+    }
+
+    fn set_parameter(&mut self, name: &str, value: &ParamValue) -> Result<(), TechniqueError> {
+        match name {
+            "resolution" => self.resolution = value.integer() as u32,
+            "shadow_resolution" => self.shadow_resolution = value.integer() as u32,
+            "dynamic" => self.dynamic = value.flag(),
             "exit" => {
-                self.exit = match value {
+                self.exit = match value.word() {
                     "none" => Exit::None,
                     "sphere" => Exit::Sphere,
-                    "slab" => Exit::Slab,
-                    _ => return Err(setting.bad("expected none, sphere or slab")),
+                    _ => Exit::Slab,
                 }
             }
-            _ => {
-                return Err(
-                    setting.bad("envmap's parameters are resolution, exit and shadow_resolution")
-                )
-            }
+            _ => {}
         }
-        self.prepared = None;
         Ok(())
     }
 
-    fn prepare(&mut self, ctx: &GpuContext, scene: &Scene) -> Result<(), TechniqueError> {
-        self.prepared = Some(self.build(ctx, scene)?);
+    fn invalidate(&mut self, what: Invalidates) {
+        if what >= Invalidates::Resources {
+            self.faces = None;
+        }
+        if what >= Invalidates::Scene {
+            self.prepared = None;
+        }
+    }
+
+    fn prepare(&mut self, ctx: &Context, scene: &LiveScene) -> Result<(), TechniqueError> {
+        self.ensure_prepared(ctx.gpu(INFO.name)?, scene)?;
         Ok(())
     }
 
     fn render(
         &mut self,
-        ctx: &GpuContext,
-        scene: &Scene,
+        ctx: &Context,
+        live: &LiveScene,
         camera: &Camera,
         width: u32,
         height: u32,
     ) -> Result<Frame, TechniqueError> {
-        let p = self.prepared.as_ref().ok_or(TechniqueError::NotPrepared {
-            technique: "envmap",
-        })?;
-        let device = &ctx.device;
-        let mut clock = StageTimer::start(ctx);
+        let gpu = ctx.gpu(INFO.name)?;
+        let before = gpu.resource_counts();
+        self.ensure_prepared(gpu, live)?;
+        let scene = live.scene();
+        let gpu_scene = live.gpu(gpu);
+        let (resolution, exit, dynamic) = (self.resolution, self.exit, self.dynamic);
+        let p = self.prepared.as_mut().expect("prepared above");
+        p.raster.begin_frame();
+        self.timer.start(gpu);
+        let moved = p.version != live.version();
+        if moved {
+            p.reflectors = reflectors(scene);
+            p.raster.redraw_shadows(gpu, scene, gpu_scene)?;
+            p.version = live.version();
+        }
         let camera_uniform = raster::camera_uniform(camera, &scene.bounds(), width, height);
-        let g = p.raster.render(ctx, &p.gpu_scene, &camera_uniform, None)?;
-        clock.lap(ctx, "g-buffer")?;
-        for (k, &(mesh, ..)) in p.reflectors.iter().enumerate() {
-            for face in 0..6 {
-                let layer = 6 * k + face;
-                let face_g =
-                    p.raster
-                        .render(ctx, &p.gpu_scene, &p.face_cameras[layer], Some(mesh))?;
-                let mut encoder = device.create_command_encoder(&Default::default());
+        let g = p.raster.render(gpu, gpu_scene, &camera_uniform, None)?;
+        self.timer.lap(gpu, "g-buffer")?;
+
+        let mut cameras = Vec::with_capacity(6 * p.reflectors.len());
+        let mut gpu_reflectors = Vec::with_capacity(p.reflectors.len());
+        for (k, &(_, center, radius)) in p.reflectors.iter().enumerate() {
+            cameras.extend(face_cameras(scene, center, resolution));
+            gpu_reflectors.push(GpuReflector {
+                center: center.to_array(),
+                radius,
+                first_layer: 6 * k as u32,
+                exit_model: exit as u32,
+                pad: [0; 2],
+            });
+        }
+        if !gpu_reflectors.is_empty() {
+            let views: Vec<[[f32; 4]; 4]> = cameras.iter().map(|c| c.clip_from_world).collect();
+            gpu.queue
+                .write_buffer(&p.env_views, 0, bytemuck::cast_slice(&views));
+            gpu.queue.write_buffer(
+                &p.reflector_buffer,
+                0,
+                bytemuck::cast_slice(&gpu_reflectors),
+            );
+        }
+        let faces = self.faces.get_or_insert_with(|| Faces {
+            texture: gpu.create_texture(&wgpu::TextureDescriptor {
+                label: Some("environment faces"),
+                size: wgpu::Extent3d {
+                    width: resolution,
+                    height: resolution,
+                    depth_or_array_layers: (6 * p.reflectors.len() as u32).max(1),
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: raster::COLOR_FORMAT,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                view_formats: &[],
+            }),
+            drawn_at: None,
+            bind_groups: Vec::new(),
+        });
+        let redraw = dynamic || faces.drawn_at != Some(live.version());
+        let faces_drawn = if redraw { cameras.len() as u64 } else { 0 };
+        if redraw {
+            let face_g = p.raster.acquire(gpu, resolution, resolution);
+            for (layer, face_camera) in cameras.iter().enumerate() {
+                let mesh = p.reflectors[layer / 6].0;
+                p.raster
+                    .draw_into(gpu, gpu_scene, face_camera, Some(mesh), None, &face_g)?;
+                let mut encoder = gpu.device.create_command_encoder(&Default::default());
                 encoder.copy_texture_to_texture(
                     face_g.color.as_image_copy(),
                     wgpu::TexelCopyTextureInfo {
-                        texture: &p.env_faces,
+                        texture: &faces.texture,
                         mip_level: 0,
                         origin: wgpu::Origin3d {
                             x: 0,
@@ -361,102 +471,82 @@ impl Technique for EnvMap {
                         aspect: wgpu::TextureAspect::All,
                     },
                     wgpu::Extent3d {
-                        width: self.resolution,
-                        height: self.resolution,
+                        width: resolution,
+                        height: resolution,
                         depth_or_array_layers: 1,
                     },
                 );
-                ctx.queue.submit([encoder.finish()]);
+                gpu.queue.submit([encoder.finish()]);
             }
+            faces.drawn_at = Some(live.version());
         }
-        clock.lap(ctx, "environment cube maps")?;
-        let output = ctx.validated("envmap shade", || {
-            let camera_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("camera"),
-                contents: bytemuck::bytes_of(&camera_uniform),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
-            let view = |t: &wgpu::Texture| t.create_view(&Default::default());
-            let faces_view = p.env_faces.create_view(&wgpu::TextureViewDescriptor {
-                dimension: Some(wgpu::TextureViewDimension::D2Array),
-                ..Default::default()
-            });
-            let (color, position, normal, ids) = (
-                view(&g.color),
-                view(&g.position),
-                view(&g.normal),
-                view(&g.ids),
-            );
-            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("envmap"),
-                layout: &p.layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: camera_buffer.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: wgpu::BindingResource::TextureView(&color),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: wgpu::BindingResource::TextureView(&position),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 3,
-                        resource: wgpu::BindingResource::TextureView(&normal),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 4,
-                        resource: wgpu::BindingResource::TextureView(&ids),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 5,
-                        resource: wgpu::BindingResource::TextureView(&faces_view),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 6,
-                        resource: p.env_views.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 7,
-                        resource: p.reflector_buffer.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 8,
-                        resource: p.mesh_reflector.as_entire_binding(),
-                    },
-                ],
-            });
+        self.timer.lap(gpu, "environment cube maps")?;
+        let output = self.output.get(gpu, width, height);
+        gpu.validated("envmap shade", || {
+            gpu.queue
+                .write_buffer(&p.camera_buffer, 0, bytemuck::bytes_of(&camera_uniform));
+            if !faces.bind_groups.iter().any(|(slot, _)| *slot == g.slot) {
+                let view = |t: &wgpu::Texture| t.create_view(&Default::default());
+                let faces_view = faces.texture.create_view(&wgpu::TextureViewDescriptor {
+                    dimension: Some(wgpu::TextureViewDimension::D2Array),
+                    ..Default::default()
+                });
+                let (color, position, normal, ids) = (
+                    view(&g.color),
+                    view(&g.position),
+                    view(&g.normal),
+                    view(&g.ids),
+                );
+                let group = bind_group(
+                    gpu,
+                    "envmap",
+                    &p.layout,
+                    &[
+                        p.camera_buffer.as_entire_binding(),
+                        wgpu::BindingResource::TextureView(&color),
+                        wgpu::BindingResource::TextureView(&position),
+                        wgpu::BindingResource::TextureView(&normal),
+                        wgpu::BindingResource::TextureView(&ids),
+                        wgpu::BindingResource::TextureView(&faces_view),
+                        p.env_views.as_entire_binding(),
+                        p.reflector_buffer.as_entire_binding(),
+                        p.mesh_reflector.as_entire_binding(),
+                    ],
+                );
+                faces.bind_groups.push((g.slot, group));
+            }
+            let group = &faces
+                .bind_groups
+                .iter()
+                .find(|(slot, _)| *slot == g.slot)
+                .expect("made above")
+                .1;
             raster::fullscreen_pass(
-                ctx,
+                gpu,
                 "envmap shade",
                 &p.pipeline,
-                &[&bind_group, &p.scene_bind_group],
-                width,
-                height,
+                &[group, &p.scene_bind_group],
+                &output,
             )
         })?;
-        clock.lap(ctx, "shading")?;
-        let image = raster::read_rgba32f(ctx, &output)?;
-        clock.lap(ctx, "readback")?;
-        let faces = 6 * p.reflectors.len() as u64;
-        let (stages, timing) = clock.finish(ctx)?;
+        self.timer.lap(gpu, "shading")?;
+        let (stages, timing) = self.timer.finish(gpu)?;
         Ok(Frame {
-            image,
+            pixels: Pixels::Texture(output),
             stages,
             counters: vec![
                 ("reflectors".into(), p.reflectors.len() as u64),
-                ("cube map faces rendered".into(), faces),
+                ("cube map faces rendered".into(), faces_drawn),
                 (
                     "cube map texels".into(),
-                    faces * (self.resolution as u64).pow(2),
+                    faces_drawn * (resolution as u64).pow(2),
                 ),
-                ("raster passes".into(), 1 + faces),
+                ("raster passes".into(), 1 + faces_drawn),
             ],
             timing,
             warnings: Vec::new(),
+            converged: true,
+            created: gpu.resource_counts() - before,
         })
     }
 }

@@ -55,6 +55,10 @@
 //! of a moved scene; only the exit segments' hits P, the view volumes and the two passes are
 //! redone.
 //!
+//! Nothing is allocated per frame once the frame's shape is known: maps come from the raster
+//! pass's G-buffer pool, 2nd-pass vertices and uniforms from arenas written in place
+//! ([`specula_gpu::arena`]), bind groups are kept per map slot.
+//!
 //! Parameters:
 //! - `resolution` (default 512): reflection-map height in texels of an undivided reflector
 //!   (the width follows the view volume's aspect ratio); patches share it in proportion to
@@ -84,27 +88,108 @@ mod view;
 pub use rays::{EyeFrame, Interaction, MeshPaths, Segment};
 pub use view::{least_squares_viewpoint, principal_directions, Extents, Patch, ViewBasis};
 
+use std::cell::RefCell;
+
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec3, Vec4};
+use specula_gpu::arena::Arena;
 use specula_gpu::shaders::{self, CameraUniform};
-use specula_gpu::util::{
-    buffer_binding, layout_entry, render_pipeline, texture_binding, PipelineSpec,
-};
+use specula_gpu::util::{bind_group, layout_entry, render_pipeline, texture_binding, PipelineSpec};
 use specula_gpu::{GpuContext, GpuError, StageTimer};
 use specula_scene::{Camera, MaterialKind, Scene};
 use specula_trace::SceneAccel;
-use wgpu::util::DeviceExt;
 
 use crate::gpu_scene::GpuScene;
-use crate::raster::{self, GBuffer, RasterPass};
-use crate::technique::{Frame, Setting, Technique, TechniqueError};
+use crate::live_scene::LiveScene;
+use crate::raster::{self, GBuffer, RasterPass, RasterSpec};
+use crate::technique::{
+    bad_value, Context, Frame, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels,
+    Technique, TechniqueError,
+};
 use rays::{trace_hits, trace_paths, ChannelPaths};
 use view::{PatchInput, PatchLimits};
 
 const SHADER: &str = include_str!("pvrr.wgsl");
 
-/// Radiance of the marker balls.
-pub const MARKER_RADIANCE: f32 = 4.0;
+pub use crate::gpu_scene::MARKER_RADIANCE;
+
+pub const PARAMS: &[ParamSpec] = &[
+    ParamSpec {
+        name: "resolution",
+        kind: ParamKind::Integer { min: 1, max: 8192 },
+        default: "512",
+        doc: "reflection-map height in texels of an undivided reflector (patches share it by solid angle)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "shadow_resolution",
+        kind: ParamKind::Integer { min: 1, max: 8192 },
+        default: "1024",
+        doc: "texels per side of the scene raster's shadow maps",
+        invalidates: Invalidates::Scene,
+    },
+    ParamSpec {
+        name: "max_fov",
+        kind: ParamKind::Number { min: 1.0, max: 170.0 },
+        default: "90",
+        doc: "widest view volume a patch may keep, degrees; lower: more, less distorted maps",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "max_patches",
+        kind: ParamKind::Integer { min: 1, max: 4096 },
+        default: "256",
+        doc: "most patches per reflector; each costs a 1st pass",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "depth",
+        kind: ParamKind::Integer { min: 1, max: 4 },
+        default: "2",
+        doc: "reflectors seen in reflectors, levels deep",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "ior",
+        kind: ParamKind::Text {
+            expected: "`material`, one index of refraction or three (red,green,blue), each above 1 and at most 4",
+        },
+        default: "material",
+        doc: "the lenses' indices of refraction (three: chromatic aberration)",
+        invalidates: Invalidates::Scene,
+    },
+    ParamSpec {
+        name: "cached",
+        kind: ParamKind::Flag,
+        default: "false",
+        doc: "keep exit rays and patches in the eye's frame while the lens does not move relative to it",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "markers",
+        kind: ParamKind::Flag,
+        default: "false",
+        doc: "verification overlay: a red ball at every vertex's exact ray-traced hit",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "marker_size",
+        kind: ParamKind::Number { min: 1e-6, max: 0.1 },
+        default: "0.012",
+        doc: "marker radius as a fraction of its distance from the reflector",
+        invalidates: Invalidates::Uniform,
+    },
+];
+
+pub const INFO: MethodInfo = MethodInfo {
+    name: "pvrr",
+    summary: "per-vertex reflection and refraction (Kakimoto et al.): exact at every vertex",
+    exact: false,
+    needs_gpu: true,
+    progressive: false,
+    params: PARAMS,
+    create: || Box::new(Pvrr::default()),
+};
 
 /// The smallest map height a patch gets, however little of the view it covers.
 const MIN_MAP_TEXELS: u32 = 16;
@@ -211,9 +296,10 @@ struct Tally {
 }
 
 struct Prepared {
-    gpu_scene: GpuScene,
+    scene_id: u64,
+    /// The scene version the shadow maps, corners and far distance were made for.
+    version: u64,
     raster: RasterPass,
-    accel: SceneAccel,
     /// Every mirror and dielectric mesh.
     reflectors: Vec<Reflector>,
     /// Corners of the scene's bounds, which every map's far plane must hold.
@@ -223,6 +309,30 @@ struct Prepared {
     /// 2nd pass pipelines writing all channels, then red, green, blue only.
     pipelines: [wgpu::RenderPipeline; 4],
     layout: wgpu::BindGroupLayout,
+    /// Per-frame data written in place: 2nd-pass and marker vertices, and uniforms (cameras,
+    /// materials) bound at dynamic offsets.
+    arenas: RefCell<Arenas>,
+}
+
+struct Arenas {
+    vertices: Arena,
+    uniforms: Arena,
+    /// 2nd-pass bind group per map (G-buffer pool slot), for the arenas' current buffers.
+    bind_groups: Vec<(usize, wgpu::BindGroup)>,
+}
+
+/// What the frame's steps read: the prepared state and the live scene's BVH and GPU upload.
+struct Shared<'a> {
+    prepared: &'a Prepared,
+    accel: &'a SceneAccel,
+    gpu_scene: &'a GpuScene,
+}
+
+impl std::ops::Deref for Shared<'_> {
+    type Target = Prepared;
+    fn deref(&self) -> &Prepared {
+        self.prepared
+    }
 }
 
 pub struct Pvrr {
@@ -237,6 +347,7 @@ pub struct Pvrr {
     pub marker_size: f32,
     prepared: Option<Prepared>,
     cache: Vec<Option<CachedReflector>>,
+    timer: StageTimer,
 }
 
 impl Default for Pvrr {
@@ -253,17 +364,14 @@ impl Default for Pvrr {
             marker_size: 0.012,
             prepared: None,
             cache: Vec::new(),
+            timer: StageTimer::default(),
         }
     }
 }
 
 /// Marker balls (centre, radius, colour channel) as `GpuVertex` triangles of the marker mesh
 /// `first_marker_mesh` + channel.
-fn marker_vertices(
-    device: &wgpu::Device,
-    first_marker_mesh: u32,
-    balls: &[Ball],
-) -> (wgpu::Buffer, u32) {
+fn marker_vertices(first_marker_mesh: u32, balls: &[Ball]) -> Vec<crate::gpu_scene::GpuVertex> {
     use crate::gpu_scene::GpuVertex;
     let ball = specula_scene::generators::sphere(1.0, 8, 4);
     let mut vertices = Vec::new();
@@ -282,16 +390,7 @@ fn marker_vertices(
             }
         }
     }
-    let count = vertices.len() as u32;
-    if vertices.is_empty() {
-        vertices.push(GpuVertex::zeroed());
-    }
-    let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("pvrr markers"),
-        contents: bytemuck::cast_slice(&vertices),
-        usage: wgpu::BufferUsages::VERTEX,
-    });
-    (buffer, count)
+    vertices
 }
 
 /// A marker ball: centre, radius, colour channel (0 red, 1 green, 2 blue).
@@ -414,7 +513,7 @@ fn solid_angle(mesh: &specula_scene::Mesh, triangles: &[u32], eye: Vec3) -> f32 
 /// mode) holds eye-relative state per mesh; `top` says whether warnings are reported.
 #[allow(clippy::too_many_arguments)]
 fn plan_level(
-    p: &Prepared,
+    p: &Shared,
     settings: &PlanSettings,
     scene: &Scene,
     eye: Vec3,
@@ -459,7 +558,7 @@ fn reuse(
 /// eye's frame in the cached mode.
 #[allow(clippy::too_many_arguments)]
 fn plan_reflector(
-    p: &Prepared,
+    p: &Shared,
     settings: &PlanSettings,
     scene: &Scene,
     reflector: &Reflector,
@@ -487,7 +586,7 @@ fn plan_reflector(
             (paths, Some(patches))
         }
         None => {
-            let paths = trace_paths(scene, &p.accel, mesh, eye, interaction);
+            let paths = trace_paths(scene, p.accel, mesh, eye, interaction);
             tally.rays += paths.rays;
             (paths, None)
         }
@@ -495,7 +594,7 @@ fn plan_reflector(
     let hits: Vec<Vec<Vec3>> = paths
         .channels
         .iter()
-        .map(|c| trace_hits(&p.accel, &c.exits, p.far_distance))
+        .map(|c| trace_hits(p.accel, &c.exits, p.far_distance))
         .collect();
     tally.rays += (hits.len() * m.positions.len()) as u64;
     let primary = paths.channels.len() / 2;
@@ -649,33 +748,27 @@ fn report(
 }
 
 impl Pvrr {
-    fn build(&self, ctx: &GpuContext, scene: &Scene) -> Result<Prepared, GpuError> {
+    fn build(&self, ctx: &GpuContext, live: &LiveScene) -> Result<Prepared, GpuError> {
         let device = &ctx.device;
-        // Markers are drawn as three extra, empty meshes (from index `scene.meshes.len()`),
-        // unlit red, green and blue (one per colour channel of a dispersive lens), so bright
-        // (4, beyond any lit surface) that a test can find them in the float image.
-        let mut uploaded = scene.clone();
-        if self.markers {
-            for color in [Vec3::X, Vec3::Y, Vec3::Z] {
-                uploaded.materials.push(specula_scene::Material::unlit(
-                    "pvrr marker",
-                    color * MARKER_RADIANCE,
-                ));
-                uploaded.meshes.push(specula_scene::Mesh {
-                    material: uploaded.materials.len() - 1,
-                    ..Default::default()
-                });
-            }
-        }
-        let gpu_scene = GpuScene::upload(device, &uploaded);
-        let raster = RasterPass::new(ctx, &gpu_scene, self.shadow_resolution)?;
+        let scene = live.scene();
+        let raster = RasterPass::new(
+            ctx,
+            scene,
+            live.gpu(ctx),
+            RasterSpec::scene(self.shadow_resolution),
+        )?;
         ctx.validated("pvrr set-up", || {
             let stages = wgpu::ShaderStages::VERTEX_FRAGMENT;
-            let uniform = buffer_binding(wgpu::BufferBindingType::Uniform);
+            // Cameras and materials live in the uniform arena, bound at dynamic offsets.
+            let uniform = |size: usize| wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: true,
+                min_binding_size: std::num::NonZeroU64::new(size as u64),
+            };
             let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("pvrr mirror"),
                 entries: &[
-                    layout_entry(0, stages, uniform),
+                    layout_entry(0, stages, uniform(size_of::<CameraUniform>())),
                     layout_entry(
                         1,
                         stages,
@@ -684,7 +777,7 @@ impl Pvrr {
                             wgpu::TextureViewDimension::D2,
                         ),
                     ),
-                    layout_entry(2, stages, uniform),
+                    layout_entry(2, stages, uniform(size_of::<GpuMirrorMaterial>())),
                 ],
             });
             let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -722,6 +815,7 @@ impl Pvrr {
                         }),
                         targets: &[raster::COLOR_FORMAT],
                         write_mask,
+                        cull_mode: None,
                     },
                 )
             };
@@ -735,28 +829,41 @@ impl Pvrr {
             let reflectors = (0..scene.meshes.len())
                 .filter_map(|mesh| Reflector::of(scene, mesh, self.ior))
                 .collect();
-            let bounds = scene.bounds();
-            let scene_corners = (0..8)
-                .map(|k| {
-                    Vec3::select(
-                        glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0),
-                        bounds.max,
-                        bounds.min,
-                    )
-                })
-                .collect();
+            let (scene_corners, far_distance) = scene_extent(scene);
+            let alignment = device.limits().min_uniform_buffer_offset_alignment as u64;
             Prepared {
-                gpu_scene,
+                scene_id: live.id(),
+                version: live.version(),
                 raster,
-                accel: SceneAccel::new(scene),
                 reflectors,
                 scene_corners,
-                far_distance: (bounds.radius() * 4.0).max(1.0),
+                far_distance,
                 pipelines,
                 layout,
+                arenas: RefCell::new(Arenas {
+                    vertices: Arena::new("pvrr vertices", wgpu::BufferUsages::VERTEX, 4),
+                    uniforms: Arena::new("pvrr uniforms", wgpu::BufferUsages::UNIFORM, alignment),
+                    bind_groups: Vec::new(),
+                }),
             }
         })
     }
+}
+
+/// The corners of the scene's bounds (which every map's far plane must hold), and how far along
+/// an exit ray that leaves the scene its P is put.
+fn scene_extent(scene: &Scene) -> (Vec<Vec3>, f32) {
+    let bounds = scene.bounds();
+    let corners = (0..8)
+        .map(|k| {
+            Vec3::select(
+                glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0),
+                bounds.max,
+                bounds.min,
+            )
+        })
+        .collect();
+    (corners, (bounds.radius() * 4.0).max(1.0))
 }
 
 /// Step 4: the reflection map of every patch in `plan`; below `depth` 2 the scene raster
@@ -765,12 +872,12 @@ impl Pvrr {
 #[allow(clippy::too_many_arguments)]
 fn render_maps(
     ctx: &GpuContext,
-    p: &Prepared,
+    p: &Shared,
     settings: &PlanSettings,
     scene: &Scene,
     plan: &LevelPlan,
     depth: u32,
-    markers: Option<(&wgpu::Buffer, u32)>,
+    markers: Option<(&wgpu::Buffer, u64, u32)>,
     tally: &mut Tally,
 ) -> Result<Vec<Vec<GBuffer>>, GpuError> {
     plan.reflectors
@@ -783,7 +890,7 @@ fn render_maps(
                     let hidden = Some(reflector.mesh);
                     let g =
                         p.raster
-                            .render_with(ctx, &p.gpu_scene, &patch.camera, hidden, markers)?;
+                            .render_with(ctx, p.gpu_scene, &patch.camera, hidden, markers)?;
                     if depth > 1 {
                         let eye = Vec3::from_array(patch.camera.eye_world);
                         let inner = plan_level(p, settings, scene, eye, hidden, None, tally, false);
@@ -809,7 +916,7 @@ fn render_maps(
 /// Step 6: every reflector of `plan` drawn over `g` (rendered with `camera`) from its maps.
 fn second_pass(
     ctx: &GpuContext,
-    p: &Prepared,
+    p: &Shared,
     camera: &CameraUniform,
     g: &GBuffer,
     plan: &LevelPlan,
@@ -818,59 +925,77 @@ fn second_pass(
     if plan.reflectors.is_empty() {
         return Ok(());
     }
-    let device = &ctx.device;
     ctx.validated("pvrr 2nd pass", || {
-        let camera_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("camera"),
-            contents: bytemuck::bytes_of(camera),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
-        let color_view = g.color.create_view(&Default::default());
-        let depth_view = g.depth.create_view(&Default::default());
-        // (pipeline, bind group, vertices, count) per draw.
+        let mut arenas = p.arenas.borrow_mut();
+        let arenas = &mut *arenas;
+        // Room first (see Arena): one camera, one material per reflector, the vertices.
+        let vertex_sizes: Vec<u64> = plan
+            .reflectors
+            .iter()
+            .flat_map(|r| &r.patches)
+            .flat_map(|patch| &patch.channels)
+            .map(|v| std::mem::size_of_val(v.as_slice()) as u64)
+            .collect();
+        let uniform_sizes = std::iter::once(size_of::<CameraUniform>() as u64).chain(
+            plan.reflectors
+                .iter()
+                .map(|_| size_of::<GpuMirrorMaterial>() as u64),
+        );
+        arenas.vertices.reserve(ctx, vertex_sizes);
+        if arenas.uniforms.reserve(ctx, uniform_sizes) {
+            arenas.bind_groups.clear();
+        }
+        let camera_offset = arenas.uniforms.push(ctx, bytemuck::bytes_of(camera)) as u32;
+        // (pipeline, map slot, material offset, vertex offset, count) per draw.
         let mut draws = Vec::new();
         for (reflector, maps) in plan.reflectors.iter().zip(maps) {
-            let material_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("mirror material"),
-                contents: bytemuck::bytes_of(&reflector.material),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
+            let material_offset = arenas
+                .uniforms
+                .push(ctx, bytemuck::bytes_of(&reflector.material))
+                as u32;
             for (patch, map) in reflector.patches.iter().zip(maps) {
-                let map_view = map.color.create_view(&Default::default());
-                let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("pvrr mirror"),
-                    layout: &p.layout,
-                    entries: &[
-                        wgpu::BindGroupEntry {
-                            binding: 0,
-                            resource: camera_buffer.as_entire_binding(),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 1,
-                            resource: wgpu::BindingResource::TextureView(&map_view),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 2,
-                            resource: material_buffer.as_entire_binding(),
-                        },
-                    ],
-                });
+                if !arenas.bind_groups.iter().any(|(slot, _)| *slot == map.slot) {
+                    let map_view = map.color.create_view(&Default::default());
+                    let uniforms = arenas.uniforms.buffer();
+                    let binding = |size: usize| {
+                        wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                            buffer: uniforms,
+                            offset: 0,
+                            size: std::num::NonZeroU64::new(size as u64),
+                        })
+                    };
+                    let group = bind_group(
+                        ctx,
+                        "pvrr mirror",
+                        &p.layout,
+                        &[
+                            binding(size_of::<CameraUniform>()),
+                            wgpu::BindingResource::TextureView(&map_view),
+                            binding(size_of::<GpuMirrorMaterial>()),
+                        ],
+                    );
+                    arenas.bind_groups.push((map.slot, group));
+                }
                 let masked = patch.channels.len() == 3;
                 for (c, vertices) in patch.channels.iter().enumerate() {
                     if vertices.is_empty() {
                         continue;
                     }
-                    let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                        label: Some("mirror vertices"),
-                        contents: bytemuck::cast_slice(vertices),
-                        usage: wgpu::BufferUsages::VERTEX,
-                    });
+                    let offset = arenas.vertices.push(ctx, bytemuck::cast_slice(vertices));
                     let pipeline = &p.pipelines[if masked { c + 1 } else { 0 }];
-                    draws.push((pipeline, bind_group.clone(), buffer, vertices.len() as u32));
+                    draws.push((
+                        pipeline,
+                        map.slot,
+                        material_offset,
+                        offset,
+                        vertices.len() as u32,
+                    ));
                 }
             }
         }
-        let mut encoder = device.create_command_encoder(&Default::default());
+        let color_view = g.color.create_view(&Default::default());
+        let depth_view = g.depth.create_view(&Default::default());
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
         {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("pvrr 2nd pass"),
@@ -893,94 +1018,124 @@ fn second_pass(
                 }),
                 ..Default::default()
             });
-            for (pipeline, bind_group, buffer, count) in &draws {
+            let vertices = arenas.vertices.buffer();
+            for (pipeline, slot, material_offset, offset, count) in draws {
+                let group = &arenas
+                    .bind_groups
+                    .iter()
+                    .find(|(s, _)| *s == slot)
+                    .expect("made above")
+                    .1;
                 pass.set_pipeline(pipeline);
-                pass.set_bind_group(0, bind_group, &[]);
-                pass.set_vertex_buffer(0, buffer.slice(..));
-                pass.draw(0..*count, 0..1);
+                pass.set_bind_group(0, group, &[camera_offset, material_offset]);
+                pass.set_vertex_buffer(0, vertices.slice(offset..));
+                pass.draw(0..count, 0..1);
             }
         }
         ctx.queue.submit([encoder.finish()]);
     })
 }
 
-impl Technique for Pvrr {
-    fn name(&self) -> &'static str {
-        "pvrr"
-    }
-
-    fn parameters(&self) -> Vec<(String, String)> {
-        let ior = match self.ior {
-            None => "material".to_string(),
-            Some(i) => format!("{},{},{}", i.x, i.y, i.z),
-        };
-        vec![
-            ("resolution".into(), self.resolution.to_string()),
-            (
-                "shadow_resolution".into(),
-                self.shadow_resolution.to_string(),
-            ),
-            ("max_fov".into(), self.max_fov_deg.to_string()),
-            ("max_patches".into(), self.max_patches.to_string()),
-            ("depth".into(), self.depth.to_string()),
-            ("ior".into(), ior),
-            ("cached".into(), self.cached.to_string()),
-        ]
-    }
-
-    fn set_parameter(&mut self, name: &str, value: &str) -> Result<(), TechniqueError> {
-        let setting = Setting {
-            technique: "pvrr",
-            name,
-            value,
-        };
-        match name {
-            "resolution" => self.resolution = setting.texels()?,
-            "shadow_resolution" => self.shadow_resolution = setting.texels()?,
-            "markers" => self.markers = setting.flag()?,
-            "marker_size" => {
-                self.marker_size = setting.number_in(
-                    f32::MIN_POSITIVE..=0.1,
-                    "a fraction of the distance, above 0 and at most 0.1",
-                )?
-            }
-            "cached" => self.cached = setting.flag()?,
-            "max_fov" => self.max_fov_deg = setting.number_in(1.0..=170.0, "degrees from 1 to 170")?,
-            "max_patches" => {
-                self.max_patches = setting.count(1..=4096, "a count from 1 to 4096")? as usize
-            }
-            "depth" => self.depth = setting.count(1..=4, "a recursion depth from 1 to 4")?,
-            "ior" => self.ior = parse_ior(&setting)?,
-            _ => {
-                return Err(setting.bad(
-                    "pvrr's parameters are resolution, shadow_resolution, max_fov, max_patches, depth, ior, cached, markers and marker_size",
-                ))
-            }
+impl Pvrr {
+    /// The prepared state for `live`, (re)built when missing or made for another scene; after
+    /// a move, the shadow maps and the scene's extent follow the new geometry.
+    fn ensure_prepared(&mut self, ctx: &GpuContext, live: &LiveScene) -> Result<(), GpuError> {
+        if self.prepared.as_ref().map(|p| p.scene_id) != Some(live.id()) {
+            self.prepared = Some(self.build(ctx, live)?);
         }
-        self.prepared = None;
-        self.cache.clear();
+        let p = self.prepared.as_mut().expect("built above");
+        if p.version != live.version() {
+            let scene = live.scene();
+            p.raster.redraw_shadows(ctx, scene, live.gpu(ctx))?;
+            (p.scene_corners, p.far_distance) = scene_extent(scene);
+            p.version = live.version();
+        }
+        Ok(())
+    }
+}
+
+impl Technique for Pvrr {
+    fn info(&self) -> &'static MethodInfo {
+        &INFO
+    }
+
+    fn parameter(&self, name: &str) -> String {
+        match name {
+            "resolution" => self.resolution.to_string(),
+            "shadow_resolution" => self.shadow_resolution.to_string(),
+            "max_fov" => self.max_fov_deg.to_string(),
+            "max_patches" => self.max_patches.to_string(),
+            "depth" => self.depth.to_string(),
+            "ior" => match self.ior {
+                None => "material".to_string(),
+                Some(i) => format!("{},{},{}", i.x, i.y, i.z),
+            },
+            "cached" => self.cached.to_string(),
+            "markers" => self.markers.to_string(),
+            "marker_size" => self.marker_size.to_string(),
+            _ => String::new(),
+        }
+    }
+
+    fn set_parameter(&mut self, name: &str, value: &ParamValue) -> Result<(), TechniqueError> {
+        match name {
+            "resolution" => self.resolution = value.integer() as u32,
+            "shadow_resolution" => self.shadow_resolution = value.integer() as u32,
+            "markers" => self.markers = value.flag(),
+            "marker_size" => self.marker_size = value.number() as f32,
+            "cached" => self.cached = value.flag(),
+            "max_fov" => self.max_fov_deg = value.number() as f32,
+            "max_patches" => self.max_patches = value.integer() as usize,
+            "depth" => self.depth = value.integer() as u32,
+            "ior" => {
+                self.ior = parse_ior(value.word())
+                    .map_err(|reason| bad_value(INFO.name, name, value, reason))?
+            }
+            _ => {}
+        }
         Ok(())
     }
 
-    fn prepare(&mut self, ctx: &GpuContext, scene: &Scene) -> Result<(), TechniqueError> {
+    fn invalidate(&mut self, what: Invalidates) {
+        if what >= Invalidates::Resources {
+            self.cache.clear();
+        }
+        if what >= Invalidates::Scene {
+            self.prepared = None;
+        }
+    }
+
+    fn prepare(&mut self, ctx: &Context, scene: &LiveScene) -> Result<(), TechniqueError> {
         // The cache survives: its entries are checked against the new scene's geometry.
-        self.prepared = Some(self.build(ctx, scene)?);
+        self.ensure_prepared(ctx.gpu(INFO.name)?, scene)?;
         Ok(())
     }
 
     fn render(
         &mut self,
-        ctx: &GpuContext,
-        scene: &Scene,
+        ctx: &Context,
+        live: &LiveScene,
         camera: &Camera,
         width: u32,
         height: u32,
     ) -> Result<Frame, TechniqueError> {
-        let p = self
-            .prepared
-            .as_ref()
-            .ok_or(TechniqueError::NotPrepared { technique: "pvrr" })?;
-        let mut timer = StageTimer::start(ctx);
+        let gpu = ctx.gpu(INFO.name)?;
+        let before = gpu.resource_counts();
+        self.ensure_prepared(gpu, live)?;
+        let scene = live.scene();
+        let prepared = self.prepared.as_ref().expect("prepared above");
+        let p = Shared {
+            prepared,
+            accel: live.accel(),
+            gpu_scene: live.gpu(gpu),
+        };
+        p.raster.begin_frame();
+        {
+            let mut arenas = p.arenas.borrow_mut();
+            arenas.vertices.begin_frame();
+            arenas.uniforms.begin_frame();
+        }
+        self.timer.start(gpu);
         let camera_uniform = raster::camera_uniform(camera, &scene.bounds(), width, height);
         let settings = PlanSettings {
             resolution: self.resolution,
@@ -1000,28 +1155,44 @@ impl Technique for Pvrr {
         let mut tally = Tally::default();
         let cache = self.cached.then_some((&mut self.cache, &eye_frame));
         let plan = plan_level(
-            p, &settings, scene, camera.eye, None, cache, &mut tally, true,
+            &p, &settings, scene, camera.eye, None, cache, &mut tally, true,
         );
-        timer.lap(ctx, "per-vertex rays")?;
-        let markers = self
-            .markers
-            .then(|| marker_vertices(&ctx.device, scene.meshes.len() as u32, &plan.balls));
-        let extra = markers.as_ref().map(|(buffer, count)| (buffer, *count));
+        self.timer.lap(gpu, "per-vertex rays")?;
+        let markers = self.markers.then(|| {
+            let vertices = marker_vertices(p.gpu_scene.marker_mesh(0), &plan.balls);
+            let mut arenas = p.arenas.borrow_mut();
+            let bytes: &[u8] = bytemuck::cast_slice(&vertices);
+            arenas.vertices.reserve(gpu, [bytes.len() as u64]);
+            let offset = arenas.vertices.push(gpu, bytes);
+            (offset, vertices.len() as u32)
+        });
+        // Marker vertices sit at `offset` in the vertex arena; the raster pass draws them from a
+        // buffer of their own, so the arena's buffer is passed with a slice there.
+        let arena_buffer = markers.map(|_| p.arenas.borrow().vertices.buffer().clone());
+        let marker_slice = arena_buffer
+            .as_ref()
+            .zip(markers)
+            .map(|(buffer, (offset, count))| (buffer, offset, count));
         let maps = render_maps(
-            ctx, p, &settings, scene, &plan, self.depth, extra, &mut tally,
+            gpu,
+            &p,
+            &settings,
+            scene,
+            &plan,
+            self.depth,
+            marker_slice,
+            &mut tally,
         )?;
-        timer.lap(ctx, "reflection maps (1st pass)")?;
+        self.timer.lap(gpu, "reflection maps (1st pass)")?;
         let g = p
             .raster
-            .render_with(ctx, &p.gpu_scene, &camera_uniform, None, extra)?;
-        timer.lap(ctx, "g-buffer")?;
-        second_pass(ctx, p, &camera_uniform, &g, &plan, &maps)?;
-        timer.lap(ctx, "mirror (2nd pass)")?;
-        let image = raster::read_rgba32f(ctx, &g.color)?;
-        timer.lap(ctx, "readback")?;
-        let (stages, timing) = timer.finish(ctx)?;
+            .render_with(gpu, p.gpu_scene, &camera_uniform, None, marker_slice)?;
+        self.timer.lap(gpu, "g-buffer")?;
+        second_pass(gpu, &p, &camera_uniform, &g, &plan, &maps)?;
+        self.timer.lap(gpu, "mirror (2nd pass)")?;
+        let (stages, timing) = self.timer.finish(gpu)?;
         Ok(Frame {
-            image,
+            pixels: Pixels::Texture(g.color.clone()),
             stages,
             counters: vec![
                 ("mirrors".into(), plan.reflectors.len() as u64),
@@ -1037,26 +1208,25 @@ impl Technique for Pvrr {
             ],
             timing,
             warnings: tally.warnings,
+            converged: true,
+            created: gpu.resource_counts() - before,
         })
     }
 }
 
 /// `material`, one index, or three (red, green, blue), each in (1, 4].
-fn parse_ior(setting: &Setting) -> Result<Option<Vec3>, TechniqueError> {
-    if setting.value == "material" {
+fn parse_ior(value: &str) -> Result<Option<Vec3>, &'static str> {
+    if value == "material" {
         return Ok(None);
     }
-    let values: Vec<f32> = setting
-        .value
+    let values: Vec<f32> = value
         .split(',')
         .map(|v| v.trim().parse::<f32>().ok().filter(|i| *i > 1.0 && *i <= 4.0))
         .collect::<Option<_>>()
-        .ok_or_else(|| {
-            setting.bad("expected `material`, one index of refraction or three (red,green,blue), each above 1 and at most 4")
-        })?;
+        .ok_or("expected `material`, one index of refraction or three (red,green,blue), each above 1 and at most 4")?;
     match values[..] {
         [i] => Ok(Some(Vec3::splat(i))),
         [r, g, b] => Ok(Some(Vec3::new(r, g, b))),
-        _ => Err(setting.bad("expected one index of refraction or three (red,green,blue)")),
+        _ => Err("expected one index of refraction or three (red,green,blue)"),
     }
 }

@@ -10,15 +10,29 @@
 //! bias of 2 texels avoid self-shadowing; everything else is the reference's shading, evaluated
 //! at the same pixel centres.
 //!
+//! What a pass draws comes from its [`RasterSpec`]: which meshes (all, specular only, or
+//! non-specular only), which faces are culled, and whether the background is drawn, so that a
+//! technique needing, say, the back faces of its refractors uses this pass, not a copy of it.
+//!
+//! Nothing is created per frame: G-buffers come from a pool kept across frames
+//! ([`RasterPass::begin_frame`] hands them all back), and the camera uniform is rewritten in
+//! place before each draw (every draw is its own submission, and wgpu orders a buffer write
+//! before the next submission). Shadow maps are drawn at creation and again only when the
+//! scene's geometry changes ([`RasterPass::redraw_shadows`]).
+//!
 //! Parameters: `shadow_resolution` (default 1024) — texels per side of each shadow map; higher
 //! sharpens shadow edges at a cost of resolution² per layer in memory and in the prepare pass.
+
+use std::cell::RefCell;
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 use specula_gpu::shaders::{self, CameraUniform};
-use specula_gpu::util::{render_pipeline, texture_2d, PipelineSpec};
+use specula_gpu::util::{
+    buffer_binding, layout_entry, render_pipeline, texture_2d, texture_binding, PipelineSpec,
+};
 use specula_gpu::{GpuContext, GpuError};
-use specula_scene::Camera;
+use specula_scene::{Camera, Scene};
 use specula_trace::Image;
 
 use crate::gpu_scene::{GpuScene, GpuVertex, LIGHT_DIRECTIONAL};
@@ -53,6 +67,8 @@ pub struct ShadowView {
 }
 
 /// Render targets of one frame. `ids` holds (mesh + 1, triangle); 0 marks the background.
+/// Textures are shared handles: a `GBuffer` from [`RasterPass`] is a view of a pooled set.
+#[derive(Clone)]
 pub struct GBuffer {
     pub width: u32,
     pub height: u32,
@@ -61,9 +77,32 @@ pub struct GBuffer {
     pub normal: wgpu::Texture,
     pub ids: wgpu::Texture,
     pub depth: wgpu::Texture,
+    /// Its slot in the pool: stable across frames, so a technique can keep bind groups per slot.
+    pub slot: usize,
 }
 
 impl GBuffer {
+    fn new(ctx: &GpuContext, width: u32, height: u32, slot: usize) -> GBuffer {
+        let texture = |label, format, usage| texture_2d(ctx, label, width, height, format, usage);
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC;
+        GBuffer {
+            width,
+            height,
+            color: texture(
+                "color",
+                COLOR_FORMAT,
+                usage | wgpu::TextureUsages::STORAGE_BINDING,
+            ),
+            position: texture("position", COLOR_FORMAT, usage),
+            normal: texture("normal", COLOR_FORMAT, usage),
+            ids: texture("ids", IDS_FORMAT, usage),
+            depth: texture("depth", DEPTH_FORMAT, usage),
+            slot,
+        }
+    }
+
     /// The shaded colour as an image.
     pub fn read_color(&self, ctx: &GpuContext) -> Result<Image, GpuError> {
         read_rgba32f(ctx, &self.color)
@@ -85,28 +124,49 @@ pub fn read_rgba32f(ctx: &GpuContext, texture: &wgpu::Texture) -> Result<Image, 
     })
 }
 
-/// Draws the full-screen triangle of `pipeline` (vertex entry without buffers) into a new
-/// `width` × `height` colour texture that can be read back, with `bind_groups` bound as groups
-/// 0, 1, ... : the last pass of techniques that shade the G-buffer's pixels.
+/// A technique's output image, kept across frames and replaced only when the size changes.
+#[derive(Default)]
+pub struct OutputTexture {
+    texture: Option<wgpu::Texture>,
+}
+
+impl OutputTexture {
+    /// The `width` × `height` colour target (readable, sampleable, storable).
+    pub fn get(&mut self, ctx: &GpuContext, width: u32, height: u32) -> wgpu::Texture {
+        match &self.texture {
+            Some(t) if t.width() == width && t.height() == height => t.clone(),
+            _ => {
+                let texture = texture_2d(
+                    ctx,
+                    "output",
+                    width,
+                    height,
+                    COLOR_FORMAT,
+                    wgpu::TextureUsages::RENDER_ATTACHMENT
+                        | wgpu::TextureUsages::COPY_SRC
+                        | wgpu::TextureUsages::COPY_DST
+                        | wgpu::TextureUsages::TEXTURE_BINDING
+                        | wgpu::TextureUsages::STORAGE_BINDING,
+                );
+                self.texture = Some(texture.clone());
+                texture
+            }
+        }
+    }
+}
+
+/// Draws the full-screen triangle of `pipeline` (vertex entry without buffers) into `output`,
+/// with `bind_groups` bound as groups 0, 1, ... : the last pass of techniques that shade the
+/// G-buffer's pixels.
 pub fn fullscreen_pass(
     ctx: &GpuContext,
     label: &str,
     pipeline: &wgpu::RenderPipeline,
     bind_groups: &[&wgpu::BindGroup],
-    width: u32,
-    height: u32,
-) -> wgpu::Texture {
-    let device = &ctx.device;
-    let output = texture_2d(
-        device,
-        label,
-        width,
-        height,
-        COLOR_FORMAT,
-        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-    );
+    output: &wgpu::Texture,
+) {
     let output_view = output.create_view(&Default::default());
-    let mut encoder = device.create_command_encoder(&Default::default());
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
     {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(label),
@@ -128,7 +188,6 @@ pub fn fullscreen_pass(
         pass.draw(0..3, 0..1);
     }
     ctx.queue.submit([encoder.finish()]);
-    output
 }
 
 /// Near and far planes that hold the whole scene as seen from `eye`.
@@ -159,16 +218,66 @@ pub fn camera_uniform(
     )
 }
 
+/// Which meshes a raster pass draws.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeshSelection {
+    All,
+    /// Mirrors and dielectrics only.
+    Specular,
+    /// Everything but mirrors and dielectrics.
+    NonSpecular,
+}
+
+/// What a [`RasterPass`] draws.
+#[derive(Clone, Copy, Debug)]
+pub struct RasterSpec {
+    pub meshes: MeshSelection,
+    /// `Some(Face::Front)` keeps only back faces (a refractor's far side).
+    pub cull_mode: Option<wgpu::Face>,
+    /// Draw the background behind the geometry (else IDs stay 0 and colour black there).
+    pub background: bool,
+    /// Texels per side of each shadow map.
+    pub shadow_resolution: u32,
+}
+
+impl RasterSpec {
+    /// Everything, both faces, with the background: the view every technique starts from.
+    pub fn scene(shadow_resolution: u32) -> RasterSpec {
+        RasterSpec {
+            meshes: MeshSelection::All,
+            cull_mode: None,
+            background: true,
+            shadow_resolution,
+        }
+    }
+}
+
+/// Light views and the bind groups that render each shadow-map layer, made once.
+struct Shadows {
+    pipeline: wgpu::RenderPipeline,
+    maps: wgpu::Texture,
+    depth: wgpu::Texture,
+    /// One uniform buffer and bind group per layer.
+    layer_views: Vec<(wgpu::Buffer, wgpu::BindGroup)>,
+    /// Every layer's view, read by lighting.wgsl.
+    views: wgpu::Buffer,
+    resolution: u32,
+}
+
 pub struct RasterPass {
+    spec: RasterSpec,
     scene_pipeline: wgpu::RenderPipeline,
     background_pipeline: wgpu::RenderPipeline,
-    camera_layout: wgpu::BindGroupLayout,
     scene_bind_group: wgpu::BindGroup,
     shadow_layout: wgpu::BindGroupLayout,
     shadow_bind_group: wgpu::BindGroup,
-    /// Kept alive for the bind groups that use them.
-    _shadow_maps: wgpu::Texture,
-    _shadow_views: wgpu::Buffer,
+    shadows: Shadows,
+    camera_buffer: wgpu::Buffer,
+    camera_bind_group: wgpu::BindGroup,
+    /// Vertex ranges of the selected meshes, per mesh (empty for the others).
+    mesh_ranges: Vec<std::ops::Range<u32>>,
+    /// G-buffers kept across frames, and whether each is handed out this frame.
+    pool: RefCell<Vec<(GBuffer, bool)>>,
 }
 
 fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
@@ -222,15 +331,23 @@ impl RasterPass {
     /// Builds the pipelines and renders the shadow maps (they depend on the scene only).
     pub fn new(
         ctx: &GpuContext,
+        scene: &Scene,
         gpu_scene: &GpuScene,
-        shadow_resolution: u32,
+        spec: RasterSpec,
     ) -> Result<RasterPass, GpuError> {
-        ctx.validated("raster pass set-up", || {
-            Self::build(ctx, gpu_scene, shadow_resolution)
-        })
+        let pass = ctx.validated("raster pass set-up", || {
+            Self::build(ctx, scene, gpu_scene, spec)
+        })?;
+        pass.redraw_shadows(ctx, scene, gpu_scene)?;
+        Ok(pass)
     }
 
-    fn build(ctx: &GpuContext, gpu_scene: &GpuScene, shadow_resolution: u32) -> RasterPass {
+    fn build(
+        ctx: &GpuContext,
+        scene: &Scene,
+        gpu_scene: &GpuScene,
+        spec: RasterSpec,
+    ) -> RasterPass {
         let device = &ctx.device;
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("raster.wgsl"),
@@ -249,26 +366,19 @@ impl RasterPass {
         let shadow_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("shadows"),
             entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Storage { read_only: true },
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                        view_dimension: wgpu::TextureViewDimension::D2Array,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
+                layout_entry(
+                    0,
+                    wgpu::ShaderStages::FRAGMENT,
+                    buffer_binding(wgpu::BufferBindingType::Storage { read_only: true }),
+                ),
+                layout_entry(
+                    1,
+                    wgpu::ShaderStages::FRAGMENT,
+                    texture_binding(
+                        wgpu::TextureSampleType::Float { filterable: false },
+                        wgpu::TextureViewDimension::D2Array,
+                    ),
+                ),
             ],
         });
         let layout = |layouts: &[Option<&wgpu::BindGroupLayout>]| {
@@ -304,6 +414,7 @@ impl RasterPass {
                 depth: depth(true, wgpu::CompareFunction::Less),
                 targets: &G_BUFFER_FORMATS,
                 write_mask: wgpu::ColorWrites::ALL,
+                cull_mode: spec.cull_mode,
             },
         );
         let background_pipeline_layout = layout(&[Some(&camera_layout), Some(&scene_layout)]);
@@ -319,6 +430,7 @@ impl RasterPass {
                 depth: depth(false, wgpu::CompareFunction::Always),
                 targets: &G_BUFFER_FORMATS,
                 write_mask: wgpu::ColorWrites::ALL,
+                cull_mode: None,
             },
         );
         let shadow_pipeline_layout = layout(&[Some(&shadow_view_layout)]);
@@ -334,11 +446,138 @@ impl RasterPass {
                 depth: depth(true, wgpu::CompareFunction::Less),
                 targets: &[SHADOW_FORMAT],
                 write_mask: wgpu::ColorWrites::ALL,
+                cull_mode: None,
             },
         );
+        let resolution = spec.shadow_resolution;
+        let layers = gpu_scene.shadow_layers().max(1);
+        let maps = ctx.create_texture(&wgpu::TextureDescriptor {
+            label: Some("shadow maps"),
+            size: wgpu::Extent3d {
+                width: resolution,
+                height: resolution,
+                depth_or_array_layers: layers,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: SHADOW_FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let shadow_depth = texture_2d(
+            ctx,
+            "shadow depth",
+            resolution,
+            resolution,
+            DEPTH_FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        );
+        let layer_views = (0..gpu_scene.shadow_layers())
+            .map(|_| {
+                let buffer = ctx.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("shadow view"),
+                    size: size_of::<ShadowView>() as u64,
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                });
+                let bind_group = ctx.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: None,
+                    layout: &shadow_view_layout,
+                    entries: &[wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: buffer.as_entire_binding(),
+                    }],
+                });
+                (buffer, bind_group)
+            })
+            .collect();
+        let views = ctx.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("shadow views"),
+            size: layers as u64 * size_of::<ShadowView>() as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let shadow_bind_group = ctx.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("shadows"),
+            layout: &shadow_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: views.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&maps.create_view(
+                        &wgpu::TextureViewDescriptor {
+                            dimension: Some(wgpu::TextureViewDimension::D2Array),
+                            ..Default::default()
+                        },
+                    )),
+                },
+            ],
+        });
+        let camera_buffer = ctx.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("camera"),
+            size: size_of::<CameraUniform>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let camera_bind_group = ctx.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("camera"),
+            layout: &camera_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: camera_buffer.as_entire_binding(),
+            }],
+        });
+        let mesh_ranges = gpu_scene
+            .mesh_vertex_ranges
+            .iter()
+            .zip(&scene.meshes)
+            .map(|(range, mesh)| {
+                let specular = scene.materials[mesh.material].is_specular();
+                let selected = match spec.meshes {
+                    MeshSelection::All => true,
+                    MeshSelection::Specular => specular,
+                    MeshSelection::NonSpecular => !specular,
+                };
+                if selected {
+                    range.clone()
+                } else {
+                    range.start..range.start
+                }
+            })
+            .collect();
+        RasterPass {
+            spec,
+            scene_bind_group: gpu_scene.bind_group(ctx, &scene_layout),
+            scene_pipeline,
+            background_pipeline,
+            shadow_layout,
+            shadow_bind_group,
+            shadows: Shadows {
+                pipeline: shadow_pipeline,
+                maps,
+                depth: shadow_depth,
+                layer_views,
+                views,
+                resolution,
+            },
+            camera_buffer,
+            camera_bind_group,
+            mesh_ranges,
+            pool: RefCell::new(Vec::new()),
+        }
+    }
 
-        // Shadow views: six per point or spot light, one per directional light.
-        let bounds = gpu_scene.bounds;
+    /// The light views of the scene's shadow maps: six per point or spot light, one per
+    /// directional light.
+    fn shadow_views(&self, scene: &Scene, gpu_scene: &GpuScene) -> Vec<ShadowView> {
+        let resolution = self.shadows.resolution;
+        let bounds = scene.bounds();
         let (center, radius) = (bounds.center(), bounds.radius().max(1e-3));
         let mut views = Vec::new();
         for light in &gpu_scene.gpu_lights {
@@ -354,137 +593,83 @@ impl RasterPass {
                     origin: eye.to_array(),
                     directional: 1,
                     direction: direction.to_array(),
-                    texel_size: 2.0 * radius / shadow_resolution as f32,
+                    texel_size: 2.0 * radius / resolution as f32,
                 });
             } else {
                 let position = Vec3::from_array(light.position);
                 let far = (center - position).length() + radius * 1.01;
-                views.extend(cube_views(position, far * 1e-5, far, shadow_resolution));
+                views.extend(cube_views(position, far * 1e-5, far, resolution));
             }
         }
-        let layers = (views.len() as u32).max(1);
-        let shadow_maps = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("shadow maps"),
-            size: wgpu::Extent3d {
-                width: shadow_resolution,
-                height: shadow_resolution,
-                depth_or_array_layers: layers,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: SHADOW_FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                | wgpu::TextureUsages::TEXTURE_BINDING
-                | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
-        let shadow_depth = texture_2d(
-            device,
-            "shadow depth",
-            shadow_resolution,
-            shadow_resolution,
-            DEPTH_FORMAT,
-            wgpu::TextureUsages::RENDER_ATTACHMENT,
-        );
-        let shadow_depth_view = shadow_depth.create_view(&Default::default());
-        let mut encoder = device.create_command_encoder(&Default::default());
-        let mut view_buffers = Vec::new();
-        for (layer, view) in views.iter().enumerate() {
-            use wgpu::util::DeviceExt;
-            let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("shadow view"),
-                contents: bytemuck::bytes_of(view),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
-            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: None,
-                layout: &shadow_view_layout,
-                entries: &[wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: buffer.as_entire_binding(),
-                }],
-            });
-            let layer_view = shadow_maps.create_view(&wgpu::TextureViewDescriptor {
-                dimension: Some(wgpu::TextureViewDimension::D2),
-                base_array_layer: layer as u32,
-                array_layer_count: Some(1),
-                ..Default::default()
-            });
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("shadow map"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &layer_view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color {
-                            r: 3.0e38,
-                            g: 0.0,
-                            b: 0.0,
-                            a: 0.0,
+        views
+    }
+
+    /// Draws the shadow maps of the scene as it is now: at creation, and after the geometry
+    /// changed. Creates nothing.
+    pub fn redraw_shadows(
+        &self,
+        ctx: &GpuContext,
+        scene: &Scene,
+        gpu_scene: &GpuScene,
+    ) -> Result<(), GpuError> {
+        ctx.validated("shadow maps", || {
+            let views = self.shadow_views(scene, gpu_scene);
+            if !views.is_empty() {
+                ctx.queue
+                    .write_buffer(&self.shadows.views, 0, bytemuck::cast_slice(&views));
+            }
+            let depth_view = self.shadows.depth.create_view(&Default::default());
+            for (layer, (view, (buffer, bind_group))) in
+                views.iter().zip(&self.shadows.layer_views).enumerate()
+            {
+                ctx.queue.write_buffer(buffer, 0, bytemuck::bytes_of(view));
+                let layer_view = self.shadows.maps.create_view(&wgpu::TextureViewDescriptor {
+                    dimension: Some(wgpu::TextureViewDimension::D2),
+                    base_array_layer: layer as u32,
+                    array_layer_count: Some(1),
+                    ..Default::default()
+                });
+                let mut encoder = ctx.device.create_command_encoder(&Default::default());
+                {
+                    let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                        label: Some("shadow map"),
+                        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                            view: &layer_view,
+                            depth_slice: None,
+                            resolve_target: None,
+                            ops: wgpu::Operations {
+                                load: wgpu::LoadOp::Clear(wgpu::Color {
+                                    r: 3.0e38,
+                                    g: 0.0,
+                                    b: 0.0,
+                                    a: 0.0,
+                                }),
+                                store: wgpu::StoreOp::Store,
+                            },
+                        })],
+                        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                            view: &depth_view,
+                            depth_ops: Some(wgpu::Operations {
+                                load: wgpu::LoadOp::Clear(1.0),
+                                store: wgpu::StoreOp::Store,
+                            }),
+                            stencil_ops: None,
                         }),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &shadow_depth_view,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
-                ..Default::default()
-            });
-            pass.set_pipeline(&shadow_pipeline);
-            pass.set_bind_group(0, &bind_group, &[]);
-            pass.set_vertex_buffer(0, gpu_scene.vertices.slice(..));
-            pass.draw(0..gpu_scene.vertex_count, 0..1);
-            drop(pass);
-            view_buffers.push(buffer);
-        }
-        ctx.queue.submit([encoder.finish()]);
-        use wgpu::util::DeviceExt;
-        let placeholder = [ShadowView::zeroed()];
-        let shadow_views = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("shadow views"),
-            contents: bytemuck::cast_slice(if views.is_empty() {
-                &placeholder[..]
-            } else {
-                &views
-            }),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
-        let shadow_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("shadows"),
-            layout: &shadow_layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: shadow_views.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::TextureView(&shadow_maps.create_view(
-                        &wgpu::TextureViewDescriptor {
-                            dimension: Some(wgpu::TextureViewDimension::D2Array),
-                            ..Default::default()
-                        },
-                    )),
-                },
-            ],
-        });
-        RasterPass {
-            scene_bind_group: gpu_scene.bind_group(device, &scene_layout),
-            scene_pipeline,
-            background_pipeline,
-            camera_layout,
-            shadow_layout,
-            shadow_bind_group,
-            _shadow_maps: shadow_maps,
-            _shadow_views: shadow_views,
-        }
+                        ..Default::default()
+                    });
+                    pass.set_pipeline(&self.shadows.pipeline);
+                    pass.set_bind_group(0, bind_group, &[]);
+                    pass.set_vertex_buffer(0, gpu_scene.vertices.slice(..));
+                    pass.draw(0..gpu_scene.vertex_count, 0..1);
+                }
+                // One submission per layer: the next layer's view is written before it.
+                ctx.queue.submit([encoder.finish()]);
+            }
+        })
+    }
+
+    pub fn spec(&self) -> &RasterSpec {
+        &self.spec
     }
 
     /// Layout of bind group 2 of lighting.wgsl (the lights' shadow maps).
@@ -497,8 +682,31 @@ impl RasterPass {
         &self.shadow_bind_group
     }
 
-    /// Rasterises the scene for `camera` into a new G-buffer; `hidden_mesh`, if given, is left
-    /// out (a reflector rendering its own environment).
+    /// Hands every pooled G-buffer back: call at the start of each frame.
+    pub fn begin_frame(&self) {
+        for (_, in_use) in self.pool.borrow_mut().iter_mut() {
+            *in_use = false;
+        }
+    }
+
+    /// A `width` × `height` G-buffer not yet handed out this frame, made only when the pool
+    /// has none.
+    pub fn acquire(&self, ctx: &GpuContext, width: u32, height: u32) -> GBuffer {
+        let mut pool = self.pool.borrow_mut();
+        if let Some((g, in_use)) = pool
+            .iter_mut()
+            .find(|(g, in_use)| !*in_use && g.width == width && g.height == height)
+        {
+            *in_use = true;
+            return g.clone();
+        }
+        let g = GBuffer::new(ctx, width, height, pool.len());
+        pool.push((g.clone(), true));
+        g
+    }
+
+    /// Rasterises the scene for `camera` into a pooled G-buffer; `hidden_mesh`, if given, is
+    /// left out (a reflector rendering its own environment).
     pub fn render(
         &self,
         ctx: &GpuContext,
@@ -510,17 +718,33 @@ impl RasterPass {
     }
 
     /// As [`RasterPass::render`], also drawing `extra` (a vertex buffer laid out as
-    /// `GpuVertex`, and its vertex count) after the scene: per-frame geometry such as markers.
+    /// `GpuVertex`, the byte offset and the count of its vertices) after the scene: per-frame
+    /// geometry such as markers.
     pub fn render_with(
         &self,
         ctx: &GpuContext,
         gpu_scene: &GpuScene,
         camera: &CameraUniform,
         hidden_mesh: Option<usize>,
-        extra: Option<(&wgpu::Buffer, u32)>,
+        extra: Option<(&wgpu::Buffer, u64, u32)>,
     ) -> Result<GBuffer, GpuError> {
+        let g = self.acquire(ctx, camera.width as u32, camera.height as u32);
+        self.draw_into(ctx, gpu_scene, camera, hidden_mesh, extra, &g)?;
+        Ok(g)
+    }
+
+    /// Rasterises into `g` (of the camera's size).
+    pub fn draw_into(
+        &self,
+        ctx: &GpuContext,
+        gpu_scene: &GpuScene,
+        camera: &CameraUniform,
+        hidden_mesh: Option<usize>,
+        extra: Option<(&wgpu::Buffer, u64, u32)>,
+        g: &GBuffer,
+    ) -> Result<(), GpuError> {
         ctx.validated("scene raster", || {
-            self.draw(ctx, gpu_scene, camera, hidden_mesh, extra)
+            self.draw(ctx, gpu_scene, camera, hidden_mesh, extra, g)
         })
     }
 
@@ -530,42 +754,11 @@ impl RasterPass {
         gpu_scene: &GpuScene,
         camera: &CameraUniform,
         hidden_mesh: Option<usize>,
-        extra: Option<(&wgpu::Buffer, u32)>,
-    ) -> GBuffer {
-        use wgpu::util::DeviceExt;
-        let device = &ctx.device;
-        let (width, height) = (camera.width as u32, camera.height as u32);
-        let texture =
-            |label, format, usage| texture_2d(device, label, width, height, format, usage);
-        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
-            | wgpu::TextureUsages::TEXTURE_BINDING
-            | wgpu::TextureUsages::COPY_SRC;
-        let g = GBuffer {
-            width,
-            height,
-            color: texture(
-                "color",
-                COLOR_FORMAT,
-                usage | wgpu::TextureUsages::STORAGE_BINDING,
-            ),
-            position: texture("position", COLOR_FORMAT, usage),
-            normal: texture("normal", COLOR_FORMAT, usage),
-            ids: texture("ids", IDS_FORMAT, usage),
-            depth: texture("depth", DEPTH_FORMAT, usage),
-        };
-        let camera_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("camera"),
-            contents: bytemuck::bytes_of(camera),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
-        let camera_bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("camera"),
-            layout: &self.camera_layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: camera_buffer.as_entire_binding(),
-            }],
-        });
+        extra: Option<(&wgpu::Buffer, u64, u32)>,
+        g: &GBuffer,
+    ) {
+        ctx.queue
+            .write_buffer(&self.camera_buffer, 0, bytemuck::bytes_of(camera));
         let views =
             [&g.color, &g.position, &g.normal, &g.ids].map(|t| t.create_view(&Default::default()));
         let depth_view = g.depth.create_view(&Default::default());
@@ -583,7 +776,7 @@ impl RasterPass {
                 })
             })
             .collect();
-        let mut encoder = device.create_command_encoder(&Default::default());
+        let mut encoder = ctx.device.create_command_encoder(&Default::default());
         {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("scene raster"),
@@ -598,27 +791,38 @@ impl RasterPass {
                 }),
                 ..Default::default()
             });
-            pass.set_bind_group(0, &camera_bind_group, &[]);
+            pass.set_bind_group(0, &self.camera_bind_group, &[]);
             pass.set_bind_group(1, &self.scene_bind_group, &[]);
-            pass.set_pipeline(&self.background_pipeline);
-            pass.draw(0..3, 0..1);
+            if self.spec.background {
+                pass.set_pipeline(&self.background_pipeline);
+                pass.draw(0..3, 0..1);
+            }
             pass.set_pipeline(&self.scene_pipeline);
             pass.set_bind_group(2, &self.shadow_bind_group, &[]);
             pass.set_vertex_buffer(0, gpu_scene.vertices.slice(..));
-            match hidden_mesh {
-                None => pass.draw(0..gpu_scene.vertex_count, 0..1),
-                Some(hidden) => {
-                    let ranges = &gpu_scene.mesh_vertex_ranges;
-                    pass.draw(0..ranges[hidden].start, 0..1);
-                    pass.draw(ranges[hidden].end..gpu_scene.vertex_count, 0..1);
+            // Consecutive selected meshes are drawn as one range.
+            let mut pending: Option<std::ops::Range<u32>> = None;
+            for (mesh, range) in self.mesh_ranges.iter().enumerate() {
+                if Some(mesh) == hidden_mesh || range.is_empty() {
+                    continue;
                 }
+                pending = match pending {
+                    Some(p) if p.end == range.start => Some(p.start..range.end),
+                    Some(p) => {
+                        pass.draw(p, 0..1);
+                        Some(range.clone())
+                    }
+                    None => Some(range.clone()),
+                };
             }
-            if let Some((buffer, count)) = extra {
-                pass.set_vertex_buffer(0, buffer.slice(..));
+            if let Some(p) = pending {
+                pass.draw(p, 0..1);
+            }
+            if let Some((buffer, offset, count)) = extra {
+                pass.set_vertex_buffer(0, buffer.slice(offset..));
                 pass.draw(0..count, 0..1);
             }
         }
         ctx.queue.submit([encoder.finish()]);
-        g
     }
 }

@@ -1,0 +1,270 @@
+//! `reference`: the exact Whitted-style ray tracer (specula-trace) as a technique: the ground
+//! truth every other method is judged against. CPU only (rayon); it needs no GPU.
+//!
+//! Paper: none (Whitted 1980; the semantics are DESIGN.md's "scene semantics").
+//!
+//! Steps: for each pixel, `spp` rays (one through the centre, or stratified jittered samples)
+//! traced through the scene's shared BVH ([`LiveScene::accel`]), both branches at dielectrics,
+//! to `max_depth` bounces.
+//!
+//! Progressive mode (`budget_ms` > 0; the viewer's): each `render` call works for about
+//! `budget_ms` and returns what it has. The image is refined coarse to fine: first every 8th
+//! pixel in x and y (each shown as an 8 × 8 block), then the pixels of the 4-grid not yet
+//! traced, then the 2-grid, then the rest, so every pixel is traced exactly once and the whole
+//! costs one full render. The frame says `converged` once every pixel is traced. Any change of
+//! camera, size, parameters or scene version starts over.
+//!
+//! Approximations: none beyond sampling (the reference defines "exact"); while not converged,
+//! untraced pixels show their block's traced corner.
+//!
+//! Parameters:
+//! - `spp` (default 1): samples per pixel. Cost is linear; more smooths edges.
+//! - `max_depth` (default 8): the most specular bounces on a path. Cost grows with the paths
+//!   that need it.
+//! - `budget_ms` (default 0): the time one call may take in progressive mode; 0 traces the
+//!   whole image in one call.
+
+use std::time::Instant;
+
+use glam::Vec3;
+use rayon::prelude::*;
+use specula_gpu::{ResourceCounts, StageTime, TimingSource};
+use specula_scene::Camera;
+use specula_trace::reference::{pixel_radiance, Tracer};
+use specula_trace::Image;
+
+use crate::live_scene::LiveScene;
+use crate::technique::{
+    Context, Frame, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, Technique,
+    TechniqueError,
+};
+
+pub const PARAMS: &[ParamSpec] = &[
+    ParamSpec {
+        name: "spp",
+        kind: ParamKind::Integer { min: 1, max: 4096 },
+        default: "1",
+        doc: "samples per pixel: 1 = the pixel centre; more = stratified jitter, averaged",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "max_depth",
+        kind: ParamKind::Integer { min: 0, max: 64 },
+        default: "8",
+        doc: "most specular bounces on a path",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "budget_ms",
+        kind: ParamKind::Integer { min: 0, max: 60000 },
+        default: "0",
+        doc: "progressive mode: milliseconds per call, coarse to fine (0: the whole image at once)",
+        invalidates: Invalidates::Uniform,
+    },
+];
+
+pub const INFO: MethodInfo = MethodInfo {
+    name: "reference",
+    summary: "exact Whitted-style ray tracing on the CPU (the ground truth)",
+    exact: true,
+    needs_gpu: false,
+    progressive: true,
+    params: PARAMS,
+    create: || Box::new(Reference::default()),
+};
+
+/// Pixel strides of the progressive levels, coarse to fine.
+const LEVELS: [u32; 4] = [8, 4, 2, 1];
+/// Side of a work tile in pixels.
+const TILE: u32 = 32;
+
+/// What a progressive image was started for: a change of any part starts over.
+#[derive(Clone, Debug, PartialEq)]
+struct ViewKey {
+    camera: Camera,
+    width: u32,
+    height: u32,
+    spp: u32,
+    max_depth: u32,
+    scene: (u64, u64),
+}
+
+struct Progress {
+    key: ViewKey,
+    image: Image,
+    /// Index into LEVELS, and the next tile of that level.
+    level: usize,
+    next_tile: u32,
+}
+
+pub struct Reference {
+    pub spp: u32,
+    pub max_depth: u32,
+    pub budget_ms: u32,
+    progress: Option<Progress>,
+}
+
+impl Default for Reference {
+    fn default() -> Self {
+        Reference {
+            spp: 1,
+            max_depth: 8,
+            budget_ms: 0,
+            progress: None,
+        }
+    }
+}
+
+/// Whether pixel (x, y) is traced at level `level`, in a run whose first level is `first`:
+/// on the level's grid and not on the previous level's (already traced).
+fn traced_at(x: u32, y: u32, level: usize, first: usize) -> bool {
+    let on = |s: u32| x.is_multiple_of(s) && y.is_multiple_of(s);
+    on(LEVELS[level]) && !(level > first && on(LEVELS[level - 1]))
+}
+
+impl Technique for Reference {
+    fn info(&self) -> &'static MethodInfo {
+        &INFO
+    }
+
+    fn parameter(&self, name: &str) -> String {
+        match name {
+            "spp" => self.spp.to_string(),
+            "max_depth" => self.max_depth.to_string(),
+            "budget_ms" => self.budget_ms.to_string(),
+            _ => String::new(),
+        }
+    }
+
+    fn set_parameter(&mut self, name: &str, value: &ParamValue) -> Result<(), TechniqueError> {
+        let v = value.integer() as u32;
+        match name {
+            "spp" => self.spp = v,
+            "max_depth" => self.max_depth = v,
+            "budget_ms" => self.budget_ms = v,
+            _ => {}
+        }
+        Ok(())
+    }
+
+    fn invalidate(&mut self, _: Invalidates) {
+        self.progress = None;
+    }
+
+    fn prepare(&mut self, _: &Context, _: &LiveScene) -> Result<(), TechniqueError> {
+        // The BVH is the scene's own (LiveScene); nothing else depends on the scene.
+        Ok(())
+    }
+
+    fn render(
+        &mut self,
+        _: &Context,
+        live: &LiveScene,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+    ) -> Result<Frame, TechniqueError> {
+        let start = Instant::now();
+        let key = ViewKey {
+            camera: camera.clone(),
+            width,
+            height,
+            spp: self.spp,
+            max_depth: self.max_depth,
+            scene: (live.id(), live.version()),
+        };
+        // Without a budget the coarse levels would only be overwritten: trace the finest alone.
+        let first_level = if self.budget_ms == 0 {
+            LEVELS.len() - 1
+        } else {
+            0
+        };
+        // Without a budget every call traces the whole image (a fresh render, as bench times).
+        let keep = self.budget_ms > 0 && self.progress.as_ref().is_some_and(|p| p.key == key);
+        if !keep {
+            self.progress = Some(Progress {
+                key,
+                image: Image::new(width, height),
+                level: first_level,
+                next_tile: 0,
+            });
+        }
+        let (spp, budget_ms) = (self.spp, self.budget_ms);
+        let progress = self.progress.as_mut().expect("set above");
+        let tracer = Tracer {
+            scene: live.scene(),
+            accel: live.accel(),
+            max_depth: self.max_depth,
+        };
+        let (tiles_x, tiles_y) = (width.div_ceil(TILE), height.div_ceil(TILE));
+        let tiles = tiles_x * tiles_y;
+        let batch = (rayon::current_num_threads() as u32 * 2).max(1);
+        let mut rays = 0u64;
+        while progress.level < LEVELS.len() {
+            let level = progress.level;
+            let stride = LEVELS[level];
+            let end = if budget_ms == 0 {
+                tiles
+            } else {
+                (progress.next_tile + batch).min(tiles)
+            };
+            let traced: Vec<(u32, u32, Vec3)> = (progress.next_tile..end)
+                .into_par_iter()
+                .flat_map_iter(|tile| {
+                    let (x0, y0) = ((tile % tiles_x) * TILE, (tile / tiles_x) * TILE);
+                    let tracer = &tracer;
+                    (y0..(y0 + TILE).min(height)).flat_map(move |y| {
+                        (x0..(x0 + TILE).min(width))
+                            .filter(move |&x| traced_at(x, y, level, first_level))
+                            .map(move |x| {
+                                (
+                                    x,
+                                    y,
+                                    pixel_radiance(tracer, camera, x, y, width, height, spp),
+                                )
+                            })
+                    })
+                })
+                .collect();
+            rays += traced.len() as u64 * spp as u64;
+            for (x, y, radiance) in traced {
+                for by in y..(y + stride).min(height) {
+                    for bx in x..(x + stride).min(width) {
+                        progress.image.pixels[(by * width + bx) as usize] = radiance;
+                    }
+                }
+            }
+            progress.next_tile = end;
+            if end == tiles {
+                progress.level += 1;
+                progress.next_tile = 0;
+            }
+            if budget_ms > 0 && start.elapsed().as_millis() as u32 >= budget_ms {
+                break;
+            }
+        }
+        let converged = progress.level == LEVELS.len();
+        Ok(Frame {
+            pixels: Pixels::Image(progress.image.clone()),
+            stages: vec![StageTime {
+                stage: "ray tracing".into(),
+                milliseconds: start.elapsed().as_secs_f64() * 1e3,
+            }],
+            counters: vec![
+                ("camera rays".into(), rays),
+                ("pixels per side of a block".into(), {
+                    let level = progress.level.min(LEVELS.len() - 1);
+                    if converged {
+                        1
+                    } else {
+                        LEVELS[level.saturating_sub(1)] as u64
+                    }
+                }),
+            ],
+            timing: TimingSource::CpuWallClock,
+            warnings: Vec::new(),
+            converged,
+            created: ResourceCounts::default(),
+        })
+    }
+}
