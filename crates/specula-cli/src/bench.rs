@@ -62,11 +62,7 @@ pub fn run(
 ) -> Result<Vec<MethodBench>> {
     let live = LiveScene::new(scene);
     let camera = live.scene().camera.clone();
-    let adapter = ctx
-        .gpu
-        .as_ref()
-        .map(|g| g.describe())
-        .unwrap_or_else(|| "CPU".into());
+    let adapter = ctx.describe();
     let mut results = Vec::new();
     for name in methods {
         let info = specula_methods::method(name)?;

@@ -217,18 +217,13 @@ pub fn compare(
         });
         method_images.push((image, metrics::heat_map(&flip, width, height)));
     }
-    let adapter = ctx
-        .gpu
-        .as_ref()
-        .map(|g| g.describe())
-        .unwrap_or_else(|| "no GPU".into());
     Ok(Comparison {
         report: Report {
             schema_version: 1,
             scene: scene.name.clone(),
             width,
             height,
-            adapter,
+            adapter: ctx.describe(),
             mask_pixels,
             reference: ReferenceReport {
                 spp: options.spp,

@@ -311,6 +311,22 @@ impl GpuScene {
         }
     }
 
+    /// The vertex ranges of the meshes for which `keep` holds, consecutive meshes merged into
+    /// one range (one draw call each).
+    pub fn vertex_ranges(&self, keep: impl Fn(usize) -> bool) -> Vec<std::ops::Range<u32>> {
+        let mut ranges: Vec<std::ops::Range<u32>> = Vec::new();
+        for (mesh, range) in self.mesh_vertex_ranges.iter().enumerate() {
+            if !keep(mesh) || range.is_empty() {
+                continue;
+            }
+            match ranges.last_mut() {
+                Some(last) if last.end == range.start => last.end = range.end,
+                _ => ranges.push(range.clone()),
+            }
+        }
+        ranges
+    }
+
     /// Number of shadow-map layers the lights need.
     pub fn shadow_layers(&self) -> u32 {
         self.gpu_lights
@@ -364,18 +380,11 @@ impl GpuScene {
             &self.texels,
             &self.lights,
         ];
-        let entries: Vec<wgpu::BindGroupEntry> = buffers
-            .iter()
-            .enumerate()
-            .map(|(i, b)| wgpu::BindGroupEntry {
-                binding: i as u32,
-                resource: b.as_entire_binding(),
-            })
-            .collect();
-        ctx.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("scene"),
+        specula_gpu::util::bind_group(
+            ctx,
+            "scene",
             layout,
-            entries: &entries,
-        })
+            &buffers.map(|b| b.as_entire_binding()),
+        )
     }
 }

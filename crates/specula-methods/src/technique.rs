@@ -54,6 +54,14 @@ impl Context {
             .ok_or(TechniqueError::NeedsGpu { technique })
     }
 
+    /// The devices in one line, for reports: the GPU adapter, or "CPU only".
+    pub fn describe(&self) -> String {
+        self.gpu
+            .as_ref()
+            .map(|g| g.describe())
+            .unwrap_or_else(|| "CPU only".into())
+    }
+
     /// GPU objects created so far (zero without a GPU).
     pub fn resource_counts(&self) -> ResourceCounts {
         self.gpu

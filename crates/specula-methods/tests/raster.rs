@@ -2,7 +2,7 @@
 //! surface (the specular ones are the techniques' job).
 
 use specula_methods::raster::{self, RasterPass, RasterSpec};
-use specula_methods::GpuScene;
+use specula_methods::LiveScene;
 use specula_trace::{render, Image, RenderSettings, SceneAccel};
 
 /// Mean FLIP over pixels where the raster G-buffer shows no mirror or dielectric, at 128×128
@@ -41,10 +41,11 @@ fn check(scene_name: &str) -> f32 {
         },
         &|_, _| {},
     );
-    let gpu_scene = GpuScene::upload(&ctx, &scene);
-    let pass = RasterPass::new(&ctx, &scene, &gpu_scene, RasterSpec::scene(1024)).unwrap();
+    let live = LiveScene::new(scene.clone());
+    let gpu_scene = live.gpu(&ctx);
+    let pass = RasterPass::new(&ctx, &live, RasterSpec::scene(1024)).unwrap();
     let camera = raster::camera_uniform(&scene.camera, &scene.bounds(), width, height);
-    let g = pass.render(&ctx, &gpu_scene, &camera, None).unwrap();
+    let g = pass.render(&ctx, gpu_scene, &camera, None).unwrap();
     let mut image = g.read_color(&ctx).unwrap();
     let ids = g.read_ids(&ctx).unwrap();
     assert!(image.pixels.iter().all(|p| p.is_finite()));

@@ -96,7 +96,7 @@ use specula_scene::{Camera, Scene};
 
 use crate::gpu_scene::GpuScene;
 use crate::live_scene::LiveScene;
-use crate::raster::{self, OutputTexture, RasterPass, RasterSpec, CUBE_FACES};
+use crate::raster::{self, BindGroupsBySlot, OutputTexture, RasterPass, RasterSpec, CUBE_FACES};
 use crate::technique::{
     Context, Frame, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, Technique,
     TechniqueError,
@@ -166,13 +166,7 @@ pub const PARAMS: &[ParamSpec] = &[
         doc: "redraw the maps every frame (else only after a move)",
         invalidates: Invalidates::Uniform,
     },
-    ParamSpec {
-        name: "shadow_resolution",
-        kind: ParamKind::Integer { min: 1, max: 8192 },
-        default: "1024",
-        doc: "texels per side of the scene raster's shadow maps",
-        invalidates: Invalidates::Scene,
-    },
+    raster::SHADOW_RESOLUTION,
 ];
 
 pub const INFO: MethodInfo = MethodInfo {
@@ -316,7 +310,7 @@ struct LayerDraw {
 
 struct Prepared {
     scene_id: u64,
-    /// The scene version the layer views, reflector origins and shadow maps were made for.
+    /// The scene version the layer views and reflector origins were made for.
     version: u64,
     /// The scene version the maps were drawn at (None: not yet).
     maps_drawn_at: Option<u64>,
@@ -343,7 +337,7 @@ struct Prepared {
     faces: wgpu::Buffer,
     camera_buffer: wgpu::Buffer,
     /// Tracing bind group per G-buffer pool slot.
-    trace_bind_groups: Vec<(usize, wgpu::BindGroup)>,
+    trace_bind_groups: BindGroupsBySlot,
 }
 
 pub struct DistanceMaps {
@@ -381,21 +375,6 @@ impl Default for DistanceMaps {
             output_texture: OutputTexture::default(),
         }
     }
-}
-
-/// Contiguous vertex ranges of the meshes for which `keep` holds.
-fn vertex_ranges(gpu_scene: &GpuScene, keep: impl Fn(usize) -> bool) -> Vec<std::ops::Range<u32>> {
-    let mut ranges: Vec<std::ops::Range<u32>> = Vec::new();
-    for (mesh, range) in gpu_scene.mesh_vertex_ranges.iter().enumerate() {
-        if !keep(mesh) || range.is_empty() {
-            continue;
-        }
-        match ranges.last_mut() {
-            Some(last) if last.end == range.start => last.end = range.end,
-            _ => ranges.push(range.clone()),
-        }
-    }
-    ranges
 }
 
 // What most bindings here are.
@@ -607,9 +586,9 @@ impl DistanceMaps {
         Vec<GpuMapReflector>,
     ) {
         let specular = |mesh: usize| scene.materials[scene.meshes[mesh].material].is_specular();
-        let all = vertex_ranges(gpu_scene, |_| true);
-        let specular_ranges = vertex_ranges(gpu_scene, specular);
-        let diffuse_ranges = vertex_ranges(gpu_scene, |m| !specular(m));
+        let all = gpu_scene.vertex_ranges(|_| true);
+        let specular_ranges = gpu_scene.vertex_ranges(specular);
+        let diffuse_ranges = gpu_scene.vertex_ranges(|m| !specular(m));
         let bounds = scene.bounds();
         let layer_count = self.layer_count();
         let mut views_out = Vec::new();
@@ -703,12 +682,7 @@ impl DistanceMaps {
         let device = &ctx.device;
         let scene = live.scene();
         let gpu_scene = live.gpu(ctx);
-        let raster = RasterPass::new(
-            ctx,
-            scene,
-            gpu_scene,
-            RasterSpec::scene(self.shadow_resolution),
-        )?;
+        let raster = RasterPass::new(ctx, live, RasterSpec::scene(self.shadow_resolution))?;
         let reflectors: Vec<usize> = (0..scene.meshes.len())
             .filter(|&m| scene.materials[scene.meshes[m].material].is_specular())
             .collect();
@@ -814,7 +788,7 @@ impl DistanceMaps {
                 ),
                 faces: storage("cube faces", bytemuck::cast_slice(&face_bases())),
                 camera_buffer: uniform("camera", size_of::<CameraUniform>()),
-                trace_bind_groups: Vec::new(),
+                trace_bind_groups: BindGroupsBySlot::default(),
                 raster,
                 reflectors,
                 material_maps: maps.material,
@@ -835,7 +809,7 @@ impl DistanceMaps {
     }
 
     /// The prepared state for `live`, (re)built when missing or made for another scene; after
-    /// a move, the layer views, origins and shadow maps follow the new geometry.
+    /// a move, the layer views and origins follow the new geometry.
     fn ensure_prepared(
         &mut self,
         ctx: &GpuContext,
@@ -847,7 +821,6 @@ impl DistanceMaps {
         let mut p = self.prepared.take().expect("built above");
         if p.version != live.version() {
             p.place(self, ctx, live.scene(), live.gpu(ctx));
-            p.raster.redraw_shadows(ctx, live.scene(), live.gpu(ctx))?;
             p.version = live.version();
         }
         self.prepared = Some(p);
@@ -1035,7 +1008,7 @@ impl Technique for DistanceMaps {
         };
         let layer_count = self.layer_count() as u64;
         let p = self.prepared.as_mut().expect("prepared above");
-        p.raster.begin_frame();
+        p.raster.begin_frame(gpu, live)?;
         self.timer.start(gpu);
         gpu.queue
             .write_buffer(&p.settings, 0, bytemuck::bytes_of(&settings));
@@ -1091,21 +1064,15 @@ fn trace(
 ) {
     ctx.queue
         .write_buffer(&p.camera_buffer, 0, bytemuck::bytes_of(camera));
-    if !p.trace_bind_groups.iter().any(|(slot, _)| *slot == g.slot) {
-        let view = |t: &wgpu::Texture| t.create_view(&Default::default());
-        let array = |t: &wgpu::Texture| {
-            t.create_view(&wgpu::TextureViewDescriptor {
-                dimension: Some(wgpu::TextureViewDimension::D2Array),
-                ..Default::default()
-            })
-        };
+    let group = p.trace_bind_groups.get_or_make(g.slot, || {
+        let [color, position, normal, ids] = g.views();
         let views = [
-            view(&g.color),
-            view(&g.position),
-            view(&g.normal),
-            view(&g.ids),
-            array(&p.material_maps),
-            array(&p.geometry_maps),
+            color,
+            position,
+            normal,
+            ids,
+            array_view(&p.material_maps),
+            array_view(&p.geometry_maps),
         ];
         let mut resources = vec![
             p.camera_buffer.as_entire_binding(),
@@ -1116,15 +1083,8 @@ fn trace(
             [&p.reflector_buffer, &p.mesh_reflector, &p.ranges, &p.faces]
                 .map(|b| b.as_entire_binding()),
         );
-        let group = bind_group(ctx, "distance-map trace", &p.trace_layout, &resources);
-        p.trace_bind_groups.push((g.slot, group));
-    }
-    let group = &p
-        .trace_bind_groups
-        .iter()
-        .find(|(slot, _)| *slot == g.slot)
-        .expect("made above")
-        .1;
+        bind_group(ctx, "distance-map trace", &p.trace_layout, &resources)
+    });
     raster::fullscreen_pass(
         ctx,
         "distance-map trace",

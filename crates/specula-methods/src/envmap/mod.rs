@@ -47,7 +47,7 @@ use specula_scene::{Camera, Scene};
 
 use crate::gpu_scene::GpuScene;
 use crate::live_scene::LiveScene;
-use crate::raster::{self, OutputTexture, RasterPass, RasterSpec};
+use crate::raster::{self, BindGroupsBySlot, OutputTexture, RasterPass, RasterSpec};
 use crate::technique::{
     Context, Frame, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, Technique,
     TechniqueError,
@@ -84,13 +84,7 @@ pub const PARAMS: &[ParamSpec] = &[
         doc: "redraw the cube maps every frame (else only after a move)",
         invalidates: Invalidates::Uniform,
     },
-    ParamSpec {
-        name: "shadow_resolution",
-        kind: ParamKind::Integer { min: 1, max: 8192 },
-        default: "1024",
-        doc: "texels per side of the scene raster's shadow maps",
-        invalidates: Invalidates::Scene,
-    },
+    raster::SHADOW_RESOLUTION,
 ];
 
 pub const INFO: MethodInfo = MethodInfo {
@@ -117,8 +111,8 @@ pub struct GpuReflector {
 /// What depends on the scene (not on `resolution`).
 struct Prepared {
     scene_id: u64,
-    /// The scene version the reflector centres, face cameras and shadow maps were made for.
-    version: u64,
+    /// The scene version and exit model the reflector buffers were written for.
+    placed: Option<(u64, Exit)>,
     raster: RasterPass,
     /// (mesh index, centre, radius) of each reflector.
     reflectors: Vec<(usize, Vec3, f32)>,
@@ -137,7 +131,7 @@ struct Faces {
     /// Scene version the faces were drawn at (None: never drawn).
     drawn_at: Option<u64>,
     /// Shading bind group per G-buffer pool slot.
-    bind_groups: Vec<(usize, wgpu::BindGroup)>,
+    bind_groups: BindGroupsBySlot,
 }
 
 /// Where a ray that refracted into a solid leaves it (`envmap`'s second interface).
@@ -238,12 +232,7 @@ impl EnvMap {
         let device = &ctx.device;
         let scene = live.scene();
         let gpu_scene = live.gpu(ctx);
-        let raster = RasterPass::new(
-            ctx,
-            scene,
-            gpu_scene,
-            RasterSpec::scene(self.shadow_resolution),
-        )?;
+        let raster = RasterPass::new(ctx, live, RasterSpec::scene(self.shadow_resolution))?;
         ctx.validated("envmap set-up", || {
             let reflectors = reflectors(scene);
             let mut mesh_reflector = vec![-1i32; scene.meshes.len().max(1)];
@@ -307,7 +296,7 @@ impl EnvMap {
             );
             Prepared {
                 scene_id: live.id(),
-                version: live.version(),
+                placed: None,
                 scene_bind_group: gpu_scene.bind_group(ctx, &scene_layout),
                 env_views: storage("environment views", 6 * count * 64),
                 reflector_buffer: storage("reflectors", count * size_of::<GpuReflector>()),
@@ -397,40 +386,41 @@ impl Technique for EnvMap {
         let gpu_scene = live.gpu(gpu);
         let (resolution, exit, dynamic) = (self.resolution, self.exit, self.dynamic);
         let p = self.prepared.as_mut().expect("prepared above");
-        p.raster.begin_frame();
+        p.raster.begin_frame(gpu, live)?;
         self.timer.start(gpu);
-        let moved = p.version != live.version();
-        if moved {
+        if p.placed != Some((live.version(), exit)) {
             p.reflectors = reflectors(scene);
-            p.raster.redraw_shadows(gpu, scene, gpu_scene)?;
-            p.version = live.version();
+            let mut views = Vec::with_capacity(6 * p.reflectors.len());
+            let mut gpu_reflectors = Vec::with_capacity(p.reflectors.len());
+            for (k, &(_, center, radius)) in p.reflectors.iter().enumerate() {
+                views.extend(
+                    face_cameras(scene, center, resolution)
+                        .iter()
+                        .map(|c| c.clip_from_world),
+                );
+                gpu_reflectors.push(GpuReflector {
+                    center: center.to_array(),
+                    radius,
+                    first_layer: 6 * k as u32,
+                    exit_model: exit as u32,
+                    pad: [0; 2],
+                });
+            }
+            if !gpu_reflectors.is_empty() {
+                gpu.queue
+                    .write_buffer(&p.env_views, 0, bytemuck::cast_slice(&views));
+                gpu.queue.write_buffer(
+                    &p.reflector_buffer,
+                    0,
+                    bytemuck::cast_slice(&gpu_reflectors),
+                );
+            }
+            p.placed = Some((live.version(), exit));
         }
         let camera_uniform = raster::camera_uniform(camera, &scene.bounds(), width, height);
         let g = p.raster.render(gpu, gpu_scene, &camera_uniform, None)?;
         self.timer.lap(gpu, "g-buffer")?;
 
-        let mut cameras = Vec::with_capacity(6 * p.reflectors.len());
-        let mut gpu_reflectors = Vec::with_capacity(p.reflectors.len());
-        for (k, &(_, center, radius)) in p.reflectors.iter().enumerate() {
-            cameras.extend(face_cameras(scene, center, resolution));
-            gpu_reflectors.push(GpuReflector {
-                center: center.to_array(),
-                radius,
-                first_layer: 6 * k as u32,
-                exit_model: exit as u32,
-                pad: [0; 2],
-            });
-        }
-        if !gpu_reflectors.is_empty() {
-            let views: Vec<[[f32; 4]; 4]> = cameras.iter().map(|c| c.clip_from_world).collect();
-            gpu.queue
-                .write_buffer(&p.env_views, 0, bytemuck::cast_slice(&views));
-            gpu.queue.write_buffer(
-                &p.reflector_buffer,
-                0,
-                bytemuck::cast_slice(&gpu_reflectors),
-            );
-        }
         let faces = self.faces.get_or_insert_with(|| Faces {
             texture: gpu.create_texture(&wgpu::TextureDescriptor {
                 label: Some("environment faces"),
@@ -447,36 +437,43 @@ impl Technique for EnvMap {
                 view_formats: &[],
             }),
             drawn_at: None,
-            bind_groups: Vec::new(),
+            bind_groups: BindGroupsBySlot::default(),
         });
         let redraw = dynamic || faces.drawn_at != Some(live.version());
-        let faces_drawn = if redraw { cameras.len() as u64 } else { 0 };
+        let faces_drawn = if redraw {
+            6 * p.reflectors.len() as u64
+        } else {
+            0
+        };
         if redraw {
             let face_g = p.raster.acquire(gpu, resolution, resolution);
-            for (layer, face_camera) in cameras.iter().enumerate() {
-                let mesh = p.reflectors[layer / 6].0;
-                p.raster
-                    .draw_into(gpu, gpu_scene, face_camera, Some(mesh), None, &face_g)?;
-                let mut encoder = gpu.device.create_command_encoder(&Default::default());
-                encoder.copy_texture_to_texture(
-                    face_g.color.as_image_copy(),
-                    wgpu::TexelCopyTextureInfo {
-                        texture: &faces.texture,
-                        mip_level: 0,
-                        origin: wgpu::Origin3d {
-                            x: 0,
-                            y: 0,
-                            z: layer as u32,
+            for (k, &(mesh, center, _)) in p.reflectors.iter().enumerate() {
+                for (face, face_camera) in
+                    face_cameras(scene, center, resolution).iter().enumerate()
+                {
+                    p.raster
+                        .draw_into(gpu, gpu_scene, face_camera, Some(mesh), None, &face_g)?;
+                    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+                    encoder.copy_texture_to_texture(
+                        face_g.color.as_image_copy(),
+                        wgpu::TexelCopyTextureInfo {
+                            texture: &faces.texture,
+                            mip_level: 0,
+                            origin: wgpu::Origin3d {
+                                x: 0,
+                                y: 0,
+                                z: (6 * k + face) as u32,
+                            },
+                            aspect: wgpu::TextureAspect::All,
                         },
-                        aspect: wgpu::TextureAspect::All,
-                    },
-                    wgpu::Extent3d {
-                        width: resolution,
-                        height: resolution,
-                        depth_or_array_layers: 1,
-                    },
-                );
-                gpu.queue.submit([encoder.finish()]);
+                        wgpu::Extent3d {
+                            width: resolution,
+                            height: resolution,
+                            depth_or_array_layers: 1,
+                        },
+                    );
+                    gpu.queue.submit([encoder.finish()]);
+                }
             }
             faces.drawn_at = Some(live.version());
         }
@@ -485,19 +482,13 @@ impl Technique for EnvMap {
         gpu.validated("envmap shade", || {
             gpu.queue
                 .write_buffer(&p.camera_buffer, 0, bytemuck::bytes_of(&camera_uniform));
-            if !faces.bind_groups.iter().any(|(slot, _)| *slot == g.slot) {
-                let view = |t: &wgpu::Texture| t.create_view(&Default::default());
+            let group = faces.bind_groups.get_or_make(g.slot, || {
                 let faces_view = faces.texture.create_view(&wgpu::TextureViewDescriptor {
                     dimension: Some(wgpu::TextureViewDimension::D2Array),
                     ..Default::default()
                 });
-                let (color, position, normal, ids) = (
-                    view(&g.color),
-                    view(&g.position),
-                    view(&g.normal),
-                    view(&g.ids),
-                );
-                let group = bind_group(
+                let [color, position, normal, ids] = g.views();
+                bind_group(
                     gpu,
                     "envmap",
                     &p.layout,
@@ -512,15 +503,8 @@ impl Technique for EnvMap {
                         p.reflector_buffer.as_entire_binding(),
                         p.mesh_reflector.as_entire_binding(),
                     ],
-                );
-                faces.bind_groups.push((g.slot, group));
-            }
-            let group = &faces
-                .bind_groups
-                .iter()
-                .find(|(slot, _)| *slot == g.slot)
-                .expect("made above")
-                .1;
+                )
+            });
             raster::fullscreen_pass(
                 gpu,
                 "envmap shade",

@@ -101,7 +101,7 @@ use specula_trace::SceneAccel;
 
 use crate::gpu_scene::GpuScene;
 use crate::live_scene::LiveScene;
-use crate::raster::{self, GBuffer, RasterPass, RasterSpec};
+use crate::raster::{self, BindGroupsBySlot, GBuffer, RasterPass, RasterSpec};
 use crate::technique::{
     bad_value, Context, Frame, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels,
     Technique, TechniqueError,
@@ -121,13 +121,7 @@ pub const PARAMS: &[ParamSpec] = &[
         doc: "reflection-map height in texels of an undivided reflector (patches share it by solid angle)",
         invalidates: Invalidates::Uniform,
     },
-    ParamSpec {
-        name: "shadow_resolution",
-        kind: ParamKind::Integer { min: 1, max: 8192 },
-        default: "1024",
-        doc: "texels per side of the scene raster's shadow maps",
-        invalidates: Invalidates::Scene,
-    },
+    raster::SHADOW_RESOLUTION,
     ParamSpec {
         name: "max_fov",
         kind: ParamKind::Number { min: 1.0, max: 170.0 },
@@ -297,7 +291,7 @@ struct Tally {
 
 struct Prepared {
     scene_id: u64,
-    /// The scene version the shadow maps, corners and far distance were made for.
+    /// The scene version the corners and far distance were made for.
     version: u64,
     raster: RasterPass,
     /// Every mirror and dielectric mesh.
@@ -318,7 +312,7 @@ struct Arenas {
     vertices: Arena,
     uniforms: Arena,
     /// 2nd-pass bind group per map (G-buffer pool slot), for the arenas' current buffers.
-    bind_groups: Vec<(usize, wgpu::BindGroup)>,
+    bind_groups: BindGroupsBySlot,
 }
 
 /// What the frame's steps read: the prepared state and the live scene's BVH and GPU upload.
@@ -748,15 +742,24 @@ fn report(
 }
 
 impl Pvrr {
+    /// The prepared state for `live`, (re)built when missing or made for another scene; after
+    /// a move, the scene's extent follows the new geometry.
+    fn ensure_prepared(&mut self, ctx: &GpuContext, live: &LiveScene) -> Result<(), GpuError> {
+        if self.prepared.as_ref().map(|p| p.scene_id) != Some(live.id()) {
+            self.prepared = Some(self.build(ctx, live)?);
+        }
+        let p = self.prepared.as_mut().expect("built above");
+        if p.version != live.version() {
+            (p.scene_corners, p.far_distance) = scene_extent(live.scene());
+            p.version = live.version();
+        }
+        Ok(())
+    }
+
     fn build(&self, ctx: &GpuContext, live: &LiveScene) -> Result<Prepared, GpuError> {
         let device = &ctx.device;
         let scene = live.scene();
-        let raster = RasterPass::new(
-            ctx,
-            scene,
-            live.gpu(ctx),
-            RasterSpec::scene(self.shadow_resolution),
-        )?;
+        let raster = RasterPass::new(ctx, live, RasterSpec::scene(self.shadow_resolution))?;
         ctx.validated("pvrr set-up", || {
             let stages = wgpu::ShaderStages::VERTEX_FRAGMENT;
             // Cameras and materials live in the uniform arena, bound at dynamic offsets.
@@ -843,7 +846,7 @@ impl Pvrr {
                 arenas: RefCell::new(Arenas {
                     vertices: Arena::new("pvrr vertices", wgpu::BufferUsages::VERTEX, 4),
                     uniforms: Arena::new("pvrr uniforms", wgpu::BufferUsages::UNIFORM, alignment),
-                    bind_groups: Vec::new(),
+                    bind_groups: BindGroupsBySlot::default(),
                 }),
             }
         })
@@ -905,6 +908,7 @@ fn render_maps(
                             tally,
                         )?;
                         second_pass(ctx, p, &patch.camera, &g, &inner, &maps)?;
+                        maps.iter().flatten().for_each(|m| p.raster.release(m));
                     }
                     Ok(g)
                 })
@@ -954,9 +958,9 @@ fn second_pass(
                 .push(ctx, bytemuck::bytes_of(&reflector.material))
                 as u32;
             for (patch, map) in reflector.patches.iter().zip(maps) {
-                if !arenas.bind_groups.iter().any(|(slot, _)| *slot == map.slot) {
+                let uniforms = arenas.uniforms.buffer();
+                arenas.bind_groups.get_or_make(map.slot, || {
                     let map_view = map.color.create_view(&Default::default());
-                    let uniforms = arenas.uniforms.buffer();
                     let binding = |size: usize| {
                         wgpu::BindingResource::Buffer(wgpu::BufferBinding {
                             buffer: uniforms,
@@ -964,7 +968,7 @@ fn second_pass(
                             size: std::num::NonZeroU64::new(size as u64),
                         })
                     };
-                    let group = bind_group(
+                    bind_group(
                         ctx,
                         "pvrr mirror",
                         &p.layout,
@@ -973,9 +977,8 @@ fn second_pass(
                             wgpu::BindingResource::TextureView(&map_view),
                             binding(size_of::<GpuMirrorMaterial>()),
                         ],
-                    );
-                    arenas.bind_groups.push((map.slot, group));
-                }
+                    )
+                });
                 let masked = patch.channels.len() == 3;
                 for (c, vertices) in patch.channels.iter().enumerate() {
                     if vertices.is_empty() {
@@ -1020,12 +1023,7 @@ fn second_pass(
             });
             let vertices = arenas.vertices.buffer();
             for (pipeline, slot, material_offset, offset, count) in draws {
-                let group = &arenas
-                    .bind_groups
-                    .iter()
-                    .find(|(s, _)| *s == slot)
-                    .expect("made above")
-                    .1;
+                let group = arenas.bind_groups.get(slot).expect("made above");
                 pass.set_pipeline(pipeline);
                 pass.set_bind_group(0, group, &[camera_offset, material_offset]);
                 pass.set_vertex_buffer(0, vertices.slice(offset..));
@@ -1034,24 +1032,6 @@ fn second_pass(
         }
         ctx.queue.submit([encoder.finish()]);
     })
-}
-
-impl Pvrr {
-    /// The prepared state for `live`, (re)built when missing or made for another scene; after
-    /// a move, the shadow maps and the scene's extent follow the new geometry.
-    fn ensure_prepared(&mut self, ctx: &GpuContext, live: &LiveScene) -> Result<(), GpuError> {
-        if self.prepared.as_ref().map(|p| p.scene_id) != Some(live.id()) {
-            self.prepared = Some(self.build(ctx, live)?);
-        }
-        let p = self.prepared.as_mut().expect("built above");
-        if p.version != live.version() {
-            let scene = live.scene();
-            p.raster.redraw_shadows(ctx, scene, live.gpu(ctx))?;
-            (p.scene_corners, p.far_distance) = scene_extent(scene);
-            p.version = live.version();
-        }
-        Ok(())
-    }
 }
 
 impl Technique for Pvrr {
@@ -1129,7 +1109,7 @@ impl Technique for Pvrr {
             accel: live.accel(),
             gpu_scene: live.gpu(gpu),
         };
-        p.raster.begin_frame();
+        p.raster.begin_frame(gpu, live)?;
         {
             let mut arenas = p.arenas.borrow_mut();
             arenas.vertices.begin_frame();

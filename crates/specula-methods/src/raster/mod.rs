@@ -17,13 +17,13 @@
 //! Nothing is created per frame: G-buffers come from a pool kept across frames
 //! ([`RasterPass::begin_frame`] hands them all back), and the camera uniform is rewritten in
 //! place before each draw (every draw is its own submission, and wgpu orders a buffer write
-//! before the next submission). Shadow maps are drawn at creation and again only when the
-//! scene's geometry changes ([`RasterPass::redraw_shadows`]).
+//! before the next submission). Shadow maps are drawn at creation and again, by
+//! [`RasterPass::begin_frame`], only when the scene's geometry has changed.
 //!
 //! Parameters: `shadow_resolution` (default 1024) — texels per side of each shadow map; higher
 //! sharpens shadow edges at a cost of resolution² per layer in memory and in the prepare pass.
 
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
@@ -36,6 +36,8 @@ use specula_scene::{Camera, Scene};
 use specula_trace::Image;
 
 use crate::gpu_scene::{GpuScene, GpuVertex, LIGHT_DIRECTIONAL};
+use crate::live_scene::LiveScene;
+use crate::technique::{Invalidates, ParamKind, ParamSpec};
 
 const SHADER: &str = include_str!("raster.wgsl");
 
@@ -46,6 +48,15 @@ pub fn shader_source() -> String {
         SHADER,
     )
 }
+
+/// The raster pass's parameter, in the list of every technique that draws it.
+pub const SHADOW_RESOLUTION: ParamSpec = ParamSpec {
+    name: "shadow_resolution",
+    kind: ParamKind::Integer { min: 1, max: 8192 },
+    default: "1024",
+    doc: "texels per side of the scene raster's shadow maps",
+    invalidates: Invalidates::Scene,
+};
 
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 pub const IDS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;
@@ -103,6 +114,12 @@ impl GBuffer {
         }
     }
 
+    /// Views of colour, position, normal and IDs, in the order the shading passes bind them.
+    pub fn views(&self) -> [wgpu::TextureView; 4] {
+        [&self.color, &self.position, &self.normal, &self.ids]
+            .map(|t| t.create_view(&Default::default()))
+    }
+
     /// The shaded colour as an image.
     pub fn read_color(&self, ctx: &GpuContext) -> Result<Image, GpuError> {
         read_rgba32f(ctx, &self.color)
@@ -122,6 +139,39 @@ pub fn read_rgba32f(ctx: &GpuContext, texture: &wgpu::Texture) -> Result<Image, 
         height: texture.height(),
         pixels: texels.iter().map(|t| Vec3::new(t[0], t[1], t[2])).collect(),
     })
+}
+
+/// Bind groups that read a pooled G-buffer, kept per pool slot ([`GBuffer::slot`]) so that a
+/// steady-state frame makes none.
+#[derive(Default)]
+pub struct BindGroupsBySlot(Vec<(usize, wgpu::BindGroup)>);
+
+impl BindGroupsBySlot {
+    /// The bind group of `slot`, made by `make` the first time.
+    pub fn get_or_make(
+        &mut self,
+        slot: usize,
+        make: impl FnOnce() -> wgpu::BindGroup,
+    ) -> &wgpu::BindGroup {
+        let index = match self.0.iter().position(|(s, _)| *s == slot) {
+            Some(index) => index,
+            None => {
+                self.0.push((slot, make()));
+                self.0.len() - 1
+            }
+        };
+        &self.0[index].1
+    }
+
+    /// The bind group made for `slot`, if any.
+    pub fn get(&self, slot: usize) -> Option<&wgpu::BindGroup> {
+        self.0.iter().find(|(s, _)| *s == slot).map(|(_, g)| g)
+    }
+
+    /// Forgets every bind group (what they bind was replaced).
+    pub fn clear(&mut self) {
+        self.0.clear();
+    }
 }
 
 /// A technique's output image, kept across frames and replaced only when the size changes.
@@ -152,6 +202,18 @@ impl OutputTexture {
                 texture
             }
         }
+    }
+}
+
+/// A depth attachment cleared to the far plane and kept.
+fn cleared_depth(view: &wgpu::TextureView) -> wgpu::RenderPassDepthStencilAttachment<'_> {
+    wgpu::RenderPassDepthStencilAttachment {
+        view,
+        depth_ops: Some(wgpu::Operations {
+            load: wgpu::LoadOp::Clear(1.0),
+            store: wgpu::StoreOp::Store,
+        }),
+        stencil_ops: None,
     }
 }
 
@@ -274,10 +336,12 @@ pub struct RasterPass {
     shadows: Shadows,
     camera_buffer: wgpu::Buffer,
     camera_bind_group: wgpu::BindGroup,
-    /// Vertex ranges of the selected meshes, per mesh (empty for the others).
-    mesh_ranges: Vec<std::ops::Range<u32>>,
+    /// Per mesh: whether the spec selects it.
+    selected: Vec<bool>,
     /// G-buffers kept across frames, and whether each is handed out this frame.
     pool: RefCell<Vec<(GBuffer, bool)>>,
+    /// The scene version the shadow maps were drawn at.
+    shadows_at: Cell<u64>,
 }
 
 fn uniform_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
@@ -331,14 +395,15 @@ impl RasterPass {
     /// Builds the pipelines and renders the shadow maps (they depend on the scene only).
     pub fn new(
         ctx: &GpuContext,
-        scene: &Scene,
-        gpu_scene: &GpuScene,
+        live: &LiveScene,
         spec: RasterSpec,
     ) -> Result<RasterPass, GpuError> {
+        let (scene, gpu_scene) = (live.scene(), live.gpu(ctx));
         let pass = ctx.validated("raster pass set-up", || {
             Self::build(ctx, scene, gpu_scene, spec)
         })?;
-        pass.redraw_shadows(ctx, scene, gpu_scene)?;
+        pass.draw_shadows(ctx, scene, gpu_scene)?;
+        pass.shadows_at.set(live.version());
         Ok(pass)
     }
 
@@ -533,21 +598,15 @@ impl RasterPass {
                 resource: camera_buffer.as_entire_binding(),
             }],
         });
-        let mesh_ranges = gpu_scene
-            .mesh_vertex_ranges
+        let selected = scene
+            .meshes
             .iter()
-            .zip(&scene.meshes)
-            .map(|(range, mesh)| {
+            .map(|mesh| {
                 let specular = scene.materials[mesh.material].is_specular();
-                let selected = match spec.meshes {
+                match spec.meshes {
                     MeshSelection::All => true,
                     MeshSelection::Specular => specular,
                     MeshSelection::NonSpecular => !specular,
-                };
-                if selected {
-                    range.clone()
-                } else {
-                    range.start..range.start
                 }
             })
             .collect();
@@ -568,8 +627,9 @@ impl RasterPass {
             },
             camera_buffer,
             camera_bind_group,
-            mesh_ranges,
+            selected,
             pool: RefCell::new(Vec::new()),
+            shadows_at: Cell::new(0),
         }
     }
 
@@ -606,7 +666,7 @@ impl RasterPass {
 
     /// Draws the shadow maps of the scene as it is now: at creation, and after the geometry
     /// changed. Creates nothing.
-    pub fn redraw_shadows(
+    fn draw_shadows(
         &self,
         ctx: &GpuContext,
         scene: &Scene,
@@ -647,14 +707,7 @@ impl RasterPass {
                                 store: wgpu::StoreOp::Store,
                             },
                         })],
-                        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                            view: &depth_view,
-                            depth_ops: Some(wgpu::Operations {
-                                load: wgpu::LoadOp::Clear(1.0),
-                                store: wgpu::StoreOp::Store,
-                            }),
-                            stencil_ops: None,
-                        }),
+                        depth_stencil_attachment: Some(cleared_depth(&depth_view)),
                         ..Default::default()
                     });
                     pass.set_pipeline(&self.shadows.pipeline);
@@ -668,10 +721,6 @@ impl RasterPass {
         })
     }
 
-    pub fn spec(&self) -> &RasterSpec {
-        &self.spec
-    }
-
     /// Layout of bind group 2 of lighting.wgsl (the lights' shadow maps).
     pub fn shadow_layout(&self) -> &wgpu::BindGroupLayout {
         &self.shadow_layout
@@ -682,9 +731,29 @@ impl RasterPass {
         &self.shadow_bind_group
     }
 
-    /// Hands every pooled G-buffer back: call at the start of each frame.
-    pub fn begin_frame(&self) {
+    /// Starts a frame: hands every pooled G-buffer back, and redraws the shadow maps when an
+    /// object moved since they were drawn.
+    pub fn begin_frame(&self, ctx: &GpuContext, live: &LiveScene) -> Result<(), GpuError> {
         for (_, in_use) in self.pool.borrow_mut().iter_mut() {
+            *in_use = false;
+        }
+        if self.shadows_at.get() != live.version() {
+            self.draw_shadows(ctx, live.scene(), live.gpu(ctx))?;
+            self.shadows_at.set(live.version());
+        }
+        Ok(())
+    }
+
+    /// Hands `g` back before the frame ends, once what was drawn from it has been submitted:
+    /// passes that draw many short-lived maps (nested reflections) reuse it instead of holding
+    /// them all.
+    pub fn release(&self, g: &GBuffer) {
+        if let Some((_, in_use)) = self
+            .pool
+            .borrow_mut()
+            .iter_mut()
+            .find(|(p, _)| p.slot == g.slot)
+        {
             *in_use = false;
         }
     }
@@ -759,8 +828,7 @@ impl RasterPass {
     ) {
         ctx.queue
             .write_buffer(&self.camera_buffer, 0, bytemuck::bytes_of(camera));
-        let views =
-            [&g.color, &g.position, &g.normal, &g.ids].map(|t| t.create_view(&Default::default()));
+        let views = g.views();
         let depth_view = g.depth.create_view(&Default::default());
         let attachments: Vec<Option<wgpu::RenderPassColorAttachment>> = views
             .iter()
@@ -781,14 +849,7 @@ impl RasterPass {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("scene raster"),
                 color_attachments: &attachments,
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &depth_view,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(1.0),
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
-                }),
+                depth_stencil_attachment: Some(cleared_depth(&depth_view)),
                 ..Default::default()
             });
             pass.set_bind_group(0, &self.camera_bind_group, &[]);
@@ -800,23 +861,10 @@ impl RasterPass {
             pass.set_pipeline(&self.scene_pipeline);
             pass.set_bind_group(2, &self.shadow_bind_group, &[]);
             pass.set_vertex_buffer(0, gpu_scene.vertices.slice(..));
-            // Consecutive selected meshes are drawn as one range.
-            let mut pending: Option<std::ops::Range<u32>> = None;
-            for (mesh, range) in self.mesh_ranges.iter().enumerate() {
-                if Some(mesh) == hidden_mesh || range.is_empty() {
-                    continue;
-                }
-                pending = match pending {
-                    Some(p) if p.end == range.start => Some(p.start..range.end),
-                    Some(p) => {
-                        pass.draw(p, 0..1);
-                        Some(range.clone())
-                    }
-                    None => Some(range.clone()),
-                };
-            }
-            if let Some(p) = pending {
-                pass.draw(p, 0..1);
+            for range in
+                gpu_scene.vertex_ranges(|mesh| self.selected[mesh] && Some(mesh) != hidden_mesh)
+            {
+                pass.draw(range, 0..1);
             }
             if let Some((buffer, offset, count)) = extra {
                 pass.set_vertex_buffer(0, buffer.slice(offset..));

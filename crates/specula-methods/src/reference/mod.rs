@@ -252,14 +252,16 @@ impl Technique for Reference {
             }],
             counters: vec![
                 ("camera rays".into(), rays),
-                ("pixels per side of a block".into(), {
-                    let level = progress.level.min(LEVELS.len() - 1);
+                // The largest block still shown: the last finished level's stride (the first
+                // level's while it runs).
+                (
+                    "pixels per side of a block".into(),
                     if converged {
                         1
                     } else {
-                        LEVELS[level.saturating_sub(1)] as u64
-                    }
-                }),
+                        LEVELS[progress.level.saturating_sub(1)] as u64
+                    },
+                ),
             ],
             timing: TimingSource::CpuWallClock,
             warnings: Vec::new(),
