@@ -156,13 +156,11 @@ impl LiveScene {
         axis: Vec3,
         degrees: f32,
     ) -> Result<AccelUpdate, MoveError> {
-        let axis = axis
-            .try_normalize()
-            .ok_or_else(|| MoveError::NotRigid(format!("rotation axis {axis}")))?;
         let center = self.scene.meshes[mesh].bounds().center();
-        let world_from_before = Mat4::from_translation(center)
-            * Mat4::from_axis_angle(axis, degrees.to_radians())
-            * Mat4::from_translation(-center);
+        let world_from_before = specula_scene::mesh::rotation_about(center, axis, degrees)
+            .ok_or_else(|| {
+                MoveError::NotRigid(format!("rotation by {degrees} degrees about {axis}"))
+            })?;
         self.move_object(ctx, mesh, world_from_before)
     }
 }

@@ -219,3 +219,17 @@ impl Mesh {
         before - self.triangles.len()
     }
 }
+
+/// The rigid transform turning by `degrees` about the world `axis` through `center`; `None` when
+/// the axis is zero or anything is not finite.
+pub fn rotation_about(center: Vec3, axis: Vec3, degrees: f32) -> Option<Mat4> {
+    let axis = axis.try_normalize()?;
+    if !center.is_finite() || !degrees.is_finite() {
+        return None;
+    }
+    Some(
+        Mat4::from_translation(center)
+            * Mat4::from_axis_angle(axis, degrees.to_radians())
+            * Mat4::from_translation(-center),
+    )
+}

@@ -742,3 +742,80 @@ fn toml_metal_mirrors_take_f0_from_index_and_extinction() {
         &["lone.toml", "materials.chrome", "extinction needs ior"],
     );
 }
+
+#[test]
+fn based_scene_moves_the_named_object_rigidly_about_its_box_centre() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(
+        dir.path(),
+        "moved.toml",
+        r#"
+base = "door-mirror"
+[[move]]
+object = "door mirror"
+translate = [0.0, 0.1, 0.0]
+[[move]]
+object = "door mirror"
+rotate = { axis = [0, 1, 0], degrees = 90 }
+"#,
+    );
+    let moved = load(path.to_str().unwrap()).unwrap();
+    let original = load("door-mirror").unwrap();
+    let find = |s: &specula_scene::Scene| {
+        s.meshes
+            .iter()
+            .find(|m| m.name == "door mirror")
+            .unwrap()
+            .clone()
+    };
+    let (before, after) = (find(&original), find(&moved));
+    // The centre moved by the translation only; a quarter turn about +Y swaps the box's X and Z
+    // extents.
+    let centre_shift = after.bounds().center() - before.bounds().center();
+    assert!(
+        centre_shift.abs_diff_eq(Vec3::new(0.0, 0.1, 0.0), 1e-5),
+        "{centre_shift}"
+    );
+    let (e0, e1) = (before.bounds().extent(), after.bounds().extent());
+    assert!(
+        (e0.x - e1.z).abs() < 1e-5 && (e0.z - e1.x).abs() < 1e-5,
+        "{e0} {e1}"
+    );
+    // Other objects stay where they were; the camera is the built-in's.
+    assert_eq!(original.camera, moved.camera);
+    assert_eq!(original.meshes[1].positions, moved.meshes[1].positions);
+}
+
+#[test]
+fn bad_base_and_moves_name_the_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        ("base = \"nowhere\"", &["base", "nowhere", "door-mirror"][..]),
+        (
+            "base = \"door-mirror\"\nambient = 0.3",
+            &["ambient", "not allowed with base"][..],
+        ),
+        (
+            "base = \"door-mirror\"\n[[move]]\nobject = \"wing\"\ntranslate = [0, 1, 0]",
+            &["move[0]", "wing", "door mirror"][..],
+        ),
+        (
+            "base = \"door-mirror\"\n[[move]]\nobject = \"door mirror\"",
+            &["move[0]", "exactly one"][..],
+        ),
+        (
+            "base = \"door-mirror\"\n[[move]]\nobject = \"door mirror\"\nrotate = { axis = [0, 0, 0], degrees = 5 }",
+            &["move[0]", "rotate", "axis"][..],
+        ),
+        (
+            "base = \"door-mirror\"\n[[move]]\nobject = \"door mirror\"\nscale = 2",
+            &["scale"][..],
+        ),
+    ];
+    for (i, (text, parts)) in cases.iter().enumerate() {
+        let path = write(dir.path(), &format!("bad{i}.toml"), text);
+        let message = error_of(&path);
+        assert_mentions(&message, &[&format!("bad{i}.toml")]);
+        assert_mentions(&message, parts);
+    }
+}

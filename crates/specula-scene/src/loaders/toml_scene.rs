@@ -33,6 +33,12 @@ impl Color {
 #[serde(deny_unknown_fields)]
 pub struct SceneFile {
     pub name: Option<String>,
+    /// Start from this built-in scene (`specula scenes`) instead of objects listed here; only
+    /// `name`, `camera` and `[[move]]` may be given with it.
+    pub base: Option<String>,
+    /// Rigid moves of named objects, applied in order after the objects are placed.
+    #[serde(default, rename = "move")]
+    pub moves: Vec<MoveSpec>,
     pub ambient: Option<Color>,
     pub camera: Option<CameraSpec>,
     pub background: Option<BackgroundSpec>,
@@ -55,6 +61,23 @@ fn one() -> f32 {
 }
 fn yes() -> bool {
     true
+}
+
+/// One rigid move of every mesh named `object`: a translation (world space, metres) or a
+/// rotation about a world axis through the object's bounding-box centre, as the viewer does.
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct MoveSpec {
+    pub object: String,
+    pub translate: Option<[f32; 3]>,
+    pub rotate: Option<RotateSpec>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct RotateSpec {
+    pub axis: [f32; 3],
+    pub degrees: f32,
 }
 
 #[derive(Deserialize, Debug)]
@@ -408,6 +431,103 @@ pub fn parse(shown: &str, text: &str, base: &Path) -> Result<Scene, SceneError> 
     let file: SceneFile = toml::from_str(text).map_err(|e| {
         SceneError::invalid(shown, e.to_string().trim_end().replace('\n', "\n    "))
     })?;
+    let mut scene = match &file.base {
+        Some(name) => based_scene(shown, &file, name)?,
+        None => listed_scene(shown, &file, base)?,
+    };
+    for (i, m) in file.moves.iter().enumerate() {
+        apply_move(&mut scene, m)
+            .map_err(|e| SceneError::invalid(shown, format!("move[{i}]: {e}")))?;
+    }
+    scene.finalize(shown)?;
+    Ok(scene)
+}
+
+/// A built-in scene with the file's name and camera, when given.
+fn based_scene(shown: &str, file: &SceneFile, name: &str) -> Result<Scene, SceneError> {
+    let listed = [
+        ("ambient", file.ambient.is_some()),
+        ("background", file.background.is_some()),
+        ("materials", !file.materials.is_empty()),
+        ("lights", !file.lights.is_empty()),
+        ("objects", !file.objects.is_empty()),
+    ];
+    if let Some((key, _)) = listed.iter().find(|(_, given)| *given) {
+        return Err(SceneError::invalid(
+            shown,
+            format!(
+                "{key}: not allowed with base = \"{name}\" (only name, camera and [[move]] are)"
+            ),
+        ));
+    }
+    let mut scene = crate::builtin::by_name(name).ok_or_else(|| {
+        SceneError::invalid(
+            shown,
+            format!(
+                "base: unknown built-in scene '{name}' (built-in: {})",
+                crate::builtin::names().join(", ")
+            ),
+        )
+    })??;
+    if let Some(name) = &file.name {
+        scene.name = name.clone();
+    }
+    if let Some(c) = &file.camera {
+        scene.camera = camera_from_spec(c);
+    }
+    Ok(scene)
+}
+
+fn camera_from_spec(c: &CameraSpec) -> Camera {
+    Camera {
+        eye: Vec3::from_array(c.eye),
+        target: Vec3::from_array(c.target),
+        up: Vec3::from_array(c.up),
+        fov_y_deg: c.fov_y_deg,
+        aspect: None,
+    }
+}
+
+fn apply_move(scene: &mut Scene, m: &MoveSpec) -> Result<(), String> {
+    let meshes: Vec<usize> = (0..scene.meshes.len())
+        .filter(|&i| scene.meshes[i].name == m.object)
+        .collect();
+    if meshes.is_empty() {
+        let mut names: Vec<&str> = scene.meshes.iter().map(|m| m.name.as_str()).collect();
+        names.dedup();
+        return Err(format!(
+            "object: no object named '{}' (objects: {})",
+            m.object,
+            names.join(", ")
+        ));
+    }
+    let world_from_before = match (&m.translate, &m.rotate) {
+        (Some(by), None) => {
+            let by = Vec3::from_array(*by);
+            if !by.is_finite() {
+                return Err(format!("translate: not finite: {by}"));
+            }
+            Mat4::from_translation(by)
+        }
+        (None, Some(r)) => {
+            let bounds = meshes
+                .iter()
+                .map(|&i| scene.meshes[i].bounds())
+                .reduce(|a, b| a.union(&b))
+                .expect("at least one mesh");
+            crate::mesh::rotation_about(bounds.center(), Vec3::from_array(r.axis), r.degrees)
+                .ok_or_else(|| format!("rotate: axis {:?} is zero or not finite, or degrees {} is not finite", r.axis, r.degrees))?
+        }
+        _ => return Err("give exactly one of translate = [x, y, z] or rotate = { axis = [x, y, z], degrees = a }".into()),
+    };
+    for i in meshes {
+        scene.meshes[i].transform(world_from_before);
+    }
+    Ok(())
+}
+
+/// A scene from the file's own materials, objects and lights.
+fn listed_scene(shown: &str, file: &SceneFile, base: &Path) -> Result<Scene, SceneError> {
     let at = |path: String, e: SceneError| SceneError::invalid(shown, format!("{path}: {e}"));
     let mut warnings = Vec::new();
     let mut textures = Vec::new();
@@ -527,15 +647,7 @@ pub fn parse(shown: &str, text: &str, base: &Path) -> Result<Scene, SceneError> 
     scene.ambient = file.ambient.map(Color::vec3).unwrap_or(Vec3::ZERO);
     scene.warnings = warnings;
     match &file.camera {
-        Some(c) => {
-            scene.camera = Camera {
-                eye: Vec3::from_array(c.eye),
-                target: Vec3::from_array(c.target),
-                up: Vec3::from_array(c.up),
-                fov_y_deg: c.fov_y_deg,
-                aspect: None,
-            }
-        }
+        Some(c) => scene.camera = camera_from_spec(c),
         None => scene.use_default_camera(shown),
     }
     if scene.lights.is_empty()
@@ -548,7 +660,6 @@ pub fn parse(shown: &str, text: &str, base: &Path) -> Result<Scene, SceneError> 
             "{shown}: no [[lights]]: diffuse surfaces receive only the ambient light"
         ));
     }
-    scene.finalize(shown)?;
     Ok(scene)
 }
 
