@@ -89,6 +89,22 @@ enum Command {
         #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(0..=64))]
         max_depth: u32,
     },
+    /// Open the interactive viewer: move the eye and objects, switch techniques, compare with
+    /// the reference (split and FLIP error views). `--script FILE` runs TOML steps and exits.
+    View {
+        #[arg(default_value = DEFAULT_SCENE)]
+        scene: String,
+        /// Technique shown first (`specula methods` lists them; T cycles in the window).
+        #[arg(long, short, default_value = "envmap")]
+        method: String,
+        /// Window size in pixels, WIDTHxHEIGHT.
+        #[arg(long, default_value = "640x480", value_parser = parse_size)]
+        size: (u32, u32),
+        /// Run the [[step]] tables of this TOML file (method, param, orbit, translate, rotate,
+        /// frames, drag, view, screenshot) and exit; see crates/specula-viewer/src/script.rs.
+        #[arg(long)]
+        script: Option<PathBuf>,
+    },
     /// Time each method: warm-up, then N frames; median and spread per method and stage.
     Bench {
         #[arg(default_value = DEFAULT_SCENE)]
@@ -107,6 +123,21 @@ enum Command {
         #[arg(short = 'H', long, value_parser = clap::value_parser!(u32).range(1..=16384))]
         height: Option<u32>,
     },
+}
+
+/// `WIDTHxHEIGHT`, each from 1 to 16384.
+fn parse_size(text: &str) -> Result<(u32, u32), String> {
+    let (w, h) = text
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected WIDTHxHEIGHT, e.g. 640x480, got '{text}'"))?;
+    let side = |s: &str| {
+        s.trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|v| (1..=16384).contains(v))
+            .ok_or_else(|| format!("'{s}' is not a whole number from 1 to 16384"))
+    };
+    Ok((side(w)?, side(h)?))
 }
 
 fn load_scene(name: &str) -> Result<Scene> {
@@ -326,6 +357,17 @@ fn run(cli: Cli) -> Result<()> {
             println!("report: {}", html.display());
             Ok(())
         }
+        Command::View {
+            scene,
+            method,
+            size,
+            script,
+        } => Ok(specula_viewer::run(specula_viewer::Options {
+            scene,
+            method,
+            size,
+            script,
+        })?),
         Command::Bench {
             scene,
             methods,

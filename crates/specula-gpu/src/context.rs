@@ -32,6 +32,8 @@ pub struct GpuContext {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
     pub adapter_info: wgpu::AdapterInfo,
+    /// The adapter itself (a window asks it what its surface supports).
+    pub adapter: wgpu::Adapter,
     pub timing: TimingSource,
     /// wgpu errors raised outside any error scope. wgpu's default is to panic on them; here
     /// they are collected and returned as an error by the next [`GpuContext::wait`].
@@ -127,6 +129,7 @@ impl GpuContext {
             device,
             queue,
             adapter_info: adapter.get_info(),
+            adapter,
             timing: if timestamps {
                 TimingSource::GpuTimestamps
             } else {

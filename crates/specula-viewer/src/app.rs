@@ -1,0 +1,843 @@
+//! The window: winit events, the wgpu surface, egui, and the frame loop that decides what to
+//! render. Script mode runs in the same loop, one step at a time.
+
+use std::collections::VecDeque;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use glam::Vec3;
+use specula_methods::{Frame, Pixels};
+use specula_trace::Image;
+use winit::application::ApplicationHandler;
+use winit::dpi::PhysicalSize;
+use winit::event::{ElementState, KeyEvent, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow};
+use winit::keyboard::{Key, ModifiersState, NamedKey};
+use winit::window::{Window, WindowId};
+
+use crate::present::{Presenter, Side};
+use crate::script::Step;
+use crate::session::{error_image, Session, ViewMode};
+use crate::{Options, ViewerError};
+
+/// Degrees of orbit per pixel of mouse drag.
+const ORBIT_DEG_PER_PIXEL: f32 = 0.3;
+/// The view counts as moving this long after the last input, so the technique stays at the
+/// reduced resolution through a series of key presses.
+const INTERACTION_LINGER: Duration = Duration::from_millis(200);
+/// Frames kept for the frame-time graph.
+const GRAPH_FRAMES: usize = 180;
+
+/// What the user can change in the panel besides the session.
+pub struct Settings {
+    /// The technique's resolution, as a fraction of the window's, while the view moves.
+    pub interaction_scale: f32,
+    /// Render the technique every frame even when nothing changed (for timing).
+    pub continuous: bool,
+    /// Where the split view cuts, as a fraction of the window width.
+    pub split: f32,
+    pub show_panel: bool,
+    pub show_help: bool,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            interaction_scale: 0.5,
+            continuous: false,
+            split: 0.5,
+            show_panel: true,
+            show_help: false,
+        }
+    }
+}
+
+/// The latest technique frame's figures, for the panel.
+pub struct FrameStats {
+    pub method: &'static str,
+    pub width: u32,
+    pub height: u32,
+    pub total_ms: f64,
+    pub stages: Vec<(String, f64)>,
+    pub counters: Vec<(String, u64)>,
+    pub warnings: Vec<String>,
+    pub created: u64,
+}
+
+/// Frame-to-frame times of the window and the technique's own frame times, for the graph.
+#[derive(Default)]
+pub struct FrameTimes {
+    pub window_ms: VecDeque<f64>,
+    pub technique_ms: VecDeque<f64>,
+}
+
+impl FrameTimes {
+    fn push(queue: &mut VecDeque<f64>, value: f64) {
+        if queue.len() == GRAPH_FRAMES {
+            queue.pop_front();
+        }
+        queue.push_back(value);
+    }
+}
+
+/// What the panel reads and writes: everything the window shows about the session.
+pub struct UiState {
+    pub settings: Settings,
+    pub stats: Option<FrameStats>,
+    pub times: FrameTimes,
+    /// The reference's progress: converged, or refining.
+    pub reference_converged: bool,
+    pub scene_input: String,
+    /// The last thing that went wrong or happened (scene load error, saved screenshot...).
+    pub message: Option<(bool, String)>,
+    /// The technique must render again (camera, scene, parameter, size or method changed).
+    pub dirty: bool,
+    pub last_input: Instant,
+}
+
+struct Mouse {
+    position: (f32, f32),
+    pressed: Option<(MouseButton, (f32, f32))>,
+    moved_while_pressed: bool,
+    modifiers: ModifiersState,
+}
+
+struct WindowState {
+    window: Arc<Window>,
+    surface: wgpu::Surface<'static>,
+    config: wgpu::SurfaceConfiguration,
+    session: Session,
+    presenter: Presenter,
+    egui: egui_winit::State,
+    egui_renderer: egui_wgpu::Renderer,
+    ui: UiState,
+    mouse: Mouse,
+    last_redraw: Instant,
+    /// The technique's latest image on the CPU, for the error view (read back only there).
+    technique_image: Option<Image>,
+    reference_image: Option<Image>,
+    error_stale: bool,
+}
+
+/// A script being run: its steps, the one at hand, and the frames it still wants.
+struct ScriptRun {
+    steps: Vec<Step>,
+    next: usize,
+    frames_left: u32,
+    drag_step: Option<(f32, f32)>,
+    /// The step now drawing frames, its first frame's time and its technique frame times.
+    timing: Option<(usize, Instant, Vec<f64>)>,
+}
+
+pub struct App {
+    options: Options,
+    initial_scene: Option<(specula_scene::Scene, String)>,
+    startup_message: Option<String>,
+    script: Option<ScriptRun>,
+    state: Option<WindowState>,
+    pub result: Result<(), ViewerError>,
+}
+
+impl App {
+    pub fn new(
+        options: Options,
+        scene: specula_scene::Scene,
+        source: String,
+        startup_message: Option<String>,
+        steps: Option<Vec<Step>>,
+    ) -> App {
+        App {
+            options,
+            initial_scene: Some((scene, source)),
+            startup_message,
+            script: steps.map(|steps| ScriptRun {
+                steps,
+                next: 0,
+                frames_left: 0,
+                drag_step: None,
+                timing: None,
+            }),
+            state: None,
+            result: Ok(()),
+        }
+    }
+
+    fn open(&mut self, event_loop: &ActiveEventLoop) -> Result<(), ViewerError> {
+        let (width, height) = self.options.size;
+        let attributes = Window::default_attributes()
+            .with_title("specula")
+            .with_inner_size(PhysicalSize::new(width, height))
+            .with_resizable(self.script.is_none());
+        let window = Arc::new(
+            event_loop
+                .create_window(attributes)
+                .map_err(|e| ViewerError::Window(e.to_string()))?,
+        );
+        let instance = specula_gpu::GpuContext::vulkan_instance();
+        let surface = instance
+            .create_surface(window.clone())
+            .map_err(|e| ViewerError::Window(format!("cannot make a wgpu surface: {e}")))?;
+        let gpu = specula_gpu::GpuContext::with_surface(&instance, Some(&surface))?;
+        let caps = surface.get_capabilities(&gpu.adapter);
+        let format = caps
+            .formats
+            .iter()
+            .copied()
+            .find(|f| f.is_srgb())
+            .or_else(|| caps.formats.first().copied())
+            .ok_or_else(|| ViewerError::Window("the surface offers no format".into()))?;
+        let size = window.inner_size();
+        let config = wgpu::SurfaceConfiguration {
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            format,
+            width: size.width.max(1),
+            height: size.height.max(1),
+            present_mode: wgpu::PresentMode::AutoVsync,
+            desired_maximum_frame_latency: 2,
+            alpha_mode: caps.alpha_modes[0],
+            view_formats: vec![],
+            color_space: wgpu::SurfaceColorSpace::Auto,
+        };
+        surface.configure(&gpu.device, &config);
+        let presenter = Presenter::new(&gpu, format);
+        let egui_renderer = egui_wgpu::Renderer::new(&gpu.device, format, Default::default());
+        let egui_ctx = egui::Context::default();
+        let egui = egui_winit::State::new(
+            egui_ctx,
+            egui::ViewportId::ROOT,
+            &window,
+            Some(window.scale_factor() as f32),
+            None,
+            Some(gpu.device.limits().max_texture_dimension_2d as usize),
+        );
+        let (scene, source) = self.initial_scene.take().expect("opened once");
+        let session = Session::new(
+            specula_methods::Context::with_gpu(gpu),
+            scene,
+            &source,
+            &self.options.method,
+        )?;
+        self.state = Some(WindowState {
+            window,
+            surface,
+            config,
+            ui: UiState {
+                settings: Settings::default(),
+                stats: None,
+                times: FrameTimes::default(),
+                reference_converged: false,
+                scene_input: source,
+                message: self.startup_message.take().map(|m| (true, m)),
+                dirty: true,
+                last_input: Instant::now() - INTERACTION_LINGER,
+            },
+            session,
+            presenter,
+            egui,
+            egui_renderer,
+            mouse: Mouse {
+                position: (0.0, 0.0),
+                pressed: None,
+                moved_while_pressed: false,
+                modifiers: ModifiersState::empty(),
+            },
+            last_redraw: Instant::now(),
+            technique_image: None,
+            reference_image: None,
+            error_stale: true,
+        });
+        Ok(())
+    }
+
+    fn fail(&mut self, event_loop: &ActiveEventLoop, error: ViewerError) {
+        self.result = Err(error);
+        event_loop.exit();
+    }
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.state.is_some() {
+            return;
+        }
+        if let Err(e) = self.open(event_loop) {
+            self.fail(event_loop, e);
+            return;
+        }
+        if let Some(state) = &self.state {
+            state.window.request_redraw();
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        let Some(state) = self.state.as_mut() else {
+            return;
+        };
+        let response = state.egui.on_window_event(&state.window, &event);
+        if response.repaint {
+            state.window.request_redraw();
+        }
+        match event {
+            WindowEvent::CloseRequested => event_loop.exit(),
+            WindowEvent::Resized(size) => {
+                state.config.width = size.width.max(1);
+                state.config.height = size.height.max(1);
+                state
+                    .surface
+                    .configure(&state.session.ctx.gpu.as_ref().expect("viewer GPU").device, &state.config);
+                state.ui.dirty = true;
+                state.window.request_redraw();
+            }
+            WindowEvent::DroppedFile(path) => {
+                let source = path.display().to_string();
+                state.ui.scene_input = source.clone();
+                load_scene(state, &source);
+            }
+            WindowEvent::ModifiersChanged(m) => state.mouse.modifiers = m.state(),
+            WindowEvent::RedrawRequested => {
+                if let Err(e) = redraw(state, self.script.as_mut()) {
+                    self.fail(event_loop, e);
+                    return;
+                }
+                let finished = self
+                    .script
+                    .as_ref()
+                    .is_some_and(|s| s.next >= s.steps.len() && s.frames_left == 0);
+                if finished {
+                    event_loop.exit();
+                } else if wants_another_frame(state, self.script.is_some()) {
+                    state.window.request_redraw();
+                }
+            }
+            _ if self.script.is_some() => {}
+            WindowEvent::KeyboardInput { event, .. } if !response.consumed => {
+                if key(state, event_loop, &event) {
+                    state.window.request_redraw();
+                }
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                let p = (position.x as f32, position.y as f32);
+                let delta = (p.0 - state.mouse.position.0, p.1 - state.mouse.position.1);
+                state.mouse.position = p;
+                if let Some((button, start)) = state.mouse.pressed {
+                    if (p.0 - start.0).abs() + (p.1 - start.1).abs() > 3.0 {
+                        state.mouse.moved_while_pressed = true;
+                    }
+                    drag(state, button, delta);
+                    state.window.request_redraw();
+                }
+            }
+            WindowEvent::MouseInput {
+                state: pressed,
+                button,
+                ..
+            } => match pressed {
+                ElementState::Pressed if !response.consumed => {
+                    state.mouse.pressed = Some((button, state.mouse.position));
+                    state.mouse.moved_while_pressed = false;
+                }
+                ElementState::Released => {
+                    if state.mouse.pressed.is_some()
+                        && !state.mouse.moved_while_pressed
+                        && button == MouseButton::Left
+                    {
+                        let (x, y) = state.mouse.position;
+                        let picked =
+                            state
+                                .session
+                                .pick(x, y, state.config.width, state.config.height);
+                        state.session.selected = picked;
+                    }
+                    state.mouse.pressed = None;
+                    state.window.request_redraw();
+                }
+                _ => {}
+            },
+            WindowEvent::MouseWheel { delta, .. } if !response.consumed => {
+                let lines = match delta {
+                    MouseScrollDelta::LineDelta(_, y) => y,
+                    MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
+                };
+                state.session.camera.zoom(0.9f32.powf(lines));
+                moved(&mut state.ui);
+                state.window.request_redraw();
+            }
+            _ => {}
+        }
+    }
+
+    fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
+        event_loop.set_control_flow(ControlFlow::Wait);
+    }
+}
+
+fn moved(ui: &mut UiState) {
+    ui.dirty = true;
+    ui.last_input = Instant::now();
+}
+
+fn interacting(state: &WindowState, script: Option<&ScriptRun>) -> bool {
+    let dragging = state.mouse.pressed.is_some() && state.mouse.moved_while_pressed;
+    let script_drag = script.is_some_and(|s| s.drag_step.is_some() && s.frames_left > 0);
+    dragging || script_drag || (script.is_none() && state.ui.last_input.elapsed() < INTERACTION_LINGER)
+}
+
+fn wants_another_frame(state: &WindowState, scripted: bool) -> bool {
+    scripted
+        || state.ui.dirty
+        || state.ui.settings.continuous
+        || (state.session.view.needs_reference() && !state.ui.reference_converged)
+        || state.ui.last_input.elapsed() < INTERACTION_LINGER
+}
+
+/// Mouse drag: left orbits (Shift: pans; Ctrl: moves the selected object in the view plane),
+/// right and middle pan.
+fn drag(state: &mut WindowState, button: MouseButton, (dx, dy): (f32, f32)) {
+    let height = state.config.height as f32;
+    let pan = button != MouseButton::Left || state.mouse.modifiers.shift_key();
+    if button == MouseButton::Left && state.mouse.modifiers.control_key() {
+        if let Some(mesh) = state.session.selected {
+            let camera = state.session.camera.camera();
+            let centre = state.session.scene().meshes[mesh].bounds().center();
+            let depth = (centre - camera.eye).dot(camera.frame().forward).max(1e-3);
+            let metres_per_pixel = 2.0 * depth * (camera.fov_y_deg.to_radians() * 0.5).tan() / height;
+            let frame = camera.frame();
+            let by = metres_per_pixel * (dx * frame.right - dy * frame.up);
+            report(&mut state.ui, state.session.translate(mesh, by));
+        }
+    } else if pan {
+        state.session.camera.pan(-dx / height, dy / height);
+    } else {
+        state
+            .session
+            .camera
+            .orbit(-dx * ORBIT_DEG_PER_PIXEL, dy * ORBIT_DEG_PER_PIXEL);
+    }
+    moved(&mut state.ui);
+}
+
+fn report<T, E: std::fmt::Display>(ui: &mut UiState, result: Result<T, E>) {
+    if let Err(e) = result {
+        ui.message = Some((true, e.to_string()));
+    }
+}
+
+fn load_scene(state: &mut WindowState, source: &str) {
+    match state.session.load(source) {
+        Ok(()) => {
+            state.ui.message = Some((false, format!("loaded {source}")));
+            state.reference_image = None;
+            state.technique_image = None;
+            moved(&mut state.ui);
+        }
+        Err(e) => state.ui.message = Some((true, format!("{e:#}; kept the previous scene"))),
+    }
+}
+
+/// A key press; returns whether to redraw.
+fn key(state: &mut WindowState, event_loop: &ActiveEventLoop, event: &KeyEvent) -> bool {
+    if event.state != ElementState::Pressed {
+        return false;
+    }
+    let shift = state.mouse.modifiers.shift_key();
+    let scene_radius = state.session.scene().bounds().radius().max(1e-3);
+    let step = scene_radius * if shift { 0.05 } else { 0.01 };
+    let degrees = if shift { 15.0 } else { 3.0 };
+    let camera_frame = state.session.camera.camera().frame();
+    let flat = |v: Vec3| Vec3::new(v.x, 0.0, v.z).try_normalize().unwrap_or(Vec3::X);
+    let (right, forward) = (flat(camera_frame.right), flat(camera_frame.forward));
+    let mut object_move = None;
+    let mut object_turn = None;
+    match &event.logical_key {
+        Key::Named(NamedKey::Escape) => event_loop.exit(),
+        Key::Named(NamedKey::F1) => state.ui.settings.show_help ^= true,
+        Key::Named(NamedKey::F12) => screenshot(state),
+        Key::Named(NamedKey::Home) => reset_view(state),
+        Key::Named(NamedKey::Space) => {
+            state.session.view = match state.session.view {
+                ViewMode::Reference => ViewMode::Technique,
+                _ => ViewMode::Reference,
+            };
+        }
+        Key::Named(NamedKey::ArrowLeft) => object_move = Some(-right * step),
+        Key::Named(NamedKey::ArrowRight) => object_move = Some(right * step),
+        Key::Named(NamedKey::ArrowUp) => object_move = Some(forward * step),
+        Key::Named(NamedKey::ArrowDown) => object_move = Some(-forward * step),
+        Key::Named(NamedKey::PageUp) => object_move = Some(Vec3::Y * step),
+        Key::Named(NamedKey::PageDown) => object_move = Some(-Vec3::Y * step),
+        Key::Character(c) => match c.to_lowercase().as_str() {
+            "?" => state.ui.settings.show_help ^= true,
+            "t" => {
+                state.session.cycle_method(if shift { -1 } else { 1 });
+                state.ui.dirty = true;
+            }
+            "v" => {
+                state.session.view = match state.session.view {
+                    ViewMode::Technique => ViewMode::Split,
+                    ViewMode::Split => ViewMode::Error,
+                    _ => ViewMode::Technique,
+                };
+            }
+            "p" => screenshot(state),
+            "0" => reset_view(state),
+            "h" => state.ui.settings.show_panel ^= true,
+            "c" => state.ui.settings.continuous ^= true,
+            "w" => walk(state, step, 0.0, 0.0),
+            "s" => walk(state, -step, 0.0, 0.0),
+            "a" => walk(state, 0.0, -step, 0.0),
+            "d" => walk(state, 0.0, step, 0.0),
+            "e" => walk(state, 0.0, 0.0, step),
+            "q" => walk(state, 0.0, 0.0, -step),
+            "[" => object_turn = Some((Vec3::Y, degrees)),
+            "]" => object_turn = Some((Vec3::Y, -degrees)),
+            "," => object_turn = Some((Vec3::X, degrees)),
+            "." => object_turn = Some((Vec3::X, -degrees)),
+            "+" | "=" => state.session.camera.zoom(0.9),
+            "-" => state.session.camera.zoom(1.0 / 0.9),
+            _ => return false,
+        },
+        _ => return false,
+    }
+    if let Some(mesh) = state.session.selected {
+        if let Some(by) = object_move {
+            report(&mut state.ui, state.session.translate(mesh, by));
+        }
+        if let Some((axis, degrees)) = object_turn {
+            report(&mut state.ui, state.session.rotate(mesh, axis, degrees));
+        }
+    } else if object_move.is_some() || object_turn.is_some() {
+        state.ui.message = Some((true, "select an object first (click it, or pick it in the panel)".into()));
+    }
+    moved(&mut state.ui);
+    true
+}
+
+fn walk(state: &mut WindowState, forward: f32, right: f32, up: f32) {
+    state.session.camera.walk(forward, right, up);
+}
+
+fn reset_view(state: &mut WindowState) {
+    state.session.camera = crate::orbit::OrbitCamera::from_camera(&state.session.scene().camera);
+}
+
+/// Saves the current view at the window size, without UI, to the next free
+/// `specula-N.png` in the current directory.
+fn screenshot(state: &mut WindowState) {
+    let path = (1..)
+        .map(|n| PathBuf::from(format!("specula-{n}.png")))
+        .find(|p| !p.exists())
+        .expect("some free name");
+    let result = save_view(state, &path);
+    state.ui.message = Some(match result {
+        Ok(()) => (false, format!("saved {}", path.display())),
+        Err(e) => (true, format!("screenshot failed: {e}")),
+    });
+}
+
+fn save_view(state: &mut WindowState, path: &std::path::Path) -> Result<(), ViewerError> {
+    let (w, h) = (state.config.width, state.config.height);
+    let split = state.ui.settings.split;
+    let image = state.session.view_image(w, h, split)?;
+    image.save_png(path).map_err(crate::session::SessionError::from)?;
+    Ok(())
+}
+
+/// Runs script steps up to the next one that draws frames; returns whether this frame is a
+/// scripted frame (the technique renders every scripted frame).
+fn advance_script(state: &mut WindowState, script: &mut ScriptRun) -> Result<(), ViewerError> {
+    if let Some((yaw, pitch)) = script.drag_step {
+        if script.frames_left > 0 {
+            state.session.camera.orbit(yaw, pitch);
+        }
+    }
+    while script.frames_left == 0 && script.next < script.steps.len() {
+        let index = script.next;
+        script.next += 1;
+        let at = |e: &dyn std::fmt::Display| ViewerError::Step {
+            step: index + 1,
+            message: e.to_string(),
+        };
+        match script.steps[index].clone() {
+            Step::Method(name) => state.session.set_method(&name).map_err(|e| at(&e))?,
+            Step::Param(setting) => state.session.set_param(&setting).map_err(|e| at(&e))?,
+            Step::Orbit { yaw_deg, pitch_deg } => state.session.camera.orbit(yaw_deg, pitch_deg),
+            Step::Translate { object, by } => {
+                let mesh = state.session.object(&object).map_err(|e| at(&e))?;
+                state.session.translate(mesh, by).map_err(|e| at(&e))?;
+            }
+            Step::Rotate {
+                object,
+                axis,
+                degrees,
+            } => {
+                let mesh = state.session.object(&object).map_err(|e| at(&e))?;
+                state.session.rotate(mesh, axis, degrees).map_err(|e| at(&e))?;
+            }
+            Step::Frames(n) => {
+                script.frames_left = n;
+                script.drag_step = None;
+                script.timing = Some((index, Instant::now(), Vec::new()));
+            }
+            Step::Drag {
+                yaw_deg,
+                pitch_deg,
+                frames,
+            } => {
+                script.frames_left = frames;
+                script.drag_step = Some((yaw_deg / frames as f32, pitch_deg / frames as f32));
+                script.timing = Some((index, Instant::now(), Vec::new()));
+                state.session.camera.orbit(yaw_deg / frames as f32, pitch_deg / frames as f32);
+            }
+            Step::Screenshot(path) => {
+                save_view(state, &path).map_err(|e| at(&e))?;
+                eprintln!("step {}: saved {}", index + 1, path.display());
+            }
+            Step::View(mode) => state.session.view = mode,
+        }
+        state.ui.dirty = true;
+    }
+    Ok(())
+}
+
+/// Prints a finished `frames` or `drag` step's rates: window frames per second and the
+/// technique's median frame time.
+fn report_script_timing(state: &WindowState, script: &mut ScriptRun) {
+    if script.frames_left > 0 {
+        return;
+    }
+    if let Some((index, start, mut times)) = script.timing.take() {
+        let seconds = start.elapsed().as_secs_f64();
+        times.sort_by(f64::total_cmp);
+        let median = times.get(times.len() / 2).copied().unwrap_or(0.0);
+        let stats = state.ui.stats.as_ref();
+        eprintln!(
+            "step {}: {} frames of {} at {}x{} (technique at {}x{}): {:.1} fps; technique median {:.1} ms",
+            index + 1,
+            times.len(),
+            state.session.method().name,
+            state.config.width,
+            state.config.height,
+            stats.map_or(0, |s| s.width),
+            stats.map_or(0, |s| s.height),
+            times.len() as f64 / seconds.max(1e-9),
+            median
+        );
+    }
+}
+
+fn redraw(state: &mut WindowState, mut script: Option<&mut ScriptRun>) -> Result<(), ViewerError> {
+    if let Some(script) = script.as_deref_mut() {
+        advance_script(state, script)?;
+    }
+    let scripted = script.is_some();
+    let now = Instant::now();
+    FrameTimes::push(
+        &mut state.ui.times.window_ms,
+        (now - state.last_redraw).as_secs_f64() * 1e3,
+    );
+    state.last_redraw = now;
+    let (width, height) = (state.config.width, state.config.height);
+    let reduced = interacting(state, script.as_deref());
+    let scale = if reduced {
+        state.ui.settings.interaction_scale
+    } else {
+        1.0
+    };
+    let (tw, th) = (
+        ((width as f32 * scale).round() as u32).max(1),
+        ((height as f32 * scale).round() as u32).max(1),
+    );
+    let ctx = state.session.ctx.clone();
+    let gpu = ctx.gpu.as_ref().expect("the viewer opens a GPU");
+    let mut encoder = gpu
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("viewer") });
+
+    let view = state.session.view;
+    let show_technique = view.needs_technique() && state.session.failure.is_none();
+    let technique_stale = state.ui.dirty
+        || state.ui.settings.continuous
+        || scripted
+        || state.stats_size() != Some((tw, th));
+    let mut technique_frame: Option<Frame> = None;
+    if show_technique && technique_stale {
+        match state.session.render_technique(tw, th) {
+            Ok(frame) => {
+                state.ui.stats = Some(FrameStats {
+                    method: state.session.method().name,
+                    width: tw,
+                    height: th,
+                    total_ms: frame.total_milliseconds(),
+                    stages: frame
+                        .stages
+                        .iter()
+                        .map(|s| (s.stage.clone(), s.milliseconds))
+                        .collect(),
+                    counters: frame.counters.clone(),
+                    warnings: frame.warnings.clone(),
+                    created: frame.created.total(),
+                });
+                FrameTimes::push(&mut state.ui.times.technique_ms, frame.total_milliseconds());
+                if let Some(script) = script.as_deref_mut() {
+                    if let Some((_, _, times)) = &mut script.timing {
+                        times.push(frame.total_milliseconds());
+                    }
+                }
+                // A progressive technique keeps the frame stale until it converges.
+                state.ui.dirty = !frame.converged;
+                technique_frame = Some(frame);
+            }
+            Err(e) if scripted => {
+                return Err(ViewerError::Step {
+                    step: script.as_ref().map_or(0, |s| s.next),
+                    message: e.to_string(),
+                })
+            }
+            Err(_) => state.ui.dirty = false,
+        }
+    } else if !show_technique {
+        state.ui.dirty = false;
+    }
+    if let Some(frame) = &technique_frame {
+        match &frame.pixels {
+            Pixels::Texture(texture) => state.presenter.show_texture(gpu, &mut encoder, Side::Left, texture),
+            Pixels::Image(image) => state.presenter.show_image(gpu, Side::Left, image),
+        }
+        if view == ViewMode::Error {
+            state.technique_image = Some(frame.image(&state.session.ctx).map_err(crate::session::SessionError::from)?);
+            state.error_stale = true;
+        }
+    }
+
+    let needs_reference = view.needs_reference() || state.session.failure.is_some();
+    if needs_reference {
+        let frame = state.session.render_reference(width, height)?;
+        let converged_before = state.ui.reference_converged;
+        state.ui.reference_converged = frame.converged;
+        if !(converged_before && frame.converged && state.reference_image.is_some()) {
+            state.reference_image = Some(frame.image(&state.session.ctx).map_err(crate::session::SessionError::from)?);
+            state.error_stale = true;
+        }
+    }
+    let reference_side = if view == ViewMode::Split && show_technique {
+        Side::Right
+    } else {
+        Side::Left
+    };
+    let split = (view == ViewMode::Split && show_technique).then_some(state.ui.settings.split);
+    if needs_reference && view != ViewMode::Error || !show_technique {
+        if let Some(image) = &state.reference_image {
+            state.presenter.show_image(gpu, reference_side, image);
+        }
+    }
+    if view == ViewMode::Error && show_technique && state.error_stale && state.ui.reference_converged {
+        if state.technique_image.is_none() {
+            state.ui.dirty = true;
+        }
+        if let (Some(reference), Some(technique)) = (&state.reference_image, &state.technique_image) {
+            if (reference.width, reference.height) == (technique.width, technique.height) {
+                let map = error_image(reference, technique);
+                state.presenter.show_image(gpu, Side::Left, &map);
+                state.error_stale = false;
+            } else {
+                state.ui.dirty = true;
+            }
+        }
+    }
+
+    // egui
+    let raw_input = state.egui.take_egui_input(&state.window);
+    let egui_ctx = state.egui.egui_ctx().clone();
+    let mut load_request = None;
+    let mut output = egui_ctx.run_pass(raw_input, |ctx| {
+        load_request = crate::panel::show(ctx, &mut state.session, &mut state.ui);
+    });
+    state
+        .egui
+        .handle_platform_output(&state.window, output.platform_output);
+    if let Some(source) = load_request {
+        load_scene(state, &source);
+    }
+    let jobs = egui_ctx.tessellate(output.shapes, output.pixels_per_point);
+    let screen = egui_wgpu::ScreenDescriptor {
+        size_in_pixels: [width, height],
+        pixels_per_point: output.pixels_per_point,
+    };
+    // egui checks that every texture change is applied: drain them.
+    let mut textures_delta = std::mem::take(&mut output.textures_delta);
+    for (id, deltas) in textures_delta.set.drain() {
+        for delta in &deltas {
+            state
+                .egui_renderer
+                .update_texture(&gpu.device, &gpu.queue, id, delta);
+        }
+    }
+    let extra = state
+        .egui_renderer
+        .update_buffers(&gpu.device, &gpu.queue, &mut encoder, &jobs, &screen);
+
+    let surface_texture = match state.surface.get_current_texture() {
+        wgpu::CurrentSurfaceTexture::Success(t) | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
+        other => {
+            // Lost or outdated: configure again and draw next time.
+            log::warn!("surface: {other:?}");
+            state.surface.configure(&gpu.device, &state.config);
+            state.window.request_redraw();
+            for id in textures_delta.free.drain() {
+                state.egui_renderer.free_texture(&id);
+            }
+            return Ok(());
+        }
+    };
+    let target = surface_texture
+        .texture
+        .create_view(&wgpu::TextureViewDescriptor::default());
+    state
+        .presenter
+        .draw(gpu, &mut encoder, &target, (width, height), split);
+    {
+        let pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("egui"),
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                view: &target,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                },
+            })],
+            ..Default::default()
+        });
+        state
+            .egui_renderer
+            .render(&mut pass.forget_lifetime(), &jobs, &screen);
+    }
+    gpu.queue
+        .submit(extra.into_iter().chain(std::iter::once(encoder.finish())));
+    gpu.queue.present(surface_texture);
+    for id in textures_delta.free.drain() {
+        state.egui_renderer.free_texture(&id);
+    }
+    if let Some(script) = script {
+        if script.frames_left > 0 {
+            script.frames_left -= 1;
+            if script.frames_left == 0 {
+                report_script_timing(state, script);
+                script.drag_step = None;
+            }
+        }
+    }
+    Ok(())
+}
+
+impl WindowState {
+    fn stats_size(&self) -> Option<(u32, u32)> {
+        self.ui
+            .stats
+            .as_ref()
+            .filter(|s| s.method == self.session.method().name)
+            .map(|s| (s.width, s.height))
+    }
+}

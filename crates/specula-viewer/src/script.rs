@@ -1,0 +1,279 @@
+//! Script mode: a TOML file of `[[step]]` tables, each with exactly one key, run in order.
+//!
+//! ```toml
+//! [[step]]
+//! method = "pvrr"                                   # switch technique
+//! [[step]]
+//! param = "depth=1"                                 # NAME=VALUE of the current technique
+//! [[step]]
+//! orbit = [30, -10]                                 # yaw, pitch in degrees about the target
+//! [[step]]
+//! translate = { object = "door mirror", by = [0, 0.02, 0] }   # world metres
+//! [[step]]
+//! rotate = { object = "door mirror", axis = [0, 1, 0], degrees = 10 }  # about its box centre
+//! [[step]]
+//! frames = 10                                       # draw 10 frames, the technique each time
+//! [[step]]
+//! drag = [90, 0, 30]                                # orbit yaw, pitch over 30 frames, as a drag
+//! [[step]]
+//! view = "split"                                    # technique | reference | split | error
+//! [[step]]
+//! screenshot = "mirror.png"                         # the view at the window size, no UI
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+use serde::Deserialize;
+
+use crate::session::ViewMode;
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum Step {
+    Method(String),
+    Param(String),
+    Orbit { yaw_deg: f32, pitch_deg: f32 },
+    Translate { object: String, by: Vec3 },
+    Rotate { object: String, axis: Vec3, degrees: f32 },
+    Frames(u32),
+    Drag { yaw_deg: f32, pitch_deg: f32, frames: u32 },
+    Screenshot(PathBuf),
+    View(ViewMode),
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum ScriptError {
+    #[error("script {file}: {message}")]
+    File { file: String, message: String },
+    #[error("script {file}, step {step}: {message}")]
+    Step {
+        file: String,
+        step: usize,
+        message: String,
+    },
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ScriptFile {
+    #[serde(default)]
+    step: Vec<toml::Table>,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct RawStep {
+    method: Option<String>,
+    param: Option<String>,
+    orbit: Option<[f32; 2]>,
+    translate: Option<RawTranslate>,
+    rotate: Option<RawRotate>,
+    frames: Option<u32>,
+    drag: Option<[f32; 3]>,
+    screenshot: Option<PathBuf>,
+    view: Option<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawTranslate {
+    object: String,
+    by: [f32; 3],
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawRotate {
+    object: String,
+    axis: [f32; 3],
+    degrees: f32,
+}
+
+const STEP_KEYS: &str =
+    "method, param, orbit, translate, rotate, frames, drag, view or screenshot";
+
+/// Reads a script; relative screenshot paths resolve against the current directory.
+pub fn load(path: &Path) -> Result<Vec<Step>, ScriptError> {
+    let file = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| ScriptError::File {
+        file: file.clone(),
+        message: e.to_string(),
+    })?;
+    parse(&file, &text)
+}
+
+/// Parses script text; `file` names it in errors. Steps are numbered from 1.
+pub fn parse(file: &str, text: &str) -> Result<Vec<Step>, ScriptError> {
+    let script: ScriptFile = toml::from_str(text).map_err(|e| ScriptError::File {
+        file: file.to_string(),
+        message: e.to_string().trim_end().replace('\n', "\n    "),
+    })?;
+    if script.step.is_empty() {
+        return Err(ScriptError::File {
+            file: file.to_string(),
+            message: "no [[step]] tables".into(),
+        });
+    }
+    script
+        .step
+        .into_iter()
+        .enumerate()
+        .map(|(i, table)| {
+            step(table).map_err(|message| ScriptError::Step {
+                file: file.to_string(),
+                step: i + 1,
+                message,
+            })
+        })
+        .collect()
+}
+
+fn finite(values: &[f32], what: &str) -> Result<(), String> {
+    match values.iter().all(|v| v.is_finite()) {
+        true => Ok(()),
+        false => Err(format!("{what} must be finite numbers, got {values:?}")),
+    }
+}
+
+fn step(table: toml::Table) -> Result<Step, String> {
+    if table.len() != 1 {
+        let keys: Vec<&str> = table.keys().map(String::as_str).collect();
+        return Err(format!(
+            "give exactly one of {STEP_KEYS}; got {}",
+            if keys.is_empty() {
+                "none".into()
+            } else {
+                keys.join(", ")
+            }
+        ));
+    }
+    let raw = RawStep::deserialize(toml::Value::Table(table))
+        .map_err(|e| e.to_string().trim_end().replace('\n', " "))?;
+    let step = if let Some(m) = raw.method {
+        specula_methods::method(&m).map_err(|e| e.to_string())?;
+        Step::Method(m)
+    } else if let Some(p) = raw.param {
+        if !p.contains('=') {
+            return Err(format!("param = \"{p}\": expected NAME=VALUE"));
+        }
+        Step::Param(p)
+    } else if let Some([yaw_deg, pitch_deg]) = raw.orbit {
+        finite(&[yaw_deg, pitch_deg], "orbit")?;
+        Step::Orbit { yaw_deg, pitch_deg }
+    } else if let Some(t) = raw.translate {
+        finite(&t.by, "translate.by")?;
+        Step::Translate {
+            object: t.object,
+            by: Vec3::from_array(t.by),
+        }
+    } else if let Some(r) = raw.rotate {
+        finite(&r.axis, "rotate.axis")?;
+        finite(&[r.degrees], "rotate.degrees")?;
+        if Vec3::from_array(r.axis).length_squared() == 0.0 {
+            return Err("rotate.axis is zero".into());
+        }
+        Step::Rotate {
+            object: r.object,
+            axis: Vec3::from_array(r.axis),
+            degrees: r.degrees,
+        }
+    } else if let Some(n) = raw.frames {
+        if n == 0 {
+            return Err("frames must be at least 1".into());
+        }
+        Step::Frames(n)
+    } else if let Some([yaw_deg, pitch_deg, frames]) = raw.drag {
+        finite(&[yaw_deg, pitch_deg], "drag")?;
+        if frames < 1.0 || frames.fract() != 0.0 {
+            return Err(format!("drag = [yaw, pitch, frames]: frames must be a whole number ≥ 1, got {frames}"));
+        }
+        Step::Drag {
+            yaw_deg,
+            pitch_deg,
+            frames: frames as u32,
+        }
+    } else if let Some(path) = raw.screenshot {
+        if path.as_os_str().is_empty() {
+            return Err("screenshot needs a file name".into());
+        }
+        Step::Screenshot(path)
+    } else if let Some(v) = raw.view {
+        Step::View(ViewMode::parse(&v).ok_or_else(|| {
+            format!(
+                "view = \"{v}\": expected one of {}",
+                ViewMode::ALL.map(|m| m.name()).join(", ")
+            )
+        })?)
+    } else {
+        unreachable!("a one-key table that deserialised names one of the fields")
+    };
+    Ok(step)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_step_kind_parses() {
+        let steps = parse(
+            "s.toml",
+            r#"
+[[step]]
+method = "envmap"
+[[step]]
+param = "resolution=128"
+[[step]]
+orbit = [30, -10]
+[[step]]
+translate = { object = "door mirror", by = [0, 0.02, 0] }
+[[step]]
+rotate = { object = "door mirror", axis = [0, 1, 0], degrees = 10 }
+[[step]]
+frames = 3
+[[step]]
+drag = [90, 0, 30]
+[[step]]
+view = "split"
+[[step]]
+screenshot = "a.png"
+"#,
+        )
+        .unwrap();
+        assert_eq!(steps.len(), 9);
+        assert_eq!(steps[0], Step::Method("envmap".into()));
+        assert_eq!(
+            steps[4],
+            Step::Rotate {
+                object: "door mirror".into(),
+                axis: Vec3::Y,
+                degrees: 10.0
+            }
+        );
+        assert_eq!(steps[7], Step::View(ViewMode::Split));
+    }
+
+    #[test]
+    fn bad_steps_are_named_by_number() {
+        let cases = [
+            ("[[step]]\nmethod = \"raytrace\"", "step 1", "unknown method"),
+            ("[[step]]\nframes = 1\n[[step]]\nframes = 0", "step 2", "at least 1"),
+            ("[[step]]\nframes = 1\nview = \"split\"", "step 1", "exactly one"),
+            ("[[step]]\nzoom = 2", "step 1", "unknown field"),
+            ("[[step]]\nview = \"wide\"", "step 1", "technique, reference, split, error"),
+            ("[[step]]\nparam = \"depth\"", "step 1", "NAME=VALUE"),
+            ("[[step]]\nrotate = { object = \"a\", axis = [0, 0, 0], degrees = 3 }", "step 1", "zero"),
+            ("[[step]]\ntranslate = { object = \"a\" }", "step 1", "by"),
+            ("[[step]]\ndrag = [10, 0, 2.5]", "step 1", "whole number"),
+            ("title = \"x\"", "s.toml", "unknown field"),
+            ("", "s.toml", "no [[step]]"),
+        ];
+        for (text, place, what) in cases {
+            let message = parse("s.toml", text).unwrap_err().to_string();
+            assert!(
+                message.contains(place) && message.contains(what),
+                "{text:?}: {message:?} should name {place:?} and say {what:?}"
+            );
+        }
+    }
+}

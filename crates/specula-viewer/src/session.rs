@@ -1,0 +1,312 @@
+//! What the viewer shows, without a window: the live scene, the camera, one instance of each
+//! registered method (created on first use, kept with its parameters and prepared state), the
+//! exact method rendered progressively as the reference, the view mode and the selected object.
+//! The window ([`crate::app`]) and script mode drive it the same way.
+
+use std::rc::Rc;
+
+use glam::Vec3;
+use specula_methods::{Context, Frame, LiveScene, MethodInfo, Technique, METHODS};
+use specula_scene::Scene;
+use specula_trace::{Image, Ray};
+
+use crate::orbit::OrbitCamera;
+
+/// What the window shows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ViewMode {
+    /// The technique's image.
+    Technique,
+    /// The exact method's image (progressive).
+    Reference,
+    /// The technique left of a vertical split, the reference right of it.
+    Split,
+    /// The FLIP error between technique and reference, as a heat-map (black = equal).
+    Error,
+}
+
+impl ViewMode {
+    pub const ALL: [ViewMode; 4] = [
+        ViewMode::Technique,
+        ViewMode::Reference,
+        ViewMode::Split,
+        ViewMode::Error,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            ViewMode::Technique => "technique",
+            ViewMode::Reference => "reference",
+            ViewMode::Split => "split",
+            ViewMode::Error => "error",
+        }
+    }
+
+    pub fn parse(name: &str) -> Option<ViewMode> {
+        ViewMode::ALL.into_iter().find(|m| m.name() == name)
+    }
+
+    /// Whether the view needs the reference image.
+    pub fn needs_reference(self) -> bool {
+        self != ViewMode::Technique
+    }
+
+    /// Whether the view needs the technique image.
+    pub fn needs_technique(self) -> bool {
+        self != ViewMode::Reference
+    }
+}
+
+/// The time one progressive call of the reference may take, so the window stays responsive.
+pub const REFERENCE_BUDGET_MS: u32 = 25;
+
+#[derive(Debug, thiserror::Error)]
+pub enum SessionError {
+    #[error(transparent)]
+    Technique(#[from] specula_methods::TechniqueError),
+    #[error(transparent)]
+    Move(#[from] specula_methods::MoveError),
+    #[error(transparent)]
+    Scene(#[from] specula_scene::SceneError),
+    #[error(transparent)]
+    Image(#[from] specula_trace::ImageError),
+}
+
+pub struct Session {
+    /// Shared so that the window can hold the GPU while it changes the session.
+    pub ctx: Rc<Context>,
+    live: LiveScene,
+    /// What the scene was loaded from: a built-in name or a file.
+    pub source: String,
+    pub camera: OrbitCamera,
+    /// One slot per entry of [`METHODS`].
+    techniques: Vec<Option<Box<dyn Technique>>>,
+    current: usize,
+    reference: Box<dyn Technique>,
+    pub view: ViewMode,
+    /// The mesh the move keys and panel act on.
+    pub selected: Option<usize>,
+    /// Why the current technique failed on this scene; the reference is shown instead.
+    pub failure: Option<String>,
+}
+
+impl Session {
+    /// A session on `scene` showing `method`.
+    pub fn new(ctx: Context, scene: Scene, source: &str, method: &str) -> Result<Session, SessionError> {
+        let current = METHODS
+            .iter()
+            .position(|m| m.name == method)
+            .ok_or_else(|| specula_methods::method(method).unwrap_err())?;
+        let mut reference = (specula_methods::exact_method().create)();
+        set_budget(reference.as_mut(), REFERENCE_BUDGET_MS)?;
+        let mut session = Session {
+            ctx: Rc::new(ctx),
+            camera: OrbitCamera::from_camera(&scene.camera),
+            live: LiveScene::new(scene),
+            source: source.to_string(),
+            techniques: METHODS.iter().map(|_| None).collect(),
+            current,
+            reference,
+            view: ViewMode::Technique,
+            selected: None,
+            failure: None,
+        };
+        session.selected = session.first_specular();
+        Ok(session)
+    }
+
+    pub fn scene(&self) -> &Scene {
+        self.live.scene()
+    }
+
+    pub fn live(&self) -> &LiveScene {
+        &self.live
+    }
+
+    pub fn method(&self) -> &'static MethodInfo {
+        &METHODS[self.current]
+    }
+
+    /// Replaces the scene by the one at `source` (built-in name or file); on error the current
+    /// scene stays.
+    pub fn load(&mut self, source: &str) -> Result<(), SessionError> {
+        let scene = specula_scene::load(source)?;
+        self.camera = OrbitCamera::from_camera(&scene.camera);
+        self.live = LiveScene::new(scene);
+        self.source = source.to_string();
+        self.selected = self.first_specular();
+        self.failure = None;
+        Ok(())
+    }
+
+    /// The first mirror or lens: what a user most likely wants to move.
+    fn first_specular(&self) -> Option<usize> {
+        let scene = self.live.scene();
+        scene
+            .meshes
+            .iter()
+            .position(|m| scene.materials[m.material].is_specular())
+    }
+
+    /// Switches to the registered method `name`.
+    pub fn set_method(&mut self, name: &str) -> Result<(), SessionError> {
+        self.current = METHODS
+            .iter()
+            .position(|m| m.name == name)
+            .ok_or_else(|| specula_methods::method(name).unwrap_err())?;
+        self.failure = None;
+        Ok(())
+    }
+
+    /// The next (or previous) registered method.
+    pub fn cycle_method(&mut self, step: isize) {
+        let n = METHODS.len() as isize;
+        self.current = (self.current as isize + step).rem_euclid(n) as usize;
+        self.failure = None;
+    }
+
+    /// The current method's instance, created on first use (progressive ones get the viewer's
+    /// time budget per call).
+    pub fn technique(&mut self) -> Result<&mut dyn Technique, SessionError> {
+        let slot = &mut self.techniques[self.current];
+        if slot.is_none() {
+            let mut technique = (METHODS[self.current].create)();
+            set_budget(technique.as_mut(), REFERENCE_BUDGET_MS)?;
+            *slot = Some(technique);
+        }
+        Ok(slot.as_deref_mut().expect("created above"))
+    }
+
+    /// Applies `NAME=VALUE` to the current technique.
+    pub fn set_param(&mut self, setting: &str) -> Result<(), SessionError> {
+        specula_methods::apply_setting(self.technique()?, setting)?;
+        self.failure = None;
+        Ok(())
+    }
+
+    /// The mesh named `name`.
+    pub fn object(&self, name: &str) -> Result<usize, SessionError> {
+        Ok(self.live.object(name)?)
+    }
+
+    /// Moves mesh `mesh` by `by` (world metres) through the update path.
+    pub fn translate(&mut self, mesh: usize, by: Vec3) -> Result<(), SessionError> {
+        self.live.translate_object(self.ctx.gpu.as_ref(), mesh, by)?;
+        Ok(())
+    }
+
+    /// Turns mesh `mesh` about the world `axis` through its bounding-box centre.
+    pub fn rotate(&mut self, mesh: usize, axis: Vec3, degrees: f32) -> Result<(), SessionError> {
+        self.live.rotate_object(self.ctx.gpu.as_ref(), mesh, axis, degrees)?;
+        Ok(())
+    }
+
+    /// The mesh seen through pixel (`x`, `y`) of a `width` × `height` view, if any.
+    pub fn pick(&self, x: f32, y: f32, width: u32, height: u32) -> Option<usize> {
+        let camera = self.camera.camera();
+        let ray = Ray {
+            origin: camera.eye,
+            dir: camera.ray_direction(x, y, width, height),
+        };
+        self.live
+            .accel()
+            .intersect(&ray, f32::INFINITY)
+            .map(|hit| hit.mesh as usize)
+    }
+
+    /// One frame of the current technique at `width` × `height`. A failure is kept in
+    /// [`Session::failure`] (the window then shows the reference) and returned.
+    pub fn render_technique(&mut self, width: u32, height: u32) -> Result<Frame, SessionError> {
+        let camera = self.camera.camera();
+        self.technique()?;
+        let technique = self.techniques[self.current]
+            .as_deref_mut()
+            .expect("created by technique()");
+        let result = technique.render(&self.ctx, &self.live, &camera, width, height);
+        match result {
+            Ok(frame) => Ok(frame),
+            Err(e) => {
+                self.failure = Some(e.to_string());
+                Err(e.into())
+            }
+        }
+    }
+
+    /// One progressive step of the reference at `width` × `height` (check `converged`).
+    pub fn render_reference(&mut self, width: u32, height: u32) -> Result<Frame, SessionError> {
+        let camera = self.camera.camera();
+        Ok(self
+            .reference
+            .render(&self.ctx, &self.live, &camera, width, height)?)
+    }
+
+    /// The reference image at `width` × `height`, refined until converged.
+    pub fn converged_reference(&mut self, width: u32, height: u32) -> Result<Image, SessionError> {
+        loop {
+            let frame = self.render_reference(width, height)?;
+            if frame.converged {
+                return Ok(frame.image(&self.ctx)?);
+            }
+        }
+    }
+
+    /// The current view at `width` × `height` as an image on the CPU, complete (the reference
+    /// converged): what a screenshot saves.
+    pub fn view_image(&mut self, width: u32, height: u32, split: f32) -> Result<Image, SessionError> {
+        let technique = match self.view.needs_technique() && self.failure.is_none() {
+            true => {
+                let frame = self.render_technique(width, height)?;
+                Some(frame.image(&self.ctx)?)
+            }
+            false => None,
+        };
+        let Some(technique) = technique else {
+            return self.converged_reference(width, height);
+        };
+        Ok(match self.view {
+            ViewMode::Technique => technique,
+            ViewMode::Reference => unreachable!("needs no technique image"),
+            ViewMode::Split => split_image(&technique, &self.converged_reference(width, height)?, split),
+            ViewMode::Error => error_image(&self.converged_reference(width, height)?, &technique),
+        })
+    }
+}
+
+fn set_budget(technique: &mut dyn Technique, budget_ms: u32) -> Result<(), SessionError> {
+    if technique.info().param("budget_ms").is_some() {
+        specula_methods::apply_setting(technique, &format!("budget_ms={budget_ms}"))?;
+    }
+    Ok(())
+}
+
+/// `left` where x < `split` × width, `right` elsewhere (same size).
+pub fn split_image(left: &Image, right: &Image, split: f32) -> Image {
+    let cut = (split.clamp(0.0, 1.0) * left.width as f32).round() as u32;
+    let mut out = left.clone();
+    for y in 0..out.height {
+        for x in cut..out.width {
+            let i = (y * out.width + x) as usize;
+            out.pixels[i] = right.pixels[i];
+        }
+    }
+    out
+}
+
+/// The FLIP heat-map of `test` against `reference`, as linear radiance for display.
+pub fn error_image(reference: &Image, test: &Image) -> Image {
+    let flip = specula_compare::metrics::flip_map(reference, test);
+    let heat = specula_compare::metrics::heat_map(&flip, reference.width, reference.height);
+    let mut out = Image::new(reference.width, reference.height);
+    for (pixel, rgb) in out.pixels.iter_mut().zip(heat.pixels()) {
+        *pixel = Vec3::from_array(rgb.0.map(|c| srgb_to_linear(c as f32 / 255.0)));
+    }
+    out
+}
+
+fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
