@@ -3,8 +3,12 @@
 #   g++                  C++ compiler for nv-flip (FLIP image metric, used by the tests)
 #   mesa-vulkan-drivers  lavapipe, the CPU Vulkan driver wgpu uses on machines without a GPU
 #   libvulkan1           the Vulkan loader
+#   xvfb xauth           a virtual X display for `specula view` in tests (xvfb-run needs xauth,
+#                        which is only a recommendation of xvfb, so name it)
+#   libxkbcommon-x11-0 libxcursor1 libxrandr2 libxi6 libx11-xcb1
+#                        the X11 libraries winit loads at run time for the viewer's window
 set -euo pipefail
-packages=(g++ mesa-vulkan-drivers libvulkan1)
+packages=(g++ mesa-vulkan-drivers libvulkan1 xvfb xauth libxkbcommon-x11-0 libxcursor1 libxrandr2 libxi6 libx11-xcb1)
 missing=()
 for p in "${packages[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")

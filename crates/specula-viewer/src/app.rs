@@ -283,9 +283,10 @@ impl ApplicationHandler for App {
             WindowEvent::Resized(size) => {
                 state.config.width = size.width.max(1);
                 state.config.height = size.height.max(1);
-                state
-                    .surface
-                    .configure(&state.session.ctx.gpu.as_ref().expect("viewer GPU").device, &state.config);
+                state.surface.configure(
+                    &state.session.ctx.gpu.as_ref().expect("viewer GPU").device,
+                    &state.config,
+                );
                 state.ui.dirty = true;
                 state.window.request_redraw();
             }
@@ -311,10 +312,10 @@ impl ApplicationHandler for App {
                 }
             }
             _ if self.script.is_some() => {}
-            WindowEvent::KeyboardInput { event, .. } if !response.consumed => {
-                if key(state, event_loop, &event) {
-                    state.window.request_redraw();
-                }
+            WindowEvent::KeyboardInput { event, .. }
+                if !response.consumed && key(state, event_loop, &event) =>
+            {
+                state.window.request_redraw();
             }
             WindowEvent::CursorMoved { position, .. } => {
                 let p = (position.x as f32, position.y as f32);
@@ -380,7 +381,9 @@ fn moved(ui: &mut UiState) {
 fn interacting(state: &WindowState, script: Option<&ScriptRun>) -> bool {
     let dragging = state.mouse.pressed.is_some() && state.mouse.moved_while_pressed;
     let script_drag = script.is_some_and(|s| s.drag_step.is_some() && s.frames_left > 0);
-    dragging || script_drag || (script.is_none() && state.ui.last_input.elapsed() < INTERACTION_LINGER)
+    dragging
+        || script_drag
+        || (script.is_none() && state.ui.last_input.elapsed() < INTERACTION_LINGER)
 }
 
 fn wants_another_frame(state: &WindowState, scripted: bool) -> bool {
@@ -401,7 +404,8 @@ fn drag(state: &mut WindowState, button: MouseButton, (dx, dy): (f32, f32)) {
             let camera = state.session.camera.camera();
             let centre = state.session.scene().meshes[mesh].bounds().center();
             let depth = (centre - camera.eye).dot(camera.frame().forward).max(1e-3);
-            let metres_per_pixel = 2.0 * depth * (camera.fov_y_deg.to_radians() * 0.5).tan() / height;
+            let metres_per_pixel =
+                2.0 * depth * (camera.fov_y_deg.to_radians() * 0.5).tan() / height;
             let frame = camera.frame();
             let by = metres_per_pixel * (dx * frame.right - dy * frame.up);
             report(&mut state.ui, state.session.translate(mesh, by));
@@ -507,7 +511,10 @@ fn key(state: &mut WindowState, event_loop: &ActiveEventLoop, event: &KeyEvent) 
             report(&mut state.ui, state.session.rotate(mesh, axis, degrees));
         }
     } else if object_move.is_some() || object_turn.is_some() {
-        state.ui.message = Some((true, "select an object first (click it, or pick it in the panel)".into()));
+        state.ui.message = Some((
+            true,
+            "select an object first (click it, or pick it in the panel)".into(),
+        ));
     }
     moved(&mut state.ui);
     true
@@ -539,7 +546,9 @@ fn save_view(state: &mut WindowState, path: &std::path::Path) -> Result<(), View
     let (w, h) = (state.config.width, state.config.height);
     let split = state.ui.settings.split;
     let image = state.session.view_image(w, h, split)?;
-    image.save_png(path).map_err(crate::session::SessionError::from)?;
+    image
+        .save_png(path)
+        .map_err(crate::session::SessionError::from)?;
     Ok(())
 }
 
@@ -572,7 +581,10 @@ fn advance_script(state: &mut WindowState, script: &mut ScriptRun) -> Result<(),
                 degrees,
             } => {
                 let mesh = state.session.object(&object).map_err(|e| at(&e))?;
-                state.session.rotate(mesh, axis, degrees).map_err(|e| at(&e))?;
+                state
+                    .session
+                    .rotate(mesh, axis, degrees)
+                    .map_err(|e| at(&e))?;
             }
             Step::Frames(n) => {
                 script.frames_left = n;
@@ -587,7 +599,10 @@ fn advance_script(state: &mut WindowState, script: &mut ScriptRun) -> Result<(),
                 script.frames_left = frames;
                 script.drag_step = Some((yaw_deg / frames as f32, pitch_deg / frames as f32));
                 script.timing = Some((index, Instant::now(), Vec::new()));
-                state.session.camera.orbit(yaw_deg / frames as f32, pitch_deg / frames as f32);
+                state
+                    .session
+                    .camera
+                    .orbit(yaw_deg / frames as f32, pitch_deg / frames as f32);
             }
             Step::Screenshot(path) => {
                 save_view(state, &path).map_err(|e| at(&e))?;
@@ -652,7 +667,9 @@ fn redraw(state: &mut WindowState, mut script: Option<&mut ScriptRun>) -> Result
     let gpu = ctx.gpu.as_ref().expect("the viewer opens a GPU");
     let mut encoder = gpu
         .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("viewer") });
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("viewer"),
+        });
 
     let view = state.session.view;
     let show_technique = view.needs_technique() && state.session.failure.is_none();
@@ -701,11 +718,19 @@ fn redraw(state: &mut WindowState, mut script: Option<&mut ScriptRun>) -> Result
     }
     if let Some(frame) = &technique_frame {
         match &frame.pixels {
-            Pixels::Texture(texture) => state.presenter.show_texture(gpu, &mut encoder, Side::Left, texture),
+            Pixels::Texture(texture) => {
+                state
+                    .presenter
+                    .show_texture(gpu, &mut encoder, Side::Left, texture)
+            }
             Pixels::Image(image) => state.presenter.show_image(gpu, Side::Left, image),
         }
         if view == ViewMode::Error {
-            state.technique_image = Some(frame.image(&state.session.ctx).map_err(crate::session::SessionError::from)?);
+            state.technique_image = Some(
+                frame
+                    .image(&state.session.ctx)
+                    .map_err(crate::session::SessionError::from)?,
+            );
             state.error_stale = true;
         }
     }
@@ -716,7 +741,11 @@ fn redraw(state: &mut WindowState, mut script: Option<&mut ScriptRun>) -> Result
         let converged_before = state.ui.reference_converged;
         state.ui.reference_converged = frame.converged;
         if !(converged_before && frame.converged && state.reference_image.is_some()) {
-            state.reference_image = Some(frame.image(&state.session.ctx).map_err(crate::session::SessionError::from)?);
+            state.reference_image = Some(
+                frame
+                    .image(&state.session.ctx)
+                    .map_err(crate::session::SessionError::from)?,
+            );
             state.error_stale = true;
         }
     }
@@ -731,11 +760,16 @@ fn redraw(state: &mut WindowState, mut script: Option<&mut ScriptRun>) -> Result
             state.presenter.show_image(gpu, reference_side, image);
         }
     }
-    if view == ViewMode::Error && show_technique && state.error_stale && state.ui.reference_converged {
+    if view == ViewMode::Error
+        && show_technique
+        && state.error_stale
+        && state.ui.reference_converged
+    {
         if state.technique_image.is_none() {
             state.ui.dirty = true;
         }
-        if let (Some(reference), Some(technique)) = (&state.reference_image, &state.technique_image) {
+        if let (Some(reference), Some(technique)) = (&state.reference_image, &state.technique_image)
+        {
             if (reference.width, reference.height) == (technique.width, technique.height) {
                 let map = error_image(reference, technique);
                 state.presenter.show_image(gpu, Side::Left, &map);
@@ -773,9 +807,10 @@ fn redraw(state: &mut WindowState, mut script: Option<&mut ScriptRun>) -> Result
                 .update_texture(&gpu.device, &gpu.queue, id, delta);
         }
     }
-    let extra = state
-        .egui_renderer
-        .update_buffers(&gpu.device, &gpu.queue, &mut encoder, &jobs, &screen);
+    let extra =
+        state
+            .egui_renderer
+            .update_buffers(&gpu.device, &gpu.queue, &mut encoder, &jobs, &screen);
 
     let surface_texture = match state.surface.get_current_texture() {
         wgpu::CurrentSurfaceTexture::Success(t) | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,

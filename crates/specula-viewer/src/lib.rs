@@ -53,7 +53,11 @@ pub fn run(options: Options) -> Result<(), ViewerError> {
         Err(e) if steps.is_none() => {
             let fallback = specula_scene::builtin::DEFAULT_SCENE;
             let scene = specula_scene::load(fallback).map_err(SessionError::from)?;
-            (scene, fallback.to_string(), Some(format!("{e}; showing {fallback}")))
+            (
+                scene,
+                fallback.to_string(),
+                Some(format!("{e}; showing {fallback}")),
+            )
         }
         Err(e) => return Err(SessionError::from(e).into()),
     };

@@ -45,7 +45,12 @@ impl OrbitCamera {
     pub fn eye(&self) -> Vec3 {
         let (yaw, pitch) = (self.yaw_deg.to_radians(), self.pitch_deg.to_radians());
         self.target
-            + self.distance * Vec3::new(pitch.cos() * yaw.sin(), pitch.sin(), pitch.cos() * yaw.cos())
+            + self.distance
+                * Vec3::new(
+                    pitch.cos() * yaw.sin(),
+                    pitch.sin(),
+                    pitch.cos() * yaw.cos(),
+                )
     }
 
     pub fn camera(&self) -> Camera {
@@ -108,10 +113,14 @@ mod tests {
     #[test]
     fn orbit_reproduces_the_camera_it_was_made_from() {
         let c = camera(Vec3::new(1.0, 2.0, 3.0), Vec3::new(-0.5, 0.2, 0.1));
-        let o = OrbitCamera::from_camera(&c);
+        let mut o = OrbitCamera::from_camera(&c);
         assert_eq!(o.camera(), c);
         o.orbit(0.0, 0.0);
-        assert!(o.camera().eye.abs_diff_eq(c.eye, 1e-5), "{}", o.camera().eye);
+        assert!(
+            o.camera().eye.abs_diff_eq(c.eye, 1e-5),
+            "{}",
+            o.camera().eye
+        );
         assert_eq!(o.camera().target, c.target);
     }
 
@@ -119,7 +128,11 @@ mod tests {
     fn orbit_keeps_distance_and_half_turn_mirrors_the_eye() {
         let mut o = OrbitCamera::from_camera(&camera(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO));
         o.orbit(180.0, 0.0);
-        assert!(o.eye().abs_diff_eq(Vec3::new(0.0, 0.0, -5.0), 1e-5), "{}", o.eye());
+        assert!(
+            o.eye().abs_diff_eq(Vec3::new(0.0, 0.0, -5.0), 1e-5),
+            "{}",
+            o.eye()
+        );
         o.orbit(0.0, 200.0);
         assert_eq!(o.pitch_deg, MAX_PITCH_DEG);
         assert!((o.eye().length() - 5.0).abs() < 1e-5);
@@ -130,6 +143,10 @@ mod tests {
         let mut o = OrbitCamera::from_camera(&camera(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO));
         o.pan(0.0, 1.0);
         let height = 2.0 * 2.0 * (20f32).to_radians().tan();
-        assert!(o.target.abs_diff_eq(Vec3::new(0.0, height, 0.0), 1e-5), "{}", o.target);
+        assert!(
+            o.target.abs_diff_eq(Vec3::new(0.0, height, 0.0), 1e-5),
+            "{}",
+            o.target
+        );
     }
 }

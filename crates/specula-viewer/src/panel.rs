@@ -14,15 +14,30 @@ pub const KEYS: &[(&str, &str)] = &[
     ("left drag", "orbit the eye about the target"),
     ("right / middle drag, Shift + left drag", "pan"),
     ("wheel, + / -", "zoom"),
-    ("W A S D, Q E", "walk the eye forward, left, back, right, down, up"),
+    (
+        "W A S D, Q E",
+        "walk the eye forward, left, back, right, down, up",
+    ),
     ("click", "select the object under the cursor"),
-    ("Ctrl + left drag", "move the selected object in the view plane"),
-    ("arrows, PageUp / PageDown", "move the selected object (Shift: 5x)"),
-    ("[ ]  , .", "turn the selected object about world Y / X (Shift: 5x)"),
+    (
+        "Ctrl + left drag",
+        "move the selected object in the view plane",
+    ),
+    (
+        "arrows, PageUp / PageDown",
+        "move the selected object (Shift: 5x)",
+    ),
+    (
+        "[ ]  , .",
+        "turn the selected object about world Y / X (Shift: 5x)",
+    ),
     ("T / Shift + T", "next / previous technique"),
     ("Space", "toggle the reference"),
     ("V", "cycle views: technique, split, error"),
-    ("P or F12", "screenshot of the view (no UI) to specula-N.png"),
+    (
+        "P or F12",
+        "screenshot of the view (no UI) to specula-N.png",
+    ),
     ("Home or 0", "reset the view to the scene's camera"),
     ("C", "render continuously (for timing)"),
     ("H", "hide / show the panel"),
@@ -88,7 +103,11 @@ fn scene_section(ui: &mut egui::Ui, session: &Session, state: &mut UiState) -> O
     });
     ui.small("or drop a .toml / .gltf / .glb / .obj / .ply / .stl file on the window");
     if let Some((is_error, message)) = &state.message {
-        let color = if *is_error { Color32::LIGHT_RED } else { Color32::LIGHT_GREEN };
+        let color = if *is_error {
+            Color32::LIGHT_RED
+        } else {
+            Color32::LIGHT_GREEN
+        };
         ui.label(RichText::new(message).color(color));
     }
     ui.separator();
@@ -103,8 +122,15 @@ fn technique_section(ui: &mut egui::Ui, session: &mut Session, state: &mut UiSta
             .selected_text(current)
             .show_ui(ui, |ui| {
                 for m in METHODS {
-                    if ui.selectable_label(m.name == current, m.name).on_hover_text(m.summary).clicked() {
-                        state.message = session.set_method(m.name).err().map(|e| (true, e.to_string()));
+                    if ui
+                        .selectable_label(m.name == current, m.name)
+                        .on_hover_text(m.summary)
+                        .clicked()
+                    {
+                        state.message = session
+                            .set_method(m.name)
+                            .err()
+                            .map(|e| (true, e.to_string()));
                         state.dirty = true;
                     }
                 }
@@ -113,8 +139,10 @@ fn technique_section(ui: &mut egui::Ui, session: &mut Session, state: &mut UiSta
     ui.small(session.method().summary);
     if let Some(failure) = &session.failure {
         ui.label(
-            RichText::new(format!("{current} failed on this scene: {failure}. Showing the reference."))
-                .color(Color32::LIGHT_RED),
+            RichText::new(format!(
+                "{current} failed on this scene: {failure}. Showing the reference."
+            ))
+            .color(Color32::LIGHT_RED),
         );
     }
     let specs = session.method().params;
@@ -137,7 +165,10 @@ fn technique_section(ui: &mut egui::Ui, session: &mut Session, state: &mut UiSta
         }
     }
     if let Some(setting) = change {
-        state.message = session.set_param(&setting).err().map(|e| (true, e.to_string()));
+        state.message = session
+            .set_param(&setting)
+            .err()
+            .map(|e| (true, e.to_string()));
         state.dirty = true;
     }
     ui.separator();
@@ -149,12 +180,16 @@ fn control(ui: &mut egui::Ui, spec: &ParamSpec, value: &str) -> Option<String> {
     match spec.kind {
         ParamKind::Integer { min, max } => {
             let mut v: i64 = value.parse().unwrap_or(min);
-            let response = ui.add(egui::DragValue::new(&mut v).range(min..=max)).on_hover_text(doc);
+            let response = ui
+                .add(egui::DragValue::new(&mut v).range(min..=max))
+                .on_hover_text(doc);
             // Apply when the drag ends or the typed value is committed, not at every pixel:
             // some parameters rebuild maps.
-            (response.drag_stopped() || response.lost_focus() || (response.changed() && !response.dragged()))
-                .then(|| v.to_string())
-                .filter(|s| s != value)
+            (response.drag_stopped()
+                || response.lost_focus()
+                || (response.changed() && !response.dragged()))
+            .then(|| v.to_string())
+            .filter(|s| s != value)
         }
         ParamKind::Number { min, max } => {
             let mut v: f64 = value.parse().unwrap_or(min);
@@ -162,13 +197,18 @@ fn control(ui: &mut egui::Ui, spec: &ParamSpec, value: &str) -> Option<String> {
             let response = ui
                 .add(egui::DragValue::new(&mut v).range(min..=max).speed(speed))
                 .on_hover_text(doc);
-            (response.drag_stopped() || response.lost_focus() || (response.changed() && !response.dragged()))
-                .then(|| v.to_string())
-                .filter(|s| s.parse::<f64>().ok() != value.parse::<f64>().ok())
+            (response.drag_stopped()
+                || response.lost_focus()
+                || (response.changed() && !response.dragged()))
+            .then(|| v.to_string())
+            .filter(|s| s.parse::<f64>().ok() != value.parse::<f64>().ok())
         }
         ParamKind::Flag => {
             let mut v = value == "true";
-            ui.checkbox(&mut v, "").on_hover_text(doc).changed().then(|| v.to_string())
+            ui.checkbox(&mut v, "")
+                .on_hover_text(doc)
+                .changed()
+                .then(|| v.to_string())
         }
         ParamKind::Choice(words) => {
             let mut chosen = None;
@@ -185,8 +225,12 @@ fn control(ui: &mut egui::Ui, spec: &ParamSpec, value: &str) -> Option<String> {
         }
         ParamKind::Text { expected } => {
             let id = ui.scope_id().with(spec.name);
-            let mut text = ui.data_mut(|d| d.get_temp::<String>(id)).unwrap_or_else(|| value.to_string());
-            let response = ui.text_edit_singleline(&mut text).on_hover_text(format!("{doc} ({expected})"));
+            let mut text = ui
+                .data_mut(|d| d.get_temp::<String>(id))
+                .unwrap_or_else(|| value.to_string());
+            let response = ui
+                .text_edit_singleline(&mut text)
+                .on_hover_text(format!("{doc} ({expected})"));
             let commit = response.lost_focus();
             if response.has_focus() {
                 ui.data_mut(|d| d.insert_temp(id, text.clone()));
@@ -221,7 +265,10 @@ fn view_section(ui: &mut egui::Ui, session: &mut Session, state: &mut UiState) {
             .text("resolution while moving"),
     )
     .on_hover_text("the technique renders at this fraction of the window's resolution while the view or an object moves, and at full resolution once still");
-    ui.checkbox(&mut state.settings.continuous, "render every frame (for timing)");
+    ui.checkbox(
+        &mut state.settings.continuous,
+        "render every frame (for timing)",
+    );
     ui.separator();
 }
 
@@ -256,8 +303,12 @@ fn object_section(ui: &mut egui::Ui, session: &mut Session, state: &mut UiState)
         ui.label("move");
         for (axis, name) in [(Vec3::X, "x"), (Vec3::Y, "y"), (Vec3::Z, "z")] {
             let mut delta = 0.0f32;
-            ui.add(egui::DragValue::new(&mut delta).speed(step).prefix(format!("{name} ")))
-                .on_hover_text("drag to move along this world axis");
+            ui.add(
+                egui::DragValue::new(&mut delta)
+                    .speed(step)
+                    .prefix(format!("{name} ")),
+            )
+            .on_hover_text("drag to move along this world axis");
             by += axis * delta;
         }
     });
@@ -266,20 +317,30 @@ fn object_section(ui: &mut egui::Ui, session: &mut Session, state: &mut UiState)
         ui.label("turn");
         for (axis, name) in [(Vec3::X, "x"), (Vec3::Y, "y"), (Vec3::Z, "z")] {
             let mut degrees = 0.0f32;
-            ui.add(egui::DragValue::new(&mut degrees).speed(0.5).prefix(format!("{name}° ")))
-                .on_hover_text("drag to turn about this world axis through the object's box centre");
+            ui.add(
+                egui::DragValue::new(&mut degrees)
+                    .speed(0.5)
+                    .prefix(format!("{name}° ")),
+            )
+            .on_hover_text("drag to turn about this world axis through the object's box centre");
             if degrees != 0.0 {
                 turn = Some((axis, degrees));
             }
         }
     });
     if by != Vec3::ZERO {
-        state.message = session.translate(mesh, by).err().map(|e| (true, e.to_string()));
+        state.message = session
+            .translate(mesh, by)
+            .err()
+            .map(|e| (true, e.to_string()));
         state.dirty = true;
         state.last_input = std::time::Instant::now();
     }
     if let Some((axis, degrees)) = turn {
-        state.message = session.rotate(mesh, axis, degrees).err().map(|e| (true, e.to_string()));
+        state.message = session
+            .rotate(mesh, axis, degrees)
+            .err()
+            .map(|e| (true, e.to_string()));
         state.dirty = true;
         state.last_input = std::time::Instant::now();
     }
@@ -318,7 +379,11 @@ fn timing_section(ui: &mut egui::Ui, session: &Session, state: &UiState) {
         ui.label(format!("window: {:.1} ms per frame", last));
     }
     graph(ui, state);
-    ui.small(format!("{} on {}", session.method().name, session.ctx.describe()));
+    ui.small(format!(
+        "{} on {}",
+        session.method().name,
+        session.ctx.describe()
+    ));
 }
 
 /// The last frames' times: window frame-to-frame (white) and technique (orange); the grey line
@@ -336,7 +401,10 @@ fn graph(ui: &mut egui::Ui, state: &UiState) {
         .min(2000.0);
     let y = |ms: f64| rect.bottom() - (ms / top_ms).min(1.0) as f32 * rect.height();
     painter.line_segment(
-        [egui::pos2(rect.left(), y(50.0)), egui::pos2(rect.right(), y(50.0))],
+        [
+            egui::pos2(rect.left(), y(50.0)),
+            egui::pos2(rect.right(), y(50.0)),
+        ],
         egui::Stroke::new(1.0, Color32::GRAY),
     );
     for (times, color) in [

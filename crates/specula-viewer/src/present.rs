@@ -56,7 +56,11 @@ impl Presenter {
                 entries: &[
                     layout_entry(0, fragment, image),
                     layout_entry(1, fragment, image),
-                    layout_entry(2, fragment, util::buffer_binding(wgpu::BufferBindingType::Uniform)),
+                    layout_entry(
+                        2,
+                        fragment,
+                        util::buffer_binding(wgpu::BufferBindingType::Uniform),
+                    ),
                 ],
             });
         let pipeline_layout = gpu
@@ -201,7 +205,9 @@ fn make_bind_group(
     images: &[wgpu::Texture; 2],
     params: &wgpu::Buffer,
 ) -> wgpu::BindGroup {
-    let views = images.each_ref().map(|t| t.create_view(&Default::default()));
+    let views = images
+        .each_ref()
+        .map(|t| t.create_view(&Default::default()));
     util::bind_group(
         gpu,
         "present",

@@ -32,11 +32,25 @@ use crate::session::ViewMode;
 pub enum Step {
     Method(String),
     Param(String),
-    Orbit { yaw_deg: f32, pitch_deg: f32 },
-    Translate { object: String, by: Vec3 },
-    Rotate { object: String, axis: Vec3, degrees: f32 },
+    Orbit {
+        yaw_deg: f32,
+        pitch_deg: f32,
+    },
+    Translate {
+        object: String,
+        by: Vec3,
+    },
+    Rotate {
+        object: String,
+        axis: Vec3,
+        degrees: f32,
+    },
     Frames(u32),
-    Drag { yaw_deg: f32, pitch_deg: f32, frames: u32 },
+    Drag {
+        yaw_deg: f32,
+        pitch_deg: f32,
+        frames: u32,
+    },
     Screenshot(PathBuf),
     View(ViewMode),
 }
@@ -89,8 +103,7 @@ struct RawRotate {
     degrees: f32,
 }
 
-const STEP_KEYS: &str =
-    "method, param, orbit, translate, rotate, frames, drag, view or screenshot";
+const STEP_KEYS: &str = "method, param, orbit, translate, rotate, frames, drag, view or screenshot";
 
 /// Reads a script; relative screenshot paths resolve against the current directory.
 pub fn load(path: &Path) -> Result<Vec<Step>, ScriptError> {
@@ -185,7 +198,9 @@ fn step(table: toml::Table) -> Result<Step, String> {
     } else if let Some([yaw_deg, pitch_deg, frames]) = raw.drag {
         finite(&[yaw_deg, pitch_deg], "drag")?;
         if frames < 1.0 || frames.fract() != 0.0 {
-            return Err(format!("drag = [yaw, pitch, frames]: frames must be a whole number ≥ 1, got {frames}"));
+            return Err(format!(
+                "drag = [yaw, pitch, frames]: frames must be a whole number ≥ 1, got {frames}"
+            ));
         }
         Step::Drag {
             yaw_deg,
@@ -256,13 +271,33 @@ screenshot = "a.png"
     #[test]
     fn bad_steps_are_named_by_number() {
         let cases = [
-            ("[[step]]\nmethod = \"raytrace\"", "step 1", "unknown method"),
-            ("[[step]]\nframes = 1\n[[step]]\nframes = 0", "step 2", "at least 1"),
-            ("[[step]]\nframes = 1\nview = \"split\"", "step 1", "exactly one"),
+            (
+                "[[step]]\nmethod = \"raytrace\"",
+                "step 1",
+                "unknown method",
+            ),
+            (
+                "[[step]]\nframes = 1\n[[step]]\nframes = 0",
+                "step 2",
+                "at least 1",
+            ),
+            (
+                "[[step]]\nframes = 1\nview = \"split\"",
+                "step 1",
+                "exactly one",
+            ),
             ("[[step]]\nzoom = 2", "step 1", "unknown field"),
-            ("[[step]]\nview = \"wide\"", "step 1", "technique, reference, split, error"),
+            (
+                "[[step]]\nview = \"wide\"",
+                "step 1",
+                "technique, reference, split, error",
+            ),
             ("[[step]]\nparam = \"depth\"", "step 1", "NAME=VALUE"),
-            ("[[step]]\nrotate = { object = \"a\", axis = [0, 0, 0], degrees = 3 }", "step 1", "zero"),
+            (
+                "[[step]]\nrotate = { object = \"a\", axis = [0, 0, 0], degrees = 3 }",
+                "step 1",
+                "zero",
+            ),
             ("[[step]]\ntranslate = { object = \"a\" }", "step 1", "by"),
             ("[[step]]\ndrag = [10, 0, 2.5]", "step 1", "whole number"),
             ("title = \"x\"", "s.toml", "unknown field"),

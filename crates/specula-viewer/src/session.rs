@@ -92,7 +92,12 @@ pub struct Session {
 
 impl Session {
     /// A session on `scene` showing `method`.
-    pub fn new(ctx: Context, scene: Scene, source: &str, method: &str) -> Result<Session, SessionError> {
+    pub fn new(
+        ctx: Context,
+        scene: Scene,
+        source: &str,
+        method: &str,
+    ) -> Result<Session, SessionError> {
         let current = METHODS
             .iter()
             .position(|m| m.name == method)
@@ -124,7 +129,7 @@ impl Session {
     }
 
     pub fn method(&self) -> &'static MethodInfo {
-        &METHODS[self.current]
+        METHODS[self.current]
     }
 
     /// Replaces the scene by the one at `source` (built-in name or file); on error the current
@@ -191,13 +196,15 @@ impl Session {
 
     /// Moves mesh `mesh` by `by` (world metres) through the update path.
     pub fn translate(&mut self, mesh: usize, by: Vec3) -> Result<(), SessionError> {
-        self.live.translate_object(self.ctx.gpu.as_ref(), mesh, by)?;
+        self.live
+            .translate_object(self.ctx.gpu.as_ref(), mesh, by)?;
         Ok(())
     }
 
     /// Turns mesh `mesh` about the world `axis` through its bounding-box centre.
     pub fn rotate(&mut self, mesh: usize, axis: Vec3, degrees: f32) -> Result<(), SessionError> {
-        self.live.rotate_object(self.ctx.gpu.as_ref(), mesh, axis, degrees)?;
+        self.live
+            .rotate_object(self.ctx.gpu.as_ref(), mesh, axis, degrees)?;
         Ok(())
     }
 
@@ -252,7 +259,12 @@ impl Session {
 
     /// The current view at `width` × `height` as an image on the CPU, complete (the reference
     /// converged): what a screenshot saves.
-    pub fn view_image(&mut self, width: u32, height: u32, split: f32) -> Result<Image, SessionError> {
+    pub fn view_image(
+        &mut self,
+        width: u32,
+        height: u32,
+        split: f32,
+    ) -> Result<Image, SessionError> {
         let technique = match self.view.needs_technique() && self.failure.is_none() {
             true => {
                 let frame = self.render_technique(width, height)?;
@@ -266,7 +278,9 @@ impl Session {
         Ok(match self.view {
             ViewMode::Technique => technique,
             ViewMode::Reference => unreachable!("needs no technique image"),
-            ViewMode::Split => split_image(&technique, &self.converged_reference(width, height)?, split),
+            ViewMode::Split => {
+                split_image(&technique, &self.converged_reference(width, height)?, split)
+            }
             ViewMode::Error => error_image(&self.converged_reference(width, height)?, &technique),
         })
     }
