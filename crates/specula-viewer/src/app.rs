@@ -118,6 +118,8 @@ struct WindowState {
     technique_image: Option<Image>,
     reference_image: Option<Image>,
     error_stale: bool,
+    /// egui wants another frame at once (an animation, a hover).
+    egui_repaint: bool,
 }
 
 /// A script being run: its steps, the one at hand, and the frames it still wants.
@@ -246,6 +248,7 @@ impl App {
             technique_image: None,
             reference_image: None,
             error_stale: true,
+            egui_repaint: false,
         });
         Ok(())
     }
@@ -275,7 +278,8 @@ impl ApplicationHandler for App {
             return;
         };
         let response = state.egui.on_window_event(&state.window, &event);
-        if response.repaint {
+        // egui asks to repaint after every redraw; the frame loop decides that itself.
+        if response.repaint && event != WindowEvent::RedrawRequested {
             state.window.request_redraw();
         }
         match event {
@@ -334,7 +338,7 @@ impl ApplicationHandler for App {
                 button,
                 ..
             } => match pressed {
-                ElementState::Pressed if !response.consumed => {
+                ElementState::Pressed if !over_panel(state) => {
                     state.mouse.pressed = Some((button, state.mouse.position));
                     state.mouse.moved_while_pressed = false;
                 }
@@ -373,6 +377,17 @@ impl ApplicationHandler for App {
     }
 }
 
+/// Whether the cursor is over one of egui's windows. Asked of the last frame's layers at the
+/// cursor's current position: egui's own `consumed` uses the pointer position of its last frame,
+/// which is stale when a press follows a move before any frame ran.
+fn over_panel(state: &WindowState) -> bool {
+    let ctx = state.egui.egui_ctx();
+    let (x, y) = state.mouse.position;
+    let points = egui::pos2(x, y) / ctx.pixels_per_point();
+    ctx.layer_id_at(points)
+        .is_some_and(|layer| layer.order != egui::Order::Background)
+}
+
 fn moved(ui: &mut UiState) {
     ui.dirty = true;
     ui.last_input = Instant::now();
@@ -387,7 +402,12 @@ fn interacting(state: &WindowState, script: Option<&ScriptRun>) -> bool {
 }
 
 fn wants_another_frame(state: &WindowState, scripted: bool) -> bool {
+    let technique_reduced = state.session.view.needs_technique()
+        && state.session.failure.is_none()
+        && state.stats_size() != Some((state.config.width, state.config.height));
     scripted
+        || technique_reduced
+        || state.egui_repaint
         || state.ui.dirty
         || state.ui.settings.continuous
         || (state.session.view.needs_reference() && !state.ui.reference_converged)
@@ -445,9 +465,15 @@ fn key(state: &mut WindowState, event_loop: &ActiveEventLoop, event: &KeyEvent) 
         return false;
     }
     let shift = state.mouse.modifiers.shift_key();
-    let scene_radius = state.session.scene().bounds().radius().max(1e-3);
-    let step = scene_radius * if shift { 0.05 } else { 0.01 };
-    let degrees = if shift { 15.0 } else { 3.0 };
+    // Moves scale with what moves: the selected object's size for object keys, the distance to
+    // the target for walking.
+    let object_radius = state.session.selected.map_or(1.0, |m| {
+        state.session.scene().meshes[m].bounds().radius().max(1e-4)
+    });
+    let boost = if shift { 5.0 } else { 1.0 };
+    let step = object_radius * 0.05 * boost;
+    let walk_step = state.session.camera.distance * 0.05 * boost;
+    let degrees = 3.0 * boost;
     let camera_frame = state.session.camera.camera().frame();
     let flat = |v: Vec3| Vec3::new(v.x, 0.0, v.z).try_normalize().unwrap_or(Vec3::X);
     let (right, forward) = (flat(camera_frame.right), flat(camera_frame.forward));
@@ -487,12 +513,12 @@ fn key(state: &mut WindowState, event_loop: &ActiveEventLoop, event: &KeyEvent) 
             "0" => reset_view(state),
             "h" => state.ui.settings.show_panel ^= true,
             "c" => state.ui.settings.continuous ^= true,
-            "w" => walk(state, step, 0.0, 0.0),
-            "s" => walk(state, -step, 0.0, 0.0),
-            "a" => walk(state, 0.0, -step, 0.0),
-            "d" => walk(state, 0.0, step, 0.0),
-            "e" => walk(state, 0.0, 0.0, step),
-            "q" => walk(state, 0.0, 0.0, -step),
+            "w" => walk(state, walk_step, 0.0, 0.0),
+            "s" => walk(state, -walk_step, 0.0, 0.0),
+            "a" => walk(state, 0.0, -walk_step, 0.0),
+            "d" => walk(state, 0.0, walk_step, 0.0),
+            "e" => walk(state, 0.0, 0.0, walk_step),
+            "q" => walk(state, 0.0, 0.0, -walk_step),
             "[" => object_turn = Some((Vec3::Y, degrees)),
             "]" => object_turn = Some((Vec3::Y, -degrees)),
             "," => object_turn = Some((Vec3::X, degrees)),
@@ -716,7 +742,9 @@ fn redraw(state: &mut WindowState, mut script: Option<&mut ScriptRun>) -> Result
     } else if !show_technique {
         state.ui.dirty = false;
     }
-    if let Some(frame) = &technique_frame {
+    // In the error view the left image is the error map: the technique's frame is not shown
+    // (a copy recorded here would also land after the map's write, which the queue runs first).
+    if let Some(frame) = technique_frame.as_ref().filter(|_| view != ViewMode::Error) {
         match &frame.pixels {
             Pixels::Texture(texture) => {
                 state
@@ -725,14 +753,11 @@ fn redraw(state: &mut WindowState, mut script: Option<&mut ScriptRun>) -> Result
             }
             Pixels::Image(image) => state.presenter.show_image(gpu, Side::Left, image),
         }
-        if view == ViewMode::Error {
-            state.technique_image = Some(
-                frame
-                    .image(&state.session.ctx)
-                    .map_err(crate::session::SessionError::from)?,
-            );
-            state.error_stale = true;
-        }
+    }
+    if let Some(frame) = technique_frame.as_ref().filter(|_| view == ViewMode::Error) {
+        let image = frame.image(&state.session.ctx);
+        state.technique_image = Some(image.map_err(crate::session::SessionError::from)?);
+        state.error_stale = true;
     }
 
     let needs_reference = view.needs_reference() || state.session.failure.is_some();
@@ -790,6 +815,10 @@ fn redraw(state: &mut WindowState, mut script: Option<&mut ScriptRun>) -> Result
     state
         .egui
         .handle_platform_output(&state.window, output.platform_output);
+    state.egui_repaint = output
+        .viewport_output
+        .get(&egui::ViewportId::ROOT)
+        .is_some_and(|v| v.repaint_delay.is_zero());
     if let Some(source) = load_request {
         load_scene(state, &source);
     }

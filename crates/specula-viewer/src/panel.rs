@@ -65,16 +65,28 @@ pub fn show(ctx: &egui::Context, session: &mut Session, ui_state: &mut UiState) 
         return None;
     }
     egui::Window::new("specula")
-        .default_width(300.0)
+        .default_width(260.0)
         .default_pos((8.0, 8.0))
         .show(ctx, |ui| {
             egui::ScrollArea::vertical().show(ui, |ui| {
-                load = scene_section(ui, session, ui_state);
-                technique_section(ui, session, ui_state);
-                view_section(ui, session, ui_state);
-                object_section(ui, session, ui_state);
-                timing_section(ui, session, ui_state);
+                // Only the technique is open at first, so the panel covers little of the view.
+                egui::CollapsingHeader::new("scene").show(ui, |ui| {
+                    load = scene_section(ui, session, ui_state);
+                });
+                egui::CollapsingHeader::new("technique")
+                    .default_open(true)
+                    .show(ui, |ui| technique_section(ui, session, ui_state));
+                egui::CollapsingHeader::new("view")
+                    .default_open(true)
+                    .show(ui, |ui| view_section(ui, session, ui_state));
+                egui::CollapsingHeader::new("object")
+                    .show(ui, |ui| object_section(ui, session, ui_state));
+                egui::CollapsingHeader::new("timings")
+                    .show(ui, |ui| timing_section(ui, session, ui_state));
             });
+            if let Some((true, message)) = &ui_state.message {
+                ui.label(RichText::new(message).color(Color32::LIGHT_RED));
+            }
         });
     load
 }
@@ -297,7 +309,7 @@ fn object_section(ui: &mut egui::Ui, session: &mut Session, state: &mut UiState)
     let Some(mesh) = session.selected else {
         return;
     };
-    let step = session.scene().bounds().radius().max(1e-3) * 0.002;
+    let step = session.scene().meshes[mesh].bounds().radius().max(1e-4) * 0.005;
     let mut by = Vec3::ZERO;
     ui.horizontal(|ui| {
         ui.label("move");
