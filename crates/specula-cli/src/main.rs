@@ -104,6 +104,10 @@ enum Command {
         /// frames, drag, view, screenshot) and exit; see crates/specula-viewer/src/script.rs.
         #[arg(long)]
         script: Option<PathBuf>,
+        /// The technique's resolution while the view or an object moves, as a fraction of the
+        /// window's width and height (full resolution once still).
+        #[arg(long, default_value_t = 0.5, value_parser = parse_scale)]
+        interaction_scale: f32,
     },
     /// Time each method: warm-up, then N frames; median and spread per method and stage.
     Bench {
@@ -138,6 +142,15 @@ fn parse_size(text: &str) -> Result<(u32, u32), String> {
             .ok_or_else(|| format!("'{s}' is not a whole number from 1 to 16384"))
     };
     Ok((side(w)?, side(h)?))
+}
+
+/// A fraction from 0.125 to 1.
+fn parse_scale(text: &str) -> Result<f32, String> {
+    text.trim()
+        .parse::<f32>()
+        .ok()
+        .filter(|v| (0.125..=1.0).contains(v))
+        .ok_or_else(|| format!("expected a number from 0.125 to 1, got '{text}'"))
 }
 
 fn load_scene(name: &str) -> Result<Scene> {
@@ -362,11 +375,13 @@ fn run(cli: Cli) -> Result<()> {
             method,
             size,
             script,
+            interaction_scale,
         } => Ok(specula_viewer::run(specula_viewer::Options {
             scene,
             method,
             size,
             script,
+            interaction_scale,
         })?),
         Command::Bench {
             scene,

@@ -225,7 +225,10 @@ impl App {
             surface,
             config,
             ui: UiState {
-                settings: Settings::default(),
+                settings: Settings {
+                    interaction_scale: self.options.interaction_scale,
+                    ..Settings::default()
+                },
                 stats: None,
                 times: FrameTimes::default(),
                 reference_converged: false,

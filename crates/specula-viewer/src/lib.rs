@@ -41,6 +41,9 @@ pub struct Options {
     pub size: (u32, u32),
     /// Run these steps and exit instead of waiting for the user.
     pub script: Option<PathBuf>,
+    /// The technique's resolution while the view moves, as a fraction of the window's side
+    /// (the panel's "resolution while moving").
+    pub interaction_scale: f32,
 }
 
 /// Opens the window and runs until it is closed (or the script ends). A scene that fails to

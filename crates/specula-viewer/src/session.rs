@@ -324,3 +324,80 @@ fn srgb_to_linear(c: f32) -> f32 {
         ((c + 0.055) / 1.055).powf(2.4)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cpu_session(method: &str) -> Session {
+        let scene = specula_scene::load("door-mirror").unwrap();
+        Session::new(Context::default(), scene, "door-mirror", method).unwrap()
+    }
+
+    #[test]
+    fn a_failing_technique_is_reported_and_the_view_falls_back_to_the_reference() {
+        // No GPU in this context: envmap cannot render, and says why.
+        let mut session = cpu_session("envmap");
+        assert!(session.render_technique(32, 24).is_err());
+        let failure = session.failure.clone().expect("failure kept for the panel");
+        assert!(failure.contains("needs a GPU"), "{failure}");
+        let shown = session.view_image(32, 24, 0.5).unwrap();
+        let reference = session.converged_reference(32, 24).unwrap();
+        assert_eq!(shown.pixels, reference.pixels);
+        // Choosing a method again clears the failure and tries it again.
+        session.set_method("reference").unwrap();
+        assert!(session.failure.is_none());
+        assert!(session.render_technique(32, 24).is_ok());
+    }
+
+    #[test]
+    fn a_scene_that_fails_to_load_keeps_the_previous_one() {
+        let mut session = cpu_session("reference");
+        let error = session.load("/nowhere/scene.toml").unwrap_err().to_string();
+        assert!(error.contains("/nowhere/scene.toml"), "{error}");
+        assert_eq!(session.source, "door-mirror");
+        assert!(session
+            .scene()
+            .meshes
+            .iter()
+            .any(|m| m.name == "door mirror"));
+    }
+
+    #[test]
+    fn picking_the_image_centre_selects_the_mirror_and_moves_reach_the_reference() {
+        let mut session = cpu_session("reference");
+        let mirror = session.object("door mirror").unwrap();
+        assert_eq!(
+            session.selected,
+            Some(mirror),
+            "the first mirror is selected"
+        );
+        assert_eq!(session.pick(32.0, 24.0, 64, 48), Some(mirror));
+        let before = session.converged_reference(64, 48).unwrap();
+        session.translate(mirror, Vec3::new(0.0, 0.3, 0.0)).unwrap();
+        let after = session.converged_reference(64, 48).unwrap();
+        assert_ne!(
+            before.pixels, after.pixels,
+            "the reference restarts after a move"
+        );
+        assert_ne!(session.pick(32.0, 24.0, 64, 48), Some(mirror));
+    }
+
+    #[test]
+    fn split_takes_the_left_image_left_of_the_cut() {
+        let mut left = Image::new(4, 1);
+        let mut right = Image::new(4, 1);
+        left.pixels.fill(Vec3::ONE);
+        right.pixels.fill(Vec3::splat(0.5));
+        let split = split_image(&left, &right, 0.25);
+        assert_eq!(
+            split.pixels,
+            vec![
+                Vec3::ONE,
+                Vec3::splat(0.5),
+                Vec3::splat(0.5),
+                Vec3::splat(0.5)
+            ]
+        );
+    }
+}
