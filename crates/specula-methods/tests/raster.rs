@@ -110,3 +110,78 @@ fn teapot_box_non_specular_pixels_match_the_reference() {
 fn mirror_teapot_bunny_non_specular_pixels_match_the_reference() {
     check("mirror-teapot-bunny");
 }
+
+#[test]
+fn geometry_targets_match_the_shaded_pass_without_colour_or_shadows() {
+    let Some(ctx) = specula_gpu::test_context("geometry targets") else {
+        return;
+    };
+    let scene = specula_scene::load("teapot-box").unwrap();
+    let (width, height) = (64, 48);
+    let live = LiveScene::new(scene.clone());
+    let camera = raster::camera_uniform(&scene.camera, &scene.bounds(), width, height);
+    let shaded = RasterPass::new(&ctx, &live, RasterSpec::scene(256)).unwrap();
+    let geometry_spec = RasterSpec {
+        targets: raster::Targets::Geometry,
+        ..RasterSpec::scene(256)
+    };
+    let geometry = RasterPass::new(&ctx, &live, geometry_spec).unwrap();
+    geometry.begin_frame(&ctx, &live).unwrap();
+    let g = geometry
+        .render(&ctx, live.gpu(&ctx), &camera, None)
+        .unwrap();
+    let s = shaded.render(&ctx, live.gpu(&ctx), &camera, None).unwrap();
+    assert_eq!(g.read_ids(&ctx).unwrap(), s.read_ids(&ctx).unwrap());
+    for (a, b) in [(&g.position, &s.position), (&g.normal, &s.normal)] {
+        assert_eq!(
+            raster::read_rgba32f(&ctx, a).unwrap().pixels,
+            raster::read_rgba32f(&ctx, b).unwrap().pixels
+        );
+    }
+    let ids = g.read_ids(&ctx).unwrap();
+    let colour = g.read_color(&ctx).unwrap();
+    let geometry_pixels = (0..ids.len()).filter(|&i| ids[i][0] != 0);
+    assert!(geometry_pixels.clone().count() > 1000);
+    assert!(geometry_pixels
+        .into_iter()
+        .all(|i| colour.pixels[i] == glam::Vec3::ZERO));
+    assert!(s
+        .read_color(&ctx)
+        .unwrap()
+        .pixels
+        .iter()
+        .any(|c| *c != glam::Vec3::ZERO));
+}
+
+#[test]
+fn the_pool_keeps_one_frames_g_buffers_and_drops_other_sizes() {
+    let Some(ctx) = specula_gpu::test_context("g-buffer pool") else {
+        return;
+    };
+    let live = LiveScene::new(specula_scene::load("door-mirror").unwrap());
+    let pass = RasterPass::new(&ctx, &live, RasterSpec::scene(64)).unwrap();
+    let frame = |sizes: &[(u32, u32)]| {
+        pass.begin_frame(&ctx, &live).unwrap();
+        let before = ctx.resource_counts();
+        for &(w, h) in sizes {
+            pass.acquire(&ctx, w, h);
+        }
+        (ctx.resource_counts() - before).textures
+    };
+    assert_eq!(
+        frame(&[(64, 48), (64, 48)]),
+        10,
+        "two new G-buffers of 5 textures"
+    );
+    assert_eq!(
+        frame(&[(64, 48), (64, 48)]),
+        0,
+        "a steady frame reuses them"
+    );
+    assert_eq!(pass.pooled(), 2);
+    // A resized view: the old size is dropped after one frame without it.
+    assert_eq!(frame(&[(32, 24)]), 5);
+    assert_eq!(pass.pooled(), 3);
+    assert_eq!(frame(&[(32, 24)]), 0);
+    assert_eq!(pass.pooled(), 1);
+}

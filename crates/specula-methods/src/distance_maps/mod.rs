@@ -1009,6 +1009,7 @@ impl Technique for DistanceMaps {
         let layer_count = self.layer_count() as u64;
         let p = self.prepared.as_mut().expect("prepared above");
         p.raster.begin_frame(gpu, live)?;
+        p.trace_bind_groups.keep_pooled(&p.raster);
         self.timer.start(gpu);
         gpu.queue
             .write_buffer(&p.settings, 0, bytemuck::bytes_of(&settings));

@@ -387,6 +387,9 @@ impl Technique for EnvMap {
         let (resolution, exit, dynamic) = (self.resolution, self.exit, self.dynamic);
         let p = self.prepared.as_mut().expect("prepared above");
         p.raster.begin_frame(gpu, live)?;
+        if let Some(faces) = &mut self.faces {
+            faces.bind_groups.keep_pooled(&p.raster);
+        }
         self.timer.start(gpu);
         if p.placed != Some((live.version(), exit)) {
             p.reflectors = reflectors(scene);

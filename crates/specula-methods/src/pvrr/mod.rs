@@ -1114,6 +1114,7 @@ impl Technique for Pvrr {
             let mut arenas = p.arenas.borrow_mut();
             arenas.vertices.begin_frame();
             arenas.uniforms.begin_frame();
+            arenas.bind_groups.keep_pooled(&p.raster);
         }
         self.timer.start(gpu);
         let camera_uniform = raster::camera_uniform(camera, &scene.bounds(), width, height);

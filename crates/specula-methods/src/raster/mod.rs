@@ -11,11 +11,13 @@
 //! at the same pixel centres.
 //!
 //! What a pass draws comes from its [`RasterSpec`]: which meshes (all, specular only, or
-//! non-specular only), which faces are culled, and whether the background is drawn, so that a
+//! non-specular only), which targets (all, shaded; or the geometry only, unlit), which faces
+//! are culled, and whether the background is drawn, so that a
 //! technique needing, say, the back faces of its refractors uses this pass, not a copy of it.
 //!
 //! Nothing is created per frame: G-buffers come from a pool kept across frames
-//! ([`RasterPass::begin_frame`] hands them all back), and the camera uniform is rewritten in
+//! ([`RasterPass::begin_frame`] hands them all back, and drops those the last frame did not
+//! use, so a resized view does not leave its old sizes behind), and the camera uniform is rewritten in
 //! place before each draw (every draw is its own submission, and wgpu orders a buffer write
 //! before the next submission). Shadow maps are drawn at creation and again, by
 //! [`RasterPass::begin_frame`], only when the scene's geometry has changed.
@@ -88,7 +90,8 @@ pub struct GBuffer {
     pub normal: wgpu::Texture,
     pub ids: wgpu::Texture,
     pub depth: wgpu::Texture,
-    /// Its slot in the pool: stable across frames, so a technique can keep bind groups per slot.
+    /// Its slot in the pool: an id never reused, stable while the G-buffer stays pooled, so a
+    /// technique can keep bind groups per slot.
     pub slot: usize,
 }
 
@@ -171,6 +174,14 @@ impl BindGroupsBySlot {
     /// Forgets every bind group (what they bind was replaced).
     pub fn clear(&mut self) {
         self.0.clear();
+    }
+
+    /// Forgets the bind groups of G-buffers `pass` no longer pools (call after
+    /// [`RasterPass::begin_frame`]), so they do not keep the textures alive.
+    pub fn keep_pooled(&mut self, pass: &RasterPass) {
+        let pool = pass.pool.borrow();
+        self.0
+            .retain(|(slot, _)| pool.iter().any(|entry| entry.g.slot == *slot));
     }
 }
 
@@ -290,10 +301,21 @@ pub enum MeshSelection {
     NonSpecular,
 }
 
+/// Which G-buffer targets a raster pass fills.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Targets {
+    /// Every target, the colour lit (shadow maps drawn and read).
+    Shaded,
+    /// Position, normal, IDs and depth only: the colour stays black and no light is computed or
+    /// shadow map drawn (a refractor's back faces, a depth or normal map).
+    Geometry,
+}
+
 /// What a [`RasterPass`] draws.
 #[derive(Clone, Copy, Debug)]
 pub struct RasterSpec {
     pub meshes: MeshSelection,
+    pub targets: Targets,
     /// `Some(Face::Front)` keeps only back faces (a refractor's far side).
     pub cull_mode: Option<wgpu::Face>,
     /// Draw the background behind the geometry (else IDs stay 0 and colour black there).
@@ -307,6 +329,7 @@ impl RasterSpec {
     pub fn scene(shadow_resolution: u32) -> RasterSpec {
         RasterSpec {
             meshes: MeshSelection::All,
+            targets: Targets::Shaded,
             cull_mode: None,
             background: true,
             shadow_resolution,
@@ -326,6 +349,13 @@ struct Shadows {
     resolution: u32,
 }
 
+/// A pooled G-buffer: handed out now (`in_use`), and used at all this frame (`used`).
+struct PoolEntry {
+    g: GBuffer,
+    in_use: bool,
+    used: bool,
+}
+
 pub struct RasterPass {
     spec: RasterSpec,
     scene_pipeline: wgpu::RenderPipeline,
@@ -339,7 +369,8 @@ pub struct RasterPass {
     /// Per mesh: whether the spec selects it.
     selected: Vec<bool>,
     /// G-buffers kept across frames, and whether each is handed out this frame.
-    pool: RefCell<Vec<(GBuffer, bool)>>,
+    pool: RefCell<Vec<PoolEntry>>,
+    next_slot: Cell<usize>,
     /// The scene version the shadow maps were drawn at.
     shadows_at: Cell<u64>,
 }
@@ -474,7 +505,10 @@ impl RasterPass {
                 layout: &scene_pipeline_layout,
                 module: &module,
                 vertex_entry: "vs_scene",
-                fragment_entry: "fs_scene",
+                fragment_entry: match spec.targets {
+                    Targets::Shaded => "fs_scene",
+                    Targets::Geometry => "fs_geometry",
+                },
                 vertex_buffers: &[Some(vertex_layout())],
                 depth: depth(true, wgpu::CompareFunction::Less),
                 targets: &G_BUFFER_FORMATS,
@@ -629,6 +663,7 @@ impl RasterPass {
             camera_bind_group,
             selected,
             pool: RefCell::new(Vec::new()),
+            next_slot: Cell::new(0),
             shadows_at: Cell::new(0),
         }
     }
@@ -734,27 +769,38 @@ impl RasterPass {
     /// Starts a frame: hands every pooled G-buffer back, and redraws the shadow maps when an
     /// object moved since they were drawn.
     pub fn begin_frame(&self, ctx: &GpuContext, live: &LiveScene) -> Result<(), GpuError> {
-        for (_, in_use) in self.pool.borrow_mut().iter_mut() {
-            *in_use = false;
+        // G-buffers the last frame did not use (another size: a resized window, a view that
+        // moved at reduced resolution) are dropped, so the pool holds one frame's worth.
+        let mut pool = self.pool.borrow_mut();
+        pool.retain(|entry| entry.used);
+        for entry in pool.iter_mut() {
+            entry.in_use = false;
+            entry.used = false;
         }
-        if self.shadows_at.get() != live.version() {
+        drop(pool);
+        if self.spec.targets == Targets::Shaded && self.shadows_at.get() != live.version() {
             self.draw_shadows(ctx, live.scene(), live.gpu(ctx))?;
             self.shadows_at.set(live.version());
         }
         Ok(())
     }
 
+    /// How many G-buffers the pool holds.
+    pub fn pooled(&self) -> usize {
+        self.pool.borrow().len()
+    }
+
     /// Hands `g` back before the frame ends, once what was drawn from it has been submitted:
     /// passes that draw many short-lived maps (nested reflections) reuse it instead of holding
     /// them all.
     pub fn release(&self, g: &GBuffer) {
-        if let Some((_, in_use)) = self
+        if let Some(entry) = self
             .pool
             .borrow_mut()
             .iter_mut()
-            .find(|(p, _)| p.slot == g.slot)
+            .find(|entry| entry.g.slot == g.slot)
         {
-            *in_use = false;
+            entry.in_use = false;
         }
     }
 
@@ -762,15 +808,22 @@ impl RasterPass {
     /// has none.
     pub fn acquire(&self, ctx: &GpuContext, width: u32, height: u32) -> GBuffer {
         let mut pool = self.pool.borrow_mut();
-        if let Some((g, in_use)) = pool
+        if let Some(entry) = pool
             .iter_mut()
-            .find(|(g, in_use)| !*in_use && g.width == width && g.height == height)
+            .find(|e| !e.in_use && e.g.width == width && e.g.height == height)
         {
-            *in_use = true;
-            return g.clone();
+            entry.in_use = true;
+            entry.used = true;
+            return entry.g.clone();
         }
-        let g = GBuffer::new(ctx, width, height, pool.len());
-        pool.push((g.clone(), true));
+        let slot = self.next_slot.get();
+        self.next_slot.set(slot + 1);
+        let g = GBuffer::new(ctx, width, height, slot);
+        pool.push(PoolEntry {
+            g: g.clone(),
+            in_use: true,
+            used: true,
+        });
         g
     }
 

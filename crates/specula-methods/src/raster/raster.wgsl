@@ -53,6 +53,21 @@ fn fs_scene(in: VertexOut, @builtin(front_facing) front: bool) -> GBuffer {
     return out;
 }
 
+// The geometry targets only (RasterSpec targets = Geometry): no lighting, colour black.
+@fragment
+fn fs_geometry(in: VertexOut) -> GBuffer {
+    var n = normalize(in.normal);
+    if (dot(n, camera.eye_world - in.position) < 0.0) {
+        n = -n;
+    }
+    var out: GBuffer;
+    out.color = vec4<f32>(0.0, 0.0, 0.0, 1.0);
+    out.position = vec4<f32>(in.position, 1.0);
+    out.normal = vec4<f32>(n, 0.0);
+    out.ids = vec2<u32>(in.mesh + 1u, in.triangle);
+    return out;
+}
+
 @fragment
 fn fs_background(in: FullscreenOut) -> GBuffer {
     var out: GBuffer;
