@@ -866,15 +866,10 @@ fn redraw(state: &mut WindowState, mut script: Option<&mut ScriptRun>) -> Result
     {
         let pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("egui"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &target,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
+            color_attachments: &[specula_gpu::util::color_attachment(
+                &target,
+                wgpu::LoadOp::Load,
+            )],
             ..Default::default()
         });
         state

@@ -171,15 +171,10 @@ impl Presenter {
             .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("present"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: target,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
+            color_attachments: &[specula_gpu::util::color_attachment(
+                target,
+                wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+            )],
             ..Default::default()
         });
         pass.set_pipeline(&self.pipeline);

@@ -243,15 +243,10 @@ pub fn fullscreen_pass(
     {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(label),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: &output_view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
+            color_attachments: &[specula_gpu::util::color_attachment(
+                &output_view,
+                wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+            )],
             ..Default::default()
         });
         pass.set_pipeline(pipeline);
@@ -886,15 +881,10 @@ impl RasterPass {
         let attachments: Vec<Option<wgpu::RenderPassColorAttachment>> = views
             .iter()
             .map(|view| {
-                Some(wgpu::RenderPassColorAttachment {
+                specula_gpu::util::color_attachment(
                     view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })
+                    wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                )
             })
             .collect();
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
