@@ -33,6 +33,11 @@ impl Aabb {
         }
     }
 
+    /// Whether the boxes overlap or lie within `gap` of each other.
+    pub fn overlaps(&self, other: &Aabb, gap: f32) -> bool {
+        (self.min - gap).cmple(other.max).all() && (other.min - gap).cmple(self.max).all()
+    }
+
     pub fn is_empty(&self) -> bool {
         self.min.cmpgt(self.max).any()
     }
@@ -232,4 +237,199 @@ pub fn rotation_about(center: Vec3, axis: Vec3, degrees: f32) -> Option<Mat4> {
             * Mat4::from_axis_angle(axis, degrees.to_radians())
             * Mat4::from_translation(-center),
     )
+}
+
+/// Vertices closer than this fraction of the mesh's bounding-box diagonal are one vertex when
+/// finding connected parts (a mesh with split normals or UV seams stays one surface).
+pub const WELD_TOLERANCE: f32 = 1e-5;
+
+/// The most parts a mesh is split into; past it (a particle cloud, a mesh of loose triangles)
+/// the mesh stays whole.
+pub const MAX_PARTS: usize = 256;
+
+impl Mesh {
+    /// The mesh's separate objects, as triangle lists in order of first triangle: triangles
+    /// that share a vertex (welded by position within [`WELD_TOLERANCE`] of the box diagonal)
+    /// are connected, and connected parts whose bounding boxes overlap stay one object (a
+    /// teapot's lid, spout and handle touch its body without sharing vertices). One entry when
+    /// the mesh is one object, or has more than [`MAX_PARTS`] parts.
+    pub fn separate_objects(&self) -> Vec<Vec<usize>> {
+        let all = || vec![(0..self.triangles.len()).collect::<Vec<_>>()];
+        if self.triangles.is_empty() {
+            return all();
+        }
+        let bounds = self.bounds();
+        let cell = ((bounds.max - bounds.min).length() * WELD_TOLERANCE).max(f32::MIN_POSITIVE);
+        // Welded vertex id per position: positions falling in one grid cell are one vertex.
+        let mut welded = std::collections::HashMap::new();
+        let vertex_ids: Vec<usize> = self
+            .positions
+            .iter()
+            .map(|p| {
+                let key = ((*p - bounds.min) / cell).round().as_ivec3();
+                let next = welded.len();
+                *welded.entry(key).or_insert(next)
+            })
+            .collect();
+        let mut sets = DisjointSets::new(welded.len());
+        for t in &self.triangles {
+            let [a, b, c] = t.map(|i| vertex_ids[i as usize]);
+            sets.union(a, b);
+            sets.union(a, c);
+        }
+        // Parts in order of their first triangle.
+        let mut part_of_root = std::collections::HashMap::new();
+        let mut parts: Vec<Vec<usize>> = Vec::new();
+        for (i, t) in self.triangles.iter().enumerate() {
+            let root = sets.find(vertex_ids[t[0] as usize]);
+            let part = *part_of_root.entry(root).or_insert_with(|| {
+                parts.push(Vec::new());
+                parts.len() - 1
+            });
+            parts[part].push(i);
+        }
+        if parts.len() == 1 || parts.len() > MAX_PARTS {
+            return all();
+        }
+        let boxes: Vec<Aabb> = parts
+            .iter()
+            .map(|tris| {
+                let mut b = Aabb::EMPTY;
+                for &t in tris {
+                    for i in self.triangles[t] {
+                        b.grow(self.positions[i as usize]);
+                    }
+                }
+                b
+            })
+            .collect();
+        let mut objects = DisjointSets::new(parts.len());
+        for i in 0..parts.len() {
+            for j in i + 1..parts.len() {
+                if boxes[i].overlaps(&boxes[j], cell) {
+                    objects.union(i, j);
+                }
+            }
+        }
+        let mut object_of_root = std::collections::HashMap::new();
+        let mut result: Vec<Vec<usize>> = Vec::new();
+        for (i, part) in parts.into_iter().enumerate() {
+            let root = objects.find(i);
+            let object = *object_of_root.entry(root).or_insert_with(|| {
+                result.push(Vec::new());
+                result.len() - 1
+            });
+            result[object].extend(part);
+        }
+        for object in &mut result {
+            object.sort_unstable();
+        }
+        result
+    }
+
+    /// The mesh made of `triangles` only (its vertices compacted), named `name`.
+    pub fn subset(&self, name: String, triangles: &[usize]) -> Mesh {
+        let mut remap = vec![u32::MAX; self.positions.len()];
+        let mut mesh = Mesh {
+            name,
+            material: self.material,
+            ..Mesh::default()
+        };
+        for &t in triangles {
+            let tri = self.triangles[t].map(|i| {
+                let i = i as usize;
+                if remap[i] == u32::MAX {
+                    remap[i] = mesh.positions.len() as u32;
+                    mesh.positions.push(self.positions[i]);
+                    if !self.normals.is_empty() {
+                        mesh.normals.push(self.normals[i]);
+                    }
+                    if !self.uvs.is_empty() {
+                        mesh.uvs.push(self.uvs[i]);
+                    }
+                }
+                remap[i]
+            });
+            mesh.triangles.push(tri);
+        }
+        mesh
+    }
+}
+
+/// Union-find with path halving.
+struct DisjointSets(Vec<usize>);
+
+impl DisjointSets {
+    fn new(n: usize) -> Self {
+        DisjointSets((0..n).collect())
+    }
+
+    fn find(&mut self, mut i: usize) -> usize {
+        while self.0[i] != i {
+            self.0[i] = self.0[self.0[i]];
+            i = self.0[i];
+        }
+        i
+    }
+
+    fn union(&mut self, a: usize, b: usize) {
+        let (a, b) = (self.find(a), self.find(b));
+        if a != b {
+            self.0[a.max(b)] = a.min(b);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::generators;
+
+    fn merged(parts: &[Mesh]) -> Mesh {
+        let mut out = Mesh::default();
+        for part in parts {
+            let base = out.positions.len() as u32;
+            out.positions.extend(&part.positions);
+            out.normals.extend(&part.normals);
+            out.triangles
+                .extend(part.triangles.iter().map(|t| t.map(|i| i + base)));
+        }
+        out
+    }
+
+    #[test]
+    fn two_spheres_apart_are_two_objects_and_keep_their_triangles() {
+        let mut a = generators::sphere(0.5, 24, 12);
+        let mut b = a.clone();
+        a.transform(Mat4::from_translation(Vec3::new(-2.0, 0.0, 0.0)));
+        b.transform(Mat4::from_translation(Vec3::new(2.0, 0.0, 0.0)));
+        let mesh = merged(&[a.clone(), b.clone()]);
+        let objects = mesh.separate_objects();
+        assert_eq!(objects.len(), 2);
+        assert_eq!(objects[0], (0..a.triangles.len()).collect::<Vec<_>>());
+        // The subset has b's triangles in order, corner for corner (vertices renumbered).
+        let second = mesh.subset("b".into(), &objects[1]);
+        let corners = |m: &Mesh| -> Vec<(Vec3, Vec3)> {
+            m.triangles
+                .iter()
+                .flat_map(|t| t.map(|i| (m.positions[i as usize], m.normals[i as usize])))
+                .collect()
+        };
+        assert!(corners(&second) == corners(&b), "b's corners differ");
+    }
+
+    #[test]
+    fn split_normals_touching_parts_and_a_teapot_stay_one_object() {
+        // Flat shading duplicates every vertex: welding by position keeps it one surface.
+        let mut flat = generators::sphere(0.5, 16, 8);
+        flat.make_flat();
+        assert_eq!(flat.separate_objects().len(), 1);
+        // The teapot's lid, spout and handle share no vertex with the body, but touch it.
+        assert_eq!(generators::teapot(6).separate_objects().len(), 1);
+        // Two boxes side by side with a gap well under the weld tolerance's scale still split.
+        let a = generators::cuboid(Vec3::ONE);
+        let mut b = a.clone();
+        b.transform(Mat4::from_translation(Vec3::new(1.1, 0.0, 0.0)));
+        assert_eq!(merged(&[a, b]).separate_objects().len(), 2);
+    }
 }

@@ -107,6 +107,36 @@ impl Scene {
         }
     }
 
+    /// Replaces each mirror or glass mesh that holds several separate objects (files often merge
+    /// objects by material) by one mesh per object, named `NAME#1`, `NAME#2`..., so that every
+    /// technique treats each as its own reflector and the viewer can move each. See
+    /// [`Mesh::separate_objects`]; a warning says what was split.
+    fn split_separate_reflectors(&mut self, source: &str) {
+        let mut meshes = Vec::with_capacity(self.meshes.len());
+        for mesh in std::mem::take(&mut self.meshes) {
+            let objects = match self.materials[mesh.material].is_specular() {
+                true => mesh.separate_objects(),
+                false => Vec::new(),
+            };
+            if objects.len() <= 1 {
+                meshes.push(mesh);
+                continue;
+            }
+            self.warnings.push(format!(
+                "{source}: mesh '{}' holds {} separate objects: split into '{}#1'...'{}#{}', one reflector each",
+                mesh.name,
+                objects.len(),
+                mesh.name,
+                mesh.name,
+                objects.len()
+            ));
+            for (i, triangles) in objects.iter().enumerate() {
+                meshes.push(mesh.subset(format!("{}#{}", mesh.name, i + 1), triangles));
+            }
+        }
+        self.meshes = meshes;
+    }
+
     /// Checks every part of the scene and drops degenerate triangles (one warning with the
     /// count). Loaders call this last; `source` names the file in messages.
     pub fn finalize(&mut self, source: &str) -> Result<(), SceneError> {
@@ -136,6 +166,7 @@ impl Scene {
             ));
         }
         self.meshes.retain(|m| !m.triangles.is_empty());
+        self.split_separate_reflectors(source);
         for (i, material) in self.materials.iter().enumerate() {
             if !material.color.is_finite() {
                 return Err(SceneError::invalid(
