@@ -7,8 +7,9 @@
 #                        which is only a recommendation of xvfb, so name it)
 #   libxkbcommon-x11-0 libxcursor1 libxrandr2 libxi6 libx11-xcb1
 #                        the X11 libraries winit loads at run time for the viewer's window
+#   assimp-testmodels    a public corpus of real and malformed model files the loader tests run
 set -euo pipefail
-packages=(g++ mesa-vulkan-drivers libvulkan1 xvfb xauth libxkbcommon-x11-0 libxcursor1 libxrandr2 libxi6 libx11-xcb1)
+packages=(g++ mesa-vulkan-drivers libvulkan1 xvfb xauth libxkbcommon-x11-0 libxcursor1 libxrandr2 libxi6 libx11-xcb1 assimp-testmodels)
 missing=()
 for p in "${packages[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")

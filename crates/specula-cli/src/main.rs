@@ -164,7 +164,7 @@ fn load_scene(name: &str) -> Result<Scene> {
 /// The height for `width` keeping the camera's aspect ratio (4:3 when it has none).
 fn height_for(scene: &Scene, width: u32, height: Option<u32>) -> u32 {
     let aspect = scene.camera.aspect.unwrap_or(4.0 / 3.0);
-    height.unwrap_or(((width as f32 / aspect).round() as u32).max(1))
+    height.unwrap_or(((width as f32 / aspect).round() as u32).clamp(1, 16384))
 }
 
 /// The devices `methods` need: a GPU only where one of them needs it.

@@ -819,3 +819,85 @@ fn bad_base_and_moves_name_the_key() {
         assert_mentions(&message, parts);
     }
 }
+
+#[test]
+fn sloppy_files_load_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    let triangle = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+    // An exporter's empty `usemtl`, and a Latin-1 byte in a comment.
+    let mut obj = format!("# caf\u{e9}\n{triangle}usemtl\nf 1 2 3\n").into_bytes();
+    let e_acute = obj.iter().position(|&b| b == 0xC3).unwrap();
+    obj.splice(e_acute..e_acute + 2, [0xE9]);
+    let path = write(dir.path(), "sloppy.obj", &obj);
+    let scene = load(path.to_str().unwrap()).unwrap();
+    assert_eq!(scene.triangle_count(), 1);
+    let warnings = scene.warnings.join("\n");
+    assert_mentions(
+        &warnings,
+        &["sloppy.obj:1", "not UTF-8", "sloppy.obj:5", "usemtl"],
+    );
+    // A PLY header line an exporter forgot to mark as a comment.
+    let ply = "ply\nformat ascii 1.0\nCreated by an exporter\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    let path = write(dir.path(), "stray.ply", ply);
+    let scene = load(path.to_str().unwrap()).unwrap();
+    assert_eq!(scene.triangle_count(), 1);
+    assert_mentions(&scene.warnings.join("\n"), &["stray.ply:3", "comment"]);
+}
+
+#[test]
+fn parser_errors_are_one_readable_sentence() {
+    let dir = tempfile::tempdir().unwrap();
+    let ply = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n";
+    let message = error_of(&write(dir.path(), "short.ply", ply));
+    assert_mentions(&message, &["short.ply", "PLY"]);
+    assert!(
+        !message.contains(" { ") && !message.contains('\t'),
+        "{message}"
+    );
+    let message = error_of(&write(dir.path(), "utf16.obj", [0xFF, 0xFE, b'v', 0]));
+    assert_mentions(&message, &["utf16.obj", "UTF-16"]);
+}
+
+#[test]
+fn malformed_gltf_is_an_error_naming_the_json_path_not_a_panic() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        (
+            r#"{"asset":{"version":"2.0"},"meshes":[{"primitives":[{"attributes":{"POSITION":7}}]}]}"#,
+            "meshes[0].primitives[0].attributes.POSITION: index 7 is out of range",
+        ),
+        (
+            r#"{"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"children":[1]},{"children":[0]}]}"#,
+            "cycle in the node hierarchy",
+        ),
+        (
+            r#"{"asset":{"version":"1.0"}}"#,
+            "glTF 1.0 is not supported",
+        ),
+        (
+            r#"{"asset":{"version":"2.0"},"extensionsRequired":["KHR_draco_mesh_compression"]}"#,
+            "requires KHR_draco_mesh_compression",
+        ),
+    ];
+    for (i, (json, expected)) in cases.iter().enumerate() {
+        let message = error_of(&write(dir.path(), &format!("bad{i}.gltf"), json));
+        assert_mentions(&message, &[&format!("bad{i}.gltf"), expected]);
+    }
+}
+
+#[test]
+fn a_wild_gltf_aspect_ratio_is_ignored_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    write_texture(dir.path());
+    let bin = gltf_buffer(0.0, 2);
+    write(dir.path(), "tri.bin", &bin);
+    let json = gltf_json(Some("tri.bin"), bin.len())
+        .replace("\"aspectRatio\": 1.5", "\"aspectRatio\": 1e9");
+    let path = write(dir.path(), "wide.gltf", json);
+    let scene = load(path.to_str().unwrap()).unwrap();
+    assert_eq!(scene.camera.aspect, None);
+    assert_mentions(
+        &scene.warnings.join("\n"),
+        &["aspectRatio 1000000000", "ignored"],
+    );
+}

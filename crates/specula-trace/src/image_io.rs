@@ -38,7 +38,7 @@ impl Image {
         Image {
             width,
             height,
-            pixels: vec![Vec3::ZERO; (width * height) as usize],
+            pixels: vec![Vec3::ZERO; width as usize * height as usize],
         }
     }
 

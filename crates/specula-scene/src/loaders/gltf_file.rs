@@ -17,6 +17,10 @@ const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_lights_punctual",
 ];
 
+/// Camera aspect ratios (width / height) outside this range are ignored with a warning.
+const MIN_ASPECT: f32 = 0.05;
+const MAX_ASPECT: f32 = 20.0;
+
 struct Loader<'a> {
     shown: String,
     buffers: &'a [gltf::buffer::Data],
@@ -158,12 +162,24 @@ impl Loader<'_> {
             gltf::camera::Projection::Perspective(p) => {
                 let eye = world_from_camera.transform_point3(Vec3::ZERO);
                 let forward = world_from_camera.transform_vector3(-Vec3::Z).normalize();
+                // The aspect ratio sets image heights: a wild one is ignored, not obeyed.
+                let aspect = p
+                    .aspect_ratio()
+                    .filter(|a| !(MIN_ASPECT..=MAX_ASPECT).contains(a));
+                if let Some(a) = aspect {
+                    self.warn_once(
+                        "aspect",
+                        format!("{node_path}: camera aspectRatio {a} is outside {MIN_ASPECT}..{MAX_ASPECT} (ignored)"),
+                    );
+                }
                 self.scene.camera = Camera {
                     eye,
                     target: eye + forward,
                     up: world_from_camera.transform_vector3(Vec3::Y).normalize(),
                     fov_y_deg: p.yfov().to_degrees(),
-                    aspect: p.aspect_ratio(),
+                    aspect: p
+                        .aspect_ratio()
+                        .filter(|a| (MIN_ASPECT..=MAX_ASPECT).contains(a)),
                 };
                 self.camera_found = true;
             }
@@ -347,8 +363,21 @@ fn image_to_dynamic(data: &gltf::image::Data) -> Option<image::DynamicImage> {
 
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
     let shown = path.display().to_string();
-    let (document, buffers, images) =
-        gltf::import(path).map_err(|e| SceneError::invalid(&shown, format!("glTF: {e}")))?;
+    let bytes = std::fs::read(path).map_err(|e| SceneError::io(&shown, e))?;
+    super::gltf_check::json_of(&bytes)
+        .and_then(super::gltf_check::check)
+        .map_err(|e| SceneError::invalid(&shown, format!("glTF: {e}")))?;
+    // The checks above keep the gltf crate away from what made it panic; should a file still
+    // find a panic in it, it becomes this file's error rather than a crash.
+    let imported = std::panic::catch_unwind(|| gltf::import(path));
+    let (document, buffers, images) = imported
+        .map_err(|_| {
+            SceneError::invalid(
+                &shown,
+                "glTF: the file broke the glTF parser (a malformed file the checks did not catch)",
+            )
+        })?
+        .map_err(|e| SceneError::invalid(&shown, format!("glTF: {e}")))?;
     let mut loader = Loader {
         shown: shown.clone(),
         buffers: &buffers,

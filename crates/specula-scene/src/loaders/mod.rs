@@ -1,6 +1,7 @@
 //! File loaders. Each turns one file format into a [`Scene`]; errors name the file and, where
 //! the format has them, the line (OBJ, TOML) or JSON path (glTF).
 
+pub mod gltf_check;
 mod gltf_file;
 mod obj;
 mod ply;
@@ -69,12 +70,11 @@ pub fn load_mesh_file(path: &Path) -> Result<MeshFile, SceneError> {
     };
     match extension.as_str() {
         "obj" | "gz" => obj::load(path, &bytes),
-        "ply" => Ok((
-            vec![ply::parse(&shown, &bytes)?],
-            vec![default_material()],
-            vec![],
-            vec![],
-        )),
+        "ply" => {
+            let mut warnings = Vec::new();
+            let mesh = ply::parse(&shown, &bytes, &mut warnings)?;
+            Ok((vec![mesh], vec![default_material()], vec![], warnings))
+        }
         "stl" => Ok((
             vec![stl::parse(&shown, &bytes)?],
             vec![default_material()],

@@ -208,17 +208,69 @@ fn material_from_mtl(
     material
 }
 
+/// The file as text: UTF-8, or (as common tools read it) with stray non-UTF-8 bytes, say in a
+/// comment or a name, replaced and a warning. UTF-16 is refused by name.
+fn text_of<'a>(
+    shown: &str,
+    bytes: &'a [u8],
+    warnings: &mut Vec<String>,
+) -> Result<std::borrow::Cow<'a, str>, SceneError> {
+    if bytes.starts_with(&[0xFE, 0xFF]) || bytes.starts_with(&[0xFF, 0xFE]) {
+        return Err(SceneError::invalid(
+            shown,
+            "UTF-16 text is not supported: save the OBJ file as UTF-8 (or ASCII)",
+        ));
+    }
+    let text = String::from_utf8_lossy(bytes);
+    if let std::borrow::Cow::Owned(_) = text {
+        let line = 1 + match std::str::from_utf8(bytes) {
+            Err(e) => bytes[..e.valid_up_to()]
+                .iter()
+                .filter(|&&b| b == b'\n')
+                .count(),
+            Ok(_) => 0,
+        };
+        warnings.push(format!(
+            "{shown}:{line}: bytes that are not UTF-8 (first on this line) replaced by U+FFFD"
+        ));
+    }
+    Ok(text)
+}
+
+/// `usemtl` with no name (an exporter's empty material) makes tobj fail the whole file: such
+/// lines are dropped with a warning, and their faces get the default material.
+fn drop_unnamed_usemtl<'a>(
+    shown: &str,
+    text: &'a str,
+    warnings: &mut Vec<String>,
+) -> std::borrow::Cow<'a, str> {
+    let unnamed = |line: &str| line.split_whitespace().collect::<Vec<_>>() == ["usemtl"];
+    let Some(first) = text.lines().position(unnamed) else {
+        return std::borrow::Cow::Borrowed(text);
+    };
+    warnings.push(format!(
+        "{shown}:{}: 'usemtl' without a material name; its faces use the default material",
+        first + 1
+    ));
+    std::borrow::Cow::Owned(
+        text.lines()
+            .filter(|l| !unnamed(l))
+            .collect::<Vec<_>>()
+            .join("\n"),
+    )
+}
+
 pub fn load(path: &Path, bytes: &[u8]) -> Result<MeshFile, SceneError> {
     let shown = path.display().to_string();
-    let text = std::str::from_utf8(bytes)
-        .map_err(|e| SceneError::invalid(&shown, format!("not UTF-8 text: {e}")))?;
-    lint(&shown, text)?;
+    let mut warnings = Vec::new();
+    let text = text_of(&shown, bytes, &mut warnings)?;
+    lint(&shown, &text)?;
+    let text = drop_unnamed_usemtl(&shown, &text, &mut warnings);
     let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
     let (models, mtl) = tobj::load_obj_buf(&mut text.as_bytes(), &load_options(), |mtl_path| {
         tobj::load_mtl(base.join(mtl_path))
     })
     .map_err(|e| SceneError::invalid(&shown, format!("OBJ: {e}")))?;
-    let mut warnings = Vec::new();
     let mut textures = Vec::new();
     let mut materials: Vec<Material> = match mtl {
         Ok(list) => list

@@ -29,13 +29,102 @@ fn list(p: &Property) -> Option<Vec<i64>> {
     })
 }
 
+/// Header keywords of PLY; a header line starting with anything else is free text an exporter
+/// forgot to mark as a comment.
+const HEADER_KEYWORDS: &[&str] = &[
+    "ply",
+    "format",
+    "comment",
+    "obj_info",
+    "element",
+    "property",
+    "end_header",
+];
+
+/// The file with stray header lines turned into comments (as common tools read them), with a
+/// warning; unchanged when the header is clean.
+fn commented_header<'a>(
+    shown: &str,
+    bytes: &'a [u8],
+    warnings: &mut Vec<String>,
+) -> std::borrow::Cow<'a, [u8]> {
+    let Some(end) = bytes
+        .windows(b"end_header".len())
+        .position(|w| w == b"end_header")
+    else {
+        return std::borrow::Cow::Borrowed(bytes);
+    };
+    let header = String::from_utf8_lossy(&bytes[..end]);
+    let stray: Vec<usize> = header
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| {
+            let first = l.split_whitespace().next();
+            first.is_some_and(|w| !HEADER_KEYWORDS.contains(&w))
+        })
+        .map(|(i, _)| i)
+        .collect();
+    if stray.is_empty() {
+        return std::borrow::Cow::Borrowed(bytes);
+    }
+    warnings.push(format!(
+        "{shown}:{}: header line without a PLY keyword read as a comment",
+        stray[0] + 1
+    ));
+    let mut fixed = Vec::with_capacity(bytes.len() + 8 * stray.len());
+    for (i, line) in header.split_inclusive('\n').enumerate() {
+        if stray.contains(&i) {
+            fixed.extend_from_slice(b"comment ");
+        }
+        fixed.extend_from_slice(line.as_bytes());
+    }
+    fixed.extend_from_slice(&bytes[end..]);
+    std::borrow::Cow::Owned(fixed)
+}
+
+/// ply-rs's errors as one sentence: its message carries the line, the text and a debug dump of
+/// the inner error; keep the line and the text, and say what was expected.
+fn readable(error: &std::io::Error) -> String {
+    let message = error.to_string();
+    let mut parts = message.split("\n\t");
+    let head = parts.next().unwrap_or("").trim().trim_end_matches('.');
+    let mut text = None;
+    let mut detail = None;
+    for part in parts {
+        if let Some(t) = part.strip_prefix("String: ") {
+            text = Some(t.trim().trim_matches('\'').trim().to_string());
+        } else if let Some(e) = part.strip_prefix("Error: ") {
+            detail = Some(if e.contains("ParseError") {
+                "expected a PLY header keyword or value".to_string()
+            } else if let Some(start) = e.find("error: \"") {
+                e[start + 8..].trim_end_matches(['}', ' ', '"']).to_string()
+            } else {
+                e.to_string()
+            });
+        }
+    }
+    if message.contains("failed to fill whole buffer") {
+        return "the file ends before the data its header declares (truncated)".into();
+    }
+    let head = head
+        .replace("Couln't", "could not")
+        .replace("Couldn't", "could not");
+    match (text, detail) {
+        (Some(t), Some(d)) => format!("{head} \"{t}\": {d}"),
+        (Some(t), None) => format!("{head} \"{t}\""),
+        (None, Some(d)) => format!("{head}: {d}"),
+        (None, None) => head,
+    }
+}
+
 /// PLY (ASCII or binary): `vertex` elements with x, y, z (and optional nx, ny, nz and u, v or
 /// s, t); `face` elements with a `vertex_indices` (or `vertex_index`) list, fan-triangulated.
-pub fn parse(shown: &str, bytes: &[u8]) -> Result<Mesh, SceneError> {
+pub fn parse(shown: &str, bytes: &[u8], warnings: &mut Vec<String>) -> Result<Mesh, SceneError> {
+    let bytes = commented_header(shown, bytes, warnings);
     let parser = ply_rs::parser::Parser::<ply_rs::ply::DefaultElement>::new();
     let ply = parser
-        .read_ply(&mut std::io::Cursor::new(bytes))
-        .map_err(|e| SceneError::invalid(shown, format!("PLY: {e}")))?;
+        .read_ply(&mut std::io::Cursor::new(&bytes[..]))
+        .map_err(|e| SceneError::invalid(shown, format!("PLY: {}", readable(&e))))?;
     let vertices = ply
         .payload
         .get("vertex")

@@ -28,8 +28,15 @@ pub fn parse(shown: &str, bytes: &[u8]) -> Result<Mesh, SceneError> {
             ));
         }
     }
-    let indexed = stl_io::read_stl(&mut std::io::Cursor::new(bytes))
-        .map_err(|e| SceneError::invalid(shown, format!("STL: {e}")))?;
+    let indexed = stl_io::read_stl(&mut std::io::Cursor::new(bytes)).map_err(|e| {
+        let reason = match e.kind() {
+            std::io::ErrorKind::UnexpectedEof => {
+                "the file ends before the data it declares (truncated)".to_string()
+            }
+            _ => e.to_string(),
+        };
+        SceneError::invalid(shown, format!("STL: {reason}"))
+    })?;
     let positions: Vec<Vec3> = indexed
         .vertices
         .iter()
