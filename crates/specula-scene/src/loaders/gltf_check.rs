@@ -174,6 +174,18 @@ pub fn check(json: &[u8]) -> Result<(), String> {
             &format!("images[{i}].bufferView"),
             len("bufferViews"),
         )?;
+        match (image.get("uri"), image.get("bufferView")) {
+            (Some(_), None) => {}
+            (None, Some(_)) if image.get("mimeType").is_some_and(Value::is_string) => {}
+            (None, Some(_)) => {
+                return Err(format!("images[{i}].mimeType: required with a bufferView"))
+            }
+            _ => {
+                return Err(format!(
+                    "images[{i}]: give exactly one of uri and bufferView"
+                ))
+            }
+        }
     }
     for (s, skin) in array("skins").iter().enumerate() {
         indices(
@@ -477,6 +489,11 @@ mod tests {
                 "materials[0].pbrMetallicRoughness.baseColorTexture.index: index 3 is out of range",
             ),
             (r#"{"asset":{"version":"2.0"},"scene":-1}"#, "scene: expected an index"),
+            (r#"{"asset":{"version":"2.0"},"images":[{}]}"#, "images[0]: give exactly one of uri and bufferView"),
+            (
+                r#"{"asset":{"version":"2.0"},"buffers":[{"byteLength":4}],"bufferViews":[{"buffer":0,"byteLength":4}],"images":[{"bufferView":0}]}"#,
+                "images[0].mimeType: required with a bufferView",
+            ),
             ("[1, 2]", "not a JSON object"),
             ("{", "not valid JSON"),
         ];

@@ -364,13 +364,31 @@ fn image_to_dynamic(data: &gltf::image::Data) -> Option<image::DynamicImage> {
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
     let shown = path.display().to_string();
     let bytes = std::fs::read(path).map_err(|e| SceneError::io(&shown, e))?;
-    super::gltf_check::json_of(&bytes)
+    convert(&shown, &bytes, || gltf::import(path))
+}
+
+/// A glTF or GLB document from memory, with its buffers and images embedded (data URIs or the
+/// GLB's binary chunk); external files are not read. For fuzzing and tests.
+pub fn load_slice(shown: &str, bytes: &[u8]) -> Result<Scene, SceneError> {
+    convert(shown, bytes, || gltf::import_slice(bytes))
+}
+
+fn convert(
+    shown: &str,
+    bytes: &[u8],
+    import: impl FnOnce() -> gltf::Result<(
+            gltf::Document,
+            Vec<gltf::buffer::Data>,
+            Vec<gltf::image::Data>,
+        )> + std::panic::UnwindSafe,
+) -> Result<Scene, SceneError> {
+    let shown = shown.to_string();
+    super::gltf_check::json_of(bytes)
         .and_then(super::gltf_check::check)
         .map_err(|e| SceneError::invalid(&shown, format!("glTF: {e}")))?;
     // The checks above keep the gltf crate away from what made it panic; should a file still
     // find a panic in it, it becomes this file's error rather than a crash.
-    let imported = std::panic::catch_unwind(|| gltf::import(path));
-    let (document, buffers, images) = imported
+    let (document, buffers, images) = std::panic::catch_unwind(import)
         .map_err(|_| {
             SceneError::invalid(
                 &shown,

@@ -2,10 +2,10 @@
 //! the format has them, the line (OBJ, TOML) or JSON path (glTF).
 
 pub mod gltf_check;
-mod gltf_file;
-mod obj;
-mod ply;
-mod stl;
+pub mod gltf_file;
+pub mod obj;
+pub mod ply;
+pub mod stl;
 pub mod toml_scene;
 
 use std::path::Path;
