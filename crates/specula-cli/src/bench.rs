@@ -144,3 +144,16 @@ pub fn print(results: &[MethodBench]) {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::spread;
+
+    #[test]
+    fn spread_is_the_median_and_the_extremes() {
+        let odd = spread(vec![5.0, 1.0, 9.0]);
+        assert_eq!((odd.min_ms, odd.median_ms, odd.max_ms), (1.0, 5.0, 9.0));
+        let even = spread(vec![10.0, 3.0, 1.0, 2.0]);
+        assert_eq!((even.min_ms, even.median_ms, even.max_ms), (1.0, 2.5, 10.0));
+    }
+}

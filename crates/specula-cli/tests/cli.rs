@@ -235,10 +235,16 @@ fn bench_reports_median_and_spread_per_stage() {
     );
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("b.json")).unwrap()).unwrap();
-    let frame = &json[0]["frame"];
-    assert!(frame["min_ms"].as_f64().unwrap() <= frame["median_ms"].as_f64().unwrap());
-    assert!(frame["median_ms"].as_f64().unwrap() <= frame["max_ms"].as_f64().unwrap());
-    assert!(json[0]["stages"].as_array().unwrap().len() >= 3);
+    // envmap keeps scene-only maps, so it is timed static and dynamic; warm frames create no
+    // GPU objects.
+    let runs = json.as_array().unwrap();
+    let modes: Vec<&str> = runs.iter().map(|r| r["mode"].as_str().unwrap()).collect();
+    assert_eq!(modes, ["static", "dynamic"]);
+    for run in runs {
+        assert_eq!(run["frames"], 3);
+        assert_eq!(run["created"], 0, "{run}");
+        assert!(run["stages"].as_array().unwrap().len() >= 3);
+    }
 }
 
 #[test]

@@ -10,6 +10,10 @@ use specula_trace::reference::primary_hits;
 use specula_trace::{render, Image, RenderSettings, SceneAccel};
 
 const SIZE: u32 = 96;
+/// Measured 2026-11-30 on lavapipe (RMSE on the sphere's pixels): mirror 0.000119, glass
+/// against the depth-2 reference 0.000947. Bounds 2x.
+const BOUND_MIRROR: f32 = 0.00024;
+const BOUND_GLASS: f32 = 0.0019;
 
 /// RMSE over the pixels whose primary ray hits a specular surface.
 fn specular_rmse(scene: &Scene, reference: &Image, image: &Image) -> (f32, usize) {
@@ -97,9 +101,9 @@ fn mirror_under_a_distant_environment_is_nearly_exact() {
     let Some((rmse, pixels)) = compare(&scene, 8) else {
         return;
     };
-    eprintln!("envmap, mirror sphere, distant environment: RMSE {rmse:.4} over {pixels} pixels");
+    eprintln!("envmap, mirror sphere, distant environment: RMSE {rmse:.6} over {pixels} pixels");
     assert!(pixels > 1000);
-    assert!(rmse < 0.005, "RMSE {rmse}");
+    assert!(rmse < BOUND_MIRROR, "RMSE {rmse}");
 }
 
 #[test]
@@ -112,8 +116,8 @@ fn glass_under_a_distant_environment_is_close() {
     let Some((rmse, pixels)) = compare_with(&scene, 2, sphere_exit()) else {
         return;
     };
-    eprintln!("envmap, glass sphere, distant environment, reference depth 2: RMSE {rmse:.4} over {pixels} pixels");
-    assert!(rmse < 0.005, "RMSE {rmse}");
+    eprintln!("envmap, glass sphere, distant environment, reference depth 2: RMSE {rmse:.6} over {pixels} pixels");
+    assert!(rmse < BOUND_GLASS, "RMSE {rmse}");
     // The full reference adds the internal reflections envmap ignores.
     let (full, _) = compare_with(&scene, 8, sphere_exit()).unwrap();
     eprintln!("envmap, glass sphere, distant environment, reference depth 8: RMSE {full:.4}");

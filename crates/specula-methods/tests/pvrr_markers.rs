@@ -217,9 +217,11 @@ fn check(name: &str, reflector: &str, ior: Option<&str>) {
         worst(&m.outline)
     );
     assert!(m.interior.len() >= 10, "too few interior vertices measured");
-    assert!(worst(&m.interior) <= 1.0, "a ball is off its vertex");
+    // Measured 2026-11-30: interior worst 0.25 px (door-mirror), outline worst 0.30 px
+    // (spectacle-lens); bounds 2x.
+    assert!(worst(&m.interior) <= 0.5, "a ball is off its vertex");
     assert!(
-        worst(&m.outline) <= 1.0,
+        worst(&m.outline) <= 0.6,
         "an outline vertex's ball is off it"
     );
 }
