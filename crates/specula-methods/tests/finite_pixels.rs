@@ -48,7 +48,11 @@ fn no_method_writes_a_non_finite_pixel_from_random_cameras() {
             let target = centre + random.direction() * radius * 0.3 * random.next();
             scene.camera = Camera {
                 eye,
-                target: if target.distance(eye) > 1e-4 { target } else { eye + Vec3::Z },
+                target: if target.distance(eye) > 1e-4 {
+                    target
+                } else {
+                    eye + Vec3::Z
+                },
                 up: Vec3::Y,
                 fov_y_deg: 10.0 + 110.0 * random.next(),
                 aspect: None,
@@ -58,7 +62,11 @@ fn no_method_writes_a_non_finite_pixel_from_random_cameras() {
                 // Cheap settings: this is about every pixel being finite, not about quality.
                 specula_methods::apply_known_parameters(
                     technique.as_mut(),
-                    &["depth=1".into(), "resolution=64".into(), "max_depth=2".into()],
+                    &[
+                        "depth=1".into(),
+                        "resolution=64".into(),
+                        "max_depth=2".into(),
+                    ],
                 )
                 .unwrap();
                 let still = technique.render_still(&ctx, &scene, SIZE.0, SIZE.1);
@@ -72,7 +80,9 @@ fn no_method_writes_a_non_finite_pixel_from_random_cameras() {
                             ));
                         }
                     }
-                    Err(e) => failures.push(format!("{name} camera {c}: {} failed: {e}", info.name)),
+                    Err(e) => {
+                        failures.push(format!("{name} camera {c}: {} failed: {e}", info.name))
+                    }
                 }
             }
         }

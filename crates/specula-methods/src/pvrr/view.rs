@@ -233,6 +233,7 @@ pub struct PatchInput<'a> {
     pub scene_corners: &'a [Vec3],
 }
 
+#[derive(Clone, Copy)]
 pub struct PatchLimits {
     pub max_fov_deg: f32,
     pub max_patches: usize,

@@ -47,14 +47,18 @@ fn commented_header<'a>(
     shown: &str,
     bytes: &'a [u8],
     warnings: &mut Vec<String>,
-) -> std::borrow::Cow<'a, [u8]> {
-    let Some(end) = bytes
+) -> Result<std::borrow::Cow<'a, [u8]>, SceneError> {
+    let end = bytes
         .windows(b"end_header".len())
-        .position(|w| w == b"end_header")
-    else {
-        return std::borrow::Cow::Borrowed(bytes);
+        .position(|w| w == b"end_header");
+    // Without an end_header ply-rs reads header lines to the end: check them all.
+    let header = String::from_utf8_lossy(&bytes[..end.unwrap_or(bytes.len())]);
+    if let Some(problem) = header_numbers(&header, bytes.len()) {
+        return Err(SceneError::invalid(shown, format!("PLY: {problem}")));
+    }
+    let Some(end) = end else {
+        return Ok(std::borrow::Cow::Borrowed(bytes));
     };
-    let header = String::from_utf8_lossy(&bytes[..end]);
     let stray: Vec<usize> = header
         .lines()
         .enumerate()
@@ -65,7 +69,7 @@ fn commented_header<'a>(
         .map(|(i, _)| i)
         .collect();
     if stray.is_empty() {
-        return std::borrow::Cow::Borrowed(bytes);
+        return Ok(std::borrow::Cow::Borrowed(bytes));
     }
     warnings.push(format!(
         "{shown}:{}: header line without a PLY keyword read as a comment",
@@ -79,7 +83,42 @@ fn commented_header<'a>(
         fixed.extend_from_slice(line.as_bytes());
     }
     fixed.extend_from_slice(&bytes[end..]);
-    std::borrow::Cow::Owned(fixed)
+    Ok(std::borrow::Cow::Owned(fixed))
+}
+
+/// The header's numbers, checked before ply-rs parses them (it unwraps a number that
+/// overflows 64 bits): the format version must be 1.0, and an element count can be no larger
+/// than the file (each element takes at least a byte), so a count cannot ask for a huge
+/// allocation either.
+fn header_numbers(header: &str, file_length: usize) -> Option<String> {
+    for (i, line) in header.lines().enumerate() {
+        let words: Vec<&str> = line.split_whitespace().collect();
+        match words.as_slice() {
+            ["format", _, version, ..] if *version != "1.0" => {
+                return Some(format!(
+                    "line {}: format version '{}' (only 1.0 exists)",
+                    i + 1,
+                    version.chars().take(20).collect::<String>()
+                ))
+            }
+            ["element", name, count, ..] => {
+                let fits = count.len() <= 19
+                    && count
+                        .parse::<u64>()
+                        .is_ok_and(|c| c as u128 <= file_length as u128);
+                if !fits {
+                    return Some(format!(
+                        "line {}: element '{}' count '{}' is not a number up to the file's size ({file_length} bytes)",
+                        i + 1,
+                        name.chars().take(40).collect::<String>(),
+                        count.chars().take(24).collect::<String>()
+                    ));
+                }
+            }
+            _ => {}
+        }
+    }
+    None
 }
 
 /// ply-rs's errors as one sentence: its message carries the line, the text and a debug dump of
@@ -120,7 +159,7 @@ fn readable(error: &std::io::Error) -> String {
 /// PLY (ASCII or binary): `vertex` elements with x, y, z (and optional nx, ny, nz and u, v or
 /// s, t); `face` elements with a `vertex_indices` (or `vertex_index`) list, fan-triangulated.
 pub fn parse(shown: &str, bytes: &[u8], warnings: &mut Vec<String>) -> Result<Mesh, SceneError> {
-    let bytes = commented_header(shown, bytes, warnings);
+    let bytes = commented_header(shown, bytes, warnings)?;
     let parser = ply_rs::parser::Parser::<ply_rs::ply::DefaultElement>::new();
     let ply = parser
         .read_ply(&mut std::io::Cursor::new(&bytes[..]))
