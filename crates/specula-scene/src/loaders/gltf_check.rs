@@ -140,6 +140,7 @@ pub fn check(json: &[u8]) -> Result<(), String> {
                 }
             }
             index(primitive.get("indices"), &at("indices"), len("accessors"))?;
+            attribute_types(primitive, &array("accessors"), &at)?;
             index(primitive.get("material"), &at("material"), len("materials"))?;
             let targets = primitive.get("targets").and_then(Value::as_array);
             for (t, target) in targets.map_or(&[][..], Vec::as_slice).iter().enumerate() {
@@ -259,6 +260,71 @@ pub fn check(json: &[u8]) -> Result<(), String> {
     }
     byte_ranges(array("buffers"), array("bufferViews"), array("accessors"))?;
     node_hierarchy(array("nodes"))
+}
+
+/// The accessor types the glTF spec allows for each vertex attribute a primitive names (the
+/// gltf crate asserts them when reading, so a mismatch would panic there).
+fn attribute_types(
+    primitive: &Value,
+    accessors: &[Value],
+    at: &dyn Fn(&str) -> String,
+) -> Result<(), String> {
+    const FLOAT: u64 = 5126;
+    const UBYTE: u64 = 5121;
+    const USHORT: u64 = 5123;
+    const UINT: u64 = 5125;
+    let allowed = |semantic: &str| -> Option<(&[&str], &[u64])> {
+        let base = semantic.split('_').next().unwrap_or(semantic);
+        Some(match (semantic, base) {
+            ("POSITION" | "NORMAL", _) => (&["VEC3"], &[FLOAT]),
+            ("TANGENT", _) => (&["VEC4"], &[FLOAT]),
+            (_, "TEXCOORD") => (&["VEC2"], &[FLOAT, UBYTE, USHORT]),
+            (_, "COLOR") => (&["VEC3", "VEC4"], &[FLOAT, UBYTE, USHORT]),
+            (_, "JOINTS") => (&["VEC4"], &[UBYTE, USHORT]),
+            (_, "WEIGHTS") => (&["VEC4"], &[FLOAT, UBYTE, USHORT]),
+            _ => return None,
+        })
+    };
+    let check = |path: String, accessor: Option<&Value>, types: &[&str], components: &[u64]| {
+        let Some(accessor) = accessor
+            .and_then(|a| a.as_u64())
+            .and_then(|a| accessors.get(a as usize))
+        else {
+            return Ok(());
+        };
+        let ty = accessor.get("type").and_then(Value::as_str).unwrap_or("?");
+        let component = number(accessor, "componentType").unwrap_or(0);
+        if types.contains(&ty) && components.contains(&component) {
+            Ok(())
+        } else {
+            Err(format!(
+                "{path}: an accessor of type {ty} with componentType {component}, but this attribute takes {} of componentType {}",
+                types.join(" or "),
+                components.iter().map(u64::to_string).collect::<Vec<_>>().join(", ")
+            ))
+        }
+    };
+    for (name, value) in primitive
+        .get("attributes")
+        .and_then(Value::as_object)
+        .into_iter()
+        .flatten()
+    {
+        if let Some((types, components)) = allowed(name) {
+            check(
+                at(&format!("attributes.{name}")),
+                Some(value),
+                types,
+                components,
+            )?;
+        }
+    }
+    check(
+        at("indices"),
+        primitive.get("indices"),
+        &["SCALAR"],
+        &[UBYTE, USHORT, UINT],
+    )
 }
 
 /// `value`, when present, must be a whole number below `count`.
@@ -383,6 +449,11 @@ fn byte_ranges(buffers: &[Value], views: &[Value], accessors: &[Value]) -> Resul
         let view_length = number(view, "byteLength").unwrap_or(0);
         let element = component * components;
         let stride = number(view, "byteStride").unwrap_or(element);
+        if stride < element {
+            return Err(format!(
+                "accessors[{a}]: elements of {element} bytes in bufferViews[{view_index}] whose byteStride is {stride}"
+            ));
+        }
         let offset = number(accessor, "byteOffset").unwrap_or(0);
         let needed = count
             .checked_sub(1)
@@ -490,6 +561,10 @@ mod tests {
             ),
             (r#"{"asset":{"version":"2.0"},"scene":-1}"#, "scene: expected an index"),
             (r#"{"asset":{"version":"2.0"},"images":[{}]}"#, "images[0]: give exactly one of uri and bufferView"),
+            (
+                r#"{"asset":{"version":"2.0"},"accessors":[{"componentType":5126,"type":"VEC2","count":1}],"meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}]}"#,
+                "meshes[0].primitives[0].attributes.POSITION: an accessor of type VEC2",
+            ),
             (
                 r#"{"asset":{"version":"2.0"},"buffers":[{"byteLength":4}],"bufferViews":[{"buffer":0,"byteLength":4}],"images":[{"bufferView":0}]}"#,
                 "images[0].mimeType: required with a bufferView",
