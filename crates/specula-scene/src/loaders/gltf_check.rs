@@ -140,7 +140,7 @@ pub fn check(json: &[u8]) -> Result<(), String> {
                 }
             }
             index(primitive.get("indices"), &at("indices"), len("accessors"))?;
-            attribute_types(primitive, &array("accessors"), &at)?;
+            attribute_types(primitive, array("accessors"), &at)?;
             index(primitive.get("material"), &at("material"), len("materials"))?;
             let targets = primitive.get("targets").and_then(Value::as_array);
             for (t, target) in targets.map_or(&[][..], Vec::as_slice).iter().enumerate() {
