@@ -200,7 +200,8 @@ fn bounces_follow_the_reference_depth_by_depth() {
         errors.push((matched, against_deep));
     }
     for (depth, (matched, _)) in errors.iter().enumerate() {
-        assert!(*matched < 0.06, "depth {}: RMSE {matched}", depth + 1);
+        // Measured 2026-11-30: 0.0267, 0.0238, 0.0252 at depths 1-3; bound 2x the largest.
+        assert!(*matched < 0.054, "depth {}: RMSE {matched}", depth + 1);
     }
     // The teapot sees itself: a second bounce brings the image closer to the full reference.
     assert!(errors[1].1 < errors[0].1 * 0.9, "{errors:?}");
@@ -237,7 +238,8 @@ fn mirror_and_glass_with_total_internal_reflection_in_one_scene() {
     // whose rays stop inside the glass.
     let cut = specular_rmse(&scene, &reference(&scene, 1), &image);
     eprintln!("mirror sphere + glass cube, max_depth 4: RMSE {error:.4} (against a depth-1 reference: {cut:.4})");
-    assert!(error < 0.08, "RMSE {error}");
+    // Measured 2026-11-30: 0.0313; bound 2x.
+    assert!(error < 0.063, "RMSE {error}");
     assert!(cut > 2.0 * error, "{cut} vs {error}");
 }
 
@@ -253,7 +255,8 @@ fn min_max_acceleration_keeps_the_image() {
     assert!(!without.stages.iter().any(|s| s.stage == "min-max"));
     let difference = specular_rmse(&scene, &with.image, &without.image);
     eprintln!("teapot-box with and without min-max: RMSE {difference:.4} between them");
-    assert!(difference < 0.01, "{difference}");
+    // Measured 2026-11-30: 0.0037; bound 2x.
+    assert!(difference < 0.0075, "{difference}");
 }
 
 #[test]

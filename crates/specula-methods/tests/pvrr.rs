@@ -123,7 +123,8 @@ fn vertices_show_the_ray_traced_reflection() {
     let (reference, frame) = reference_and_pvrr(&ctx, &scene);
     let (at_vertices, at_centroids) = vertex_and_centroid_errors(&scene, &reference, &frame.image);
     eprintln!("pvrr door-mirror {SIZE}²: mean error at vertex pixels {at_vertices:.4}, at centroid pixels {at_centroids:.4}");
-    assert!(at_vertices < 0.01, "at vertices {at_vertices}");
+    // Measured 2026-11-30: 0.0029; bound 2x.
+    assert!(at_vertices < 0.006, "at vertices {at_vertices}");
     assert!(
         at_vertices * 4.0 < at_centroids,
         "vertices {at_vertices} vs centroids {at_centroids}"
@@ -255,7 +256,8 @@ fn concave_mirror_vertices_show_the_ray_traced_reflection() {
     let (reference, frame) = reference_and_pvrr(&ctx, &scene);
     let (at_vertices, at_centroids) = vertex_and_centroid_errors(&scene, &reference, &frame.image);
     eprintln!("pvrr concave {SIZE}²: mean error at vertex pixels {at_vertices:.4}, at centroid pixels {at_centroids:.4}");
-    assert!(at_vertices < 0.02, "at vertices {at_vertices}");
+    // Measured 2026-11-30: 0.0025; bound 2x.
+    assert!(at_vertices < 0.005, "at vertices {at_vertices}");
 }
 
 /// `scene` with its mesh named "door mirror" replaced by `mirror` (same name and material).
@@ -446,7 +448,8 @@ fn cached_mode_reuses_paths_while_the_lens_moves_with_the_eye() {
     eprintln!(
         "pvrr cached vs fresh after moving eye and lens together: mean difference {difference:.6}"
     );
-    assert!(difference < 1e-3, "{difference}");
+    // Measured 2026-11-30: 0.000006; bound 2x.
+    assert!(difference < 1.3e-5, "{difference}");
     // The lens alone moves: recomputed.
     let slipped = moved(&scene, "spectacle lens", Vec3::new(0.0, 0.01, 0.0));
     assert_eq!(counter(&frame_of(&slipped), "reflectors from the cache"), 0);
@@ -481,7 +484,8 @@ fn subdivided_patches_meet_at_their_shared_vertices() {
         rmse(&whole.image)
     );
     // Every patch shows its vertices exactly, and the seams add no error of their own.
-    assert!(split_error < 0.01, "{split_error}");
+    // Measured 2026-11-30: 0.0008; bound 2x.
+    assert!(split_error < 0.0017, "{split_error}");
     assert!(rmse(&split.image) < rmse(&whole.image) * 1.1);
 }
 
