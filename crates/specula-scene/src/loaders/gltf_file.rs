@@ -395,7 +395,15 @@ fn convert(
                 "glTF: the file broke the glTF parser (a malformed file the checks did not catch)",
             )
         })?
-        .map_err(|e| SceneError::invalid(&shown, format!("glTF: {e}")))?;
+        .map_err(|e| {
+            let reason = match e.to_string() {
+                m if m.contains("failed to fill whole buffer") => {
+                    "the file ends before the data it declares (truncated)".to_string()
+                }
+                m => m,
+            };
+            SceneError::invalid(&shown, format!("glTF: {reason}"))
+        })?;
     let mut loader = Loader {
         shown: shown.clone(),
         buffers: &buffers,

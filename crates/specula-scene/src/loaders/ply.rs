@@ -148,6 +148,16 @@ fn readable(error: &std::io::Error) -> String {
     let head = head
         .replace("Couln't", "could not")
         .replace("Couldn't", "could not");
+    if text.as_deref() == Some("")
+        && detail
+            .as_deref()
+            .is_some_and(|d| d.contains("found nothing"))
+    {
+        let line = head.split(':').next().unwrap_or(&head).to_lowercase();
+        return format!(
+            "{line}: the file ends before the elements its header declares (truncated)"
+        );
+    }
     match (text, detail) {
         (Some(t), Some(d)) => format!("{head} \"{t}\": {d}"),
         (Some(t), None) => format!("{head} \"{t}\""),
