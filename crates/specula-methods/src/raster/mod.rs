@@ -571,12 +571,12 @@ impl RasterPass {
         );
         let layer_views = (0..gpu_scene.shadow_layers())
             .map(|_| {
-                let buffer = ctx.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("shadow view"),
-                    size: size_of::<ShadowView>() as u64,
-                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                });
+                let buffer = specula_gpu::util::writable_buffer(
+                    ctx,
+                    "shadow view",
+                    size_of::<ShadowView>() as u64,
+                    wgpu::BufferUsages::UNIFORM,
+                );
                 let bind_group = ctx.create_bind_group(&wgpu::BindGroupDescriptor {
                     label: None,
                     layout: &shadow_view_layout,
@@ -588,12 +588,12 @@ impl RasterPass {
                 (buffer, bind_group)
             })
             .collect();
-        let views = ctx.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("shadow views"),
-            size: layers as u64 * size_of::<ShadowView>() as u64,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let views = specula_gpu::util::writable_buffer(
+            ctx,
+            "shadow views",
+            layers as u64 * size_of::<ShadowView>() as u64,
+            wgpu::BufferUsages::STORAGE,
+        );
         let shadow_bind_group = ctx.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("shadows"),
             layout: &shadow_layout,
@@ -613,12 +613,12 @@ impl RasterPass {
                 },
             ],
         });
-        let camera_buffer = ctx.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("camera"),
-            size: size_of::<CameraUniform>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let camera_buffer = specula_gpu::util::writable_buffer(
+            ctx,
+            "camera",
+            size_of::<CameraUniform>() as u64,
+            wgpu::BufferUsages::UNIFORM,
+        );
         let camera_bind_group = ctx.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("camera"),
             layout: &camera_layout,

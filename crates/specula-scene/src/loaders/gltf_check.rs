@@ -9,17 +9,6 @@
 
 use serde_json::Value;
 
-/// Extensions whose absence would make specula draw something wrong: a file requiring one of
-/// these others is refused, naming it.
-pub const SUPPORTED_REQUIRED: &[&str] = &[
-    "KHR_materials_unlit",
-    "KHR_materials_transmission",
-    "KHR_materials_volume",
-    "KHR_materials_ior",
-    "KHR_materials_dispersion",
-    "KHR_lights_punctual",
-];
-
 /// The JSON text of a `.gltf` or `.glb` file, or what is wrong with the GLB container.
 pub fn json_of(bytes: &[u8]) -> Result<&[u8], String> {
     if !bytes.starts_with(b"glTF") {
@@ -67,7 +56,7 @@ pub fn check(json: &[u8]) -> Result<(), String> {
     if let Some(required) = root.get("extensionsRequired").and_then(Value::as_array) {
         for (i, e) in required.iter().enumerate() {
             let name = e.as_str().unwrap_or("?");
-            if !SUPPORTED_REQUIRED.contains(&name) {
+            if !super::gltf_file::SUPPORTED_EXTENSIONS.contains(&name) {
                 return Err(format!(
                     "extensionsRequired[{i}]: the file requires {name}, which specula does not support"
                 ));

@@ -8,7 +8,8 @@ use glam::{Mat4, Vec2, Vec3};
 use crate::material::ior_from_abbe;
 use crate::{Camera, Light, Material, MaterialKind, Mesh, Scene, SceneError, Texture};
 
-const SUPPORTED_EXTENSIONS: &[&str] = &[
+/// The extensions specula maps; a file requiring any other is refused (gltf_check).
+pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_unlit",
     "KHR_materials_transmission",
     "KHR_materials_volume",
