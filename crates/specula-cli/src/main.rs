@@ -64,9 +64,11 @@ enum Command {
         exr: Option<PathBuf>,
     },
     /// Render the reference and each method from the same camera; report error and speed.
+    /// Several scenes, or a folder of .toml scenes, give one report with a methods × scenes table.
     Compare {
+        /// Built-in scene names, scene or mesh files, or folders of .toml scenes.
         #[arg(default_value = DEFAULT_SCENE)]
-        scene: String,
+        scenes: Vec<String>,
         /// Comma-separated methods (default: every method).
         #[arg(long, value_delimiter = ',')]
         methods: Option<Vec<String>>,
@@ -209,6 +211,65 @@ fn print_methods() {
     }
 }
 
+fn print_comparison(r: &specula_compare::Report) {
+    println!(
+        "{} at {}x{}, {} reflector/refractor pixels; reference {:.1} ms",
+        r.scene, r.width, r.height, r.mask_pixels, r.reference.total_ms
+    );
+    println!(
+        "{:<16}{:>9}{:>11}{:>11}{:>11}{:>12}{:>10}",
+        "method", "RMSE", "PSNR dB", "mean FLIP", "FLIP>0.1", "frame ms", "speed-up"
+    );
+    for warning in r.methods.iter().flat_map(|m| &m.warnings) {
+        eprintln!("warning: {warning}");
+    }
+    for m in &r.methods {
+        println!(
+            "{:<16}{:>9.4}{:>11}{:>11.4}{:>10.1}%{:>12.2}{:>9.1}x",
+            m.method,
+            m.metrics.rmse,
+            m.metrics
+                .psnr_db
+                .map(|p| format!("{p:.1}"))
+                .unwrap_or_else(|| "inf".into()),
+            m.metrics.mean_flip,
+            m.metrics.share_flip_over_0_1 * 100.0,
+            m.total_ms,
+            m.speedup_over_reference
+        );
+    }
+}
+
+/// The methods × scenes table: mean FLIP (frame ms) per cell.
+fn print_suite(summary: &specula_compare::suite::SuiteReport) {
+    let width = summary
+        .scenes
+        .iter()
+        .map(|r| r.scene.len().max(r.source.len().min(40)))
+        .max()
+        .unwrap_or(5)
+        .max(5);
+    print!("{:<width$}", "scene");
+    for m in &summary.methods {
+        print!("{:>22}", format!("{m} FLIP (ms)"));
+    }
+    println!();
+    for row in &summary.scenes {
+        if let Some(error) = &row.error {
+            println!("{:<width$}  error: {error}", row.source);
+            continue;
+        }
+        print!("{:<width$}", row.scene);
+        for m in &summary.methods {
+            match row.methods.iter().find(|c| &c.method == m) {
+                Some(c) => print!("{:>22}", format!("{:.4} ({:.1})", c.mean_flip, c.total_ms)),
+                None => print!("{:>22}", "-"),
+            }
+        }
+        println!();
+    }
+}
+
 fn spinner() -> ProgressBar {
     let bar = ProgressBar::new_spinner();
     bar.set_style(
@@ -309,7 +370,7 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Compare {
-            scene,
+            scenes,
             methods,
             report,
             json,
@@ -319,55 +380,83 @@ fn run(cli: Cli) -> Result<()> {
             max_depth,
             params,
         } => {
-            let scene = load_scene(&scene)?;
-            let options = specula_compare::Options {
-                parameters: params,
+            let methods = methods.unwrap_or_else(specula_methods::approximate_methods);
+            let mut infos = method_infos(&methods)?;
+            infos.push(specula_methods::exact_method());
+            let options = |scene: &Scene| specula_compare::Options {
+                parameters: params.clone(),
                 width,
-                height: height_for(&scene, width, height),
-                methods: methods.unwrap_or_else(specula_methods::approximate_methods),
+                height: height_for(scene, width, height),
+                methods: methods.clone(),
                 spp,
                 max_depth,
             };
-            let mut infos = method_infos(&options.methods)?;
-            infos.push(specula_methods::exact_method());
+            let is_suite = scenes.len() > 1 || scenes.iter().any(|s| PathBuf::from(s).is_dir());
+            if !is_suite {
+                let scene = load_scene(&scenes[0])?;
+                let ctx = context_for(&infos)?;
+                let bar = spinner();
+                let comparison =
+                    specula_compare::compare(&scene, &ctx, &options(&scene), &|stage| {
+                        bar.set_message(format!("rendering {stage}"))
+                    })?;
+                bar.finish_and_clear();
+                let html = comparison.write_report(&report)?;
+                if let Some(json) = &json {
+                    comparison.write_json(json)?;
+                }
+                print_comparison(&comparison.report);
+                println!("report: {}", html.display());
+                return Ok(());
+            }
+            let sources = specula_compare::suite::expand_scenes(&scenes)?;
             let ctx = context_for(&infos)?;
-            let bar = spinner();
-            let comparison = specula_compare::compare(&scene, &ctx, &options, &|stage| {
-                bar.set_message(format!("rendering {stage}"))
-            })?;
+            let bar = ProgressBar::new(sources.len() as u64);
+            bar.set_style(
+                ProgressStyle::with_template("{bar:30} {pos}/{len} {msg} ({elapsed})")
+                    .expect("valid template"),
+            );
+            let mut outcomes = Vec::new();
+            for source in &sources {
+                bar.set_message(source.clone());
+                let outcome = specula_scene::load(source)
+                    .map_err(anyhow::Error::from)
+                    .and_then(|scene| {
+                        for warning in &scene.warnings {
+                            bar.println(format!("warning: {source}: {warning}"));
+                        }
+                        Ok(specula_compare::compare(
+                            &scene,
+                            &ctx,
+                            &options(&scene),
+                            &|stage| bar.set_message(format!("{source}: {stage}")),
+                        )?)
+                    });
+                outcomes.push((
+                    source.clone(),
+                    match outcome {
+                        Ok(c) => specula_compare::suite::SuiteOutcome::Compared(Box::new(c)),
+                        Err(e) => {
+                            bar.println(format!("error: {source}: {e:#}"));
+                            specula_compare::suite::SuiteOutcome::Failed(format!("{e:#}"))
+                        }
+                    },
+                ));
+                bar.inc(1);
+            }
             bar.finish_and_clear();
-            let html = comparison.write_report(&report)?;
+            let (summary, html) =
+                specula_compare::suite::write_suite(&report, &ctx.describe(), &methods, &outcomes)?;
             if let Some(json) = &json {
-                comparison.write_json(json)?;
+                std::fs::write(json, serde_json::to_string_pretty(&summary)?)
+                    .with_context(|| format!("writing {}", json.display()))?;
             }
-            let r = &comparison.report;
-            println!(
-                "{} at {}x{}, {} reflector/refractor pixels; reference {:.1} ms",
-                r.scene, r.width, r.height, r.mask_pixels, r.reference.total_ms
-            );
-            println!(
-                "{:<16}{:>9}{:>11}{:>11}{:>11}{:>12}{:>10}",
-                "method", "RMSE", "PSNR dB", "mean FLIP", "FLIP>0.1", "frame ms", "speed-up"
-            );
-            for warning in r.methods.iter().flat_map(|m| &m.warnings) {
-                eprintln!("warning: {warning}");
-            }
-            for m in &r.methods {
-                println!(
-                    "{:<16}{:>9.4}{:>11}{:>11.4}{:>10.1}%{:>12.2}{:>9.1}x",
-                    m.method,
-                    m.metrics.rmse,
-                    m.metrics
-                        .psnr_db
-                        .map(|p| format!("{p:.1}"))
-                        .unwrap_or_else(|| "inf".into()),
-                    m.metrics.mean_flip,
-                    m.metrics.share_flip_over_0_1 * 100.0,
-                    m.total_ms,
-                    m.speedup_over_reference
-                );
-            }
+            print_suite(&summary);
             println!("report: {}", html.display());
+            let failed = summary.scenes.iter().filter(|r| r.error.is_some()).count();
+            if failed > 0 {
+                anyhow::bail!("{failed} of {} scenes failed (see above)", summary.scenes.len());
+            }
             Ok(())
         }
         Command::View {

@@ -6,6 +6,7 @@
 //! for shader compilation); the reference's is its CPU render time, BVH build included.
 
 pub mod metrics;
+pub mod suite;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -35,6 +36,8 @@ pub enum CompareError {
     UnusedParameter { setting: String, methods: String },
     #[error("the scene has no mirror or dielectric surface in view: nothing to compare")]
     EmptyMask,
+    #[error("{folder}: the folder holds no .toml scene file")]
+    NoScenes { folder: String },
 }
 
 #[derive(Clone, Debug)]
@@ -238,7 +241,7 @@ pub fn compare(
     })
 }
 
-fn write_error(path: &Path, e: impl std::fmt::Display) -> CompareError {
+pub(crate) fn write_error(path: &Path, e: impl std::fmt::Display) -> CompareError {
     CompareError::Write {
         path: path.display().to_string(),
         message: e.to_string(),
@@ -262,7 +265,7 @@ fn data_uri(img: &image::RgbImage) -> String {
     )
 }
 
-fn escape(s: &str) -> String {
+pub(crate) fn escape(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")

@@ -63,12 +63,7 @@ fn merged(separate: &Scene) -> Scene {
         name: "mirrors".into(),
         ..scene.meshes[left].clone()
     };
-    let base = both.positions.len() as u32;
-    both.positions.extend(&right.positions);
-    both.normals.extend(&right.normals);
-    both.uvs.extend(&right.uvs);
-    both.triangles
-        .extend(right.triangles.iter().map(|t| t.map(|i| i + base)));
+    both.append(&right);
     scene.meshes[left] = both;
     scene.warnings.clear();
     scene.finalize("merged").unwrap();

@@ -324,6 +324,29 @@ pub fn cuboid(size: Vec3) -> Mesh {
     finish(mesh)
 }
 
+/// The inside of a closed `size` box standing on y = 0, centred over the origin: six walls whose
+/// normals point inwards, UVs in metres along each wall.
+pub fn room(size: Vec3) -> Mesh {
+    let mut mesh = empty("room");
+    let half = size * 0.5;
+    let centre = Vec3::new(0.0, half.y, 0.0);
+    for axis in 0..3 {
+        for sign in [-1.0f32, 1.0] {
+            let mut inward = Vec3::ZERO;
+            inward[axis] = -sign;
+            let (a1, a2) = ((axis + 1) % 3, (axis + 2) % 3);
+            let (t1, t2) = (Vec3::from_array(unit(a1)), Vec3::from_array(unit(a2)));
+            append_grid(&mut mesh, 1, 1, |u, v| Sample {
+                p: centre
+                    + (-inward + t1 * (2.0 * u - 1.0) + t2 * (2.0 * v - 1.0)) * half,
+                n: inward,
+                uv: Vec2::new(u * size[a1], v * size[a2]),
+            });
+        }
+    }
+    finish(mesh)
+}
+
 fn unit(axis: usize) -> [f32; 3] {
     let mut a = [0.0; 3];
     a[axis] = 1.0;

@@ -136,6 +136,26 @@ impl Mesh {
         self.triangles = triangles;
     }
 
+    /// Appends `other`'s vertices and triangles (renumbered), keeping this mesh's name and
+    /// material. UVs stay one per position: the side without them gets (0, 0).
+    pub fn append(&mut self, other: &Mesh) {
+        let base = self.positions.len() as u32;
+        if self.uvs.is_empty() != other.uvs.is_empty() {
+            self.uvs.resize(self.positions.len(), Vec2::ZERO);
+        }
+        self.positions.extend(&other.positions);
+        self.normals.extend(&other.normals);
+        if !self.uvs.is_empty() {
+            if other.uvs.is_empty() {
+                self.uvs.resize(self.positions.len(), Vec2::ZERO);
+            } else {
+                self.uvs.extend(&other.uvs);
+            }
+        }
+        self.triangles
+            .extend(other.triangles.iter().map(|t| t.map(|i| i + base)));
+    }
+
     /// Applies an affine transform; normals go through the inverse transpose. A transform that
     /// mirrors (negative determinant) also flips the winding so faces stay counter-clockwise.
     pub fn transform(&mut self, world_from_object: Mat4) {
@@ -388,13 +408,25 @@ mod tests {
     fn merged(parts: &[Mesh]) -> Mesh {
         let mut out = Mesh::default();
         for part in parts {
-            let base = out.positions.len() as u32;
-            out.positions.extend(&part.positions);
-            out.normals.extend(&part.normals);
-            out.triangles
-                .extend(part.triangles.iter().map(|t| t.map(|i| i + base)));
+            out.append(part);
         }
         out
+    }
+
+    #[test]
+    fn append_renumbers_and_keeps_one_uv_per_position() {
+        let plane = generators::plane(Vec2::ONE, 1);
+        let mut without_uvs = generators::cuboid(Vec3::ONE);
+        without_uvs.uvs.clear();
+        let mut mesh = without_uvs.clone();
+        mesh.append(&plane);
+        assert_eq!(mesh.positions.len(), without_uvs.positions.len() + plane.positions.len());
+        assert_eq!(mesh.uvs.len(), mesh.positions.len());
+        assert_eq!(mesh.uvs[without_uvs.positions.len()..], plane.uvs[..]);
+        let last = *mesh.triangles.last().unwrap();
+        let expected = plane.triangles.last().unwrap().map(|i| i + without_uvs.positions.len() as u32);
+        assert_eq!(last, expected);
+        mesh.validate("appended").unwrap();
     }
 
     #[test]

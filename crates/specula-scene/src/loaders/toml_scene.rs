@@ -107,10 +107,12 @@ pub enum MaterialSpec {
     Unlit {
         color: Option<Color>,
         texture: Option<String>,
+        checker: Option<CheckerSpec>,
     },
     Diffuse {
         color: Option<Color>,
         texture: Option<String>,
+        checker: Option<CheckerSpec>,
     },
     Mirror {
         /// F0, the reflectance at normal incidence.
@@ -131,6 +133,15 @@ pub enum MaterialSpec {
         #[serde(default)]
         thin: bool,
     },
+}
+
+/// A procedural checkerboard texture: `squares` × `squares` squares per unit of UV, in two
+/// colours (multiplied by the material's `color`).
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct CheckerSpec {
+    pub squares: u32,
+    pub colors: [Color; 2],
 }
 
 #[derive(Deserialize, Debug)]
@@ -168,6 +179,20 @@ pub struct ObjectSpec {
     pub material: String,
     pub translate: Option<[f32; 3]>,
     /// Euler angles in degrees, applied about X, then Y, then Z.
+    pub rotate_deg: Option<[f32; 3]>,
+    pub scale: Option<Scale>,
+    /// Replace the shape's normals by its face normals (a flat-shaded mesh, as files without
+    /// normals are in glTF).
+    #[serde(default)]
+    pub flat: bool,
+    pub shape: ShapeSpec,
+}
+
+/// One placed part of a `merged` shape.
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct PartSpec {
+    pub translate: Option<[f32; 3]>,
     pub rotate_deg: Option<[f32; 3]>,
     pub scale: Option<Scale>,
     pub shape: ShapeSpec,
@@ -237,6 +262,16 @@ pub enum ShapeSpec {
         #[serde(default = "n1")]
         subdivisions: u32,
     },
+    /// The six inward-facing walls of a closed box, floor at y = 0, centred over the origin;
+    /// UVs are metres along each wall, so a texture repeats every metre.
+    Room {
+        size: [f32; 3],
+    },
+    /// Several shapes, each placed by its own transform, joined into one mesh, as files often
+    /// join the objects that share a material.
+    Merged {
+        parts: Vec<PartSpec>,
+    },
     Teapot {
         #[serde(default = "n8")]
         resolution: u32,
@@ -268,15 +303,26 @@ pub fn fit_meshes(meshes: &mut [Mesh], size: f32) {
     }
 }
 
-fn object_transform(object: &ObjectSpec) -> Mat4 {
-    let translate = Vec3::from_array(object.translate.unwrap_or_default());
-    let [rx, ry, rz] = object.rotate_deg.unwrap_or_default().map(f32::to_radians);
+fn placement(
+    translate: Option<[f32; 3]>,
+    rotate_deg: Option<[f32; 3]>,
+    scale: Option<Scale>,
+) -> Result<Mat4, SceneError> {
+    let translate = Vec3::from_array(translate.unwrap_or_default());
+    let [rx, ry, rz] = rotate_deg.unwrap_or_default().map(f32::to_radians);
     let rotation = Quat::from_euler(EulerRot::ZYX, rz, ry, rx);
-    let scale = match object.scale.unwrap_or(Scale::Uniform(1.0)) {
+    let scale = match scale.unwrap_or(Scale::Uniform(1.0)) {
         Scale::Uniform(s) => Vec3::splat(s),
         Scale::PerAxis(s) => Vec3::from_array(s),
     };
-    Mat4::from_scale_rotation_translation(scale, rotation, translate)
+    let m = Mat4::from_scale_rotation_translation(scale, rotation, translate);
+    if !m.is_finite() || m.determinant() == 0.0 {
+        return Err(SceneError::invalid(
+            "transform",
+            "singular or not finite",
+        ));
+    }
+    Ok(m)
 }
 
 fn shape_meshes(
@@ -345,6 +391,29 @@ fn shape_meshes(
             vec![generators::plane(Vec2::from_array(*size), *subdivisions)]
         }
         ShapeSpec::Teapot { resolution } => vec![generators::teapot(*resolution)],
+        ShapeSpec::Room { size } => vec![generators::room(Vec3::from_array(*size))],
+        ShapeSpec::Merged { parts } => {
+            let mut joined = Mesh {
+                name: "merged".into(),
+                ..Default::default()
+            };
+            for (i, part) in parts.iter().enumerate() {
+                let at = |e: SceneError| SceneError::invalid(format!("parts[{i}]"), e.to_string());
+                let world_from_part =
+                    placement(part.translate, part.rotate_deg, part.scale).map_err(at)?;
+                for mut mesh in shape_meshes(&part.shape, base, warnings).map_err(at)? {
+                    if mesh.normals.is_empty() {
+                        mesh.compute_smooth_normals();
+                    }
+                    mesh.transform(world_from_part);
+                    joined.append(&mesh);
+                }
+            }
+            if joined.triangles.is_empty() {
+                return Err(SceneError::invalid("parts", "no part has a triangle"));
+            }
+            vec![joined]
+        }
         ShapeSpec::Mesh { file, fit } => {
             let (mut meshes, _, _, mut file_warnings) = super::load_mesh_file(&base.join(file))?;
             warnings.append(&mut file_warnings);
@@ -364,14 +433,25 @@ fn material_from_spec(
 ) -> Result<Material, SceneError> {
     let grey = |c: &Option<Color>, d: f32| c.map(Color::vec3).unwrap_or(Vec3::splat(d));
     let mut texture_file = None;
+    let mut checker_spec = None;
     let material = match spec {
-        MaterialSpec::Unlit { color, texture } => {
+        MaterialSpec::Unlit {
+            color,
+            texture,
+            checker,
+        } => {
             texture_file = texture.clone();
+            checker_spec = checker.as_ref();
             Material::unlit(name, grey(color, 1.0))
         }
-        MaterialSpec::Diffuse { color, texture } => {
+        MaterialSpec::Diffuse {
+            color,
+            texture,
+            checker,
+        } => {
             texture_file = texture.clone();
-            Material::diffuse(name, grey(color, 0.8))
+            checker_spec = checker.as_ref();
+            Material::diffuse(name, grey(color, if checker.is_some() { 1.0 } else { 0.8 }))
         }
         MaterialSpec::Mirror {
             color,
@@ -419,11 +499,45 @@ fn material_from_spec(
         }
     };
     let mut material = material;
-    if let Some(file) = texture_file {
-        textures.push(Texture::load(&base.join(file), true)?);
+    let texture = match (texture_file, checker_spec) {
+        (Some(_), Some(_)) => {
+            return Err(SceneError::invalid(
+                format!("materials.{name}"),
+                "give either texture or checker, not both",
+            ))
+        }
+        (Some(file), None) => Some(Texture::load(&base.join(file), true)?),
+        (None, Some(checker)) => Some(checker_texture(name, checker)?),
+        (None, None) => None,
+    };
+    if let Some(texture) = texture {
+        textures.push(texture);
         material.texture = Some(textures.len() - 1);
     }
     Ok(material)
+}
+
+fn checker_texture(name: &str, spec: &CheckerSpec) -> Result<Texture, SceneError> {
+    if !(1..=256).contains(&spec.squares) {
+        return Err(SceneError::invalid(
+            format!("materials.{name}.checker.squares"),
+            format!("{} is not from 1 to 256", spec.squares),
+        ));
+    }
+    let [a, b] = spec.colors.map(Color::vec3);
+    // Eight texels a square keep the squares' edges sharp under bilinear filtering.
+    let side = spec.squares * 8;
+    Ok(Texture::procedural(name, side, side, |uv| {
+        let (i, j) = (
+            (uv.x * spec.squares as f32) as u32,
+            (uv.y * spec.squares as f32) as u32,
+        );
+        if (i + j) % 2 == 0 {
+            a
+        } else {
+            b
+        }
+    }))
 }
 
 /// Parses a scene from TOML text; relative file names resolve against `base`.
@@ -557,13 +671,8 @@ fn listed_scene(shown: &str, file: &SceneFile, base: &Path) -> Result<Scene, Sce
                 ),
             ));
         };
-        let world_from_object = object_transform(object);
-        if !world_from_object.is_finite() || world_from_object.determinant() == 0.0 {
-            return Err(SceneError::invalid(
-                shown,
-                format!("{path}: transform is singular or not finite"),
-            ));
-        }
+        let world_from_object = placement(object.translate, object.rotate_deg, object.scale)
+            .map_err(|e| at(path.clone(), e))?;
         for mut mesh in shape_meshes(&object.shape, base, &mut warnings)
             .map_err(|e| at(format!("{path}.shape"), e))?
         {
@@ -571,7 +680,9 @@ fn listed_scene(shown: &str, file: &SceneFile, base: &Path) -> Result<Scene, Sce
                 mesh.name = name.clone();
             }
             mesh.check_topology(shown)?;
-            if mesh.normals.is_empty() {
+            if object.flat {
+                mesh.make_flat();
+            } else if mesh.normals.is_empty() {
                 mesh.compute_smooth_normals();
             }
             mesh.transform(world_from_object);

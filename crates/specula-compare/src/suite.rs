@@ -1,0 +1,287 @@
+//! `specula compare` over several scenes (or a folder of them): one comparison per scene, each
+//! in its own sub-folder, and a summary page with a methods × scenes table of mean FLIP and
+//! frame time (schema: docs/compare-suite.schema.json). A scene that fails to load or to render
+//! is a row with its error; the others still run.
+
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+use crate::{escape, write_error, CompareError, Comparison};
+
+/// One method's figures on one scene.
+#[derive(Clone, Debug, Serialize)]
+pub struct SuiteCell {
+    pub method: String,
+    pub mean_flip: f64,
+    pub share_flip_over_0_1: f64,
+    pub rmse: f64,
+    pub total_ms: f64,
+    pub warnings: usize,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct SuiteRow {
+    /// The scene as it was named on the command line (file path or built-in name).
+    pub source: String,
+    /// The scene's own name; empty when it failed to load.
+    pub scene: String,
+    /// The sub-folder holding this scene's report; empty when it failed.
+    pub folder: String,
+    pub width: u32,
+    pub height: u32,
+    pub mask_pixels: usize,
+    pub reference_ms: f64,
+    pub methods: Vec<SuiteCell>,
+    /// Why the scene has no figures; null when it has them.
+    pub error: Option<String>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct SuiteReport {
+    pub schema_version: u32,
+    pub adapter: String,
+    pub methods: Vec<String>,
+    pub scenes: Vec<SuiteRow>,
+}
+
+/// What comparing one scene gave: a comparison, or the reason there is none.
+pub enum SuiteOutcome {
+    Compared(Box<Comparison>),
+    Failed(String),
+}
+
+/// Scene names from the command line: a folder stands for the `.toml` files in it, sorted by
+/// name; anything else (a file or a built-in name) is kept as given.
+pub fn expand_scenes(names: &[String]) -> Result<Vec<String>, CompareError> {
+    let mut scenes = Vec::new();
+    for name in names {
+        let path = Path::new(name);
+        if !path.is_dir() {
+            scenes.push(name.clone());
+            continue;
+        }
+        let entries = std::fs::read_dir(path).map_err(|e| write_error(path, e))?;
+        let mut files: Vec<PathBuf> = entries
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+            .collect();
+        if files.is_empty() {
+            return Err(CompareError::NoScenes {
+                folder: path.display().to_string(),
+            });
+        }
+        files.sort();
+        scenes.extend(files.iter().map(|f| f.display().to_string()));
+    }
+    Ok(scenes)
+}
+
+/// A folder name for `source` (its file stem, or the built-in name), made unique among `taken`.
+fn folder_name(source: &str, taken: &[String]) -> String {
+    let stem = Path::new(source)
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| source.to_string());
+    let clean: String = stem
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    let mut name = clean.clone();
+    let mut k = 2;
+    while taken.contains(&name) {
+        name = format!("{clean}-{k}");
+        k += 1;
+    }
+    name
+}
+
+/// Writes each compared scene's report into its own sub-folder of `dir`, then `report.html`
+/// (the methods × scenes table, linking to each scene's page) and `report.json`; returns the
+/// summary and the HTML's path.
+pub fn write_suite(
+    dir: &Path,
+    adapter: &str,
+    methods: &[String],
+    outcomes: &[(String, SuiteOutcome)],
+) -> Result<(SuiteReport, PathBuf), CompareError> {
+    std::fs::create_dir_all(dir).map_err(|e| write_error(dir, e))?;
+    let mut rows = Vec::new();
+    let mut taken = Vec::new();
+    for (source, outcome) in outcomes {
+        let row = match outcome {
+            SuiteOutcome::Compared(comparison) => {
+                let folder = folder_name(source, &taken);
+                comparison.write_report(&dir.join(&folder))?;
+                taken.push(folder.clone());
+                let r = &comparison.report;
+                SuiteRow {
+                    source: source.clone(),
+                    scene: r.scene.clone(),
+                    folder,
+                    width: r.width,
+                    height: r.height,
+                    mask_pixels: r.mask_pixels,
+                    reference_ms: r.reference.total_ms,
+                    methods: r
+                        .methods
+                        .iter()
+                        .map(|m| SuiteCell {
+                            method: m.method.clone(),
+                            mean_flip: m.metrics.mean_flip,
+                            share_flip_over_0_1: m.metrics.share_flip_over_0_1,
+                            rmse: m.metrics.rmse,
+                            total_ms: m.total_ms,
+                            warnings: m.warnings.len(),
+                        })
+                        .collect(),
+                    error: None,
+                }
+            }
+            SuiteOutcome::Failed(message) => SuiteRow {
+                source: source.clone(),
+                scene: String::new(),
+                folder: String::new(),
+                width: 0,
+                height: 0,
+                mask_pixels: 0,
+                reference_ms: 0.0,
+                methods: Vec::new(),
+                error: Some(message.clone()),
+            },
+        };
+        rows.push(row);
+    }
+    let report = SuiteReport {
+        schema_version: 1,
+        adapter: adapter.to_string(),
+        methods: methods.to_vec(),
+        scenes: rows,
+    };
+    let json = dir.join("report.json");
+    let text = serde_json::to_string_pretty(&report).map_err(|e| write_error(&json, e))?;
+    std::fs::write(&json, text).map_err(|e| write_error(&json, e))?;
+    let html = dir.join("report.html");
+    std::fs::write(&html, suite_html(&report)).map_err(|e| write_error(&html, e))?;
+    Ok((report, html))
+}
+
+/// A cell's background: green at FLIP 0 through yellow to red at 0.3 and above.
+fn flip_colour(flip: f64) -> String {
+    let t = (flip / 0.3).clamp(0.0, 1.0);
+    let (r, g) = if t < 0.5 {
+        (510.0 * t, 255.0)
+    } else {
+        (255.0, 510.0 * (1.0 - t))
+    };
+    format!("rgb({:.0},{:.0},120)", r * 0.6 + 100.0, g * 0.6 + 100.0)
+}
+
+fn suite_html(report: &SuiteReport) -> String {
+    let mut head = String::from("<tr><th>scene</th><th>pixels</th><th>reference ms</th>");
+    for m in &report.methods {
+        head.push_str(&format!(
+            "<th>{} FLIP</th><th>{} ms</th>",
+            escape(m),
+            escape(m)
+        ));
+    }
+    head.push_str("</tr>\n");
+    let mut rows = String::new();
+    for row in &report.scenes {
+        if let Some(error) = &row.error {
+            rows.push_str(&format!(
+                "<tr><td>{}</td><td colspan=\"{}\" class=\"error\">{}</td></tr>\n",
+                escape(&row.source),
+                2 + 2 * report.methods.len(),
+                escape(error)
+            ));
+            continue;
+        }
+        rows.push_str(&format!(
+            "<tr><td><a href=\"{}/report.html\">{}</a></td><td>{}</td><td>{:.1}</td>",
+            escape(&row.folder),
+            escape(&row.scene),
+            row.mask_pixels,
+            row.reference_ms
+        ));
+        for method in &report.methods {
+            match row.methods.iter().find(|c| &c.method == method) {
+                Some(c) => rows.push_str(&format!(
+                    "<td style=\"background:{}\" title=\"FLIP &gt; 0.1 on {:.1} % of the pixels; RMSE {:.4}; {} warnings\">{:.4}</td><td>{:.1}</td>",
+                    flip_colour(c.mean_flip),
+                    c.share_flip_over_0_1 * 100.0,
+                    c.rmse,
+                    c.warnings,
+                    c.mean_flip,
+                    c.total_ms
+                )),
+                None => rows.push_str("<td>–</td><td>–</td>"),
+            }
+        }
+        rows.push_str("</tr>\n");
+    }
+    format!(
+        r#"<!DOCTYPE html>
+<html><head><meta charset="utf-8"><title>specula compare: {count} scenes</title>
+<style>
+body {{ font-family: sans-serif; margin: 2em; background: #fafafa; }}
+table {{ border-collapse: collapse; margin: 1em 0; }}
+td, th {{ border: 1px solid #bbb; padding: 4px 8px; text-align: right; }}
+td:first-child, th:first-child {{ text-align: left; }}
+td.error {{ text-align: left; color: #a00; }}
+</style></head><body>
+<h1>specula compare: {count} scenes</h1>
+<p>On {adapter}. Mean FLIP over each scene's mirror and dielectric pixels against the exact
+reference (green 0, red ≥ 0.3; hover for the share over 0.1 and the RMSE), and each method's frame
+time in milliseconds. A scene's name links to its own report with the images and heat-maps.</p>
+<table>
+{head}{rows}</table>
+</body></html>
+"#,
+        count = report.scenes.len(),
+        adapter = escape(&report.adapter),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn folder_names_are_file_stems_made_unique() {
+        let mut taken = Vec::new();
+        for source in ["a/glass.toml", "b/glass.toml", "door-mirror", "x/my scene.toml"] {
+            let name = folder_name(source, &taken);
+            taken.push(name);
+        }
+        assert_eq!(taken, ["glass", "glass-2", "door-mirror", "my_scene"]);
+    }
+
+    #[test]
+    fn a_folder_expands_to_its_toml_files_in_name_order() {
+        let dir = tempfile::tempdir().unwrap();
+        for f in ["b.toml", "a.toml", "notes.md"] {
+            std::fs::write(dir.path().join(f), "").unwrap();
+        }
+        let folder = dir.path().display().to_string();
+        let scenes = expand_scenes(&["door-mirror".into(), folder.clone()]).unwrap();
+        assert_eq!(
+            scenes,
+            [
+                "door-mirror".to_string(),
+                format!("{folder}/a.toml"),
+                format!("{folder}/b.toml")
+            ]
+        );
+        let empty = tempfile::tempdir().unwrap();
+        let error = expand_scenes(&[empty.path().display().to_string()]).unwrap_err();
+        assert!(error.to_string().contains("no .toml scene"), "{error}");
+    }
+}
