@@ -416,7 +416,8 @@ fn run(cli: Cli) -> Result<()> {
                 ProgressStyle::with_template("{bar:30} {pos}/{len} {msg} ({elapsed})")
                     .expect("valid template"),
             );
-            let mut outcomes = Vec::new();
+            let mut rows = Vec::new();
+            let mut taken = Vec::new();
             for source in &sources {
                 bar.set_message(source.clone());
                 let outcome = specula_scene::load(source)
@@ -431,22 +432,37 @@ fn run(cli: Cli) -> Result<()> {
                             &options(&scene),
                             &|stage| bar.set_message(format!("{source}: {stage}")),
                         )?)
-                    });
-                outcomes.push((
-                    source.clone(),
-                    match outcome {
-                        Ok(c) => specula_compare::suite::SuiteOutcome::Compared(Box::new(c)),
-                        Err(e) => {
-                            bar.println(format!("error: {source}: {e:#}"));
-                            specula_compare::suite::SuiteOutcome::Failed(format!("{e:#}"))
-                        }
-                    },
-                ));
+                    })
+                    .map_err(|e| format!("{e:#}"));
+                let row = specula_compare::suite::scene_row(
+                    &report,
+                    source,
+                    outcome.as_ref().map_err(Clone::clone),
+                    &mut taken,
+                )?;
+                bar.println(match &row.error {
+                    Some(e) => format!("error: {source}: {e}"),
+                    None => format!(
+                        "{}: {}",
+                        row.scene,
+                        row.methods
+                            .iter()
+                            .map(|c| format!("{} {:.4}", c.method, c.mean_flip))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                });
+                rows.push(row);
                 bar.inc(1);
             }
             bar.finish_and_clear();
-            let (summary, html) =
-                specula_compare::suite::write_suite(&report, &ctx.describe(), &methods, &outcomes)?;
+            let summary = specula_compare::suite::SuiteReport {
+                schema_version: 1,
+                adapter: ctx.describe(),
+                methods: methods.clone(),
+                scenes: rows,
+            };
+            let html = specula_compare::suite::write_summary(&report, &summary)?;
             if let Some(json) = &json {
                 std::fs::write(json, serde_json::to_string_pretty(&summary)?)
                     .with_context(|| format!("writing {}", json.display()))?;
@@ -455,7 +471,10 @@ fn run(cli: Cli) -> Result<()> {
             println!("report: {}", html.display());
             let failed = summary.scenes.iter().filter(|r| r.error.is_some()).count();
             if failed > 0 {
-                anyhow::bail!("{failed} of {} scenes failed (see above)", summary.scenes.len());
+                anyhow::bail!(
+                    "{failed} of {} scenes failed (see above)",
+                    summary.scenes.len()
+                );
             }
             Ok(())
         }

@@ -45,12 +45,6 @@ pub struct SuiteReport {
     pub scenes: Vec<SuiteRow>,
 }
 
-/// What comparing one scene gave: a comparison, or the reason there is none.
-pub enum SuiteOutcome {
-    Compared(Box<Comparison>),
-    Failed(String),
-}
-
 /// Scene names from the command line: a folder stands for the `.toml` files in it, sorted by
 /// name; anything else (a file or a built-in name) is kept as given.
 pub fn expand_scenes(names: &[String]) -> Result<Vec<String>, CompareError> {
@@ -102,50 +96,20 @@ fn folder_name(source: &str, taken: &[String]) -> String {
     name
 }
 
-/// Writes each compared scene's report into its own sub-folder of `dir`, then `report.html`
-/// (the methods × scenes table, linking to each scene's page) and `report.json`; returns the
-/// summary and the HTML's path.
-pub fn write_suite(
+/// Writes a compared scene's report into its own sub-folder of `dir` (named after `source`,
+/// unique among `taken`, which it joins) and returns its row of the summary; a failed scene's
+/// row holds its error.
+pub fn scene_row(
     dir: &Path,
-    adapter: &str,
-    methods: &[String],
-    outcomes: &[(String, SuiteOutcome)],
-) -> Result<(SuiteReport, PathBuf), CompareError> {
-    std::fs::create_dir_all(dir).map_err(|e| write_error(dir, e))?;
-    let mut rows = Vec::new();
-    let mut taken = Vec::new();
-    for (source, outcome) in outcomes {
-        let row = match outcome {
-            SuiteOutcome::Compared(comparison) => {
-                let folder = folder_name(source, &taken);
-                comparison.write_report(&dir.join(&folder))?;
-                taken.push(folder.clone());
-                let r = &comparison.report;
-                SuiteRow {
-                    source: source.clone(),
-                    scene: r.scene.clone(),
-                    folder,
-                    width: r.width,
-                    height: r.height,
-                    mask_pixels: r.mask_pixels,
-                    reference_ms: r.reference.total_ms,
-                    methods: r
-                        .methods
-                        .iter()
-                        .map(|m| SuiteCell {
-                            method: m.method.clone(),
-                            mean_flip: m.metrics.mean_flip,
-                            share_flip_over_0_1: m.metrics.share_flip_over_0_1,
-                            rmse: m.metrics.rmse,
-                            total_ms: m.total_ms,
-                            warnings: m.warnings.len(),
-                        })
-                        .collect(),
-                    error: None,
-                }
-            }
-            SuiteOutcome::Failed(message) => SuiteRow {
-                source: source.clone(),
+    source: &str,
+    outcome: Result<&Comparison, String>,
+    taken: &mut Vec<String>,
+) -> Result<SuiteRow, CompareError> {
+    let comparison = match outcome {
+        Ok(c) => c,
+        Err(message) => {
+            return Ok(SuiteRow {
+                source: source.to_string(),
                 scene: String::new(),
                 folder: String::new(),
                 width: 0,
@@ -153,23 +117,48 @@ pub fn write_suite(
                 mask_pixels: 0,
                 reference_ms: 0.0,
                 methods: Vec::new(),
-                error: Some(message.clone()),
-            },
-        };
-        rows.push(row);
-    }
-    let report = SuiteReport {
-        schema_version: 1,
-        adapter: adapter.to_string(),
-        methods: methods.to_vec(),
-        scenes: rows,
+                error: Some(message),
+            })
+        }
     };
+    let folder = folder_name(source, taken);
+    comparison.write_report(&dir.join(&folder))?;
+    taken.push(folder.clone());
+    let r = &comparison.report;
+    Ok(SuiteRow {
+        source: source.to_string(),
+        scene: r.scene.clone(),
+        folder,
+        width: r.width,
+        height: r.height,
+        mask_pixels: r.mask_pixels,
+        reference_ms: r.reference.total_ms,
+        methods: r
+            .methods
+            .iter()
+            .map(|m| SuiteCell {
+                method: m.method.clone(),
+                mean_flip: m.metrics.mean_flip,
+                share_flip_over_0_1: m.metrics.share_flip_over_0_1,
+                rmse: m.metrics.rmse,
+                total_ms: m.total_ms,
+                warnings: m.warnings.len(),
+            })
+            .collect(),
+        error: None,
+    })
+}
+
+/// Writes the summary, `report.html` (the methods × scenes table, linking to each scene's
+/// page) and `report.json`, into `dir`; returns the HTML's path.
+pub fn write_summary(dir: &Path, report: &SuiteReport) -> Result<PathBuf, CompareError> {
+    std::fs::create_dir_all(dir).map_err(|e| write_error(dir, e))?;
     let json = dir.join("report.json");
-    let text = serde_json::to_string_pretty(&report).map_err(|e| write_error(&json, e))?;
+    let text = serde_json::to_string_pretty(report).map_err(|e| write_error(&json, e))?;
     std::fs::write(&json, text).map_err(|e| write_error(&json, e))?;
     let html = dir.join("report.html");
-    std::fs::write(&html, suite_html(&report)).map_err(|e| write_error(&html, e))?;
-    Ok((report, html))
+    std::fs::write(&html, suite_html(report)).map_err(|e| write_error(&html, e))?;
+    Ok(html)
 }
 
 /// A cell's background: green at FLIP 0 through yellow to red at 0.3 and above.
@@ -257,7 +246,12 @@ mod tests {
     #[test]
     fn folder_names_are_file_stems_made_unique() {
         let mut taken = Vec::new();
-        for source in ["a/glass.toml", "b/glass.toml", "door-mirror", "x/my scene.toml"] {
+        for source in [
+            "a/glass.toml",
+            "b/glass.toml",
+            "door-mirror",
+            "x/my scene.toml",
+        ] {
             let name = folder_name(source, &taken);
             taken.push(name);
         }

@@ -1,5 +1,6 @@
 //! Property: no method ever writes a NaN or infinite pixel, whatever the camera. Random
-//! cameras (a fixed seed, so a failure reproduces) inside and around every built-in scene:
+//! cameras (a fixed seed, so a failure reproduces) inside and around every built-in scene and
+//! every scene of the suite (`scenes/suite`):
 //! eyes from inside the objects to twice the scene's radius away, any direction, fields of
 //! view from 10° to 120°.
 
@@ -39,8 +40,24 @@ fn no_method_writes_a_non_finite_pixel_from_random_cameras() {
     };
     let mut random = Random(0x5EED_CAFE_F00D_D00D);
     let mut failures = Vec::new();
-    for name in specula_scene::builtin::names() {
-        let mut scene = specula_scene::load(name).unwrap();
+    let suite = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/suite");
+    let mut suite_files: Vec<String> = std::fs::read_dir(&suite)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .map(|p| p.display().to_string())
+        .collect();
+    suite_files.sort();
+    assert!(
+        suite_files.len() >= 10,
+        "the suite is missing: {suite_files:?}"
+    );
+    let names = specula_scene::builtin::names()
+        .into_iter()
+        .map(|n| n.to_string())
+        .chain(suite_files);
+    for name in names {
+        let mut scene = specula_scene::load(&name).unwrap();
         let bounds = scene.bounds();
         let (centre, radius) = (bounds.center(), bounds.radius());
         for c in 0..CAMERAS {

@@ -337,8 +337,7 @@ pub fn room(size: Vec3) -> Mesh {
             let (a1, a2) = ((axis + 1) % 3, (axis + 2) % 3);
             let (t1, t2) = (Vec3::from_array(unit(a1)), Vec3::from_array(unit(a2)));
             append_grid(&mut mesh, 1, 1, |u, v| Sample {
-                p: centre
-                    + (-inward + t1 * (2.0 * u - 1.0) + t2 * (2.0 * v - 1.0)) * half,
+                p: centre + (-inward + t1 * (2.0 * u - 1.0) + t2 * (2.0 * v - 1.0)) * half,
                 n: inward,
                 uv: Vec2::new(u * size[a1], v * size[a2]),
             });

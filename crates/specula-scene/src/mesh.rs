@@ -420,11 +420,18 @@ mod tests {
         without_uvs.uvs.clear();
         let mut mesh = without_uvs.clone();
         mesh.append(&plane);
-        assert_eq!(mesh.positions.len(), without_uvs.positions.len() + plane.positions.len());
+        assert_eq!(
+            mesh.positions.len(),
+            without_uvs.positions.len() + plane.positions.len()
+        );
         assert_eq!(mesh.uvs.len(), mesh.positions.len());
         assert_eq!(mesh.uvs[without_uvs.positions.len()..], plane.uvs[..]);
         let last = *mesh.triangles.last().unwrap();
-        let expected = plane.triangles.last().unwrap().map(|i| i + without_uvs.positions.len() as u32);
+        let expected = plane
+            .triangles
+            .last()
+            .unwrap()
+            .map(|i| i + without_uvs.positions.len() as u32);
         assert_eq!(last, expected);
         mesh.validate("appended").unwrap();
     }

@@ -317,10 +317,7 @@ fn placement(
     };
     let m = Mat4::from_scale_rotation_translation(scale, rotation, translate);
     if !m.is_finite() || m.determinant() == 0.0 {
-        return Err(SceneError::invalid(
-            "transform",
-            "singular or not finite",
-        ));
+        return Err(SceneError::invalid("transform", "singular or not finite"));
     }
     Ok(m)
 }
