@@ -153,14 +153,15 @@ fn main() {
             &[
                 format!("linear_steps={linear}"),
                 format!("secant_steps={secant}"),
+                "max_depth=2".into(),
             ],
         );
         println!("{}", row(&format!("{linear}/{secant}"), &r));
     }
 
-    println!("\nMin-max acceleration and the reference, same run, default settings (max_depth=2)\n\n{header}");
-    let with = run(&ctx, &scene, &mask, exact2, &["min_max=true".into()]);
-    let without = run(&ctx, &scene, &mask, exact2, &["min_max=false".into()]);
+    println!("\nMin-max acceleration and the reference, same run, max_depth=2\n\n{header}");
+    let with = run(&ctx, &scene, &mask, exact2, &["min_max=true".into(), "max_depth=2".into()]);
+    let without = run(&ctx, &scene, &mask, exact2, &["min_max=false".into(), "max_depth=2".into()]);
     println!("{}", row("min_max=true", &with));
     println!("{}", row("min_max=false", &without));
     for (label, r) in [("min_max=true", &with), ("min_max=false", &without)] {

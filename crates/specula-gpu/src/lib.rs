@@ -4,6 +4,7 @@
 
 pub mod arena;
 mod context;
+pub mod counters;
 pub mod shaders;
 mod timer;
 pub mod util;

@@ -56,6 +56,9 @@ struct Face {
 // (min, max) distance of each map as float bits; min > max for an empty one.
 @group(0) @binding(10) var<storage, read> ranges: array<u32>;
 @group(0) @binding(11) var<storage, read> faces: array<Face, 6>;
+// Fallbacks taken this frame: rays the search did not resolve, branches cut at max_depth,
+// branches with no room on the stack (FALLBACK_*).
+@group(0) @binding(12) var<storage, read_write> fallbacks: array<atomic<u32>, 3>;
 
 // Where direction `d` falls in map `map`: array layer, the top-left texel of its bilinear
 // footprint, and the weights within it.
@@ -323,80 +326,174 @@ fn trace_ray(reflector: MapReflector, x: vec3<f32>, r: vec3<f32>) -> Hit {
     return best;
 }
 
-// Radiance arriving at the eye along a specular path that starts at `p_world` (seen along unit
-// `v`, normal `n` facing the eye, surface `first` as (rgb, code)). `channel` 0..2 traces one
-// colour channel's index of refraction, 3 all channels with the green one. At dielectrics the
-// path refracts (reflects under total internal reflection); `reflect_first` takes the reflected
-// branch at the first surface instead. A path that needs more than `max_depth` bounces is
-// black, as in the reference.
-fn trace_path(reflector: MapReflector, p_world: vec3<f32>, v: vec3<f32>, n: vec3<f32>, first: vec4<f32>, channel: u32, reflect_first: bool) -> vec3<f32> {
-    var x = p_world - reflector.origin;
-    var dir = v;
-    var normal = n;
-    var surface = first;
-    var weight = vec3<f32>(1.0);
-    for (var depth = 0u; depth < settings.max_depth; depth++) {
-        let code = surface.w;
-        let cos_v = abs(dot(normal, dir));
-        var r: vec3<f32>;
-        if (code < 0.0) {
-            r = reflect(dir, normal);
-            weight *= select(surface.xyz, fresnel_schlick(surface.xyz, cos_v), code == CODE_MIRROR_SCHLICK);
-        } else {
-            let iors = ior_from_f0(surface.xyz);
-            let ior = select(iors[min(channel, 2u)], iors.y, channel == 3u);
-            let f0 = (ior - 1.0) * (ior - 1.0) / ((ior + 1.0) * (ior + 1.0));
-            let branch_reflect = depth == 0u && reflect_first;
-            if (code > THIN_OFFSET) {
-                let f = f0 + (1.0 - f0) * pow(1.0 - cos_v, 5.0);
-                let sheet = 2.0 * f / (1.0 + f);
-                if (branch_reflect) {
-                    r = reflect(dir, normal);
-                    weight *= sheet;
-                } else {
-                    r = dir;
-                    weight *= 1.0 - sheet;
-                }
-            } else {
-                // The stored normal points out of the solid: a ray along it is leaving.
-                var n_in = normal;
-                var eta = 1.0 / ior;
-                if (dot(dir, normal) > 0.0) {
-                    n_in = -normal;
-                    eta = ior;
-                }
-                let t = refract(dir, n_in, eta);
-                let total = dot(t, t) == 0.0;
-                // Schlick with the angle on the air side.
-                let cos_air = select(cos_v, abs(dot(t, n_in)), eta > 1.0 && !total);
-                let f = select(f0 + (1.0 - f0) * pow(1.0 - cos_air, 5.0), 1.0, total);
-                if (branch_reflect || total) {
-                    r = reflect(dir, n_in);
-                    weight *= f;
-                } else {
-                    r = t;
-                    weight *= 1.0 - f;
-                }
+// A specular path's branch, waiting to be traced: leaving the point x (relative to the map's
+// reference point) along `dir` with `weight`, after `depth` bounces.
+struct Branch {
+    x: vec3<f32>,
+    dir: vec3<f32>,
+    weight: vec3<f32>,
+    depth: u32,
+};
+
+// Branches waiting per pixel. A dielectric splits a path in two; with the weight cut-off
+// below, a glass object rarely needs more than four at once.
+const STACK_SIZE: u32 = 8u;
+// Branches carrying less than this share of the pixel's radiance are not traced (the
+// reference traces them; at 0.4 % they are below an 8-bit step of a bright pixel).
+const MIN_BRANCH_WEIGHT: f32 = 0.004;
+
+// Where the counters of fallbacks are (counters[i], atomic).
+const FALLBACK_MISSED: u32 = 0u;
+const FALLBACK_DEPTH: u32 = 1u;
+const FALLBACK_STACK: u32 = 2u;
+
+var<private> stack: array<Branch, STACK_SIZE>;
+var<private> stack_top: u32;
+
+// The light leaving a specular surface splits into up to two branches: (direction, weight).
+struct Split {
+    count: u32,
+    dir0: vec3<f32>,
+    weight0: vec3<f32>,
+    dir1: vec3<f32>,
+    weight1: vec3<f32>,
+};
+
+// The branches of a path arriving along `dir` at a surface with `normal` and (rgb, code)
+// `surface`: a mirror reflects (Schlick's Fresnel or exactly F0, as the reference); a
+// dielectric reflects and refracts with the exact Fresnel terms (all reflected under total
+// internal reflection), a thin sheet reflects and passes straight through.
+fn split_at(dir: vec3<f32>, normal: vec3<f32>, surface: vec4<f32>, channel: u32) -> Split {
+    var out: Split;
+    let code = surface.w;
+    let cos_v = abs(dot(normal, dir));
+    if (code < 0.0) {
+        out.count = 1u;
+        out.dir0 = reflect(dir, normal);
+        out.weight0 = select(surface.xyz, fresnel_schlick(surface.xyz, cos_v), code == CODE_MIRROR_SCHLICK);
+        return out;
+    }
+    let iors = ior_from_f0(surface.xyz);
+    let ior = select(iors[min(channel, 2u)], iors.y, channel == 3u);
+    if (code > THIN_OFFSET) {
+        let sheet = thin_sheet_reflectance(cos_v, ior);
+        out.count = 2u;
+        out.dir0 = dir;
+        out.weight0 = vec3<f32>(1.0 - sheet);
+        out.dir1 = reflect(dir, normal);
+        out.weight1 = vec3<f32>(sheet);
+        return out;
+    }
+    // The stored normal points out of the solid: a ray along it is leaving.
+    var n_in = normal;
+    var eta = 1.0 / ior;
+    if (dot(dir, normal) > 0.0) {
+        n_in = -normal;
+        eta = ior;
+    }
+    let f = fresnel_dielectric(cos_v, eta);
+    let r = reflect(dir, n_in);
+    if (f >= 1.0) {
+        out.count = 1u;
+        out.dir0 = r;
+        out.weight0 = vec3<f32>(1.0);
+        return out;
+    }
+    out.count = 2u;
+    out.dir0 = refract(dir, n_in, eta);
+    out.weight0 = vec3<f32>(1.0 - f);
+    out.dir1 = r;
+    out.weight1 = vec3<f32>(f);
+    return out;
+}
+
+fn push(x: vec3<f32>, dir: vec3<f32>, weight: vec3<f32>, depth: u32) -> bool {
+    if (max(weight.x, max(weight.y, weight.z)) < MIN_BRANCH_WEIGHT) {
+        return true;
+    }
+    if (stack_top == STACK_SIZE) {
+        return false;
+    }
+    stack[stack_top] = Branch(x, dir, weight, depth);
+    stack_top += 1u;
+    return true;
+}
+
+// The best estimate for a ray the search cannot resolve: what the map shows from its
+// reference point in the ray's direction (classic environment mapping: right for distant
+// surfaces, off by the parallax between the point and the reference point for near ones), in
+// the farthest layer that holds a diffuse surface there; the background where none does.
+fn estimate(reflector: MapReflector, r: vec3<f32>) -> vec3<f32> {
+    for (var k = 0u; k < settings.layers; k++) {
+        let map = reflector.first_map + settings.layers - 1u - k;
+        if (map_distance(map, r).distance > 0.0) {
+            let s = map_surface(map, r);
+            if (s.code == CODE_DIFFUSE) {
+                return s.rgb;
             }
         }
-        let hit = trace_ray(reflector, x, r);
-        if (settings.output == OUTPUT_FIRST_HIT) {
-            return select(vec3<f32>(NO_HIT), reflector.origin + x + r * hit.d, hit.found);
-        }
+    }
+    return background_radiance(r);
+}
+
+// The first secondary ray's hit, for output=first-hit.
+fn first_hit(reflector: MapReflector, p_world: vec3<f32>, v: vec3<f32>, n: vec3<f32>, first: vec4<f32>) -> vec3<f32> {
+    let x = p_world - reflector.origin;
+    let branches = split_at(v, n, first, 3u);
+    let hit = trace_ray(reflector, x, branches.dir0);
+    return select(vec3<f32>(NO_HIT), reflector.origin + x + branches.dir0 * hit.d, hit.found);
+}
+
+// Radiance arriving at the eye along the specular paths that start at `p_world` (seen along
+// unit `v`, normal `n` facing the eye, surface `first` as (rgb, code)). `channel` 0..2 traces
+// one colour channel's index of refraction, 3 all channels with the green one. Every branch
+// is followed (both at a dielectric) until it meets a diffuse surface, up to `max_depth`
+// bounces; a ray the search cannot resolve, a branch at the depth limit and one with no room
+// left take the map's estimate (`estimate`), counted.
+fn trace_paths(reflector: MapReflector, p_world: vec3<f32>, v: vec3<f32>, n: vec3<f32>, first: vec4<f32>, channel: u32) -> vec3<f32> {
+    var color = vec3<f32>(0.0);
+    let x0 = p_world - reflector.origin;
+    stack_top = 0u;
+    let s0 = split_at(v, n, first, channel);
+    push(x0, s0.dir0, s0.weight0, 0u);
+    if (s0.count == 2u) {
+        push(x0, s0.dir1, s0.weight1, 0u);
+    }
+    // Every branch pops once; the bound only guards the loop.
+    for (var guard = 0u; guard < 64u && stack_top > 0u; guard++) {
+        stack_top -= 1u;
+        let b = stack[stack_top];
+        let hit = trace_ray(reflector, b.x, b.dir);
         if (!hit.found) {
-            return weight * background_radiance(r);
+            atomicAdd(&fallbacks[FALLBACK_MISSED], 1u);
+            color += b.weight * estimate(reflector, b.dir);
+            continue;
         }
-        let l = x + r * hit.d;
+        let l = b.x + b.dir * hit.d;
         let s = map_surface(hit.map, l);
         if (s.code == CODE_DIFFUSE) {
-            return weight * s.rgb;
+            color += b.weight * s.rgb;
+            continue;
         }
-        x = l;
-        dir = r;
-        normal = s.normal;
-        surface = vec4<f32>(s.rgb, s.code);
+        let next = split_at(b.dir, s.normal, vec4<f32>(s.rgb, s.code), channel);
+        if (b.depth + 1u >= settings.max_depth) {
+            atomicAdd(&fallbacks[FALLBACK_DEPTH], 1u);
+            color += b.weight * next.weight0 * estimate(reflector, next.dir0);
+            if (next.count == 2u) {
+                color += b.weight * next.weight1 * estimate(reflector, next.dir1);
+            }
+            continue;
+        }
+        if (!push(l, next.dir0, b.weight * next.weight0, b.depth + 1u)) {
+            atomicAdd(&fallbacks[FALLBACK_STACK], 1u);
+            color += b.weight * next.weight0 * estimate(reflector, next.dir0);
+        }
+        if (next.count == 2u && !push(l, next.dir1, b.weight * next.weight1, b.depth + 1u)) {
+            atomicAdd(&fallbacks[FALLBACK_STACK], 1u);
+            color += b.weight * next.weight1 * estimate(reflector, next.dir1);
+        }
     }
-    return vec3<f32>(0.0);
+    return color;
 }
 
 @fragment
@@ -418,17 +515,15 @@ fn fs_shade(in: FullscreenOut) -> @location(0) vec4<f32> {
     let p = textureLoad(g_position, pixel, 0).xyz;
     let n = textureLoad(g_normal, pixel, 0).xyz;
     let v = normalize(p - camera.eye_world);
-    let dielectric = material.kind == MATERIAL_DIELECTRIC;
-    if (settings.output == OUTPUT_FIRST_HIT || !(dielectric && settings.dispersive == 1u)) {
-        var color = trace_path(reflector, p, v, n, first, 3u, false);
-        if (dielectric && settings.output == OUTPUT_RADIANCE) {
-            color += trace_path(reflector, p, v, n, first, 3u, true);
-        }
-        return vec4<f32>(color, 1.0);
+    if (settings.output == OUTPUT_FIRST_HIT) {
+        return vec4<f32>(first_hit(reflector, p, v, n, first), 1.0);
+    }
+    if (!(material.kind == MATERIAL_DIELECTRIC && settings.dispersive == 1u)) {
+        return vec4<f32>(trace_paths(reflector, p, v, n, first, 3u), 1.0);
     }
     var color = vec3<f32>(0.0);
     for (var c = 0u; c < 3u; c++) {
-        color[c] = trace_path(reflector, p, v, n, first, c, false)[c] + trace_path(reflector, p, v, n, first, c, true)[c];
+        color[c] = trace_paths(reflector, p, v, n, first, c)[c];
     }
     return vec4<f32>(color, 1.0);
 }
