@@ -35,6 +35,8 @@ pub struct GpuContext {
     /// The adapter itself (a window asks it what its surface supports).
     pub adapter: wgpu::Adapter,
     pub timing: TimingSource,
+    /// Whether 32-bit float targets can be blended into (wgpu's FLOAT32_BLENDABLE).
+    pub float32_blendable: bool,
     /// wgpu errors raised outside any error scope. wgpu's default is to panic on them; here
     /// they are collected and returned as an error by the next [`GpuContext::wait`].
     uncaptured: Arc<Mutex<Vec<String>>>,
@@ -104,11 +106,18 @@ impl GpuContext {
         let timestamp_features =
             wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS;
         let timestamps = adapter.features().contains(timestamp_features);
-        let required_features = if timestamps {
+        // Adding into float targets (pvrr's surface reflection over a lens) needs blending.
+        let float32_blendable = adapter
+            .features()
+            .contains(wgpu::Features::FLOAT32_BLENDABLE);
+        let mut required_features = if timestamps {
             timestamp_features
         } else {
             wgpu::Features::empty()
         };
+        if float32_blendable {
+            required_features |= wgpu::Features::FLOAT32_BLENDABLE;
+        }
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("specula"),
             required_features,
@@ -130,6 +139,7 @@ impl GpuContext {
             queue,
             adapter_info: adapter.get_info(),
             adapter,
+            float32_blendable,
             timing: if timestamps {
                 TimingSource::GpuTimestamps
             } else {

@@ -77,7 +77,7 @@ pub fn buffer_binding(ty: wgpu::BufferBindingType) -> wgpu::BindingType {
 }
 
 /// What distinguishes one render pipeline from another here: entry points, vertex buffers,
-/// depth state and colour targets (no blending, triangle lists, no multisampling).
+/// depth state and colour targets (triangle lists, no multisampling).
 pub struct PipelineSpec<'a> {
     pub label: &'a str,
     pub layout: &'a wgpu::PipelineLayout,
@@ -89,6 +89,8 @@ pub struct PipelineSpec<'a> {
     pub targets: &'a [wgpu::TextureFormat],
     /// Channels written to every target.
     pub write_mask: wgpu::ColorWrites,
+    /// Blending into every target; None: the fragment replaces what is there.
+    pub blend: Option<wgpu::BlendState>,
     /// Triangles facing away (`Back`) or towards (`Front`) the view are skipped; None: both kept.
     pub cull_mode: Option<wgpu::Face>,
 }
@@ -100,7 +102,7 @@ pub fn render_pipeline(device: &wgpu::Device, spec: &PipelineSpec) -> wgpu::Rend
         .map(|&format| {
             Some(wgpu::ColorTargetState {
                 format,
-                blend: None,
+                blend: spec.blend,
                 write_mask: spec.write_mask,
             })
         })

@@ -82,6 +82,7 @@ impl Presenter {
                 depth: None,
                 targets: &[surface_format],
                 write_mask: wgpu::ColorWrites::ALL,
+                blend: None,
                 cull_mode: None,
             },
         );

@@ -453,6 +453,7 @@ fn layer_pass(
             }),
             targets: &[MAP_FORMAT, MAP_FORMAT],
             write_mask: wgpu::ColorWrites::ALL,
+            blend: None,
             cull_mode: None,
         },
     );
@@ -569,6 +570,7 @@ fn trace_pass(
             depth: None,
             targets: &[raster::COLOR_FORMAT],
             write_mask: wgpu::ColorWrites::ALL,
+            blend: None,
             cull_mode: None,
         },
     );

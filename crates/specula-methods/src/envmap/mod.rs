@@ -291,6 +291,7 @@ impl EnvMap {
                     depth: None,
                     targets: &[raster::COLOR_FORMAT],
                     write_mask: wgpu::ColorWrites::ALL,
+                    blend: None,
                     cull_mode: None,
                 },
             );

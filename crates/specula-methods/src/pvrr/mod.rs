@@ -31,21 +31,32 @@
 //!    or F0), a lens times the exact Fresnel transmittance along the path; for three indices,
 //!    three draws with red, green and blue colour masks share one 1st pass.
 //!
+//! Beyond the paper: a dielectric is two reflectors, its transmitted light and, added over it
+//! (float blending; left out on a device without it), its surface
+//! reflection: a mirror whose per-vertex weight is the exact Fresnel reflectance (a thin
+//! sheet's 2R / (1 + R)). The paper's lens leaves the reflected ≈ 4–10 % out; the reference
+//! has it. Each costs its own patches and 1st passes.
+//!
 //! Approximations and artifacts: between vertices the map is warped linearly, so error grows
 //! with triangle size and curvature and falls as the mesh is refined (a reflector with fewer
 //! than 9 visible vertices raises a warning); objects hidden from the virtual viewpoint but
 //! seen along some exit ray, or the reverse, show the wrong surface (the occlusion
 //! inconsistency of §6); a reflector does not appear in its own map (no self-reflection); a
-//! lens shows only its transmitted light (the ≈ 5 % surface reflection is left out) along one
-//! path (no multiple internal paths). In multiple reflection, the inner reflector's rays start
-//! at the outer one's virtual viewpoint, not at the exact bounce points.
+//! lens follows one path through the solid (the light reflected inside it, which the
+//! reference adds, is missing: about 8 % of a glass sphere's centre). In multiple reflection,
+//! the inner reflector's rays start at the outer one's virtual viewpoint, not at the exact
+//! bounce points.
 //!
 //! Concave mirrors (§4.2) go through the same construction: the viewpoint lands near the
 //! convergence point with the mirror behind it and the map comes out reversed (Figure 8).
 //! The "zooming region" — P between the mirror and the convergence point, so behind the
 //! viewpoint — cannot be shown by any forward view: subdivision first tries smaller patches,
-//! and vertices still unresolved are drawn with magenta stripes and named in a warning.
-//!
+//! and vertices still unresolved take the radiance ray traced along their exit segment (up to
+//! 8 bounces, as the reference), blended across their triangles by the share of such
+//! corners; they are counted (`unresolved vertices`), named in a warning, and striped magenta
+//! with `markers=true`. A converging lens before a near wall (a magnifier) is the same case:
+//! its rays converge behind the wall.
+
 //! When a patch's exit lines are (nearly) parallel no least-squares viewpoint exists: the view
 //! then looks along their mean direction from 10 patch radii behind it, with a warning.
 //!
@@ -95,6 +106,7 @@ pub use view::{least_squares_viewpoint, principal_directions, Extents, Patch, Vi
 use std::cell::RefCell;
 
 use bytemuck::{Pod, Zeroable};
+use rayon::prelude::*;
 use glam::{Vec3, Vec4};
 use specula_gpu::arena::Arena;
 use specula_gpu::shaders::{self, CameraUniform};
@@ -114,6 +126,10 @@ use rays::{trace_hits, trace_paths, ChannelPaths};
 use view::{PatchInput, PatchLimits};
 
 const SHADER: &str = include_str!("pvrr.wgsl");
+
+/// Specular bounces the ray tracing of an unresolved vertex's exit segment follows (the
+/// reference's default).
+const TRACED_DEPTH: u32 = 8;
 
 pub use crate::gpu_scene::MARKER_RADIANCE;
 
@@ -205,6 +221,8 @@ pub fn shader_source() -> String {
 pub struct GpuMirrorMaterial {
     pub f0: [f32; 3],
     pub fresnel: u32,
+    pub stripes: u32,
+    pub pad: [u32; 3],
 }
 
 /// One corner of a reflector triangle for the 2nd pass.
@@ -218,6 +236,8 @@ struct MirrorVertex {
     weight: f32,
     /// 1 where the vertex's P could not be placed in its patch's map (zooming region).
     unresolved: f32,
+    /// An unresolved vertex's radiance, ray traced along its exit segment (0 elsewhere).
+    traced: [f32; 3],
 }
 
 /// Texture coordinate ((0, 0) = top-left) of `p` in the map rendered with `view`.
@@ -238,6 +258,8 @@ struct PatchDraw {
 struct ReflectorDraw {
     mesh: usize,
     material: GpuMirrorMaterial,
+    /// Added to what the reflector's earlier draw left (a dielectric's surface reflection).
+    additive: bool,
     patches: Vec<PatchDraw>,
 }
 
@@ -251,33 +273,49 @@ struct CachedReflector {
     patches: Vec<Patch>,
 }
 
-/// A mirror or dielectric mesh: how it bends rays and how its 2nd pass shades.
+/// A mirror or dielectric mesh: how it bends rays and how its 2nd pass shades. A dielectric
+/// is two: its transmitted light, then its surface reflection added over it.
 struct Reflector {
     mesh: usize,
     interaction: Interaction,
     material: GpuMirrorMaterial,
+    additive: bool,
 }
 
 impl Reflector {
-    fn of(scene: &Scene, mesh: usize, ior_override: Option<Vec3>) -> Option<Reflector> {
+    fn of(scene: &Scene, mesh: usize, ior_override: Option<Vec3>) -> Vec<Reflector> {
         let material = &scene.materials[scene.meshes[mesh].material];
-        let interaction = Interaction::of(&material.kind, ior_override)?;
-        let material = match material.kind {
-            MaterialKind::Mirror { fresnel } => GpuMirrorMaterial {
-                f0: material.color.to_array(),
-                fresnel: fresnel as u32,
-            },
-            // A lens's 2nd pass is weighted by the path's exact Fresnel transmittance instead.
-            _ => GpuMirrorMaterial {
-                f0: [1.0; 3],
-                fresnel: 0,
-            },
+        let Some(interaction) = Interaction::of(&material.kind, ior_override) else {
+            return Vec::new();
         };
-        Some(Reflector {
+        // A lens's 2nd pass is weighted by the path's exact Fresnel terms instead.
+        let weighted = GpuMirrorMaterial {
+            f0: [1.0; 3],
+            ..Zeroable::zeroed()
+        };
+        let first = Reflector {
             mesh,
             interaction,
-            material,
-        })
+            material: match material.kind {
+                MaterialKind::Mirror { fresnel } => GpuMirrorMaterial {
+                    f0: material.color.to_array(),
+                    fresnel: fresnel as u32,
+                    ..Zeroable::zeroed()
+                },
+                _ => weighted,
+            },
+            additive: false,
+        };
+        let reflection =
+            Interaction::surface_reflection(&material.kind, ior_override).map(|interaction| {
+                Reflector {
+                    mesh,
+                    interaction,
+                    material: weighted,
+                    additive: true,
+                }
+            });
+        std::iter::once(first).chain(reflection).collect()
     }
 }
 
@@ -306,6 +344,9 @@ struct Prepared {
     far_distance: f32,
     /// 2nd pass pipelines writing all channels, then red, green, blue only.
     pipelines: [wgpu::RenderPipeline; 4],
+    /// The 2nd pass pipeline adding to what is there (a dielectric's surface reflection), where
+    /// the device can blend float targets.
+    additive: Option<wgpu::RenderPipeline>,
     layout: wgpu::BindGroupLayout,
     /// Per-frame data written in place: 2nd-pass and marker vertices, and uniforms (cameras,
     /// materials) bound at dynamic offsets.
@@ -521,12 +562,15 @@ fn plan_level(
     top: bool,
 ) -> LevelPlan {
     let mut plan = LevelPlan::default();
-    for reflector in p.reflectors.iter().filter(|r| Some(r.mesh) != hidden) {
+    for (index, reflector) in p.reflectors.iter().enumerate() {
+        if Some(reflector.mesh) == hidden {
+            continue;
+        }
         let slot = cache.as_mut().map(|(slots, frame)| {
-            if slots.len() < scene.meshes.len() {
-                slots.resize_with(scene.meshes.len(), || None);
+            if slots.len() < p.reflectors.len() {
+                slots.resize_with(p.reflectors.len(), || None);
             }
-            (&mut slots[reflector.mesh], **frame)
+            (&mut slots[index], **frame)
         });
         plan_reflector(
             p, settings, scene, reflector, eye, slot, tally, top, &mut plan,
@@ -635,7 +679,48 @@ fn plan_reflector(
             patches
         }
     };
+    // Vertices whose P lies behind some patch's viewpoint (the zooming region) take the
+    // radiance ray traced along their exit segment instead of the map's, per channel.
     let mut unresolved = vec![false; m.positions.len()];
+    for patch in &patches {
+        for &t in &patch.triangles {
+            for i in m.triangles[t as usize] {
+                let i = i as usize;
+                unresolved[i] |= paths.visible[i]
+                    && hits
+                        .iter()
+                        .any(|h| patch.basis.local(h[i]).z <= 0.0);
+            }
+        }
+    }
+    let tracer = specula_trace::reference::Tracer {
+        scene,
+        accel: p.accel,
+        max_depth: TRACED_DEPTH,
+    };
+    let dispersive = paths.channels.len() == 3;
+    let traced: Vec<Vec<Vec3>> = paths
+        .channels
+        .iter()
+        .enumerate()
+        .map(|(c, channel)| {
+            (0..m.positions.len())
+                .into_par_iter()
+                .map(|i| {
+                    if !unresolved[i] {
+                        return Vec3::ZERO;
+                    }
+                    let exit = channel.exits[i];
+                    let ray = specula_trace::Ray {
+                        origin: exit.origin,
+                        dir: exit.dir,
+                    };
+                    tracer.radiance(&ray, 1, dispersive.then_some(c))
+                })
+                .collect()
+        })
+        .collect();
+    tally.rays += unresolved.iter().filter(|&&u| u).count() as u64 * traced.len() as u64;
     let solid_angles: Vec<f32> = patches
         .iter()
         .map(|patch| solid_angle(m, &patch.triangles, eye))
@@ -656,22 +741,21 @@ fn plan_reflector(
                 .channels
                 .iter()
                 .zip(&hits)
-                .map(|(channel, h)| {
+                .zip(&traced)
+                .map(|((channel, h), traced)| {
                     patch
                         .triangles
                         .iter()
                         .flat_map(|&t| m.triangles[t as usize])
                         .map(|i| {
                             let i = i as usize;
-                            let hit = h[i];
-                            let behind = paths.visible[i] && patch.basis.local(hit).z <= 0.0;
-                            unresolved[i] |= behind;
                             MirrorVertex {
                                 position: m.positions[i].to_array(),
                                 normal: m.normals[i].to_array(),
-                                uv: map_uv(&camera, hit),
+                                uv: map_uv(&camera, h[i]),
                                 weight: channel.weights[i],
-                                unresolved: behind as u32 as f32,
+                                unresolved: unresolved[i] as u32 as f32,
+                                traced: traced[i].to_array(),
                             }
                         })
                         .collect()
@@ -702,7 +786,11 @@ fn plan_reflector(
     }
     plan.reflectors.push(ReflectorDraw {
         mesh,
-        material: reflector.material,
+        material: GpuMirrorMaterial {
+            stripes: settings.markers.is_some() as u32,
+            ..reflector.material
+        },
+        additive: reflector.additive,
         patches: draws,
     });
 }
@@ -727,7 +815,7 @@ fn report(
     }
     if unresolved > 0 {
         tally.warnings.push(format!(
-            "pvrr: mirror '{}': {unresolved} vertices see a point between the surface and their rays' convergence (a concave mirror's zooming region), which no forward view shows; they are drawn with magenta stripes",
+            "pvrr: mirror '{}': {unresolved} vertices see a point between the surface and their rays' convergence (a concave mirror's zooming region), which no forward view shows; they show their ray-traced radiance instead (striped magenta with markers=true)",
             mesh.name
         ));
     }
@@ -796,10 +884,11 @@ impl Pvrr {
                 label: Some("pvrr.wgsl"),
                 source: wgpu::ShaderSource::Wgsl(shader_source().into()),
             });
-            const ATTRIBUTES: [wgpu::VertexAttribute; 5] = wgpu::vertex_attr_array![
-                0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32, 4 => Float32
+            const ATTRIBUTES: [wgpu::VertexAttribute; 6] = wgpu::vertex_attr_array![
+                0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32, 4 => Float32,
+                5 => Float32x3
             ];
-            let pipeline = |write_mask| {
+            let pipeline = |(write_mask, blend)| {
                 render_pipeline(
                     device,
                     &PipelineSpec {
@@ -822,19 +911,33 @@ impl Pvrr {
                         }),
                         targets: &[raster::COLOR_FORMAT],
                         write_mask,
+                        blend,
                         cull_mode: None,
                     },
                 )
             };
+            let add = wgpu::BlendState {
+                color: wgpu::BlendComponent {
+                    src_factor: wgpu::BlendFactor::One,
+                    dst_factor: wgpu::BlendFactor::One,
+                    operation: wgpu::BlendOperation::Add,
+                },
+                alpha: wgpu::BlendComponent::REPLACE,
+            };
             let pipelines = [
-                wgpu::ColorWrites::ALL,
-                wgpu::ColorWrites::RED,
-                wgpu::ColorWrites::GREEN,
-                wgpu::ColorWrites::BLUE,
+                (wgpu::ColorWrites::ALL, None),
+                (wgpu::ColorWrites::RED, None),
+                (wgpu::ColorWrites::GREEN, None),
+                (wgpu::ColorWrites::BLUE, None),
             ]
-            .map(pipeline);
+            .map(&pipeline);
+            // Without float blending a dielectric's surface reflection cannot be added.
+            let additive = ctx
+                .float32_blendable
+                .then(|| pipeline((wgpu::ColorWrites::ALL, Some(add))));
             let reflectors = (0..scene.meshes.len())
-                .filter_map(|mesh| Reflector::of(scene, mesh, self.ior))
+                .flat_map(|mesh| Reflector::of(scene, mesh, self.ior))
+                .filter(|r| !r.additive || additive.is_some())
                 .collect();
             let (scene_corners, far_distance) = scene_extent(scene);
             let alignment = device.limits().min_uniform_buffer_offset_alignment as u64;
@@ -846,6 +949,7 @@ impl Pvrr {
                 scene_corners,
                 far_distance,
                 pipelines,
+                additive,
                 layout,
                 arenas: RefCell::new(Arenas {
                     vertices: Arena::new("pvrr vertices", wgpu::BufferUsages::VERTEX, 4),
@@ -1006,7 +1110,10 @@ fn second_pass(
                         continue;
                     }
                     let offset = arenas.vertices.push(ctx, bytemuck::cast_slice(vertices));
-                    let pipeline = &p.pipelines[if masked { c + 1 } else { 0 }];
+                    let pipeline = match &p.additive {
+                        Some(additive) if reflector.additive => additive,
+                        _ => &p.pipelines[if masked { c + 1 } else { 0 }],
+                    };
                     draws.push((
                         pipeline,
                         map.slot,

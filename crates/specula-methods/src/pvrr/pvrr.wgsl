@@ -5,6 +5,8 @@
 struct MirrorMaterial {
     f0: vec3<f32>,
     fresnel: u32,
+    // 1: stripe the pixels of unresolved vertices magenta (the markers overlay).
+    stripes: u32,
 };
 
 @group(0) @binding(0) var<uniform> camera: Camera;
@@ -17,6 +19,7 @@ struct VertexIn {
     @location(2) uv: vec2<f32>,
     @location(3) weight: f32,
     @location(4) unresolved: f32,
+    @location(5) traced: vec3<f32>,
 };
 
 struct VertexOut {
@@ -28,6 +31,7 @@ struct VertexOut {
     @location(2) uv: vec2<f32>,
     @location(3) weight: f32,
     @location(4) unresolved: f32,
+    @location(5) traced: vec3<f32>,
 };
 
 @vertex
@@ -39,6 +43,7 @@ fn vs_mirror(v: VertexIn) -> VertexOut {
     out.uv = v.uv;
     out.weight = v.weight;
     out.unresolved = v.unresolved;
+    out.traced = v.traced;
     return out;
 }
 
@@ -69,12 +74,15 @@ fn fs_mirror(in: VertexOut) -> @location(0) vec4<f32> {
     if (mirror.fresnel != 0u) {
         f = fresnel_schlick(mirror.f0, -dot(d, n));
     }
-    // Vertices whose hit the map cannot show (zooming region): marked, not guessed.
-    if (in.unresolved > 0.0) {
+    // Where a vertex's hit is one the map cannot show (zooming region), its ray-traced
+    // radiance is blended in, by the interpolated share of such vertices; the markers overlay
+    // stripes those pixels magenta.
+    if (in.unresolved > 0.0 && mirror.stripes != 0u) {
         let stripe = (i32(floor((in.clip.x + in.clip.y) / 6.0)) & 1) == 0;
         if (stripe) {
             return vec4<f32>(1.0, 0.0, 1.0, 1.0);
         }
     }
-    return vec4<f32>(in.weight * f * sample_map(in.uv), 1.0);
+    let seen = mix(sample_map(in.uv), in.traced, clamp(in.unresolved, 0.0, 1.0));
+    return vec4<f32>(in.weight * f * seen, 1.0);
 }

@@ -26,9 +26,26 @@ pub enum Interaction {
     Sheet {
         ior: f32,
     },
+    /// The light a dielectric's surface reflects towards the eye: a mirror whose weight is the
+    /// exact Fresnel reflectance (a thin sheet's, 2R / (1 + R), when `thin`).
+    SurfaceReflect {
+        ior: f32,
+        thin: bool,
+    },
 }
 
 impl Interaction {
+    /// The reflection off a dielectric's surface, for a material that has one.
+    pub fn surface_reflection(kind: &MaterialKind, ior_override: Option<Vec3>) -> Option<Interaction> {
+        match *kind {
+            MaterialKind::Dielectric { ior, thin_walled } => Some(Interaction::SurfaceReflect {
+                ior: ior_override.unwrap_or(ior).y,
+                thin: thin_walled,
+            }),
+            _ => None,
+        }
+    }
+
     /// The interaction of `material`; `ior_override` replaces a dielectric's indices.
     pub fn of(kind: &MaterialKind, ior_override: Option<Vec3>) -> Option<Interaction> {
         match *kind {
@@ -103,7 +120,7 @@ pub fn trace_paths(
         .collect();
     let channel_count = match interaction {
         Interaction::Refract { iors } => iors.len(),
-        Interaction::Reflect | Interaction::Sheet { .. } => 1,
+        Interaction::Reflect | Interaction::Sheet { .. } | Interaction::SurfaceReflect { .. } => 1,
     };
     let mut rays = m.positions.len() as u64;
     let channels = (0..channel_count)
@@ -136,6 +153,23 @@ pub fn trace_paths(
                                 dir: r,
                             };
                             (exit, 1.0, 0)
+                        }
+                        Interaction::SurfaceReflect { ior, thin } => {
+                            let r = reflect(d, facing);
+                            let exit = Segment {
+                                origin: offset_origin(v, facing, r),
+                                dir: r,
+                            };
+                            let cos_i = -d.dot(facing);
+                            // Seen from inside a solid (the eye in the glass), the surface
+                            // reflects as an interface from glass to air.
+                            let eta = if d.dot(n) > 0.0 && !thin { *ior } else { 1.0 / *ior };
+                            let weight = if *thin {
+                                specula_trace::optics::thin_sheet_reflectance(cos_i, *ior)
+                            } else {
+                                fresnel_dielectric(cos_i, eta)
+                            };
+                            (exit, weight, 0)
                         }
                     }
                 })

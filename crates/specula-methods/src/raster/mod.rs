@@ -508,6 +508,7 @@ impl RasterPass {
                 depth: depth(true, wgpu::CompareFunction::Less),
                 targets: &G_BUFFER_FORMATS,
                 write_mask: wgpu::ColorWrites::ALL,
+                blend: None,
                 cull_mode: spec.cull_mode,
             },
         );
@@ -524,6 +525,7 @@ impl RasterPass {
                 depth: depth(false, wgpu::CompareFunction::Always),
                 targets: &G_BUFFER_FORMATS,
                 write_mask: wgpu::ColorWrites::ALL,
+                blend: None,
                 cull_mode: None,
             },
         );
@@ -540,6 +542,7 @@ impl RasterPass {
                 depth: depth(true, wgpu::CompareFunction::Less),
                 targets: &[SHADOW_FORMAT],
                 write_mask: wgpu::ColorWrites::ALL,
+                blend: None,
                 cull_mode: None,
             },
         );
