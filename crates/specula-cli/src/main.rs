@@ -424,7 +424,7 @@ fn run(cli: Cli) -> Result<()> {
                     .map_err(anyhow::Error::from)
                     .and_then(|scene| {
                         for warning in &scene.warnings {
-                            bar.println(format!("warning: {source}: {warning}"));
+                            bar.suspend(|| eprintln!("warning: {source}: {warning}"));
                         }
                         Ok(specula_compare::compare(
                             &scene,
@@ -440,7 +440,7 @@ fn run(cli: Cli) -> Result<()> {
                     outcome.as_ref().map_err(Clone::clone),
                     &mut taken,
                 )?;
-                bar.println(match &row.error {
+                let line = match &row.error {
                     Some(e) => format!("error: {source}: {e}"),
                     None => format!(
                         "{}: {}",
@@ -451,7 +451,9 @@ fn run(cli: Cli) -> Result<()> {
                             .collect::<Vec<_>>()
                             .join(", ")
                     ),
-                });
+                };
+                // Printed through the bar so that it works with and without a terminal.
+                bar.suspend(|| eprintln!("{line}"));
                 rows.push(row);
                 bar.inc(1);
             }

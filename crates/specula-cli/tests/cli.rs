@@ -207,6 +207,68 @@ fn compare_with_no_arguments_reports_every_method_on_the_default_scene() {
 }
 
 #[test]
+fn compare_over_a_folder_writes_one_table_and_a_row_per_failed_scene() {
+    if !has_gpu("compare_over_a_folder") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let scenes = dir.path().join("scenes");
+    std::fs::create_dir(&scenes).unwrap();
+    std::fs::write(scenes.join("a-lens.toml"), "base = \"spectacle-lens\"\n").unwrap();
+    std::fs::write(scenes.join("b-broken.toml"), "objects = 3\n").unwrap();
+    std::fs::write(scenes.join("notes.txt"), "not a scene").unwrap();
+    let out = specula()
+        .current_dir(dir.path())
+        .args([
+            "compare",
+            "door-mirror",
+            "scenes",
+            "--methods",
+            "envmap",
+            "-W",
+            "32",
+            "--report",
+            "suite",
+        ])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    // The broken scene fails the command, after the others were compared and written.
+    assert!(!out.status.success());
+    assert!(
+        stderr.contains("b-broken.toml") && stderr.contains("1 of 3 scenes failed"),
+        "{stderr}"
+    );
+    let report = dir.path().join("suite");
+    for page in [
+        "report.html",
+        "door-mirror/report.html",
+        "a-lens/report.html",
+    ] {
+        assert!(report.join(page).exists(), "{page} missing");
+    }
+    let html = std::fs::read_to_string(report.join("report.html")).unwrap();
+    assert!(html.contains("href=\"a-lens/report.html\"") && html.contains("b-broken.toml"));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(report.join("report.json")).unwrap())
+            .unwrap();
+    let schema: serde_json::Value =
+        serde_json::from_str(include_str!("../../../docs/compare-suite.schema.json")).unwrap();
+    let validator = jsonschema::validator_for(&schema).unwrap();
+    let errors: Vec<String> = validator
+        .iter_errors(&json)
+        .map(|e| format!("{e} at {}", e.instance_path()))
+        .collect();
+    assert!(errors.is_empty(), "{errors:?}");
+    let rows = json["scenes"].as_array().unwrap();
+    assert_eq!(rows.len(), 3);
+    assert_eq!(rows[0]["scene"], "door-mirror");
+    assert!(rows[0]["methods"][0]["mean_flip"].as_f64().unwrap() > 0.0);
+    assert!(rows[1]["error"].is_null());
+    assert!(rows[2]["error"].as_str().unwrap().contains("objects"));
+}
+
+#[test]
 fn bench_reports_median_and_spread_per_stage() {
     if !has_gpu("bench_reports_median_and_spread") {
         return;

@@ -160,8 +160,20 @@ fn main() {
     }
 
     println!("\nMin-max acceleration and the reference, same run, max_depth=2\n\n{header}");
-    let with = run(&ctx, &scene, &mask, exact2, &["min_max=true".into(), "max_depth=2".into()]);
-    let without = run(&ctx, &scene, &mask, exact2, &["min_max=false".into(), "max_depth=2".into()]);
+    let with = run(
+        &ctx,
+        &scene,
+        &mask,
+        exact2,
+        &["min_max=true".into(), "max_depth=2".into()],
+    );
+    let without = run(
+        &ctx,
+        &scene,
+        &mask,
+        exact2,
+        &["min_max=false".into(), "max_depth=2".into()],
+    );
     println!("{}", row("min_max=true", &with));
     println!("{}", row("min_max=false", &without));
     for (label, r) in [("min_max=true", &with), ("min_max=false", &without)] {

@@ -96,12 +96,12 @@
 //! - `shadow_resolution` (default 1024): the raster pass's shadow maps.
 
 use bytemuck::{Pod, Zeroable};
+use specula_gpu::counters::Counters;
 use specula_gpu::shaders::{self, CameraUniform};
 use specula_gpu::util::{
     bind_group, buffer_binding, layout_entry, render_pipeline, texture_2d, texture_binding,
     writable_buffer, PipelineSpec,
 };
-use specula_gpu::counters::Counters;
 use specula_gpu::{GpuContext, StageTimer};
 use specula_scene::{Camera, Scene};
 

@@ -106,8 +106,8 @@ pub use view::{least_squares_viewpoint, principal_directions, Extents, Patch, Vi
 use std::cell::RefCell;
 
 use bytemuck::{Pod, Zeroable};
-use rayon::prelude::*;
 use glam::{Vec3, Vec4};
+use rayon::prelude::*;
 use specula_gpu::arena::Arena;
 use specula_gpu::shaders::{self, CameraUniform};
 use specula_gpu::util::{bind_group, layout_entry, render_pipeline, texture_binding, PipelineSpec};
@@ -686,10 +686,8 @@ fn plan_reflector(
         for &t in &patch.triangles {
             for i in m.triangles[t as usize] {
                 let i = i as usize;
-                unresolved[i] |= paths.visible[i]
-                    && hits
-                        .iter()
-                        .any(|h| patch.basis.local(h[i]).z <= 0.0);
+                unresolved[i] |=
+                    paths.visible[i] && hits.iter().any(|h| patch.basis.local(h[i]).z <= 0.0);
             }
         }
     }

@@ -36,7 +36,10 @@ pub enum Interaction {
 
 impl Interaction {
     /// The reflection off a dielectric's surface, for a material that has one.
-    pub fn surface_reflection(kind: &MaterialKind, ior_override: Option<Vec3>) -> Option<Interaction> {
+    pub fn surface_reflection(
+        kind: &MaterialKind,
+        ior_override: Option<Vec3>,
+    ) -> Option<Interaction> {
         match *kind {
             MaterialKind::Dielectric { ior, thin_walled } => Some(Interaction::SurfaceReflect {
                 ior: ior_override.unwrap_or(ior).y,
@@ -163,7 +166,11 @@ pub fn trace_paths(
                             let cos_i = -d.dot(facing);
                             // Seen from inside a solid (the eye in the glass), the surface
                             // reflects as an interface from glass to air.
-                            let eta = if d.dot(n) > 0.0 && !thin { *ior } else { 1.0 / *ior };
+                            let eta = if d.dot(n) > 0.0 && !thin {
+                                *ior
+                            } else {
+                                1.0 / *ior
+                            };
                             let weight = if *thin {
                                 specula_trace::optics::thin_sheet_reflectance(cos_i, *ior)
                             } else {
