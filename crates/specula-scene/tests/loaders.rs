@@ -904,3 +904,106 @@ fn a_wild_gltf_aspect_ratio_is_ignored_with_a_warning() {
         &["aspectRatio 1000000000", "ignored"],
     );
 }
+
+const SHAPES_SCENE: &str = r#"
+[materials.walls]
+type = "diffuse"
+checker = { squares = 4, colors = [0.9, 0.1] }
+[materials.chrome]
+type = "mirror"
+[[objects]]
+name = "room"
+material = "walls"
+shape = { type = "room", size = [4.0, 2.0, 3.0] }
+[[objects]]
+name = "pair"
+material = "chrome"
+shape = { type = "merged", parts = [
+  { translate = [-1.0, 1.0, 0.0], shape = { type = "sphere", radius = 0.3, segments = 16, rings = 8 } },
+  { translate = [1.0, 1.0, 0.0], scale = 0.5, shape = { type = "box", size = [1.0, 1.0, 1.0] } },
+] }
+[[objects]]
+name = "faceted"
+material = "walls"
+flat = true
+translate = [0.0, 1.0, 1.0]
+shape = { type = "sphere", radius = 0.2, segments = 12, rings = 6 }
+"#;
+
+#[test]
+fn toml_room_merged_flat_and_checker_shapes() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene =
+        specula_scene::load(write(dir.path(), "s.toml", SHAPES_SCENE).to_str().unwrap()).unwrap();
+    let mesh = |name: &str| scene.meshes.iter().find(|m| m.name == name).unwrap();
+    // The room: the inside of the box, floor at y = 0, every normal pointing inwards.
+    let room = mesh("room");
+    let bounds = room.bounds();
+    assert_eq!((bounds.min.y, bounds.max.y), (0.0, 2.0));
+    assert_eq!((bounds.min.x, bounds.max.z), (-2.0, 1.5));
+    let centre = glam::Vec3::new(0.0, 1.0, 0.0);
+    for (p, n) in room.positions.iter().zip(&room.normals) {
+        assert!(
+            n.dot(centre - *p) > 0.0,
+            "normal {n} at {p} points outwards"
+        );
+    }
+    // The checker: squares alternate between the two colours, four per UV unit.
+    let texture = &scene.textures[scene.materials[room.material].texture.unwrap()];
+    let at = |u: f32, v: f32| texture.sample(glam::Vec2::new(u, v)).x;
+    assert!((at(0.1, 0.1) - 0.9).abs() < 1e-6 && (at(0.35, 0.1) - 0.1).abs() < 1e-6);
+    assert!((at(1.1, 0.1) - 0.9).abs() < 1e-6, "the texture repeats");
+    // The merged mirror mesh is one mesh in the file, split into its two objects on load.
+    let (first, second) = (mesh("pair#1"), mesh("pair#2"));
+    assert_eq!(
+        first.triangles.len() + second.triangles.len(),
+        16 * 8 * 2 - 2 * 16 + 12
+    );
+    assert!(
+        (second.bounds().extent().x - 0.5).abs() < 1e-6,
+        "the part's scale"
+    );
+    assert!(
+        (first.bounds().center().x + 1.0).abs() < 1e-5,
+        "the part's translation"
+    );
+    // Flat: three vertices per triangle, each carrying its face normal.
+    let faceted = mesh("faceted");
+    assert_eq!(faceted.positions.len(), 3 * faceted.triangles.len());
+    for t in 0..faceted.triangles.len() {
+        let face = faceted.face_normal_scaled(t).normalize();
+        for i in faceted.triangles[t] {
+            assert!(faceted.normals[i as usize].dot(face) > 0.9999);
+        }
+    }
+}
+
+#[test]
+fn toml_checker_and_merged_errors_name_the_path() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        (
+            SHAPES_SCENE.replace("squares = 4", "squares = 0"),
+            vec!["materials.walls.checker.squares", "0 is not from 1 to 256"],
+        ),
+        (
+            SHAPES_SCENE.replace("checker = {", "texture = \"x.png\"\nchecker = {"),
+            vec!["materials.walls", "either texture or checker"],
+        ),
+        (
+            SHAPES_SCENE.replace("scale = 0.5", "scale = 0.0"),
+            vec!["objects[1].shape", "parts[1]", "singular"],
+        ),
+        (
+            SHAPES_SCENE.replace(
+                "shape = { type = \"box\", size = [1.0, 1.0, 1.0] }",
+                "shape = { type = \"lens\", front_radius = 0.1, back_radius = -0.1, center_thickness = 0.01, diameter = 0.3 }",
+            ),
+            vec!["objects[1].shape", "parts[1]", "lens"],
+        ),
+    ];
+    for (k, (text, parts)) in cases.iter().enumerate() {
+        let path = write(dir.path(), &format!("bad{k}.toml"), text);
+        assert_mentions(&error_of(&path), parts);
+    }
+}
