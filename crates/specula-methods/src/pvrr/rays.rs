@@ -32,6 +32,13 @@ pub enum Interaction {
         ior: f32,
         thin: bool,
     },
+    /// The light reflected once inside a solid: refracted in, partly reflected where it first
+    /// meets the surface again, refracted out where it meets it next. Weight 0 where either
+    /// meeting is a total internal reflection (the first is `Refract`'s path; after the second
+    /// the path would wander inside the solid).
+    InternalReflect {
+        ior: f32,
+    },
 }
 
 impl Interaction {
@@ -44,6 +51,22 @@ impl Interaction {
             MaterialKind::Dielectric { ior, thin_walled } => Some(Interaction::SurfaceReflect {
                 ior: ior_override.unwrap_or(ior).y,
                 thin: thin_walled,
+            }),
+            _ => None,
+        }
+    }
+
+    /// The light reflected inside a solid dielectric (not a thin sheet).
+    pub fn internal_reflection(
+        kind: &MaterialKind,
+        ior_override: Option<Vec3>,
+    ) -> Option<Interaction> {
+        match *kind {
+            MaterialKind::Dielectric {
+                ior,
+                thin_walled: false,
+            } => Some(Interaction::InternalReflect {
+                ior: ior_override.unwrap_or(ior).y,
             }),
             _ => None,
         }
@@ -123,10 +146,13 @@ pub fn trace_paths(
         .collect();
     let channel_count = match interaction {
         Interaction::Refract { iors } => iors.len(),
-        Interaction::Reflect | Interaction::Sheet { .. } | Interaction::SurfaceReflect { .. } => 1,
+        Interaction::Reflect
+        | Interaction::Sheet { .. }
+        | Interaction::SurfaceReflect { .. }
+        | Interaction::InternalReflect { .. } => 1,
     };
     let mut rays = m.positions.len() as u64;
-    let channels = (0..channel_count)
+    let channels: Vec<ChannelPaths> = (0..channel_count)
         .map(|channel| {
             let traced: Vec<(Segment, f32, u64)> = m
                 .positions
@@ -138,7 +164,10 @@ pub fn trace_paths(
                     let facing = if d.dot(n) > 0.0 { -n } else { n };
                     match interaction {
                         Interaction::Refract { iors } => {
-                            refract_through(scene, accel, mesh, v, n, d, iors[channel])
+                            refract_through(scene, accel, mesh, v, n, d, iors[channel], false)
+                        }
+                        Interaction::InternalReflect { ior } => {
+                            refract_through(scene, accel, mesh, v, n, d, *ior, true)
                         }
                         Interaction::Sheet { ior } => {
                             let r =
@@ -188,6 +217,12 @@ pub fn trace_paths(
             }
         })
         .collect();
+    // Paths that carry nothing (an internal reflection that is total) do not shape the views.
+    let visible = visible
+        .iter()
+        .enumerate()
+        .map(|(i, &v)| v && channels.iter().any(|c| c.weights[i] > 0.0))
+        .collect();
     MeshPaths {
         visible,
         channels,
@@ -196,8 +231,12 @@ pub fn trace_paths(
 }
 
 /// Refracts the eye ray `d` into the solid at vertex `v` (normal `n`), follows it through the
-/// solid (internal reflection where total) and refracts it out where it leaves `mesh`.
-/// Returns the exit segment, the Fresnel transmittance along the way and the rays cast.
+/// solid (internal reflection where total) and refracts it out where it leaves `mesh`. With
+/// `reflect_first`, the path takes the partial reflection at the first surface it meets inside
+/// (weight R) instead of leaving there, and must leave at the next (weight 0 where either is
+/// a total internal reflection).
+/// Returns the exit segment, the Fresnel weight along the way and the rays cast.
+#[allow(clippy::too_many_arguments)]
 fn refract_through(
     scene: &Scene,
     accel: &SceneAccel,
@@ -206,6 +245,7 @@ fn refract_through(
     n: Vec3,
     d: Vec3,
     ior: f32,
+    reflect_first: bool,
 ) -> (Segment, f32, u64) {
     let (n, eta) = if d.dot(n) < 0.0 {
         (n, 1.0 / ior)
@@ -218,9 +258,10 @@ fn refract_through(
             origin: offset_origin(v, n, r),
             dir: r,
         };
-        return (exit, 1.0, 0);
+        return (exit, if reflect_first { 0.0 } else { 1.0 }, 0);
     };
     let mut weight = 1.0 - fresnel_dielectric(-d.dot(n), eta);
+    let mut reflect_next = reflect_first;
     let mut ray = Ray {
         origin: offset_origin(v, n, inside),
         dir: inside.normalize(),
@@ -237,12 +278,23 @@ fn refract_through(
         let sp = surface_point(scene, &ray, &hit);
         let eta = if sp.backface { ior } else { 1.0 / ior };
         let (dir, leaving) = match refract(ray.dir, sp.ns, eta) {
+            Some(_) if reflect_next => {
+                weight *= fresnel_dielectric(-ray.dir.dot(sp.ns), eta);
+                (reflect(ray.dir, sp.ns), false)
+            }
             Some(t) => {
                 weight *= 1.0 - fresnel_dielectric(-ray.dir.dot(sp.ns), eta);
                 (t.normalize(), sp.backface)
             }
+            // The reflected path carries only what leaves at its next meeting: a total
+            // internal reflection there (or at the first, which the plain path follows) ends it.
+            None if reflect_first => {
+                weight = 0.0;
+                (reflect(ray.dir, sp.ns), true)
+            }
             None => (reflect(ray.dir, sp.ns), false),
         };
+        reflect_next = false;
         ray = Ray {
             origin: offset_origin(sp.p, sp.ng, dir),
             dir,
