@@ -65,7 +65,11 @@ fn every_parameter_the_parser_accepts_is_listed_and_every_listed_one_is_accepted
                 let error = apply_setting(technique.as_mut(), &format!("{}={bad}", spec.name))
                     .unwrap_err()
                     .to_string();
-                assert!(error.contains(spec.name), "{error}");
+                // The setting as given, and what would have been accepted.
+                assert!(
+                    error.contains(&format!("'{}={bad}'", spec.name)) && error.contains("expected"),
+                    "{error}"
+                );
             }
         }
         // A name no spec lists is rejected, naming the valid ones.

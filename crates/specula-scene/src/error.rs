@@ -4,11 +4,11 @@ use std::fmt;
 /// scene) and, where there is one, the line or JSON path.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
-    #[error("{path}: cannot read: {source}")]
+    // The reason is in the message, not an error source: error chains print it once.
+    #[error("{path}: cannot read: {reason}")]
     Io {
         path: String,
-        #[source]
-        source: std::io::Error,
+        reason: std::io::Error,
     },
     #[error("{path}: {message}")]
     Invalid { path: String, message: String },
@@ -27,7 +27,7 @@ impl SceneError {
     pub fn io(path: impl fmt::Display, source: std::io::Error) -> Self {
         SceneError::Io {
             path: path.to_string(),
-            source,
+            reason: source,
         }
     }
 }
