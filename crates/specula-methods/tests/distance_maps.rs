@@ -199,9 +199,11 @@ fn bounces_follow_the_reference_depth_by_depth() {
         eprintln!("teapot-box, max_depth {depth}: RMSE {matched:.4} against the reference at depth {depth}, {against_deep:.4} at depth 8");
         errors.push((matched, against_deep));
     }
-    for (depth, (matched, _)) in errors.iter().enumerate() {
-        // Measured 2026-11-30: 0.0267, 0.0238, 0.0252 at depths 1-3; bound 2x the largest.
-        assert!(*matched < 0.054, "depth {}: RMSE {matched}", depth + 1);
+    // Paths cut at max_depth take the map's estimate, where the reference cut at the same
+    // depth is black: each frame is held to the full reference. Measured 2026-11-30: 0.0342,
+    // 0.0301, 0.0344 at depths 1-3; bound 2x the largest.
+    for (depth, (_, against_deep)) in errors.iter().enumerate() {
+        assert!(*against_deep < 0.069, "depth {}: RMSE {against_deep}", depth + 1);
     }
     // The teapot sees itself: a second bounce brings the image closer to the full reference.
     assert!(errors[1].1 < errors[0].1 * 0.9, "{errors:?}");
@@ -255,8 +257,9 @@ fn min_max_acceleration_keeps_the_image() {
     assert!(!without.stages.iter().any(|s| s.stage == "min-max"));
     let difference = specular_rmse(&scene, &with.image, &without.image);
     eprintln!("teapot-box with and without min-max: RMSE {difference:.4} between them");
-    // Measured 2026-11-30: 0.0037; bound 2x.
-    assert!(difference < 0.0075, "{difference}");
+    // Measured 2026-11-30: 0.0097 (0.0037 while a missed ray took the background: rays the
+    // gated march misses now take the map's estimate, which differs more); bound 2x.
+    assert!(difference < 0.0195, "{difference}");
 }
 
 #[test]
@@ -313,7 +316,7 @@ fn bad_parameters_name_the_parameter_and_the_choices() {
         ("layers=many", "one of simple, 1, 2"),
         ("linear_steps=0", "1 to 1000"),
         ("secant_steps=-1", "0 to 100"),
-        ("max_depth=99", "0 to 16"),
+        ("max_depth=99", "1 to 16"),
         ("min_max=perhaps", "true or false"),
         ("output=depth", "first-hit"),
         ("resolution=0", "1 to 8192"),

@@ -56,7 +56,8 @@ struct Face {
 // (min, max) distance of each map as float bits; min > max for an empty one.
 @group(0) @binding(10) var<storage, read> ranges: array<u32>;
 @group(0) @binding(11) var<storage, read> faces: array<Face, 6>;
-// Fallbacks taken this frame: rays the search did not resolve, branches cut at max_depth,
+// Fallbacks taken this frame: rays the search did not resolve (found no surface where the
+// map holds one), branches cut at max_depth,
 // branches with no room on the stack (FALLBACK_*).
 @group(0) @binding(12) var<storage, read_write> fallbacks: array<atomic<u32>, 3>;
 
@@ -419,21 +420,34 @@ fn push(x: vec3<f32>, dir: vec3<f32>, weight: vec3<f32>, depth: u32) -> bool {
     return true;
 }
 
-// The best estimate for a ray the search cannot resolve: what the map shows from its
-// reference point in the ray's direction (classic environment mapping: right for distant
-// surfaces, off by the parallax between the point and the reference point for near ones), in
-// the farthest layer that holds a diffuse surface there; the background where none does.
-fn estimate(reflector: MapReflector, r: vec3<f32>) -> vec3<f32> {
+// What a ray the search found nothing for meets. A ray that leaves the scene meets the
+// background: where it leaves the map's far sphere, the map holds nothing. Otherwise the search
+// missed a surface (a step over a thin object, a layer that lacks the surface): the best
+// estimate the map has is the farthest diffuse surface it holds towards that exit point (an
+// environment-map lookup there, off by parallax for near surfaces); `missed` says which.
+struct Estimate {
+    rgb: vec3<f32>,
+    missed: bool,
+};
+
+fn estimate(reflector: MapReflector, x: vec3<f32>, r: vec3<f32>) -> Estimate {
+    let b = dot(x, r);
+    let exit = x + r * (-b + sqrt(max(b * b - (dot(x, x) - reflector.far * reflector.far), 0.0)));
+    var out: Estimate;
+    out.rgb = background_radiance(r);
+    out.missed = false;
     for (var k = 0u; k < settings.layers; k++) {
         let map = reflector.first_map + settings.layers - 1u - k;
-        if (map_distance(map, r).distance > 0.0) {
-            let s = map_surface(map, r);
+        if (map_distance(map, exit).distance > 0.0) {
+            let s = map_surface(map, exit);
+            out.missed = true;
             if (s.code == CODE_DIFFUSE) {
-                return s.rgb;
+                out.rgb = s.rgb;
+                return out;
             }
         }
     }
-    return background_radiance(r);
+    return out;
 }
 
 // The first secondary ray's hit, for output=first-hit.
@@ -465,8 +479,11 @@ fn trace_paths(reflector: MapReflector, p_world: vec3<f32>, v: vec3<f32>, n: vec
         let b = stack[stack_top];
         let hit = trace_ray(reflector, b.x, b.dir);
         if (!hit.found) {
-            atomicAdd(&fallbacks[FALLBACK_MISSED], 1u);
-            color += b.weight * estimate(reflector, b.dir);
+            let e = estimate(reflector, b.x, b.dir);
+            if (e.missed) {
+                atomicAdd(&fallbacks[FALLBACK_MISSED], 1u);
+            }
+            color += b.weight * e.rgb;
             continue;
         }
         let l = b.x + b.dir * hit.d;
@@ -478,19 +495,19 @@ fn trace_paths(reflector: MapReflector, p_world: vec3<f32>, v: vec3<f32>, n: vec
         let next = split_at(b.dir, s.normal, vec4<f32>(s.rgb, s.code), channel);
         if (b.depth + 1u >= settings.max_depth) {
             atomicAdd(&fallbacks[FALLBACK_DEPTH], 1u);
-            color += b.weight * next.weight0 * estimate(reflector, next.dir0);
+            color += b.weight * next.weight0 * estimate(reflector, l, next.dir0).rgb;
             if (next.count == 2u) {
-                color += b.weight * next.weight1 * estimate(reflector, next.dir1);
+                color += b.weight * next.weight1 * estimate(reflector, l, next.dir1).rgb;
             }
             continue;
         }
         if (!push(l, next.dir0, b.weight * next.weight0, b.depth + 1u)) {
             atomicAdd(&fallbacks[FALLBACK_STACK], 1u);
-            color += b.weight * next.weight0 * estimate(reflector, next.dir0);
+            color += b.weight * next.weight0 * estimate(reflector, l, next.dir0).rgb;
         }
         if (next.count == 2u && !push(l, next.dir1, b.weight * next.weight1, b.depth + 1u)) {
             atomicAdd(&fallbacks[FALLBACK_STACK], 1u);
-            color += b.weight * next.weight1 * estimate(reflector, next.dir1);
+            color += b.weight * next.weight1 * estimate(reflector, l, next.dir1).rgb;
         }
     }
     return color;
