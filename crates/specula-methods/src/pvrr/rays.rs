@@ -303,6 +303,11 @@ fn refract_through(
             break;
         }
     }
+    // A path that met something else inside the solid (or nothing) before its reflection
+    // carries none of the reflected light.
+    if reflect_next {
+        weight = 0.0;
+    }
     let exit = Segment {
         origin: ray.origin,
         dir: ray.dir,
