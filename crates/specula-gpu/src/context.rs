@@ -275,6 +275,22 @@ impl GpuContext {
             },
         );
         self.queue.submit([encoder.finish()]);
+        self.read_mapped(&buffer, |mapped| {
+            let mut out = Vec::with_capacity((unpadded * height) as usize);
+            for row in mapped.chunks_exact(padded as usize) {
+                out.extend_from_slice(&row[..unpadded as usize]);
+            }
+            out
+        })
+    }
+
+    /// Waits for the work submitted so far, maps `buffer` (MAP_READ) and hands its bytes to
+    /// `read`; the buffer is unmapped again after.
+    pub fn read_mapped<R>(
+        &self,
+        buffer: &wgpu::Buffer,
+        read: impl FnOnce(&[u8]) -> R,
+    ) -> Result<R, GpuError> {
         let slice = buffer.slice(..);
         let (sender, receiver) = std::sync::mpsc::channel();
         slice.map_async(wgpu::MapMode::Read, move |result| {
@@ -288,13 +304,10 @@ impl GpuContext {
         let mapped = slice
             .get_mapped_range()
             .map_err(|e| GpuError::Readback(e.to_string()))?;
-        let mut out = Vec::with_capacity((unpadded * height) as usize);
-        for row in mapped.chunks_exact(padded as usize) {
-            out.extend_from_slice(&row[..unpadded as usize]);
-        }
+        let result = read(&mapped);
         drop(mapped);
         buffer.unmap();
-        Ok(out)
+        Ok(result)
     }
 }
 

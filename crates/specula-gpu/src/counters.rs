@@ -45,23 +45,10 @@ impl Counters {
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         encoder.copy_buffer_to_buffer(&self.buffer, 0, &self.staging, 0, self.buffer.size());
         ctx.queue.submit([encoder.finish()]);
-        let slice = self.staging.slice(..);
-        let (sender, receiver) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |result| {
-            let _ = sender.send(result);
-        });
-        ctx.wait()?;
-        receiver
-            .recv()
-            .map_err(|e| GpuError::Readback(e.to_string()))?
-            .map_err(|e| GpuError::Readback(e.to_string()))?;
-        let mapped = slice
-            .get_mapped_range()
-            .map_err(|e| GpuError::Readback(e.to_string()))?;
-        let values = bytemuck::cast_slice::<u8, u32>(&mapped)[..self.count].to_vec();
-        drop(mapped);
-        self.staging.unmap();
-        Ok(values)
+        let count = self.count;
+        ctx.read_mapped(&self.staging, |bytes| {
+            bytemuck::cast_slice::<u8, u32>(bytes)[..count].to_vec()
+        })
     }
 }
 

@@ -203,7 +203,11 @@ fn bounces_follow_the_reference_depth_by_depth() {
     // depth is black: each frame is held to the full reference. Measured 2026-11-30: 0.0342,
     // 0.0301, 0.0344 at depths 1-3; bound 2x the largest.
     for (depth, (_, against_deep)) in errors.iter().enumerate() {
-        assert!(*against_deep < 0.069, "depth {}: RMSE {against_deep}", depth + 1);
+        assert!(
+            *against_deep < 0.069,
+            "depth {}: RMSE {against_deep}",
+            depth + 1
+        );
     }
     // The teapot sees itself: a second bounce brings the image closer to the full reference.
     assert!(errors[1].1 < errors[0].1 * 0.9, "{errors:?}");
