@@ -54,7 +54,7 @@
 //!   the paper's search falls back to: mirror-teapot-bunny's mean FLIP went from 0.052 to 0.060
 //!   with this change (the teapot lid's rim), while glass-dragon went from 0.267 to 0.129 and
 //!   spectacle-lens from 0.086 to 0.058 with the branching above (docs/benchmarks.md).
-
+//!
 //! Approximations and artifacts:
 //! - sampling: each layer is a height field about the reference point, sampled at `resolution`;
 //!   the distance is interpolated bilinearly, so a hit is exact on planes (the secant step; the
