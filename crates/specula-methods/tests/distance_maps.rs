@@ -292,6 +292,7 @@ fn peeled_layers_see_what_one_layer_cannot() {
     }
     // One peeled layer is the teapot seen from inside itself: its reflections find nothing.
     assert!(errors[0] > 2.0 * errors[2], "{errors:?}");
+    // Measured 2026-11-30: 0.1880, 0.0601, 0.0445, 0.0432 (layers 1, 2, 4, simple).
     assert!(errors[2] < 0.06 && errors[3] < 0.06, "{errors:?}");
 }
 

@@ -121,6 +121,7 @@ fn glass_under_a_distant_environment_is_close() {
     // The full reference adds the internal reflections envmap ignores.
     let (full, _) = compare_with(&scene, 8, sphere_exit()).unwrap();
     eprintln!("envmap, glass sphere, distant environment, reference depth 8: RMSE {full:.4}");
+    // Measured 2026-11-30: 0.0470.
     assert!(full < 0.06, "RMSE {full}");
 }
 

@@ -346,6 +346,7 @@ fn lens_vertices_show_the_ray_traced_double_refraction_per_channel() {
         errors.len(),
         100.0 * within(&errors)
     );
+    // Measured 2026-11-30: 87.4 % (12.6 % outside; the bound allows 20 %).
     assert!(within(&errors) > 0.8);
     // Colour masks: with strongly dispersive glass (1.3 / 1.6 / 1.9) each channel's picture
     // differs, so drawing every channel with one index is visibly wrong at the vertices.
@@ -524,6 +525,7 @@ fn a_sphere_is_subdivided_until_every_patch_fits_the_field_of_view() {
         frame.warnings
     );
     assert!(one.warnings.iter().any(|w| w.contains("max_fov")));
+    // Measured 2026-11-30: 0.0136 (one patch: 0.0348).
     assert!(at_vertices < 0.02, "{at_vertices}");
     assert!(at_vertices < one_patch, "{at_vertices} vs {one_patch}");
 }
