@@ -421,7 +421,7 @@ fn push(x: vec3<f32>, dir: vec3<f32>, weight: vec3<f32>, depth: u32) -> bool {
 }
 
 // What a ray the search found nothing for meets. A ray that leaves the scene meets the
-// background: where it leaves the map's far sphere, the map holds nothing. Otherwise the search
+// background: where it leaves the map's far sphere, the map holds no diffuse surface. Otherwise the search
 // missed a surface (a step over a thin object, a layer that lacks the surface): the best
 // estimate the map has is the farthest diffuse surface it holds towards that exit point (an
 // environment-map lookup there, off by parallax for near surfaces); `missed` says which.
@@ -439,10 +439,13 @@ fn estimate(reflector: MapReflector, x: vec3<f32>, r: vec3<f32>) -> Estimate {
     for (var k = 0u; k < settings.layers; k++) {
         let map = reflector.first_map + settings.layers - 1u - k;
         if (map_distance(map, exit).distance > 0.0) {
+            // Only a diffuse surface says the search missed something: mirror and glass
+            // surfaces (the reflector's own, which surrounds its reference point) are what the
+            // ray left.
             let s = map_surface(map, exit);
-            out.missed = true;
             if (s.code == CODE_DIFFUSE) {
                 out.rgb = s.rgb;
+                out.missed = true;
                 return out;
             }
         }
