@@ -437,7 +437,7 @@ fn run(cli: Cli) -> Result<()> {
                 let row = specula_compare::suite::scene_row(
                     &report,
                     source,
-                    outcome.as_ref().map_err(Clone::clone),
+                    outcome.as_ref().map_err(String::as_str),
                     &mut taken,
                 )?;
                 let line = match &row.error {

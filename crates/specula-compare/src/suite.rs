@@ -102,7 +102,7 @@ fn folder_name(source: &str, taken: &[String]) -> String {
 pub fn scene_row(
     dir: &Path,
     source: &str,
-    outcome: Result<&Comparison, String>,
+    outcome: Result<&Comparison, &str>,
     taken: &mut Vec<String>,
 ) -> Result<SuiteRow, CompareError> {
     let comparison = match outcome {
@@ -117,7 +117,7 @@ pub fn scene_row(
                 mask_pixels: 0,
                 reference_ms: 0.0,
                 methods: Vec::new(),
-                error: Some(message),
+                error: Some(message.to_string()),
             })
         }
     };

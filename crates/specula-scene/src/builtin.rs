@@ -109,17 +109,7 @@ fn at(translation: [f32; 3]) -> Mat4 {
 }
 
 fn checker(name: &str, squares: u32, a: Vec3, b: Vec3) -> Texture {
-    Texture::procedural(name, 256, 256, |uv| {
-        let (i, j) = (
-            (uv.x * squares as f32) as u32,
-            (uv.y * squares as f32) as u32,
-        );
-        if (i + j) % 2 == 0 {
-            a
-        } else {
-            b
-        }
-    })
+    Texture::checker(name, squares, 256, a, b)
 }
 
 fn srgb(r: u8, g: u8, b: u8) -> Vec3 {

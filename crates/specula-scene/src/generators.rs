@@ -305,22 +305,7 @@ pub fn lens(spec: &LensSpec) -> Result<Mesh, SceneError> {
 /// Axis-aligned box centred at the origin with flat faces.
 pub fn cuboid(size: Vec3) -> Mesh {
     let mut mesh = empty("box");
-    let half = size * 0.5;
-    for axis in 0..3 {
-        for sign in [-1.0f32, 1.0] {
-            let mut n = Vec3::ZERO;
-            n[axis] = sign;
-            let (t1, t2) = (
-                Vec3::from_array(unit((axis + 1) % 3)),
-                Vec3::from_array(unit((axis + 2) % 3)),
-            );
-            append_grid(&mut mesh, 1, 1, |u, v| Sample {
-                p: (n + t1 * (2.0 * u - 1.0) + t2 * (2.0 * v - 1.0)) * half,
-                n,
-                uv: Vec2::new(u, v),
-            });
-        }
-    }
+    append_box_faces(&mut mesh, size, Vec3::ZERO, false);
     finish(mesh)
 }
 
@@ -328,22 +313,32 @@ pub fn cuboid(size: Vec3) -> Mesh {
 /// normals point inwards, UVs in metres along each wall.
 pub fn room(size: Vec3) -> Mesh {
     let mut mesh = empty("room");
+    append_box_faces(&mut mesh, size, Vec3::new(0.0, size.y * 0.5, 0.0), true);
+    finish(mesh)
+}
+
+/// The six faces of the `size` box around `centre`, one quad each. Outward normals and UVs
+/// over [0, 1]² per face; or, seen from inside, inward normals and UVs in metres.
+fn append_box_faces(mesh: &mut Mesh, size: Vec3, centre: Vec3, inside: bool) {
     let half = size * 0.5;
-    let centre = Vec3::new(0.0, half.y, 0.0);
     for axis in 0..3 {
         for sign in [-1.0f32, 1.0] {
-            let mut inward = Vec3::ZERO;
-            inward[axis] = -sign;
+            let mut outward = Vec3::ZERO;
+            outward[axis] = sign;
             let (a1, a2) = ((axis + 1) % 3, (axis + 2) % 3);
             let (t1, t2) = (Vec3::from_array(unit(a1)), Vec3::from_array(unit(a2)));
-            append_grid(&mut mesh, 1, 1, |u, v| Sample {
-                p: centre + (-inward + t1 * (2.0 * u - 1.0) + t2 * (2.0 * v - 1.0)) * half,
-                n: inward,
-                uv: Vec2::new(u * size[a1], v * size[a2]),
+            let (n, uv_scale) = if inside {
+                (-outward, Vec2::new(size[a1], size[a2]))
+            } else {
+                (outward, Vec2::ONE)
+            };
+            append_grid(mesh, 1, 1, |u, v| Sample {
+                p: centre + (outward + t1 * (2.0 * u - 1.0) + t2 * (2.0 * v - 1.0)) * half,
+                n,
+                uv: Vec2::new(u, v) * uv_scale,
             });
         }
     }
-    finish(mesh)
 }
 
 fn unit(axis: usize) -> [f32; 3] {

@@ -140,12 +140,13 @@ impl Mesh {
     /// material. UVs stay one per position: the side without them gets (0, 0).
     pub fn append(&mut self, other: &Mesh) {
         let base = self.positions.len() as u32;
-        if self.uvs.is_empty() != other.uvs.is_empty() {
+        let with_uvs = !self.uvs.is_empty() || !other.uvs.is_empty();
+        if with_uvs {
             self.uvs.resize(self.positions.len(), Vec2::ZERO);
         }
         self.positions.extend(&other.positions);
         self.normals.extend(&other.normals);
-        if !self.uvs.is_empty() {
+        if with_uvs {
             if other.uvs.is_empty() {
                 self.uvs.resize(self.positions.len(), Vec2::ZERO);
             } else {
@@ -434,6 +435,10 @@ mod tests {
             .map(|i| i + without_uvs.positions.len() as u32);
         assert_eq!(last, expected);
         mesh.validate("appended").unwrap();
+        // Onto an empty mesh (the start of every join), the UVs come along.
+        let mut joined = Mesh::default();
+        joined.append(&plane);
+        assert_eq!(joined.uvs, plane.uvs);
     }
 
     #[test]

@@ -101,6 +101,22 @@ impl Texture {
         }
     }
 
+    /// A `side` × `side` texel checkerboard of `squares` × `squares` squares in colours `a`
+    /// (the top-left square) and `b`.
+    pub fn checker(name: &str, squares: u32, side: u32, a: Vec3, b: Vec3) -> Self {
+        Texture::procedural(name, side, side, |uv| {
+            let (i, j) = (
+                (uv.x * squares as f32) as u32,
+                (uv.y * squares as f32) as u32,
+            );
+            if (i + j) % 2 == 0 {
+                a
+            } else {
+                b
+            }
+        })
+    }
+
     fn texel(&self, x: i64, y: i64) -> Vec3 {
         let x = x.rem_euclid(self.width as i64) as usize;
         let y = y.rem_euclid(self.height as i64) as usize;

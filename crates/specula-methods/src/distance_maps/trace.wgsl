@@ -421,10 +421,11 @@ fn push(x: vec3<f32>, dir: vec3<f32>, weight: vec3<f32>, depth: u32) -> bool {
 }
 
 // What a ray the search found nothing for meets. A ray that leaves the scene meets the
-// background: where it leaves the map's far sphere, the map holds no diffuse surface. Otherwise the search
-// missed a surface (a step over a thin object, a layer that lacks the surface): the best
-// estimate the map has is the farthest diffuse surface it holds towards that exit point (an
-// environment-map lookup there, off by parallax for near surfaces); `missed` says which.
+// background: where it leaves the map's far sphere, the map holds no diffuse surface.
+// Otherwise the search missed a surface (a step over a thin object, a layer that lacks the
+// surface): the best estimate the map has is the farthest diffuse surface it holds towards
+// that exit point (an environment-map lookup there, off by parallax for near surfaces);
+// `missed` says which.
 struct Estimate {
     rgb: vec3<f32>,
     missed: bool,

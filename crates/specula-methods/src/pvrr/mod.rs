@@ -37,7 +37,7 @@
 //! sheet's 2R / (1 + R)); and the light reflected once inside it (refracted in, reflected
 //! with weight R where it first meets the surface again, then out as the first). The paper's
 //! lens leaves both out; the reference has them (on the suite's glass sphere they took pvrr's
-//! mean FLIP from 0.343 to 0.253). Each costs its own patches and 1st passes; inside another
+//! mean FLIP from 0.343 to 0.252). Each costs its own patches and 1st passes; inside another
 //! reflector's map (depth ≥ 2) a dielectric shows its transmitted light only.
 //!
 //! Approximations and artifacts: between vertices the map is warped linearly, so error grows
@@ -61,7 +61,7 @@
 //! corners; they are counted (`unresolved vertices`), named in a warning, and striped magenta
 //! with `markers=true`. A converging lens before a near wall (a magnifier) is the same case:
 //! its rays converge behind the wall.
-
+//!
 //! When a patch's exit lines are (nearly) parallel no least-squares viewpoint exists: the view
 //! then looks along their mean direction from 10 patch radii behind it, with a warning.
 //!
@@ -263,7 +263,7 @@ struct PatchDraw {
 struct ReflectorDraw {
     mesh: usize,
     material: GpuMirrorMaterial,
-    /// Added to what the reflector's earlier draw left (a dielectric's surface reflection).
+    /// Added to what the reflector's earlier draw left (a dielectric's reflections).
     additive: bool,
     patches: Vec<PatchDraw>,
 }
@@ -278,8 +278,9 @@ struct CachedReflector {
     patches: Vec<Patch>,
 }
 
-/// A mirror or dielectric mesh: how it bends rays and how its 2nd pass shades. A dielectric
-/// is two: its transmitted light, then its surface reflection added over it.
+/// A mirror or dielectric mesh: how it bends rays and how its 2nd pass shades. A solid
+/// dielectric is three: its transmitted light, then its surface reflection and the light
+/// reflected once inside it, added over it (a thin sheet has no third).
 struct Reflector {
     mesh: usize,
     interaction: Interaction,
@@ -351,8 +352,8 @@ struct Prepared {
     far_distance: f32,
     /// 2nd pass pipelines writing all channels, then red, green, blue only.
     pipelines: [wgpu::RenderPipeline; 4],
-    /// The 2nd pass pipeline adding to what is there (a dielectric's surface reflection), where
-    /// the device can blend float targets.
+    /// The 2nd pass pipeline adding to what is there (a dielectric's reflections), where the
+    /// device can blend float targets.
     additive: Option<wgpu::RenderPipeline>,
     layout: wgpu::BindGroupLayout,
     /// Per-frame data written in place: 2nd-pass and marker vertices, and uniforms (cameras,

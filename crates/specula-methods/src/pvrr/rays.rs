@@ -162,6 +162,13 @@ pub fn trace_paths(
                     let d = (v - eye).normalize_or(Vec3::NEG_Z);
                     // The normal on the eye's side, for the open surfaces.
                     let facing = if d.dot(n) > 0.0 { -n } else { n };
+                    let mirrored = || {
+                        let r = reflect(d, facing);
+                        Segment {
+                            origin: offset_origin(v, facing, r),
+                            dir: r,
+                        }
+                    };
                     match interaction {
                         Interaction::Refract { iors } => {
                             refract_through(scene, accel, mesh, v, n, d, iors[channel], false)
@@ -178,20 +185,8 @@ pub fn trace_paths(
                             };
                             (exit, 1.0 - r, 0)
                         }
-                        Interaction::Reflect => {
-                            let r = reflect(d, facing);
-                            let exit = Segment {
-                                origin: offset_origin(v, facing, r),
-                                dir: r,
-                            };
-                            (exit, 1.0, 0)
-                        }
+                        Interaction::Reflect => (mirrored(), 1.0, 0),
                         Interaction::SurfaceReflect { ior, thin } => {
-                            let r = reflect(d, facing);
-                            let exit = Segment {
-                                origin: offset_origin(v, facing, r),
-                                dir: r,
-                            };
                             let cos_i = -d.dot(facing);
                             // Seen from inside a solid (the eye in the glass), the surface
                             // reflects as an interface from glass to air.
@@ -205,7 +200,7 @@ pub fn trace_paths(
                             } else {
                                 fresnel_dielectric(cos_i, eta)
                             };
-                            (exit, weight, 0)
+                            (mirrored(), weight, 0)
                         }
                     }
                 })

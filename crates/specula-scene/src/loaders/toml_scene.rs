@@ -523,18 +523,7 @@ fn checker_texture(name: &str, spec: &CheckerSpec) -> Result<Texture, SceneError
     }
     let [a, b] = spec.colors.map(Color::vec3);
     // Eight texels a square keep the squares' edges sharp under bilinear filtering.
-    let side = spec.squares * 8;
-    Ok(Texture::procedural(name, side, side, |uv| {
-        let (i, j) = (
-            (uv.x * spec.squares as f32) as u32,
-            (uv.y * spec.squares as f32) as u32,
-        );
-        if (i + j) % 2 == 0 {
-            a
-        } else {
-            b
-        }
-    }))
+    Ok(Texture::checker(name, spec.squares, spec.squares * 8, a, b))
 }
 
 /// Parses a scene from TOML text; relative file names resolve against `base`.
