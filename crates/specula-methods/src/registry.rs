@@ -7,6 +7,7 @@ use crate::technique::{MethodInfo, Technique, TechniqueError};
 /// Every registered method: the exact reference first, then the techniques.
 pub static METHODS: &[&MethodInfo] = &[
     &crate::reference::INFO,
+    &crate::gpu_trace::INFO,
     &crate::envmap::INFO,
     &crate::pvrr::INFO,
     &crate::distance_maps::INFO,

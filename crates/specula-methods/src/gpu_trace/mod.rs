@@ -1,0 +1,483 @@
+//! `gpu-trace`: the exact reference (specula_trace::reference) on the GPU, as WGSL compute
+//! passes over the BVH the CPU builds. Its images equal the CPU reference's (≥ 45 dB PSNR, see
+//! tests/gpu_trace.rs); it is the exact method every technique's speed is compared with on
+//! the same device.
+//!
+//! Paper: none (Whitted 1980, as the CPU reference). Triangle test: Woop, Benthin and Wald,
+//! "Watertight Ray/Triangle Intersection" (JCGT 2013); traversal: ordered, stack-based, with
+//! Ize's robust box test (2013). Wavefront form: Laine, Karras and Aila, "Megakernels
+//! Considered Harmful: Wavefront Path Tracing on GPUs" (HPG 2013).
+//!
+//! Steps:
+//! 1. upload the scene's binary SAH BVH as built on the CPU ([`LiveScene::accel`], nodes as
+//!    they are) and its triangles in leaf order; a rigid move refits (or rebuilds) the CPU tree
+//!    and the next frame writes the nodes and corners again into the same buffers (new ones
+//!    only when a rebuild changed the node count). A camera change uploads nothing but the
+//!    camera;
+//! 2. trace, in one of two forms (`mode`):
+//!    - `megakernel`: one thread per pixel traces its pixel's whole Whitted ray tree depth
+//!      first from a private stack of pending rays (origin, direction, weight, depth, colour
+//!      channel);
+//!    - `wavefront`: rays wait in queues in GPU memory; one dispatch intersects and shades
+//!      every ray of a generation (each pending ray of depth k) and appends the rays it spawns
+//!      to the next generation's queue, max_depth + 1 generations in all; contributions are
+//!      added to their pixel atomically.
+//!
+//! Shading is the CPU reference's, ray for ray: unlit, Lambert with hard shadows (an any-hit
+//! ray per light) and ambient, mirrors (Schlick or F0), dielectrics with exact Fresnel and both
+//! branches, total internal reflection, thin sheets, dispersion (one path per colour channel
+//! from the first dispersive interface), the background, `max_depth`.
+//!
+//! Bounds: the megakernel's stack holds 16 pending rays; depth first, that is every tree up to
+//! max_depth 11 exactly (each level leaves at most one waiting sibling, a dispersive split
+//! five). The wavefront's queues hold `queue_factor` × pixels rays each. Past either bound a
+//! spawned ray is dropped, counted (`rays dropped`) and warned about; nothing is dropped at the
+//! default max_depth 8 with the megakernel.
+//!
+//! Approximations: none beyond float rounding. The CPU decides a ray that falls exactly on a
+//! triangle edge in single precision again in double precision; WGSL has no double, so such a
+//! ray counts as on the triangle. Shader compilers may fuse multiply-adds, so hits agree to the
+//! last bits only: where a path's outcome hinges on those bits (a grazing silhouette seen
+//! through several refractions) a pixel may differ.
+//!
+//! Hardware ray queries (`wgpu::Features::EXPERIMENTAL_RAY_QUERY`) are detected and reported
+//! (`specula methods`, `bench`); neither lavapipe nor the H200 machine sometimes lent here has
+//! them, so the compute traversal is the method and no second path is compiled.
+//!
+//! Parameters:
+//! - `max_depth` (default 8): the most specular bounces on a path, as the CPU reference's.
+//!   Cost grows with the paths that need it.
+//! - `mode` (default `megakernel`, the faster on lavapipe; docs/benchmarks.md): the form of
+//!   the tracing, above.
+//! - `queue_factor` (default 4): wavefront queue capacity in rays per pixel. More memory, fewer
+//!   drops on deep glass.
+
+use bytemuck::{Pod, Zeroable};
+use specula_gpu::counters::Counters;
+use specula_gpu::shaders::{self, CameraUniform};
+use specula_gpu::util::{buffer_binding, layout_entry, writable_buffer};
+use specula_gpu::{GpuContext, GpuError, ResourceCounts, StageTimer};
+use specula_scene::Camera;
+use specula_trace::SceneAccel;
+
+use crate::gpu_scene::GpuScene;
+use crate::live_scene::LiveScene;
+use crate::raster::{self, OutputTexture};
+use crate::technique::{
+    Context, Frame, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, Technique,
+    TechniqueError,
+};
+
+const BVH: &str = include_str!("bvh.wgsl");
+const SHADE: &str = include_str!("shade.wgsl");
+const MEGAKERNEL: &str = include_str!("megakernel.wgsl");
+
+/// The megakernel's shader: the common files, shading, traversal, its entry point.
+pub fn megakernel_source() -> String {
+    shaders::compose(
+        &["optics.wgsl", "camera.wgsl", "scene.wgsl"],
+        &[SHADE, BVH, MEGAKERNEL].join("\n"),
+    )
+}
+
+/// Names of the shader's counter slots (shade.wgsl's COUNT_*), as reports list them.
+pub const COUNTER_NAMES: [&str; 4] = [
+    "rays traced (primary and secondary)",
+    "shadow rays",
+    "paths cut at max_depth",
+    "rays dropped (queue or stack full)",
+];
+const DROPPED: usize = 3;
+
+pub const PARAMS: &[ParamSpec] = &[
+    ParamSpec {
+        name: "max_depth",
+        kind: ParamKind::Integer { min: 0, max: 64 },
+        default: "8",
+        doc: "most specular bounces on a path (the megakernel is exact up to 11)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "mode",
+        kind: ParamKind::Choice(&["megakernel", "wavefront"]),
+        default: "megakernel",
+        doc: "one thread per pixel with a private ray stack, or ray queues in GPU memory",
+        invalidates: Invalidates::Resources,
+    },
+    ParamSpec {
+        name: "queue_factor",
+        kind: ParamKind::Integer { min: 1, max: 64 },
+        default: "4",
+        doc: "wavefront: rays per pixel each queue holds",
+        invalidates: Invalidates::Resources,
+    },
+];
+
+pub const INFO: MethodInfo = MethodInfo {
+    name: "gpu-trace",
+    summary: "exact Whitted ray tracing in WGSL compute over the CPU's SAH BVH (the reference on the GPU)",
+    exact: true,
+    needs_gpu: true,
+    progressive: false,
+    params: PARAMS,
+    create: || Box::new(GpuTrace::default()),
+};
+
+/// Host mirror of WGSL `Settings` (shade.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct GpuSettings {
+    max_depth: u32,
+    triangle_count: u32,
+    queue_capacity: u32,
+    pad: u32,
+}
+
+/// Host mirror of WGSL `Triangle` (bvh.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct GpuTriangle {
+    p0: [f32; 3],
+    vertex: u32,
+    p1: [f32; 3],
+    pad0: u32,
+    p2: [f32; 3],
+    pad1: u32,
+}
+
+/// Whether the adapter offers hardware ray queries (reported; see the module doc).
+pub fn ray_queries_supported(ctx: &GpuContext) -> bool {
+    ctx.adapter
+        .features()
+        .contains(wgpu::Features::EXPERIMENTAL_RAY_QUERY)
+}
+
+/// The triangles of `accel` in leaf order, each with its first vertex in `gpu_scene`'s buffer.
+fn leaf_triangles(accel: &SceneAccel, gpu_scene: &GpuScene) -> Vec<GpuTriangle> {
+    accel
+        .triangles
+        .iter()
+        .zip(&accel.ids)
+        .map(|(t, &(mesh, triangle))| GpuTriangle {
+            p0: t[0].to_array(),
+            vertex: gpu_scene.mesh_vertex_ranges[mesh as usize].start + 3 * triangle,
+            p1: t[1].to_array(),
+            pad0: 0,
+            p2: t[2].to_array(),
+            pad1: 0,
+        })
+        .collect()
+}
+
+/// What depends on the scene: the BVH on the GPU and the pipeline.
+struct Prepared {
+    scene_id: u64,
+    /// Scene version the nodes and triangles were written at.
+    uploaded_at: u64,
+    nodes: wgpu::Buffer,
+    triangles: wgpu::Buffer,
+    triangle_count: u32,
+    camera: wgpu::Buffer,
+    settings: wgpu::Buffer,
+    counters: Counters,
+    layout: wgpu::BindGroupLayout,
+    scene_bind_group: wgpu::BindGroup,
+    megakernel: wgpu::ComputePipeline,
+    /// The bind group for the current output texture and buffers (remade when either changes).
+    bind_group: Option<(wgpu::Texture, wgpu::BindGroup)>,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    Megakernel,
+    Wavefront,
+}
+
+pub struct GpuTrace {
+    pub max_depth: u32,
+    pub mode: Mode,
+    pub queue_factor: u32,
+    prepared: Option<Prepared>,
+    timer: StageTimer,
+    output: OutputTexture,
+}
+
+impl Default for GpuTrace {
+    fn default() -> Self {
+        GpuTrace {
+            max_depth: 8,
+            mode: Mode::Megakernel,
+            queue_factor: 4,
+            prepared: None,
+            timer: StageTimer::default(),
+            output: OutputTexture::default(),
+        }
+    }
+}
+
+impl GpuTrace {
+    pub fn new(mode: Mode, max_depth: u32) -> Self {
+        GpuTrace {
+            mode,
+            max_depth,
+            ..Default::default()
+        }
+    }
+}
+
+fn storage_buffer(ctx: &GpuContext, label: &str, bytes: &[u8]) -> wgpu::Buffer {
+    // Storage bindings may not be empty.
+    let size = bytes.len().max(16) as u64;
+    let buffer = writable_buffer(ctx, label, size, wgpu::BufferUsages::STORAGE);
+    ctx.queue.write_buffer(&buffer, 0, bytes);
+    buffer
+}
+
+/// Writes `bytes` into `buffer`, or into a new buffer when they no longer fit.
+fn rewrite(ctx: &GpuContext, buffer: &mut wgpu::Buffer, label: &str, bytes: &[u8]) {
+    if bytes.len() as u64 > buffer.size() {
+        *buffer = storage_buffer(ctx, label, bytes);
+    } else {
+        ctx.queue.write_buffer(buffer, 0, bytes);
+    }
+}
+
+impl GpuTrace {
+    fn build(ctx: &GpuContext, live: &LiveScene) -> Result<Prepared, GpuError> {
+        let device = &ctx.device;
+        let gpu_scene = live.gpu(ctx);
+        let accel = live.accel();
+        ctx.validated("gpu-trace set-up", || {
+            use wgpu::{BufferBindingType as B, ShaderStages as St};
+            let read_only = || buffer_binding(B::Storage { read_only: true });
+            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("gpu-trace"),
+                entries: &[
+                    layout_entry(0, St::COMPUTE, buffer_binding(B::Uniform)),
+                    layout_entry(1, St::COMPUTE, read_only()),
+                    layout_entry(2, St::COMPUTE, read_only()),
+                    layout_entry(3, St::COMPUTE, read_only()),
+                    layout_entry(
+                        4,
+                        St::COMPUTE,
+                        wgpu::BindingType::StorageTexture {
+                            access: wgpu::StorageTextureAccess::WriteOnly,
+                            format: raster::COLOR_FORMAT,
+                            view_dimension: wgpu::TextureViewDimension::D2,
+                        },
+                    ),
+                    layout_entry(
+                        5,
+                        St::COMPUTE,
+                        buffer_binding(B::Storage { read_only: false }),
+                    ),
+                    layout_entry(6, St::COMPUTE, buffer_binding(B::Uniform)),
+                ],
+            });
+            let scene_layout = GpuScene::bind_group_layout(device);
+            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("gpu-trace"),
+                bind_group_layouts: &[Some(&layout), Some(&scene_layout)],
+                ..Default::default()
+            });
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("gpu_trace/megakernel.wgsl"),
+                source: wgpu::ShaderSource::Wgsl(megakernel_source().into()),
+            });
+            let megakernel = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("gpu-trace megakernel"),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some("cs_trace"),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+            let uniform = |label, size: usize| {
+                writable_buffer(ctx, label, size as u64, wgpu::BufferUsages::UNIFORM)
+            };
+            Prepared {
+                scene_id: live.id(),
+                uploaded_at: live.version(),
+                nodes: storage_buffer(ctx, "bvh nodes", bytemuck::cast_slice(&accel.bvh.nodes)),
+                triangles: storage_buffer(
+                    ctx,
+                    "bvh triangles",
+                    bytemuck::cast_slice(&leaf_triangles(accel, gpu_scene)),
+                ),
+                triangle_count: accel.triangles.len() as u32,
+                camera: uniform("gpu-trace camera", size_of::<CameraUniform>()),
+                settings: uniform("gpu-trace settings", size_of::<GpuSettings>()),
+                counters: Counters::new(ctx, "gpu-trace counters", COUNTER_NAMES.len()),
+                scene_bind_group: gpu_scene.bind_group(ctx, &scene_layout),
+                layout,
+                megakernel,
+                bind_group: None,
+            }
+        })
+    }
+
+    fn ensure_prepared(&mut self, ctx: &GpuContext, live: &LiveScene) -> Result<(), GpuError> {
+        if self.prepared.as_ref().map(|p| p.scene_id) != Some(live.id()) {
+            self.prepared = Some(Self::build(ctx, live)?);
+        }
+        Ok(())
+    }
+}
+
+impl Prepared {
+    /// Writes the moved scene's BVH and triangles (after [`LiveScene`] refitted or rebuilt it).
+    fn upload_moves(&mut self, ctx: &GpuContext, live: &LiveScene) {
+        if self.uploaded_at == live.version() {
+            return;
+        }
+        let accel = live.accel();
+        let nodes = bytemuck::cast_slice(&accel.bvh.nodes);
+        let before = (self.nodes.size(), self.triangles.size());
+        rewrite(ctx, &mut self.nodes, "bvh nodes", nodes);
+        let triangles = leaf_triangles(accel, live.gpu(ctx));
+        rewrite(
+            ctx,
+            &mut self.triangles,
+            "bvh triangles",
+            bytemuck::cast_slice(&triangles),
+        );
+        if (self.nodes.size(), self.triangles.size()) != before {
+            self.bind_group = None;
+        }
+        self.uploaded_at = live.version();
+    }
+
+    fn bind_group(
+        &mut self,
+        ctx: &GpuContext,
+        live: &LiveScene,
+        output: &wgpu::Texture,
+    ) -> &wgpu::BindGroup {
+        if self.bind_group.as_ref().is_none_or(|(t, _)| t != output) {
+            let view = output.create_view(&Default::default());
+            let group = specula_gpu::util::bind_group(
+                ctx,
+                "gpu-trace",
+                &self.layout,
+                &[
+                    self.camera.as_entire_binding(),
+                    self.nodes.as_entire_binding(),
+                    self.triangles.as_entire_binding(),
+                    live.gpu(ctx).vertices.as_entire_binding(),
+                    wgpu::BindingResource::TextureView(&view),
+                    self.counters.buffer.as_entire_binding(),
+                    self.settings.as_entire_binding(),
+                ],
+            );
+            self.bind_group = Some((output.clone(), group));
+        }
+        &self.bind_group.as_ref().expect("made above").1
+    }
+}
+
+impl Technique for GpuTrace {
+    fn info(&self) -> &'static MethodInfo {
+        &INFO
+    }
+
+    fn parameter(&self, name: &str) -> String {
+        match name {
+            "max_depth" => self.max_depth.to_string(),
+            "mode" => format!("{:?}", self.mode).to_lowercase(),
+            "queue_factor" => self.queue_factor.to_string(),
+            _ => String::new(),
+        }
+    }
+
+    fn set_parameter(&mut self, name: &str, value: &ParamValue) -> Result<(), TechniqueError> {
+        match name {
+            "max_depth" => self.max_depth = value.integer() as u32,
+            "queue_factor" => self.queue_factor = value.integer() as u32,
+            "mode" => {
+                self.mode = match value.word() {
+                    "wavefront" => Mode::Wavefront,
+                    _ => Mode::Megakernel,
+                }
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+
+    fn invalidate(&mut self, what: Invalidates) {
+        if what >= Invalidates::Scene {
+            self.prepared = None;
+        }
+    }
+
+    fn prepare(&mut self, ctx: &Context, scene: &LiveScene) -> Result<(), TechniqueError> {
+        self.ensure_prepared(ctx.gpu(INFO.name)?, scene)?;
+        Ok(())
+    }
+
+    fn render(
+        &mut self,
+        ctx: &Context,
+        live: &LiveScene,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+    ) -> Result<Frame, TechniqueError> {
+        let gpu = ctx.gpu(INFO.name)?;
+        let before = gpu.resource_counts();
+        self.ensure_prepared(gpu, live)?;
+        let output = self.output.get(gpu, width, height);
+        let p = self.prepared.as_mut().expect("prepared above");
+        self.timer.start(gpu);
+        p.upload_moves(gpu, live);
+        self.timer.lap(gpu, "bvh upload")?;
+        let camera_uniform = raster::camera_uniform(camera, &live.scene().bounds(), width, height);
+        let settings = GpuSettings {
+            max_depth: self.max_depth,
+            triangle_count: p.triangle_count,
+            queue_capacity: 0,
+            pad: 0,
+        };
+        gpu.validated("gpu-trace", || {
+            gpu.queue
+                .write_buffer(&p.camera, 0, bytemuck::bytes_of(&camera_uniform));
+            gpu.queue
+                .write_buffer(&p.settings, 0, bytemuck::bytes_of(&settings));
+            p.counters.clear(gpu);
+            let group = p.bind_group(gpu, live, &output).clone();
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            {
+                let mut pass = encoder.begin_compute_pass(&Default::default());
+                pass.set_pipeline(&p.megakernel);
+                pass.set_bind_group(0, &group, &[]);
+                pass.set_bind_group(1, &p.scene_bind_group, &[]);
+                pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
+            }
+            gpu.queue.submit([encoder.finish()]);
+        })?;
+        self.timer.lap(gpu, "ray tracing")?;
+        let (stages, timing) = self.timer.finish(gpu)?;
+        let counts = p.counters.read(gpu)?;
+        let mut warnings = Vec::new();
+        if counts[DROPPED] > 0 {
+            warnings.push(format!(
+                "gpu-trace dropped {} rays (its ray stack or queues were full; max_depth {} is past what they hold): the image is darker where they went",
+                counts[DROPPED], self.max_depth
+            ));
+        }
+        let created: ResourceCounts = gpu.resource_counts() - before;
+        Ok(Frame {
+            pixels: Pixels::Texture(output),
+            stages,
+            counters: COUNTER_NAMES
+                .iter()
+                .zip(counts)
+                .map(|(name, count)| (name.to_string(), count as u64))
+                .collect(),
+            timing,
+            warnings,
+            converged: true,
+            created,
+        })
+    }
+}
