@@ -322,7 +322,10 @@ fn run(cli: Cli) -> Result<()> {
             let info = specula_methods::method(&method)?;
             let mut technique = (info.create)();
             if info.exact {
-                specula_methods::apply_parameters(
+                if spp > 1 && info.param("spp").is_none() {
+                    anyhow::bail!("{method} traces one ray per pixel centre; --spp {spp} needs the CPU reference");
+                }
+                specula_methods::apply_known_parameters(
                     technique.as_mut(),
                     &[format!("spp={spp}"), format!("max_depth={max_depth}")],
                 )?;

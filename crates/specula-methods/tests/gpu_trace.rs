@@ -75,7 +75,7 @@ fn gpu_trace_equals_the_cpu_reference_on_every_scene() {
     let mut worst = f64::INFINITY;
     for (name, scene) in scenes() {
         let reference = cpu_reference(&scene, WIDTH, HEIGHT, 8);
-        for mode in [Mode::Megakernel] {
+        for mode in [Mode::Megakernel, Mode::Wavefront] {
             let still = gpu(&ctx, &scene, mode, 8);
             assert!(still.image.pixels.iter().all(|p| p.is_finite()), "{name}");
             let db = psnr(&reference, &still.image);

@@ -71,6 +71,7 @@ use crate::technique::{
 const BVH: &str = include_str!("bvh.wgsl");
 const SHADE: &str = include_str!("shade.wgsl");
 const MEGAKERNEL: &str = include_str!("megakernel.wgsl");
+const WAVEFRONT: &str = include_str!("wavefront.wgsl");
 
 /// The megakernel's shader: the common files, shading, traversal, its entry point.
 pub fn megakernel_source() -> String {
@@ -79,6 +80,20 @@ pub fn megakernel_source() -> String {
         &[SHADE, BVH, MEGAKERNEL].join("\n"),
     )
 }
+
+/// The wavefront's shader.
+pub fn wavefront_source() -> String {
+    shaders::compose(
+        &["optics.wgsl", "camera.wgsl", "scene.wgsl"],
+        &[SHADE, BVH, WAVEFRONT].join("\n"),
+    )
+}
+
+/// Side of the wavefront's square tiles, in pixels: its queues hold `queue_factor` rays per
+/// pixel of one tile, whatever the image size.
+const WAVEFRONT_TILE: u32 = 256;
+/// Generations the wavefront's count slots cover (max_depth + 1 of them, plus the next's count).
+const GENERATIONS: u32 = 65;
 
 /// Names of the shader's counter slots (shade.wgsl's COUNT_*), as reports list them.
 pub const COUNTER_NAMES: [&str; 4] = [
@@ -106,7 +121,7 @@ pub const PARAMS: &[ParamSpec] = &[
     },
     ParamSpec {
         name: "queue_factor",
-        kind: ParamKind::Integer { min: 1, max: 64 },
+        kind: ParamKind::Integer { min: 1, max: 16 },
         default: "4",
         doc: "wavefront: rays per pixel each queue holds",
         invalidates: Invalidates::Resources,
@@ -181,6 +196,7 @@ struct Prepared {
     settings: wgpu::Buffer,
     counters: Counters,
     layout: wgpu::BindGroupLayout,
+    scene_layout: wgpu::BindGroupLayout,
     scene_bind_group: wgpu::BindGroup,
     megakernel: wgpu::ComputePipeline,
     /// The bind group for the current output texture and buffers (remade when either changes).
@@ -193,11 +209,190 @@ pub enum Mode {
     Wavefront,
 }
 
+/// The wavefront's pipelines and buffers, for one queue capacity.
+struct Wavefront {
+    generate: wgpu::ComputePipeline,
+    extend: wgpu::ComputePipeline,
+    resolve: wgpu::ComputePipeline,
+    capacity: u32,
+    bind_group: wgpu::BindGroup,
+    tile: wgpu::Buffer,
+    queue_counts: wgpu::Buffer,
+    accumulator: wgpu::Buffer,
+    /// Bytes between the generation numbers in the dynamic-offset uniform.
+    generation_stride: u32,
+}
+
+/// Host mirror of WGSL `Tile` (wavefront.wgsl).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct GpuTile {
+    origin: [u32; 2],
+    size: [u32; 2],
+}
+
+impl Wavefront {
+    fn new(ctx: &GpuContext, p: &Prepared, queue_factor: u32) -> Result<Wavefront, GpuError> {
+        let device = &ctx.device;
+        ctx.validated("gpu-trace wavefront set-up", || {
+            use wgpu::{BufferBindingType as B, ShaderStages as St};
+            let read_write = || buffer_binding(B::Storage { read_only: false });
+            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("gpu-trace wavefront"),
+                entries: &[
+                    layout_entry(0, St::COMPUTE, read_write()),
+                    layout_entry(1, St::COMPUTE, read_write()),
+                    layout_entry(2, St::COMPUTE, read_write()),
+                    layout_entry(3, St::COMPUTE, buffer_binding(B::Uniform)),
+                    layout_entry(
+                        4,
+                        St::COMPUTE,
+                        wgpu::BindingType::Buffer {
+                            ty: B::Uniform,
+                            has_dynamic_offset: true,
+                            min_binding_size: wgpu::BufferSize::new(4),
+                        },
+                    ),
+                ],
+            });
+            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("gpu-trace wavefront"),
+                bind_group_layouts: &[Some(&p.layout), Some(&p.scene_layout), Some(&layout)],
+                ..Default::default()
+            });
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("gpu_trace/wavefront.wgsl"),
+                source: wgpu::ShaderSource::Wgsl(wavefront_source().into()),
+            });
+            let pipeline = |entry: &str| {
+                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(entry),
+                    layout: Some(&pipeline_layout),
+                    module: &module,
+                    entry_point: Some(entry),
+                    compilation_options: Default::default(),
+                    cache: None,
+                })
+            };
+            let tile_pixels = WAVEFRONT_TILE * WAVEFRONT_TILE;
+            let capacity = queue_factor * tile_pixels;
+            let storage =
+                |label, size: u64| writable_buffer(ctx, label, size, wgpu::BufferUsages::STORAGE);
+            let queues = storage("ray queues", 2 * capacity as u64 * 48);
+            let queue_counts = storage("ray queue counts", 4 * (GENERATIONS as u64 + 1));
+            let accumulator = storage("radiance accumulator", 12 * tile_pixels as u64);
+            let tile = writable_buffer(
+                ctx,
+                "wavefront tile",
+                size_of::<GpuTile>() as u64,
+                wgpu::BufferUsages::UNIFORM,
+            );
+            let generation_stride = device.limits().min_uniform_buffer_offset_alignment.max(4);
+            let generations = writable_buffer(
+                ctx,
+                "wavefront generations",
+                (generation_stride * GENERATIONS) as u64,
+                wgpu::BufferUsages::UNIFORM,
+            );
+            let numbers: Vec<u8> = (0..GENERATIONS)
+                .flat_map(|g| {
+                    let mut entry = vec![0u8; generation_stride as usize];
+                    entry[..4].copy_from_slice(&g.to_le_bytes());
+                    entry
+                })
+                .collect();
+            ctx.queue.write_buffer(&generations, 0, &numbers);
+            let bind_group = specula_gpu::util::bind_group(
+                ctx,
+                "gpu-trace wavefront",
+                &layout,
+                &[
+                    queues.as_entire_binding(),
+                    queue_counts.as_entire_binding(),
+                    accumulator.as_entire_binding(),
+                    tile.as_entire_binding(),
+                    wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer: &generations,
+                        offset: 0,
+                        size: wgpu::BufferSize::new(4),
+                    }),
+                ],
+            );
+            Wavefront {
+                generate: pipeline("cs_generate"),
+                extend: pipeline("cs_extend"),
+                resolve: pipeline("cs_resolve"),
+                capacity,
+                bind_group,
+                tile,
+                queue_counts,
+                accumulator,
+                generation_stride,
+            }
+        })
+    }
+
+    /// Traces the image tile by tile (group 0 bound to `group`).
+    fn trace(
+        &self,
+        ctx: &GpuContext,
+        p: &Prepared,
+        group: &wgpu::BindGroup,
+        width: u32,
+        height: u32,
+        max_depth: u32,
+    ) {
+        for y0 in (0..height).step_by(WAVEFRONT_TILE as usize) {
+            for x0 in (0..width).step_by(WAVEFRONT_TILE as usize) {
+                let size = [
+                    WAVEFRONT_TILE.min(width - x0),
+                    WAVEFRONT_TILE.min(height - y0),
+                ];
+                let tile = GpuTile {
+                    origin: [x0, y0],
+                    size,
+                };
+                ctx.queue
+                    .write_buffer(&self.tile, 0, bytemuck::bytes_of(&tile));
+                let pixels = size[0] * size[1];
+                let mut encoder = ctx.device.create_command_encoder(&Default::default());
+                encoder.clear_buffer(&self.queue_counts, 0, None);
+                encoder.clear_buffer(&self.accumulator, 0, None);
+                {
+                    let mut pass = encoder.begin_compute_pass(&Default::default());
+                    pass.set_bind_group(0, group, &[]);
+                    pass.set_bind_group(1, &p.scene_bind_group, &[]);
+                    pass.set_bind_group(2, &self.bind_group, &[0]);
+                    pass.set_pipeline(&self.generate);
+                    pass.dispatch_workgroups(pixels.div_ceil(64), 1, 1);
+                    pass.set_pipeline(&self.extend);
+                    // Generation g holds at most MAX_CHILDREN^g rays per pixel, and never more
+                    // than a queue holds.
+                    let mut bound = pixels as u64;
+                    for g in 0..=max_depth.min(GENERATIONS - 1) {
+                        pass.set_bind_group(2, &self.bind_group, &[g * self.generation_stride]);
+                        pass.dispatch_workgroups(
+                            (bound.min(self.capacity as u64) as u32).div_ceil(64),
+                            1,
+                            1,
+                        );
+                        bound *= 6;
+                    }
+                    pass.set_pipeline(&self.resolve);
+                    pass.dispatch_workgroups(pixels.div_ceil(64), 1, 1);
+                }
+                ctx.queue.submit([encoder.finish()]);
+            }
+        }
+    }
+}
+
 pub struct GpuTrace {
     pub max_depth: u32,
     pub mode: Mode,
     pub queue_factor: u32,
     prepared: Option<Prepared>,
+    wavefront: Option<Wavefront>,
     timer: StageTimer,
     output: OutputTexture,
 }
@@ -209,6 +404,7 @@ impl Default for GpuTrace {
             mode: Mode::Megakernel,
             queue_factor: 4,
             prepared: None,
+            wavefront: None,
             timer: StageTimer::default(),
             output: OutputTexture::default(),
         }
@@ -310,6 +506,7 @@ impl GpuTrace {
                 counters: Counters::new(ctx, "gpu-trace counters", COUNTER_NAMES.len()),
                 scene_bind_group: gpu_scene.bind_group(ctx, &scene_layout),
                 layout,
+                scene_layout,
                 megakernel,
                 bind_group: None,
             }
@@ -319,6 +516,7 @@ impl GpuTrace {
     fn ensure_prepared(&mut self, ctx: &GpuContext, live: &LiveScene) -> Result<(), GpuError> {
         if self.prepared.as_ref().map(|p| p.scene_id) != Some(live.id()) {
             self.prepared = Some(Self::build(ctx, live)?);
+            self.wavefront = None;
         }
         Ok(())
     }
@@ -405,6 +603,9 @@ impl Technique for GpuTrace {
     }
 
     fn invalidate(&mut self, what: Invalidates) {
+        if what >= Invalidates::Resources {
+            self.wavefront = None;
+        }
         if what >= Invalidates::Scene {
             self.prepared = None;
         }
@@ -432,12 +633,20 @@ impl Technique for GpuTrace {
         p.upload_moves(gpu, live);
         self.timer.lap(gpu, "bvh upload")?;
         let camera_uniform = raster::camera_uniform(camera, &live.scene().bounds(), width, height);
+        if self.mode == Mode::Wavefront && self.wavefront.is_none() {
+            self.wavefront = Some(Wavefront::new(gpu, p, self.queue_factor)?);
+        }
+        let wavefront = self
+            .wavefront
+            .as_ref()
+            .filter(|_| self.mode == Mode::Wavefront);
         let settings = GpuSettings {
             max_depth: self.max_depth,
             triangle_count: p.triangle_count,
-            queue_capacity: 0,
+            queue_capacity: wavefront.map(|w| w.capacity).unwrap_or(0),
             pad: 0,
         };
+        let max_depth = self.max_depth;
         gpu.validated("gpu-trace", || {
             gpu.queue
                 .write_buffer(&p.camera, 0, bytemuck::bytes_of(&camera_uniform));
@@ -445,6 +654,10 @@ impl Technique for GpuTrace {
                 .write_buffer(&p.settings, 0, bytemuck::bytes_of(&settings));
             p.counters.clear(gpu);
             let group = p.bind_group(gpu, live, &output).clone();
+            if let Some(wavefront) = wavefront {
+                wavefront.trace(gpu, p, &group, width, height, max_depth);
+                return;
+            }
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
             {
                 let mut pass = encoder.begin_compute_pass(&Default::default());
