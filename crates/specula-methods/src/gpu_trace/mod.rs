@@ -214,7 +214,9 @@ struct Wavefront {
     generate: wgpu::ComputePipeline,
     extend: wgpu::ComputePipeline,
     resolve: wgpu::ComputePipeline,
+    /// Rays each queue can hold: `queue_factor` × the pixels of a whole tile.
     capacity: u32,
+    queue_factor: u32,
     bind_group: wgpu::BindGroup,
     tile: wgpu::Buffer,
     queue_counts: wgpu::Buffer,
@@ -229,6 +231,8 @@ struct Wavefront {
 struct GpuTile {
     origin: [u32; 2],
     size: [u32; 2],
+    capacity: u32,
+    pad: [u32; 3],
 }
 
 impl Wavefront {
@@ -323,6 +327,7 @@ impl Wavefront {
                 extend: pipeline("cs_extend"),
                 resolve: pipeline("cs_resolve"),
                 capacity,
+                queue_factor,
                 bind_group,
                 tile,
                 queue_counts,
@@ -351,6 +356,8 @@ impl Wavefront {
                 let tile = GpuTile {
                     origin: [x0, y0],
                     size,
+                    capacity: self.queue_factor * size[0] * size[1],
+                    pad: [0; 3],
                 };
                 ctx.queue
                     .write_buffer(&self.tile, 0, bytemuck::bytes_of(&tile));
@@ -422,8 +429,8 @@ impl GpuTrace {
 }
 
 fn storage_buffer(ctx: &GpuContext, label: &str, bytes: &[u8]) -> wgpu::Buffer {
-    // Storage bindings may not be empty.
-    let size = bytes.len().max(16) as u64;
+    // Storage bindings may not be empty, and hold at least one element of any of the structs.
+    let size = bytes.len().max(64) as u64;
     let buffer = writable_buffer(ctx, label, size, wgpu::BufferUsages::STORAGE);
     ctx.queue.write_buffer(&buffer, 0, bytes);
     buffer

@@ -7,6 +7,11 @@
 struct Tile {
     origin: vec2<u32>,
     size: vec2<u32>,
+    // Rays a queue may hold for this tile: queue_factor × its pixels.
+    capacity: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 };
 
 // Which generation a dispatch extends (a dynamic offset selects it).
@@ -24,6 +29,7 @@ struct Generation {
 @group(2) @binding(3) var<uniform> tile: Tile;
 @group(2) @binding(4) var<uniform> generation: Generation;
 
+// Each queue is half of the buffer (settings.queue_capacity rays, the largest tile's).
 fn queue_start(g: u32) -> u32 {
     return (g % 2u) * settings.queue_capacity;
 }
@@ -61,7 +67,7 @@ fn cs_generate(@builtin(global_invocation_id) id: vec3<u32>) {
 @compute @workgroup_size(64)
 fn cs_extend(@builtin(global_invocation_id) id: vec3<u32>) {
     let g = generation.index;
-    let count = min(atomicLoad(&queue_counts[g]), settings.queue_capacity);
+    let count = min(atomicLoad(&queue_counts[g]), tile.capacity);
     if (id.x >= count) {
         return;
     }
@@ -77,7 +83,7 @@ fn cs_extend(@builtin(global_invocation_id) id: vec3<u32>) {
     if (child_count > 0u) {
         let first = atomicAdd(&queue_counts[g + 1u], child_count);
         for (var i = 0u; i < child_count; i++) {
-            if (first + i < settings.queue_capacity) {
+            if (first + i < tile.capacity) {
                 queues[queue_start(g + 1u) + first + i] = children[i];
             } else {
                 dropped += 1u;
