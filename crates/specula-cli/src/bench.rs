@@ -1,12 +1,21 @@
-//! `specula bench`: per method, a warm-up then N timed frames; the median and the spread (min,
-//! max) of the frame time and of each stage. A method with a `dynamic` parameter is timed twice:
-//! static (its scene-only maps kept, as in a still scene) and dynamic (redrawn every frame, as
-//! the papers do for moving scenes).
+//! `specula bench`: per scene and method, a warm-up then N timed frames; the median and the
+//! spread (min, max) of the frame time and of each stage. A method with a `dynamic` parameter is
+//! timed twice: static (its scene-only maps kept, as in a still scene) and dynamic (redrawn every
+//! frame, as the papers do for moving scenes).
+//!
+//! Every run is also put beside the two exact methods of the same scene, timed in the same
+//! process: its speed-up over the CPU `reference` and over `gpu-trace` (the exact answer on the
+//! same GPU), each the exact method's median frame time over the run's. Methods that count
+//! their rays (the exact ones) also get rays per second (closest-hit and shadow rays alike).
 
 use anyhow::Result;
 use serde::Serialize;
 use specula_methods::{Context, LiveScene};
 use specula_scene::Scene;
+
+/// The exact methods every run is compared with.
+pub const CPU_REFERENCE: &str = "reference";
+pub const GPU_TRACE: &str = "gpu-trace";
 
 /// Frames rendered and thrown away before timing (pipeline creation, first-use costs).
 const WARM_UP_FRAMES: u32 = 2;
@@ -20,6 +29,7 @@ pub struct Spread {
 
 #[derive(Debug, Serialize)]
 pub struct MethodBench {
+    pub scene: String,
     pub method: String,
     /// "static", "dynamic", or "-" for a method without scene-only maps.
     pub mode: String,
@@ -34,6 +44,77 @@ pub struct MethodBench {
     pub stages: Vec<(String, Spread)>,
     /// GPU textures + buffers + bind groups created over the timed frames.
     pub created: u64,
+    /// The CPU reference's median frame time over this run's, on the same scene.
+    pub speedup_over_reference: Option<f64>,
+    /// gpu-trace's median frame time over this run's, on the same scene and GPU.
+    pub speedup_over_gpu_trace: Option<f64>,
+    /// Closest-hit plus shadow rays of the last frame over the median frame time (methods that
+    /// count rays).
+    pub rays_per_second: Option<f64>,
+}
+
+/// A whole `specula bench` run: where and when, and every run of every scene.
+#[derive(Debug, Serialize)]
+pub struct BenchReport {
+    pub schema_version: u32,
+    pub adapter: String,
+    pub driver: String,
+    /// UTC, YYYY-MM-DD.
+    pub date: String,
+    /// Whether the adapter offers hardware ray queries (gpu-trace does not use them).
+    pub ray_queries: bool,
+    pub runs: Vec<MethodBench>,
+}
+
+/// Today's UTC date as YYYY-MM-DD.
+pub fn utc_date() -> String {
+    civil_date(
+        std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map(|d| d.as_secs())
+            .unwrap_or(0),
+    )
+}
+
+/// The UTC date of a Unix time (civil-from-days, Howard Hinnant's algorithm).
+fn civil_date(seconds: u64) -> String {
+    let z = (seconds / 86_400) as i64 + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    format!("{year:04}-{month:02}-{day:02}")
+}
+
+/// The methods a bench times: those asked for, then the exact ones the ratios need (gpu-trace
+/// only where there is a GPU).
+pub fn with_bases(methods: &[String], has_gpu: bool) -> Vec<String> {
+    let mut all = methods.to_vec();
+    for base in [CPU_REFERENCE, GPU_TRACE] {
+        if (base != GPU_TRACE || has_gpu) && !all.iter().any(|m| m == base) {
+            all.push(base.to_string());
+        }
+    }
+    all
+}
+
+/// Fills each run's speed-ups from the exact methods' runs on its scene.
+pub fn add_ratios(runs: &mut [MethodBench]) {
+    let median_of = |runs: &[MethodBench], scene: &str, method: &str| {
+        runs.iter()
+            .find(|r| r.scene == scene && r.method == method)
+            .map(|r| r.frame.median_ms)
+    };
+    for i in 0..runs.len() {
+        let (scene, median) = (runs[i].scene.clone(), runs[i].frame.median_ms);
+        let ratio = |base: Option<f64>| base.filter(|_| median > 0.0).map(|b| b / median);
+        runs[i].speedup_over_reference = ratio(median_of(runs, &scene, CPU_REFERENCE));
+        runs[i].speedup_over_gpu_trace = ratio(median_of(runs, &scene, GPU_TRACE));
+    }
 }
 
 fn spread(mut values: Vec<f64>) -> Spread {
@@ -60,6 +141,7 @@ pub fn run(
     height: u32,
     frames: u32,
 ) -> Result<Vec<MethodBench>> {
+    let scene_name = scene.name.clone();
     let live = LiveScene::new(scene);
     let camera = live.scene().camera.clone();
     let adapter = ctx.describe();
@@ -89,11 +171,23 @@ pub fn run(
             let mut stages: Vec<(String, Vec<f64>)> = Vec::new();
             let mut timing = String::new();
             let mut created = 0;
+            let mut rays = None;
             for i in 0..WARM_UP_FRAMES + frames {
                 let frame = technique.render(ctx, &live, &camera, width, height)?;
                 bar.inc(1);
                 if i < WARM_UP_FRAMES {
                     continue;
+                }
+                let count = |name: &str| {
+                    frame
+                        .counters
+                        .iter()
+                        .find(|(n, _)| n.starts_with(name))
+                        .map(|c| c.1)
+                };
+                if let (Some(closest), Some(shadow)) = (count("rays traced"), count("shadow rays"))
+                {
+                    rays = Some(closest + shadow);
                 }
                 created += frame.created.total();
                 timing = format!("{:?}", frame.timing);
@@ -106,7 +200,12 @@ pub fn run(
                 }
             }
             bar.finish_and_clear();
+            let frame = spread(totals);
+            let rays_per_second = rays
+                .filter(|_| frame.median_ms > 0.0)
+                .map(|r| r as f64 / (frame.median_ms * 1e-3));
             results.push(MethodBench {
+                scene: scene_name.clone(),
                 method: name.clone(),
                 mode: mode.to_string(),
                 parameters: technique.parameters(),
@@ -116,9 +215,12 @@ pub fn run(
                 adapter: adapter.clone(),
                 timing,
                 prepare_ms,
-                frame: spread(totals),
+                frame,
                 stages: stages.into_iter().map(|(n, v)| (n, spread(v))).collect(),
                 created,
+                speedup_over_reference: None,
+                speedup_over_gpu_trace: None,
+                rays_per_second,
             });
         }
     }
@@ -133,8 +235,8 @@ pub fn print(results: &[MethodBench]) {
             format!(" [{}]", r.mode)
         };
         println!(
-            "{}{mode} ({}x{}, {} frames on {}, {}): prepare {:.1} ms; frame median {:.2} ms (min {:.2}, max {:.2}); GPU objects created {}",
-            r.method, r.width, r.height, r.frames, r.adapter, r.timing, r.prepare_ms, r.frame.median_ms, r.frame.min_ms, r.frame.max_ms, r.created
+            "{}: {}{mode} ({}x{}, {} frames on {}, {}): prepare {:.1} ms; frame median {:.2} ms (min {:.2}, max {:.2}); {}; GPU objects created {}",
+            r.scene, r.method, r.width, r.height, r.frames, r.adapter, r.timing, r.prepare_ms, r.frame.median_ms, r.frame.min_ms, r.frame.max_ms, ratios(r), r.created
         );
         for (stage, s) in &r.stages {
             println!(
@@ -145,9 +247,113 @@ pub fn print(results: &[MethodBench]) {
     }
 }
 
+fn speedup(value: Option<f64>) -> String {
+    value
+        .map(|v| format!("{v:.3}x"))
+        .unwrap_or_else(|| "-".into())
+}
+
+/// "speed-up over reference Ax, over gpu-trace Bx[, N Mrays/s]".
+fn ratios(r: &MethodBench) -> String {
+    let mut text = format!(
+        "speed-up over {CPU_REFERENCE} {}, over {GPU_TRACE} {}",
+        speedup(r.speedup_over_reference),
+        speedup(r.speedup_over_gpu_trace)
+    );
+    if let Some(rays) = r.rays_per_second {
+        text.push_str(&format!(", {:.2} Mrays/s", rays / 1e6));
+    }
+    text
+}
+
+/// The report as a markdown table: one row per scene, method and mode.
+pub fn markdown(report: &BenchReport) -> String {
+    let mut out = format!(
+        "Adapter: {} (driver: {}); ray queries: {}; {}.\n\n",
+        report.adapter,
+        if report.driver.is_empty() {
+            "-"
+        } else {
+            &report.driver
+        },
+        if report.ray_queries { "yes" } else { "no" },
+        report.date
+    );
+    out.push_str("| scene | method | mode | size | frame ms (median) | min–max ms | speed-up over reference | speed-up over gpu-trace | Mrays/s |\n");
+    out.push_str("|---|---|---|---|---:|---:|---:|---:|---:|\n");
+    for r in &report.runs {
+        out.push_str(&format!(
+            "| {} | {} | {} | {}×{} | {:.2} | {:.2}–{:.2} | {} | {} | {} |\n",
+            r.scene,
+            r.method,
+            r.mode,
+            r.width,
+            r.height,
+            r.frame.median_ms,
+            r.frame.min_ms,
+            r.frame.max_ms,
+            speedup(r.speedup_over_reference),
+            speedup(r.speedup_over_gpu_trace),
+            r.rays_per_second
+                .map(|v| format!("{:.2}", v / 1e6))
+                .unwrap_or_else(|| "-".into())
+        ));
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
-    use super::spread;
+    use super::*;
+
+    #[test]
+    fn civil_dates() {
+        assert_eq!(civil_date(0), "1970-01-01");
+        // A leap day, and a date late in a year.
+        assert_eq!(civil_date(951_782_400), "2000-02-29");
+        assert_eq!(civil_date(1_796_040_000), "2026-11-30");
+    }
+
+    fn run(scene: &str, method: &str, median_ms: f64) -> MethodBench {
+        MethodBench {
+            scene: scene.into(),
+            method: method.into(),
+            mode: "-".into(),
+            parameters: Vec::new(),
+            frames: 1,
+            width: 1,
+            height: 1,
+            adapter: String::new(),
+            timing: String::new(),
+            prepare_ms: 0.0,
+            frame: spread(vec![median_ms]),
+            stages: Vec::new(),
+            created: 0,
+            speedup_over_reference: None,
+            speedup_over_gpu_trace: None,
+            rays_per_second: None,
+        }
+    }
+
+    #[test]
+    fn ratios_are_the_exact_methods_medians_over_the_runs_of_the_same_scene() {
+        let mut runs = vec![
+            run("a", "envmap", 2.0),
+            run("a", CPU_REFERENCE, 100.0),
+            run("a", GPU_TRACE, 10.0),
+            run("b", "envmap", 4.0),
+            run("b", CPU_REFERENCE, 40.0),
+        ];
+        add_ratios(&mut runs);
+        assert_eq!(runs[0].speedup_over_reference, Some(50.0));
+        assert_eq!(runs[0].speedup_over_gpu_trace, Some(5.0));
+        assert_eq!(runs[2].speedup_over_gpu_trace, Some(1.0));
+        assert_eq!(runs[3].speedup_over_reference, Some(10.0));
+        assert_eq!(
+            runs[3].speedup_over_gpu_trace, None,
+            "no gpu-trace run on b"
+        );
+    }
 
     #[test]
     fn spread_is_the_median_and_the_extremes() {

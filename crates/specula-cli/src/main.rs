@@ -111,10 +111,13 @@ enum Command {
         #[arg(long, default_value_t = 0.5, value_parser = parse_scale)]
         interaction_scale: f32,
     },
-    /// Time each method: warm-up, then N frames; median and spread per method and stage.
+    /// Time each method: warm-up, then N frames; median and spread per method and stage, and
+    /// each method's speed-up over the CPU reference and over gpu-trace (both always timed too).
     Bench {
+        /// Built-in scene names or scene/mesh files.
         #[arg(default_value = DEFAULT_SCENE)]
-        scene: String,
+        scenes: Vec<String>,
+        /// Comma-separated methods (default: every method).
         #[arg(long, value_delimiter = ',')]
         methods: Option<Vec<String>>,
         #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=100000))]
@@ -122,8 +125,12 @@ enum Command {
         /// A technique parameter, NAME=VALUE (repeatable), e.g. `-p resolution=512`.
         #[arg(short = 'p', long = "param")]
         params: Vec<String>,
+        /// Write the report (adapter, driver, date, every run) as JSON here.
         #[arg(long)]
         json: Option<PathBuf>,
+        /// Write the runs as a markdown table here.
+        #[arg(long)]
+        markdown: Option<PathBuf>,
         #[arg(short = 'W', long, default_value_t = 640, value_parser = clap::value_parser!(u32).range(1..=16384))]
         width: u32,
         #[arg(short = 'H', long, value_parser = clap::value_parser!(u32).range(1..=16384))]
@@ -304,6 +311,19 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Methods => {
             print_methods();
+            // Hardware ray queries: reported, not used (gpu_trace's module doc says why).
+            match GpuContext::new() {
+                Ok(gpu) => println!(
+                    "\nGPU: {}; hardware ray queries: {}",
+                    gpu.describe(),
+                    if specula_methods::gpu_trace::ray_queries_supported(&gpu) {
+                        "offered (gpu-trace still traverses its BVH in compute shaders)"
+                    } else {
+                        "not offered (gpu-trace traverses its BVH in compute shaders)"
+                    }
+                ),
+                Err(e) => println!("\nno GPU: {e}"),
+            }
             Ok(())
         }
         Command::Render {
@@ -497,23 +517,60 @@ fn run(cli: Cli) -> Result<()> {
             interaction_scale,
         })?),
         Command::Bench {
-            scene,
+            scenes,
             methods,
             frames,
             json,
+            markdown,
             width,
             height,
             params,
         } => {
-            let scene = load_scene(&scene)?;
-            let height = height_for(&scene, width, height);
-            let methods = methods.unwrap_or_else(specula_methods::approximate_methods);
-            let ctx = context_for(&method_infos(&methods)?)?;
-            let results = bench::run(scene, &ctx, &methods, &params, width, height, frames)?;
-            bench::print(&results);
+            let methods = methods.unwrap_or_else(|| {
+                specula_methods::METHODS
+                    .iter()
+                    .map(|m| m.name.to_string())
+                    .collect()
+            });
+            let asked = method_infos(&methods)?;
+            let ctx = context_for(&asked)?;
+            let methods = bench::with_bases(&methods, ctx.gpu.is_some());
+            let mut runs = Vec::new();
+            for source in &scenes {
+                let scene = load_scene(source)?;
+                let height = height_for(&scene, width, height);
+                runs.extend(bench::run(
+                    scene, &ctx, &methods, &params, width, height, frames,
+                )?);
+            }
+            bench::add_ratios(&mut runs);
+            bench::print(&runs);
+            let report = bench::BenchReport {
+                schema_version: 2,
+                adapter: ctx.describe(),
+                driver: ctx
+                    .gpu
+                    .as_ref()
+                    .map(|g| {
+                        format!("{} {}", g.adapter_info.driver, g.adapter_info.driver_info)
+                            .trim()
+                            .to_string()
+                    })
+                    .unwrap_or_default(),
+                date: bench::utc_date(),
+                ray_queries: ctx
+                    .gpu
+                    .as_ref()
+                    .is_some_and(specula_methods::gpu_trace::ray_queries_supported),
+                runs,
+            };
             if let Some(json) = json {
-                std::fs::write(&json, serde_json::to_string_pretty(&results)?)
+                std::fs::write(&json, serde_json::to_string_pretty(&report)?)
                     .with_context(|| format!("writing {}", json.display()))?;
+            }
+            if let Some(markdown) = markdown {
+                std::fs::write(&markdown, bench::markdown(&report))
+                    .with_context(|| format!("writing {}", markdown.display()))?;
             }
             Ok(())
         }

@@ -287,6 +287,8 @@ fn bench_reports_median_and_spread_per_stage() {
             "32",
             "--json",
             "b.json",
+            "--markdown",
+            "b.md",
         ])
         .output()
         .unwrap();
@@ -297,16 +299,46 @@ fn bench_reports_median_and_spread_per_stage() {
     );
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("b.json")).unwrap()).unwrap();
-    // envmap keeps scene-only maps, so it is timed static and dynamic; warm frames create no
-    // GPU objects.
-    let runs = json.as_array().unwrap();
-    let modes: Vec<&str> = runs.iter().map(|r| r["mode"].as_str().unwrap()).collect();
-    assert_eq!(modes, ["static", "dynamic"]);
+    // envmap keeps scene-only maps, so it is timed static and dynamic; the two exact methods
+    // are timed too, as the ratios' bases; warm frames create no GPU objects.
+    assert!(json["date"].as_str().unwrap().starts_with("20"));
+    assert!(json["ray_queries"].is_boolean());
+    let runs = json["runs"].as_array().unwrap();
+    let names: Vec<(&str, &str)> = runs
+        .iter()
+        .map(|r| (r["method"].as_str().unwrap(), r["mode"].as_str().unwrap()))
+        .collect();
+    assert_eq!(
+        names,
+        [
+            ("envmap", "static"),
+            ("envmap", "dynamic"),
+            ("reference", "-"),
+            ("gpu-trace", "-")
+        ]
+    );
     for run in runs {
         assert_eq!(run["frames"], 3);
         assert_eq!(run["created"], 0, "{run}");
-        assert!(run["stages"].as_array().unwrap().len() >= 3);
+        assert!(!run["stages"].as_array().unwrap().is_empty());
+        // Each ratio is the exact method's median over this run's.
+        let median = run["frame"]["median_ms"].as_f64().unwrap();
+        for (base, key) in [(2, "speedup_over_reference"), (3, "speedup_over_gpu_trace")] {
+            let base_median = runs[base]["frame"]["median_ms"].as_f64().unwrap();
+            let ratio = run[key].as_f64().unwrap();
+            assert!(
+                (ratio - base_median / median).abs() < 1e-9 * ratio.max(1.0),
+                "{run}"
+            );
+        }
     }
+    assert!(runs[0]["stages"].as_array().unwrap().len() >= 3);
+    // The exact methods count their rays: the same rays, so the same count per frame.
+    for exact in &runs[2..] {
+        assert!(exact["rays_per_second"].as_f64().unwrap() > 0.0, "{exact}");
+    }
+    let markdown = std::fs::read_to_string(dir.path().join("b.md")).unwrap();
+    assert_eq!(markdown.matches("| door-mirror |").count(), 4, "{markdown}");
 }
 
 #[test]

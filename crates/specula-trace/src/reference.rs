@@ -15,6 +15,7 @@
 //! through its centre; with more, the samples are stratified in x and in y (Latin hypercube,
 //! jittered within strata, deterministic per pixel) and averaged (box filter).
 
+use std::cell::Cell;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use glam::{Vec2, Vec3};
@@ -108,6 +109,30 @@ pub fn offset_origin(p: Vec3, ng: Vec3, dir: Vec3) -> Vec3 {
     }
 }
 
+thread_local! {
+    /// Rays this thread has traced: (closest-hit rays, shadow rays).
+    static RAYS_TRACED: Cell<(u64, u64)> = const { Cell::new((0, 0)) };
+}
+
+/// How many rays the calling thread has traced so far through [`Tracer`]: closest-hit rays
+/// (primary and secondary alike) and shadow rays. A caller that wants the rays of some work
+/// reads it before and after, on the thread that did the work (a thread-local counter costs
+/// nothing next to a ray; an atomic shared by all threads would).
+pub fn rays_traced_on_this_thread() -> (u64, u64) {
+    RAYS_TRACED.with(Cell::get)
+}
+
+fn count_ray(shadow: bool) {
+    RAYS_TRACED.with(|c| {
+        let (rays, shadows) = c.get();
+        c.set(if shadow {
+            (rays, shadows + 1)
+        } else {
+            (rays + 1, shadows)
+        });
+    });
+}
+
 pub struct Tracer<'a> {
     pub scene: &'a Scene,
     pub accel: &'a SceneAccel,
@@ -120,6 +145,7 @@ impl Tracer<'_> {
     /// component of the result is used.
     pub fn radiance(&self, ray: &Ray, depth: u32, channel: Option<usize>) -> Vec3 {
         let scene = self.scene;
+        count_ray(false);
         let Some(hit) = self.accel.intersect(ray, f32::INFINITY) else {
             return scene.background.radiance(ray.dir, &scene.textures);
         };
@@ -147,6 +173,7 @@ impl Tracer<'_> {
                         origin: offset_origin(sp.p, sp.ng, sample.to_light),
                         dir: sample.to_light,
                     };
+                    count_ray(true);
                     if !self.accel.occluded(&shadow, sample.distance) {
                         irradiance += sample.irradiance * cos;
                     }

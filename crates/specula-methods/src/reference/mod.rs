@@ -30,7 +30,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 use specula_gpu::{ResourceCounts, StageTime, TimingSource};
 use specula_scene::Camera;
-use specula_trace::reference::{pixel_radiance, Tracer};
+use specula_trace::reference::{pixel_radiance, rays_traced_on_this_thread, Tracer};
 use specula_trace::Image;
 
 use crate::live_scene::LiveScene;
@@ -199,7 +199,7 @@ impl Technique for Reference {
         let (tiles_x, tiles_y) = (width.div_ceil(TILE), height.div_ceil(TILE));
         let tiles = tiles_x * tiles_y;
         let batch = (rayon::current_num_threads() as u32 * 2).max(1);
-        let mut rays = 0u64;
+        let (mut camera_rays, mut rays_traced, mut shadow_rays) = (0u64, 0u64, 0u64);
         while progress.level < LEVELS.len() {
             let level = progress.level;
             let stride = LEVELS[level];
@@ -208,25 +208,36 @@ impl Technique for Reference {
             } else {
                 (progress.next_tile + batch).min(tiles)
             };
-            let traced: Vec<(u32, u32, Vec3)> = (progress.next_tile..end)
+            let tiles_traced: Vec<(Vec<(u32, u32, Vec3)>, (u64, u64))> = (progress.next_tile..end)
                 .into_par_iter()
-                .flat_map_iter(|tile| {
+                .map(|tile| {
                     let (x0, y0) = ((tile % tiles_x) * TILE, (tile / tiles_x) * TILE);
-                    let tracer = &tracer;
-                    (y0..(y0 + TILE).min(height)).flat_map(move |y| {
-                        (x0..(x0 + TILE).min(width))
-                            .filter(move |&x| traced_at(x, y, level, first_level))
-                            .map(move |x| {
-                                (
-                                    x,
-                                    y,
-                                    pixel_radiance(tracer, camera, x, y, width, height, spp),
-                                )
-                            })
-                    })
+                    let before = rays_traced_on_this_thread();
+                    let pixels: Vec<(u32, u32, Vec3)> = (y0..(y0 + TILE).min(height))
+                        .flat_map(|y| {
+                            (x0..(x0 + TILE).min(width))
+                                .filter(move |&x| traced_at(x, y, level, first_level))
+                                .map(move |x| (x, y))
+                        })
+                        .map(|(x, y)| {
+                            (
+                                x,
+                                y,
+                                pixel_radiance(&tracer, camera, x, y, width, height, spp),
+                            )
+                        })
+                        .collect();
+                    let after = rays_traced_on_this_thread();
+                    (pixels, (after.0 - before.0, after.1 - before.1))
                 })
                 .collect();
-            rays += traced.len() as u64 * spp as u64;
+            let mut traced = Vec::new();
+            for (pixels, (rays, shadow)) in tiles_traced {
+                camera_rays += pixels.len() as u64 * spp as u64;
+                rays_traced += rays;
+                shadow_rays += shadow;
+                traced.extend(pixels);
+            }
             for (x, y, radiance) in traced {
                 for by in y..(y + stride).min(height) {
                     for bx in x..(x + stride).min(width) {
@@ -251,7 +262,9 @@ impl Technique for Reference {
                 milliseconds: start.elapsed().as_secs_f64() * 1e3,
             }],
             counters: vec![
-                ("camera rays".into(), rays),
+                ("camera rays".into(), camera_rays),
+                ("rays traced (primary and secondary)".into(), rays_traced),
+                ("shadow rays".into(), shadow_rays),
                 // The largest block still shown: the last finished level's stride (the first
                 // level's while it runs).
                 (
