@@ -73,6 +73,9 @@ pub const INFO: MethodInfo = MethodInfo {
     create: || Box::new(Reference::default()),
 };
 
+/// (x, y, radiance) of one traced pixel.
+type TracedPixel = (u32, u32, Vec3);
+
 /// Pixel strides of the progressive levels, coarse to fine.
 const LEVELS: [u32; 4] = [8, 4, 2, 1];
 /// Side of a work tile in pixels.
@@ -208,12 +211,12 @@ impl Technique for Reference {
             } else {
                 (progress.next_tile + batch).min(tiles)
             };
-            let tiles_traced: Vec<(Vec<(u32, u32, Vec3)>, (u64, u64))> = (progress.next_tile..end)
+            let tiles_traced: Vec<(Vec<TracedPixel>, (u64, u64))> = (progress.next_tile..end)
                 .into_par_iter()
                 .map(|tile| {
                     let (x0, y0) = ((tile % tiles_x) * TILE, (tile / tiles_x) * TILE);
                     let before = rays_traced_on_this_thread();
-                    let pixels: Vec<(u32, u32, Vec3)> = (y0..(y0 + TILE).min(height))
+                    let pixels: Vec<TracedPixel> = (y0..(y0 + TILE).min(height))
                         .flat_map(|y| {
                             (x0..(x0 + TILE).min(width))
                                 .filter(move |&x| traced_at(x, y, level, first_level))
