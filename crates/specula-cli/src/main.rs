@@ -224,15 +224,22 @@ fn print_comparison(r: &specula_compare::Report) {
         r.scene, r.width, r.height, r.mask_pixels, r.reference.total_ms
     );
     println!(
-        "{:<16}{:>9}{:>11}{:>11}{:>11}{:>12}{:>10}",
-        "method", "RMSE", "PSNR dB", "mean FLIP", "FLIP>0.1", "frame ms", "speed-up"
+        "{:<16}{:>9}{:>11}{:>11}{:>11}{:>12}{:>10}{:>14}",
+        "method",
+        "RMSE",
+        "PSNR dB",
+        "mean FLIP",
+        "FLIP>0.1",
+        "frame ms",
+        "speed-up",
+        "vs gpu-trace"
     );
     for warning in r.methods.iter().flat_map(|m| &m.warnings) {
         eprintln!("warning: {warning}");
     }
     for m in &r.methods {
         println!(
-            "{:<16}{:>9.4}{:>11}{:>11.4}{:>10.1}%{:>12.2}{:>9.1}x",
+            "{:<16}{:>9.4}{:>11}{:>11.4}{:>10.1}%{:>12.2}{:>9.1}x{:>14}",
             m.method,
             m.metrics.rmse,
             m.metrics
@@ -242,7 +249,10 @@ fn print_comparison(r: &specula_compare::Report) {
             m.metrics.mean_flip,
             m.metrics.share_flip_over_0_1 * 100.0,
             m.total_ms,
-            m.speedup_over_reference
+            m.speedup_over_reference,
+            m.speedup_over_gpu_trace
+                .map(|v| format!("{v:.2}x"))
+                .unwrap_or_else(|| "-".into())
         );
     }
 }
@@ -403,7 +413,13 @@ fn run(cli: Cli) -> Result<()> {
             max_depth,
             params,
         } => {
-            let methods = methods.unwrap_or_else(specula_methods::approximate_methods);
+            // By default every method but the CPU reference, which is the ground truth; gpu-trace
+            // among them shows its own error (none) and is the base of the second speed-up.
+            let methods = methods.unwrap_or_else(|| {
+                let mut all = specula_methods::approximate_methods();
+                all.insert(0, specula_compare::GPU_TRACE.to_string());
+                all
+            });
             let mut infos = method_infos(&methods)?;
             infos.push(specula_methods::exact_method());
             let options = |scene: &Scene| specula_compare::Options {

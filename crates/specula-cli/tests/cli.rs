@@ -203,7 +203,30 @@ fn compare_with_no_arguments_reports_every_method_on_the_default_scene() {
     assert!(dir.path().join("specula-report/report.html").exists());
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("r.json")).unwrap()).unwrap();
-    assert_eq!(json["methods"][0]["method"], "envmap");
+    // Every method but the CPU reference, gpu-trace first: it matches the reference exactly.
+    let names: Vec<&str> = json["methods"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m["method"].as_str().unwrap())
+        .collect();
+    let mut expected = vec!["gpu-trace"];
+    expected.extend(
+        specula_methods::METHODS
+            .iter()
+            .filter(|m| !m.exact)
+            .map(|m| m.name),
+    );
+    assert_eq!(names, expected);
+    assert!(json["methods"][0]["metrics"]["psnr_db"]
+        .as_f64()
+        .is_none_or(|db| db > 45.0));
+    assert_eq!(
+        json["methods"][1]["speedup_over_gpu_trace"]
+            .as_f64()
+            .is_some(),
+        true
+    );
 }
 
 #[test]

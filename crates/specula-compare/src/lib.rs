@@ -3,7 +3,9 @@
 //! from the G-buffer's IDs), an error heat-map, its time per stage and its speed-up over the
 //! reference; written as a self-contained HTML page and as JSON (schema:
 //! docs/compare.schema.json). A technique's time is that of its second frame (the first pays
-//! for shader compilation); the reference's is its CPU render time, BVH build included.
+//! for shader compilation); the reference's is its CPU render time, BVH build included. Where
+//! there is a GPU, each technique's time is also put beside `gpu-trace`'s (the exact answer on
+//! the same GPU; timed even when not among the methods compared).
 
 pub mod metrics;
 pub mod suite;
@@ -23,6 +25,9 @@ use specula_trace::reference::primary_hits;
 use specula_trace::Image;
 
 pub use metrics::Metrics;
+
+/// The exact method on the GPU, whose frame time every technique's is also compared with.
+pub const GPU_TRACE: &str = "gpu-trace";
 
 #[derive(Debug, thiserror::Error)]
 pub enum CompareError {
@@ -83,6 +88,8 @@ pub struct MethodReport {
     pub stages: Vec<StageReport>,
     pub total_ms: f64,
     pub speedup_over_reference: f64,
+    /// gpu-trace's frame time over this method's (null without a GPU).
+    pub speedup_over_gpu_trace: Option<f64>,
     pub counters: BTreeMap<String, u64>,
     pub metrics: Metrics,
     pub image: String,
@@ -103,6 +110,8 @@ pub struct Report {
     /// Pixels whose primary visible surface (G-buffer ID) is a mirror or dielectric.
     pub mask_pixels: usize,
     pub reference: ReferenceReport,
+    /// gpu-trace's frame time on this run's GPU (null without a GPU).
+    pub gpu_trace_ms: Option<f64>,
     pub methods: Vec<MethodReport>,
 }
 
@@ -137,6 +146,12 @@ pub fn compare(
         .collect::<Result<Vec<_>, _>>()?;
     let mut used = vec![false; options.parameters.len()];
     for technique in techniques.iter_mut() {
+        if technique.name() == GPU_TRACE {
+            apply_parameters(
+                technique.as_mut(),
+                &[format!("max_depth={}", options.max_depth)],
+            )?;
+        }
         let applied = apply_known_parameters(technique.as_mut(), &options.parameters)?;
         for (u, a) in used.iter_mut().zip(applied) {
             *u |= a;
@@ -207,6 +222,7 @@ pub fn compare(
                 .collect(),
             total_ms,
             speedup_over_reference: reference_ms / total_ms.max(1e-9),
+            speedup_over_gpu_trace: None,
             counters: frame.counters.iter().cloned().collect(),
             metrics,
             image: format!("{}.png", technique.name()),
@@ -219,6 +235,25 @@ pub fn compare(
             },
         });
         method_images.push((image, metrics::heat_map(&flip, width, height)));
+    }
+    let gpu_trace_ms = match methods.iter().find(|m| m.method == GPU_TRACE) {
+        Some(m) => Some(m.total_ms),
+        None if ctx.gpu.is_some() => {
+            progress(GPU_TRACE);
+            let mut gpu_trace = by_name(GPU_TRACE)?;
+            apply_parameters(
+                gpu_trace.as_mut(),
+                &[format!("max_depth={}", options.max_depth)],
+            )?;
+            gpu_trace.prepare(ctx, &live)?;
+            gpu_trace.render(ctx, &live, &scene.camera, width, height)?;
+            let frame = gpu_trace.render(ctx, &live, &scene.camera, width, height)?;
+            Some(frame.total_milliseconds())
+        }
+        None => None,
+    };
+    for m in &mut methods {
+        m.speedup_over_gpu_trace = gpu_trace_ms.map(|g| g / m.total_ms.max(1e-9));
     }
     Ok(Comparison {
         report: Report {
@@ -234,6 +269,7 @@ pub fn compare(
                 total_ms: reference_ms,
                 image: "reference.png".into(),
             },
+            gpu_trace_ms,
             methods,
         },
         reference,
@@ -309,12 +345,12 @@ impl Comparison {
                 .collect();
             for warning in &m.warnings {
                 rows.push_str(&format!(
-                    "<tr><td colspan=\"9\">⚠ {}</td></tr>\n",
+                    "<tr><td colspan=\"10\">⚠ {}</td></tr>\n",
                     escape(warning)
                 ));
             }
             rows.push_str(&format!(
-                "<tr><td>{}</td><td>{:.4}</td><td>{}</td><td>{:.4}</td><td>{:.1} %</td><td>{:.2}</td><td>{:.1}×</td><td>{}</td><td>{}</td></tr>\n",
+                "<tr><td>{}</td><td>{:.4}</td><td>{}</td><td>{:.4}</td><td>{:.1} %</td><td>{:.2}</td><td>{:.1}×</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
                 escape(&m.method),
                 m.metrics.rmse,
                 m.metrics.psnr_db.map(|p| format!("{p:.1}")).unwrap_or_else(|| "∞".into()),
@@ -322,6 +358,7 @@ impl Comparison {
                 m.metrics.share_flip_over_0_1 * 100.0,
                 m.total_ms,
                 m.speedup_over_reference,
+                m.speedup_over_gpu_trace.map(|v| format!("{v:.2}×")).unwrap_or_else(|| "–".into()),
                 stages.join("<br>"),
                 escape(&m.timing),
             ));
@@ -362,9 +399,10 @@ img {{ image-rendering: pixelated; width: {display_width}px; }}
 <h1>specula compare: {scene}</h1>
 <p>{width}×{height} pixels on {adapter}. Errors are measured on the {mask} pixels whose visible surface is a mirror or
 dielectric (from the G-buffer's IDs): RMSE and PSNR on linear radiance clamped to [0, 1]; FLIP on the sRGB images.
-Speed-up is the reference's render time over the technique's frame time.</p>
+Speed-up is the CPU reference's render time over the technique's frame time; the next column is gpu-trace's frame
+time on the same GPU over the technique's ({gpu_trace}).</p>
 <table>
-<tr><th>method</th><th>RMSE</th><th>PSNR (dB)</th><th>mean FLIP</th><th>FLIP &gt; 0.1</th><th>frame (ms)</th><th>speed-up</th><th>stages (ms)</th><th>timing</th></tr>
+<tr><th>method</th><th>RMSE</th><th>PSNR (dB)</th><th>mean FLIP</th><th>FLIP &gt; 0.1</th><th>frame (ms)</th><th>speed-up</th><th>vs gpu-trace</th><th>stages (ms)</th><th>timing</th></tr>
 {rows}</table>
 {figures}
 </body></html>
@@ -375,6 +413,10 @@ Speed-up is the reference's render time over the technique's frame time.</p>
             adapter = escape(&r.adapter),
             mask = r.mask_pixels,
             display_width = r.width.clamp(256, 512),
+            gpu_trace = r
+                .gpu_trace_ms
+                .map(|g| format!("gpu-trace {g:.1} ms"))
+                .unwrap_or_else(|| "no GPU in this run".into()),
         )
     }
 }

@@ -32,6 +32,8 @@ pub struct SuiteRow {
     pub height: u32,
     pub mask_pixels: usize,
     pub reference_ms: f64,
+    /// gpu-trace's frame time on the same GPU (None without a GPU, or when the scene failed).
+    pub gpu_trace_ms: Option<f64>,
     pub methods: Vec<SuiteCell>,
     /// Why the scene has no figures; null when it has them.
     pub error: Option<String>,
@@ -116,6 +118,7 @@ pub fn scene_row(
                 height: 0,
                 mask_pixels: 0,
                 reference_ms: 0.0,
+                gpu_trace_ms: None,
                 methods: Vec::new(),
                 error: Some(message.to_string()),
             })
@@ -133,6 +136,7 @@ pub fn scene_row(
         height: r.height,
         mask_pixels: r.mask_pixels,
         reference_ms: r.reference.total_ms,
+        gpu_trace_ms: r.gpu_trace_ms,
         methods: r
             .methods
             .iter()
@@ -173,7 +177,8 @@ fn flip_colour(flip: f64) -> String {
 }
 
 fn suite_html(report: &SuiteReport) -> String {
-    let mut head = String::from("<tr><th>scene</th><th>pixels</th><th>reference ms</th>");
+    let mut head =
+        String::from("<tr><th>scene</th><th>pixels</th><th>reference ms</th><th>gpu-trace ms</th>");
     for m in &report.methods {
         head.push_str(&format!(
             "<th>{} FLIP</th><th>{} ms</th>",
@@ -188,17 +193,20 @@ fn suite_html(report: &SuiteReport) -> String {
             rows.push_str(&format!(
                 "<tr><td>{}</td><td colspan=\"{}\" class=\"error\">{}</td></tr>\n",
                 escape(&row.source),
-                2 + 2 * report.methods.len(),
+                3 + 2 * report.methods.len(),
                 escape(error)
             ));
             continue;
         }
         rows.push_str(&format!(
-            "<tr><td><a href=\"{}/report.html\">{}</a></td><td>{}</td><td>{:.1}</td>",
+            "<tr><td><a href=\"{}/report.html\">{}</a></td><td>{}</td><td>{:.1}</td><td>{}</td>",
             escape(&row.folder),
             escape(&row.scene),
             row.mask_pixels,
-            row.reference_ms
+            row.reference_ms,
+            row.gpu_trace_ms
+                .map(|g| format!("{g:.1}"))
+                .unwrap_or_else(|| "–".into())
         ));
         for method in &report.methods {
             match row.methods.iter().find(|c| &c.method == method) {

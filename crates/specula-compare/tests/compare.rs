@@ -55,6 +55,11 @@ fn compare_writes_a_report_and_json_that_matches_the_schema() {
         "speed-up {} is not reference time / method time {expected}",
         m.speedup_over_reference
     );
+    // gpu-trace was timed as the second base although not compared.
+    let gpu_trace_ms = r.gpu_trace_ms.expect("a GPU run times gpu-trace");
+    let ratio = m.speedup_over_gpu_trace.unwrap();
+    assert!((ratio - gpu_trace_ms / m.total_ms).abs() <= 1e-9 * ratio);
+    assert!(text.contains("vs gpu-trace"));
 }
 
 #[test]

@@ -598,6 +598,7 @@ fn advance_script(state: &mut WindowState, script: &mut ScriptRun) -> Result<(),
         };
         match script.steps[index].clone() {
             Step::Method(name) => state.session.set_method(&name).map_err(|e| at(&e))?,
+            Step::Reference(name) => state.session.set_reference(&name).map_err(|e| at(&e))?,
             Step::Param(setting) => state.session.set_param(&setting).map_err(|e| at(&e))?,
             Step::Orbit { yaw_deg, pitch_deg } => state.session.camera.orbit(yaw_deg, pitch_deg),
             Step::Translate { object, by } => {

@@ -265,11 +265,33 @@ fn view_section(ui: &mut egui::Ui, session: &mut Session, state: &mut UiState) {
         ui.add(egui::Slider::new(&mut state.settings.split, 0.0..=1.0).text("split"));
     }
     if session.view.needs_reference() {
-        let reference = specula_methods::exact_method().name;
+        let current = session.reference_method();
+        ui.horizontal(|ui| {
+            ui.label("reference");
+            let has_gpu = session.ctx.gpu.is_some();
+            let exact = specula_methods::METHODS
+                .iter()
+                .filter(|m| m.exact && (!m.needs_gpu || has_gpu));
+            for m in exact {
+                if ui
+                    .selectable_label(current.name == m.name, m.name)
+                    .clicked()
+                    && current.name != m.name
+                {
+                    state.message = session
+                        .set_reference(m.name)
+                        .err()
+                        .map(|e| (true, e.to_string()));
+                    state.dirty = true;
+                }
+            }
+        });
+        let reference = session.reference_method();
+        let device = if reference.needs_gpu { "GPU" } else { "CPU" };
         ui.small(if state.reference_converged {
-            format!("{reference}: converged")
+            format!("{}: converged", reference.name)
         } else {
-            format!("{reference}: refining on the CPU…")
+            format!("{}: refining on the {device}…", reference.name)
         });
     }
     ui.add(

@@ -4,6 +4,8 @@
 //! [[step]]
 //! method = "pvrr"                                   # switch technique
 //! [[step]]
+//! reference = "gpu-trace"                           # the exact method compared against
+//! [[step]]
 //! param = "depth=1"                                 # NAME=VALUE of the current technique
 //! [[step]]
 //! orbit = [30, -10]                                 # yaw, pitch in degrees about the target
@@ -31,6 +33,7 @@ use crate::session::ViewMode;
 #[derive(Clone, Debug, PartialEq)]
 pub enum Step {
     Method(String),
+    Reference(String),
     Param(String),
     Orbit {
         yaw_deg: f32,
@@ -78,6 +81,7 @@ struct ScriptFile {
 #[serde(deny_unknown_fields)]
 struct RawStep {
     method: Option<String>,
+    reference: Option<String>,
     param: Option<String>,
     orbit: Option<[f32; 2]>,
     translate: Option<RawTranslate>,
@@ -103,7 +107,8 @@ struct RawRotate {
     degrees: f32,
 }
 
-const STEP_KEYS: &str = "method, param, orbit, translate, rotate, frames, drag, view or screenshot";
+const STEP_KEYS: &str =
+    "method, reference, param, orbit, translate, rotate, frames, drag, view or screenshot";
 
 /// Reads a script; relative screenshot paths resolve against the current directory.
 pub fn load(path: &Path) -> Result<Vec<Step>, ScriptError> {
@@ -165,6 +170,12 @@ fn step(table: toml::Table) -> Result<Step, String> {
     let step = if let Some(m) = raw.method {
         specula_methods::method(&m).map_err(|e| e.to_string())?;
         Step::Method(m)
+    } else if let Some(r) = raw.reference {
+        let info = specula_methods::method(&r).map_err(|e| e.to_string())?;
+        if !info.exact {
+            return Err(format!("reference = \"{r}\": {r} is not an exact method"));
+        }
+        Step::Reference(r)
     } else if let Some(p) = raw.param {
         if !p.contains('=') {
             return Err(format!("param = \"{p}\": expected NAME=VALUE"));

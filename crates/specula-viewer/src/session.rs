@@ -102,7 +102,7 @@ impl Session {
             .iter()
             .position(|m| m.name == method)
             .ok_or_else(|| specula_methods::method(method).unwrap_err())?;
-        let mut reference = (specula_methods::exact_method().create)();
+        let mut reference = (default_reference(&ctx).create)();
         set_budget(reference.as_mut(), REFERENCE_BUDGET_MS)?;
         let mut session = Session {
             ctx: Rc::new(ctx),
@@ -168,6 +168,32 @@ impl Session {
         let n = METHODS.len() as isize;
         self.current = (self.current as isize + step).rem_euclid(n) as usize;
         self.failure = None;
+    }
+
+    /// The exact method shown as the reference.
+    pub fn reference_method(&self) -> &'static MethodInfo {
+        self.reference.info()
+    }
+
+    /// Switches the reference to the exact method `name` (`reference` on the CPU, or
+    /// `gpu-trace`).
+    pub fn set_reference(&mut self, name: &str) -> Result<(), SessionError> {
+        let info = specula_methods::method(name)?;
+        if !info.exact {
+            return Err(specula_methods::TechniqueError::BadParameter {
+                technique: info.name,
+                name: "reference".into(),
+                value: name.into(),
+                reason: "the reference must be an exact method".into(),
+            }
+            .into());
+        }
+        if info.name != self.reference.name() {
+            let mut reference = (info.create)();
+            set_budget(reference.as_mut(), REFERENCE_BUDGET_MS)?;
+            self.reference = reference;
+        }
+        Ok(())
     }
 
     /// The current method's instance, created on first use (progressive ones get the viewer's
@@ -286,6 +312,21 @@ impl Session {
     }
 }
 
+/// The exact method a session shows as its reference: `gpu-trace` on a GPU that is not a CPU
+/// (there it is much faster than the CPU reference, and equal to it), else the CPU reference
+/// (on lavapipe the CPU reference is the faster of the two, and progressive).
+pub fn default_reference(ctx: &Context) -> &'static MethodInfo {
+    let real_gpu = ctx
+        .gpu
+        .as_ref()
+        .is_some_and(|g| g.adapter_info.device_type != wgpu::DeviceType::Cpu);
+    if real_gpu {
+        &specula_methods::gpu_trace::INFO
+    } else {
+        specula_methods::exact_method()
+    }
+}
+
 fn set_budget(technique: &mut dyn Technique, budget_ms: u32) -> Result<(), SessionError> {
     if technique.info().param("budget_ms").is_some() {
         specula_methods::apply_setting(technique, &format!("budget_ms={budget_ms}"))?;
@@ -384,6 +425,47 @@ mod tests {
             "the reference restarts after a move"
         );
         assert_ne!(session.pick(32.0, 24.0, 64, 48), Some(mirror));
+    }
+
+    #[test]
+    fn the_reference_is_the_cpu_one_on_lavapipe_and_gpu_trace_can_be_chosen() {
+        // Without a GPU, and on a CPU adapter, the CPU reference is the default.
+        assert_eq!(
+            cpu_session("reference").reference_method().name,
+            "reference"
+        );
+        let Some(ctx) = specula_methods::test_context("viewer reference choice") else {
+            return;
+        };
+        let on_cpu_adapter = ctx
+            .gpu
+            .as_ref()
+            .is_some_and(|g| g.adapter_info.device_type == wgpu::DeviceType::Cpu);
+        let expected = if on_cpu_adapter {
+            "reference"
+        } else {
+            "gpu-trace"
+        };
+        let scene = specula_scene::load("door-mirror").unwrap();
+        let mut session = Session::new(ctx, scene, "door-mirror", "envmap").unwrap();
+        assert_eq!(session.reference_method().name, expected);
+        session.set_reference("reference").unwrap();
+        let cpu = session.converged_reference(48, 36).unwrap();
+        session.set_reference("gpu-trace").unwrap();
+        assert_eq!(session.reference_method().name, "gpu-trace");
+        let gpu = session.converged_reference(48, 36).unwrap();
+        let largest = cpu
+            .pixels
+            .iter()
+            .zip(&gpu.pixels)
+            .map(|(a, b)| (*a - *b).abs().max_element())
+            .fold(0.0, f32::max);
+        assert!(
+            largest < 1e-4,
+            "gpu-trace differs from the CPU by {largest}"
+        );
+        let error = session.set_reference("envmap").unwrap_err().to_string();
+        assert!(error.contains("exact"), "{error}");
     }
 
     #[test]
