@@ -146,6 +146,7 @@ pub fn run(
     let camera = live.scene().camera.clone();
     let adapter = ctx.describe();
     let mut results = Vec::new();
+    let mut used = vec![false; parameters.len()];
     for name in methods {
         let info = specula_methods::method(name)?;
         let modes: &[&str] = if info.param("dynamic").is_some() {
@@ -155,7 +156,11 @@ pub fn run(
         };
         for mode in modes {
             let mut technique = (info.create)();
-            specula_methods::apply_parameters(technique.as_mut(), parameters)?;
+            // A parameter goes to the methods that have it (the exact bases share few).
+            let applied = specula_methods::apply_known_parameters(technique.as_mut(), parameters)?;
+            for (u, a) in used.iter_mut().zip(applied) {
+                *u |= a;
+            }
             if *mode != "-" {
                 specula_methods::apply_setting(
                     technique.as_mut(),
@@ -223,6 +228,13 @@ pub fn run(
                 rays_per_second,
             });
         }
+    }
+    if let Some(i) = used.iter().position(|u| !u) {
+        anyhow::bail!(
+            "parameter '{}' belongs to none of the methods benchmarked ({})",
+            parameters[i],
+            methods.join(", ")
+        );
     }
     Ok(results)
 }
