@@ -13,9 +13,14 @@ use serde::Serialize;
 use specula_methods::{Context, LiveScene};
 use specula_scene::Scene;
 
-/// The exact methods every run is compared with.
-pub const CPU_REFERENCE: &str = "reference";
-pub const GPU_TRACE: &str = "gpu-trace";
+/// The exact methods every run is compared with: the CPU reference and gpu-trace.
+fn cpu_reference() -> &'static str {
+    specula_methods::exact_method().name
+}
+
+fn gpu_trace() -> &'static str {
+    specula_methods::gpu_trace::INFO.name
+}
 
 /// Frames rendered and thrown away before timing (pipeline creation, first-use costs).
 const WARM_UP_FRAMES: u32 = 2;
@@ -94,8 +99,8 @@ fn civil_date(seconds: u64) -> String {
 /// only where there is a GPU).
 pub fn with_bases(methods: &[String], has_gpu: bool) -> Vec<String> {
     let mut all = methods.to_vec();
-    for base in [CPU_REFERENCE, GPU_TRACE] {
-        if (base != GPU_TRACE || has_gpu) && !all.iter().any(|m| m == base) {
+    for base in [cpu_reference(), gpu_trace()] {
+        if (base != gpu_trace() || has_gpu) && !all.iter().any(|m| m == base) {
             all.push(base.to_string());
         }
     }
@@ -112,8 +117,8 @@ pub fn add_ratios(runs: &mut [MethodBench]) {
     for i in 0..runs.len() {
         let (scene, median) = (runs[i].scene.clone(), runs[i].frame.median_ms);
         let ratio = |base: Option<f64>| base.filter(|_| median > 0.0).map(|b| b / median);
-        runs[i].speedup_over_reference = ratio(median_of(runs, &scene, CPU_REFERENCE));
-        runs[i].speedup_over_gpu_trace = ratio(median_of(runs, &scene, GPU_TRACE));
+        runs[i].speedup_over_reference = ratio(median_of(runs, &scene, cpu_reference()));
+        runs[i].speedup_over_gpu_trace = ratio(median_of(runs, &scene, gpu_trace()));
     }
 }
 
@@ -183,15 +188,12 @@ pub fn run(
                 if i < WARM_UP_FRAMES {
                     continue;
                 }
-                let count = |name: &str| {
-                    frame
-                        .counters
-                        .iter()
-                        .find(|(n, _)| n.starts_with(name))
-                        .map(|c| c.1)
-                };
-                if let (Some(closest), Some(shadow)) = (count("rays traced"), count("shadow rays"))
-                {
+                let count =
+                    |name: &str| frame.counters.iter().find(|(n, _)| n == name).map(|c| c.1);
+                if let (Some(closest), Some(shadow)) = (
+                    count(specula_methods::COUNTER_RAYS_TRACED),
+                    count(specula_methods::COUNTER_SHADOW_RAYS),
+                ) {
                     rays = Some(closest + shadow);
                 }
                 created += frame.created.total();
@@ -268,8 +270,10 @@ fn speedup(value: Option<f64>) -> String {
 /// "speed-up over reference Ax, over gpu-trace Bx[, N Mrays/s]".
 fn ratios(r: &MethodBench) -> String {
     let mut text = format!(
-        "speed-up over {CPU_REFERENCE} {}, over {GPU_TRACE} {}",
+        "speed-up over {} {}, over {} {}",
+        cpu_reference(),
         speedup(r.speedup_over_reference),
+        gpu_trace(),
         speedup(r.speedup_over_gpu_trace)
     );
     if let Some(rays) = r.rays_per_second {
@@ -351,10 +355,10 @@ mod tests {
     fn ratios_are_the_exact_methods_medians_over_the_runs_of_the_same_scene() {
         let mut runs = vec![
             run("a", "envmap", 2.0),
-            run("a", CPU_REFERENCE, 100.0),
-            run("a", GPU_TRACE, 10.0),
+            run("a", cpu_reference(), 100.0),
+            run("a", gpu_trace(), 10.0),
             run("b", "envmap", 4.0),
-            run("b", CPU_REFERENCE, 40.0),
+            run("b", cpu_reference(), 40.0),
         ];
         add_ratios(&mut runs);
         assert_eq!(runs[0].speedup_over_reference, Some(50.0));

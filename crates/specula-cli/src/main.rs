@@ -417,7 +417,7 @@ fn run(cli: Cli) -> Result<()> {
             // among them shows its own error (none) and is the base of the second speed-up.
             let methods = methods.unwrap_or_else(|| {
                 let mut all = specula_methods::approximate_methods();
-                all.insert(0, specula_compare::GPU_TRACE.to_string());
+                all.insert(0, specula_methods::gpu_trace::INFO.name.to_string());
                 all
             });
             let mut infos = method_infos(&methods)?;

@@ -26,9 +26,6 @@ use specula_trace::Image;
 
 pub use metrics::Metrics;
 
-/// The exact method on the GPU, whose frame time every technique's is also compared with.
-pub const GPU_TRACE: &str = "gpu-trace";
-
 #[derive(Debug, thiserror::Error)]
 pub enum CompareError {
     #[error(transparent)]
@@ -146,7 +143,7 @@ pub fn compare(
         .collect::<Result<Vec<_>, _>>()?;
     let mut used = vec![false; options.parameters.len()];
     for technique in techniques.iter_mut() {
-        if technique.name() == GPU_TRACE {
+        if technique.name() == specula_methods::gpu_trace::INFO.name {
             apply_parameters(
                 technique.as_mut(),
                 &[format!("max_depth={}", options.max_depth)],
@@ -236,11 +233,14 @@ pub fn compare(
         });
         method_images.push((image, metrics::heat_map(&flip, width, height)));
     }
-    let gpu_trace_ms = match methods.iter().find(|m| m.method == GPU_TRACE) {
+    let gpu_trace_ms = match methods
+        .iter()
+        .find(|m| m.method == specula_methods::gpu_trace::INFO.name)
+    {
         Some(m) => Some(m.total_ms),
         None if ctx.gpu.is_some() => {
-            progress(GPU_TRACE);
-            let mut gpu_trace = by_name(GPU_TRACE)?;
+            progress(specula_methods::gpu_trace::INFO.name);
+            let mut gpu_trace = by_name(specula_methods::gpu_trace::INFO.name)?;
             apply_parameters(
                 gpu_trace.as_mut(),
                 &[format!("max_depth={}", options.max_depth)],

@@ -20,6 +20,7 @@ pub use registry::{approximate_methods, by_name, exact_method, method, METHODS};
 pub use technique::{
     apply_known_parameters, apply_parameters, apply_setting, Context, Frame, Invalidates,
     MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, StageTime, Technique, TechniqueError,
+    COUNTER_RAYS_TRACED, COUNTER_SHADOW_RAYS,
 };
 
 /// One frame of a still scene from its own camera, with its pixels on the CPU: for tests,

@@ -111,6 +111,11 @@ impl Frame {
     }
 }
 
+/// Counter names of methods that trace rays (both exact methods report them; `bench` turns
+/// them into rays per second): closest-hit rays, primary and secondary alike, and shadow rays.
+pub const COUNTER_RAYS_TRACED: &str = "rays traced (primary and secondary)";
+pub const COUNTER_SHADOW_RAYS: &str = "shadow rays";
+
 /// What a parameter's value may be.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ParamKind {

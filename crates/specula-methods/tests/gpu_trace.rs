@@ -1,6 +1,7 @@
 //! `gpu-trace` renders what the CPU reference renders: PSNR (on radiance clamped to [0, 1], as
 //! `compare` computes it) against the CPU reference, one sample per pixel, on every built-in
-//! and suite scene, in both of its modes.
+//! and suite scene, in both of its modes. `GPU_TRACE_TEST_SIZE=320x240` runs the every-scene
+//! test at the size (docs/benchmarks.md has its figures); the default is 80×60.
 
 use std::path::Path;
 
@@ -42,10 +43,15 @@ fn cpu_reference(scene: &Scene, width: u32, height: u32, max_depth: u32) -> Imag
     )
 }
 
-fn gpu(ctx: &Context, scene: &Scene, mode: Mode, max_depth: u32) -> Still {
-    GpuTrace::new(mode, max_depth)
-        .render_still(ctx, scene, WIDTH, HEIGHT)
-        .unwrap()
+/// The every-scene test's image size: `GPU_TRACE_TEST_SIZE` (WIDTHxHEIGHT), else 80×60.
+fn every_scene_size() -> (u32, u32) {
+    std::env::var("GPU_TRACE_TEST_SIZE")
+        .ok()
+        .and_then(|s| {
+            let (w, h) = s.split_once('x')?;
+            Some((w.parse().ok()?, h.parse().ok()?))
+        })
+        .unwrap_or((WIDTH, HEIGHT))
 }
 
 fn scenes() -> Vec<(String, Scene)> {
@@ -72,11 +78,14 @@ fn gpu_trace_equals_the_cpu_reference_on_every_scene() {
     let Some(ctx) = specula_methods::test_context("gpu-trace") else {
         return;
     };
+    let (width, height) = every_scene_size();
     let mut worst = f64::INFINITY;
     for (name, scene) in scenes() {
-        let reference = cpu_reference(&scene, WIDTH, HEIGHT, 8);
+        let reference = cpu_reference(&scene, width, height, 8);
         for mode in [Mode::Megakernel, Mode::Wavefront] {
-            let still = gpu(&ctx, &scene, mode, 8);
+            let still = GpuTrace::new(mode, 8)
+                .render_still(&ctx, &scene, width, height)
+                .unwrap();
             assert!(still.image.pixels.iter().all(|p| p.is_finite()), "{name}");
             let db = psnr(&reference, &still.image);
             println!("{name} {mode:?}: {db:.1} dB");

@@ -4,6 +4,8 @@
 // rounding of single-precision arithmetic (the CPU decides a ray exactly on an edge in double
 // precision; WGSL has no double, so such a ray counts as on the triangle here).
 //
+// Needs shade.wgsl (its `settings` hold the triangle count).
+//
 // Traversal: ordered (near child first), with an explicit stack of the far children and their
 // entry distances. The builder caps the tree's depth at 60 levels, so a 64-entry stack never
 // overflows.
@@ -141,7 +143,8 @@ fn traverse(origin: vec3<f32>, dir: vec3<f32>, t_max_in: f32, any_hit: bool) -> 
     var best: Hit;
     best.triangle = NO_HIT;
     best.t = t_max_in;
-    if (arrayLength(&triangles) == 0u || settings.triangle_count == 0u) {
+    // An empty scene still binds one placeholder triangle: the count says there is none.
+    if (settings.triangle_count == 0u) {
         return best;
     }
     let r = ray_data(origin, dir);

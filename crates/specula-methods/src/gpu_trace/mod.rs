@@ -65,7 +65,7 @@ use crate::live_scene::LiveScene;
 use crate::raster::{self, OutputTexture};
 use crate::technique::{
     Context, Frame, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, Technique,
-    TechniqueError,
+    TechniqueError, COUNTER_RAYS_TRACED, COUNTER_SHADOW_RAYS,
 };
 
 const BVH: &str = include_str!("bvh.wgsl");
@@ -97,8 +97,8 @@ const GENERATIONS: u32 = 65;
 
 /// Names of the shader's counter slots (shade.wgsl's COUNT_*), as reports list them.
 pub const COUNTER_NAMES: [&str; 4] = [
-    "rays traced (primary and secondary)",
-    "shadow rays",
+    COUNTER_RAYS_TRACED,
+    COUNTER_SHADOW_RAYS,
     "paths cut at max_depth",
     "rays dropped (queue or stack full)",
 ];

@@ -36,7 +36,7 @@ use specula_trace::Image;
 use crate::live_scene::LiveScene;
 use crate::technique::{
     Context, Frame, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, Technique,
-    TechniqueError,
+    TechniqueError, COUNTER_RAYS_TRACED, COUNTER_SHADOW_RAYS,
 };
 
 pub const PARAMS: &[ParamSpec] = &[
@@ -266,8 +266,8 @@ impl Technique for Reference {
             }],
             counters: vec![
                 ("camera rays".into(), camera_rays),
-                ("rays traced (primary and secondary)".into(), rays_traced),
-                ("shadow rays".into(), shadow_rays),
+                (COUNTER_RAYS_TRACED.into(), rays_traced),
+                (COUNTER_SHADOW_RAYS.into(), shadow_rays),
                 // The largest block still shown: the last finished level's stride (the first
                 // level's while it runs).
                 (
