@@ -214,8 +214,6 @@ struct Wavefront {
     generate: wgpu::ComputePipeline,
     extend: wgpu::ComputePipeline,
     resolve: wgpu::ComputePipeline,
-    /// Rays each queue can hold: `queue_factor` × the pixels of a whole tile.
-    capacity: u32,
     queue_factor: u32,
     bind_group: wgpu::BindGroup,
     tile: wgpu::Buffer,
@@ -280,9 +278,11 @@ impl Wavefront {
             };
             let tile_pixels = WAVEFRONT_TILE * WAVEFRONT_TILE;
             let capacity = queue_factor * tile_pixels;
+            // WGSL `PendingRay`: three vec3 + u32 rows of 16 bytes.
+            const PENDING_RAY_BYTES: u64 = 48;
             let storage =
                 |label, size: u64| writable_buffer(ctx, label, size, wgpu::BufferUsages::STORAGE);
-            let queues = storage("ray queues", 2 * capacity as u64 * 48);
+            let queues = storage("ray queues", 2 * capacity as u64 * PENDING_RAY_BYTES);
             let queue_counts = storage("ray queue counts", 4 * (GENERATIONS as u64 + 1));
             let accumulator = storage("radiance accumulator", 12 * tile_pixels as u64);
             let tile = writable_buffer(
@@ -326,7 +326,6 @@ impl Wavefront {
                 generate: pipeline("cs_generate"),
                 extend: pipeline("cs_extend"),
                 resolve: pipeline("cs_resolve"),
-                capacity,
                 queue_factor,
                 bind_group,
                 tile,
@@ -335,6 +334,11 @@ impl Wavefront {
                 generation_stride,
             }
         })
+    }
+
+    /// Rays each queue holds: `queue_factor` × the pixels of a whole tile.
+    fn capacity(&self) -> u32 {
+        self.queue_factor * WAVEFRONT_TILE * WAVEFRONT_TILE
     }
 
     /// Traces the image tile by tile (group 0 bound to `group`).
@@ -379,7 +383,7 @@ impl Wavefront {
                     for g in 0..=max_depth.min(GENERATIONS - 1) {
                         pass.set_bind_group(2, &self.bind_group, &[g * self.generation_stride]);
                         pass.dispatch_workgroups(
-                            (bound.min(self.capacity as u64) as u32).div_ceil(64),
+                            (bound.min(tile.capacity as u64) as u32).div_ceil(64),
                             1,
                             1,
                         );
@@ -650,7 +654,7 @@ impl Technique for GpuTrace {
         let settings = GpuSettings {
             max_depth: self.max_depth,
             triangle_count: p.triangle_count,
-            queue_capacity: wavefront.map(|w| w.capacity).unwrap_or(0),
+            queue_capacity: wavefront.map(Wavefront::capacity).unwrap_or(0),
             pad: 0,
         };
         let max_depth = self.max_depth;
