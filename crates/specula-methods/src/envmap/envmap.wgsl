@@ -1,21 +1,6 @@
 // envmap: shades the specular pixels of the G-buffer from per-reflector environment cube maps
 // (six faces in a 2D array; see cubemap.wgsl).
-// Prepended: optics.wgsl, camera.wgsl, scene.wgsl, cubemap.wgsl.
-
-struct EnvView {
-    clip_from_world: mat4x4<f32>,
-};
-
-struct Reflector {
-    center: vec3<f32>,
-    radius: f32,
-    first_layer: u32,
-    // How rays leave a solid refractor: 0 = they do not (one interface), 1 = through the
-    // bounding sphere, 2 = through a face parallel to the entry face (a thin slab).
-    exit_model: u32,
-    pad0: u32,
-    pad1: u32,
-};
+// Prepended: optics.wgsl, camera.wgsl, scene.wgsl, cubemap.wgsl, lookup.wgsl.
 
 @group(0) @binding(0) var<uniform> camera: Camera;
 @group(0) @binding(1) var g_color: texture_2d<f32>;
@@ -27,28 +12,6 @@ struct Reflector {
 @group(0) @binding(7) var<storage, read> reflectors: array<Reflector>;
 // Reflector index of each mesh, or -1.
 @group(0) @binding(8) var<storage, read> mesh_reflector: array<i32>;
-
-fn env_texel(layer: u32, x: i32, y: i32, size: i32) -> vec3<f32> {
-    return textureLoad(env_faces, vec2<i32>(clamp(x, 0, size - 1), clamp(y, 0, size - 1)), i32(layer), 0).xyz;
-}
-
-// Radiance the cube map of `r` holds in direction `d` (as seen from the reflector's centre).
-fn env_lookup(r: Reflector, d: vec3<f32>) -> vec3<f32> {
-    let layer = r.first_layer + cube_face(d);
-    let uv = face_uv(env_views[layer].clip_from_world, r.center + d);
-    let size = i32(textureDimensions(env_faces).x);
-    let x = uv.x * f32(size) - 0.5;
-    let y = uv.y * f32(size) - 0.5;
-    let x0 = floor(x);
-    let y0 = floor(y);
-    let fx = x - x0;
-    let fy = y - y0;
-    let xi = i32(x0);
-    let yi = i32(y0);
-    let top = mix(env_texel(layer, xi, yi, size), env_texel(layer, xi + 1, yi, size), fx);
-    let bottom = mix(env_texel(layer, xi, yi + 1, size), env_texel(layer, xi + 1, yi + 1, size), fx);
-    return mix(top, bottom, fy);
-}
 
 // Far intersection of the ray p + t·d (p inside) with the reflector's bounding sphere.
 fn exit_point(r: Reflector, p: vec3<f32>, d: vec3<f32>) -> vec3<f32> {

@@ -54,11 +54,13 @@ use crate::technique::{
 };
 
 const SHADER: &str = include_str!("envmap.wgsl");
+/// The cube-map lookup shared with the techniques that fall back on envmap's maps.
+pub const LOOKUP_SHADER: &str = include_str!("lookup.wgsl");
 
 pub fn shader_source() -> String {
     shaders::compose(
         &["optics.wgsl", "camera.wgsl", "scene.wgsl", "cubemap.wgsl"],
-        SHADER,
+        &format!("{LOOKUP_SHADER}\n{SHADER}"),
     )
 }
 
@@ -108,30 +110,216 @@ pub struct GpuReflector {
     pub pad: [u32; 2],
 }
 
-/// What depends on the scene (not on `resolution`).
-struct Prepared {
-    scene_id: u64,
+/// Each specular mesh's ("reflector's") environment cube map, drawn from the centre of its
+/// bounding box with the reflector left out: six 90° faces per reflector in one 2D array,
+/// looked up by `lookup.wgsl`. The faces depend on the scene only: they are drawn again after a
+/// move, or on every frame when asked (`dynamic`). envmap shades with them; image-space falls
+/// back on them where its image-space lookups find nothing.
+pub struct CubeMaps {
+    /// (mesh index, centre, radius) of each reflector.
+    pub reflectors: Vec<(usize, Vec3, f32)>,
     /// The scene version and exit model the reflector buffers were written for.
     placed: Option<(u64, Exit)>,
-    raster: RasterPass,
-    /// (mesh index, centre, radius) of each reflector.
-    reflectors: Vec<(usize, Vec3, f32)>,
     env_views: wgpu::Buffer,
     reflector_buffer: wgpu::Buffer,
     mesh_reflector: wgpu::Buffer,
+    faces: Option<Faces>,
+    generation: u64,
+}
+
+/// The cube-map faces at one resolution.
+struct Faces {
+    texture: wgpu::Texture,
+    view: wgpu::TextureView,
+    resolution: u32,
+    /// Counts the textures made, so that bind groups know when theirs is gone.
+    generation: u64,
+    /// Scene version the faces were drawn at (None: never drawn).
+    drawn_at: Option<u64>,
+}
+
+impl CubeMaps {
+    pub fn new(ctx: &GpuContext, scene: &Scene) -> CubeMaps {
+        let reflectors = reflectors(scene);
+        let mut mesh_reflector = vec![-1i32; scene.meshes.len().max(1)];
+        for (k, &(mesh, ..)) in reflectors.iter().enumerate() {
+            mesh_reflector[mesh] = k as i32;
+        }
+        let storage =
+            |label, size: usize| writable_buffer(ctx, label, size as u64, wgpu::BufferUsages::STORAGE);
+        let count = reflectors.len().max(1);
+        let mesh_reflector_buffer = storage("mesh reflectors", 4 * mesh_reflector.len());
+        ctx.queue.write_buffer(
+            &mesh_reflector_buffer,
+            0,
+            bytemuck::cast_slice(&mesh_reflector),
+        );
+        CubeMaps {
+            reflectors,
+            placed: None,
+            env_views: storage("environment views", 6 * count * 64),
+            reflector_buffer: storage("reflectors", count * size_of::<GpuReflector>()),
+            mesh_reflector: mesh_reflector_buffer,
+            faces: None,
+            generation: 0,
+        }
+    }
+
+    /// Forgets the faces (a new resolution makes them again).
+    pub fn drop_faces(&mut self) {
+        self.faces = None;
+    }
+
+    /// Brings the maps up to date for `live` at `resolution`: the reflectors' centres and face
+    /// views after a move, and the faces when they are stale or `redraw_always`. Returns the
+    /// number of faces drawn.
+    pub fn update(
+        &mut self,
+        gpu: &GpuContext,
+        raster: &RasterPass,
+        live: &LiveScene,
+        resolution: u32,
+        exit: Exit,
+        redraw_always: bool,
+    ) -> Result<u64, GpuError> {
+        let scene = live.scene();
+        let gpu_scene = live.gpu(gpu);
+        if self.placed != Some((live.version(), exit)) {
+            self.reflectors = reflectors(scene);
+            let mut views = Vec::with_capacity(6 * self.reflectors.len());
+            let mut gpu_reflectors = Vec::with_capacity(self.reflectors.len());
+            for (k, &(_, center, radius)) in self.reflectors.iter().enumerate() {
+                views.extend(
+                    face_cameras(scene, center, resolution)
+                        .iter()
+                        .map(|c| c.clip_from_world),
+                );
+                gpu_reflectors.push(GpuReflector {
+                    center: center.to_array(),
+                    radius,
+                    first_layer: 6 * k as u32,
+                    exit_model: exit as u32,
+                    pad: [0; 2],
+                });
+            }
+            if !gpu_reflectors.is_empty() {
+                gpu.queue
+                    .write_buffer(&self.env_views, 0, bytemuck::cast_slice(&views));
+                gpu.queue.write_buffer(
+                    &self.reflector_buffer,
+                    0,
+                    bytemuck::cast_slice(&gpu_reflectors),
+                );
+            }
+            self.placed = Some((live.version(), exit));
+        }
+        if self.faces.as_ref().map(|f| f.resolution) != Some(resolution) {
+            self.generation += 1;
+            let texture = gpu.create_texture(&wgpu::TextureDescriptor {
+                label: Some("environment faces"),
+                size: wgpu::Extent3d {
+                    width: resolution,
+                    height: resolution,
+                    depth_or_array_layers: (6 * self.reflectors.len() as u32).max(1),
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: raster::COLOR_FORMAT,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                view_formats: &[],
+            });
+            let view = texture.create_view(&wgpu::TextureViewDescriptor {
+                dimension: Some(wgpu::TextureViewDimension::D2Array),
+                ..Default::default()
+            });
+            self.faces = Some(Faces {
+                texture,
+                view,
+                resolution,
+                generation: self.generation,
+                drawn_at: None,
+            });
+        }
+        let faces = self.faces.as_mut().expect("made above");
+        if !redraw_always && faces.drawn_at == Some(live.version()) {
+            return Ok(0);
+        }
+        let face_g = raster.acquire(gpu, resolution, resolution);
+        for (k, &(mesh, center, _)) in self.reflectors.iter().enumerate() {
+            for (face, face_camera) in face_cameras(scene, center, resolution).iter().enumerate() {
+                raster.draw_into(gpu, gpu_scene, face_camera, Some(mesh), None, &face_g)?;
+                let mut encoder = gpu.device.create_command_encoder(&Default::default());
+                encoder.copy_texture_to_texture(
+                    face_g.color.as_image_copy(),
+                    wgpu::TexelCopyTextureInfo {
+                        texture: &faces.texture,
+                        mip_level: 0,
+                        origin: wgpu::Origin3d {
+                            x: 0,
+                            y: 0,
+                            z: (6 * k + face) as u32,
+                        },
+                        aspect: wgpu::TextureAspect::All,
+                    },
+                    wgpu::Extent3d {
+                        width: resolution,
+                        height: resolution,
+                        depth_or_array_layers: 1,
+                    },
+                );
+                gpu.queue.submit([encoder.finish()]);
+            }
+        }
+        raster.release(&face_g);
+        faces.drawn_at = Some(live.version());
+        Ok(6 * self.reflectors.len() as u64)
+    }
+
+    /// The bind group layout entries `lookup.wgsl` reads, from `first` on: the faces, their
+    /// views, the reflectors and each mesh's reflector index.
+    pub fn layout_entries(first: u32) -> [wgpu::BindGroupLayoutEntry; 4] {
+        use wgpu::{BufferBindingType as B, ShaderStages as St, TextureViewDimension as D};
+        let float = wgpu::TextureSampleType::Float { filterable: false };
+        let read_only = || buffer_binding(B::Storage { read_only: true });
+        [
+            layout_entry(first, St::FRAGMENT, texture_binding(float, D::D2Array)),
+            layout_entry(first + 1, St::FRAGMENT, read_only()),
+            layout_entry(first + 2, St::FRAGMENT, read_only()),
+            layout_entry(first + 3, St::FRAGMENT, read_only()),
+        ]
+    }
+
+    /// The resources for [`CubeMaps::layout_entries`], in the same order (after `update`).
+    pub fn bindings(&self) -> [wgpu::BindingResource<'_>; 4] {
+        let faces = self.faces.as_ref().expect("CubeMaps::update makes the faces");
+        [
+            wgpu::BindingResource::TextureView(&faces.view),
+            self.env_views.as_entire_binding(),
+            self.reflector_buffer.as_entire_binding(),
+            self.mesh_reflector.as_entire_binding(),
+        ]
+    }
+
+    /// Which texture holds the faces now (changes when they are made again), for bind groups
+    /// that must follow them.
+    pub fn faces_generation(&self) -> Option<u64> {
+        self.faces.as_ref().map(|f| f.generation)
+    }
+}
+
+/// What depends on the scene (not on `resolution`).
+struct Prepared {
+    scene_id: u64,
+    raster: RasterPass,
+    maps: CubeMaps,
     camera_buffer: wgpu::Buffer,
     pipeline: wgpu::RenderPipeline,
     layout: wgpu::BindGroupLayout,
     scene_bind_group: wgpu::BindGroup,
-}
-
-/// The cube maps at one resolution, and the shading bind groups that read them.
-struct Faces {
-    texture: wgpu::Texture,
-    /// Scene version the faces were drawn at (None: never drawn).
-    drawn_at: Option<u64>,
-    /// Shading bind group per G-buffer pool slot.
+    /// Shading bind group per G-buffer pool slot, for the faces texture `bound_faces`.
     bind_groups: BindGroupsBySlot,
+    bound_faces: Option<u64>,
 }
 
 /// Where a ray that refracted into a solid leaves it (`envmap`'s second interface).
@@ -151,7 +339,6 @@ pub struct EnvMap {
     pub dynamic: bool,
     pub shadow_resolution: u32,
     prepared: Option<Prepared>,
-    faces: Option<Faces>,
     timer: StageTimer,
     output: OutputTexture,
 }
@@ -174,7 +361,6 @@ impl Default for EnvMap {
             dynamic: false,
             shadow_resolution: 1024,
             prepared: None,
-            faces: None,
             timer: StageTimer::default(),
             output: OutputTexture::default(),
         }
@@ -230,25 +416,9 @@ fn face_cameras(scene: &Scene, center: Vec3, resolution: u32) -> Vec<CameraUnifo
 impl EnvMap {
     fn build(&self, ctx: &GpuContext, live: &LiveScene) -> Result<Prepared, GpuError> {
         let device = &ctx.device;
-        let scene = live.scene();
         let gpu_scene = live.gpu(ctx);
         let raster = RasterPass::new(ctx, live, RasterSpec::scene(self.shadow_resolution))?;
         ctx.validated("envmap set-up", || {
-            let reflectors = reflectors(scene);
-            let mut mesh_reflector = vec![-1i32; scene.meshes.len().max(1)];
-            for (k, &(mesh, ..)) in reflectors.iter().enumerate() {
-                mesh_reflector[mesh] = k as i32;
-            }
-            let storage = |label, size: usize| {
-                writable_buffer(ctx, label, size as u64, wgpu::BufferUsages::STORAGE)
-            };
-            let count = reflectors.len().max(1);
-            let mesh_reflector_buffer = storage("mesh reflectors", 4 * mesh_reflector.len());
-            ctx.queue.write_buffer(
-                &mesh_reflector_buffer,
-                0,
-                bytemuck::cast_slice(&mesh_reflector),
-            );
             let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some("envmap.wgsl"),
                 source: wgpu::ShaderSource::Wgsl(shader_source().into()),
@@ -258,20 +428,17 @@ impl EnvMap {
                 TextureViewDimension as D,
             };
             let float = S::Float { filterable: false };
-            let read_only = || buffer_binding(B::Storage { read_only: true });
+            let mut entries = vec![
+                layout_entry(0, St::FRAGMENT, buffer_binding(B::Uniform)),
+                layout_entry(1, St::FRAGMENT, texture_binding(float, D::D2)),
+                layout_entry(2, St::FRAGMENT, texture_binding(float, D::D2)),
+                layout_entry(3, St::FRAGMENT, texture_binding(float, D::D2)),
+                layout_entry(4, St::FRAGMENT, texture_binding(S::Uint, D::D2)),
+            ];
+            entries.extend(CubeMaps::layout_entries(5));
             let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("envmap"),
-                entries: &[
-                    layout_entry(0, St::FRAGMENT, buffer_binding(B::Uniform)),
-                    layout_entry(1, St::FRAGMENT, texture_binding(float, D::D2)),
-                    layout_entry(2, St::FRAGMENT, texture_binding(float, D::D2)),
-                    layout_entry(3, St::FRAGMENT, texture_binding(float, D::D2)),
-                    layout_entry(4, St::FRAGMENT, texture_binding(S::Uint, D::D2)),
-                    layout_entry(5, St::FRAGMENT, texture_binding(float, D::D2Array)),
-                    layout_entry(6, St::FRAGMENT, read_only()),
-                    layout_entry(7, St::FRAGMENT, read_only()),
-                    layout_entry(8, St::FRAGMENT, read_only()),
-                ],
+                entries: &entries,
             });
             let scene_layout = GpuScene::bind_group_layout(device);
             let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -297,11 +464,8 @@ impl EnvMap {
             );
             Prepared {
                 scene_id: live.id(),
-                placed: None,
                 scene_bind_group: gpu_scene.bind_group(ctx, &scene_layout),
-                env_views: storage("environment views", 6 * count * 64),
-                reflector_buffer: storage("reflectors", count * size_of::<GpuReflector>()),
-                mesh_reflector: mesh_reflector_buffer,
+                maps: CubeMaps::new(ctx, live.scene()),
                 camera_buffer: writable_buffer(
                     ctx,
                     "camera",
@@ -309,9 +473,10 @@ impl EnvMap {
                     wgpu::BufferUsages::UNIFORM,
                 ),
                 raster,
-                reflectors,
                 pipeline,
                 layout,
+                bind_groups: BindGroupsBySlot::default(),
+                bound_faces: None,
             }
         })
     }
@@ -320,7 +485,6 @@ impl EnvMap {
     fn ensure_prepared(&mut self, ctx: &GpuContext, live: &LiveScene) -> Result<(), GpuError> {
         if self.prepared.as_ref().map(|p| p.scene_id) != Some(live.id()) {
             self.prepared = Some(self.build(ctx, live)?);
-            self.faces = None;
         }
         Ok(())
     }
@@ -360,7 +524,9 @@ impl Technique for EnvMap {
 
     fn invalidate(&mut self, what: Invalidates) {
         if what >= Invalidates::Resources {
-            self.faces = None;
+            if let Some(p) = &mut self.prepared {
+                p.maps.drop_faces();
+            }
         }
         if what >= Invalidates::Scene {
             self.prepared = None;
@@ -388,126 +554,34 @@ impl Technique for EnvMap {
         let (resolution, exit, dynamic) = (self.resolution, self.exit, self.dynamic);
         let p = self.prepared.as_mut().expect("prepared above");
         p.raster.begin_frame(gpu, live)?;
-        if let Some(faces) = &mut self.faces {
-            faces.bind_groups.keep_pooled(&p.raster);
-        }
+        p.bind_groups.keep_pooled(&p.raster);
         self.timer.start(gpu);
-        if p.placed != Some((live.version(), exit)) {
-            p.reflectors = reflectors(scene);
-            let mut views = Vec::with_capacity(6 * p.reflectors.len());
-            let mut gpu_reflectors = Vec::with_capacity(p.reflectors.len());
-            for (k, &(_, center, radius)) in p.reflectors.iter().enumerate() {
-                views.extend(
-                    face_cameras(scene, center, resolution)
-                        .iter()
-                        .map(|c| c.clip_from_world),
-                );
-                gpu_reflectors.push(GpuReflector {
-                    center: center.to_array(),
-                    radius,
-                    first_layer: 6 * k as u32,
-                    exit_model: exit as u32,
-                    pad: [0; 2],
-                });
-            }
-            if !gpu_reflectors.is_empty() {
-                gpu.queue
-                    .write_buffer(&p.env_views, 0, bytemuck::cast_slice(&views));
-                gpu.queue.write_buffer(
-                    &p.reflector_buffer,
-                    0,
-                    bytemuck::cast_slice(&gpu_reflectors),
-                );
-            }
-            p.placed = Some((live.version(), exit));
-        }
         let camera_uniform = raster::camera_uniform(camera, &scene.bounds(), width, height);
         let g = p.raster.render(gpu, gpu_scene, &camera_uniform, None)?;
         self.timer.lap(gpu, "g-buffer")?;
-
-        let faces = self.faces.get_or_insert_with(|| Faces {
-            texture: gpu.create_texture(&wgpu::TextureDescriptor {
-                label: Some("environment faces"),
-                size: wgpu::Extent3d {
-                    width: resolution,
-                    height: resolution,
-                    depth_or_array_layers: (6 * p.reflectors.len() as u32).max(1),
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: raster::COLOR_FORMAT,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-                view_formats: &[],
-            }),
-            drawn_at: None,
-            bind_groups: BindGroupsBySlot::default(),
-        });
-        let redraw = dynamic || faces.drawn_at != Some(live.version());
-        let faces_drawn = if redraw {
-            6 * p.reflectors.len() as u64
-        } else {
-            0
-        };
-        if redraw {
-            let face_g = p.raster.acquire(gpu, resolution, resolution);
-            for (k, &(mesh, center, _)) in p.reflectors.iter().enumerate() {
-                for (face, face_camera) in
-                    face_cameras(scene, center, resolution).iter().enumerate()
-                {
-                    p.raster
-                        .draw_into(gpu, gpu_scene, face_camera, Some(mesh), None, &face_g)?;
-                    let mut encoder = gpu.device.create_command_encoder(&Default::default());
-                    encoder.copy_texture_to_texture(
-                        face_g.color.as_image_copy(),
-                        wgpu::TexelCopyTextureInfo {
-                            texture: &faces.texture,
-                            mip_level: 0,
-                            origin: wgpu::Origin3d {
-                                x: 0,
-                                y: 0,
-                                z: (6 * k + face) as u32,
-                            },
-                            aspect: wgpu::TextureAspect::All,
-                        },
-                        wgpu::Extent3d {
-                            width: resolution,
-                            height: resolution,
-                            depth_or_array_layers: 1,
-                        },
-                    );
-                    gpu.queue.submit([encoder.finish()]);
-                }
-            }
-            faces.drawn_at = Some(live.version());
+        let faces_drawn = p
+            .maps
+            .update(gpu, &p.raster, live, resolution, exit, dynamic)?;
+        if p.bound_faces != p.maps.faces_generation() {
+            p.bind_groups.clear();
+            p.bound_faces = p.maps.faces_generation();
         }
         self.timer.lap(gpu, "environment cube maps")?;
         let output = self.output.get(gpu, width, height);
         gpu.validated("envmap shade", || {
             gpu.queue
                 .write_buffer(&p.camera_buffer, 0, bytemuck::bytes_of(&camera_uniform));
-            let group = faces.bind_groups.get_or_make(g.slot, || {
-                let faces_view = faces.texture.create_view(&wgpu::TextureViewDescriptor {
-                    dimension: Some(wgpu::TextureViewDimension::D2Array),
-                    ..Default::default()
-                });
+            let group = p.bind_groups.get_or_make(g.slot, || {
                 let [color, position, normal, ids] = g.views();
-                bind_group(
-                    gpu,
-                    "envmap",
-                    &p.layout,
-                    &[
-                        p.camera_buffer.as_entire_binding(),
-                        wgpu::BindingResource::TextureView(&color),
-                        wgpu::BindingResource::TextureView(&position),
-                        wgpu::BindingResource::TextureView(&normal),
-                        wgpu::BindingResource::TextureView(&ids),
-                        wgpu::BindingResource::TextureView(&faces_view),
-                        p.env_views.as_entire_binding(),
-                        p.reflector_buffer.as_entire_binding(),
-                        p.mesh_reflector.as_entire_binding(),
-                    ],
-                )
+                let mut entries = vec![
+                    p.camera_buffer.as_entire_binding(),
+                    wgpu::BindingResource::TextureView(&color),
+                    wgpu::BindingResource::TextureView(&position),
+                    wgpu::BindingResource::TextureView(&normal),
+                    wgpu::BindingResource::TextureView(&ids),
+                ];
+                entries.extend(p.maps.bindings());
+                bind_group(gpu, "envmap", &p.layout, &entries)
             });
             raster::fullscreen_pass(
                 gpu,
@@ -523,7 +597,7 @@ impl Technique for EnvMap {
             pixels: Pixels::Texture(output),
             stages,
             counters: vec![
-                ("reflectors".into(), p.reflectors.len() as u64),
+                ("reflectors".into(), p.maps.reflectors.len() as u64),
                 ("cube map faces rendered".into(), faces_drawn),
                 (
                     "cube map texels".into(),
