@@ -7,6 +7,7 @@ pub mod distance_maps;
 pub mod envmap;
 pub mod gpu_scene;
 pub mod gpu_trace;
+pub mod image_space;
 pub mod live_scene;
 pub mod pvrr;
 pub mod raster;

@@ -11,6 +11,7 @@ pub static METHODS: &[&MethodInfo] = &[
     &crate::envmap::INFO,
     &crate::pvrr::INFO,
     &crate::distance_maps::INFO,
+    &crate::image_space::INFO,
 ];
 
 /// The registered method called `name`.

@@ -145,8 +145,9 @@ impl CubeMaps {
         for (k, &(mesh, ..)) in reflectors.iter().enumerate() {
             mesh_reflector[mesh] = k as i32;
         }
-        let storage =
-            |label, size: usize| writable_buffer(ctx, label, size as u64, wgpu::BufferUsages::STORAGE);
+        let storage = |label, size: usize| {
+            writable_buffer(ctx, label, size as u64, wgpu::BufferUsages::STORAGE)
+        };
         let count = reflectors.len().max(1);
         let mesh_reflector_buffer = storage("mesh reflectors", 4 * mesh_reflector.len());
         ctx.queue.write_buffer(
@@ -292,7 +293,10 @@ impl CubeMaps {
 
     /// The resources for [`CubeMaps::layout_entries`], in the same order (after `update`).
     pub fn bindings(&self) -> [wgpu::BindingResource<'_>; 4] {
-        let faces = self.faces.as_ref().expect("CubeMaps::update makes the faces");
+        let faces = self
+            .faces
+            .as_ref()
+            .expect("CubeMaps::update makes the faces");
         [
             wgpu::BindingResource::TextureView(&faces.view),
             self.env_views.as_entire_binding(),

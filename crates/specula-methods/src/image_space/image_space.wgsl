@@ -1,0 +1,581 @@
+// image-space: two-interface refraction of nearby geometry (Wyman 2005), the final pass.
+// A full-screen pass over the scene G-buffer: every refractor pixel is refracted twice with
+// the back-face textures and shown with what the nearby-geometry (NG) texture holds where the
+// refracted ray meets it; everything else keeps the raster's colour.
+// Prepended: optics.wgsl, camera.wgsl, scene.wgsl, cubemap.wgsl, envmap's lookup.wgsl.
+
+const MODE_KAY_GREENBERG: u32 = 0u;
+const MODE_RAY_PLANE: u32 = 1u;
+const MODE_ITERATIVE: u32 = 2u;
+
+// Counter slots (mod.rs `COUNTERS` has their names, in this order).
+const COUNT_LEFT_FRUSTUM: u32 = 0u;
+const COUNT_NOTHING_NEARBY: u32 = 1u;
+const COUNT_EXIT_OFF_BACK_FACES: u32 = 2u;
+const COUNT_TIR_FOLLOWED: u32 = 3u;
+const COUNT_INTERNAL_NOT_RESOLVED: u32 = 4u;
+
+struct Settings {
+    mode: u32,
+    seeds: u32,
+    iterations: u32,
+    plane_count: u32,
+    // 0: each material's own index of refraction.
+    index_override: f32,
+    // A nearby-geometry hit is accepted when its depth and the ray's differ by less than this
+    // fraction of the depth.
+    depth_tolerance: f32,
+    // Steps of the march that follows an internally reflected ray.
+    inside_steps: u32,
+    // Depth-matching steps refining P̃2 against the back-face texture (0: the paper's P̃2).
+    exit_iterations: u32,
+    // The scene's bounding sphere: where rays leave the scene.
+    scene_center: vec3<f32>,
+    scene_radius: f32,
+};
+
+@group(0) @binding(0) var<uniform> camera: Camera;
+@group(0) @binding(1) var g_color: texture_2d<f32>;
+@group(0) @binding(2) var g_position: texture_2d<f32>;
+@group(0) @binding(3) var g_normal: texture_2d<f32>;
+@group(0) @binding(4) var g_ids: texture_2d<u32>;
+// First pass: the refractors' back faces (world position, normal facing the eye, IDs).
+@group(0) @binding(5) var back_position: texture_2d<f32>;
+@group(0) @binding(6) var back_normal: texture_2d<f32>;
+@group(0) @binding(7) var back_ids: texture_2d<u32>;
+// Second pass: the nearby (non-specular) geometry seen from the eye (colour, world position,
+// IDs; ids.x = 0 where nothing is).
+@group(0) @binding(8) var ng_color: texture_2d<f32>;
+@group(0) @binding(9) var ng_position: texture_2d<f32>;
+@group(0) @binding(10) var ng_ids: texture_2d<u32>;
+// The scene vertices (10 words per GpuVertex), d_N per vertex (-1: none found), and each
+// mesh's first vertex.
+@group(0) @binding(11) var<storage, read> vertex_data: array<f32>;
+@group(0) @binding(12) var<storage, read> normal_distance: array<f32>;
+@group(0) @binding(13) var<storage, read> mesh_first_vertex: array<u32>;
+@group(0) @binding(14) var<uniform> settings: Settings;
+// The ray-plane mode's planes (mod.rs `GpuPlane`).
+struct Plane {
+    // Zero: the plane faces the eye through `center`.
+    normal: vec3<f32>,
+    offset: f32,
+    center: vec3<f32>,
+    // A disc: hits farther than this from `center` miss.
+    radius: f32,
+};
+@group(0) @binding(15) var<storage, read> planes: array<Plane>;
+@group(0) @binding(16) var<storage, read_write> counters: array<atomic<u32>, 5>;
+@group(0) @binding(17) var env_faces: texture_2d_array<f32>;
+@group(0) @binding(18) var<storage, read> env_views: array<EnvView>;
+@group(0) @binding(19) var<storage, read> reflectors: array<Reflector>;
+@group(0) @binding(20) var<storage, read> mesh_reflector: array<i32>;
+
+fn count(slot: u32) {
+    atomicAdd(&counters[slot], 1u);
+}
+
+// Where world point `p` lands on the screen: xy in [0, 1) (top-left origin) when visible, z the
+// clip w (<= 0 behind the eye).
+fn project(p: vec3<f32>) -> vec3<f32> {
+    let clip = camera.clip_from_world * vec4<f32>(p, 1.0);
+    if (clip.w <= 1e-6) {
+        return vec3<f32>(-1.0, -1.0, clip.w);
+    }
+    let ndc = clip.xy / clip.w;
+    return vec3<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5, clip.w);
+}
+
+fn on_screen(q: vec3<f32>) -> bool {
+    return q.z > 0.0 && q.x >= 0.0 && q.x < 1.0 && q.y >= 0.0 && q.y < 1.0;
+}
+
+// The texel of a texture of size `size` under screen point `q`.
+fn texel_at(q: vec3<f32>, size: vec2<u32>) -> vec2<i32> {
+    let last = vec2<i32>(size) - 1;
+    return clamp(vec2<i32>(q.xy * vec2<f32>(size)), vec2<i32>(0), last);
+}
+
+fn view_depth(p: vec3<f32>) -> f32 {
+    return dot(p - camera.eye_world, camera.forward_world);
+}
+
+// Distance along the ray p + t·d (p inside) to where it leaves the scene's bounding sphere.
+fn scene_exit(p: vec3<f32>, d: vec3<f32>) -> f32 {
+    let oc = p - settings.scene_center;
+    let b = dot(oc, d);
+    let c = dot(oc, oc) - settings.scene_radius * settings.scene_radius;
+    return max(-b + sqrt(max(b * b - c, 0.0)), 0.0);
+}
+
+// ---- Nearby geometry (§4) -------------------------------------------------------------------
+
+struct NearbyHit {
+    // 0: found (colour valid); 1: left the NG texture's frustum; 2: nothing nearby.
+    status: u32,
+    color: vec3<f32>,
+};
+
+// The NG texel under world point `p`, accepted when `accept_any` or when its depth agrees with
+// p's.
+fn ng_sample(p: vec3<f32>, accept_any: bool) -> NearbyHit {
+    let q = project(p);
+    if (!on_screen(q)) {
+        return NearbyHit(1u, vec3<f32>(0.0));
+    }
+    let texel = texel_at(q, textureDimensions(ng_ids));
+    if (textureLoad(ng_ids, texel, 0).x == 0u) {
+        return NearbyHit(2u, vec3<f32>(0.0));
+    }
+    if (!accept_any) {
+        let z_ng = view_depth(textureLoad(ng_position, texel, 0).xyz);
+        if (abs(z_ng - view_depth(p)) > settings.depth_tolerance * z_ng) {
+            return NearbyHit(2u, vec3<f32>(0.0));
+        }
+    }
+    return NearbyHit(0u, textureLoad(ng_color, texel, 0).xyz);
+}
+
+// §4.1: the NG texture straight behind the exit point (rays assumed parallel to the view).
+fn kay_greenberg(p: vec3<f32>) -> NearbyHit {
+    return ng_sample(p, true);
+}
+
+// §4.2: the nearest of the CPU's planes along the ray, projected into the NG texture.
+fn ray_plane(p: vec3<f32>, d: vec3<f32>) -> NearbyHit {
+    var t_best = 3.4e38;
+    for (var i = 0u; i < settings.plane_count; i++) {
+        let plane = planes[i];
+        var normal = plane.normal;
+        var offset = plane.offset;
+        if (dot(normal, normal) == 0.0) {
+            normal = normalize(camera.eye_world - plane.center);
+            offset = dot(normal, plane.center);
+        }
+        let denom = dot(normal, d);
+        if (abs(denom) > 1e-6) {
+            let t = (offset - dot(normal, p)) / denom;
+            let x = p + d * t;
+            if (t > 1e-5 && t < t_best && distance(x, plane.center) <= plane.radius) {
+                t_best = t;
+            }
+        }
+    }
+    if (t_best == 3.4e38) {
+        return NearbyHit(2u, vec3<f32>(0.0));
+    }
+    return ng_sample(p + d * t_best, true);
+}
+
+// The ray point at `t` against the NG texture under it: x = whether there is geometry there,
+// y = z(ray point) − z(NG) (negative while the ray is in front of what the eye sees).
+fn ng_depth_gap(p: vec3<f32>, d: vec3<f32>, t: f32) -> vec2<f32> {
+    let x = p + d * t;
+    let q = project(x);
+    if (!on_screen(q)) {
+        return vec2<f32>(-1.0, 0.0);
+    }
+    let texel = texel_at(q, textureDimensions(ng_ids));
+    if (textureLoad(ng_ids, texel, 0).x == 0u) {
+        return vec2<f32>(0.0, 0.0);
+    }
+    return vec2<f32>(1.0, view_depth(x) - view_depth(textureLoad(ng_position, texel, 0).xyz));
+}
+
+// §4.3: seeds along the ray, spaced evenly on the screen between the exit point and where the
+// ray leaves the scene (or the view); the seed whose depth best agrees with the NG depth under
+// it starts the iteration t ← (z_NG(p + t·d) − z(p)) / (d · forward) (Figure 7).
+// Beyond the paper: where two consecutive seeds bracket the NG surface (the ray passes from
+// in front of it to behind it), the iteration is a secant search in that bracket instead,
+// which cannot run off; and the point with the best depth agreement met anywhere is kept.
+fn iterative(p: vec3<f32>, d: vec3<f32>) -> NearbyHit {
+    var t_end = scene_exit(p, d);
+    let w0 = max(project(p).z, 1e-6);
+    var w1 = project(p + d * t_end).z;
+    // Keep the segment in front of the eye: cut it where w falls to a tenth of w0.
+    if (w1 < 0.1 * w0) {
+        let w_min = 0.1 * w0;
+        t_end = t_end * (w0 - w_min) / (w0 - w1);
+        w1 = w_min;
+    }
+    var best_t = -1.0;
+    var best_error = 3.4e38;
+    var any_on_screen = false;
+    var bracket_found = false;
+    var before_t = 0.0;
+    var before_gap = 0.0;
+    var after_t = 0.0;
+    var after_gap = 0.0;
+    var previous_t = -1.0;
+    var previous_gap = 0.0;
+    let seeds = max(settings.seeds, 1u);
+    for (var i = 0u; i < seeds; i++) {
+        let s = (f32(i) + 0.5) / f32(seeds);
+        // The ray parameter whose projection lies at fraction s of the screen segment.
+        let t = t_end * s * w0 / ((1.0 - s) * w1 + s * w0);
+        let gap = ng_depth_gap(p, d, t);
+        if (gap.x < 0.0) {
+            previous_t = -1.0;
+            continue;
+        }
+        any_on_screen = true;
+        if (gap.x == 0.0) {
+            previous_t = -1.0;
+            continue;
+        }
+        if (abs(gap.y) < best_error) {
+            best_error = abs(gap.y);
+            best_t = t;
+        }
+        if (!bracket_found && previous_t >= 0.0 && previous_gap < 0.0 && gap.y >= 0.0) {
+            bracket_found = true;
+            before_t = previous_t;
+            before_gap = previous_gap;
+            after_t = t;
+            after_gap = gap.y;
+        }
+        previous_t = t;
+        previous_gap = gap.y;
+    }
+    if (best_t < 0.0) {
+        return NearbyHit(select(1u, 2u, any_on_screen), vec3<f32>(0.0));
+    }
+    if (bracket_found) {
+        for (var k = 0u; k < settings.iterations; k++) {
+            let t = before_t + (after_t - before_t) * before_gap / (before_gap - after_gap);
+            let gap = ng_depth_gap(p, d, t);
+            if (gap.x <= 0.0) {
+                break;
+            }
+            if (abs(gap.y) < best_error) {
+                best_error = abs(gap.y);
+                best_t = t;
+            }
+            if (gap.y < 0.0) {
+                before_t = t;
+                before_gap = gap.y;
+            } else {
+                after_t = t;
+                after_gap = gap.y;
+            }
+        }
+    } else {
+        let rate = dot(d, camera.forward_world);
+        let z_p = view_depth(p);
+        var t = best_t;
+        for (var k = 0u; k < settings.iterations; k++) {
+            if (abs(rate) < 1e-3) {
+                break;
+            }
+            let x = p + d * t;
+            let t_next = t - ng_depth_gap(p, d, t).y / rate;
+            if (t_next <= 0.0) {
+                break;
+            }
+            let gap = ng_depth_gap(p, d, t_next);
+            if (gap.x <= 0.0) {
+                break;
+            }
+            t = t_next;
+            if (abs(gap.y) < best_error) {
+                best_error = abs(gap.y);
+                best_t = t;
+            }
+        }
+    }
+    return ng_sample(p + d * best_t, false);
+}
+
+// Radiance arriving along the ray p + t·d that has left the refractor: the nearby geometry by
+// the chosen mode, else envmap's cube map (drawn without the refractor), counted.
+fn nearby(r: Reflector, p: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
+    var hit: NearbyHit;
+    switch settings.mode {
+        case MODE_KAY_GREENBERG: {
+            hit = kay_greenberg(p);
+        }
+        case MODE_RAY_PLANE: {
+            hit = ray_plane(p, d);
+        }
+        default: {
+            hit = iterative(p, d);
+        }
+    }
+    if (hit.status == 0u) {
+        return hit.color;
+    }
+    count(select(COUNT_NOTHING_NEARBY, COUNT_LEFT_FRUSTUM, hit.status == 1u));
+    return env_lookup(r, d);
+}
+
+// ---- The refractor's surfaces (§3) ------------------------------------------------------------
+
+// d_N at the G-buffer's surface point: the per-vertex distances of its triangle, interpolated.
+fn interpolated_normal_distance(mesh: u32, triangle: u32, p: vec3<f32>) -> f32 {
+    let first = mesh_first_vertex[mesh] + 3u * triangle;
+    var corners: array<vec3<f32>, 3>;
+    var distances: vec3<f32>;
+    for (var k = 0u; k < 3u; k++) {
+        let w = 10u * (first + k);
+        corners[k] = vec3<f32>(vertex_data[w], vertex_data[w + 1u], vertex_data[w + 2u]);
+        distances[k] = normal_distance[first + k];
+    }
+    if (min(distances.x, min(distances.y, distances.z)) < 0.0) {
+        return -1.0;
+    }
+    let e1 = corners[1] - corners[0];
+    let e2 = corners[2] - corners[0];
+    let ep = p - corners[0];
+    let d11 = dot(e1, e1);
+    let d12 = dot(e1, e2);
+    let d22 = dot(e2, e2);
+    let denom = d11 * d22 - d12 * d12;
+    if (denom <= 0.0) {
+        return distances.x;
+    }
+    let b1 = clamp((d22 * dot(ep, e1) - d12 * dot(ep, e2)) / denom, 0.0, 1.0);
+    let b2 = clamp((d11 * dot(ep, e2) - d12 * dot(ep, e1)) / denom, 0.0, 1.0 - b1);
+    return distances.x * (1.0 - b1 - b2) + distances.y * b1 + distances.z * b2;
+}
+
+struct Surface {
+    found: bool,
+    position: vec3<f32>,
+    // Oriented along the ray that meets it (leaving the refractor).
+    normal: vec3<f32>,
+};
+
+// The refractor's back face under screen point `q`, its normal turned along `d`.
+fn back_face(q: vec3<f32>, d: vec3<f32>) -> Surface {
+    if (!on_screen(q)) {
+        return Surface(false, vec3<f32>(0.0), vec3<f32>(0.0));
+    }
+    let texel = texel_at(q, textureDimensions(back_ids));
+    if (textureLoad(back_ids, texel, 0).x == 0u) {
+        return Surface(false, vec3<f32>(0.0), vec3<f32>(0.0));
+    }
+    var n = textureLoad(back_normal, texel, 0).xyz;
+    if (dot(n, d) < 0.0) {
+        n = -n;
+    }
+    return Surface(true, textureLoad(back_position, texel, 0).xyz, n);
+}
+
+// Beyond the paper (§6, total internal reflection): a ray reflected inside the refractor at
+// `p` is marched in screen space against the refractor's two depth layers the textures hold
+// (its front faces in the G-buffer, its back faces in the first pass) until it leaves the
+// slab between them; the crossing is refined by bisection and takes that layer's normal.
+fn march_inside(mesh: u32, p: vec3<f32>, d: vec3<f32>, radius: f32) -> Surface {
+    let steps = max(settings.inside_steps, 1u);
+    let length = 2.0 * radius;
+    var inside_t = 0.0;
+    var outside_t = -1.0;
+    for (var i = 1u; i <= steps; i++) {
+        let t = length * f32(i) / f32(steps);
+        if (!inside_refractor(mesh, p + d * t)) {
+            outside_t = t;
+            break;
+        }
+        inside_t = t;
+    }
+    if (outside_t < 0.0) {
+        return Surface(false, vec3<f32>(0.0), vec3<f32>(0.0));
+    }
+    for (var k = 0u; k < 6u; k++) {
+        let mid = 0.5 * (inside_t + outside_t);
+        if (inside_refractor(mesh, p + d * mid)) {
+            inside_t = mid;
+        } else {
+            outside_t = mid;
+        }
+    }
+    let x = p + d * outside_t;
+    let q = project(x);
+    if (!on_screen(q)) {
+        return Surface(false, vec3<f32>(0.0), vec3<f32>(0.0));
+    }
+    // The nearer of the two layers in depth is the one crossed.
+    let g_texel = texel_at(q, textureDimensions(g_ids));
+    let z = view_depth(x);
+    let back = back_face(q, d);
+    var use_front = !back.found;
+    if (back.found && textureLoad(g_ids, g_texel, 0).x == mesh + 1u) {
+        let z_front = view_depth(textureLoad(g_position, g_texel, 0).xyz);
+        use_front = abs(z - z_front) < abs(z - view_depth(back.position));
+    }
+    if (use_front) {
+        if (textureLoad(g_ids, g_texel, 0).x != mesh + 1u) {
+            return Surface(false, vec3<f32>(0.0), vec3<f32>(0.0));
+        }
+        var n = textureLoad(g_normal, g_texel, 0).xyz;
+        if (dot(n, d) < 0.0) {
+            n = -n;
+        }
+        return Surface(true, textureLoad(g_position, g_texel, 0).xyz, n);
+    }
+    return back;
+}
+
+// Whether world point `x` lies between the refractor's front and back faces under it.
+fn inside_refractor(mesh: u32, x: vec3<f32>) -> bool {
+    let q = project(x);
+    if (!on_screen(q)) {
+        return false;
+    }
+    let g_texel = texel_at(q, textureDimensions(g_ids));
+    if (textureLoad(g_ids, g_texel, 0).x != mesh + 1u) {
+        return false;
+    }
+    let b_texel = texel_at(q, textureDimensions(back_ids));
+    if (textureLoad(back_ids, b_texel, 0).x == 0u) {
+        return false;
+    }
+    let z = view_depth(x);
+    let z_front = view_depth(textureLoad(g_position, g_texel, 0).xyz);
+    let z_back = view_depth(textureLoad(back_position, b_texel, 0).xyz);
+    return z >= z_front && z <= z_back;
+}
+
+// Radiance of a ray inside the refractor, travelling `d`, that meets the surface `exit`:
+// refracted out (Fresnel-weighted) to the nearby geometry; the part reflected inside (all of
+// it under total internal reflection) followed once more to where it leaves.
+fn leave(r: Reflector, mesh: u32, exit: Surface, d: vec3<f32>, ior: f32) -> vec3<f32> {
+    let fresnel = fresnel_dielectric(dot(d, exit.normal), ior);
+    var color = vec3<f32>(0.0);
+    if (fresnel < 1.0) {
+        color = (1.0 - fresnel) * nearby(r, exit.position, refract(d, -exit.normal, ior));
+    } else {
+        count(COUNT_TIR_FOLLOWED);
+    }
+    if (fresnel > 0.004) {
+        let inner = reflect(d, -exit.normal);
+        let next = march_inside(mesh, exit.position, inner, r.radius);
+        var inner_color: vec3<f32>;
+        if (!next.found) {
+            count(COUNT_INTERNAL_NOT_RESOLVED);
+            inner_color = env_lookup(r, inner);
+        } else {
+            let fresnel_next = fresnel_dielectric(dot(inner, next.normal), ior);
+            if (fresnel_next >= 1.0) {
+                // Trapped again: the light is taken from the cube map along its last direction.
+                count(COUNT_INTERNAL_NOT_RESOLVED);
+                inner_color = env_lookup(r, reflect(inner, -next.normal));
+            } else {
+                inner_color = (1.0 - fresnel_next)
+                    * nearby(r, next.position, refract(inner, -next.normal, ior));
+            }
+        }
+        color += fresnel * inner_color;
+    }
+    return color;
+}
+
+// §3 A–F with §4's lookups: the radiance refracted through the solid at P1 for index `ior`.
+fn refracted(r: Reflector, mesh: u32, pixel_q: vec3<f32>, p1: vec3<f32>, v: vec3<f32>, n1: vec3<f32>, d_n: f32, ior: f32) -> vec3<f32> {
+    // A. T1.
+    let t1 = refract(v, n1, 1.0 / ior);
+    let theta_i = acos(clamp(-dot(v, n1), 0.0, 1.0));
+    let theta_t = acos(clamp(-dot(t1, n1), 0.0, 1.0));
+    // θt/θi → 1/n at normal incidence (Snell's law for small angles).
+    var ratio = 1.0 / ior;
+    if (theta_i > 1e-3) {
+        ratio = theta_t / theta_i;
+    }
+    // B. d_V: from the front face to the back face under this pixel.
+    let back_here = back_face(pixel_q, t1);
+    var d_v = d_n;
+    if (back_here.found && dot(back_here.position - p1, v) > 0.0) {
+        d_v = length(back_here.position - p1);
+    }
+    var d_normal = d_n;
+    if (d_normal < 0.0) {
+        d_normal = d_v;
+    }
+    // C, D. d̃ and P̃2.
+    let d_tilde = ratio * d_v + (1.0 - ratio) * d_normal;
+    var p2 = p1 + t1 * d_tilde;
+    // Beyond the paper: the back face's depth under P̃2 moves P̃2 along T1 to that depth, as
+    // §4.3 iterates against the NG depth.
+    let rate = dot(t1, camera.forward_world);
+    if (abs(rate) > 0.05) {
+        let z1 = view_depth(p1);
+        for (var k = 0u; k < settings.exit_iterations; k++) {
+            let b = back_face(project(p2), t1);
+            if (!b.found) {
+                break;
+            }
+            let t = (view_depth(b.position) - z1) / rate;
+            if (t <= 0.0 || t > 4.0 * max(d_v, d_normal)) {
+                break;
+            }
+            p2 = p1 + t1 * t;
+        }
+    }
+    // E. N2 from the back-face texture where P̃2 projects.
+    var exit = back_face(project(p2), t1);
+    if (!exit.found) {
+        count(COUNT_EXIT_OFF_BACK_FACES);
+        exit = back_here;
+        if (!exit.found) {
+            // No back face at all (an open surface): leave as through a parallel face.
+            exit = Surface(true, p2, -n1);
+        }
+    }
+    // F (and §4): refract out and look up what the ray meets.
+    return leave(r, mesh, Surface(true, p2, exit.normal), t1, ior);
+}
+
+@fragment
+fn fs_shade(in: FullscreenOut) -> @location(0) vec4<f32> {
+    let pixel = vec2<i32>(in.clip.xy);
+    let base = textureLoad(g_color, pixel, 0);
+    let ids = textureLoad(g_ids, pixel, 0).xy;
+    if (ids.x == 0u) {
+        return base;
+    }
+    let mesh = ids.x - 1u;
+    let reflector_index = mesh_reflector[mesh];
+    if (reflector_index < 0) {
+        return base;
+    }
+    let r = reflectors[reflector_index];
+    let material = materials[mesh_materials[mesh]];
+    let p = textureLoad(g_position, pixel, 0).xyz;
+    let n = textureLoad(g_normal, pixel, 0).xyz;
+    let v = normalize(p - camera.eye_world);
+    let cos_i = -dot(v, n);
+    let reflected = env_lookup(r, reflect(v, n));
+    if (material.kind == MATERIAL_MIRROR) {
+        var f = material.color;
+        if ((material.flags & FLAG_FRESNEL) != 0u) {
+            f = fresnel_schlick(material.color, cos_i);
+        }
+        return vec4<f32>(f * reflected, 1.0);
+    }
+    var ior = material.ior;
+    if (settings.index_override > 0.0) {
+        ior = vec3<f32>(settings.index_override);
+    }
+    let pixel_q = vec3<f32>(in.clip.xy / vec2<f32>(camera.width, camera.height), 1.0);
+    var color = vec3<f32>(0.0);
+    if ((material.flags & FLAG_THIN) != 0u) {
+        // A thin sheet: the ray goes straight on, to the nearby geometry behind it.
+        let straight = nearby(r, p, v);
+        for (var c = 0u; c < 3u; c++) {
+            let rs = thin_sheet_reflectance(cos_i, ior[c]);
+            color[c] = rs * reflected[c] + (1.0 - rs) * straight[c];
+        }
+        return vec4<f32>(color, 1.0);
+    }
+    let d_n = interpolated_normal_distance(mesh, ids.y, p);
+    if (ior.x == ior.y && ior.y == ior.z) {
+        let rf = fresnel_dielectric(cos_i, 1.0 / ior.x);
+        color = rf * reflected + (1.0 - rf) * refracted(r, mesh, pixel_q, p, v, n, d_n, ior.x);
+    } else {
+        // Dispersion: one refracted path per colour channel.
+        for (var c = 0u; c < 3u; c++) {
+            let rf = fresnel_dielectric(cos_i, 1.0 / ior[c]);
+            color[c] = rf * reflected[c] + (1.0 - rf) * refracted(r, mesh, pixel_q, p, v, n, d_n, ior[c])[c];
+        }
+    }
+    return vec4<f32>(color, 1.0);
+}

@@ -1,0 +1,835 @@
+//! `image-space`: two-interface image-space refraction of nearby geometry.
+//!
+//! Paper: Wyman, *Interactive image-space refraction of nearby geometry*
+//! (`../shared/seeds/003_c76f67374e02f221.txt`), building on Wyman 2005's two-interface
+//! image-space refraction.
+//!
+//! The paper's steps and where they are:
+//! - **Precompute d_N** at each vertex (§3): [`normal_distances`], a ray cast along the
+//!   inverted normal through the BVH against the refractor's own surface only (other objects
+//!   inside or behind it are passed through). Cast once per scene: a rigid move keeps it.
+//! - **First pass** (§3): the refractors' back faces, normals and positions (a [`RasterPass`]
+//!   whose spec culls front faces).
+//! - **Second pass** (§4.1–4.2): the nearby-geometry (NG) texture, the non-specular scene drawn
+//!   from the eye without the refractors (colour, position, hence depth; a [`RasterPass`]).
+//! - **Final pass** (`image_space.wgsl`, `fs_shade`, a full-screen pass over the scene's
+//!   G-buffer): A. T1 from V and N1; B. d_V to the back face under the pixel; C. d̃ =
+//!   (θt/θi)·d_V + (1 − θt/θi)·d_N, the ratio taken as its limit 1/n at normal incidence;
+//!   D. P̃2 = P1 + d̃·T1; E. N2 from the back-face texture where P̃2 projects; F. T2; then the
+//!   nearby geometry by one of the paper's three ways (`mode`): `kay-greenberg` (§4.1: P̃2
+//!   projected into the NG texture), `ray-plane` (§4.2: the nearest of a few planes fitted on
+//!   the CPU, [`fit_planes`], projected into it), `iterative` (§4.3: `seeds` samples along T2,
+//!   evenly spaced on the screen up to where the ray leaves the scene, the one whose depth
+//!   best agrees with the NG depth under it starting `iterations` steps of
+//!   t ← (z_NG − z(P̃2)) / (T2 · forward)). The first surface's Fresnel reflection is added
+//!   from envmap's cube map, as the reference has it; dispersive materials refract once per
+//!   colour channel. A ray that leaves the NG texture's frustum or finds nothing nearby takes
+//!   envmap's cube map of the refractor (drawn without it), never the bare background, and
+//!   is counted. Mirrors take envmap's reflection; thin sheets look straight through to the
+//!   nearby geometry.
+//!
+//! The paper's four limitations (§6) and what this implementation does about them:
+//! 1. *Two interfaces only.* Kept for the light that leaves at the second interface.
+//! 2. *Total internal reflection handled wrongly* (the paper refracts anyway). Removed in
+//!    part: at the second interface the Fresnel-reflected part (all of it under TIR) is
+//!    followed inside once more — marched in screen space against the refractor's front faces
+//!    (the G-buffer) and back faces (the first pass) until it leaves the slab between them,
+//!    refined by bisection — and refracted out there to the nearby geometry. Still wrong: a
+//!    ray trapped a second time takes the cube map along its reflected direction (counted as
+//!    `internal reflections not resolved`), and the march sees only the two depth layers, so
+//!    inside a concave refractor it can stop at the wrong layer.
+//! 3. *Aliasing* of d_V, N2 and the NG texture (nearest texels). Kept; `resolution` trades it
+//!    for cost.
+//! 4. *Visibility from one NG texture* (geometry hidden from the eye behind other geometry
+//!    cannot be refracted). Kept; measured in docs/benchmarks.md.
+//!
+//! Other approximations: the NG texture holds only non-specular surfaces, so a mirror seen
+//! through the refractor comes from the cube map (where other specular objects are black);
+//! the iterative search accepts a hit only where the NG depth agrees with the ray's within
+//! 10 % (else the cube map), where the paper takes whatever texel it ends on.
+//!
+//! Parameters:
+//! - `mode` (default `iterative`, the paper's choice): `kay-greenberg`, `ray-plane` or
+//!   `iterative` (above). Kay–Greenberg costs one texture read and barely bends what is seen;
+//!   ray-plane adds a loop over at most 8 planes and is exact for planar surroundings;
+//!   iterative costs `seeds + iterations` reads and follows any geometry.
+//! - `seeds` (default 7, the paper's): samples along T2 choosing the iteration's start. More
+//!   find smaller features (the paper: seven find every feature larger than ten pixels at
+//!   512²); cost linear.
+//! - `iterations` (default 4; the paper: fewer than five are typically needed): refinement
+//!   steps of the iterative mode; cost linear.
+//! - `index` (default 0 = each material's own): overrides the refractors' index of refraction.
+//! - `resolution` (default 1): the back-face and NG textures' size relative to the frame.
+//!   Lower is cheaper and more aliased.
+//! - `inside_steps` (default 24): march steps following an internally reflected ray; more
+//!   find thin parts of the refractor; cost linear, only where light reflects inside.
+//! - `cube_resolution` (default 256) and `dynamic` (default false): the fallback cube maps'
+//!   texels per face side, and whether they are redrawn every frame (as envmap's).
+//! - `shadow_resolution` (default 1024): shadow maps of the raster passes (see `raster`).
+
+use std::collections::HashMap;
+
+use bytemuck::{Pod, Zeroable};
+use glam::{DVec3, Vec3};
+use rayon::prelude::*;
+use specula_gpu::counters::Counters;
+use specula_gpu::shaders::{self, CameraUniform};
+use specula_gpu::util::{
+    bind_group, buffer_binding, layout_entry, render_pipeline, texture_binding, writable_buffer,
+    PipelineSpec,
+};
+use specula_gpu::{GpuContext, StageTimer};
+use specula_scene::{Camera, MaterialKind, Scene};
+use specula_trace::accel::{Ray, SceneAccel};
+
+use crate::envmap::{self, CubeMaps, Exit};
+use crate::gpu_scene::GpuScene;
+use crate::live_scene::LiveScene;
+use crate::raster::{self, MeshSelection, OutputTexture, RasterPass, RasterSpec, Targets};
+use crate::technique::{
+    Context, Frame, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, Technique,
+    TechniqueError,
+};
+
+const SHADER: &str = include_str!("image_space.wgsl");
+
+pub fn shader_source() -> String {
+    shaders::compose(
+        &["optics.wgsl", "camera.wgsl", "scene.wgsl", "cubemap.wgsl"],
+        &format!("{}\n{SHADER}", envmap::LOOKUP_SHADER),
+    )
+}
+
+/// The most planes the ray-plane mode intersects (the paper: "a few").
+pub const MAX_PLANES: usize = 8;
+
+/// The final pass's counters, in image_space.wgsl's order: name, and what a warning says.
+const COUNTERS: [(&str, &str); 5] = [
+    (
+        "rays that left the view",
+        "refracted rays left the nearby-geometry texture's view and took the cube map",
+    ),
+    (
+        "rays that found nothing nearby",
+        "refracted rays found no nearby geometry and took the cube map",
+    ),
+    (
+        "exits off the back faces",
+        "estimated exit points fell outside the back-face texture (the pixel's own back face was used)",
+    ),
+    ("total internal reflections followed", ""),
+    (
+        "internal reflections not resolved",
+        "internally reflected rays were not resolved in the textures and took the cube map",
+    ),
+];
+
+pub const PARAMS: &[ParamSpec] = &[
+    ParamSpec {
+        name: "mode",
+        kind: ParamKind::Choice(&["kay-greenberg", "ray-plane", "iterative"]),
+        default: "iterative",
+        doc: "how refracted rays find nearby geometry: the NG texture behind the exit point, the nearest fitted plane, or seeded iteration",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "seeds",
+        kind: ParamKind::Integer { min: 1, max: 64 },
+        default: "7",
+        doc: "iterative mode: samples along the refracted ray choosing where iteration starts (more find smaller features)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "iterations",
+        kind: ParamKind::Integer { min: 0, max: 32 },
+        default: "4",
+        doc: "iterative mode: refinement steps from the best seed",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "index",
+        kind: ParamKind::Number { min: 0.0, max: 4.0 },
+        default: "0",
+        doc: "index of refraction of every refractor (0: each material's own)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "resolution",
+        kind: ParamKind::Number {
+            min: 0.125,
+            max: 2.0,
+        },
+        default: "1",
+        doc: "size of the back-face and nearby-geometry textures relative to the frame",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "inside_steps",
+        kind: ParamKind::Integer { min: 1, max: 256 },
+        default: "24",
+        doc: "march steps following light reflected inside the refractor",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "exit_iterations",
+        kind: ParamKind::Integer { min: 0, max: 16 },
+        default: "2",
+        doc: "steps moving the estimated exit point to the back face's depth (0: the paper's interpolated distance alone)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "cube_resolution",
+        kind: ParamKind::Integer { min: 1, max: 8192 },
+        default: "256",
+        doc: "texels per face side of the fallback cube maps (envmap's)",
+        invalidates: Invalidates::Resources,
+    },
+    ParamSpec {
+        name: "dynamic",
+        kind: ParamKind::Flag,
+        default: "false",
+        doc: "redraw the fallback cube maps every frame (else only after a move)",
+        invalidates: Invalidates::Uniform,
+    },
+    raster::SHADOW_RESOLUTION,
+];
+
+pub const INFO: MethodInfo = MethodInfo {
+    name: "image-space",
+    summary: "two-interface image-space refraction of nearby geometry (Wyman)",
+    exact: false,
+    needs_gpu: true,
+    progressive: false,
+    params: PARAMS,
+    create: || Box::new(ImageSpace::default()),
+};
+
+/// How refracted rays find the nearby geometry (§4).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NearbyMode {
+    KayGreenberg = 0,
+    RayPlane = 1,
+    Iterative = 2,
+}
+
+impl NearbyMode {
+    pub fn name(self) -> &'static str {
+        match self {
+            NearbyMode::KayGreenberg => "kay-greenberg",
+            NearbyMode::RayPlane => "ray-plane",
+            NearbyMode::Iterative => "iterative",
+        }
+    }
+}
+
+/// Host mirror of WGSL `Settings`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct GpuSettings {
+    pub mode: u32,
+    pub seeds: u32,
+    pub iterations: u32,
+    pub plane_count: u32,
+    pub index_override: f32,
+    pub depth_tolerance: f32,
+    pub inside_steps: u32,
+    pub exit_iterations: u32,
+    pub scene_center: [f32; 3],
+    pub scene_radius: f32,
+}
+
+/// The relative depth disagreement within which the iterative mode accepts an NG texel.
+const DEPTH_TOLERANCE: f32 = 0.1;
+
+/// What a final-pass bind group was made for: the pool slots of the scene, back-face and NG
+/// G-buffers, and the cube-map faces' texture.
+type BindingKey = (usize, usize, usize, Option<u64>);
+
+/// What depends on the scene.
+struct Prepared {
+    scene_id: u64,
+    raster: RasterPass,
+    back_faces: RasterPass,
+    nearby: RasterPass,
+    maps: CubeMaps,
+    planes: wgpu::Buffer,
+    plane_count: u32,
+    normal_distances: wgpu::Buffer,
+    mesh_first_vertex: wgpu::Buffer,
+    camera_buffer: wgpu::Buffer,
+    settings_buffer: wgpu::Buffer,
+    counters: Counters,
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+    scene_bind_group: wgpu::BindGroup,
+    bind_groups: Vec<(BindingKey, wgpu::BindGroup)>,
+}
+
+pub struct ImageSpace {
+    pub mode: NearbyMode,
+    pub seeds: u32,
+    pub iterations: u32,
+    pub index: f32,
+    pub resolution: f32,
+    pub inside_steps: u32,
+    pub exit_iterations: u32,
+    pub cube_resolution: u32,
+    pub dynamic: bool,
+    pub shadow_resolution: u32,
+    prepared: Option<Prepared>,
+    timer: StageTimer,
+    output: OutputTexture,
+}
+
+impl Default for ImageSpace {
+    fn default() -> Self {
+        ImageSpace {
+            mode: NearbyMode::Iterative,
+            seeds: 7,
+            iterations: 4,
+            index: 0.0,
+            resolution: 1.0,
+            inside_steps: 24,
+            exit_iterations: 2,
+            cube_resolution: 256,
+            dynamic: false,
+            shadow_resolution: 1024,
+            prepared: None,
+            timer: StageTimer::default(),
+            output: OutputTexture::default(),
+        }
+    }
+}
+
+impl ImageSpace {
+    pub fn new(mode: NearbyMode) -> Self {
+        ImageSpace {
+            mode,
+            ..Default::default()
+        }
+    }
+}
+
+/// Whether a material is refracted through as a solid (the paper's refractors).
+fn is_solid_refractor(kind: &MaterialKind) -> bool {
+    matches!(
+        kind,
+        MaterialKind::Dielectric {
+            thin_walled: false,
+            ..
+        }
+    )
+}
+
+/// d_N for every vertex of `gpu_scene` (three per triangle, in its order): for vertices of
+/// solid refractors, the distance along the inverted normal to the refractor's own surface on
+/// the other side (other meshes are passed through); -1 where none is found (an open surface)
+/// and for every other mesh.
+pub fn normal_distances(scene: &Scene, accel: &SceneAccel) -> Vec<Vec<f32>> {
+    scene
+        .meshes
+        .iter()
+        .enumerate()
+        .map(|(index, mesh)| {
+            if !is_solid_refractor(&scene.materials[mesh.material].kind) {
+                return Vec::new();
+            }
+            let offset = 1e-4 * mesh.bounds().extent().length().max(1e-6);
+            let per_vertex: Vec<f32> = mesh
+                .positions
+                .par_iter()
+                .zip(mesh.normals.par_iter())
+                .map(|(&p, &n)| {
+                    let Some(dir) = (-n).try_normalize() else {
+                        return -1.0;
+                    };
+                    distance_to_own_surface(accel, index as u32, p + dir * offset, dir)
+                        .map_or(-1.0, |t| t + offset)
+                })
+                .collect();
+            mesh.triangles
+                .iter()
+                .flat_map(|tri| tri.map(|i| per_vertex[i as usize]))
+                .collect()
+        })
+        .collect()
+}
+
+/// Distance from `origin` along `dir` to the first hit on mesh `mesh`, passing other meshes.
+fn distance_to_own_surface(accel: &SceneAccel, mesh: u32, origin: Vec3, dir: Vec3) -> Option<f32> {
+    let mut travelled = 0.0;
+    let mut origin = origin;
+    for _ in 0..64 {
+        let hit = accel.intersect(&Ray { origin, dir }, f32::INFINITY)?;
+        if hit.mesh == mesh {
+            return Some(travelled + hit.t);
+        }
+        let step = hit.t + 1e-4 * (1.0 + travelled + hit.t);
+        origin += dir * step;
+        travelled += step;
+    }
+    None
+}
+
+/// One of §4.2's planes, as the shader reads it: a disc, so that a plane standing for one
+/// object does not catch rays that pass far from it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct GpuPlane {
+    /// Unit normal; zero for a plane that faces the eye through `center` (an object that no
+    /// plane of its own fits).
+    pub normal: [f32; 3],
+    /// dot(normal, p) on the plane.
+    pub offset: f32,
+    pub center: [f32; 3],
+    /// Hits farther than this from `center` miss.
+    pub radius: f32,
+}
+
+/// §4.2's planes, fitted on the CPU to the nearby (non-specular) geometry: each set of
+/// coplanar triangles covering at least 2 % of its mesh's area is a disc around those
+/// triangles (a floor, a wall, a box's side); a mesh not mostly covered by such sets gets a
+/// disc through its centre facing the eye (the paper's plane standing for complex geometry,
+/// its Figure 6), as large as its bounding sphere. The `MAX_PLANES` largest by area.
+pub fn fit_planes(scene: &Scene) -> Vec<GpuPlane> {
+    struct Group {
+        area: f64,
+        normal_sum: DVec3,
+        offset_sum: f64,
+        bounds: specula_scene::Aabb,
+    }
+    let diagonal = scene.bounds().extent().length().max(1e-6);
+    let mut planes: Vec<(f64, GpuPlane)> = Vec::new();
+    for mesh in &scene.meshes {
+        if scene.materials[mesh.material].is_specular() {
+            continue;
+        }
+        let mut groups: HashMap<[i64; 4], Group> = HashMap::new();
+        let mut mesh_area = 0.0;
+        for tri in &mesh.triangles {
+            let corners = tri.map(|i| mesh.positions[i as usize]);
+            let [a, b, c] = corners.map(|p| p.as_dvec3());
+            let cross = (b - a).cross(c - a);
+            let area = 0.5 * cross.length();
+            if area <= 0.0 {
+                continue;
+            }
+            mesh_area += area;
+            let mut normal = cross.normalize();
+            // One orientation per plane, so that both windings group together.
+            let major = normal.abs().max_element();
+            if [normal.x, normal.y, normal.z]
+                .into_iter()
+                .find(|v| v.abs() == major)
+                .is_some_and(|v| v < 0.0)
+            {
+                normal = -normal;
+            }
+            let offset = normal.dot(a);
+            let key = [
+                (normal.x * 200.0).round() as i64,
+                (normal.y * 200.0).round() as i64,
+                (normal.z * 200.0).round() as i64,
+                (offset / (1e-3 * diagonal as f64)).round() as i64,
+            ];
+            let group = groups.entry(key).or_insert(Group {
+                area: 0.0,
+                normal_sum: DVec3::ZERO,
+                offset_sum: 0.0,
+                bounds: specula_scene::Aabb::EMPTY,
+            });
+            group.area += area;
+            group.normal_sum += normal * area;
+            group.offset_sum += offset * area;
+            for p in corners {
+                group.bounds.grow(p);
+            }
+        }
+        if mesh_area == 0.0 {
+            continue;
+        }
+        let mut covered = 0.0;
+        for group in groups.into_values() {
+            if group.area >= 0.02 * mesh_area {
+                covered += group.area;
+                let normal = group.normal_sum.normalize();
+                planes.push((
+                    group.area,
+                    GpuPlane {
+                        normal: normal.as_vec3().to_array(),
+                        offset: (group.offset_sum / group.area) as f32,
+                        center: group.bounds.center().to_array(),
+                        radius: group.bounds.radius() * 1.001,
+                    },
+                ));
+            }
+        }
+        if covered < 0.5 * mesh_area {
+            let bounds = mesh.bounds();
+            planes.push((
+                mesh_area,
+                GpuPlane {
+                    normal: [0.0; 3],
+                    offset: 0.0,
+                    center: bounds.center().to_array(),
+                    radius: bounds.radius(),
+                },
+            ));
+        }
+    }
+    planes.sort_by(|a, b| b.0.total_cmp(&a.0));
+    planes.truncate(MAX_PLANES);
+    planes.into_iter().map(|(_, p)| p).collect()
+}
+
+impl ImageSpace {
+    fn build(&self, ctx: &GpuContext, live: &LiveScene) -> Result<Prepared, TechniqueError> {
+        let device = &ctx.device;
+        let scene = live.scene();
+        let gpu_scene = live.gpu(ctx);
+        let raster = RasterPass::new(ctx, live, RasterSpec::scene(self.shadow_resolution))?;
+        let back_faces = RasterPass::new(
+            ctx,
+            live,
+            RasterSpec {
+                meshes: MeshSelection::Specular,
+                targets: Targets::Geometry,
+                cull_mode: Some(wgpu::Face::Front),
+                background: false,
+                shadow_resolution: self.shadow_resolution,
+            },
+        )?;
+        let nearby = RasterPass::new(
+            ctx,
+            live,
+            RasterSpec {
+                meshes: MeshSelection::NonSpecular,
+                targets: Targets::Shaded,
+                cull_mode: None,
+                background: false,
+                shadow_resolution: self.shadow_resolution,
+            },
+        )?;
+        let distances: Vec<f32> = normal_distances(scene, live.accel())
+            .into_iter()
+            .zip(&scene.meshes)
+            .flat_map(|(d, mesh)| {
+                if d.is_empty() {
+                    vec![-1.0; 3 * mesh.triangles.len()]
+                } else {
+                    d
+                }
+            })
+            .collect();
+        let planes = fit_planes(scene);
+        Ok(ctx.validated("image-space set-up", || {
+            let storage = |label, bytes: &[u8]| {
+                let buffer = writable_buffer(
+                    ctx,
+                    label,
+                    bytes.len().max(16) as u64,
+                    wgpu::BufferUsages::STORAGE,
+                );
+                ctx.queue.write_buffer(&buffer, 0, bytes);
+                buffer
+            };
+            let first_vertex: Vec<u32> = gpu_scene
+                .mesh_vertex_ranges
+                .iter()
+                .map(|r| r.start)
+                .collect();
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("image_space.wgsl"),
+                source: wgpu::ShaderSource::Wgsl(shader_source().into()),
+            });
+            use wgpu::{
+                BufferBindingType as B, ShaderStages as St, TextureSampleType as S,
+                TextureViewDimension as D,
+            };
+            let float = S::Float { filterable: false };
+            let read_only = || buffer_binding(B::Storage { read_only: true });
+            let mut entries = vec![layout_entry(0, St::FRAGMENT, buffer_binding(B::Uniform))];
+            // Three G-buffers: the scene's, the back faces', the nearby geometry's.
+            let mut binding = 1;
+            for targets in [4, 3, 3] {
+                for target in 0..targets {
+                    let kind = if target == targets - 1 {
+                        S::Uint
+                    } else {
+                        float
+                    };
+                    entries.push(layout_entry(
+                        binding,
+                        St::FRAGMENT,
+                        texture_binding(kind, D::D2),
+                    ));
+                    binding += 1;
+                }
+            }
+            entries.extend([
+                layout_entry(11, St::FRAGMENT, read_only()),
+                layout_entry(12, St::FRAGMENT, read_only()),
+                layout_entry(13, St::FRAGMENT, read_only()),
+                layout_entry(14, St::FRAGMENT, buffer_binding(B::Uniform)),
+                layout_entry(15, St::FRAGMENT, read_only()),
+                layout_entry(
+                    16,
+                    St::FRAGMENT,
+                    buffer_binding(B::Storage { read_only: false }),
+                ),
+            ]);
+            entries.extend(CubeMaps::layout_entries(17));
+            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("image-space"),
+                entries: &entries,
+            });
+            let scene_layout = GpuScene::bind_group_layout(device);
+            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("image-space"),
+                bind_group_layouts: &[Some(&layout), Some(&scene_layout)],
+                ..Default::default()
+            });
+            let pipeline = render_pipeline(
+                device,
+                &PipelineSpec {
+                    label: "image-space refraction",
+                    layout: &pipeline_layout,
+                    module: &module,
+                    vertex_entry: "vs_fullscreen",
+                    fragment_entry: "fs_shade",
+                    vertex_buffers: &[],
+                    depth: None,
+                    targets: &[raster::COLOR_FORMAT],
+                    write_mask: wgpu::ColorWrites::ALL,
+                    blend: None,
+                    cull_mode: None,
+                },
+            );
+            let uniform = |label, size: usize| {
+                writable_buffer(ctx, label, size as u64, wgpu::BufferUsages::UNIFORM)
+            };
+            Prepared {
+                scene_id: live.id(),
+                raster,
+                back_faces,
+                nearby,
+                maps: CubeMaps::new(ctx, scene),
+                plane_count: planes.len() as u32,
+                planes: storage("ray-plane planes", bytemuck::cast_slice(&planes)),
+                normal_distances: storage("d_N", bytemuck::cast_slice(&distances)),
+                mesh_first_vertex: storage(
+                    "mesh first vertex",
+                    bytemuck::cast_slice(&first_vertex),
+                ),
+                camera_buffer: uniform("camera", size_of::<CameraUniform>()),
+                settings_buffer: uniform("image-space settings", size_of::<GpuSettings>()),
+                counters: Counters::new(ctx, "image-space counters", COUNTERS.len()),
+                pipeline,
+                layout,
+                scene_bind_group: gpu_scene.bind_group(ctx, &scene_layout),
+                bind_groups: Vec::new(),
+            }
+        })?)
+    }
+
+    fn ensure_prepared(
+        &mut self,
+        ctx: &GpuContext,
+        live: &LiveScene,
+    ) -> Result<(), TechniqueError> {
+        if self.prepared.as_ref().map(|p| p.scene_id) != Some(live.id()) {
+            self.prepared = Some(self.build(ctx, live)?);
+        }
+        Ok(())
+    }
+}
+
+impl Technique for ImageSpace {
+    fn info(&self) -> &'static MethodInfo {
+        &INFO
+    }
+
+    fn parameter(&self, name: &str) -> String {
+        match name {
+            "mode" => self.mode.name().to_string(),
+            "seeds" => self.seeds.to_string(),
+            "iterations" => self.iterations.to_string(),
+            "index" => self.index.to_string(),
+            "resolution" => self.resolution.to_string(),
+            "inside_steps" => self.inside_steps.to_string(),
+            "exit_iterations" => self.exit_iterations.to_string(),
+            "cube_resolution" => self.cube_resolution.to_string(),
+            "dynamic" => self.dynamic.to_string(),
+            "shadow_resolution" => self.shadow_resolution.to_string(),
+            _ => String::new(),
+        }
+    }
+
+    fn set_parameter(&mut self, name: &str, value: &ParamValue) -> Result<(), TechniqueError> {
+        match name {
+            "mode" => {
+                self.mode = match value.word() {
+                    "kay-greenberg" => NearbyMode::KayGreenberg,
+                    "ray-plane" => NearbyMode::RayPlane,
+                    _ => NearbyMode::Iterative,
+                }
+            }
+            "seeds" => self.seeds = value.integer() as u32,
+            "iterations" => self.iterations = value.integer() as u32,
+            "index" => self.index = value.number() as f32,
+            "resolution" => self.resolution = value.number() as f32,
+            "inside_steps" => self.inside_steps = value.integer() as u32,
+            "exit_iterations" => self.exit_iterations = value.integer() as u32,
+            "cube_resolution" => self.cube_resolution = value.integer() as u32,
+            "dynamic" => self.dynamic = value.flag(),
+            "shadow_resolution" => self.shadow_resolution = value.integer() as u32,
+            _ => {}
+        }
+        Ok(())
+    }
+
+    fn invalidate(&mut self, what: Invalidates) {
+        if what >= Invalidates::Resources {
+            if let Some(p) = &mut self.prepared {
+                p.maps.drop_faces();
+            }
+        }
+        if what >= Invalidates::Scene {
+            self.prepared = None;
+        }
+    }
+
+    fn prepare(&mut self, ctx: &Context, scene: &LiveScene) -> Result<(), TechniqueError> {
+        self.ensure_prepared(ctx.gpu(INFO.name)?, scene)
+    }
+
+    fn render(
+        &mut self,
+        ctx: &Context,
+        live: &LiveScene,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+    ) -> Result<Frame, TechniqueError> {
+        let gpu = ctx.gpu(INFO.name)?;
+        let before = gpu.resource_counts();
+        self.ensure_prepared(gpu, live)?;
+        let scene = live.scene();
+        let gpu_scene = live.gpu(gpu);
+        let p = self.prepared.as_mut().expect("prepared above");
+        for pass in [&p.raster, &p.back_faces, &p.nearby] {
+            pass.begin_frame(gpu, live)?;
+        }
+        self.timer.start(gpu);
+        let bounds = scene.bounds();
+        let camera_uniform = raster::camera_uniform(camera, &bounds, width, height);
+        let g = p.raster.render(gpu, gpu_scene, &camera_uniform, None)?;
+        self.timer.lap(gpu, "g-buffer")?;
+        let texture_width = ((width as f32 * self.resolution).round() as u32).max(1);
+        let texture_height = ((height as f32 * self.resolution).round() as u32).max(1);
+        let texture_camera = raster::camera_uniform(camera, &bounds, texture_width, texture_height);
+        let back = p.back_faces.render(gpu, gpu_scene, &texture_camera, None)?;
+        self.timer.lap(gpu, "back faces")?;
+        let nearby = p.nearby.render(gpu, gpu_scene, &texture_camera, None)?;
+        self.timer.lap(gpu, "nearby geometry")?;
+        let faces_drawn = p.maps.update(
+            gpu,
+            &p.raster,
+            live,
+            self.cube_resolution,
+            Exit::None,
+            self.dynamic,
+        )?;
+        self.timer.lap(gpu, "fallback cube maps")?;
+        let settings = GpuSettings {
+            mode: self.mode as u32,
+            seeds: self.seeds,
+            iterations: self.iterations,
+            plane_count: p.plane_count,
+            index_override: self.index,
+            depth_tolerance: DEPTH_TOLERANCE,
+            inside_steps: self.inside_steps,
+            exit_iterations: self.exit_iterations,
+            scene_center: bounds.center().to_array(),
+            scene_radius: bounds.radius(),
+        };
+        let output = self.output.get(gpu, width, height);
+        p.counters.clear(gpu);
+        gpu.validated("image-space refraction", || {
+            gpu.queue
+                .write_buffer(&p.camera_buffer, 0, bytemuck::bytes_of(&camera_uniform));
+            gpu.queue
+                .write_buffer(&p.settings_buffer, 0, bytemuck::bytes_of(&settings));
+            let key = (g.slot, back.slot, nearby.slot, p.maps.faces_generation());
+            if !p.bind_groups.iter().any(|(k, _)| *k == key) {
+                if p.bind_groups.len() >= 8 {
+                    p.bind_groups.clear();
+                }
+                let [color, position, normal, ids] = g.views();
+                let [_, back_position, back_normal, back_ids] = back.views();
+                let [ng_color, ng_position, _, ng_ids] = nearby.views();
+                let view = wgpu::BindingResource::TextureView;
+                let mut resources = vec![
+                    p.camera_buffer.as_entire_binding(),
+                    view(&color),
+                    view(&position),
+                    view(&normal),
+                    view(&ids),
+                    view(&back_position),
+                    view(&back_normal),
+                    view(&back_ids),
+                    view(&ng_color),
+                    view(&ng_position),
+                    view(&ng_ids),
+                    gpu_scene.vertices.as_entire_binding(),
+                    p.normal_distances.as_entire_binding(),
+                    p.mesh_first_vertex.as_entire_binding(),
+                    p.settings_buffer.as_entire_binding(),
+                    p.planes.as_entire_binding(),
+                    p.counters.buffer.as_entire_binding(),
+                ];
+                resources.extend(p.maps.bindings());
+                let group = bind_group(gpu, "image-space", &p.layout, &resources);
+                p.bind_groups.push((key, group));
+            }
+            let group = &p
+                .bind_groups
+                .iter()
+                .find(|(k, _)| *k == key)
+                .expect("made above")
+                .1;
+            raster::fullscreen_pass(
+                gpu,
+                "image-space refraction",
+                &p.pipeline,
+                &[group, &p.scene_bind_group],
+                &output,
+            )
+        })?;
+        self.timer.lap(gpu, "refraction")?;
+        let (stages, timing) = self.timer.finish(gpu)?;
+        let counts = p.counters.read(gpu)?;
+        let mut counters = vec![
+            ("refractors".into(), p.maps.reflectors.len() as u64),
+            ("planes".into(), p.plane_count as u64),
+            ("cube map faces rendered".into(), faces_drawn),
+            ("raster passes".into(), 3 + faces_drawn),
+        ];
+        let mut warnings = Vec::new();
+        for ((name, what), &n) in COUNTERS.iter().zip(&counts) {
+            counters.push((name.to_string(), n as u64));
+            if n > 0 && !what.is_empty() {
+                warnings.push(format!("image-space: {n} {what}"));
+            }
+        }
+        Ok(Frame {
+            pixels: Pixels::Texture(output),
+            stages,
+            counters,
+            timing,
+            warnings,
+            converged: true,
+            created: gpu.resource_counts() - before,
+        })
+    }
+}
