@@ -790,6 +790,35 @@ rotate = { axis = [0, 1, 0], degrees = 90 }
 }
 
 #[test]
+fn based_scene_replaces_a_material_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(
+        dir.path(),
+        "ior.toml",
+        "base = \"glass-dragon\"\n[materials.glass]\ntype = \"dielectric\"\nior = 1.2\n",
+    );
+    let scene = load(path.to_str().unwrap()).unwrap();
+    let original = load("glass-dragon").unwrap();
+    let glass = |s: &specula_scene::Scene| {
+        s.materials
+            .iter()
+            .find(|m| m.name == "glass")
+            .unwrap()
+            .kind
+            .clone()
+    };
+    assert_eq!(
+        glass(&scene),
+        specula_scene::MaterialKind::Dielectric {
+            ior: Vec3::splat(1.2),
+            thin_walled: false
+        }
+    );
+    assert_ne!(glass(&original), glass(&scene));
+    assert_eq!(original.meshes.len(), scene.meshes.len());
+}
+
+#[test]
 fn bad_base_and_moves_name_the_key() {
     let dir = tempfile::tempdir().unwrap();
     let cases = [
@@ -813,6 +842,14 @@ fn bad_base_and_moves_name_the_key() {
         (
             "base = \"door-mirror\"\n[[move]]\nobject = \"door mirror\"\nscale = 2",
             &["scale"][..],
+        ),
+        (
+            "base = \"glass-dragon\"\n[materials.crystal]\ntype = \"dielectric\"\nior = 1.2",
+            &["materials.crystal", "no material", "glass"][..],
+        ),
+        (
+            "base = \"glass-dragon\"\n[materials.glass]\ntype = \"dielectric\"\nior = -1",
+            &["glass", "index of refraction"][..],
         ),
     ];
     for (i, (text, parts)) in cases.iter().enumerate() {

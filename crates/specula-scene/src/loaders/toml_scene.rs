@@ -34,7 +34,8 @@ impl Color {
 pub struct SceneFile {
     pub name: Option<String>,
     /// Start from this built-in scene (`specula scenes`) instead of objects listed here; only
-    /// `name`, `camera` and `[[move]]` may be given with it.
+    /// `name`, `camera`, `[[move]]` and `[materials.NAME]` replacing one of its materials by
+    /// name (e.g. another index of refraction) may be given with it.
     pub base: Option<String>,
     /// Rigid moves of named objects, applied in order after the objects are placed.
     #[serde(default, rename = "move")]
@@ -532,7 +533,7 @@ pub fn parse(shown: &str, text: &str, base: &Path) -> Result<Scene, SceneError> 
         SceneError::invalid(shown, e.to_string().trim_end().replace('\n', "\n    "))
     })?;
     let mut scene = match &file.base {
-        Some(name) => based_scene(shown, &file, name)?,
+        Some(name) => based_scene(shown, &file, name, base)?,
         None => listed_scene(shown, &file, base)?,
     };
     for (i, m) in file.moves.iter().enumerate() {
@@ -544,11 +545,15 @@ pub fn parse(shown: &str, text: &str, base: &Path) -> Result<Scene, SceneError> 
 }
 
 /// A built-in scene with the file's name and camera, when given.
-fn based_scene(shown: &str, file: &SceneFile, name: &str) -> Result<Scene, SceneError> {
+fn based_scene(
+    shown: &str,
+    file: &SceneFile,
+    name: &str,
+    base: &Path,
+) -> Result<Scene, SceneError> {
     let listed = [
         ("ambient", file.ambient.is_some()),
         ("background", file.background.is_some()),
-        ("materials", !file.materials.is_empty()),
         ("lights", !file.lights.is_empty()),
         ("objects", !file.objects.is_empty()),
     ];
@@ -556,7 +561,7 @@ fn based_scene(shown: &str, file: &SceneFile, name: &str) -> Result<Scene, Scene
         return Err(SceneError::invalid(
             shown,
             format!(
-                "{key}: not allowed with base = \"{name}\" (only name, camera and [[move]] are)"
+                "{key}: not allowed with base = \"{name}\" (only name, camera, [[move]] and materials replacing the base's are)"
             ),
         ));
     }
@@ -574,6 +579,23 @@ fn based_scene(shown: &str, file: &SceneFile, name: &str) -> Result<Scene, Scene
     }
     if let Some(c) = &file.camera {
         scene.camera = camera_from_spec(c);
+    }
+    for (material_name, spec) in &file.materials {
+        let at = |e: String| SceneError::invalid(shown, format!("materials.{material_name}: {e}"));
+        let Some(index) = scene.materials.iter().position(|m| &m.name == material_name) else {
+            let known: Vec<&str> = scene.materials.iter().map(|m| m.name.as_str()).collect();
+            return Err(at(format!(
+                "base \"{name}\" has no material of that name (its materials: {})",
+                known.join(", ")
+            )));
+        };
+        let mut textures = Vec::new();
+        let material = material_from_spec(material_name, spec, base, &mut textures)
+            .map_err(|e| at(e.to_string()))?;
+        if !textures.is_empty() {
+            return Err(at("a texture may not replace a base scene's material".into()));
+        }
+        scene.materials[index] = material;
     }
     Ok(scene)
 }
