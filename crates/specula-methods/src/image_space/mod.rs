@@ -38,7 +38,7 @@
 //!    ray trapped a second time takes the cube map along its reflected direction (counted as
 //!    `internal reflections not resolved`), and the march sees only the two depth layers, so
 //!    inside a concave refractor it can stop at the wrong layer.
-//! 3. *Aliasing* of d_V, N2 and the NG texture (nearest texels). Kept; `resolution` trades it
+//! 3. *Aliasing* of d_V, N2 and the NG texture (nearest texels). Kept; `texture_scale` trades it
 //!    for cost.
 //! 4. *Visibility from one NG texture* (geometry hidden from the eye behind other geometry
 //!    cannot be refracted). Kept; measured in docs/benchmarks.md.
@@ -59,12 +59,12 @@
 //! - `iterations` (default 4; the paper: fewer than five are typically needed): refinement
 //!   steps of the iterative mode; cost linear.
 //! - `index` (default 0 = each material's own): overrides the refractors' index of refraction.
-//! - `resolution` (default 1): the back-face and NG textures' size relative to the frame.
-//!   Lower is cheaper and more aliased.
+//! - `texture_scale` (default 1): the back-face and NG textures' size relative to the frame
+//!   (the paper draws them at the frame's size). Lower is cheaper and more aliased.
 //! - `inside_steps` (default 24): march steps following an internally reflected ray; more
 //!   find thin parts of the refractor; cost linear, only where light reflects inside.
-//! - `cube_resolution` (default 256) and `dynamic` (default false): the fallback cube maps'
-//!   texels per face side, and whether they are redrawn every frame (as envmap's).
+//! - `resolution` (default 256) and `dynamic` (default false): the fallback cube maps' texels
+//!   per face side, and whether they are redrawn every frame (as envmap's parameters).
 //! - `shadow_resolution` (default 1024): shadow maps of the raster passes (see `raster`).
 
 use std::collections::HashMap;
@@ -154,7 +154,7 @@ pub const PARAMS: &[ParamSpec] = &[
         invalidates: Invalidates::Uniform,
     },
     ParamSpec {
-        name: "resolution",
+        name: "texture_scale",
         kind: ParamKind::Number {
             min: 0.125,
             max: 2.0,
@@ -178,7 +178,7 @@ pub const PARAMS: &[ParamSpec] = &[
         invalidates: Invalidates::Uniform,
     },
     ParamSpec {
-        name: "cube_resolution",
+        name: "resolution",
         kind: ParamKind::Integer { min: 1, max: 8192 },
         default: "256",
         doc: "texels per face side of the fallback cube maps (envmap's)",
@@ -270,10 +270,10 @@ pub struct ImageSpace {
     pub seeds: u32,
     pub iterations: u32,
     pub index: f32,
-    pub resolution: f32,
+    pub texture_scale: f32,
     pub inside_steps: u32,
     pub exit_iterations: u32,
-    pub cube_resolution: u32,
+    pub resolution: u32,
     pub dynamic: bool,
     pub shadow_resolution: u32,
     prepared: Option<Prepared>,
@@ -288,10 +288,10 @@ impl Default for ImageSpace {
             seeds: 7,
             iterations: 4,
             index: 0.0,
-            resolution: 1.0,
+            texture_scale: 1.0,
             inside_steps: 24,
             exit_iterations: 2,
-            cube_resolution: 256,
+            resolution: 256,
             dynamic: false,
             shadow_resolution: 1024,
             prepared: None,
@@ -655,10 +655,10 @@ impl Technique for ImageSpace {
             "seeds" => self.seeds.to_string(),
             "iterations" => self.iterations.to_string(),
             "index" => self.index.to_string(),
-            "resolution" => self.resolution.to_string(),
+            "texture_scale" => self.texture_scale.to_string(),
             "inside_steps" => self.inside_steps.to_string(),
             "exit_iterations" => self.exit_iterations.to_string(),
-            "cube_resolution" => self.cube_resolution.to_string(),
+            "resolution" => self.resolution.to_string(),
             "dynamic" => self.dynamic.to_string(),
             "shadow_resolution" => self.shadow_resolution.to_string(),
             _ => String::new(),
@@ -677,10 +677,10 @@ impl Technique for ImageSpace {
             "seeds" => self.seeds = value.integer() as u32,
             "iterations" => self.iterations = value.integer() as u32,
             "index" => self.index = value.number() as f32,
-            "resolution" => self.resolution = value.number() as f32,
+            "texture_scale" => self.texture_scale = value.number() as f32,
             "inside_steps" => self.inside_steps = value.integer() as u32,
             "exit_iterations" => self.exit_iterations = value.integer() as u32,
-            "cube_resolution" => self.cube_resolution = value.integer() as u32,
+            "resolution" => self.resolution = value.integer() as u32,
             "dynamic" => self.dynamic = value.flag(),
             "shadow_resolution" => self.shadow_resolution = value.integer() as u32,
             _ => {}
@@ -725,8 +725,8 @@ impl Technique for ImageSpace {
         let camera_uniform = raster::camera_uniform(camera, &bounds, width, height);
         let g = p.raster.render(gpu, gpu_scene, &camera_uniform, None)?;
         self.timer.lap(gpu, "g-buffer")?;
-        let texture_width = ((width as f32 * self.resolution).round() as u32).max(1);
-        let texture_height = ((height as f32 * self.resolution).round() as u32).max(1);
+        let texture_width = ((width as f32 * self.texture_scale).round() as u32).max(1);
+        let texture_height = ((height as f32 * self.texture_scale).round() as u32).max(1);
         let texture_camera = raster::camera_uniform(camera, &bounds, texture_width, texture_height);
         let back = p.back_faces.render(gpu, gpu_scene, &texture_camera, None)?;
         self.timer.lap(gpu, "back faces")?;
@@ -736,7 +736,7 @@ impl Technique for ImageSpace {
             gpu,
             &p.raster,
             live,
-            self.cube_resolution,
+            self.resolution,
             Exit::None,
             self.dynamic,
         )?;
