@@ -7,11 +7,11 @@ mod common;
 
 use std::path::Path;
 
+use common::{cpu_reference, looking_down_z, prism, scene, wall};
 use glam::{Mat4, Vec2, Vec3};
 use specula_methods::gpu_trace::{GpuTrace, Mode};
 use specula_methods::{Context, LiveScene, RenderStill, Still, Technique};
 use specula_scene::{generators, Background, Material, MaterialKind, Scene, Texture};
-use common::{cpu_reference, looking_down_z, prism, scene, wall};
 use specula_trace::Image;
 
 const WIDTH: u32 = 80;

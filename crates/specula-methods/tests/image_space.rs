@@ -75,7 +75,11 @@ fn planes_fitted_to_a_room_are_its_walls_and_a_ball_faces_the_eye() {
     let ball = planes[6];
     assert_eq!(ball.normal, [0.0; 3]);
     assert!(Vec3::from_array(ball.center).distance(Vec3::new(1.0, 0.0, 0.0)) < 1e-4);
-    assert!((ball.radius - 0.3 * 3f32.sqrt()).abs() < 0.01, "{}", ball.radius);
+    assert!(
+        (ball.radius - 0.3 * 3f32.sqrt()).abs() < 0.01,
+        "{}",
+        ball.radius
+    );
 }
 
 #[test]
@@ -134,9 +138,15 @@ fn total_internal_reflection_is_followed_not_refracted() {
         })
         .count();
     let share = shown_reflected as f64 / tir_pixels.len() as f64;
-    println!("{shown_reflected} of {} TIR pixels show the panel", tir_pixels.len());
+    println!(
+        "{shown_reflected} of {} TIR pixels show the panel",
+        tir_pixels.len()
+    );
     // Measured 1536 of 1640 (0.937): 6.3 % missed; the bound allows twice that.
-    assert!(share > 0.87, "only {share:.2} of the TIR pixels show the panel");
+    assert!(
+        share > 0.87,
+        "only {share:.2} of the TIR pixels show the panel"
+    );
 }
 
 #[test]
@@ -168,7 +178,9 @@ fn bad_parameters_name_the_parameter_and_the_range() {
         ("index=-1", &["index"][..]),
         ("texture_scale=9", &["texture_scale"][..]),
     ] {
-        let message = apply_setting(&mut technique, setting).unwrap_err().to_string();
+        let message = apply_setting(&mut technique, setting)
+            .unwrap_err()
+            .to_string();
         for word in words {
             assert!(message.contains(word), "{setting}: {message}");
         }

@@ -22,7 +22,11 @@ pub fn cpu_reference(scene: &Scene, width: u32, height: u32, max_depth: u32) -> 
 }
 
 /// A scene of `objects` (mesh, material, world_from_object) seen by `camera`.
-pub fn scene(objects: Vec<(Mesh, Material, Mat4)>, background: Background, camera: Camera) -> Scene {
+pub fn scene(
+    objects: Vec<(Mesh, Material, Mat4)>,
+    background: Background,
+    camera: Camera,
+) -> Scene {
     let mut s = Scene::new("test");
     s.camera = camera;
     s.background = background;

@@ -582,7 +582,11 @@ fn based_scene(
     }
     for (material_name, spec) in &file.materials {
         let at = |e: String| SceneError::invalid(shown, format!("materials.{material_name}: {e}"));
-        let Some(index) = scene.materials.iter().position(|m| &m.name == material_name) else {
+        let Some(index) = scene
+            .materials
+            .iter()
+            .position(|m| &m.name == material_name)
+        else {
             let known: Vec<&str> = scene.materials.iter().map(|m| m.name.as_str()).collect();
             return Err(at(format!(
                 "base \"{name}\" has no material of that name (its materials: {})",
@@ -593,7 +597,9 @@ fn based_scene(
         let material = material_from_spec(material_name, spec, base, &mut textures)
             .map_err(|e| at(e.to_string()))?;
         if !textures.is_empty() {
-            return Err(at("a texture may not replace a base scene's material".into()));
+            return Err(at(
+                "a texture may not replace a base scene's material".into()
+            ));
         }
         scene.materials[index] = material;
     }
