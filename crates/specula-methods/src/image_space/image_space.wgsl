@@ -32,6 +32,12 @@ struct Settings {
     // The scene's bounding sphere: where rays leave the scene.
     scene_center: vec3<f32>,
     scene_radius: f32,
+    // The scene's bounding box, the proxy of parallax-corrected cube-map lookups.
+    scene_min: vec3<f32>,
+    // 1: cube-map lookups are corrected for parallax against the scene's box.
+    parallax: u32,
+    scene_max: vec3<f32>,
+    pad0: u32,
 };
 
 @group(0) @binding(0) var<uniform> camera: Camera;
@@ -105,6 +111,24 @@ fn scene_exit(p: vec3<f32>, d: vec3<f32>) -> f32 {
     let b = dot(oc, d);
     let c = dot(oc, oc) - settings.scene_radius * settings.scene_radius;
     return max(-b + sqrt(max(b * b - c, 0.0)), 0.0);
+}
+
+// Envmap's cube map for a ray p + t·d. Beyond the paper: with `parallax`, the direction looked
+// up is the one from the map's centre to where the ray leaves the scene's bounding box (exact
+// for the walls of a room that is the scene's box), instead of d itself (exact only for an
+// environment at infinity).
+fn env_along(r: Reflector, p: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
+    if (settings.parallax == 0u) {
+        return env_lookup(r, d);
+    }
+    let inverse = 1.0 / d;
+    let t_far = max((settings.scene_min - p) * inverse, (settings.scene_max - p) * inverse);
+    let t = min(t_far.x, min(t_far.y, t_far.z));
+    let towards = p + d * max(t, 0.0) - r.center;
+    if (dot(towards, towards) < 1e-12) {
+        return env_lookup(r, d);
+    }
+    return env_lookup(r, normalize(towards));
 }
 
 // ---- Nearby geometry (§4) -------------------------------------------------------------------
@@ -304,7 +328,7 @@ fn nearby(r: Reflector, p: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
         return hit.color;
     }
     count(select(COUNT_NOTHING_NEARBY, COUNT_LEFT_FRUSTUM, hit.status == 1u));
-    return env_lookup(r, d);
+    return env_along(r, p, d);
 }
 
 // ---- The refractor's surfaces (§3) ------------------------------------------------------------
@@ -452,13 +476,13 @@ fn leave(r: Reflector, mesh: u32, exit: Surface, d: vec3<f32>, ior: f32) -> vec3
         var inner_color: vec3<f32>;
         if (!next.found) {
             count(COUNT_INTERNAL_NOT_RESOLVED);
-            inner_color = env_lookup(r, inner);
+            inner_color = env_along(r, exit.position, inner);
         } else {
             let fresnel_next = fresnel_dielectric(dot(inner, next.normal), ior);
             if (fresnel_next >= 1.0) {
                 // Trapped again: the light is taken from the cube map along its last direction.
                 count(COUNT_INTERNAL_NOT_RESOLVED);
-                inner_color = env_lookup(r, reflect(inner, -next.normal));
+                inner_color = env_along(r, next.position, reflect(inner, -next.normal));
             } else {
                 inner_color = (1.0 - fresnel_next)
                     * nearby(r, next.position, refract(inner, -next.normal, ior));
@@ -543,7 +567,7 @@ fn fs_shade(in: FullscreenOut) -> @location(0) vec4<f32> {
     let n = textureLoad(g_normal, pixel, 0).xyz;
     let v = normalize(p - camera.eye_world);
     let cos_i = -dot(v, n);
-    let reflected = env_lookup(r, reflect(v, n));
+    let reflected = env_along(r, p, reflect(v, n));
     if (material.kind == MATERIAL_MIRROR) {
         var f = material.color;
         if ((material.flags & FLAG_FRESNEL) != 0u) {

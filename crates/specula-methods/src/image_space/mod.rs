@@ -191,6 +191,13 @@ pub const PARAMS: &[ParamSpec] = &[
         doc: "redraw the fallback cube maps every frame (else only after a move)",
         invalidates: Invalidates::Uniform,
     },
+    ParamSpec {
+        name: "parallax",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "correct cube-map lookups for parallax against the scene's bounding box (false: the direction alone, as envmap)",
+        invalidates: Invalidates::Uniform,
+    },
     raster::SHADOW_RESOLUTION,
 ];
 
@@ -236,6 +243,10 @@ pub struct GpuSettings {
     pub exit_iterations: u32,
     pub scene_center: [f32; 3],
     pub scene_radius: f32,
+    pub scene_min: [f32; 3],
+    pub parallax: u32,
+    pub scene_max: [f32; 3],
+    pub pad0: u32,
 }
 
 /// The relative depth disagreement within which the iterative mode accepts an NG texel.
@@ -275,6 +286,7 @@ pub struct ImageSpace {
     pub exit_iterations: u32,
     pub resolution: u32,
     pub dynamic: bool,
+    pub parallax: bool,
     pub shadow_resolution: u32,
     prepared: Option<Prepared>,
     timer: StageTimer,
@@ -293,6 +305,7 @@ impl Default for ImageSpace {
             exit_iterations: 2,
             resolution: 256,
             dynamic: false,
+            parallax: true,
             shadow_resolution: 1024,
             prepared: None,
             timer: StageTimer::default(),
@@ -660,6 +673,7 @@ impl Technique for ImageSpace {
             "exit_iterations" => self.exit_iterations.to_string(),
             "resolution" => self.resolution.to_string(),
             "dynamic" => self.dynamic.to_string(),
+            "parallax" => self.parallax.to_string(),
             "shadow_resolution" => self.shadow_resolution.to_string(),
             _ => String::new(),
         }
@@ -682,6 +696,7 @@ impl Technique for ImageSpace {
             "exit_iterations" => self.exit_iterations = value.integer() as u32,
             "resolution" => self.resolution = value.integer() as u32,
             "dynamic" => self.dynamic = value.flag(),
+            "parallax" => self.parallax = value.flag(),
             "shadow_resolution" => self.shadow_resolution = value.integer() as u32,
             _ => {}
         }
@@ -752,6 +767,10 @@ impl Technique for ImageSpace {
             exit_iterations: self.exit_iterations,
             scene_center: bounds.center().to_array(),
             scene_radius: bounds.radius(),
+            scene_min: bounds.min.to_array(),
+            parallax: self.parallax as u32,
+            scene_max: bounds.max.to_array(),
+            pad0: 0,
         };
         let output = self.output.get(gpu, width, height);
         p.counters.clear(gpu);
