@@ -71,9 +71,9 @@ fn iterative_lookup_beats_kay_greenberg_before_a_checkered_plane() {
     };
     let (iterative, kay_greenberg) = (flip("iterative"), flip("kay-greenberg"));
     println!("mean FLIP on the sphere: iterative {iterative:.4}, kay-greenberg {kay_greenberg:.4}");
-    // Measured at 128²: iterative 0.0762, Kay–Greenberg 0.4775 (lavapipe); the bound is twice
+    // Measured at 128²: iterative 0.0494, Kay–Greenberg 0.4637 (lavapipe); the bound is twice
     // the iterative figure.
-    assert!(iterative < 0.15, "iterative {iterative}");
+    assert!(iterative < 0.1, "iterative {iterative}");
     assert!(iterative < kay_greenberg);
 }
 
