@@ -6,7 +6,9 @@ mod common;
 
 use common::{cpu_reference, looking_down_z, prism, scene};
 use glam::{Mat4, Vec2, Vec3};
-use specula_methods::image_space::{fit_planes, normal_distances, ImageSpace, NearbyMode};
+use specula_methods::image_space::{
+    fit_planes, nearby_visibility, normal_distances, ImageSpace, NearbyMode, NearbyVisibility,
+};
 use specula_methods::{apply_setting, RenderStill, Technique};
 use specula_scene::{generators, Background, Material};
 use specula_trace::SceneAccel;
@@ -184,5 +186,124 @@ fn bad_parameters_name_the_parameter_and_the_range() {
         for word in words {
             assert!(message.contains(word), "{setting}: {message}");
         }
+    }
+}
+
+#[test]
+fn a_refractor_alone_before_the_background_renders_with_every_option() {
+    let Some(ctx) = specula_methods::test_context("image-space alone") else {
+        return;
+    };
+    // No nearby geometry at all: no NG texels, no planes; every ray takes the cube map.
+    let mut s = scene(
+        vec![(
+            generators::sphere(0.5, 32, 16),
+            Material::glass("glass", 1.5),
+            Mat4::IDENTITY,
+        )],
+        Background::Color(Vec3::new(0.2, 0.4, 0.8)),
+        looking_down_z(20.0),
+    );
+    s.finalize("test").unwrap();
+    for setting in [
+        "mode=kay-greenberg",
+        "mode=ray-plane",
+        "layers=3",
+        "parallax=false",
+    ] {
+        let mut technique = ImageSpace::default();
+        apply_setting(&mut technique, setting).unwrap();
+        let still = technique.render_still(&ctx, &s, 32, 32).unwrap();
+        let centre = still.image.get(16, 16);
+        // Only the background's colour can come through (attenuated by Fresnel).
+        assert!(
+            centre.is_finite() && centre.z > 0.5 && centre.z > centre.x,
+            "{setting}: {centre}"
+        );
+    }
+}
+
+#[test]
+fn nearby_visibility_counts_surfaces_hidden_from_the_eye() {
+    // A glass ball before a wall, with a small box between ball and wall off the axis: rays the
+    // ball bends across the axis pass beside the box to wall points behind it, which the eye
+    // cannot see.
+    let wall = (
+        generators::plane(Vec2::splat(20.0), 1),
+        Material::diffuse("wall", Vec3::ONE),
+        Mat4::from_translation(Vec3::new(0.0, 0.0, -2.0))
+            * Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2),
+    );
+    let ball = (
+        generators::sphere(0.5, 32, 16),
+        Material::glass("glass", 1.5),
+        Mat4::from_translation(Vec3::new(0.0, 0.0, 1.0)),
+    );
+    let mut open = scene(
+        vec![wall.clone(), ball.clone()],
+        Background::Color(Vec3::ZERO),
+        looking_down_z(20.0),
+    );
+    open.finalize("test").unwrap();
+    let figures = nearby_visibility(&open, &SceneAccel::new(&open), 64, 64);
+    assert!(figures.refractor_pixels > 500, "{figures:?}");
+    assert_eq!(
+        figures.hidden_from_eye, 0,
+        "nothing hides the wall: {figures:?}"
+    );
+    let mut hidden = scene(
+        vec![
+            wall,
+            ball,
+            (
+                generators::cuboid(Vec3::splat(0.4)),
+                Material::diffuse("box", Vec3::ONE),
+                Mat4::from_translation(Vec3::new(0.6, 0.0, -1.0)),
+            ),
+        ],
+        Background::Color(Vec3::ZERO),
+        looking_down_z(20.0),
+    );
+    hidden.finalize("test").unwrap();
+    let NearbyVisibility {
+        refractor_pixels,
+        reaching_nearby_geometry,
+        hidden_from_eye,
+    } = nearby_visibility(&hidden, &SceneAccel::new(&hidden), 64, 64);
+    println!(
+        "{hidden_from_eye} of {reaching_nearby_geometry} ({refractor_pixels} refractor pixels)"
+    );
+    assert!(hidden_from_eye > 0 && hidden_from_eye < reaching_nearby_geometry);
+}
+
+/// The paper's fourth limitation measured on the scenes with a refractor and nearby geometry
+/// (docs/benchmarks.md quotes these figures: `cargo test -p specula-methods --test image_space
+/// visibility_on_the_scenes -- --nocapture`).
+#[test]
+fn visibility_on_the_scenes() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+    let mut names = vec!["glass-dragon".to_string(), "truck-cover".to_string()];
+    for file in [
+        "table1/sphere-dragon.toml",
+        "table1/bunny-dragon.toml",
+        "table1/sphere-plane.toml",
+        "suite/glass-sphere.toml",
+        "suite/glass-lens.toml",
+    ] {
+        names.push(root.join(file).to_string_lossy().into_owned());
+    }
+    for name in names {
+        let s = specula_scene::load(&name).unwrap();
+        let v = nearby_visibility(&s, &SceneAccel::new(&s), 160, 120);
+        println!(
+            "{}: {} refractor pixels, {} reach nearby geometry, {} of them hidden from the eye ({:.1} %)",
+            s.name,
+            v.refractor_pixels,
+            v.reaching_nearby_geometry,
+            v.hidden_from_eye,
+            100.0 * v.hidden_from_eye as f64 / v.reaching_nearby_geometry.max(1) as f64
+        );
+        assert!(v.hidden_from_eye <= v.reaching_nearby_geometry);
+        assert!(v.reaching_nearby_geometry <= v.refractor_pixels);
     }
 }

@@ -14,6 +14,7 @@ const COUNT_NOTHING_NEARBY: u32 = 1u;
 const COUNT_EXIT_OFF_BACK_FACES: u32 = 2u;
 const COUNT_TIR_FOLLOWED: u32 = 3u;
 const COUNT_INTERNAL_NOT_RESOLVED: u32 = 4u;
+const COUNT_REENTRIES: u32 = 5u;
 
 struct Settings {
     mode: u32,
@@ -37,7 +38,15 @@ struct Settings {
     // 1: cube-map lookups are corrected for parallax against the scene's box.
     parallax: u32,
     scene_max: vec3<f32>,
-    pad0: u32,
+    // Pairs of interfaces a path may cross (the `layers` parameter; 1 = the paper's two).
+    layers: u32,
+    // Depth-peeled surface layers bound (0 with layers = 1).
+    peeled: u32,
+    // The largest solid refractor's bounding-sphere diameter: how far marches between
+    // refractors look.
+    refractor_extent: f32,
+    pad1: u32,
+    pad2: u32,
 };
 
 @group(0) @binding(0) var<uniform> camera: Camera;
@@ -70,11 +79,15 @@ struct Plane {
     radius: f32,
 };
 @group(0) @binding(15) var<storage, read> planes: array<Plane>;
-@group(0) @binding(16) var<storage, read_write> counters: array<atomic<u32>, 5>;
+@group(0) @binding(16) var<storage, read_write> counters: array<atomic<u32>, 6>;
 @group(0) @binding(17) var env_faces: texture_2d_array<f32>;
 @group(0) @binding(18) var<storage, read> env_views: array<EnvView>;
 @group(0) @binding(19) var<storage, read> reflectors: array<Reflector>;
 @group(0) @binding(20) var<storage, read> mesh_reflector: array<i32>;
+// With layers > 1: the solid refractors' surfaces peeled from the eye (peel.wgsl): position
+// (w = view depth, 0 where none) and normal per layer.
+@group(0) @binding(21) var layer_position: texture_2d_array<f32>;
+@group(0) @binding(22) var layer_normal: texture_2d_array<f32>;
 
 fn count(slot: u32) {
     atomicAdd(&counters[slot], 1u);
@@ -366,60 +379,85 @@ struct Surface {
     position: vec3<f32>,
     // Oriented along the ray that meets it (leaving the refractor).
     normal: vec3<f32>,
+    // The stored (outward) normal faced the ray: the ray enters there. Known for peeled
+    // layers only (false elsewhere).
+    entering: bool,
 };
 
 // The refractor's back face under screen point `q`, its normal turned along `d`.
 fn back_face(q: vec3<f32>, d: vec3<f32>) -> Surface {
     if (!on_screen(q)) {
-        return Surface(false, vec3<f32>(0.0), vec3<f32>(0.0));
+        return Surface(false, vec3<f32>(0.0), vec3<f32>(0.0), false);
     }
     let texel = texel_at(q, textureDimensions(back_ids));
     if (textureLoad(back_ids, texel, 0).x == 0u) {
-        return Surface(false, vec3<f32>(0.0), vec3<f32>(0.0));
+        return Surface(false, vec3<f32>(0.0), vec3<f32>(0.0), false);
     }
     var n = textureLoad(back_normal, texel, 0).xyz;
     if (dot(n, d) < 0.0) {
         n = -n;
     }
-    return Surface(true, textureLoad(back_position, texel, 0).xyz, n);
+    return Surface(true, textureLoad(back_position, texel, 0).xyz, n, false);
 }
 
-// Beyond the paper (§6, total internal reflection): a ray reflected inside the refractor at
-// `p` is marched in screen space against the refractor's two depth layers the textures hold
-// (its front faces in the G-buffer, its back faces in the first pass) until it leaves the
-// slab between them; the crossing is refined by bisection and takes that layer's normal.
-fn march_inside(mesh: u32, p: vec3<f32>, d: vec3<f32>, radius: f32) -> Surface {
-    let steps = max(settings.inside_steps, 1u);
-    let length = 2.0 * radius;
-    var inside_t = 0.0;
-    var outside_t = -1.0;
-    for (var i = 1u; i <= steps; i++) {
-        let t = length * f32(i) / f32(steps);
-        if (!inside_refractor(mesh, p + d * t)) {
-            outside_t = t;
-            break;
-        }
-        inside_t = t;
+// Whether world point `x` lies inside a solid refractor: with peeled layers, an odd number of
+// them lie in front of it along the eye ray; else, for refractor `mesh`, it lies between the
+// front face (the G-buffer) and the back face (the first pass) under it.
+fn inside(mesh: u32, x: vec3<f32>) -> bool {
+    if (settings.peeled == 0u) {
+        return inside_refractor(mesh, x);
     }
-    if (outside_t < 0.0) {
-        return Surface(false, vec3<f32>(0.0), vec3<f32>(0.0));
-    }
-    for (var k = 0u; k < 6u; k++) {
-        let mid = 0.5 * (inside_t + outside_t);
-        if (inside_refractor(mesh, p + d * mid)) {
-            inside_t = mid;
-        } else {
-            outside_t = mid;
-        }
-    }
-    let x = p + d * outside_t;
     let q = project(x);
     if (!on_screen(q)) {
-        return Surface(false, vec3<f32>(0.0), vec3<f32>(0.0));
+        return false;
+    }
+    let texel = texel_at(q, textureDimensions(layer_position));
+    let z = view_depth(x);
+    var crossings = 0u;
+    for (var k = 0u; k < settings.peeled; k++) {
+        let w = textureLoad(layer_position, texel, k, 0).w;
+        if (w == 0.0 || w >= z) {
+            break;
+        }
+        crossings++;
+    }
+    return crossings % 2u == 1u;
+}
+
+// The refractor's surface that a march crossed near `x`: the surface nearest in depth under
+// it, of the peeled layers or else of the front and back faces; its normal turned along `d`.
+fn crossed_surface(mesh: u32, x: vec3<f32>, d: vec3<f32>) -> Surface {
+    let q = project(x);
+    if (!on_screen(q)) {
+        return Surface(false, vec3<f32>(0.0), vec3<f32>(0.0), false);
+    }
+    let z = view_depth(x);
+    if (settings.peeled > 0u) {
+        let texel = texel_at(q, textureDimensions(layer_position));
+        var best = -1;
+        var best_gap = 3.4e38;
+        for (var k = 0u; k < settings.peeled; k++) {
+            let w = textureLoad(layer_position, texel, k, 0).w;
+            if (w == 0.0) {
+                break;
+            }
+            if (abs(w - z) < best_gap) {
+                best_gap = abs(w - z);
+                best = i32(k);
+            }
+        }
+        if (best < 0) {
+            return Surface(false, vec3<f32>(0.0), vec3<f32>(0.0), false);
+        }
+        var n = textureLoad(layer_normal, texel, best, 0).xyz;
+        let entering = dot(n, d) < 0.0;
+        if (entering) {
+            n = -n;
+        }
+        return Surface(true, textureLoad(layer_position, texel, best, 0).xyz, n, entering);
     }
     // The nearer of the two layers in depth is the one crossed.
     let g_texel = texel_at(q, textureDimensions(g_ids));
-    let z = view_depth(x);
     let back = back_face(q, d);
     var use_front = !back.found;
     if (back.found && textureLoad(g_ids, g_texel, 0).x == mesh + 1u) {
@@ -428,15 +466,50 @@ fn march_inside(mesh: u32, p: vec3<f32>, d: vec3<f32>, radius: f32) -> Surface {
     }
     if (use_front) {
         if (textureLoad(g_ids, g_texel, 0).x != mesh + 1u) {
-            return Surface(false, vec3<f32>(0.0), vec3<f32>(0.0));
+            return Surface(false, vec3<f32>(0.0), vec3<f32>(0.0), false);
         }
         var n = textureLoad(g_normal, g_texel, 0).xyz;
         if (dot(n, d) < 0.0) {
             n = -n;
         }
-        return Surface(true, textureLoad(g_position, g_texel, 0).xyz, n);
+        return Surface(true, textureLoad(g_position, g_texel, 0).xyz, n, false);
     }
     return back;
+}
+
+// Beyond the paper: marches the ray p + t·d (t up to `length`) in screen space until it
+// crosses the refractor's surface into the state `to_inside`, refines the crossing by
+// bisection and returns that surface. `leave_first`: the march must first be seen in the other
+// state (a ray leaving the surface it starts on). Used to follow light reflected inside (§6's
+// total internal reflection) and, with peeled layers, light entering the refractor again.
+fn march(mesh: u32, p: vec3<f32>, d: vec3<f32>, length: f32, to_inside: bool, leave_first: bool) -> Surface {
+    let steps = max(settings.inside_steps, 1u);
+    var before_t = 0.0;
+    var after_t = -1.0;
+    var left = !leave_first;
+    for (var i = 1u; i <= steps; i++) {
+        let t = length * f32(i) / f32(steps);
+        let state = inside(mesh, p + d * t);
+        if (state != to_inside) {
+            left = true;
+        } else if (left) {
+            after_t = t;
+            break;
+        }
+        before_t = t;
+    }
+    if (after_t < 0.0) {
+        return Surface(false, vec3<f32>(0.0), vec3<f32>(0.0), false);
+    }
+    for (var k = 0u; k < 6u; k++) {
+        let mid = 0.5 * (before_t + after_t);
+        if (inside(mesh, p + d * mid) == to_inside) {
+            after_t = mid;
+        } else {
+            before_t = mid;
+        }
+    }
+    return crossed_surface(mesh, p + d * after_t, d);
 }
 
 // Whether world point `x` lies between the refractor's front and back faces under it.
@@ -459,6 +532,49 @@ fn inside_refractor(mesh: u32, x: vec3<f32>) -> bool {
     return z >= z_front && z <= z_back;
 }
 
+// Radiance of light that has left the refractor at `p` along `d`. With layers > 1, beyond the
+// paper (§6's two-interface limit): where it enters a solid refractor again (another part of
+// it, behind) it is refracted in there and out where it leaves, up to layers − 1 more pairs
+// of interfaces, each found by marching the peeled layers; the light these interfaces reflect
+// takes the cube map along its reflected direction. Then the nearby geometry.
+fn onward(r: Reflector, mesh: u32, p_start: vec3<f32>, d_start: vec3<f32>, ior: f32) -> vec3<f32> {
+    var p = p_start;
+    var d = d_start;
+    var weight = 1.0;
+    var color = vec3<f32>(0.0);
+    for (var k = 1u; k < settings.layers; k++) {
+        let entry = march(mesh, p, d, settings.refractor_extent, true, true);
+        // A crossing into the refractor must be through a surface facing the ray (its stored
+        // normal against it) some way from where the ray left: else it is the surface just
+        // left, seen through the textures' texels.
+        if (!entry.found || !entry.entering || distance(entry.position, p) < 0.1 * r.radius) {
+            break;
+        }
+        count(COUNT_REENTRIES);
+        // entry.normal points along d, into the refractor. The light each extra interface
+        // reflects takes the cube map along its reflected direction.
+        let fresnel_in = fresnel_dielectric(dot(d, entry.normal), 1.0 / ior);
+        color += weight * fresnel_in * env_along(r, entry.position, reflect(d, -entry.normal));
+        weight *= 1.0 - fresnel_in;
+        let t_in = refract(d, -entry.normal, 1.0 / ior);
+        let exit = march(mesh, entry.position, t_in, settings.refractor_extent, false, false);
+        if (!exit.found) {
+            count(COUNT_INTERNAL_NOT_RESOLVED);
+            return color + weight * env_along(r, entry.position, t_in);
+        }
+        let fresnel_out = fresnel_dielectric(dot(t_in, exit.normal), ior);
+        color += weight * fresnel_out * env_along(r, exit.position, reflect(t_in, -exit.normal));
+        if (fresnel_out >= 1.0) {
+            count(COUNT_INTERNAL_NOT_RESOLVED);
+            return color;
+        }
+        weight *= 1.0 - fresnel_out;
+        p = exit.position;
+        d = refract(t_in, -exit.normal, ior);
+    }
+    return color + weight * nearby(r, p, d);
+}
+
 // Radiance of a ray inside the refractor, travelling `d`, that meets the surface `exit`:
 // refracted out (Fresnel-weighted) to the nearby geometry; the part reflected inside (all of
 // it under total internal reflection) followed once more to where it leaves.
@@ -466,13 +582,13 @@ fn leave(r: Reflector, mesh: u32, exit: Surface, d: vec3<f32>, ior: f32) -> vec3
     let fresnel = fresnel_dielectric(dot(d, exit.normal), ior);
     var color = vec3<f32>(0.0);
     if (fresnel < 1.0) {
-        color = (1.0 - fresnel) * nearby(r, exit.position, refract(d, -exit.normal, ior));
+        color = (1.0 - fresnel) * onward(r, mesh, exit.position, refract(d, -exit.normal, ior), ior);
     } else {
         count(COUNT_TIR_FOLLOWED);
     }
     if (fresnel > 0.004) {
         let inner = reflect(d, -exit.normal);
-        let next = march_inside(mesh, exit.position, inner, r.radius);
+        let next = march(mesh, exit.position, inner, 2.0 * r.radius, false, false);
         var inner_color: vec3<f32>;
         if (!next.found) {
             count(COUNT_INTERNAL_NOT_RESOLVED);
@@ -541,11 +657,11 @@ fn refracted(r: Reflector, mesh: u32, pixel_q: vec3<f32>, p1: vec3<f32>, v: vec3
         exit = back_here;
         if (!exit.found) {
             // No back face at all (an open surface): leave as through a parallel face.
-            exit = Surface(true, p2, -n1);
+            exit = Surface(true, p2, -n1, false);
         }
     }
     // F (and §4): refract out and look up what the ray meets.
-    return leave(r, mesh, Surface(true, p2, exit.normal), t1, ior);
+    return leave(r, mesh, Surface(true, p2, exit.normal, false), t1, ior);
 }
 
 @fragment

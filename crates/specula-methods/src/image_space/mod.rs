@@ -91,6 +91,8 @@ use crate::technique::{
     TechniqueError,
 };
 
+mod peel;
+
 const SHADER: &str = include_str!("image_space.wgsl");
 
 pub fn shader_source() -> String {
@@ -104,7 +106,7 @@ pub fn shader_source() -> String {
 pub const MAX_PLANES: usize = 8;
 
 /// The final pass's counters, in image_space.wgsl's order: name, and what a warning says.
-const COUNTERS: [(&str, &str); 5] = [
+const COUNTERS: [(&str, &str); 6] = [
     (
         "rays that left the view",
         "refracted rays left the nearby-geometry texture's view and took the cube map",
@@ -122,6 +124,7 @@ const COUNTERS: [(&str, &str); 5] = [
         "internal reflections not resolved",
         "internally reflected rays were not resolved in the textures and took the cube map",
     ),
+    ("re-entries followed", ""),
 ];
 
 pub const PARAMS: &[ParamSpec] = &[
@@ -192,6 +195,13 @@ pub const PARAMS: &[ParamSpec] = &[
         invalidates: Invalidates::Uniform,
     },
     ParamSpec {
+        name: "layers",
+        kind: ParamKind::Integer { min: 1, max: 4 },
+        default: "1",
+        doc: "pairs of interfaces a path may cross (1: the paper's two); more peel 2 x layers surface layers",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
         name: "parallax",
         kind: ParamKind::Flag,
         default: "true",
@@ -246,15 +256,18 @@ pub struct GpuSettings {
     pub scene_min: [f32; 3],
     pub parallax: u32,
     pub scene_max: [f32; 3],
-    pub pad0: u32,
+    pub layers: u32,
+    pub peeled: u32,
+    pub refractor_extent: f32,
+    pub pad: [u32; 2],
 }
 
 /// The relative depth disagreement within which the iterative mode accepts an NG texel.
 const DEPTH_TOLERANCE: f32 = 0.1;
 
 /// What a final-pass bind group was made for: the pool slots of the scene, back-face and NG
-/// G-buffers, and the cube-map faces' texture.
-type BindingKey = (usize, usize, usize, Option<u64>);
+/// G-buffers, the cube-map faces' texture, and the peeled layers' (0: the placeholder).
+type BindingKey = (usize, usize, usize, Option<u64>, u64);
 
 /// What depends on the scene.
 struct Prepared {
@@ -274,6 +287,13 @@ struct Prepared {
     layout: wgpu::BindGroupLayout,
     scene_bind_group: wgpu::BindGroup,
     bind_groups: Vec<(BindingKey, wgpu::BindGroup)>,
+    peel: peel::Peel,
+    /// Bound in place of the peeled layers when there are none (layers = 1).
+    no_layers: wgpu::TextureView,
+    /// Vertex ranges of the solid refractors (what is peeled).
+    solid_ranges: Vec<std::ops::Range<u32>>,
+    /// The largest solid refractor's bounding-sphere diameter.
+    refractor_extent: f32,
 }
 
 pub struct ImageSpace {
@@ -287,6 +307,7 @@ pub struct ImageSpace {
     pub resolution: u32,
     pub dynamic: bool,
     pub parallax: bool,
+    pub layers: u32,
     pub shadow_resolution: u32,
     prepared: Option<Prepared>,
     timer: StageTimer,
@@ -306,6 +327,7 @@ impl Default for ImageSpace {
             resolution: 256,
             dynamic: false,
             parallax: true,
+            layers: 1,
             shadow_resolution: 1024,
             prepared: None,
             timer: StageTimer::default(),
@@ -366,6 +388,99 @@ pub fn normal_distances(scene: &Scene, accel: &SceneAccel) -> Vec<Vec<f32>> {
                 .collect()
         })
         .collect()
+}
+
+/// What the paper's fourth limitation costs on a scene: of the pixels that see a solid
+/// refractor, how many send their (dominant) refracted path to a non-specular surface, and
+/// how many of those surfaces are hidden from the eye behind other non-specular geometry —
+/// points no single nearby-geometry texture drawn from the eye can hold.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct NearbyVisibility {
+    pub refractor_pixels: usize,
+    pub reaching_nearby_geometry: usize,
+    pub hidden_from_eye: usize,
+}
+
+/// Measures [`NearbyVisibility`] with exact rays at `width` × `height`: each refractor pixel's
+/// path is followed through solid refractors (refracted, or reflected under total internal
+/// reflection) to the first other surface.
+pub fn nearby_visibility(
+    scene: &Scene,
+    accel: &SceneAccel,
+    width: u32,
+    height: u32,
+) -> NearbyVisibility {
+    use specula_trace::optics::{reflect, refract};
+    use specula_trace::reference::{offset_origin, surface_point};
+    let eye = scene.camera.eye;
+    let per_pixel: Vec<(bool, bool, bool)> = (0..width * height)
+        .into_par_iter()
+        .map(|i| {
+            let (x, y) = ((i % width) as f32 + 0.5, (i / width) as f32 + 0.5);
+            let mut ray = Ray {
+                origin: eye,
+                dir: scene.camera.ray_direction(x, y, width, height),
+            };
+            let mut through_refractor = false;
+            for _ in 0..16 {
+                let Some(hit) = accel.intersect(&ray, f32::INFINITY) else {
+                    return (through_refractor, false, false);
+                };
+                let sp = surface_point(scene, &ray, &hit);
+                let kind = &scene.materials[sp.material].kind;
+                if !is_solid_refractor(kind) {
+                    if !through_refractor || scene.materials[sp.material].is_specular() {
+                        return (through_refractor, false, false);
+                    }
+                    return (true, true, hidden_behind_nearby(scene, accel, eye, sp.p));
+                }
+                through_refractor = true;
+                let MaterialKind::Dielectric { ior, .. } = kind else {
+                    unreachable!("a solid refractor is a dielectric");
+                };
+                let eta = if sp.backface { ior.y } else { 1.0 / ior.y };
+                let dir = refract(ray.dir, sp.ns, eta).unwrap_or_else(|| reflect(ray.dir, sp.ns));
+                ray = Ray {
+                    origin: offset_origin(sp.p, sp.ng, dir),
+                    dir,
+                };
+            }
+            (through_refractor, false, false)
+        })
+        .collect();
+    let mut visibility = NearbyVisibility::default();
+    for (refractor, nearby, hidden) in per_pixel {
+        visibility.refractor_pixels += refractor as usize;
+        visibility.reaching_nearby_geometry += nearby as usize;
+        visibility.hidden_from_eye += hidden as usize;
+    }
+    visibility
+}
+
+/// Whether a non-specular surface nearer than `point` lies on the line from the eye to it
+/// (specular surfaces are passed through: the NG texture leaves them out).
+fn hidden_behind_nearby(scene: &Scene, accel: &SceneAccel, eye: Vec3, point: Vec3) -> bool {
+    let to_point = point - eye;
+    let distance = to_point.length();
+    let dir = to_point / distance;
+    let mut origin = eye;
+    let mut travelled = 0.0;
+    for _ in 0..64 {
+        let Some(hit) = accel.intersect(&Ray { origin, dir }, f32::INFINITY) else {
+            return false;
+        };
+        if travelled + hit.t >= distance * (1.0 - 1e-3) {
+            return false;
+        }
+        let mesh = &scene.meshes[hit.mesh as usize];
+        if !scene.materials[mesh.material].is_specular() {
+            return true;
+        }
+        let step = hit.t + 1e-4 * (1.0 + travelled + hit.t);
+        origin += dir * step;
+        travelled += step;
+    }
+    false
 }
 
 /// Distance from `origin` along `dir` to the first hit on mesh `mesh`, passing other meshes.
@@ -540,7 +655,9 @@ impl ImageSpace {
                 let buffer = writable_buffer(
                     ctx,
                     label,
-                    bytes.len().max(16) as u64,
+                    // At least one element of the largest struct read (a plane, 32 bytes): an empty
+                    // scene list still binds.
+                    bytes.len().max(64) as u64,
                     wgpu::BufferUsages::STORAGE,
                 );
                 ctx.queue.write_buffer(&buffer, 0, bytes);
@@ -592,6 +709,10 @@ impl ImageSpace {
                 ),
             ]);
             entries.extend(CubeMaps::layout_entries(17));
+            entries.extend([
+                layout_entry(21, St::FRAGMENT, texture_binding(float, D::D2Array)),
+                layout_entry(22, St::FRAGMENT, texture_binding(float, D::D2Array)),
+            ]);
             let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("image-space"),
                 entries: &entries,
@@ -641,6 +762,28 @@ impl ImageSpace {
                 layout,
                 scene_bind_group: gpu_scene.bind_group(ctx, &scene_layout),
                 bind_groups: Vec::new(),
+                peel: peel::Peel::new(ctx, gpu_scene),
+                no_layers: specula_gpu::util::texture_2d(
+                    ctx,
+                    "no peeled layers",
+                    1,
+                    1,
+                    wgpu::TextureFormat::Rgba32Float,
+                    wgpu::TextureUsages::TEXTURE_BINDING,
+                )
+                .create_view(&wgpu::TextureViewDescriptor {
+                    dimension: Some(wgpu::TextureViewDimension::D2Array),
+                    ..Default::default()
+                }),
+                solid_ranges: gpu_scene.vertex_ranges(|mesh| {
+                    is_solid_refractor(&scene.materials[scene.meshes[mesh].material].kind)
+                }),
+                refractor_extent: scene
+                    .meshes
+                    .iter()
+                    .filter(|m| is_solid_refractor(&scene.materials[m.material].kind))
+                    .map(|m| 2.0 * m.bounds().radius())
+                    .fold(0.0, f32::max),
             }
         })?)
     }
@@ -674,6 +817,7 @@ impl Technique for ImageSpace {
             "resolution" => self.resolution.to_string(),
             "dynamic" => self.dynamic.to_string(),
             "parallax" => self.parallax.to_string(),
+            "layers" => self.layers.to_string(),
             "shadow_resolution" => self.shadow_resolution.to_string(),
             _ => String::new(),
         }
@@ -697,6 +841,7 @@ impl Technique for ImageSpace {
             "resolution" => self.resolution = value.integer() as u32,
             "dynamic" => self.dynamic = value.flag(),
             "parallax" => self.parallax = value.flag(),
+            "layers" => self.layers = value.integer() as u32,
             "shadow_resolution" => self.shadow_resolution = value.integer() as u32,
             _ => {}
         }
@@ -756,6 +901,14 @@ impl Technique for ImageSpace {
             self.dynamic,
         )?;
         self.timer.lap(gpu, "fallback cube maps")?;
+        let peeled = if self.layers > 1 { 2 * self.layers } else { 0 };
+        if peeled > 0 {
+            gpu.validated("image-space peel", || {
+                p.peel
+                    .draw(gpu, gpu_scene, &p.solid_ranges, &texture_camera, peeled)
+            })?;
+            self.timer.lap(gpu, "peeled layers")?;
+        }
         let settings = GpuSettings {
             mode: self.mode as u32,
             seeds: self.seeds,
@@ -770,7 +923,10 @@ impl Technique for ImageSpace {
             scene_min: bounds.min.to_array(),
             parallax: self.parallax as u32,
             scene_max: bounds.max.to_array(),
-            pad0: 0,
+            layers: self.layers,
+            peeled,
+            refractor_extent: p.refractor_extent,
+            pad: [0; 2],
         };
         let output = self.output.get(gpu, width, height);
         p.counters.clear(gpu);
@@ -779,7 +935,17 @@ impl Technique for ImageSpace {
                 .write_buffer(&p.camera_buffer, 0, bytemuck::bytes_of(&camera_uniform));
             gpu.queue
                 .write_buffer(&p.settings_buffer, 0, bytemuck::bytes_of(&settings));
-            let key = (g.slot, back.slot, nearby.slot, p.maps.faces_generation());
+            let layer_views = match p.peel.views() {
+                Some(views) if peeled > 0 => views,
+                _ => (&p.no_layers, &p.no_layers, 0),
+            };
+            let key = (
+                g.slot,
+                back.slot,
+                nearby.slot,
+                p.maps.faces_generation(),
+                layer_views.2,
+            );
             if !p.bind_groups.iter().any(|(k, _)| *k == key) {
                 if p.bind_groups.len() >= 8 {
                     p.bind_groups.clear();
@@ -808,6 +974,8 @@ impl Technique for ImageSpace {
                     p.counters.buffer.as_entire_binding(),
                 ];
                 resources.extend(p.maps.bindings());
+                resources.push(view(layer_views.0));
+                resources.push(view(layer_views.1));
                 let group = bind_group(gpu, "image-space", &p.layout, &resources);
                 p.bind_groups.push((key, group));
             }
@@ -832,7 +1000,7 @@ impl Technique for ImageSpace {
             ("refractors".into(), p.maps.reflectors.len() as u64),
             ("planes".into(), p.plane_count as u64),
             ("cube map faces rendered".into(), faces_drawn),
-            ("raster passes".into(), 3 + faces_drawn),
+            ("raster passes".into(), 3 + faces_drawn + peeled as u64),
         ];
         let mut warnings = Vec::new();
         for ((name, what), &n) in COUNTERS.iter().zip(&counts) {
