@@ -8,6 +8,7 @@ use specula_methods::distance_maps::{
 };
 use specula_methods::envmap::{self, GpuReflector};
 use specula_methods::gpu_scene::{GpuLight, GpuMaterial, GpuSceneInfo, GpuTextureInfo};
+use specula_methods::image_space::{self, GpuPlane, GpuSettings};
 use specula_methods::pvrr::{self, GpuMirrorMaterial};
 use specula_methods::raster::{self, ShadowView};
 
@@ -47,6 +48,8 @@ fn assert_layout(module: &naga::Module, name: &str, size: usize, host: &[usize])
 fn technique_shaders_validate() {
     parse("raster.wgsl", &raster::shader_source());
     parse("envmap.wgsl", &envmap::shader_source());
+    parse("image_space.wgsl", &image_space::shader_source());
+    parse("image_space/peel.wgsl", &image_space::peel::shader_source());
     parse("pvrr.wgsl", &pvrr::shader_source());
     parse(
         "distance_maps/layers.wgsl",
@@ -140,6 +143,42 @@ fn host_structs_match_wgsl_layouts() {
             offset_of!(GpuReflector, first_layer),
             offset_of!(GpuReflector, exit_model),
             offset_of!(GpuReflector, pad),
+        ],
+    );
+    let module = parse("image_space.wgsl", &image_space::shader_source());
+    assert_layout(
+        &module,
+        "Settings",
+        size_of::<GpuSettings>(),
+        &[
+            offset_of!(GpuSettings, mode),
+            offset_of!(GpuSettings, seeds),
+            offset_of!(GpuSettings, iterations),
+            offset_of!(GpuSettings, plane_count),
+            offset_of!(GpuSettings, index_override),
+            offset_of!(GpuSettings, depth_tolerance),
+            offset_of!(GpuSettings, inside_steps),
+            offset_of!(GpuSettings, exit_iterations),
+            offset_of!(GpuSettings, scene_center),
+            offset_of!(GpuSettings, scene_radius),
+            offset_of!(GpuSettings, scene_min),
+            offset_of!(GpuSettings, parallax),
+            offset_of!(GpuSettings, scene_max),
+            offset_of!(GpuSettings, layers),
+            offset_of!(GpuSettings, peeled),
+            offset_of!(GpuSettings, refractor_extent),
+            offset_of!(GpuSettings, pad),
+        ],
+    );
+    assert_layout(
+        &module,
+        "Plane",
+        size_of::<GpuPlane>(),
+        &[
+            offset_of!(GpuPlane, normal),
+            offset_of!(GpuPlane, offset),
+            offset_of!(GpuPlane, center),
+            offset_of!(GpuPlane, radius),
         ],
     );
     let module = parse("pvrr.wgsl", &pvrr::shader_source());

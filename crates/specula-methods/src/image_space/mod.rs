@@ -91,7 +91,7 @@ use crate::technique::{
     TechniqueError,
 };
 
-mod peel;
+pub mod peel;
 
 const SHADER: &str = include_str!("image_space.wgsl");
 
