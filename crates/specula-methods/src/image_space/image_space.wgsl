@@ -223,7 +223,8 @@ fn ng_depth_gap(p: vec3<f32>, d: vec3<f32>, t: f32) -> vec2<f32> {
 // it starts the iteration t ← (z_NG(p + t·d) − z(p)) / (d · forward) (Figure 7).
 // Beyond the paper: where two consecutive seeds bracket the NG surface (the ray passes from
 // in front of it to behind it), the iteration is a secant search in that bracket instead,
-// which cannot run off; and the point with the best depth agreement met anywhere is kept.
+// which cannot run off; the point with the best depth agreement met anywhere is kept; and a
+// ray in front of the NG surface at every seed finds nothing nearby.
 fn iterative(p: vec3<f32>, d: vec3<f32>) -> NearbyHit {
     var t_end = scene_exit(p, d);
     let w0 = max(project(p).z, 1e-6);
@@ -244,6 +245,7 @@ fn iterative(p: vec3<f32>, d: vec3<f32>) -> NearbyHit {
     var after_gap = 0.0;
     var previous_t = -1.0;
     var previous_gap = 0.0;
+    var any_behind = false;
     let seeds = max(settings.seeds, 1u);
     for (var i = 0u; i < seeds; i++) {
         let s = (f32(i) + 0.5) / f32(seeds);
@@ -263,6 +265,7 @@ fn iterative(p: vec3<f32>, d: vec3<f32>) -> NearbyHit {
             best_error = abs(gap.y);
             best_t = t;
         }
+        any_behind = any_behind || gap.y >= 0.0;
         if (!bracket_found && previous_t >= 0.0 && previous_gap < 0.0 && gap.y >= 0.0) {
             bracket_found = true;
             before_t = previous_t;
@@ -275,6 +278,11 @@ fn iterative(p: vec3<f32>, d: vec3<f32>) -> NearbyHit {
     }
     if (best_t < 0.0) {
         return NearbyHit(select(1u, 2u, any_on_screen), vec3<f32>(0.0));
+    }
+    // Beyond the paper: a ray that stays in front of everything the NG texture holds, at every
+    // seed, passes over the nearby geometry (beside an object's silhouette): nothing nearby.
+    if (!any_behind) {
+        return NearbyHit(2u, vec3<f32>(0.0));
     }
     if (bracket_found) {
         for (var k = 0u; k < settings.iterations; k++) {
