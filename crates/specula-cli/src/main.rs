@@ -550,13 +550,13 @@ fn run(cli: Cli) -> Result<()> {
             });
             let asked = method_infos(&methods)?;
             let ctx = context_for(&asked)?;
-            let methods = bench::with_bases(&methods, ctx.gpu.is_some());
+            let timed = bench::with_bases(&methods, ctx.gpu.is_some());
             let mut runs = Vec::new();
             for source in &scenes {
                 let scene = load_scene(source)?;
                 let height = height_for(&scene, width, height);
                 runs.extend(bench::run(
-                    scene, &ctx, &methods, &params, width, height, frames,
+                    scene, &ctx, &timed, &methods, &params, width, height, frames,
                 )?);
             }
             bench::add_ratios(&mut runs);

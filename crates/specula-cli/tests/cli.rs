@@ -362,6 +362,72 @@ fn bench_reports_median_and_spread_per_stage() {
 }
 
 #[test]
+fn bench_parameters_go_to_the_methods_asked_for_not_to_the_added_bases() {
+    if !has_gpu("bench_parameters_go_to_the_methods_asked_for") {
+        return;
+    }
+    // image-space and gpu-trace both have a `mode`; gpu-trace, timed as a base, keeps its own.
+    let dir = tempfile::tempdir().unwrap();
+    let out = specula()
+        .current_dir(dir.path())
+        .args([
+            "bench",
+            "glass-dragon",
+            "--methods",
+            "image-space",
+            "-p",
+            "mode=ray-plane",
+            "--frames",
+            "1",
+            "-W",
+            "32",
+            "--json",
+            "b.json",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("b.json")).unwrap()).unwrap();
+    let mode_of = |method: &str| {
+        let run = json["runs"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|r| r["method"] == method)
+            .unwrap();
+        let parameters = run["parameters"].as_array().unwrap();
+        parameters
+            .iter()
+            .find(|p| p[0] == "mode")
+            .map(|p| p[1].as_str().unwrap().to_string())
+            .unwrap()
+    };
+    assert_eq!(mode_of("image-space"), "ray-plane");
+    assert_eq!(mode_of("gpu-trace"), "megakernel");
+    // A parameter no asked-for method has is still an error.
+    let out = specula()
+        .args([
+            "bench",
+            "glass-dragon",
+            "--methods",
+            "envmap",
+            "-p",
+            "seeds=3",
+            "-W",
+            "16",
+        ])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("seeds=3"));
+}
+
+#[test]
 fn methods_lists_every_method_with_its_parameters_from_the_registry() {
     let out = specula().arg("methods").output().unwrap();
     assert!(out.status.success());
