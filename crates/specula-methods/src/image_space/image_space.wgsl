@@ -540,12 +540,22 @@ fn inside_refractor(mesh: u32, x: vec3<f32>) -> bool {
     return z >= z_front && z <= z_back;
 }
 
-// Radiance of light that has left the refractor at `p` along `d`. With layers > 1, beyond the
-// paper (§6's two-interface limit): where it enters a solid refractor again (another part of
-// it, behind) it is refracted in there and out where it leaves, up to layers − 1 more pairs
-// of interfaces, each found by marching the peeled layers; the light these interfaces reflect
-// takes the cube map along its reflected direction. Then the nearby geometry.
-fn onward(r: Reflector, mesh: u32, p_start: vec3<f32>, d_start: vec3<f32>, ior: f32) -> vec3<f32> {
+// Light that has left the refractor at `p` along `d`. With layers > 1, beyond the paper (§6's
+// two-interface limit): where it enters a solid refractor again (another part of it, behind)
+// it is refracted in there and out where it leaves, up to layers − 1 more pairs of
+// interfaces, each found by marching the peeled layers; the light these interfaces reflect
+// takes the cube map along its reflected direction. What goes on to the nearby geometry is
+// returned, for the caller to look up.
+// The light that goes on to the nearby geometry: from `p` along `d`, carrying `weight` of what
+// it meets there, plus `color` already gathered on the way (from the cube map).
+struct Onward {
+    p: vec3<f32>,
+    weight: f32,
+    d: vec3<f32>,
+    color: vec3<f32>,
+};
+
+fn onward(r: Reflector, mesh: u32, p_start: vec3<f32>, d_start: vec3<f32>, ior: f32) -> Onward {
     var p = p_start;
     var d = d_start;
     var weight = 1.0;
@@ -566,53 +576,73 @@ fn onward(r: Reflector, mesh: u32, p_start: vec3<f32>, d_start: vec3<f32>, ior: 
         weight *= 1.0 - fresnel_in;
         let t_in = refract(d, -entry.normal, 1.0 / ior);
         let exit = march(mesh, entry.position, t_in, settings.refractor_extent, false, false);
-        if (!exit.found) {
-            count(COUNT_INTERNAL_NOT_RESOLVED);
-            return color + weight * env_along(r, entry.position, t_in);
+        var out_normal = -exit.normal;
+        var fresnel_out = 0.0;
+        if (exit.found) {
+            fresnel_out = fresnel_dielectric(dot(t_in, exit.normal), ior);
+            color += weight * fresnel_out * env_along(r, exit.position, reflect(t_in, out_normal));
         }
-        let fresnel_out = fresnel_dielectric(dot(t_in, exit.normal), ior);
-        color += weight * fresnel_out * env_along(r, exit.position, reflect(t_in, -exit.normal));
-        if (fresnel_out >= 1.0) {
+        if (!exit.found || fresnel_out >= 1.0) {
             count(COUNT_INTERNAL_NOT_RESOLVED);
-            return color;
+            if (!exit.found) {
+                color += weight * env_along(r, entry.position, t_in);
+            }
+            return Onward(p, 0.0, d, color);
         }
         weight *= 1.0 - fresnel_out;
         p = exit.position;
-        d = refract(t_in, -exit.normal, ior);
+        d = refract(t_in, out_normal, ior);
     }
-    return color + weight * nearby(r, p, d);
+    return Onward(p, weight, d, color);
 }
 
 // Radiance of a ray inside the refractor, travelling `d`, that meets the surface `exit`:
 // refracted out (Fresnel-weighted) to the nearby geometry; the part reflected inside (all of
-// it under total internal reflection) followed once more to where it leaves.
+// it under total internal reflection) followed once more to where it leaves. Both end in the
+// nearby geometry through one loop (one copy of the lookup in the compiled shader).
 fn leave(r: Reflector, mesh: u32, exit: Surface, d: vec3<f32>, ior: f32) -> vec3<f32> {
     let fresnel = fresnel_dielectric(dot(d, exit.normal), ior);
     var color = vec3<f32>(0.0);
+    var rays: array<Onward, 2>;
+    rays[0] = Onward(exit.position, 0.0, d, vec3<f32>(0.0));
+    rays[1] = rays[0];
     if (fresnel < 1.0) {
-        color = (1.0 - fresnel) * onward(r, mesh, exit.position, refract(d, -exit.normal, ior), ior);
+        let out = onward(r, mesh, exit.position, refract(d, -exit.normal, ior), ior);
+        color += (1.0 - fresnel) * out.color;
+        rays[0] = Onward(out.p, (1.0 - fresnel) * out.weight, out.d, vec3<f32>(0.0));
     } else {
         count(COUNT_TIR_FOLLOWED);
     }
     if (fresnel > 0.004) {
         let inner = reflect(d, -exit.normal);
         let next = march(mesh, exit.position, inner, 2.0 * r.radius, false, false);
-        var inner_color: vec3<f32>;
-        if (!next.found) {
-            count(COUNT_INTERNAL_NOT_RESOLVED);
-            inner_color = env_along(r, exit.position, inner);
-        } else {
-            let fresnel_next = fresnel_dielectric(dot(inner, next.normal), ior);
-            if (fresnel_next >= 1.0) {
-                // Trapped again: the light is taken from the cube map along its last direction.
-                count(COUNT_INTERNAL_NOT_RESOLVED);
-                inner_color = env_along(r, next.position, reflect(inner, -next.normal));
-            } else {
-                inner_color = (1.0 - fresnel_next)
-                    * nearby(r, next.position, refract(inner, -next.normal, ior));
-            }
+        var fresnel_next = 1.0;
+        if (next.found) {
+            fresnel_next = fresnel_dielectric(dot(inner, next.normal), ior);
         }
-        color += fresnel * inner_color;
+        if (fresnel_next >= 1.0) {
+            // Not resolved, or trapped again: the cube map along the last direction.
+            count(COUNT_INTERNAL_NOT_RESOLVED);
+            var at = exit.position;
+            var towards = inner;
+            if (next.found) {
+                at = next.position;
+                towards = reflect(inner, -next.normal);
+            }
+            color += fresnel * env_along(r, at, towards);
+        } else {
+            rays[1] = Onward(
+                next.position,
+                fresnel * (1.0 - fresnel_next),
+                refract(inner, -next.normal, ior),
+                vec3<f32>(0.0),
+            );
+        }
+    }
+    for (var k = 0u; k < 2u; k++) {
+        if (rays[k].weight > 0.0) {
+            color += rays[k].weight * nearby(r, rays[k].p, rays[k].d);
+        }
     }
     return color;
 }
@@ -715,14 +745,19 @@ fn fs_shade(in: FullscreenOut) -> @location(0) vec4<f32> {
         return vec4<f32>(color, 1.0);
     }
     let d_n = interpolated_normal_distance(mesh, ids.y, p);
+    // Dispersion: one refracted path per colour channel; one for all three otherwise. (One
+    // call site: the compiled shader holds one copy of the path.)
+    var paths = 3u;
     if (ior.x == ior.y && ior.y == ior.z) {
-        let rf = fresnel_dielectric(cos_i, 1.0 / ior.x);
-        color = rf * reflected + (1.0 - rf) * refracted(r, mesh, pixel_q, p, v, n, d_n, ior.x);
-    } else {
-        // Dispersion: one refracted path per colour channel.
-        for (var c = 0u; c < 3u; c++) {
-            let rf = fresnel_dielectric(cos_i, 1.0 / ior[c]);
-            color[c] = rf * reflected[c] + (1.0 - rf) * refracted(r, mesh, pixel_q, p, v, n, d_n, ior[c])[c];
+        paths = 1u;
+    }
+    for (var c = 0u; c < paths; c++) {
+        let rf = fresnel_dielectric(cos_i, 1.0 / ior[c]);
+        let through = rf * reflected + (1.0 - rf) * refracted(r, mesh, pixel_q, p, v, n, d_n, ior[c]);
+        if (paths == 1u) {
+            color = through;
+        } else {
+            color[c] = through[c];
         }
     }
     return vec4<f32>(color, 1.0);
