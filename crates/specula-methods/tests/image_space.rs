@@ -307,3 +307,31 @@ fn visibility_on_the_scenes() {
         assert!(v.reaching_nearby_geometry <= v.refractor_pixels);
     }
 }
+
+#[test]
+fn the_table1_and_figure11_scenes_load_and_render() {
+    let Some(ctx) = specula_methods::test_context("image-space paper scenes") else {
+        return;
+    };
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+    for folder in ["table1", "figure11"] {
+        let mut files: Vec<_> = std::fs::read_dir(root.join(folder))
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+            .collect();
+        files.sort();
+        assert!(files.len() >= 4, "{folder}: {files:?}");
+        for file in files {
+            let scene = specula_scene::load(file.to_str().unwrap()).unwrap();
+            let still = ImageSpace::default()
+                .render_still(&ctx, &scene, 32, 24)
+                .unwrap();
+            assert!(
+                still.image.pixels.iter().all(|p| p.is_finite()),
+                "{}",
+                file.display()
+            );
+        }
+    }
+}
