@@ -559,27 +559,8 @@ fn trace_pass(
         label: Some("distance_maps/trace.wgsl"),
         source: wgpu::ShaderSource::Wgsl(trace_shader_source().into()),
     });
-    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some("distance-map trace"),
-        bind_group_layouts: &[Some(&layout), Some(scene_layout)],
-        ..Default::default()
-    });
-    let pipeline = render_pipeline(
-        device,
-        &PipelineSpec {
-            label: "distance-map trace",
-            layout: &pipeline_layout,
-            module: &module,
-            vertex_entry: "vs_fullscreen",
-            fragment_entry: "fs_shade",
-            vertex_buffers: &[],
-            depth: None,
-            targets: &[raster::COLOR_FORMAT],
-            write_mask: wgpu::ColorWrites::ALL,
-            blend: None,
-            cull_mode: None,
-        },
-    );
+    let pipeline =
+        raster::shading_pipeline(device, "distance-map trace", &module, &layout, scene_layout);
     (layout, pipeline)
 }
 

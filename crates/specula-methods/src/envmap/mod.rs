@@ -39,8 +39,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use specula_gpu::shaders::{self, CameraUniform};
 use specula_gpu::util::{
-    bind_group, buffer_binding, layout_entry, render_pipeline, texture_binding, writable_buffer,
-    PipelineSpec,
+    bind_group, buffer_binding, layout_entry, texture_binding, writable_buffer,
 };
 use specula_gpu::{GpuContext, GpuError, StageTimer};
 use specula_scene::{Camera, Scene};
@@ -445,27 +444,8 @@ impl EnvMap {
                 entries: &entries,
             });
             let scene_layout = GpuScene::bind_group_layout(device);
-            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("envmap"),
-                bind_group_layouts: &[Some(&layout), Some(&scene_layout)],
-                ..Default::default()
-            });
-            let pipeline = render_pipeline(
-                device,
-                &PipelineSpec {
-                    label: "envmap shade",
-                    layout: &pipeline_layout,
-                    module: &module,
-                    vertex_entry: "vs_fullscreen",
-                    fragment_entry: "fs_shade",
-                    vertex_buffers: &[],
-                    depth: None,
-                    targets: &[raster::COLOR_FORMAT],
-                    write_mask: wgpu::ColorWrites::ALL,
-                    blend: None,
-                    cull_mode: None,
-                },
-            );
+            let pipeline =
+                raster::shading_pipeline(device, "envmap shade", &module, &layout, &scene_layout);
             Prepared {
                 scene_id: live.id(),
                 scene_bind_group: gpu_scene.bind_group(ctx, &scene_layout),

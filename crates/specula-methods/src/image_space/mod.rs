@@ -113,8 +113,7 @@ use rayon::prelude::*;
 use specula_gpu::counters::Counters;
 use specula_gpu::shaders::{self, CameraUniform};
 use specula_gpu::util::{
-    bind_group, buffer_binding, layout_entry, render_pipeline, texture_binding, writable_buffer,
-    PipelineSpec,
+    bind_group, buffer_binding, layout_entry, texture_binding, writable_buffer,
 };
 use specula_gpu::{GpuContext, StageTimer};
 use specula_scene::{Camera, MaterialKind, Scene};
@@ -756,26 +755,12 @@ impl ImageSpace {
                 entries: &entries,
             });
             let scene_layout = GpuScene::bind_group_layout(device);
-            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("image-space"),
-                bind_group_layouts: &[Some(&layout), Some(&scene_layout)],
-                ..Default::default()
-            });
-            let pipeline = render_pipeline(
+            let pipeline = raster::shading_pipeline(
                 device,
-                &PipelineSpec {
-                    label: "image-space refraction",
-                    layout: &pipeline_layout,
-                    module: &module,
-                    vertex_entry: "vs_fullscreen",
-                    fragment_entry: "fs_shade",
-                    vertex_buffers: &[],
-                    depth: None,
-                    targets: &[raster::COLOR_FORMAT],
-                    write_mask: wgpu::ColorWrites::ALL,
-                    blend: None,
-                    cull_mode: None,
-                },
+                "image-space refraction",
+                &module,
+                &layout,
+                &scene_layout,
             );
             let uniform = |label, size: usize| {
                 writable_buffer(ctx, label, size as u64, wgpu::BufferUsages::UNIFORM)

@@ -228,6 +228,39 @@ fn cleared_depth(view: &wgpu::TextureView) -> wgpu::RenderPassDepthStencilAttach
     }
 }
 
+/// The last pass of techniques that shade the G-buffer: a full-screen triangle (`vs_fullscreen`)
+/// running `fs_shade` of `module` into one colour target, with `layout` as bind group 0 and the
+/// scene's (`GpuScene::bind_group_layout`) as group 1.
+pub fn shading_pipeline(
+    device: &wgpu::Device,
+    label: &str,
+    module: &wgpu::ShaderModule,
+    layout: &wgpu::BindGroupLayout,
+    scene_layout: &wgpu::BindGroupLayout,
+) -> wgpu::RenderPipeline {
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(label),
+        bind_group_layouts: &[Some(layout), Some(scene_layout)],
+        ..Default::default()
+    });
+    render_pipeline(
+        device,
+        &PipelineSpec {
+            label,
+            layout: &pipeline_layout,
+            module,
+            vertex_entry: "vs_fullscreen",
+            fragment_entry: "fs_shade",
+            vertex_buffers: &[],
+            depth: None,
+            targets: &[COLOR_FORMAT],
+            write_mask: wgpu::ColorWrites::ALL,
+            blend: None,
+            cull_mode: None,
+        },
+    )
+}
+
 /// Draws the full-screen triangle of `pipeline` (vertex entry without buffers) into `output`,
 /// with `bind_groups` bound as groups 0, 1, ... : the last pass of techniques that shade the
 /// G-buffer's pixels.
