@@ -3,6 +3,7 @@
 //! (CPU scene, BVH, GPU upload, kept current as objects move: [`LiveScene`]) and the scene
 //! raster pass with its G-buffer ([`raster`]).
 
+pub mod c3rc;
 pub mod distance_maps;
 pub mod envmap;
 pub mod gpu_scene;

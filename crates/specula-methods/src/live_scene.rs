@@ -42,6 +42,8 @@ pub struct LiveScene {
     id: u64,
     version: u64,
     fresh_cost: f32,
+    /// Each mesh's rigid motion since the scene was loaded.
+    world_from_loaded: Vec<Mat4>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -57,12 +59,13 @@ impl LiveScene {
         let accel = SceneAccel::new(&scene);
         let fresh_cost = accel.sah_cost();
         LiveScene {
-            scene,
             accel,
             gpu: OnceCell::new(),
             id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
             version: 0,
             fresh_cost,
+            world_from_loaded: vec![Mat4::IDENTITY; scene.meshes.len()],
+            scene,
         }
     }
 
@@ -87,6 +90,12 @@ impl LiveScene {
     /// Bumped by every move: a technique whose maps were drawn at another version redraws them.
     pub fn version(&self) -> u64 {
         self.version
+    }
+
+    /// The rigid motion of mesh `mesh` since the scene was loaded: what a technique that keeps
+    /// per-object data in the loaded pose (a point tree) maps through.
+    pub fn world_from_loaded(&self, mesh: usize) -> Mat4 {
+        self.world_from_loaded[mesh]
     }
 
     /// The mesh named `name` (an object the user can move).
@@ -123,6 +132,7 @@ impl LiveScene {
             return Err(MoveError::NotRigid(format!("{world_from_before}")));
         }
         self.scene.meshes[mesh].transform(world_from_before);
+        self.world_from_loaded[mesh] = world_from_before * self.world_from_loaded[mesh];
         if let (Some(gpu), Some(ctx)) = (self.gpu.get(), ctx) {
             gpu.write_mesh(ctx, mesh, &self.scene.meshes[mesh]);
         }

@@ -12,6 +12,7 @@ pub static METHODS: &[&MethodInfo] = &[
     &crate::pvrr::INFO,
     &crate::distance_maps::INFO,
     &crate::image_space::INFO,
+    &crate::c3rc::INFO,
 ];
 
 /// The registered method called `name`.

@@ -160,26 +160,7 @@ impl Tracer<'_> {
         };
         match material.kind {
             MaterialKind::Unlit => base(),
-            MaterialKind::Diffuse => {
-                let albedo = base();
-                let mut irradiance = Vec3::ZERO;
-                for light in &scene.lights {
-                    let sample = light.sample(sp.p);
-                    let cos = sp.ns.dot(sample.to_light);
-                    if cos <= 0.0 || sample.irradiance == Vec3::ZERO {
-                        continue;
-                    }
-                    let shadow = Ray {
-                        origin: offset_origin(sp.p, sp.ng, sample.to_light),
-                        dir: sample.to_light,
-                    };
-                    count_ray(true);
-                    if !self.accel.occluded(&shadow, sample.distance) {
-                        irradiance += sample.irradiance * cos;
-                    }
-                }
-                albedo * (irradiance / std::f32::consts::PI + scene.ambient)
-            }
+            MaterialKind::Diffuse => self.diffuse(&sp, base()),
             MaterialKind::Mirror { fresnel } => {
                 if depth >= self.max_depth {
                     return Vec3::ZERO;
@@ -210,6 +191,28 @@ impl Tracer<'_> {
                 }
             }
         }
+    }
+
+    /// Radiance a Lambertian surface of `albedo` leaves at `sp` towards the side its normals
+    /// face: every light's irradiance where a shadow ray reaches it, plus the ambient term.
+    pub fn diffuse(&self, sp: &SurfacePoint, albedo: Vec3) -> Vec3 {
+        let mut irradiance = Vec3::ZERO;
+        for light in &self.scene.lights {
+            let sample = light.sample(sp.p);
+            let cos = sp.ns.dot(sample.to_light);
+            if cos <= 0.0 || sample.irradiance == Vec3::ZERO {
+                continue;
+            }
+            let shadow = Ray {
+                origin: offset_origin(sp.p, sp.ng, sample.to_light),
+                dir: sample.to_light,
+            };
+            count_ray(true);
+            if !self.accel.occluded(&shadow, sample.distance) {
+                irradiance += sample.irradiance * cos;
+            }
+        }
+        albedo * (irradiance / std::f32::consts::PI + self.scene.ambient)
     }
 
     fn spawn(&self, sp: &SurfacePoint, dir: Vec3, depth: u32, channel: Option<usize>) -> Vec3 {

@@ -53,13 +53,21 @@ use crate::technique::{
 };
 
 const SHADER: &str = include_str!("envmap.wgsl");
+/// The G-buffer shading from the cube maps, as a function `shade(pixel, near)` (c3rc calls it
+/// with its own reflections of nearby objects).
+pub const SHADE_SHADER: &str = include_str!("shade.wgsl");
 /// The cube-map lookup shared with the techniques that fall back on envmap's maps.
 pub const LOOKUP_SHADER: &str = include_str!("lookup.wgsl");
 
 pub fn shader_source() -> String {
+    shading_shader_source(SHADER)
+}
+
+/// `entry` (which defines `fs_shade`, calling `shade`) after the cube-map shading it calls.
+pub fn shading_shader_source(entry: &str) -> String {
     shaders::compose(
         &["optics.wgsl", "camera.wgsl", "scene.wgsl", "cubemap.wgsl"],
-        &format!("{LOOKUP_SHADER}\n{SHADER}"),
+        &format!("{LOOKUP_SHADER}\n{SHADE_SHADER}\n{entry}"),
     )
 }
 
@@ -124,6 +132,9 @@ pub struct CubeMaps {
     mesh_reflector: wgpu::Buffer,
     faces: Option<Faces>,
     generation: u64,
+    /// (reflector mesh, meshes its faces leave out besides itself): what a technique draws
+    /// by other means (c3rc's near objects).
+    hidden: Vec<(usize, Vec<usize>)>,
 }
 
 /// The cube-map faces at one resolution.
@@ -162,6 +173,18 @@ impl CubeMaps {
             mesh_reflector: mesh_reflector_buffer,
             faces: None,
             generation: 0,
+            hidden: Vec::new(),
+        }
+    }
+
+    /// Leaves `hidden` meshes out of the faces of the reflectors they are given for
+    /// ((reflector mesh, meshes) pairs); a change marks the faces stale.
+    pub fn set_hidden(&mut self, hidden: Vec<(usize, Vec<usize>)>) {
+        if hidden != self.hidden {
+            self.hidden = hidden;
+            if let Some(faces) = &mut self.faces {
+                faces.drawn_at = None;
+            }
         }
     }
 
@@ -247,8 +270,12 @@ impl CubeMaps {
         }
         let face_g = raster.acquire(gpu, resolution, resolution);
         for (k, &(mesh, center, _)) in self.reflectors.iter().enumerate() {
+            let mut hidden = vec![mesh];
+            if let Some((_, more)) = self.hidden.iter().find(|(m, _)| *m == mesh) {
+                hidden.extend(more);
+            }
             for (face, face_camera) in face_cameras(scene, center, resolution).iter().enumerate() {
-                raster.draw_into(gpu, gpu_scene, face_camera, Some(mesh), None, &face_g)?;
+                raster.draw_into(gpu, gpu_scene, face_camera, &hidden, None, &face_g)?;
                 let mut encoder = gpu.device.create_command_encoder(&Default::default());
                 encoder.copy_texture_to_texture(
                     face_g.color.as_image_copy(),
@@ -372,7 +399,7 @@ impl Default for EnvMap {
 
 /// (mesh index, centre, radius) of every specular mesh: the tightest sphere around the box
 /// centre (farthest vertex, not the box's half-diagonal).
-fn reflectors(scene: &Scene) -> Vec<(usize, Vec3, f32)> {
+pub fn reflectors(scene: &Scene) -> Vec<(usize, Vec3, f32)> {
     scene
         .meshes
         .iter()
@@ -416,6 +443,25 @@ fn face_cameras(scene: &Scene, center: Vec3, resolution: u32) -> Vec<CameraUnifo
         .collect()
 }
 
+/// The bindings `shade.wgsl` reads (group 0, bindings 0..=8): camera, the G-buffer's colour,
+/// position, normal and ids, and the cube maps.
+pub fn shading_layout_entries() -> Vec<wgpu::BindGroupLayoutEntry> {
+    use wgpu::{
+        BufferBindingType as B, ShaderStages as St, TextureSampleType as S,
+        TextureViewDimension as D,
+    };
+    let float = S::Float { filterable: false };
+    let mut entries = vec![
+        layout_entry(0, St::FRAGMENT, buffer_binding(B::Uniform)),
+        layout_entry(1, St::FRAGMENT, texture_binding(float, D::D2)),
+        layout_entry(2, St::FRAGMENT, texture_binding(float, D::D2)),
+        layout_entry(3, St::FRAGMENT, texture_binding(float, D::D2)),
+        layout_entry(4, St::FRAGMENT, texture_binding(S::Uint, D::D2)),
+    ];
+    entries.extend(CubeMaps::layout_entries(5));
+    entries
+}
+
 impl EnvMap {
     fn build(&self, ctx: &GpuContext, live: &LiveScene) -> Result<Prepared, GpuError> {
         let device = &ctx.device;
@@ -426,22 +472,9 @@ impl EnvMap {
                 label: Some("envmap.wgsl"),
                 source: wgpu::ShaderSource::Wgsl(shader_source().into()),
             });
-            use wgpu::{
-                BufferBindingType as B, ShaderStages as St, TextureSampleType as S,
-                TextureViewDimension as D,
-            };
-            let float = S::Float { filterable: false };
-            let mut entries = vec![
-                layout_entry(0, St::FRAGMENT, buffer_binding(B::Uniform)),
-                layout_entry(1, St::FRAGMENT, texture_binding(float, D::D2)),
-                layout_entry(2, St::FRAGMENT, texture_binding(float, D::D2)),
-                layout_entry(3, St::FRAGMENT, texture_binding(float, D::D2)),
-                layout_entry(4, St::FRAGMENT, texture_binding(S::Uint, D::D2)),
-            ];
-            entries.extend(CubeMaps::layout_entries(5));
             let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("envmap"),
-                entries: &entries,
+                entries: &shading_layout_entries(),
             });
             let scene_layout = GpuScene::bind_group_layout(device);
             let pipeline =

@@ -882,22 +882,22 @@ impl RasterPass {
         extra: Option<(&wgpu::Buffer, u64, u32)>,
     ) -> Result<GBuffer, GpuError> {
         let g = self.acquire(ctx, camera.width as u32, camera.height as u32);
-        self.draw_into(ctx, gpu_scene, camera, hidden_mesh, extra, &g)?;
+        self.draw_into(ctx, gpu_scene, camera, hidden_mesh.as_slice(), extra, &g)?;
         Ok(g)
     }
 
-    /// Rasterises into `g` (of the camera's size).
+    /// Rasterises into `g` (of the camera's size), leaving out the meshes in `hidden`.
     pub fn draw_into(
         &self,
         ctx: &GpuContext,
         gpu_scene: &GpuScene,
         camera: &CameraUniform,
-        hidden_mesh: Option<usize>,
+        hidden: &[usize],
         extra: Option<(&wgpu::Buffer, u64, u32)>,
         g: &GBuffer,
     ) -> Result<(), GpuError> {
         ctx.validated("scene raster", || {
-            self.draw(ctx, gpu_scene, camera, hidden_mesh, extra, g)
+            self.draw(ctx, gpu_scene, camera, hidden, extra, g)
         })
     }
 
@@ -906,7 +906,7 @@ impl RasterPass {
         ctx: &GpuContext,
         gpu_scene: &GpuScene,
         camera: &CameraUniform,
-        hidden_mesh: Option<usize>,
+        hidden: &[usize],
         extra: Option<(&wgpu::Buffer, u64, u32)>,
         g: &GBuffer,
     ) {
@@ -941,7 +941,7 @@ impl RasterPass {
             pass.set_bind_group(2, &self.shadow_bind_group, &[]);
             pass.set_vertex_buffer(0, gpu_scene.vertices.slice(..));
             for range in
-                gpu_scene.vertex_ranges(|mesh| self.selected[mesh] && Some(mesh) != hidden_mesh)
+                gpu_scene.vertex_ranges(|mesh| self.selected[mesh] && !hidden.contains(&mesh))
             {
                 pass.draw(range, 0..1);
             }

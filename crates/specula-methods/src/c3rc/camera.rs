@@ -1,0 +1,407 @@
+//! The continuous 3-ray camera (C3RC; Popescu et al. 2006, as used by Mei, Popescu and Sacks
+//! 2007, §5): a non-pinhole camera that interpolates three rays. Its image plane is the
+//! triangle of the rays' tails (the base); its view volume is swept by the triangle
+//! `T(λ) = (v1 + λ d1, v2 + λ d2, v3 + λ d3)`, λ ≥ 0, which cuts equal lengths on the three
+//! unit rays.
+//!
+//! - Projection (§5.1): Q projects where a `T(λ)` contains it: `det[w1 − Q, w2 − Q, w3 − Q] = 0`
+//!   is a cubic in λ; every real root λ ≥ 0 at which Q's barycentric coordinates in `T(λ)` are
+//!   all in [0, 1] is a valid projection, at those barycentric coordinates of the base. All of
+//!   them are returned (the paper's GPU could issue only one).
+//! - Where multiple projections can occur (§5.1): only where `T(λ)` self-intersects, which needs
+//!   a construction ray to have crossed the plane of `T(λ)`; ray i lies in that plane where
+//!   `n(λ) · d_i = 0`, a quadratic. [`C3rc::multiple_projection_intervals`] gives the λ
+//!   intervals where the rays are not all on one side.
+//! - Box–view-volume intersection (§5.2), conservative: a box is kept if one of its corners has
+//!   a valid projection (the box may be inside), if a side wall crosses one of its 12 edges
+//!   (the paper's arcs p(α) against each face's frame, solved as one quadratic per wall and
+//!   edge), and — the cases the paper's two conditions miss, where a wall's arc lies inside one
+//!   face — if a construction ray (an arc's end point) or the base triangle meets the box.
+//!
+//! All arithmetic is in f64: the cubic's coefficients are differences of triple products of
+//! nearly parallel vectors for small reflector triangles.
+
+use glam::DVec3;
+
+/// Barycentric slack for points on an edge shared by two cameras (both project them).
+const BARY_EPS: f64 = 1e-9;
+
+/// A continuous 3-ray camera: base vertices `v` (the reflector triangle) and unit construction
+/// ray directions `d` (the reflected rays at those vertices).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct C3rc {
+    pub v: [DVec3; 3],
+    pub d: [DVec3; 3],
+}
+
+/// One valid projection of a point: the sweep parameter and the barycentric coordinates in the
+/// base (and in `T(λ)`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Projection {
+    pub lambda: f64,
+    pub bary: [f64; 3],
+}
+
+impl Projection {
+    /// The image point on the base (on the reflector triangle).
+    pub fn base_point(&self, camera: &C3rc) -> DVec3 {
+        camera.v[0] * self.bary[0] + camera.v[1] * self.bary[1] + camera.v[2] * self.bary[2]
+    }
+}
+
+fn det(a: DVec3, b: DVec3, c: DVec3) -> f64 {
+    a.dot(b.cross(c))
+}
+
+impl C3rc {
+    /// The camera of a reflector triangle seen from `eye`: each vertex's ray is the view
+    /// direction reflected about the vertex normal.
+    pub fn reflector(v: [DVec3; 3], n: [DVec3; 3], eye: DVec3) -> C3rc {
+        let d = std::array::from_fn(|i| {
+            let view = (v[i] - eye).normalize_or_zero();
+            let normal = n[i].normalize_or_zero();
+            (view - 2.0 * view.dot(normal) * normal).normalize_or_zero()
+        });
+        C3rc { v, d }
+    }
+
+    /// The camera in another space (a rigid transform keeps unit rays unit).
+    pub fn transformed(&self, to: &glam::DMat4) -> C3rc {
+        C3rc {
+            v: self.v.map(|p| to.transform_point3(p)),
+            d: self.d.map(|d| to.transform_vector3(d)),
+        }
+    }
+
+    /// Vertex i of the sweeping triangle `T(λ)`.
+    pub fn sweep_vertex(&self, i: usize, lambda: f64) -> DVec3 {
+        self.v[i] + self.d[i] * lambda
+    }
+
+    /// Area of `T(λ)`: the cross-section a point at λ is magnified or minified by.
+    pub fn sweep_area(&self, lambda: f64) -> f64 {
+        self.sweep_normal(lambda).length() * 0.5
+    }
+
+    /// `(w2 − w1) × (w3 − w1)` of `T(λ)`.
+    fn sweep_normal(&self, lambda: f64) -> DVec3 {
+        let w = |i| self.sweep_vertex(i, lambda);
+        (w(1) - w(0)).cross(w(2) - w(0))
+    }
+
+    /// Coefficients (c0, c1, c2, c3) of `det[w1 − Q, w2 − Q, w3 − Q]` as a polynomial in λ.
+    fn projection_cubic(&self, q: DVec3) -> [f64; 4] {
+        let [a1, a2, a3] = self.v.map(|v| v - q);
+        let [d1, d2, d3] = self.d;
+        [
+            det(a1, a2, a3),
+            det(d1, a2, a3) + det(a1, d2, a3) + det(a1, a2, d3),
+            det(d1, d2, a3) + det(d1, a2, d3) + det(a1, d2, d3),
+            det(d1, d2, d3),
+        ]
+    }
+
+    /// Q's barycentric coordinates in `T(λ)` (Q is in its plane).
+    fn sweep_bary(&self, q: DVec3, lambda: f64) -> Option<[f64; 3]> {
+        let [w1, w2, w3] = [0, 1, 2].map(|i| self.sweep_vertex(i, lambda));
+        let n = (w2 - w1).cross(w3 - w1);
+        let nn = n.length_squared();
+        if nn <= 0.0 || !nn.is_finite() {
+            return None;
+        }
+        let b1 = (w2 - q).cross(w3 - q).dot(n) / nn;
+        let b2 = (w3 - q).cross(w1 - q).dot(n) / nn;
+        Some([b1, b2, 1.0 - b1 - b2])
+    }
+
+    /// Every valid projection of `q` (at most three), in increasing λ. `first_only` stops at
+    /// the first one (for cameras that cannot project a point twice, and for inside tests).
+    pub fn project(&self, q: DVec3, first_only: bool) -> ([Projection; 3], usize) {
+        let mut out = [Projection {
+            lambda: 0.0,
+            bary: [0.0; 3],
+        }; 3];
+        let mut count = 0;
+        let (roots, n) = real_roots(self.projection_cubic(q));
+        for &lambda in &roots[..n] {
+            if lambda < 0.0 {
+                continue;
+            }
+            let Some(bary) = self.sweep_bary(q, lambda) else {
+                continue;
+            };
+            if bary.iter().all(|&b| (-BARY_EPS..=1.0 + BARY_EPS).contains(&b)) {
+                out[count] = Projection { lambda, bary };
+                count += 1;
+                if first_only {
+                    break;
+                }
+            }
+        }
+        (out, count)
+    }
+
+    /// Whether `q` lies in the view volume (has a valid projection).
+    pub fn contains(&self, q: DVec3) -> bool {
+        self.project(q, true).1 > 0
+    }
+
+    /// The λ intervals (λ ≥ 0; the last may end at infinity) in which the three construction
+    /// rays are not all on the same side of `T(λ)`'s plane: the only places where `T(λ)` can
+    /// cut an earlier position of itself, so the only places a point can project twice. Empty
+    /// for cameras that project every point at most once.
+    pub fn multiple_projection_intervals(&self) -> Vec<(f64, f64)> {
+        let e1 = self.v[1] - self.v[0];
+        let e2 = self.v[2] - self.v[0];
+        let f1 = self.d[1] - self.d[0];
+        let f2 = self.d[2] - self.d[0];
+        // n(λ) = n0 + λ n1 + λ² n2.
+        let n0 = e1.cross(e2);
+        let n1 = e1.cross(f2) + f1.cross(e2);
+        let n2 = f1.cross(f2);
+        let side = |i: usize, lambda: f64| {
+            let d = self.d[i];
+            let s = n0.dot(d) + lambda * (n1.dot(d) + lambda * n2.dot(d));
+            s > 0.0
+        };
+        let mut cuts: Vec<f64> = Vec::new();
+        for d in self.d {
+            let (roots, n) = real_roots([n0.dot(d), n1.dot(d), n2.dot(d), 0.0]);
+            cuts.extend(roots[..n].iter().filter(|&&r| r > 0.0));
+        }
+        cuts.sort_by(f64::total_cmp);
+        cuts.dedup();
+        let mut bounds = vec![0.0];
+        bounds.extend(&cuts);
+        let mut intervals: Vec<(f64, f64)> = Vec::new();
+        for (k, &start) in bounds.iter().enumerate() {
+            let end = bounds.get(k + 1).copied().unwrap_or(f64::INFINITY);
+            let probe = if end.is_finite() {
+                0.5 * (start + end)
+            } else {
+                start * 2.0 + 1.0
+            };
+            let sides = [0, 1, 2].map(|i| side(i, probe));
+            if sides[0] != sides[1] || sides[1] != sides[2] {
+                match intervals.last_mut() {
+                    Some(last) if last.1 == start => last.1 = end,
+                    _ => intervals.push((start, end)),
+                }
+            }
+        }
+        intervals
+    }
+
+    /// Conservative box test (§5.2 with the missing cases): false only when the axis-aligned
+    /// box `[lo, hi]` holds no point of the view volume.
+    pub fn may_see_box(&self, lo: DVec3, hi: DVec3) -> bool {
+        // 1. A corner inside: the box may lie wholly inside the view volume.
+        if self.contains(lo) {
+            return true;
+        }
+        // 2. The arcs' end points: a construction ray meets the box.
+        if self
+            .v
+            .iter()
+            .zip(&self.d)
+            .any(|(&o, &d)| ray_meets_box(o, d, f64::INFINITY, lo, hi))
+        {
+            return true;
+        }
+        // 3. The base triangle meets the box.
+        if (0..3).any(|i| {
+            let (a, b) = (self.v[i], self.v[(i + 1) % 3]);
+            ray_meets_box(a, b - a, 1.0, lo, hi)
+        }) || box_edges(lo, hi).any(|(a, b)| segment_meets_triangle(a, b, self.v))
+        {
+            return true;
+        }
+        // 4. A side wall crosses a box edge (the paper's arc against a face's frame).
+        (0..3).any(|i| self.wall_crosses_box_edges(i, (i + 1) % 3, lo, hi))
+    }
+
+    /// Whether the side wall `S(α, λ) = (1−α) v_a + α v_b + λ ((1−α) d_a + α d_b)`, α ∈ [0, 1],
+    /// λ ≥ 0, crosses one of the box's 12 edges.
+    fn wall_crosses_box_edges(&self, a: usize, b: usize, lo: DVec3, hi: DVec3) -> bool {
+        let (base, along) = (self.v[a], self.v[b] - self.v[a]);
+        let (dir, dir_change) = (self.d[a], self.d[b] - self.d[a]);
+        const EPS: f64 = 1e-9;
+        for k in 0..3 {
+            // Edges along axis k sit at fixed coordinates on the two other axes.
+            let (i, j) = ((k + 1) % 3, (k + 2) % 3);
+            for ci in [lo[i], hi[i]] {
+                for cj in [lo[j], hi[j]] {
+                    // S_i = ci and S_j = cj: eliminate λ, a quadratic in α.
+                    let (p0i, p1i) = (ci - base[i], -along[i]);
+                    let (p0j, p1j) = (cj - base[j], -along[j]);
+                    let (q0i, q1i) = (dir[i], dir_change[i]);
+                    let (q0j, q1j) = (dir[j], dir_change[j]);
+                    let coefficients = [
+                        p0i * q0j - p0j * q0i,
+                        p0i * q1j + p1i * q0j - p0j * q1i - p1j * q0i,
+                        p1i * q1j - p1j * q1i,
+                        0.0,
+                    ];
+                    let scale = coefficients.iter().fold(0.0f64, |m, c| m.max(c.abs()));
+                    if scale == 0.0 {
+                        // The edge's line lies in the wall's ruling family: keep the box.
+                        return true;
+                    }
+                    let (roots, n) = real_roots(coefficients);
+                    for &alpha in &roots[..n] {
+                        if !(-EPS..=1.0 + EPS).contains(&alpha) {
+                            continue;
+                        }
+                        let qi = q0i + q1i * alpha;
+                        let qj = q0j + q1j * alpha;
+                        let lambda = if qi.abs() >= qj.abs() {
+                            (p0i + p1i * alpha) / qi
+                        } else {
+                            (p0j + p1j * alpha) / qj
+                        };
+                        if !lambda.is_finite() || lambda < -EPS {
+                            continue;
+                        }
+                        let s_k = base[k] + along[k] * alpha + lambda * (dir[k] + dir_change[k] * alpha);
+                        let slack = EPS * (1.0 + hi[k].abs().max(lo[k].abs()));
+                        if s_k >= lo[k] - slack && s_k <= hi[k] + slack {
+                            return true;
+                        }
+                    }
+                }
+            }
+        }
+        false
+    }
+}
+
+/// The 12 edges of a box as segments.
+fn box_edges(lo: DVec3, hi: DVec3) -> impl Iterator<Item = (DVec3, DVec3)> {
+    let corner = move |m: usize| {
+        DVec3::new(
+            if m & 1 != 0 { hi.x } else { lo.x },
+            if m & 2 != 0 { hi.y } else { lo.y },
+            if m & 4 != 0 { hi.z } else { lo.z },
+        )
+    };
+    (0..8usize).flat_map(move |m| {
+        [1usize, 2, 4]
+            .into_iter()
+            .filter(move |bit| m & bit == 0)
+            .map(move |bit| (corner(m), corner(m | bit)))
+    })
+}
+
+/// Whether `o + t d`, t ∈ [0, t_max], meets the box (slab test, closed boxes).
+fn ray_meets_box(o: DVec3, d: DVec3, t_max: f64, lo: DVec3, hi: DVec3) -> bool {
+    let (mut t0, mut t1) = (0.0f64, t_max);
+    for k in 0..3 {
+        if d[k] == 0.0 {
+            if o[k] < lo[k] || o[k] > hi[k] {
+                return false;
+            }
+            continue;
+        }
+        let (a, b) = ((lo[k] - o[k]) / d[k], (hi[k] - o[k]) / d[k]);
+        t0 = t0.max(a.min(b));
+        t1 = t1.min(a.max(b));
+        if t0 > t1 {
+            return false;
+        }
+    }
+    true
+}
+
+/// Whether the segment a–b meets the triangle (Möller–Trumbore, closed).
+fn segment_meets_triangle(a: DVec3, b: DVec3, tri: [DVec3; 3]) -> bool {
+    let dir = b - a;
+    let e1 = tri[1] - tri[0];
+    let e2 = tri[2] - tri[0];
+    let p = dir.cross(e2);
+    let det = e1.dot(p);
+    let scale = e1.length() * e2.length() * dir.length();
+    if det.abs() <= 1e-12 * scale {
+        return false;
+    }
+    let s = a - tri[0];
+    let u = s.dot(p) / det;
+    let q = s.cross(e1);
+    let v = dir.dot(q) / det;
+    let t = e2.dot(q) / det;
+    const E: f64 = 1e-9;
+    u >= -E && v >= -E && u + v <= 1.0 + E && (-E..=1.0 + E).contains(&t)
+}
+
+/// Real roots of `c0 + c1 x + c2 x² + c3 x³` (degree taken from the largest non-negligible
+/// coefficient), each polished by Newton steps. Returns the roots and how many there are.
+pub fn real_roots(c: [f64; 4]) -> ([f64; 3], usize) {
+    let scale = c.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let mut out = [0.0; 3];
+    if scale == 0.0 || !scale.is_finite() {
+        return (out, 0);
+    }
+    let c = c.map(|x| x / scale);
+    const TINY: f64 = 1e-12;
+    let mut n = 0;
+    if c[3].abs() > TINY {
+        // Depressed cubic t³ + p t + q with x = t − a/3.
+        let (a, b, cc) = (c[2] / c[3], c[1] / c[3], c[0] / c[3]);
+        let p = b - a * a / 3.0;
+        let q = 2.0 * a * a * a / 27.0 - a * b / 3.0 + cc;
+        let shift = -a / 3.0;
+        let disc = q * q / 4.0 + p * p * p / 27.0;
+        if disc > 0.0 {
+            let s = disc.sqrt();
+            let u = (-q / 2.0 + s).cbrt();
+            let v = (-q / 2.0 - s).cbrt();
+            out[0] = u + v + shift;
+            n = 1;
+        } else if p == 0.0 {
+            out[0] = shift;
+            n = 1;
+        } else {
+            let r = (-p / 3.0).sqrt();
+            let phi = (-q / (2.0 * r * r * r)).clamp(-1.0, 1.0).acos();
+            for k in 0..3 {
+                out[k] = 2.0 * r * ((phi + 2.0 * std::f64::consts::PI * k as f64) / 3.0).cos()
+                    + shift;
+            }
+            n = 3;
+        }
+    } else if c[2].abs() > TINY {
+        let (a, b, cc) = (c[2], c[1], c[0]);
+        let disc = b * b - 4.0 * a * cc;
+        if disc >= 0.0 {
+            // The numerically stable pair.
+            let s = disc.sqrt();
+            let qq = -0.5 * (b + b.signum() * s + if b == 0.0 { s } else { 0.0 });
+            if qq != 0.0 {
+                out[0] = qq / a;
+                out[1] = cc / qq;
+                n = 2;
+            } else {
+                out[0] = 0.0;
+                n = 1;
+            }
+        }
+    } else if c[1].abs() > TINY {
+        out[0] = -c[0] / c[1];
+        n = 1;
+    }
+    for x in out.iter_mut().take(n) {
+        for _ in 0..3 {
+            let f = ((c[3] * *x + c[2]) * *x + c[1]) * *x + c[0];
+            let df = (3.0 * c[3] * *x + 2.0 * c[2]) * *x + c[1];
+            if df == 0.0 {
+                break;
+            }
+            let step = f / df;
+            if !step.is_finite() {
+                break;
+            }
+            *x -= step;
+        }
+    }
+    out[..n].sort_by(f64::total_cmp);
+    (out, n)
+}

@@ -1,0 +1,753 @@
+//! `c3rc`: hybrid backward–forward reflections with continuous 3-ray cameras.
+//!
+//! Paper: Mei, Popescu, Sacks, *A hybrid backward-forward method for interactive reflections*,
+//! GRAPP 2007 (`../shared/seeds/002_4c71036af837317b.txt`); the projection cubic and the
+//! multiple-projection quadratic as in `../shared/seeds/README.md`.
+//!
+//! Steps, and where they are:
+//! 1. Pre-processing (§3.1, §4; [`points`]): every non-specular object within `near` reflector
+//!    radii of a mirror ([`phases::mesh_is_near`]) is sampled uniformly by area
+//!    ([`points::PointCloud::sample`]), each point shaded as the reference shades that surface
+//!    ([`points::PointCloud::shade`]) and given a splat radius (the disc it stands for); an
+//!    eight-way kd-tree per object ([`points::PointCloud::build_tree`]), kept in the object's
+//!    loaded pose so that a rigid move keeps it (colours are shaded again after a move: light
+//!    and shadows change).
+//! 2. Far field: envmap's cube maps ([`crate::envmap::CubeMaps`]) drawn from each mirror with
+//!    its nearby objects left out.
+//! 3. A C3RC per reflector triangle (§5; [`camera::C3rc::reflector`]): the view direction
+//!    reflected about each vertex normal; the base is the triangle. Only triangles the
+//!    G-buffer shows get one.
+//! 4. Backward phase (§5.2; [`phases::reflect_near`]): each camera, mapped into each object's
+//!    space, against that object's tree ([`camera::C3rc::may_see_box`]), collecting leaves.
+//! 5. Forward phase (§5.1, §6): each leaf's points projected with the camera (the cubic, every
+//!    valid projection: a point may show several times, in one camera or in several), each
+//!    splatted as a square at the pixel of its base point, sized to its footprint, with
+//!    push-back depth (its distance from the reflector) so the point nearest the reflector
+//!    wins; a splat lands only on pixels of the surface it was projected from.
+//! 6. Shading: envmap's shading pass, taking a mirror pixel's reflected radiance from the
+//!    splats where they cover it and from the far-field cube map where they do not.
+//!
+//! Approximations and artifacts:
+//! - Point-based: the nearby objects are points, not surfaces. Too few points or too small
+//!   splats leave holes (the far field shows through, darker or lighter speckles); too large
+//!   splats blur and fatten edges (an object's silhouette grows by about a splat). Where
+//!   reflected rays converge (concave mirrors) a point's footprint grows past `max_splat` and
+//!   holes appear.
+//! - Rays inside a camera are interpolated linearly between the vertices' reflected rays, not
+//!   reflected about the interpolated normal: large curved triangles bend the reflection
+//!   slightly (continuous across edges, exact at vertices).
+//! - First order: a mirror does not see itself or other mirrors through its splats (other
+//!   specular objects are not points; the far field shows them as envmap does).
+//! - The split near/far is per object: a far object is exactly as wrong as in envmap; a near
+//!   object is right. Points are one-sided: a surface seen from its back (open meshes) is not
+//!   reflected.
+//! - Triangles that cover fewer than `min_pixels` visible pixels do not pay for a camera
+//!   (§8): their pixels take the per-vertex reflected colour, the radiance traced exactly
+//!   along the reflected ray at each vertex, interpolated (counted: `small triangles`,
+//!   `pixels from per-vertex colour`).
+//! - Dielectric objects are shaded as envmap shades them, with the nearby objects in their
+//!   cube maps.
+//!
+//! Parameters:
+//! - `points` (100000): how many points the nearby objects get in all (sets the density).
+//!   More points: fewer holes and sharper reflections, linear cost in projection.
+//! - `density` (0 = from `points`): points per square metre, overriding `points`.
+//! - `near` (3): objects within this many reflector radii of a mirror become points; farther
+//!   ones are the cube map's. Larger: more points, fewer objects in the wrong place.
+//! - `leaf_points` (128), `max_depth` (12): the tree's leaf size and depth. Smaller leaves
+//!   cull more precisely (fewer wasted projections) at more culling cost (paper: about 20 %
+//!   valid projections balances the two).
+//! - `splat_scale` (1.5): splat radius over the radius of the disc a point stands for. Larger
+//!   closes holes and blurs.
+//! - `max_splat` (6): largest splat half-size in pixels (where rays converge).
+//! - `min_pixels` (2): triangles covering fewer visible pixels take the per-vertex colour.
+//! - `resolution` (256), `dynamic` (false), `shadow_resolution` (1024): the far-field cube maps
+//!   and the scene raster, as in envmap.
+
+pub mod camera;
+pub mod phases;
+pub mod points;
+
+use glam::{DMat4, Vec3};
+use specula_gpu::shaders::CameraUniform;
+use specula_gpu::util::{bind_group, layout_entry, texture_2d, texture_binding, writable_buffer};
+use specula_gpu::{GpuContext, GpuError, TimingSource};
+use specula_scene::{Camera, MaterialKind, Scene};
+
+use crate::envmap::{self, CubeMaps, Exit};
+use crate::gpu_scene::GpuScene;
+use crate::live_scene::LiveScene;
+use crate::raster::{self, BindGroupsBySlot, OutputTexture, RasterPass, RasterSpec};
+use crate::technique::{
+    Context, Frame, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, StageTime,
+    Technique, TechniqueError,
+};
+use phases::{FrameSettings, PhaseReport, PixelSurfaces, PlacedCloud, ScreenView};
+use points::{PointCloud, TreeLimits};
+
+const SHADER: &str = include_str!("c3rc.wgsl");
+
+pub fn shader_source() -> String {
+    envmap::shading_shader_source(SHADER)
+}
+
+pub const PARAMS: &[ParamSpec] = &[
+    ParamSpec {
+        name: "points",
+        kind: ParamKind::Integer { min: 1, max: 50_000_000 },
+        default: "100000",
+        doc: "points over all nearby objects (sets the density): fewer holes, linear projection cost",
+        invalidates: Invalidates::Resources,
+    },
+    ParamSpec {
+        name: "density",
+        kind: ParamKind::Number { min: 0.0, max: 1e9 },
+        default: "0",
+        doc: "points per square metre; 0 takes the density from `points`",
+        invalidates: Invalidates::Resources,
+    },
+    ParamSpec {
+        name: "near",
+        kind: ParamKind::Number { min: 0.0, max: 1e6 },
+        default: "3",
+        doc: "objects within this many reflector radii become points; farther ones are the cube map's",
+        invalidates: Invalidates::Resources,
+    },
+    ParamSpec {
+        name: "leaf_points",
+        kind: ParamKind::Integer { min: 1, max: 1_000_000 },
+        default: "128",
+        doc: "kd-tree leaf size: smaller culls more precisely at more culling cost",
+        invalidates: Invalidates::Resources,
+    },
+    ParamSpec {
+        name: "max_depth",
+        kind: ParamKind::Integer { min: 0, max: 30 },
+        default: "12",
+        doc: "kd-tree depth limit",
+        invalidates: Invalidates::Resources,
+    },
+    ParamSpec {
+        name: "splat_scale",
+        kind: ParamKind::Number { min: 0.01, max: 100.0 },
+        default: "1.5",
+        doc: "splat radius over the radius of the disc a point stands for: closes holes, blurs",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "max_splat",
+        kind: ParamKind::Number { min: 0.5, max: 64.0 },
+        default: "6",
+        doc: "largest splat half-size in pixels (where reflected rays converge)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "min_pixels",
+        kind: ParamKind::Integer { min: 0, max: 1_000_000 },
+        default: "2",
+        doc: "triangles covering fewer visible pixels take the per-vertex reflected colour",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "resolution",
+        kind: ParamKind::Integer { min: 1, max: 8192 },
+        default: "256",
+        doc: "texels per far-field cube-map face side",
+        invalidates: Invalidates::Resources,
+    },
+    ParamSpec {
+        name: "dynamic",
+        kind: ParamKind::Flag,
+        default: "false",
+        doc: "redraw the far-field cube maps every frame (else only after a move)",
+        invalidates: Invalidates::Uniform,
+    },
+    raster::SHADOW_RESOLUTION,
+];
+
+pub const INFO: MethodInfo = MethodInfo {
+    name: "c3rc",
+    summary: "continuous 3-ray cameras: nearby objects as points projected per reflector triangle over an envmap far field",
+    exact: false,
+    needs_gpu: true,
+    progressive: false,
+    params: PARAMS,
+    create: || Box::new(C3rcMethod::default()),
+};
+
+/// Largest traced depth of the per-vertex fallback (as the reference's default).
+const FALLBACK_MAX_DEPTH: u32 = 8;
+
+pub struct C3rcMethod {
+    pub points: u32,
+    pub density: f32,
+    pub near: f32,
+    pub limits: TreeLimits,
+    pub splat_scale: f32,
+    pub max_splat: f32,
+    pub min_pixels: u32,
+    pub resolution: u32,
+    pub dynamic: bool,
+    pub shadow_resolution: u32,
+    prepared: Option<Prepared>,
+    output: OutputTexture,
+}
+
+impl Default for C3rcMethod {
+    fn default() -> Self {
+        C3rcMethod {
+            points: 100_000,
+            density: 0.0,
+            near: 3.0,
+            limits: TreeLimits {
+                leaf_points: 128,
+                max_depth: 12,
+            },
+            splat_scale: 1.5,
+            max_splat: 6.0,
+            min_pixels: 2,
+            resolution: 256,
+            dynamic: false,
+            shadow_resolution: 1024,
+            prepared: None,
+            output: OutputTexture::default(),
+        }
+    }
+}
+
+/// The nearby objects of the mirrors, as points.
+struct NearField {
+    /// (mirror mesh, its nearby meshes).
+    near: Vec<(usize, Vec<usize>)>,
+    clouds: Vec<PointCloud>,
+    /// Scene version `near` was found at.
+    found_at: u64,
+    /// Milliseconds spent sampling and building trees when the clouds were made.
+    build_ms: f64,
+}
+
+/// The G-buffer readback, kept between frames.
+struct Readback {
+    buffer: wgpu::Buffer,
+    width: u32,
+    height: u32,
+    ids_row: u32,
+    position_row: u32,
+    position_offset: u64,
+}
+
+/// What depends on the scene.
+struct Prepared {
+    scene_id: u64,
+    raster: RasterPass,
+    maps: CubeMaps,
+    camera_buffer: wgpu::Buffer,
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+    scene_bind_group: wgpu::BindGroup,
+    bind_groups: BindGroupsBySlot,
+    /// (faces generation, near texture size) the bind groups were made for.
+    bound: Option<(Option<u64>, u32, u32)>,
+    near_field: Option<NearField>,
+    near_texture: Option<wgpu::Texture>,
+    readback: Option<Readback>,
+    near_pixels: Vec<[f32; 4]>,
+}
+
+fn padded_row(bytes: u32) -> u32 {
+    bytes.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT
+}
+
+impl Readback {
+    fn new(gpu: &GpuContext, width: u32, height: u32) -> Readback {
+        let ids_row = padded_row(width * 8);
+        let position_row = padded_row(width * 16);
+        let position_offset = (ids_row * height) as u64;
+        let buffer = gpu.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("c3rc g-buffer readback"),
+            size: position_offset + (position_row * height) as u64,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        Readback {
+            buffer,
+            width,
+            height,
+            ids_row,
+            position_row,
+            position_offset,
+        }
+    }
+
+    fn read(&self, gpu: &GpuContext, g: &raster::GBuffer) -> Result<PixelSurfaces, GpuError> {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        let size = wgpu::Extent3d {
+            width: self.width,
+            height: self.height,
+            depth_or_array_layers: 1,
+        };
+        for (texture, offset, row) in [
+            (&g.ids, 0, self.ids_row),
+            (&g.position, self.position_offset, self.position_row),
+        ] {
+            encoder.copy_texture_to_buffer(
+                texture.as_image_copy(),
+                wgpu::TexelCopyBufferInfo {
+                    buffer: &self.buffer,
+                    layout: wgpu::TexelCopyBufferLayout {
+                        offset,
+                        bytes_per_row: Some(row),
+                        rows_per_image: Some(self.height),
+                    },
+                },
+                size,
+            );
+        }
+        gpu.queue.submit([encoder.finish()]);
+        let (w, h) = (self.width as usize, self.height as usize);
+        gpu.read_mapped(&self.buffer, |bytes| {
+            let mut ids = Vec::with_capacity(w * h);
+            let mut position = Vec::with_capacity(w * h);
+            for y in 0..h {
+                let row = &bytes[y * self.ids_row as usize..][..w * 8];
+                ids.extend_from_slice(bytemuck::cast_slice::<u8, [u32; 2]>(row));
+                let start = self.position_offset as usize + y * self.position_row as usize;
+                let row = &bytes[start..][..w * 16];
+                position.extend_from_slice(bytemuck::cast_slice::<u8, [f32; 4]>(row));
+            }
+            PixelSurfaces { ids, position }
+        })
+    }
+}
+
+/// The mirrors (specular meshes of mirror material) with their centres and radii.
+fn mirrors(scene: &Scene) -> Vec<(usize, Vec3, f32)> {
+    envmap::reflectors(scene)
+        .into_iter()
+        .filter(|&(m, ..)| {
+            matches!(
+                scene.materials[scene.meshes[m].material].kind,
+                MaterialKind::Mirror { .. }
+            )
+        })
+        .collect()
+}
+
+/// Each mirror's nearby objects: non-specular meshes within `near` × its radius.
+fn near_objects(scene: &Scene, near: f32) -> Vec<(usize, Vec<usize>)> {
+    mirrors(scene)
+        .into_iter()
+        .map(|(mirror, center, radius)| {
+            let objects = (0..scene.meshes.len())
+                .filter(|&m| !scene.materials[scene.meshes[m].material].is_specular())
+                .filter(|&m| phases::mesh_is_near(scene, m, center, near * radius))
+                .collect();
+            (mirror, objects)
+        })
+        .collect()
+}
+
+impl C3rcMethod {
+    fn build(&self, ctx: &GpuContext, live: &LiveScene) -> Result<Prepared, GpuError> {
+        let device = &ctx.device;
+        let gpu_scene = live.gpu(ctx);
+        let raster = RasterPass::new(ctx, live, RasterSpec::scene(self.shadow_resolution))?;
+        ctx.validated("c3rc set-up", || {
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("c3rc.wgsl"),
+                source: wgpu::ShaderSource::Wgsl(shader_source().into()),
+            });
+            let mut entries = envmap::shading_layout_entries();
+            entries.push(layout_entry(
+                9,
+                wgpu::ShaderStages::FRAGMENT,
+                texture_binding(
+                    wgpu::TextureSampleType::Float { filterable: false },
+                    wgpu::TextureViewDimension::D2,
+                ),
+            ));
+            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("c3rc"),
+                entries: &entries,
+            });
+            let scene_layout = GpuScene::bind_group_layout(device);
+            let pipeline =
+                raster::shading_pipeline(device, "c3rc shade", &module, &layout, &scene_layout);
+            Prepared {
+                scene_id: live.id(),
+                scene_bind_group: gpu_scene.bind_group(ctx, &scene_layout),
+                maps: CubeMaps::new(ctx, live.scene()),
+                camera_buffer: writable_buffer(
+                    ctx,
+                    "camera",
+                    size_of::<CameraUniform>() as u64,
+                    wgpu::BufferUsages::UNIFORM,
+                ),
+                raster,
+                pipeline,
+                layout,
+                bind_groups: BindGroupsBySlot::default(),
+                bound: None,
+                near_field: None,
+                near_texture: None,
+                readback: None,
+                near_pixels: Vec::new(),
+            }
+        })
+    }
+
+    fn ensure_prepared(&mut self, ctx: &GpuContext, live: &LiveScene) -> Result<(), GpuError> {
+        if self.prepared.as_ref().map(|p| p.scene_id) != Some(live.id()) {
+            self.prepared = Some(self.build(ctx, live)?);
+        }
+        Ok(())
+    }
+
+    /// The nearby objects' point clouds for `live`, made when missing or when the set of
+    /// nearby objects changed; colours shaded again after a move.
+    fn update_near_field(&self, live: &LiveScene, field: &mut Option<NearField>) {
+        let scene = live.scene();
+        let stale = field.as_ref().map(|f| f.found_at) != Some(live.version());
+        if !stale {
+            return;
+        }
+        let near = near_objects(scene, self.near);
+        let mut meshes: Vec<usize> = near.iter().flat_map(|(_, m)| m.iter().copied()).collect();
+        meshes.sort_unstable();
+        meshes.dedup();
+        let same_set = field
+            .as_ref()
+            .is_some_and(|f| f.clouds.iter().map(|c| c.mesh).eq(meshes.iter().copied()));
+        if !same_set {
+            let start = std::time::Instant::now();
+            let area: f32 = meshes.iter().map(|&m| points::area(&scene.meshes[m])).sum();
+            let density = if self.density > 0.0 {
+                self.density
+            } else {
+                self.points as f32 / area.max(1e-12)
+            };
+            let clouds = meshes
+                .iter()
+                .map(|&m| {
+                    PointCloud::sample(
+                        m,
+                        &scene.meshes[m],
+                        live.world_from_loaded(m).inverse(),
+                        density,
+                        1.0,
+                        self.limits,
+                    )
+                })
+                .collect();
+            *field = Some(NearField {
+                near: Vec::new(),
+                clouds,
+                found_at: u64::MAX,
+                build_ms: start.elapsed().as_secs_f64() * 1e3,
+            });
+        }
+        let f = field.as_mut().expect("made above");
+        for cloud in &mut f.clouds {
+            cloud.shade(scene, live.accel(), live.world_from_loaded(cloud.mesh));
+            cloud.shaded_at = Some(live.version());
+        }
+        f.near = near;
+        f.found_at = live.version();
+    }
+}
+
+impl Technique for C3rcMethod {
+    fn info(&self) -> &'static MethodInfo {
+        &INFO
+    }
+
+    fn parameter(&self, name: &str) -> String {
+        match name {
+            "points" => self.points.to_string(),
+            "density" => self.density.to_string(),
+            "near" => self.near.to_string(),
+            "leaf_points" => self.limits.leaf_points.to_string(),
+            "max_depth" => self.limits.max_depth.to_string(),
+            "splat_scale" => self.splat_scale.to_string(),
+            "max_splat" => self.max_splat.to_string(),
+            "min_pixels" => self.min_pixels.to_string(),
+            "resolution" => self.resolution.to_string(),
+            "dynamic" => self.dynamic.to_string(),
+            "shadow_resolution" => self.shadow_resolution.to_string(),
+            _ => String::new(),
+        }
+    }
+
+    fn set_parameter(&mut self, name: &str, value: &ParamValue) -> Result<(), TechniqueError> {
+        match name {
+            "points" => self.points = value.integer() as u32,
+            "density" => self.density = value.number() as f32,
+            "near" => self.near = value.number() as f32,
+            "leaf_points" => self.limits.leaf_points = value.integer() as usize,
+            "max_depth" => self.limits.max_depth = value.integer() as u32,
+            "splat_scale" => self.splat_scale = value.number() as f32,
+            "max_splat" => self.max_splat = value.number() as f32,
+            "min_pixels" => self.min_pixels = value.integer() as u32,
+            "resolution" => self.resolution = value.integer() as u32,
+            "dynamic" => self.dynamic = value.flag(),
+            "shadow_resolution" => self.shadow_resolution = value.integer() as u32,
+            _ => {}
+        }
+        Ok(())
+    }
+
+    fn invalidate(&mut self, what: Invalidates) {
+        if what >= Invalidates::Resources {
+            if let Some(p) = &mut self.prepared {
+                p.maps.drop_faces();
+                p.near_field = None;
+            }
+        }
+        if what >= Invalidates::Scene {
+            self.prepared = None;
+        }
+    }
+
+    fn prepare(&mut self, ctx: &Context, live: &LiveScene) -> Result<(), TechniqueError> {
+        self.ensure_prepared(ctx.gpu(INFO.name)?, live)?;
+        let mut field = self.prepared.as_mut().and_then(|p| p.near_field.take());
+        self.update_near_field(live, &mut field);
+        self.prepared.as_mut().expect("prepared above").near_field = field;
+        Ok(())
+    }
+
+    fn render(
+        &mut self,
+        ctx: &Context,
+        live: &LiveScene,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+    ) -> Result<Frame, TechniqueError> {
+        let gpu = ctx.gpu(INFO.name)?;
+        let before = gpu.resource_counts();
+        self.ensure_prepared(gpu, live)?;
+        let scene = live.scene();
+        let gpu_scene = live.gpu(gpu);
+        let mut stages = WallStages::new();
+
+        let mut field = self.prepared.as_mut().and_then(|p| p.near_field.take());
+        let rebuilt = field.is_none();
+        self.update_near_field(live, &mut field);
+        let field = field.expect("made by update_near_field");
+        stages.lap(gpu, "points (sample, trees, shading)")?;
+
+        let p = self.prepared.as_mut().expect("prepared above");
+        p.raster.begin_frame(gpu, live)?;
+        p.bind_groups.keep_pooled(&p.raster);
+        let camera_uniform = raster::camera_uniform(camera, &scene.bounds(), width, height);
+        let g = p.raster.render(gpu, gpu_scene, &camera_uniform, None)?;
+        stages.lap(gpu, "g-buffer")?;
+
+        p.maps.set_hidden(field.near.clone());
+        let faces_drawn =
+            p.maps
+                .update(gpu, &p.raster, live, self.resolution, Exit::Slab, self.dynamic)?;
+        stages.lap(gpu, "far-field cube maps")?;
+
+        if p.readback.as_ref().map(|r| (r.width, r.height)) != Some((width, height)) {
+            p.readback = Some(Readback::new(gpu, width, height));
+        }
+        let surfaces = p.readback.as_ref().expect("made above").read(gpu, &g)?;
+        stages.lap(gpu, "g-buffer readback")?;
+
+        let placed: Vec<PlacedCloud> = field
+            .clouds
+            .iter()
+            .map(|cloud| PlacedCloud {
+                cloud,
+                object_from_world: DMat4::from_cols_array(
+                    &live
+                        .world_from_loaded(cloud.mesh)
+                        .inverse()
+                        .to_cols_array()
+                        .map(f64::from),
+                ),
+            })
+            .collect();
+        let mirror_meshes: Vec<usize> = field.near.iter().map(|(m, _)| *m).collect();
+        let report = phases::reflect_near(
+            scene,
+            live.accel(),
+            &mirror_meshes,
+            &placed,
+            &ScreenView::new(camera, width, height),
+            &surfaces,
+            FrameSettings {
+                min_pixels: self.min_pixels,
+                splat_scale: self.splat_scale,
+                max_splat: self.max_splat,
+                max_depth: FALLBACK_MAX_DEPTH,
+            },
+            &mut p.near_pixels,
+        );
+        for (name, ms) in [
+            ("c3rc set-up", report.setup_ms),
+            ("culling (backward phase)", report.culling_ms),
+            ("projection (forward phase)", report.projection_ms),
+            ("splatting and per-vertex colour", report.splatting_ms),
+        ] {
+            stages.measured(name, ms);
+        }
+
+        if p.near_texture
+            .as_ref()
+            .map(|t| (t.width(), t.height()))
+            != Some((width, height))
+        {
+            p.near_texture = Some(texture_2d(
+                gpu,
+                "c3rc near reflection",
+                width,
+                height,
+                raster::COLOR_FORMAT,
+                wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            ));
+        }
+        let near_texture = p.near_texture.as_ref().expect("made above");
+        gpu.queue.write_texture(
+            near_texture.as_image_copy(),
+            bytemuck::cast_slice(&p.near_pixels),
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(width * 16),
+                rows_per_image: Some(height),
+            },
+            wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: 1,
+            },
+        );
+        let bound = Some((p.maps.faces_generation(), width, height));
+        if p.bound != bound {
+            p.bind_groups.clear();
+            p.bound = bound;
+        }
+        let output = self.output.get(gpu, width, height);
+        gpu.validated("c3rc shade", || {
+            gpu.queue
+                .write_buffer(&p.camera_buffer, 0, bytemuck::bytes_of(&camera_uniform));
+            let group = p.bind_groups.get_or_make(g.slot, || {
+                let [color, position, normal, ids] = g.views();
+                let near_view = near_texture.create_view(&Default::default());
+                let mut entries = vec![
+                    p.camera_buffer.as_entire_binding(),
+                    wgpu::BindingResource::TextureView(&color),
+                    wgpu::BindingResource::TextureView(&position),
+                    wgpu::BindingResource::TextureView(&normal),
+                    wgpu::BindingResource::TextureView(&ids),
+                ];
+                entries.extend(p.maps.bindings());
+                entries.push(wgpu::BindingResource::TextureView(&near_view));
+                bind_group(gpu, "c3rc", &p.layout, &entries)
+            });
+            raster::fullscreen_pass(
+                gpu,
+                "c3rc shade",
+                &p.pipeline,
+                &[group, &p.scene_bind_group],
+                &output,
+            )
+        })?;
+        stages.lap(gpu, "upload and shading")?;
+
+        let counters = counters(&field, &report, rebuilt, faces_drawn);
+        p.near_field = Some(field);
+        let mut warnings = Vec::new();
+        if report.cameras + report.small_triangles == 0 && !mirror_meshes.is_empty() {
+            warnings.push("c3rc: no mirror triangle is visible; only the far field shows".into());
+        }
+        Ok(Frame {
+            pixels: Pixels::Texture(output),
+            stages: stages.stages,
+            counters,
+            timing: TimingSource::CpuWallClock,
+            warnings,
+            converged: true,
+            created: gpu.resource_counts() - before,
+        })
+    }
+}
+
+/// Wall-clock stage times: the CPU phases have no GPU timestamps, so every stage is timed on
+/// the CPU, waiting for the GPU at the end of GPU stages.
+struct WallStages {
+    stages: Vec<StageTime>,
+    clock: std::time::Instant,
+}
+
+impl WallStages {
+    fn new() -> WallStages {
+        WallStages {
+            stages: Vec::new(),
+            clock: std::time::Instant::now(),
+        }
+    }
+
+    /// Ends a stage that ran since the last one ended.
+    fn lap(&mut self, gpu: &GpuContext, name: &str) -> Result<(), GpuError> {
+        gpu.wait()?;
+        let now = std::time::Instant::now();
+        self.measured(name, (now - self.clock).as_secs_f64() * 1e3);
+        Ok(())
+    }
+
+    /// Records a stage timed by its own code; the next stage starts now.
+    fn measured(&mut self, name: &str, milliseconds: f64) {
+        self.stages.push(StageTime {
+            stage: name.into(),
+            milliseconds,
+        });
+        self.clock = std::time::Instant::now();
+    }
+}
+
+/// The frame's counters: the paper's Tables 1 and 2 and what the fallbacks took.
+fn counters(
+    field: &NearField,
+    report: &PhaseReport,
+    rebuilt: bool,
+    faces_drawn: u64,
+) -> Vec<(String, u64)> {
+    let points: usize = field.clouds.iter().map(|c| c.len()).sum();
+    let leaves: usize = field.clouds.iter().map(|c| c.stats.leaves).sum();
+    let depth_sum: f64 = field
+        .clouds
+        .iter()
+        .map(|c| c.stats.average_depth * c.stats.leaves as f64)
+        .sum();
+    let tree_us: f64 = field.clouds.iter().map(|c| c.stats.build_ms * 1e3).sum();
+    vec![
+        ("nearby objects".into(), field.clouds.len() as u64),
+        ("points".into(), points as u64),
+        ("kd-tree leaves".into(), leaves as u64),
+        (
+            "kd-tree mean leaf depth (hundredths)".into(),
+            (100.0 * depth_sum / leaves.max(1) as f64).round() as u64,
+        ),
+        ("kd-tree build us".into(), tree_us.round() as u64),
+        (
+            "points sampled and trees built this frame".into(),
+            if rebuilt { points as u64 } else { 0 },
+        ),
+        ("sampling and trees ms (when built)".into(), field.build_ms.round() as u64),
+        ("cameras (C3RCs)".into(), report.cameras),
+        ("cameras that can project a point twice".into(), report.cameras_that_can_project_twice),
+        ("leaves seen by cameras".into(), report.leaves_visited),
+        ("points projected".into(), report.points_tried),
+        ("valid projections".into(), report.valid_projections),
+        ("points with several projections in one camera".into(), report.points_projected_more_than_once),
+        ("culling us".into(), (report.culling_ms * 1e3).round() as u64),
+        ("projection us".into(), (report.projection_ms * 1e3).round() as u64),
+        ("pixels covered by splats".into(), report.covered_pixels),
+        ("small triangles (per-vertex colour)".into(), report.small_triangles),
+        ("pixels from per-vertex colour".into(), report.small_triangle_pixels),
+        ("cube map faces rendered".into(), faces_drawn),
+    ]
+}

@@ -1,0 +1,484 @@
+//! One frame of c3rc on the CPU (Mei, Popescu and Sacks 2007, §3.2, §5.2, §6): a camera per
+//! visible reflector triangle, the backward phase (each camera's view volume against the point
+//! trees), the forward phase (the points of the leaves it sees projected with it), and the
+//! splats resolved per pixel, nearest to the reflector first. Triangles too small to pay for a
+//! camera take the per-vertex reflected colour instead.
+
+use std::time::Instant;
+
+use glam::{DMat4, DVec3, Vec3};
+use rayon::prelude::*;
+use specula_scene::{Camera, Scene};
+use specula_trace::reference::{offset_origin, Tracer};
+use specula_trace::{Ray, SceneAccel};
+
+use super::camera::C3rc;
+use super::points::PointCloud;
+
+/// How the camera maps world points to pixels (the raster pass's pinhole, top-left origin).
+#[derive(Clone, Copy, Debug)]
+pub struct ScreenView {
+    pub eye: Vec3,
+    right: Vec3,
+    up: Vec3,
+    forward: Vec3,
+    tan_half: f32,
+    aspect: f32,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl ScreenView {
+    pub fn new(camera: &Camera, width: u32, height: u32) -> ScreenView {
+        let frame = camera.frame();
+        ScreenView {
+            eye: camera.eye,
+            right: frame.right,
+            up: frame.up,
+            forward: frame.forward,
+            tan_half: (camera.fov_y_deg.to_radians() * 0.5).tan(),
+            aspect: width as f32 / height as f32,
+            width,
+            height,
+        }
+    }
+
+    /// Pixel coordinates (x right, y down, pixel centres at +0.5) and view depth of `p_world`;
+    /// None behind the eye.
+    pub fn project(&self, p_world: Vec3) -> Option<(f32, f32, f32)> {
+        let v = p_world - self.eye;
+        let z = v.dot(self.forward);
+        if z <= 1e-6 {
+            return None;
+        }
+        let x = v.dot(self.right) / (z * self.tan_half * self.aspect);
+        let y = v.dot(self.up) / (z * self.tan_half);
+        Some((
+            (x + 1.0) * 0.5 * self.width as f32,
+            (1.0 - y) * 0.5 * self.height as f32,
+            z,
+        ))
+    }
+
+    /// The side of one pixel, in metres, at view depth `z`.
+    pub fn footprint(&self, z: f32) -> f32 {
+        2.0 * z * self.tan_half / self.height as f32
+    }
+}
+
+/// The G-buffer as the CPU sees it: per pixel (mesh + 1, triangle) and the world position.
+pub struct PixelSurfaces {
+    pub ids: Vec<[u32; 2]>,
+    pub position: Vec<[f32; 4]>,
+}
+
+/// Per-frame knobs (see the module parameters in `c3rc/mod.rs`).
+#[derive(Clone, Copy, Debug)]
+pub struct FrameSettings {
+    pub min_pixels: u32,
+    pub splat_scale: f32,
+    pub max_splat: f32,
+    pub max_depth: u32,
+}
+
+/// A point cloud placed in the world for this frame.
+pub struct PlacedCloud<'a> {
+    pub cloud: &'a PointCloud,
+    pub object_from_world: DMat4,
+}
+
+/// One reflector triangle's camera.
+struct TriangleCamera {
+    mesh: usize,
+    world: C3rc,
+    /// Pixels² the triangle covers on screen (not occlusion-aware): the image-side area the
+    /// camera's cross-sections map to, for splat sizes.
+    screen_area: f64,
+    may_project_twice: bool,
+}
+
+/// A projected point.
+#[derive(Clone, Copy)]
+struct Splat {
+    x: f32,
+    y: f32,
+    radius: f32,
+    /// Push-back depth: the point's distance from the reflector.
+    depth: f32,
+    z_view: f32,
+    p_world: Vec3,
+    color: Vec3,
+    mesh: u32,
+}
+
+/// What a frame found and how long its phases took (the paper's Table 2).
+#[derive(Clone, Debug, Default)]
+pub struct PhaseReport {
+    pub cameras: u64,
+    pub cameras_that_can_project_twice: u64,
+    pub small_triangles: u64,
+    pub small_triangle_pixels: u64,
+    pub leaves_visited: u64,
+    pub points_tried: u64,
+    pub valid_projections: u64,
+    pub points_projected_more_than_once: u64,
+    pub splats: u64,
+    pub covered_pixels: u64,
+    pub setup_ms: f64,
+    pub culling_ms: f64,
+    pub projection_ms: f64,
+    pub splatting_ms: f64,
+}
+
+/// Radiance arriving along each mirror pixel's reflected ray from the nearby objects
+/// (alpha 1 where something was found, 0 where the far field shows), for the pixels of the
+/// reflectors `mirrors`.
+#[allow(clippy::too_many_arguments)]
+pub fn reflect_near(
+    scene: &Scene,
+    accel: &SceneAccel,
+    mirrors: &[usize],
+    clouds: &[PlacedCloud],
+    view: &ScreenView,
+    surfaces: &PixelSurfaces,
+    settings: FrameSettings,
+    out: &mut Vec<[f32; 4]>,
+) -> PhaseReport {
+    let mut report = PhaseReport::default();
+    let pixel_count = (view.width * view.height) as usize;
+    out.clear();
+    out.resize(pixel_count, [0.0; 4]);
+
+    // Cameras for the triangles that cover enough pixels; the rest are small.
+    let start = Instant::now();
+    let mut visible: Vec<Vec<u32>> = scene
+        .meshes
+        .iter()
+        .enumerate()
+        .map(|(k, m)| vec![0; if mirrors.contains(&k) { m.triangles.len() } else { 0 }])
+        .collect();
+    for [mesh1, triangle] in &surfaces.ids {
+        if *mesh1 > 0 && mirrors.contains(&((mesh1 - 1) as usize)) {
+            visible[(mesh1 - 1) as usize][*triangle as usize] += 1;
+        }
+    }
+    let eye = view.eye.as_dvec3();
+    let mut cameras = Vec::new();
+    let mut small: Vec<Vec<bool>> = visible.iter().map(|v| vec![false; v.len()]).collect();
+    for &mesh in mirrors {
+        let m = &scene.meshes[mesh];
+        for (t, &count) in visible[mesh].iter().enumerate() {
+            if count == 0 {
+                continue;
+            }
+            if count < settings.min_pixels {
+                small[mesh][t] = true;
+                report.small_triangles += 1;
+                report.small_triangle_pixels += count as u64;
+                continue;
+            }
+            let idx = m.triangles[t].map(|i| i as usize);
+            let v = idx.map(|i| m.positions[i].as_dvec3());
+            let mut n = idx.map(|i| m.normals[i].as_dvec3());
+            // The side the eye sees reflects (the reference flips normals the same way).
+            let mut face = (v[1] - v[0]).cross(v[2] - v[0]);
+            if face.dot(n[0] + n[1] + n[2]) < 0.0 {
+                face = -face;
+            }
+            if face.dot(eye - v[0]) < 0.0 {
+                n = n.map(|x| -x);
+            }
+            let world = C3rc::reflector(v, n, eye);
+            let screen = v.map(|p| view.project(p.as_vec3()));
+            let screen_area = match screen {
+                [Some(a), Some(b), Some(c)] => {
+                    let (ab, ac) = ((b.0 - a.0, b.1 - a.1), (c.0 - a.0, c.1 - a.1));
+                    0.5 * (ab.0 * ac.1 - ab.1 * ac.0).abs() as f64
+                }
+                _ => count as f64,
+            }
+            .max(count as f64);
+            let may_project_twice = !world.multiple_projection_intervals().is_empty();
+            report.cameras_that_can_project_twice += may_project_twice as u64;
+            cameras.push(TriangleCamera {
+                mesh,
+                world,
+                screen_area,
+                may_project_twice,
+            });
+        }
+    }
+    report.cameras = cameras.len() as u64;
+    report.setup_ms = ms(start);
+
+    // Backward phase: each camera's view volume against every tree.
+    let start = Instant::now();
+    let leaves: Vec<Vec<(usize, usize)>> = cameras
+        .par_iter()
+        .map(|camera| {
+            let mut found = Vec::new();
+            let mut stack = Vec::new();
+            for (c, placed) in clouds.iter().enumerate() {
+                let cloud = placed.cloud;
+                if cloud.is_empty() {
+                    continue;
+                }
+                let local = camera.world.transformed(&placed.object_from_world);
+                stack.clear();
+                stack.push(0usize);
+                while let Some(k) = stack.pop() {
+                    let node = &cloud.nodes[k];
+                    if !local.may_see_box(node.lo.as_dvec3(), node.hi.as_dvec3()) {
+                        continue;
+                    }
+                    if node.leaf {
+                        found.push((c, k));
+                    } else {
+                        stack.extend(node.first as usize..(node.first + node.count) as usize);
+                    }
+                }
+            }
+            found
+        })
+        .collect();
+    report.leaves_visited = leaves.iter().map(|l| l.len() as u64).sum();
+    report.culling_ms = ms(start);
+
+    // Forward phase: the leaves' points projected with the camera, every valid projection.
+    let start = Instant::now();
+    let per_camera: Vec<(Vec<Splat>, u64, u64)> = cameras
+        .par_iter()
+        .zip(&leaves)
+        .map(|(camera, leaves)| {
+            let mut splats = Vec::new();
+            let (mut tried, mut twice) = (0u64, 0u64);
+            for &(c, k) in leaves {
+                let placed = &clouds[c];
+                let cloud = placed.cloud;
+                let local = camera.world.transformed(&placed.object_from_world);
+                let node = &cloud.nodes[k];
+                let range = node.first as usize..(node.first + node.count) as usize;
+                tried += range.len() as u64;
+                let radius = (cloud.radius * settings.splat_scale) as f64;
+                for i in range {
+                    let q = cloud.p_object[i].as_dvec3();
+                    let (projections, count) = local.project(q, !camera.may_project_twice);
+                    twice += (count > 1) as u64;
+                    for projection in &projections[..count] {
+                        let base_local = projection.base_point(&local);
+                        // Points seen from behind belong to a surface whose front is nearer.
+                        if cloud.n_object[i].as_dvec3().dot(base_local - q) <= 0.0 {
+                            continue;
+                        }
+                        let p_world = projection.base_point(&camera.world).as_vec3();
+                        let Some((x, y, z_view)) = view.project(p_world) else {
+                            continue;
+                        };
+                        let area = camera.world.sweep_area(projection.lambda).max(1e-30);
+                        let r = (radius * (camera.screen_area / area).sqrt()) as f32;
+                        splats.push(Splat {
+                            x,
+                            y,
+                            radius: r.clamp(0.5, settings.max_splat),
+                            depth: (q - base_local).length() as f32,
+                            z_view,
+                            p_world,
+                            color: cloud.color[i],
+                            mesh: camera.mesh as u32,
+                        });
+                    }
+                }
+            }
+            (splats, tried, twice)
+        })
+        .collect();
+    report.projection_ms = ms(start);
+
+    // Splats resolved per pixel: on the reflector surface the splat came from, nearest first.
+    let start = Instant::now();
+    let mut depth = vec![f32::INFINITY; pixel_count];
+    for (splats, tried, twice) in &per_camera {
+        report.points_tried += tried;
+        report.points_projected_more_than_once += twice;
+        report.valid_projections += splats.len() as u64;
+        for s in splats {
+            splat(s, view, surfaces, &mut depth, out);
+        }
+    }
+    report.splats = report.valid_projections;
+    report.covered_pixels = depth.iter().filter(|d| d.is_finite()).count() as u64;
+
+    // Small triangles: the reflected colour traced at their vertices, interpolated.
+    if report.small_triangles > 0 {
+        per_vertex_fallback(scene, accel, view, surfaces, &small, settings.max_depth, out);
+    }
+    report.splatting_ms = ms(start);
+    report
+}
+
+fn ms(start: Instant) -> f64 {
+    start.elapsed().as_secs_f64() * 1e3
+}
+
+fn splat(s: &Splat, view: &ScreenView, surfaces: &PixelSurfaces, depth: &mut [f32], out: &mut [[f32; 4]]) {
+    let (w, h) = (view.width as i64, view.height as i64);
+    let x0 = ((s.x - s.radius).floor() as i64).max(0);
+    let x1 = ((s.x + s.radius).ceil() as i64).min(w);
+    let y0 = ((s.y - s.radius).floor() as i64).max(0);
+    let y1 = ((s.y + s.radius).ceil() as i64).min(h);
+    // A pixel whose surface is farther from the splat's reflector point than the splat reaches
+    // shows another part of the reflector (or something in front of it).
+    let reach = (s.radius + 1.5) * view.footprint(s.z_view);
+    for py in y0..y1 {
+        let cy = py as f32 + 0.5;
+        if (cy - s.y).abs() > s.radius {
+            continue;
+        }
+        for px in x0..x1 {
+            let cx = px as f32 + 0.5;
+            if (cx - s.x).abs() > s.radius {
+                continue;
+            }
+            let k = (py * w + px) as usize;
+            if surfaces.ids[k][0] != s.mesh + 1 || s.depth >= depth[k] {
+                continue;
+            }
+            let p = surfaces.position[k];
+            if (Vec3::new(p[0], p[1], p[2]) - s.p_world).length() > reach {
+                continue;
+            }
+            depth[k] = s.depth;
+            out[k] = [s.color.x, s.color.y, s.color.z, 1.0];
+        }
+    }
+}
+
+/// The pixels of `small` triangles: radiance traced along the reflected ray at each of their
+/// vertices (exact, through the BVH), interpolated across the triangle.
+fn per_vertex_fallback(
+    scene: &Scene,
+    accel: &SceneAccel,
+    view: &ScreenView,
+    surfaces: &PixelSurfaces,
+    small: &[Vec<bool>],
+    max_depth: u32,
+    out: &mut [[f32; 4]],
+) {
+    let tracer = Tracer {
+        scene,
+        accel,
+        max_depth,
+    };
+    // (mesh, vertex) pairs the small triangles use, traced once each.
+    let mut needed: Vec<(usize, u32)> = Vec::new();
+    for (mesh, flags) in small.iter().enumerate() {
+        for (t, _) in flags.iter().enumerate().filter(|(_, &f)| f) {
+            needed.extend(scene.meshes[mesh].triangles[t].iter().map(|&i| (mesh, i)));
+        }
+    }
+    needed.sort_unstable();
+    needed.dedup();
+    let colors: Vec<Vec3> = needed
+        .par_iter()
+        .map(|&(mesh, i)| {
+            let m = &scene.meshes[mesh];
+            let p = m.positions[i as usize];
+            let mut n = m.normals[i as usize].normalize_or_zero();
+            let d = (p - view.eye).normalize_or_zero();
+            if n.dot(d) > 0.0 {
+                n = -n;
+            }
+            let reflected = d - 2.0 * d.dot(n) * n;
+            let ray = Ray {
+                origin: offset_origin(p, n, reflected),
+                dir: reflected,
+            };
+            tracer.radiance(&ray, 1, None)
+        })
+        .collect();
+    let color_of = |mesh: usize, i: u32| {
+        let k = needed.binary_search(&(mesh, i)).expect("traced above");
+        colors[k]
+    };
+    for (k, [mesh1, t]) in surfaces.ids.iter().enumerate() {
+        if *mesh1 == 0 {
+            continue;
+        }
+        let mesh = (mesh1 - 1) as usize;
+        if !small.get(mesh).is_some_and(|f| f.get(*t as usize) == Some(&true)) {
+            continue;
+        }
+        let m = &scene.meshes[mesh];
+        let tri = m.triangles[*t as usize];
+        let [a, b, c] = tri.map(|i| m.positions[i as usize]);
+        let p = Vec3::from_slice(&surfaces.position[k][..3]);
+        let bary = barycentric(p, a, b, c);
+        let color = color_of(mesh, tri[0]) * bary[0]
+            + color_of(mesh, tri[1]) * bary[1]
+            + color_of(mesh, tri[2]) * bary[2];
+        out[k] = [color.x, color.y, color.z, 1.0];
+    }
+}
+
+/// Barycentric coordinates of `p` projected onto triangle abc, clamped to it.
+fn barycentric(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> [f32; 3] {
+    let n = (b - a).cross(c - a);
+    let nn = n.length_squared();
+    if nn <= 0.0 {
+        return [1.0 / 3.0; 3];
+    }
+    let w0 = ((b - p).cross(c - p).dot(n) / nn).max(0.0);
+    let w1 = ((c - p).cross(a - p).dot(n) / nn).max(0.0);
+    let w2 = (1.0 - w0 - w1).max(0.0);
+    let sum = w0 + w1 + w2;
+    [w0 / sum, w1 / sum, w2 / sum]
+}
+
+/// Whether mesh `mesh` (not specular) comes within `distance` of `center`: its box first,
+/// then its triangles (a room around the reflector is near only where a wall is).
+pub fn mesh_is_near(scene: &Scene, mesh: usize, center: Vec3, distance: f32) -> bool {
+    let m = &scene.meshes[mesh];
+    let b = m.bounds();
+    let outside = (b.min - center).max(center - b.max).max(Vec3::ZERO);
+    if outside.length() > distance {
+        return false;
+    }
+    m.triangles.iter().any(|tri| {
+        let [a, b, c] = tri.map(|i| m.positions[i as usize].as_dvec3());
+        (closest_point_on_triangle(center.as_dvec3(), a, b, c) - center.as_dvec3()).length()
+            <= distance as f64
+    })
+}
+
+/// The point of triangle abc closest to `p` (Ericson, Real-Time Collision Detection, 5.1.5).
+fn closest_point_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return a + ab * (d1 / (d1 - d3));
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return a + ac * (d2 / (d2 - d6));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    }
+    let denom = 1.0 / (va + vb + vc);
+    a + ab * (vb * denom) + ac * (vc * denom)
+}
