@@ -25,6 +25,8 @@ use glam::DVec3;
 
 /// Barycentric slack for points on an edge shared by two cameras (both project them).
 const BARY_EPS: f64 = 1e-9;
+/// Sweep slack for points on the base.
+const LAMBDA_EPS: f64 = 1e-9;
 
 /// A continuous 3-ray camera: base vertices `v` (the reflector triangle) and unit construction
 /// ray directions `d` (the reflected rays at those vertices).
@@ -124,9 +126,11 @@ impl C3rc {
         let mut count = 0;
         let (roots, n) = real_roots(self.projection_cubic(q));
         for &lambda in &roots[..n] {
-            if lambda < 0.0 {
+            // Points on the base (λ = 0) come out a rounding error either side.
+            if lambda < -LAMBDA_EPS {
                 continue;
             }
+            let lambda = lambda.max(0.0);
             let Some(bary) = self.sweep_bary(q, lambda) else {
                 continue;
             };
@@ -192,9 +196,62 @@ impl C3rc {
         intervals
     }
 
+    /// The largest λ at which the view volume can reach the box `[lo, hi]`: a point at λ lies
+    /// λ·|Σ bᵢ dᵢ| from its base point, and |Σ bᵢ dᵢ| ≥ minᵢ dᵢ·d̄ (d̄ the rays' mean
+    /// direction). Infinite when the rays spread over a half-space.
+    pub fn lambda_bound(&self, lo: DVec3, hi: DVec3) -> f64 {
+        let mean = (self.d[0] + self.d[1] + self.d[2]).normalize_or_zero();
+        let least = self.d.iter().map(|d| d.dot(mean)).fold(f64::INFINITY, f64::min);
+        if least < 0.05 {
+            return f64::INFINITY;
+        }
+        let reach = self
+            .v
+            .iter()
+            .map(|v| (v - (lo + hi) * 0.5).length() + (hi - lo).length() * 0.5)
+            .fold(0.0, f64::max);
+        reach / least
+    }
+
+    /// Boxes around the parts of the view volume where the sweeping triangle can fold over
+    /// itself (the multiple-projection intervals, cut at `lambda_max`): `T(λ)` for λ in
+    /// [a, b] lies in the hull of `T(a)` and `T(b)`, since each vertex moves along a segment.
+    /// The fold's surface bounds the view volume there and is neither a side wall nor the
+    /// base, so the §5.2 conditions miss it; an unbounded interval gives an unbounded box.
+    pub fn fold_boxes(&self, lambda_max: f64) -> Vec<(DVec3, DVec3)> {
+        self.multiple_projection_intervals()
+            .into_iter()
+            .filter(|&(a, _)| a <= lambda_max)
+            .map(|(a, b)| {
+                let b = b.min(lambda_max);
+                if !b.is_finite() {
+                    return (DVec3::NEG_INFINITY, DVec3::INFINITY);
+                }
+                let mut lo = DVec3::INFINITY;
+                let mut hi = DVec3::NEG_INFINITY;
+                for i in 0..3 {
+                    for lambda in [a, b] {
+                        let p = self.sweep_vertex(i, lambda);
+                        lo = lo.min(p);
+                        hi = hi.max(p);
+                    }
+                }
+                (lo, hi)
+            })
+            .collect()
+    }
+
     /// Conservative box test (§5.2 with the missing cases): false only when the axis-aligned
-    /// box `[lo, hi]` holds no point of the view volume.
-    pub fn may_see_box(&self, lo: DVec3, hi: DVec3) -> bool {
+    /// box `[lo, hi]` holds no point of the view volume. `folds` are this camera's
+    /// [`C3rc::fold_boxes`] (empty for cameras that project every point once).
+    pub fn may_see_box(&self, lo: DVec3, hi: DVec3, folds: &[(DVec3, DVec3)]) -> bool {
+        // 0. Where the sweeping triangle folds over, the volume's boundary is the fold.
+        if folds
+            .iter()
+            .any(|(a, b)| a.cmple(hi).all() && lo.cmple(*b).all())
+        {
+            return true;
+        }
         // 1. A corner inside: the box may lie wholly inside the view volume.
         if self.contains(lo) {
             return true;

@@ -224,11 +224,17 @@ pub fn reflect_near(
                     continue;
                 }
                 let local = camera.world.transformed(&placed.object_from_world);
+                let root = &cloud.nodes[0];
+                let folds = if camera.may_project_twice {
+                    local.fold_boxes(local.lambda_bound(root.lo.as_dvec3(), root.hi.as_dvec3()))
+                } else {
+                    Vec::new()
+                };
                 stack.clear();
                 stack.push(0usize);
                 while let Some(k) = stack.pop() {
                     let node = &cloud.nodes[k];
-                    if !local.may_see_box(node.lo.as_dvec3(), node.hi.as_dvec3()) {
+                    if !local.may_see_box(node.lo.as_dvec3(), node.hi.as_dvec3(), &folds) {
                         continue;
                     }
                     if node.leaf {
