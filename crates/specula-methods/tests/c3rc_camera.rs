@@ -30,7 +30,11 @@ fn crossing_camera() -> C3rc {
         DVec3::new(0.0, 1.0, 0.0),
     ];
     let centre = (v[0] + v[1] + v[2]) / 3.0;
-    let tilt = [DVec3::new(-2.0, 0.0, 0.0), DVec3::new(0.0, 1.0, 0.0), DVec3::ZERO];
+    let tilt = [
+        DVec3::new(-2.0, 0.0, 0.0),
+        DVec3::new(0.0, 1.0, 0.0),
+        DVec3::ZERO,
+    ];
     let d = std::array::from_fn(|i| (DVec3::Z - (v[i] - centre) * 1.5 + tilt[i]).normalize());
     C3rc { v, d }
 }
@@ -55,7 +59,10 @@ fn roots_of_known_polynomials() {
     // A quadratic and a line.
     let (r, n) = real_roots([2.0, -3.0, 1.0, 0.0]);
     assert_eq!(n, 2);
-    assert!((r[0] - 1.0).abs() < 1e-12 && (r[1] - 2.0).abs() < 1e-12, "{r:?}");
+    assert!(
+        (r[0] - 1.0).abs() < 1e-12 && (r[1] - 2.0).abs() < 1e-12,
+        "{r:?}"
+    );
     let (r, n) = real_roots([4.0, -2.0, 0.0, 0.0]);
     assert_eq!(n, 1);
     assert!((r[0] - 2.0).abs() < 1e-12);
@@ -74,7 +81,11 @@ fn a_point_on_a_construction_ray_projects_to_that_rays_vertex() {
                     .unwrap_or_else(|| panic!("ray {i} at {lambda}: {projections:?}"));
                 for (k, b) in hit.bary.iter().enumerate() {
                     let want = if k == i { 1.0 } else { 0.0 };
-                    assert!((b - want).abs() < 1e-6, "ray {i} at {lambda}: {:?}", hit.bary);
+                    assert!(
+                        (b - want).abs() < 1e-6,
+                        "ray {i} at {lambda}: {:?}",
+                        hit.bary
+                    );
                 }
                 assert!((hit.base_point(&c) - c.v[i]).length() < 1e-6);
             }
@@ -111,11 +122,17 @@ fn projection_is_continuous_across_an_edge_two_cameras_share() {
                         p[..k].iter().map(|p| p.base_point(c)).collect::<Vec<_>>()
                     })
                     .collect();
-                assert!(!found.is_empty(), "s {s}, λ {lambda}, step {step}: no projection");
+                assert!(
+                    !found.is_empty(),
+                    "s {s}, λ {lambda}, step {step}: no projection"
+                );
                 let here = found[0];
                 if let Some(prev) = last {
                     let jump = (here - prev).length();
-                    assert!(jump < 1e-3, "s {s}, λ {lambda}, step {step}: base point jumps {jump}");
+                    assert!(
+                        jump < 1e-3,
+                        "s {s}, λ {lambda}, step {step}: base point jumps {jump}"
+                    );
                 }
                 last = Some(here);
             }
@@ -131,7 +148,10 @@ fn a_configuration_with_two_valid_projections_yields_both() {
     // sampled densely over the base, pass through the point exactly where the cubic says.
     let c = crossing_camera();
     let intervals = c.multiple_projection_intervals();
-    assert!(!intervals.is_empty(), "this camera's rays cross its sweeping plane");
+    assert!(
+        !intervals.is_empty(),
+        "this camera's rays cross its sweeping plane"
+    );
     let mut found = 0;
     for k in 0..4000 {
         let f = |s: u64| ((k * 7919 + s * 104729) % 1000) as f64 / 1000.0;
@@ -147,7 +167,11 @@ fn a_configuration_with_two_valid_projections_yields_both() {
         found += 1;
         // Multiple projections need the sweeping triangle to turn over: one of them lies
         // where the construction rays are not all on one side.
-        let inside = |l: f64| intervals.iter().any(|&(lo, hi)| l >= lo - 1e-6 && l <= hi + 1e-6);
+        let inside = |l: f64| {
+            intervals
+                .iter()
+                .any(|&(lo, hi)| l >= lo - 1e-6 && l <= hi + 1e-6)
+        };
         assert!(
             projections[..count].iter().any(|p| inside(p.lambda)),
             "{projections:?} outside {intervals:?}"
@@ -186,17 +210,27 @@ fn a_configuration_with_two_valid_projections_yields_both() {
                 let inside = b.iter().all(|x| (-1e-9..=1.0 + 1e-9).contains(x)) && lambda >= 0.0;
                 if converged
                     && inside
-                    && !solutions.iter().any(|s| (s[0] - b1).abs() + (s[1] - b2).abs() < 1e-6)
+                    && !solutions
+                        .iter()
+                        .any(|s| (s[0] - b1).abs() + (s[1] - b2).abs() < 1e-6)
                 {
                     solutions.push([b1, b2, lambda]);
                 }
             }
         }
-        assert_eq!(solutions.len(), count, "q {q}: Newton {solutions:?}, cubic {projections:?}");
+        assert_eq!(
+            solutions.len(),
+            count,
+            "q {q}: Newton {solutions:?}, cubic {projections:?}"
+        );
         for p in &projections[..count] {
             assert!(
-                solutions.iter().any(|s| (s[0] - p.bary[0]).abs() + (s[1] - p.bary[1]).abs() < 1e-6
-                    && (s[2] - p.lambda).abs() < 1e-6),
+                solutions
+                    .iter()
+                    .any(
+                        |s| (s[0] - p.bary[0]).abs() + (s[1] - p.bary[1]).abs() < 1e-6
+                            && (s[2] - p.lambda).abs() < 1e-6
+                    ),
                 "{p:?} not among {solutions:?}"
             );
         }
@@ -290,7 +324,11 @@ fn the_box_test_culls_boxes_far_from_the_volume() {
     // Conservative, but not trivially so: boxes behind the base or off to the side go.
     let c = camera(0.2, 0.0);
     assert!(c.fold_boxes(f64::INFINITY).is_empty());
-    assert!(!c.may_see_box(DVec3::new(-1.0, -1.0, -3.0), DVec3::new(2.0, 2.0, -0.5), &[]));
+    assert!(!c.may_see_box(
+        DVec3::new(-1.0, -1.0, -3.0),
+        DVec3::new(2.0, 2.0, -0.5),
+        &[]
+    ));
     assert!(!c.may_see_box(DVec3::new(5.0, 5.0, 0.5), DVec3::new(6.0, 6.0, 1.0), &[]));
     assert!(c.may_see_box(DVec3::new(0.1, 0.1, 1.0), DVec3::new(0.2, 0.2, 1.1), &[]));
     // A box that holds the whole base triangle (an arc inside one face).
@@ -321,4 +359,3 @@ fn the_eight_way_tree_holds_every_point_once_within_its_boxes() {
         assert!(n.dot(*p) > 0.99);
     }
 }
-

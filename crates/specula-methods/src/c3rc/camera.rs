@@ -134,7 +134,10 @@ impl C3rc {
             let Some(bary) = self.sweep_bary(q, lambda) else {
                 continue;
             };
-            if bary.iter().all(|&b| (-BARY_EPS..=1.0 + BARY_EPS).contains(&b)) {
+            if bary
+                .iter()
+                .all(|&b| (-BARY_EPS..=1.0 + BARY_EPS).contains(&b))
+            {
                 out[count] = Projection { lambda, bary };
                 count += 1;
                 if first_only {
@@ -201,7 +204,11 @@ impl C3rc {
     /// direction). Infinite when the rays spread over a half-space.
     pub fn lambda_bound(&self, lo: DVec3, hi: DVec3) -> f64 {
         let mean = (self.d[0] + self.d[1] + self.d[2]).normalize_or_zero();
-        let least = self.d.iter().map(|d| d.dot(mean)).fold(f64::INFINITY, f64::min);
+        let least = self
+            .d
+            .iter()
+            .map(|d| d.dot(mean))
+            .fold(f64::INFINITY, f64::min);
         if least < 0.05 {
             return f64::INFINITY;
         }
@@ -319,7 +326,8 @@ impl C3rc {
                         if !lambda.is_finite() || lambda < -EPS {
                             continue;
                         }
-                        let s_k = base[k] + along[k] * alpha + lambda * (dir[k] + dir_change[k] * alpha);
+                        let s_k =
+                            base[k] + along[k] * alpha + lambda * (dir[k] + dir_change[k] * alpha);
                         let slack = EPS * (1.0 + hi[k].abs().max(lo[k].abs()));
                         if s_k >= lo[k] - slack && s_k <= hi[k] + slack {
                             return true;
@@ -420,8 +428,8 @@ pub fn real_roots(c: [f64; 4]) -> ([f64; 3], usize) {
             let r = (-p / 3.0).sqrt();
             let phi = (-q / (2.0 * r * r * r)).clamp(-1.0, 1.0).acos();
             for k in 0..3 {
-                out[k] = 2.0 * r * ((phi + 2.0 * std::f64::consts::PI * k as f64) / 3.0).cos()
-                    + shift;
+                out[k] =
+                    2.0 * r * ((phi + 2.0 * std::f64::consts::PI * k as f64) / 3.0).cos() + shift;
             }
             n = 3;
         }

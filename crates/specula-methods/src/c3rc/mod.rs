@@ -545,9 +545,14 @@ impl Technique for C3rcMethod {
         stages.lap(gpu, "g-buffer")?;
 
         p.maps.set_hidden(field.near.clone());
-        let faces_drawn =
-            p.maps
-                .update(gpu, &p.raster, live, self.resolution, Exit::Slab, self.dynamic)?;
+        let faces_drawn = p.maps.update(
+            gpu,
+            &p.raster,
+            live,
+            self.resolution,
+            Exit::Slab,
+            self.dynamic,
+        )?;
         stages.lap(gpu, "far-field cube maps")?;
 
         if p.readback.as_ref().map(|r| (r.width, r.height)) != Some((width, height)) {
@@ -595,11 +600,7 @@ impl Technique for C3rcMethod {
             stages.measured(name, ms);
         }
 
-        if p.near_texture
-            .as_ref()
-            .map(|t| (t.width(), t.height()))
-            != Some((width, height))
-        {
+        if p.near_texture.as_ref().map(|t| (t.width(), t.height())) != Some((width, height)) {
             p.near_texture = Some(texture_2d(
                 gpu,
                 "c3rc near reflection",
@@ -736,18 +737,48 @@ fn counters(
             "points sampled and trees built this frame".into(),
             if rebuilt { points as u64 } else { 0 },
         ),
-        ("sampling and trees ms (when built)".into(), field.build_ms.round() as u64),
+        (
+            "sampling and trees ms (when built)".into(),
+            field.build_ms.round() as u64,
+        ),
         ("cameras (C3RCs)".into(), report.cameras),
-        ("cameras that can project a point twice".into(), report.cameras_that_can_project_twice),
+        (
+            "cameras that can project a point twice".into(),
+            report.cameras_that_can_project_twice,
+        ),
         ("leaves seen by cameras".into(), report.leaves_visited),
         ("points projected".into(), report.points_tried),
         ("valid projections".into(), report.valid_projections),
-        ("points with several projections in one camera".into(), report.points_projected_more_than_once),
-        ("culling us".into(), (report.culling_ms * 1e3).round() as u64),
-        ("projection us".into(), (report.projection_ms * 1e3).round() as u64),
+        (
+            "points with several projections in one camera".into(),
+            report.points_projected_more_than_once,
+        ),
+        (
+            "culling us".into(),
+            (report.culling_ms * 1e3).round() as u64,
+        ),
+        (
+            "projection us".into(),
+            (report.projection_ms * 1e3).round() as u64,
+        ),
         ("pixels covered by splats".into(), report.covered_pixels),
-        ("small triangles (per-vertex colour)".into(), report.small_triangles),
-        ("pixels from per-vertex colour".into(), report.small_triangle_pixels),
+        ("one-pixel holes filled".into(), report.holes_filled),
+        (
+            "small triangles (per-vertex colour)".into(),
+            report.small_triangles,
+        ),
+        (
+            "pixels of small triangles".into(),
+            report.small_triangle_pixels,
+        ),
+        (
+            "triangles that see their own mirror (per-vertex colour)".into(),
+            report.self_seeing_triangles,
+        ),
+        (
+            "pixels of triangles that see their own mirror".into(),
+            report.self_seeing_pixels,
+        ),
         ("cube map faces rendered".into(), faces_drawn),
     ]
 }

@@ -95,6 +95,9 @@ struct TriangleCamera {
     /// camera's cross-sections map to, for splat sizes.
     screen_area: f64,
     may_project_twice: bool,
+    /// 1 / |cos| of the angle between the view ray and the triangle (capped): how much farther
+    /// apart on the surface than on the screen neighbouring pixels' points are.
+    obliquity: f32,
 }
 
 /// A projected point.
@@ -105,7 +108,11 @@ struct Splat {
     radius: f32,
     /// Push-back depth: the point's distance from the reflector.
     depth: f32,
-    z_view: f32,
+    /// Depth range behind the front-most splat that still counts as the same surface.
+    band: f32,
+    /// How far (metres) from `p_world` a pixel's surface point may lie and still be the
+    /// surface the splat came from.
+    reach: f32,
     p_world: Vec3,
     color: Vec3,
     mesh: u32,
@@ -118,12 +125,14 @@ pub struct PhaseReport {
     pub cameras_that_can_project_twice: u64,
     pub small_triangles: u64,
     pub small_triangle_pixels: u64,
+    pub self_seeing_triangles: u64,
+    pub self_seeing_pixels: u64,
     pub leaves_visited: u64,
     pub points_tried: u64,
     pub valid_projections: u64,
     pub points_projected_more_than_once: u64,
-    pub splats: u64,
     pub covered_pixels: u64,
+    pub holes_filled: u64,
     pub setup_ms: f64,
     pub culling_ms: f64,
     pub projection_ms: f64,
@@ -155,7 +164,16 @@ pub fn reflect_near(
         .meshes
         .iter()
         .enumerate()
-        .map(|(k, m)| vec![0; if mirrors.contains(&k) { m.triangles.len() } else { 0 }])
+        .map(|(k, m)| {
+            vec![
+                0;
+                if mirrors.contains(&k) {
+                    m.triangles.len()
+                } else {
+                    0
+                }
+            ]
+        })
         .collect();
     for [mesh1, triangle] in &surfaces.ids {
         if *mesh1 > 0 && mirrors.contains(&((mesh1 - 1) as usize)) {
@@ -163,6 +181,21 @@ pub fn reflect_near(
         }
     }
     let eye = view.eye.as_dvec3();
+    // The exact reflected ray at every vertex of a visible triangle: its radiance (the
+    // per-vertex colour) and whether it hits its own mirror.
+    let mut vertices: Vec<(usize, u32)> = Vec::new();
+    for &mesh in mirrors {
+        for (t, _) in visible[mesh].iter().enumerate().filter(|(_, &c)| c > 0) {
+            vertices.extend(scene.meshes[mesh].triangles[t].iter().map(|&i| (mesh, i)));
+        }
+    }
+    vertices.sort_unstable();
+    vertices.dedup();
+    let traced = trace_vertices(scene, accel, view, &vertices, settings.max_depth);
+    let sees_itself = |mesh: usize, i: u32| {
+        let k = vertices.binary_search(&(mesh, i)).expect("traced above");
+        traced[k].1
+    };
     let mut cameras = Vec::new();
     let mut small: Vec<Vec<bool>> = visible.iter().map(|v| vec![false; v.len()]).collect();
     for &mesh in mirrors {
@@ -175,6 +208,12 @@ pub fn reflect_near(
                 small[mesh][t] = true;
                 report.small_triangles += 1;
                 report.small_triangle_pixels += count as u64;
+                continue;
+            }
+            if m.triangles[t].iter().any(|&i| sees_itself(mesh, i)) {
+                small[mesh][t] = true;
+                report.self_seeing_triangles += 1;
+                report.self_seeing_pixels += count as u64;
                 continue;
             }
             let idx = m.triangles[t].map(|i| i as usize);
@@ -200,11 +239,17 @@ pub fn reflect_near(
             .max(count as f64);
             let may_project_twice = !world.multiple_projection_intervals().is_empty();
             report.cameras_that_can_project_twice += may_project_twice as u64;
+            let centroid = (v[0] + v[1] + v[2]) / 3.0;
+            let cos = face
+                .normalize_or_zero()
+                .dot((centroid - eye).normalize_or_zero())
+                .abs();
             cameras.push(TriangleCamera {
                 mesh,
                 world,
                 screen_area,
                 may_project_twice,
+                obliquity: (1.0 / cos.max(0.1)) as f32,
             });
         }
     }
@@ -282,12 +327,15 @@ pub fn reflect_near(
                         };
                         let area = camera.world.sweep_area(projection.lambda).max(1e-30);
                         let r = (radius * (camera.screen_area / area).sqrt()) as f32;
+                        let radius_px = r.clamp(0.5, settings.max_splat);
+                        let depth = (q - base_local).length() as f32;
                         splats.push(Splat {
                             x,
                             y,
-                            radius: r.clamp(0.5, settings.max_splat),
-                            depth: (q - base_local).length() as f32,
-                            z_view,
+                            radius: radius_px,
+                            depth,
+                            band: 2.0 * radius as f32 + 0.01 * depth,
+                            reach: (radius_px + 1.5) * view.footprint(z_view) * camera.obliquity,
                             p_world,
                             color: cloud.color[i],
                             mesh: camera.mesh as u32,
@@ -307,17 +355,14 @@ pub fn reflect_near(
         report.points_tried += tried;
         report.points_projected_more_than_once += twice;
         report.valid_projections += splats.len() as u64;
-        for s in splats {
-            splat(s, view, surfaces, &mut depth, out);
-        }
     }
-    report.splats = report.valid_projections;
+    resolve(&per_camera, view, surfaces, &mut depth, out);
     report.covered_pixels = depth.iter().filter(|d| d.is_finite()).count() as u64;
+    report.holes_filled = fill_holes(view, surfaces, mirrors, &depth, out);
 
-    // Small triangles: the reflected colour traced at their vertices, interpolated.
-    if report.small_triangles > 0 {
-        per_vertex_fallback(scene, accel, view, surfaces, &small, settings.max_depth, out);
-    }
+    // Small triangles and those that see their own mirror: the reflected colour traced at
+    // their vertices, interpolated.
+    per_vertex_fallback(scene, surfaces, &small, &vertices, &traced, out);
     report.splatting_ms = ms(start);
     report
 }
@@ -326,65 +371,142 @@ fn ms(start: Instant) -> f64 {
     start.elapsed().as_secs_f64() * 1e3
 }
 
-fn splat(s: &Splat, view: &ScreenView, surfaces: &PixelSurfaces, depth: &mut [f32], out: &mut [[f32; 4]]) {
+/// Calls `f(pixel, squared distance to the splat's centre)` for each pixel the square splat
+/// covers that shows the surface the splat came from.
+fn splat_pixels(
+    s: &Splat,
+    view: &ScreenView,
+    surfaces: &PixelSurfaces,
+    mut f: impl FnMut(usize, f32),
+) {
     let (w, h) = (view.width as i64, view.height as i64);
     let x0 = ((s.x - s.radius).floor() as i64).max(0);
     let x1 = ((s.x + s.radius).ceil() as i64).min(w);
     let y0 = ((s.y - s.radius).floor() as i64).max(0);
     let y1 = ((s.y + s.radius).ceil() as i64).min(h);
-    // A pixel whose surface is farther from the splat's reflector point than the splat reaches
-    // shows another part of the reflector (or something in front of it).
-    let reach = (s.radius + 1.5) * view.footprint(s.z_view);
     for py in y0..y1 {
-        let cy = py as f32 + 0.5;
-        if (cy - s.y).abs() > s.radius {
+        let dy = py as f32 + 0.5 - s.y;
+        if dy.abs() > s.radius {
             continue;
         }
         for px in x0..x1 {
-            let cx = px as f32 + 0.5;
-            if (cx - s.x).abs() > s.radius {
+            let dx = px as f32 + 0.5 - s.x;
+            if dx.abs() > s.radius {
                 continue;
             }
             let k = (py * w + px) as usize;
-            if surfaces.ids[k][0] != s.mesh + 1 || s.depth >= depth[k] {
+            if surfaces.ids[k][0] != s.mesh + 1 {
                 continue;
             }
+            // A pixel whose surface is farther from the splat's reflector point than the
+            // splat reaches shows another part of the reflector (or something in front of it).
             let p = surfaces.position[k];
-            if (Vec3::new(p[0], p[1], p[2]) - s.p_world).length() > reach {
+            if (Vec3::new(p[0], p[1], p[2]) - s.p_world).length() > s.reach {
                 continue;
             }
-            depth[k] = s.depth;
-            out[k] = [s.color.x, s.color.y, s.color.z, 1.0];
+            f(k, dx * dx + dy * dy);
         }
     }
 }
 
-/// The pixels of `small` triangles: radiance traced along the reflected ray at each of their
-/// vertices (exact, through the BVH), interpolated across the triangle.
-fn per_vertex_fallback(
+/// Resolves the splats per pixel: the nearest push-back depth finds the front surface; among
+/// the splats within `band` of it (points of that same surface) the one whose centre is
+/// nearest the pixel's gives the colour (a point-sampled reconstruction, not the colour of
+/// whichever point happened to lie nearest the reflector).
+fn resolve(
+    per_camera: &[(Vec<Splat>, u64, u64)],
+    view: &ScreenView,
+    surfaces: &PixelSurfaces,
+    depth: &mut [f32],
+    out: &mut [[f32; 4]],
+) {
+    for (splats, ..) in per_camera {
+        for s in splats {
+            splat_pixels(s, view, surfaces, |k, _| depth[k] = depth[k].min(s.depth));
+        }
+    }
+    let mut nearest = vec![f32::INFINITY; depth.len()];
+    for (splats, ..) in per_camera {
+        for s in splats {
+            splat_pixels(s, view, surfaces, |k, d2| {
+                if s.depth <= depth[k] + s.band && d2 < nearest[k] {
+                    nearest[k] = d2;
+                    out[k] = [s.color.x, s.color.y, s.color.z, 1.0];
+                }
+            });
+        }
+    }
+}
+
+/// Fills one-pixel holes between splats: an uncovered mirror pixel with at least five of its
+/// eight neighbours covered (on the same mesh) takes the front-most neighbour's colour.
+/// Returns the pixels filled.
+fn fill_holes(
+    view: &ScreenView,
+    surfaces: &PixelSurfaces,
+    mirrors: &[usize],
+    depth: &[f32],
+    out: &mut [[f32; 4]],
+) -> u64 {
+    let (w, h) = (view.width as i64, view.height as i64);
+    let mut filled = Vec::new();
+    for y in 0..h {
+        for x in 0..w {
+            let k = (y * w + x) as usize;
+            let mesh1 = surfaces.ids[k][0];
+            if out[k][3] > 0.0 || mesh1 == 0 || !mirrors.contains(&((mesh1 - 1) as usize)) {
+                continue;
+            }
+            let mut covered = 0;
+            let mut best: Option<usize> = None;
+            for (dx, dy) in [
+                (-1, -1),
+                (0, -1),
+                (1, -1),
+                (-1, 0),
+                (1, 0),
+                (-1, 1),
+                (0, 1),
+                (1, 1),
+            ] {
+                let (nx, ny) = (x + dx, y + dy);
+                if nx < 0 || ny < 0 || nx >= w || ny >= h {
+                    continue;
+                }
+                let n = (ny * w + nx) as usize;
+                if surfaces.ids[n][0] == mesh1 && depth[n].is_finite() {
+                    covered += 1;
+                    if best.is_none_or(|b| depth[n] < depth[b]) {
+                        best = Some(n);
+                    }
+                }
+            }
+            if let (true, Some(b)) = (covered >= 5, best) {
+                filled.push((k, out[b]));
+            }
+        }
+    }
+    for &(k, color) in &filled {
+        out[k] = color;
+    }
+    filled.len() as u64
+}
+
+/// Radiance along the exact reflected ray at each (mesh, vertex) (traced through the BVH
+/// with the reference's shading), and whether that ray hits the same mesh first.
+fn trace_vertices(
     scene: &Scene,
     accel: &SceneAccel,
     view: &ScreenView,
-    surfaces: &PixelSurfaces,
-    small: &[Vec<bool>],
+    vertices: &[(usize, u32)],
     max_depth: u32,
-    out: &mut [[f32; 4]],
-) {
+) -> Vec<(Vec3, bool)> {
     let tracer = Tracer {
         scene,
         accel,
         max_depth,
     };
-    // (mesh, vertex) pairs the small triangles use, traced once each.
-    let mut needed: Vec<(usize, u32)> = Vec::new();
-    for (mesh, flags) in small.iter().enumerate() {
-        for (t, _) in flags.iter().enumerate().filter(|(_, &f)| f) {
-            needed.extend(scene.meshes[mesh].triangles[t].iter().map(|&i| (mesh, i)));
-        }
-    }
-    needed.sort_unstable();
-    needed.dedup();
-    let colors: Vec<Vec3> = needed
+    vertices
         .par_iter()
         .map(|&(mesh, i)| {
             let m = &scene.meshes[mesh];
@@ -399,19 +521,36 @@ fn per_vertex_fallback(
                 origin: offset_origin(p, n, reflected),
                 dir: reflected,
             };
-            tracer.radiance(&ray, 1, None)
+            let sees_itself = accel
+                .intersect(&ray, f32::INFINITY)
+                .is_some_and(|hit| hit.mesh as usize == mesh);
+            (tracer.radiance(&ray, 1, None), sees_itself)
         })
-        .collect();
+        .collect()
+}
+
+/// The pixels of the `small` triangles: their vertices' traced colours, interpolated.
+fn per_vertex_fallback(
+    scene: &Scene,
+    surfaces: &PixelSurfaces,
+    small: &[Vec<bool>],
+    vertices: &[(usize, u32)],
+    traced: &[(Vec3, bool)],
+    out: &mut [[f32; 4]],
+) {
     let color_of = |mesh: usize, i: u32| {
-        let k = needed.binary_search(&(mesh, i)).expect("traced above");
-        colors[k]
+        let k = vertices.binary_search(&(mesh, i)).expect("traced above");
+        traced[k].0
     };
     for (k, [mesh1, t]) in surfaces.ids.iter().enumerate() {
         if *mesh1 == 0 {
             continue;
         }
         let mesh = (mesh1 - 1) as usize;
-        if !small.get(mesh).is_some_and(|f| f.get(*t as usize) == Some(&true)) {
+        if !small
+            .get(mesh)
+            .is_some_and(|f| f.get(*t as usize) == Some(&true))
+        {
             continue;
         }
         let m = &scene.meshes[mesh];

@@ -183,7 +183,9 @@ impl PointCloud {
             }
             let octant = |i: u32| {
                 let p = points[i as usize];
-                (p.x > mid.x) as usize | ((p.y > mid.y) as usize) << 1 | ((p.z > mid.z) as usize) << 2
+                (p.x > mid.x) as usize
+                    | ((p.y > mid.y) as usize) << 1
+                    | ((p.z > mid.z) as usize) << 2
             };
             let slice = &mut order[begin..end];
             slice.sort_unstable_by_key(|&i| octant(i));
