@@ -359,3 +359,30 @@ fn the_eight_way_tree_holds_every_point_once_within_its_boxes() {
         assert!(n.dot(*p) > 0.99);
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(400))]
+
+    /// The plane bound and the affine cubic agree with the camera: a point of the volume is
+    /// inside the planes, and the precomputed cubic equals the direct one.
+    #[test]
+    fn the_plane_bound_holds_the_volume_and_the_affine_cubic_is_the_cubic(
+        c in arbitrary_camera(),
+        b in prop::array::uniform2(0.0f64..1.0),
+        lambda in 0.0f64..4.0,
+        q in prop::array::uniform3(-3.0f64..3.0),
+    ) {
+        let (mut b1, mut b2) = (b[0], b[1]);
+        if b1 + b2 > 1.0 {
+            (b1, b2) = (1.0 - b1, 1.0 - b2);
+        }
+        let inside = point_at(&c, [b1, b2, 1.0 - b1 - b2], lambda);
+        prop_assert!(c.plane_bound().may_contain(inside));
+        prop_assert!(c.plane_bound().may_meet_box(inside, inside));
+        let q = DVec3::from_array(q);
+        let (direct, affine) = (c.projection_cubic(q), c.projector().cubic(q));
+        for k in 0..4 {
+            prop_assert!((direct[k] - affine[k]).abs() <= 1e-9 * (1.0 + direct[k].abs()), "{direct:?} vs {affine:?}");
+        }
+    }
+}

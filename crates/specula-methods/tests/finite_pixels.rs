@@ -83,6 +83,7 @@ fn no_method_writes_a_non_finite_pixel_from_random_cameras() {
                         "depth=1".into(),
                         "resolution=64".into(),
                         "max_depth=2".into(),
+                        "points=5000".into(),
                     ],
                 )
                 .unwrap();

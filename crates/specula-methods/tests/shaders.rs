@@ -3,6 +3,7 @@
 
 use std::mem::{offset_of, size_of};
 
+use specula_methods::c3rc;
 use specula_methods::distance_maps::{
     self, GpuFace, GpuLayerView, GpuMapReflector, GpuTraceSettings,
 };
@@ -48,6 +49,7 @@ fn assert_layout(module: &naga::Module, name: &str, size: usize, host: &[usize])
 fn technique_shaders_validate() {
     parse("raster.wgsl", &raster::shader_source());
     parse("envmap.wgsl", &envmap::shader_source());
+    parse("c3rc.wgsl", &c3rc::shader_source());
     parse("image_space.wgsl", &image_space::shader_source());
     parse("image_space/peel.wgsl", &image_space::peel::shader_source());
     parse("pvrr.wgsl", &pvrr::shader_source());

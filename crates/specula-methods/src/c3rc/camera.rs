@@ -36,6 +36,19 @@ pub struct C3rc {
     pub d: [DVec3; 3],
 }
 
+/// A camera's projection cubic as affine functions of the point (see [`C3rc::projector`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Projector {
+    constant: [f64; 4],
+    linear: [DVec3; 4],
+}
+
+impl Projector {
+    pub fn cubic(&self, q: DVec3) -> [f64; 4] {
+        std::array::from_fn(|k| self.constant[k] + self.linear[k].dot(q))
+    }
+}
+
 /// One valid projection of a point: the sweep parameter and the barycentric coordinates in the
 /// base (and in `T(λ)`).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -55,7 +68,116 @@ fn det(a: DVec3, b: DVec3, c: DVec3) -> f64 {
     a.dot(b.cross(c))
 }
 
+/// A cheap convex bound of a camera's view volume: up to four planes, each with the whole
+/// volume on its positive side: the base's plane (when every ray leaves the base to one side),
+/// and through each base edge the plane containing the edge and the outermost ray as seen
+/// along the edge (the other rays and the opposite vertex lie inside it). A point
+/// x = Σ bᵢ vᵢ + λ Σ bᵢ dᵢ is then on the positive side of each plane, being a non-negative
+/// combination of non-negative terms.
+#[derive(Clone, Copy, Debug)]
+pub struct PlaneBound {
+    planes: [(DVec3, f64); 4],
+    count: usize,
+}
+
+impl PlaneBound {
+    /// False only when no point of the box `[lo, hi]` can be in the view volume.
+    pub fn may_meet_box(&self, lo: DVec3, hi: DVec3) -> bool {
+        self.planes[..self.count].iter().all(|&(n, offset)| {
+            // The box corner farthest along n.
+            let corner = DVec3::select(n.cmpge(DVec3::ZERO), hi, lo);
+            n.dot(corner) >= offset
+        })
+    }
+
+    /// False only when `q` cannot be in the view volume.
+    pub fn may_contain(&self, q: DVec3) -> bool {
+        self.planes[..self.count]
+            .iter()
+            .all(|&(n, offset)| n.dot(q) >= offset)
+    }
+}
+
 impl C3rc {
+    /// Coefficients of the projection cubic as affine functions of the point: every term of
+    /// `det[v1 + λd1 − Q, v2 + λd2 − Q, v3 + λd3 − Q]` is affine in Q (the Q × Q terms
+    /// vanish), so `c_k(Q) = constant_k + linear_k · Q` is precomputed once per camera.
+    pub fn projector(&self) -> Projector {
+        // c0 = det[v1 − Q, v2 − Q, v3 − Q] = det[v1, v2, v3] − Q · (v2×v3 + v3×v1 + v1×v2).
+        // For a column pair (x, y) the affine part of (x − Q) × (y − Q) is x×y − x×Q − Q×y
+        //   = x×y + (y − x)×Q... collected below via dot products with the third column.
+        let [v1, v2, v3] = self.v;
+        let [d1, d2, d3] = self.d;
+        // t(a, x, y) = a · ((x − Q) × (y − Q)) = a·(x×y) − Q·(y×a + a×x)... written as
+        // constant a·(x×y) and linear −(y×a + a×x) (from a·(x×Q) = Q·(a×x), a·(Q×y) = Q·(y×a)).
+        let term = |a: DVec3, x: DVec3, y: DVec3| (a.dot(x.cross(y)), -(y.cross(a) + a.cross(x)));
+        // Column-wise: det[p, q, r] with p = x1 − Q ... ; the Q-free columns (d's) enter as a.
+        // c0: det[v1 − Q, v2 − Q, v3 − Q].
+        let c0 = (
+            v1.dot(v2.cross(v3)),
+            -(v2.cross(v3) + v3.cross(v1) + v1.cross(v2)),
+        );
+        // c1 = det[d1, v2 − Q, v3 − Q] + det[v1 − Q, d2, v3 − Q] + det[v1 − Q, v2 − Q, d3].
+        let c1 = [term(d1, v2, v3), term(d2, v3, v1), term(d3, v1, v2)];
+        // c2 = det[d1, d2, v3 − Q] + det[d1, v2 − Q, d3] + det[v1 − Q, d2, d3]: linear in Q.
+        let (e3, e2, e1) = (d1.cross(d2), d3.cross(d1), d2.cross(d3));
+        let c2 = (e3.dot(v3) + e2.dot(v2) + e1.dot(v1), -(e3 + e2 + e1));
+        let c3 = d1.dot(d2.cross(d3));
+        Projector {
+            constant: [c0.0, c1.iter().map(|t| t.0).sum(), c2.0, c3],
+            linear: [c0.1, c1.iter().map(|t| t.1).sum(), c2.1, DVec3::ZERO],
+        }
+    }
+
+    /// The [`PlaneBound`] of this camera's view volume.
+    pub fn plane_bound(&self) -> PlaneBound {
+        let mut bound = PlaneBound {
+            planes: [(DVec3::ZERO, 0.0); 4],
+            count: 0,
+        };
+        let mut add = |n: DVec3, through: DVec3| {
+            bound.planes[bound.count] = (n, n.dot(through));
+            bound.count += 1;
+        };
+        const SLACK: f64 = -1e-12;
+        let mut base = (self.v[1] - self.v[0]).cross(self.v[2] - self.v[0]);
+        if base.dot(self.d[0] + self.d[1] + self.d[2]) < 0.0 {
+            base = -base;
+        }
+        if self.d.iter().all(|d| base.dot(*d) >= SLACK) {
+            add(base, self.v[0]);
+        }
+        // Through each base edge, the plane that contains the edge and the outermost of the
+        // three rays (seen along the edge): the others and the opposite vertex lie inside.
+        let unit_base = base.normalize_or_zero();
+        for a in 0..3 {
+            let (b, c) = ((a + 1) % 3, (a + 2) % 3);
+            let edge = self.v[b] - self.v[a];
+            let mut inward = unit_base.cross(edge).normalize_or_zero();
+            if inward.dot(self.v[c] - self.v[a]) < 0.0 {
+                inward = -inward;
+            }
+            // Angles from `inward` towards the base normal; the opposite vertex is at 0.
+            let outermost = self
+                .d
+                .iter()
+                .map(|d| d.dot(unit_base).atan2(d.dot(inward)))
+                .fold(0.0f64, f64::max);
+            let least = self
+                .d
+                .iter()
+                .map(|d| d.dot(unit_base).atan2(d.dot(inward)))
+                .fold(0.0f64, f64::min);
+            if outermost - least >= std::f64::consts::PI - 1e-6 {
+                continue;
+            }
+            let theta = outermost + 1e-9;
+            let n = inward * theta.sin() - unit_base * theta.cos();
+            add(n, self.v[a]);
+        }
+        bound
+    }
+
     /// The camera of a reflector triangle seen from `eye`: each vertex's ray is the view
     /// direction reflected about the vertex normal.
     pub fn reflector(v: [DVec3; 3], n: [DVec3; 3], eye: DVec3) -> C3rc {
@@ -91,8 +213,9 @@ impl C3rc {
         (w(1) - w(0)).cross(w(2) - w(0))
     }
 
-    /// Coefficients (c0, c1, c2, c3) of `det[w1 − Q, w2 − Q, w3 − Q]` as a polynomial in λ.
-    fn projection_cubic(&self, q: DVec3) -> [f64; 4] {
+    /// Coefficients (c0, c1, c2, c3) of `det[w1 − Q, w2 − Q, w3 − Q]` as a polynomial in λ
+    /// (directly; [`Projector`] evaluates the same affine forms faster).
+    pub fn projection_cubic(&self, q: DVec3) -> [f64; 4] {
         let [a1, a2, a3] = self.v.map(|v| v - q);
         let [d1, d2, d3] = self.d;
         [
@@ -119,12 +242,22 @@ impl C3rc {
     /// Every valid projection of `q` (at most three), in increasing λ. `first_only` stops at
     /// the first one (for cameras that cannot project a point twice, and for inside tests).
     pub fn project(&self, q: DVec3, first_only: bool) -> ([Projection; 3], usize) {
+        self.project_with(self.projection_cubic(q), q, first_only)
+    }
+
+    /// [`C3rc::project`] given the cubic's coefficients for `q`.
+    pub fn project_with(
+        &self,
+        cubic: [f64; 4],
+        q: DVec3,
+        first_only: bool,
+    ) -> ([Projection; 3], usize) {
         let mut out = [Projection {
             lambda: 0.0,
             bary: [0.0; 3],
         }; 3];
         let mut count = 0;
-        let (roots, n) = real_roots(self.projection_cubic(q));
+        let (roots, n) = real_roots(cubic);
         for &lambda in &roots[..n] {
             // Points on the base (λ = 0) come out a rounding error either side.
             if lambda < -LAMBDA_EPS {

@@ -54,9 +54,10 @@
 //! - `density` (0 = from `points`): points per square metre, overriding `points`.
 //! - `near` (3): objects within this many reflector radii of a mirror become points; farther
 //!   ones are the cube map's. Larger: more points, fewer objects in the wrong place.
-//! - `leaf_points` (128), `max_depth` (12): the tree's leaf size and depth. Smaller leaves
-//!   cull more precisely (fewer wasted projections) at more culling cost (paper: about 20 %
-//!   valid projections balances the two).
+//! - `leaf_points` (384), `tree_depth` (12): the tree's leaf size and depth. Smaller leaves
+//!   cull more precisely (fewer wasted projections) at more culling cost. With the default,
+//!   leaves hold about 105 points (the paper's about 121); on the teapot and 100k dragon points
+//!   culling + projection took 109 ms at 32, 61 at 128, 50 at 384, 50 at 512 (640×480).
 //! - `splat_scale` (1.5): splat radius over the radius of the disc a point stands for. Larger
 //!   closes holes and blurs.
 //! - `max_splat` (6): largest splat half-size in pixels (where rays converge).
@@ -116,12 +117,12 @@ pub const PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "leaf_points",
         kind: ParamKind::Integer { min: 1, max: 1_000_000 },
-        default: "128",
+        default: "384",
         doc: "kd-tree leaf size: smaller culls more precisely at more culling cost",
         invalidates: Invalidates::Resources,
     },
     ParamSpec {
-        name: "max_depth",
+        name: "tree_depth",
         kind: ParamKind::Integer { min: 0, max: 30 },
         default: "12",
         doc: "kd-tree depth limit",
@@ -200,7 +201,7 @@ impl Default for C3rcMethod {
             density: 0.0,
             near: 3.0,
             limits: TreeLimits {
-                leaf_points: 128,
+                leaf_points: 384,
                 max_depth: 12,
             },
             splat_scale: 1.5,
@@ -467,7 +468,7 @@ impl Technique for C3rcMethod {
             "density" => self.density.to_string(),
             "near" => self.near.to_string(),
             "leaf_points" => self.limits.leaf_points.to_string(),
-            "max_depth" => self.limits.max_depth.to_string(),
+            "tree_depth" => self.limits.max_depth.to_string(),
             "splat_scale" => self.splat_scale.to_string(),
             "max_splat" => self.max_splat.to_string(),
             "min_pixels" => self.min_pixels.to_string(),
@@ -484,7 +485,7 @@ impl Technique for C3rcMethod {
             "density" => self.density = value.number() as f32,
             "near" => self.near = value.number() as f32,
             "leaf_points" => self.limits.leaf_points = value.integer() as usize,
-            "max_depth" => self.limits.max_depth = value.integer() as u32,
+            "tree_depth" => self.limits.max_depth = value.integer() as u32,
             "splat_scale" => self.splat_scale = value.number() as f32,
             "max_splat" => self.max_splat = value.number() as f32,
             "min_pixels" => self.min_pixels = value.integer() as u32,
@@ -747,8 +748,13 @@ fn counters(
             report.cameras_that_can_project_twice,
         ),
         ("leaves seen by cameras".into(), report.leaves_visited),
-        ("points projected".into(), report.points_tried),
+        ("points in leaves seen".into(), report.points_in_leaves),
+        (
+            "points projected (cubic solved)".into(),
+            report.points_projected,
+        ),
         ("valid projections".into(), report.valid_projections),
+        ("splats".into(), report.splats),
         (
             "points with several projections in one camera".into(),
             report.points_projected_more_than_once,

@@ -128,9 +128,14 @@ pub struct PhaseReport {
     pub self_seeing_triangles: u64,
     pub self_seeing_pixels: u64,
     pub leaves_visited: u64,
-    pub points_tried: u64,
+    /// Points in the leaves the cameras saw.
+    pub points_in_leaves: u64,
+    /// Those inside the camera's plane bound and facing it: projected by solving the cubic.
+    pub points_projected: u64,
     pub valid_projections: u64,
     pub points_projected_more_than_once: u64,
+    /// Valid projections of front-facing points in front of the eye.
+    pub splats: u64,
     pub covered_pixels: u64,
     pub holes_filled: u64,
     pub setup_ms: f64,
@@ -275,11 +280,14 @@ pub fn reflect_near(
                 } else {
                     Vec::new()
                 };
+                let bound = local.plane_bound();
                 stack.clear();
                 stack.push(0usize);
                 while let Some(k) = stack.pop() {
                     let node = &cloud.nodes[k];
-                    if !local.may_see_box(node.lo.as_dvec3(), node.hi.as_dvec3(), &folds) {
+                    let (lo, hi) = (node.lo.as_dvec3(), node.hi.as_dvec3());
+                    // The cheap planes first, then the exact (conservative) test.
+                    if !bound.may_meet_box(lo, hi) || !local.may_see_box(lo, hi, &folds) {
                         continue;
                     }
                     if node.leaf {
@@ -297,12 +305,12 @@ pub fn reflect_near(
 
     // Forward phase: the leaves' points projected with the camera, every valid projection.
     let start = Instant::now();
-    let per_camera: Vec<(Vec<Splat>, u64, u64)> = cameras
+    let per_camera: Vec<(Vec<Splat>, [u64; 4])> = cameras
         .par_iter()
         .zip(&leaves)
         .map(|(camera, leaves)| {
             let mut splats = Vec::new();
-            let (mut tried, mut twice) = (0u64, 0u64);
+            let (mut tried, mut solved, mut valid, mut twice) = (0u64, 0u64, 0u64, 0u64);
             for &(c, k) in leaves {
                 let placed = &clouds[c];
                 let cloud = placed.cloud;
@@ -311,14 +319,28 @@ pub fn reflect_near(
                 let range = node.first as usize..(node.first + node.count) as usize;
                 tried += range.len() as u64;
                 let radius = (cloud.radius * settings.splat_scale) as f64;
+                let bound = local.plane_bound();
+                let projector = local.projector();
                 for i in range {
                     let q = cloud.p_object[i].as_dvec3();
-                    let (projections, count) = local.project(q, !camera.may_project_twice);
+                    if !bound.may_contain(q) {
+                        continue;
+                    }
+                    // Points seen from behind belong to a surface whose front is nearer: a
+                    // point facing away from all three base vertices faces away from every
+                    // base point.
+                    let n = cloud.n_object[i].as_dvec3();
+                    if local.v.iter().all(|v| n.dot(*v - q) <= 0.0) {
+                        continue;
+                    }
+                    solved += 1;
+                    let (projections, count) =
+                        local.project_with(projector.cubic(q), q, !camera.may_project_twice);
                     twice += (count > 1) as u64;
+                    valid += count as u64;
                     for projection in &projections[..count] {
                         let base_local = projection.base_point(&local);
-                        // Points seen from behind belong to a surface whose front is nearer.
-                        if cloud.n_object[i].as_dvec3().dot(base_local - q) <= 0.0 {
+                        if n.dot(base_local - q) <= 0.0 {
                             continue;
                         }
                         let p_world = projection.base_point(&camera.world).as_vec3();
@@ -343,7 +365,7 @@ pub fn reflect_near(
                     }
                 }
             }
-            (splats, tried, twice)
+            (splats, [tried, solved, valid, twice])
         })
         .collect();
     report.projection_ms = ms(start);
@@ -351,10 +373,12 @@ pub fn reflect_near(
     // Splats resolved per pixel: on the reflector surface the splat came from, nearest first.
     let start = Instant::now();
     let mut depth = vec![f32::INFINITY; pixel_count];
-    for (splats, tried, twice) in &per_camera {
-        report.points_tried += tried;
+    for (splats, [tried, solved, valid, twice]) in &per_camera {
+        report.points_in_leaves += tried;
+        report.points_projected += solved;
+        report.splats += splats.len() as u64;
         report.points_projected_more_than_once += twice;
-        report.valid_projections += splats.len() as u64;
+        report.valid_projections += valid;
     }
     resolve(&per_camera, view, surfaces, &mut depth, out);
     report.covered_pixels = depth.iter().filter(|d| d.is_finite()).count() as u64;
@@ -414,7 +438,7 @@ fn splat_pixels(
 /// nearest the pixel's gives the colour (a point-sampled reconstruction, not the colour of
 /// whichever point happened to lie nearest the reflector).
 fn resolve(
-    per_camera: &[(Vec<Splat>, u64, u64)],
+    per_camera: &[(Vec<Splat>, [u64; 4])],
     view: &ScreenView,
     surfaces: &PixelSurfaces,
     depth: &mut [f32],
