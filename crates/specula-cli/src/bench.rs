@@ -49,6 +49,8 @@ pub struct MethodBench {
     pub stages: Vec<(String, Spread)>,
     /// GPU textures + buffers + bind groups created over the timed frames.
     pub created: u64,
+    /// What the technique counted in the last timed frame (its `Frame::counters`).
+    pub counters: Vec<(String, u64)>,
     /// The CPU reference's median frame time over this run's, on the same scene.
     pub speedup_over_reference: Option<f64>,
     /// gpu-trace's median frame time over this run's, on the same scene and GPU.
@@ -190,6 +192,7 @@ pub fn run(
             let mut timing = String::new();
             let mut created = 0;
             let mut rays = None;
+            let mut counters = Vec::new();
             for i in 0..WARM_UP_FRAMES + frames {
                 let frame = technique.render(ctx, &live, &camera, width, height)?;
                 bar.inc(1);
@@ -205,6 +208,7 @@ pub fn run(
                     rays = Some(closest + shadow);
                 }
                 created += frame.created.total();
+                counters = frame.counters.clone();
                 timing = format!("{:?}", frame.timing);
                 totals.push(frame.total_milliseconds());
                 for s in &frame.stages {
@@ -233,6 +237,7 @@ pub fn run(
                 frame,
                 stages: stages.into_iter().map(|(n, v)| (n, spread(v))).collect(),
                 created,
+                counters,
                 speedup_over_reference: None,
                 speedup_over_gpu_trace: None,
                 rays_per_second,
@@ -353,6 +358,7 @@ mod tests {
             frame: spread(vec![median_ms]),
             stages: Vec::new(),
             created: 0,
+            counters: Vec::new(),
             speedup_over_reference: None,
             speedup_over_gpu_trace: None,
             rays_per_second: None,
