@@ -3,7 +3,10 @@
 
 use std::mem::{offset_of, size_of};
 
-use specula_methods::c3rc;
+use specula_methods::c3rc::{
+    self,
+    gpu::{GpuCamera, GpuPoint, GpuSettings as ProjectionSettings},
+};
 use specula_methods::distance_maps::{
     self, GpuFace, GpuLayerView, GpuMapReflector, GpuTraceSettings,
 };
@@ -50,6 +53,7 @@ fn technique_shaders_validate() {
     parse("raster.wgsl", &raster::shader_source());
     parse("envmap.wgsl", &envmap::shader_source());
     parse("c3rc.wgsl", &c3rc::shader_source());
+    parse("c3rc/project.wgsl", &c3rc::gpu::shader_source());
     parse("image_space.wgsl", &image_space::shader_source());
     parse("image_space/peel.wgsl", &image_space::peel::shader_source());
     parse("pvrr.wgsl", &pvrr::shader_source());
@@ -132,6 +136,46 @@ fn host_structs_match_wgsl_layouts() {
             offset_of!(ShadowView, directional),
             offset_of!(ShadowView, direction),
             offset_of!(ShadowView, texel_size),
+        ],
+    );
+    let module = parse("c3rc/project.wgsl", &c3rc::gpu::shader_source());
+    assert_layout(
+        &module,
+        "Settings",
+        size_of::<ProjectionSettings>(),
+        &[
+            offset_of!(ProjectionSettings, eye),
+            offset_of!(ProjectionSettings, right),
+            offset_of!(ProjectionSettings, up),
+            offset_of!(ProjectionSettings, forward),
+            offset_of!(ProjectionSettings, lens),
+            offset_of!(ProjectionSettings, width),
+            offset_of!(ProjectionSettings, height),
+            offset_of!(ProjectionSettings, work_items),
+            offset_of!(ProjectionSettings, row),
+        ],
+    );
+    assert_layout(
+        &module,
+        "Point",
+        size_of::<GpuPoint>(),
+        &[
+            offset_of!(GpuPoint, p),
+            offset_of!(GpuPoint, n),
+            offset_of!(GpuPoint, color),
+        ],
+    );
+    assert_layout(
+        &module,
+        "Camera",
+        size_of::<GpuCamera>(),
+        &[
+            offset_of!(GpuCamera, v),
+            offset_of!(GpuCamera, d),
+            offset_of!(GpuCamera, frame),
+            offset_of!(GpuCamera, planes),
+            offset_of!(GpuCamera, info),
+            offset_of!(GpuCamera, ids),
         ],
     );
     let module = parse("envmap.wgsl", &envmap::shader_source());

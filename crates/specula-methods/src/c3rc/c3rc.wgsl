@@ -2,10 +2,12 @@
 // objects (splatted by the C3RCs on the CPU) in place of the cube-map lookup where it found
 // something; the far field stays the cube maps', drawn without the nearby objects.
 
-@group(0) @binding(9) var near_reflection: texture_2d<f32>;
+// One vec4 per pixel, row by row: radiance along the reflected ray, alpha 1 where found.
+@group(0) @binding(9) var<storage, read> near_reflection: array<vec4<f32>>;
 
 @fragment
 fn fs_shade(in: FullscreenOut) -> @location(0) vec4<f32> {
     let pixel = vec2<i32>(in.clip.xy);
-    return shade(pixel, textureLoad(near_reflection, pixel, 0));
+    let width = textureDimensions(g_color).x;
+    return shade(pixel, near_reflection[u32(pixel.y) * width + u32(pixel.x)]);
 }

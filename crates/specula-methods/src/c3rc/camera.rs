@@ -90,6 +90,11 @@ impl PlaneBound {
         })
     }
 
+    /// The planes as (normal, offset): the volume lies where normal · x ≥ offset.
+    pub fn planes(&self) -> &[(DVec3, f64)] {
+        &self.planes[..self.count]
+    }
+
     /// False only when `q` cannot be in the view volume.
     pub fn may_contain(&self, q: DVec3) -> bool {
         self.planes[..self.count]
@@ -560,8 +565,8 @@ pub fn real_roots(c: [f64; 4]) -> ([f64; 3], usize) {
         } else {
             let r = (-p / 3.0).sqrt();
             let phi = (-q / (2.0 * r * r * r)).clamp(-1.0, 1.0).acos();
-            for k in 0..3 {
-                out[k] =
+            for (k, root) in out.iter_mut().enumerate() {
+                *root =
                     2.0 * r * ((phi + 2.0 * std::f64::consts::PI * k as f64) / 3.0).cos() + shift;
             }
             n = 3;

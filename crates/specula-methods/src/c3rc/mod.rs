@@ -66,12 +66,13 @@
 //!   and the scene raster, as in envmap.
 
 pub mod camera;
+pub mod gpu;
 pub mod phases;
 pub mod points;
 
 use glam::{DMat4, Vec3};
 use specula_gpu::shaders::CameraUniform;
-use specula_gpu::util::{bind_group, layout_entry, texture_2d, texture_binding, writable_buffer};
+use specula_gpu::util::{bind_group, buffer_binding, layout_entry, writable_buffer};
 use specula_gpu::{GpuContext, GpuError, TimingSource};
 use specula_scene::{Camera, MaterialKind, Scene};
 
@@ -163,6 +164,13 @@ pub const PARAMS: &[ParamSpec] = &[
         doc: "redraw the far-field cube maps every frame (else only after a move)",
         invalidates: Invalidates::Uniform,
     },
+    ParamSpec {
+        name: "projection",
+        kind: ParamKind::Choice(&["auto", "cpu", "gpu"]),
+        default: "auto",
+        doc: "where the forward phase runs: rayon on the CPU, compute passes on the GPU, or auto (the CPU on a software GPU, else the GPU)",
+        invalidates: Invalidates::Uniform,
+    },
     raster::SHADOW_RESOLUTION,
 ];
 
@@ -176,8 +184,21 @@ pub const INFO: MethodInfo = MethodInfo {
     create: || Box::new(C3rcMethod::default()),
 };
 
+/// Source of `NearField::generation`: unique across techniques and scenes.
+static NEXT_GENERATION: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+
 /// Largest traced depth of the per-vertex fallback (as the reference's default).
 const FALLBACK_MAX_DEPTH: u32 = 8;
+
+/// Where the forward phase runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Projection {
+    /// The CPU where the GPU is a software rasteriser (lavapipe: measured faster there), the
+    /// GPU otherwise.
+    Auto,
+    Cpu,
+    Gpu,
+}
 
 pub struct C3rcMethod {
     pub points: u32,
@@ -190,6 +211,7 @@ pub struct C3rcMethod {
     pub resolution: u32,
     pub dynamic: bool,
     pub shadow_resolution: u32,
+    pub projection: Projection,
     prepared: Option<Prepared>,
     output: OutputTexture,
 }
@@ -210,6 +232,7 @@ impl Default for C3rcMethod {
             resolution: 256,
             dynamic: false,
             shadow_resolution: 1024,
+            projection: Projection::Auto,
             prepared: None,
             output: OutputTexture::default(),
         }
@@ -225,6 +248,8 @@ struct NearField {
     found_at: u64,
     /// Milliseconds spent sampling and building trees when the clouds were made.
     build_ms: f64,
+    /// Changes whenever points or colours change (what the GPU copy follows).
+    generation: u64,
 }
 
 /// The G-buffer readback, kept between frames.
@@ -247,10 +272,14 @@ struct Prepared {
     layout: wgpu::BindGroupLayout,
     scene_bind_group: wgpu::BindGroup,
     bind_groups: BindGroupsBySlot,
-    /// (faces generation, near texture size) the bind groups were made for.
-    bound: Option<(Option<u64>, u32, u32)>,
+    /// The faces generation the bind groups were made for.
+    bound: Option<Option<u64>>,
     near_field: Option<NearField>,
-    near_texture: Option<wgpu::Texture>,
+    /// One vec4 per pixel: what the shading pass reads (the CPU writes it, or the GPU
+    /// forward phase).
+    near_buffer: wgpu::Buffer,
+    near_capacity: u64,
+    gpu_projection: Option<gpu::GpuProjection>,
     readback: Option<Readback>,
     near_pixels: Vec<[f32; 4]>,
 }
@@ -362,10 +391,7 @@ impl C3rcMethod {
             entries.push(layout_entry(
                 9,
                 wgpu::ShaderStages::FRAGMENT,
-                texture_binding(
-                    wgpu::TextureSampleType::Float { filterable: false },
-                    wgpu::TextureViewDimension::D2,
-                ),
+                buffer_binding(wgpu::BufferBindingType::Storage { read_only: true }),
             ));
             let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("c3rc"),
@@ -390,7 +416,14 @@ impl C3rcMethod {
                 bind_groups: BindGroupsBySlot::default(),
                 bound: None,
                 near_field: None,
-                near_texture: None,
+                near_buffer: writable_buffer(
+                    ctx,
+                    "c3rc near reflection",
+                    16,
+                    wgpu::BufferUsages::STORAGE,
+                ),
+                near_capacity: 16,
+                gpu_projection: None,
                 readback: None,
                 near_pixels: Vec::new(),
             }
@@ -445,6 +478,7 @@ impl C3rcMethod {
                 clouds,
                 found_at: u64::MAX,
                 build_ms: start.elapsed().as_secs_f64() * 1e3,
+                generation: 0,
             });
         }
         let f = field.as_mut().expect("made above");
@@ -454,6 +488,7 @@ impl C3rcMethod {
         }
         f.near = near;
         f.found_at = live.version();
+        f.generation = NEXT_GENERATION.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     }
 }
 
@@ -475,6 +510,7 @@ impl Technique for C3rcMethod {
             "resolution" => self.resolution.to_string(),
             "dynamic" => self.dynamic.to_string(),
             "shadow_resolution" => self.shadow_resolution.to_string(),
+            "projection" => format!("{:?}", self.projection).to_lowercase(),
             _ => String::new(),
         }
     }
@@ -492,6 +528,13 @@ impl Technique for C3rcMethod {
             "resolution" => self.resolution = value.integer() as u32,
             "dynamic" => self.dynamic = value.flag(),
             "shadow_resolution" => self.shadow_resolution = value.integer() as u32,
+            "projection" => {
+                self.projection = match value.word() {
+                    "gpu" => Projection::Gpu,
+                    "cpu" => Projection::Cpu,
+                    _ => Projection::Auto,
+                }
+            }
             _ => {}
         }
         Ok(())
@@ -577,56 +620,93 @@ impl Technique for C3rcMethod {
             })
             .collect();
         let mirror_meshes: Vec<usize> = field.near.iter().map(|(m, _)| *m).collect();
-        let report = phases::reflect_near(
+        let view = ScreenView::new(camera, width, height);
+        let settings = FrameSettings {
+            min_pixels: self.min_pixels,
+            splat_scale: self.splat_scale,
+            max_splat: self.max_splat,
+            max_depth: FALLBACK_MAX_DEPTH,
+        };
+        let mut plan = phases::plan(
             scene,
             live.accel(),
             &mirror_meshes,
             &placed,
-            &ScreenView::new(camera, width, height),
+            &view,
             &surfaces,
-            FrameSettings {
-                min_pixels: self.min_pixels,
-                splat_scale: self.splat_scale,
-                max_splat: self.max_splat,
-                max_depth: FALLBACK_MAX_DEPTH,
-            },
-            &mut p.near_pixels,
+            settings,
         );
-        for (name, ms) in [
-            ("c3rc set-up", report.setup_ms),
-            ("culling (backward phase)", report.culling_ms),
-            ("projection (forward phase)", report.projection_ms),
-            ("splatting and per-vertex colour", report.splatting_ms),
-        ] {
-            stages.measured(name, ms);
-        }
-
-        if p.near_texture.as_ref().map(|t| (t.width(), t.height())) != Some((width, height)) {
-            p.near_texture = Some(texture_2d(
+        stages.measured("c3rc set-up", plan.report.setup_ms);
+        stages.measured("culling (backward phase)", plan.report.culling_ms);
+        let pixels = (width * height) as u64 * 16;
+        if p.near_capacity < pixels {
+            p.near_buffer = writable_buffer(
                 gpu,
                 "c3rc near reflection",
-                width,
-                height,
-                raster::COLOR_FORMAT,
-                wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-            ));
+                pixels,
+                wgpu::BufferUsages::STORAGE,
+            );
+            p.near_capacity = pixels;
+            p.bind_groups.clear();
         }
-        let near_texture = p.near_texture.as_ref().expect("made above");
-        gpu.queue.write_texture(
-            near_texture.as_image_copy(),
-            bytemuck::cast_slice(&p.near_pixels),
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(width * 16),
-                rows_per_image: Some(height),
-            },
-            wgpu::Extent3d {
-                width,
-                height,
-                depth_or_array_layers: 1,
-            },
-        );
-        let bound = Some((p.maps.faces_generation(), width, height));
+        let points: usize = field.clouds.iter().map(|c| c.len()).sum();
+        let on_gpu = points <= gpu::MAX_POINTS
+            && match self.projection {
+                Projection::Gpu => true,
+                Projection::Cpu => false,
+                Projection::Auto => gpu.adapter_info.device_type != wgpu::DeviceType::Cpu,
+            };
+        if on_gpu {
+            plan.fallback(scene, &view, &surfaces, &mut p.near_pixels);
+            gpu.queue
+                .write_buffer(&p.near_buffer, 0, bytemuck::cast_slice(&p.near_pixels));
+            if p.gpu_projection.is_none() {
+                p.gpu_projection = Some(gpu::GpuProjection::new(gpu)?);
+            }
+            let world_from_loaded: Vec<glam::Mat4> = field
+                .clouds
+                .iter()
+                .map(|c| live.world_from_loaded(c.mesh))
+                .collect();
+            let counts = p.gpu_projection.as_mut().expect("made above").forward(
+                gpu,
+                &plan,
+                &field.clouds,
+                field.generation,
+                &world_from_loaded,
+                &mirror_meshes,
+                scene.meshes.len(),
+                &view,
+                camera,
+                (self.splat_scale, self.max_splat),
+                &g,
+                &p.near_buffer,
+            )?;
+            let report = &mut plan.report;
+            report.points_in_leaves = counts[0] as u64;
+            report.points_projected = counts[1] as u64;
+            report.valid_projections = counts[2] as u64;
+            report.splats = counts[3] as u64;
+            stages.lap(gpu, "projection and splatting (GPU)")?;
+        } else {
+            phases::forward(
+                &mut plan,
+                scene,
+                &mirror_meshes,
+                &placed,
+                &view,
+                &surfaces,
+                settings,
+                &mut p.near_pixels,
+            );
+            stages.measured("projection (forward phase)", plan.report.projection_ms);
+            stages.measured("splatting and per-vertex colour", plan.report.splatting_ms);
+            gpu.queue
+                .write_buffer(&p.near_buffer, 0, bytemuck::cast_slice(&p.near_pixels));
+        }
+        let report = plan.report;
+
+        let bound = Some(p.maps.faces_generation());
         if p.bound != bound {
             p.bind_groups.clear();
             p.bound = bound;
@@ -637,7 +717,6 @@ impl Technique for C3rcMethod {
                 .write_buffer(&p.camera_buffer, 0, bytemuck::bytes_of(&camera_uniform));
             let group = p.bind_groups.get_or_make(g.slot, || {
                 let [color, position, normal, ids] = g.views();
-                let near_view = near_texture.create_view(&Default::default());
                 let mut entries = vec![
                     p.camera_buffer.as_entire_binding(),
                     wgpu::BindingResource::TextureView(&color),
@@ -646,7 +725,7 @@ impl Technique for C3rcMethod {
                     wgpu::BindingResource::TextureView(&ids),
                 ];
                 entries.extend(p.maps.bindings());
-                entries.push(wgpu::BindingResource::TextureView(&near_view));
+                entries.push(p.near_buffer.as_entire_binding());
                 bind_group(gpu, "c3rc", &p.layout, &entries)
             });
             raster::fullscreen_pass(

@@ -88,16 +88,16 @@ pub struct PlacedCloud<'a> {
 }
 
 /// One reflector triangle's camera.
-struct TriangleCamera {
-    mesh: usize,
-    world: C3rc,
+pub(super) struct TriangleCamera {
+    pub(super) mesh: usize,
+    pub(super) world: C3rc,
     /// Pixels² the triangle covers on screen (not occlusion-aware): the image-side area the
     /// camera's cross-sections map to, for splat sizes.
-    screen_area: f64,
-    may_project_twice: bool,
+    pub(super) screen_area: f64,
+    pub(super) may_project_twice: bool,
     /// 1 / |cos| of the angle between the view ray and the triangle (capped): how much farther
     /// apart on the surface than on the screen neighbouring pixels' points are.
-    obliquity: f32,
+    pub(super) obliquity: f32,
 }
 
 /// A projected point.
@@ -146,7 +146,7 @@ pub struct PhaseReport {
 
 /// Radiance arriving along each mirror pixel's reflected ray from the nearby objects
 /// (alpha 1 where something was found, 0 where the far field shows), for the pixels of the
-/// reflectors `mirrors`.
+/// reflectors `mirrors`: [`plan`] then [`forward`] on the CPU.
 #[allow(clippy::too_many_arguments)]
 pub fn reflect_near(
     scene: &Scene,
@@ -158,11 +158,37 @@ pub fn reflect_near(
     settings: FrameSettings,
     out: &mut Vec<[f32; 4]>,
 ) -> PhaseReport {
-    let mut report = PhaseReport::default();
-    let pixel_count = (view.width * view.height) as usize;
-    out.clear();
-    out.resize(pixel_count, [0.0; 4]);
+    let mut plan = plan(scene, accel, mirrors, clouds, view, surfaces, settings);
+    forward(
+        &mut plan, scene, mirrors, clouds, view, surfaces, settings, out,
+    );
+    plan.report
+}
 
+/// A frame's cameras and what each sees, before the forward phase.
+pub struct Plan {
+    pub(super) cameras: Vec<TriangleCamera>,
+    /// (cloud, leaf node) pairs each camera's view volume meets.
+    pub leaves: Vec<Vec<(usize, usize)>>,
+    /// Triangles (per mesh) whose pixels take the per-vertex colour.
+    small: Vec<Vec<bool>>,
+    vertices: Vec<(usize, u32)>,
+    traced: Vec<(Vec3, bool)>,
+    pub report: PhaseReport,
+}
+
+/// The cameras of the visible mirror triangles and the backward phase (§5.2): which leaves
+/// each camera's view volume meets.
+pub fn plan(
+    scene: &Scene,
+    accel: &SceneAccel,
+    mirrors: &[usize],
+    clouds: &[PlacedCloud],
+    view: &ScreenView,
+    surfaces: &PixelSurfaces,
+    settings: FrameSettings,
+) -> Plan {
+    let mut report = PhaseReport::default();
     // Cameras for the triangles that cover enough pixels; the rest are small.
     let start = Instant::now();
     let mut visible: Vec<Vec<u32>> = scene
@@ -302,12 +328,63 @@ pub fn reflect_near(
         .collect();
     report.leaves_visited = leaves.iter().map(|l| l.len() as u64).sum();
     report.culling_ms = ms(start);
+    Plan {
+        cameras,
+        leaves,
+        small,
+        vertices,
+        traced,
+        report,
+    }
+}
 
+impl Plan {
+    /// Clears `out` to the frame's size and writes the per-vertex colour of the small and
+    /// self-seeing triangles' pixels (alpha 1).
+    pub fn fallback(
+        &self,
+        scene: &Scene,
+        view: &ScreenView,
+        surfaces: &PixelSurfaces,
+        out: &mut Vec<[f32; 4]>,
+    ) {
+        out.clear();
+        out.resize((view.width * view.height) as usize, [0.0; 4]);
+        per_vertex_fallback(
+            scene,
+            surfaces,
+            &self.small,
+            &self.vertices,
+            &self.traced,
+            out,
+        );
+    }
+}
+
+/// The forward phase on the CPU (§5.1, §6): every leaf's points projected with the camera
+/// that sees it, splatted and resolved per pixel; one-pixel holes filled; then the per-vertex
+/// colour where the plan gave none.
+#[allow(clippy::too_many_arguments)]
+pub fn forward(
+    plan: &mut Plan,
+    scene: &Scene,
+    mirrors: &[usize],
+    clouds: &[PlacedCloud],
+    view: &ScreenView,
+    surfaces: &PixelSurfaces,
+    settings: FrameSettings,
+    out: &mut Vec<[f32; 4]>,
+) {
+    let pixel_count = (view.width * view.height) as usize;
+    out.clear();
+    out.resize(pixel_count, [0.0; 4]);
+    let report = &mut plan.report;
     // Forward phase: the leaves' points projected with the camera, every valid projection.
     let start = Instant::now();
-    let per_camera: Vec<(Vec<Splat>, [u64; 4])> = cameras
+    let per_camera: Vec<(Vec<Splat>, [u64; 4])> = plan
+        .cameras
         .par_iter()
-        .zip(&leaves)
+        .zip(&plan.leaves)
         .map(|(camera, leaves)| {
             let mut splats = Vec::new();
             let (mut tried, mut solved, mut valid, mut twice) = (0u64, 0u64, 0u64, 0u64);
@@ -386,9 +463,15 @@ pub fn reflect_near(
 
     // Small triangles and those that see their own mirror: the reflected colour traced at
     // their vertices, interpolated.
-    per_vertex_fallback(scene, surfaces, &small, &vertices, &traced, out);
+    per_vertex_fallback(
+        scene,
+        surfaces,
+        &plan.small,
+        &plan.vertices,
+        &plan.traced,
+        out,
+    );
     report.splatting_ms = ms(start);
-    report
 }
 
 fn ms(start: Instant) -> f64 {
@@ -571,10 +654,7 @@ fn per_vertex_fallback(
             continue;
         }
         let mesh = (mesh1 - 1) as usize;
-        if !small
-            .get(mesh)
-            .is_some_and(|f| f.get(*t as usize) == Some(&true))
-        {
+        if small.get(mesh).and_then(|f| f.get(*t as usize)) != Some(&true) {
             continue;
         }
         let m = &scene.meshes[mesh];
