@@ -147,6 +147,8 @@ fn a_point_seen_twice_through_one_triangle_is_splatted_where_its_rays_show_it() 
         &surfaces,
         FrameSettings {
             min_pixels: 0,
+            split_pixels: 0,
+            trace_self: true,
             splat_scale: 1.0,
             max_splat: 3.0,
             max_depth: 4,
@@ -305,7 +307,7 @@ fn counters_follow_the_paper_and_the_teapot_falls_back_where_it_sees_itself() {
     assert!(c("splats") <= c("valid projections"));
     assert!(c("pixels covered by splats") > 1000);
     // The lid and the body see the spout, the knob and each other.
-    assert!(c("triangles that see their own mirror (per-vertex colour)") > 0);
+    assert!(c("triangles that see their own mirror (traced per pixel)") > 0);
     // No mirror at all: only the far field, and it says so.
     let lens = specula_scene::load("spectacle-lens").unwrap();
     let frame = technique.render_still(&ctx, &lens, 64, 48).unwrap();

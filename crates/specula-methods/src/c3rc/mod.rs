@@ -151,6 +151,20 @@ pub const PARAMS: &[ParamSpec] = &[
         invalidates: Invalidates::Uniform,
     },
     ParamSpec {
+        name: "split_pixels",
+        kind: ParamKind::Integer { min: 0, max: 1_000_000 },
+        default: "0",
+        doc: "triangles covering more pixels are cut in four (up to 3 times) for more cameras; 0: never",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "trace_self",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "trace per pixel the triangles whose vertex rays hit their own mirror (false: first order, as the paper)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
         name: "resolution",
         kind: ParamKind::Integer { min: 1, max: 8192 },
         default: "256",
@@ -208,6 +222,8 @@ pub struct C3rcMethod {
     pub splat_scale: f32,
     pub max_splat: f32,
     pub min_pixels: u32,
+    pub split_pixels: u32,
+    pub trace_self: bool,
     pub resolution: u32,
     pub dynamic: bool,
     pub shadow_resolution: u32,
@@ -229,6 +245,8 @@ impl Default for C3rcMethod {
             splat_scale: 1.5,
             max_splat: 6.0,
             min_pixels: 2,
+            split_pixels: 0,
+            trace_self: true,
             resolution: 256,
             dynamic: false,
             shadow_resolution: 1024,
@@ -507,6 +525,8 @@ impl Technique for C3rcMethod {
             "splat_scale" => self.splat_scale.to_string(),
             "max_splat" => self.max_splat.to_string(),
             "min_pixels" => self.min_pixels.to_string(),
+            "split_pixels" => self.split_pixels.to_string(),
+            "trace_self" => self.trace_self.to_string(),
             "resolution" => self.resolution.to_string(),
             "dynamic" => self.dynamic.to_string(),
             "shadow_resolution" => self.shadow_resolution.to_string(),
@@ -525,6 +545,8 @@ impl Technique for C3rcMethod {
             "splat_scale" => self.splat_scale = value.number() as f32,
             "max_splat" => self.max_splat = value.number() as f32,
             "min_pixels" => self.min_pixels = value.integer() as u32,
+            "split_pixels" => self.split_pixels = value.integer() as u32,
+            "trace_self" => self.trace_self = value.flag(),
             "resolution" => self.resolution = value.integer() as u32,
             "dynamic" => self.dynamic = value.flag(),
             "shadow_resolution" => self.shadow_resolution = value.integer() as u32,
@@ -623,6 +645,8 @@ impl Technique for C3rcMethod {
         let view = ScreenView::new(camera, width, height);
         let settings = FrameSettings {
             min_pixels: self.min_pixels,
+            split_pixels: self.split_pixels,
+            trace_self: self.trace_self,
             splat_scale: self.splat_scale,
             max_splat: self.max_splat,
             max_depth: FALLBACK_MAX_DEPTH,
@@ -657,7 +681,14 @@ impl Technique for C3rcMethod {
                 Projection::Auto => gpu.adapter_info.device_type != wgpu::DeviceType::Cpu,
             };
         if on_gpu {
-            plan.fallback(scene, &view, &surfaces, &mut p.near_pixels);
+            plan.fallback(
+                scene,
+                live.accel(),
+                &view,
+                &surfaces,
+                FALLBACK_MAX_DEPTH,
+                &mut p.near_pixels,
+            );
             gpu.queue
                 .write_buffer(&p.near_buffer, 0, bytemuck::cast_slice(&p.near_pixels));
             if p.gpu_projection.is_none() {
@@ -692,6 +723,7 @@ impl Technique for C3rcMethod {
             phases::forward(
                 &mut plan,
                 scene,
+                live.accel(),
                 &mirror_meshes,
                 &placed,
                 &view,
@@ -823,6 +855,10 @@ fn counters(
         ),
         ("cameras (C3RCs)".into(), report.cameras),
         (
+            "triangles split into several cameras".into(),
+            report.split_triangles,
+        ),
+        (
             "cameras that can project a point twice".into(),
             report.cameras_that_can_project_twice,
         ),
@@ -857,7 +893,7 @@ fn counters(
             report.small_triangle_pixels,
         ),
         (
-            "triangles that see their own mirror (per-vertex colour)".into(),
+            "triangles that see their own mirror (traced per pixel)".into(),
             report.self_seeing_triangles,
         ),
         (

@@ -76,6 +76,11 @@ pub struct PixelSurfaces {
 #[derive(Clone, Copy, Debug)]
 pub struct FrameSettings {
     pub min_pixels: u32,
+    /// Triangles covering more pixels are cut in four (up to three times); 0: never.
+    pub split_pixels: u32,
+    /// Trace the pixels of triangles whose vertex rays hit their own mirror (else they get a
+    /// camera like the others, first order as in the paper).
+    pub trace_self: bool,
     pub splat_scale: f32,
     pub max_splat: f32,
     pub max_depth: u32,
@@ -126,6 +131,8 @@ pub struct PhaseReport {
     pub small_triangles: u64,
     pub small_triangle_pixels: u64,
     pub self_seeing_triangles: u64,
+    /// Triangles cut into several cameras.
+    pub split_triangles: u64,
     pub self_seeing_pixels: u64,
     pub leaves_visited: u64,
     /// Points in the leaves the cameras saw.
@@ -160,7 +167,7 @@ pub fn reflect_near(
 ) -> PhaseReport {
     let mut plan = plan(scene, accel, mirrors, clouds, view, surfaces, settings);
     forward(
-        &mut plan, scene, mirrors, clouds, view, surfaces, settings, out,
+        &mut plan, scene, accel, mirrors, clouds, view, surfaces, settings, out,
     );
     plan.report
 }
@@ -170,8 +177,8 @@ pub struct Plan {
     pub(super) cameras: Vec<TriangleCamera>,
     /// (cloud, leaf node) pairs each camera's view volume meets.
     pub leaves: Vec<Vec<(usize, usize)>>,
-    /// Triangles (per mesh) whose pixels take the per-vertex colour.
-    small: Vec<Vec<bool>>,
+    /// How each triangle's (per mesh) pixels are drawn: [`C3RC`], [`PER_VERTEX`], [`TRACED`].
+    small: Vec<Vec<u8>>,
     vertices: Vec<(usize, u32)>,
     traced: Vec<(Vec3, bool)>,
     pub report: PhaseReport,
@@ -228,7 +235,7 @@ pub fn plan(
         traced[k].1
     };
     let mut cameras = Vec::new();
-    let mut small: Vec<Vec<bool>> = visible.iter().map(|v| vec![false; v.len()]).collect();
+    let mut small: Vec<Vec<u8>> = visible.iter().map(|v| vec![C3RC; v.len()]).collect();
     for &mesh in mirrors {
         let m = &scene.meshes[mesh];
         for (t, &count) in visible[mesh].iter().enumerate() {
@@ -236,13 +243,13 @@ pub fn plan(
                 continue;
             }
             if count < settings.min_pixels {
-                small[mesh][t] = true;
+                small[mesh][t] = PER_VERTEX;
                 report.small_triangles += 1;
                 report.small_triangle_pixels += count as u64;
                 continue;
             }
-            if m.triangles[t].iter().any(|&i| sees_itself(mesh, i)) {
-                small[mesh][t] = true;
+            if settings.trace_self && m.triangles[t].iter().any(|&i| sees_itself(mesh, i)) {
+                small[mesh][t] = TRACED;
                 report.self_seeing_triangles += 1;
                 report.self_seeing_pixels += count as u64;
                 continue;
@@ -258,7 +265,6 @@ pub fn plan(
             if face.dot(eye - v[0]) < 0.0 {
                 n = n.map(|x| -x);
             }
-            let world = C3rc::reflector(v, n, eye);
             let screen = v.map(|p| view.project(p.as_vec3()));
             let screen_area = match screen {
                 [Some(a), Some(b), Some(c)] => {
@@ -268,20 +274,34 @@ pub fn plan(
                 _ => count as f64,
             }
             .max(count as f64);
-            let may_project_twice = !world.multiple_projection_intervals().is_empty();
-            report.cameras_that_can_project_twice += may_project_twice as u64;
             let centroid = (v[0] + v[1] + v[2]) / 3.0;
             let cos = face
                 .normalize_or_zero()
                 .dot((centroid - eye).normalize_or_zero())
                 .abs();
-            cameras.push(TriangleCamera {
-                mesh,
-                world,
-                screen_area,
-                may_project_twice,
-                obliquity: (1.0 / cos.max(0.1)) as f32,
-            });
+            // Large triangles are cut in four (normals interpolated as the reference does)
+            // until each part covers at most `split_pixels`: linear interpolation of the rays
+            // then follows the reflection of the interpolated normal more closely.
+            let mut levels = 0;
+            while settings.split_pixels > 0
+                && levels < MAX_SPLIT_LEVELS
+                && screen_area / 4f64.powi(levels as i32) > settings.split_pixels as f64
+            {
+                levels += 1;
+            }
+            report.split_triangles += (levels > 0) as u64;
+            for (v, n) in subdivide(v, n, levels) {
+                let world = C3rc::reflector(v, n, eye);
+                let may_project_twice = !world.multiple_projection_intervals().is_empty();
+                report.cameras_that_can_project_twice += may_project_twice as u64;
+                cameras.push(TriangleCamera {
+                    mesh,
+                    world,
+                    screen_area: screen_area / 4f64.powi(levels as i32),
+                    may_project_twice,
+                    obliquity: (1.0 / cos.max(0.1)) as f32,
+                });
+            }
         }
     }
     report.cameras = cameras.len() as u64;
@@ -339,35 +359,41 @@ pub fn plan(
 }
 
 impl Plan {
-    /// Clears `out` to the frame's size and writes the per-vertex colour of the small and
-    /// self-seeing triangles' pixels (alpha 1).
+    /// Clears `out` to the frame's size and writes the pixels of the triangles without a
+    /// camera (alpha 1): the per-vertex colour of small ones, traced colour of self-seeing ones.
     pub fn fallback(
         &self,
         scene: &Scene,
+        accel: &SceneAccel,
         view: &ScreenView,
         surfaces: &PixelSurfaces,
+        max_depth: u32,
         out: &mut Vec<[f32; 4]>,
     ) {
         out.clear();
         out.resize((view.width * view.height) as usize, [0.0; 4]);
-        per_vertex_fallback(
+        fallback_pixels(
             scene,
+            accel,
+            view,
             surfaces,
             &self.small,
             &self.vertices,
             &self.traced,
+            max_depth,
             out,
         );
     }
 }
 
 /// The forward phase on the CPU (§5.1, §6): every leaf's points projected with the camera
-/// that sees it, splatted and resolved per pixel; one-pixel holes filled; then the per-vertex
-/// colour where the plan gave none.
+/// that sees it, splatted and resolved per pixel; one-pixel holes filled; then the pixels of
+/// the triangles without a camera.
 #[allow(clippy::too_many_arguments)]
 pub fn forward(
     plan: &mut Plan,
     scene: &Scene,
+    accel: &SceneAccel,
     mirrors: &[usize],
     clouds: &[PlacedCloud],
     view: &ScreenView,
@@ -461,17 +487,52 @@ pub fn forward(
     report.covered_pixels = depth.iter().filter(|d| d.is_finite()).count() as u64;
     report.holes_filled = fill_holes(view, surfaces, mirrors, &depth, out);
 
-    // Small triangles and those that see their own mirror: the reflected colour traced at
-    // their vertices, interpolated.
-    per_vertex_fallback(
+    // Small triangles (per-vertex colour) and those that see their own mirror (traced).
+    fallback_pixels(
         scene,
+        accel,
+        view,
         surfaces,
         &plan.small,
         &plan.vertices,
         &plan.traced,
+        settings.max_depth,
         out,
     );
     report.splatting_ms = ms(start);
+}
+
+/// A triangle's pixels come from its camera's splats (and the far field).
+const C3RC: u8 = 0;
+/// A triangle too small for a camera: its pixels take the per-vertex colour.
+const PER_VERTEX: u8 = 1;
+/// A triangle whose mirror sees itself: its pixels are traced exactly, one ray each.
+const TRACED: u8 = 2;
+
+/// Most times a large triangle is cut in four.
+const MAX_SPLIT_LEVELS: u32 = 3;
+
+/// The triangle (vertices, unit normals) cut into 4^levels by its edges' midpoints; midpoint
+/// normals are the normalised means.
+fn subdivide(v: [DVec3; 3], n: [DVec3; 3], levels: u32) -> Vec<([DVec3; 3], [DVec3; 3])> {
+    let mut parts = vec![(v, n.map(|x| x.normalize_or_zero()))];
+    for _ in 0..levels {
+        parts = parts
+            .into_iter()
+            .flat_map(|(v, n)| {
+                let mid =
+                    |a: usize, b: usize| ((v[a] + v[b]) * 0.5, (n[a] + n[b]).normalize_or_zero());
+                let ((v01, n01), (v12, n12), (v20, n20)) = (mid(0, 1), mid(1, 2), mid(2, 0));
+                [
+                    ([v[0], v01, v20], [n[0], n01, n20]),
+                    ([v01, v[1], v12], [n01, n[1], n12]),
+                    ([v20, v12, v[2]], [n20, n12, n[2]]),
+                    ([v01, v12, v20], [n01, n12, n20]),
+                ]
+            })
+            .collect();
+    }
+    parts
 }
 
 fn ms(start: Instant) -> f64 {
@@ -636,37 +697,76 @@ fn trace_vertices(
         .collect()
 }
 
-/// The pixels of the `small` triangles: their vertices' traced colours, interpolated.
-fn per_vertex_fallback(
+/// The pixels of the triangles that have no camera: small ones take their vertices' traced
+/// colours, interpolated; those that see their own mirror are traced, one exact reflected ray
+/// per pixel (with the normal interpolated as the reference interpolates it).
+#[allow(clippy::too_many_arguments)]
+fn fallback_pixels(
     scene: &Scene,
+    accel: &SceneAccel,
+    view: &ScreenView,
     surfaces: &PixelSurfaces,
-    small: &[Vec<bool>],
+    small: &[Vec<u8>],
     vertices: &[(usize, u32)],
     traced: &[(Vec3, bool)],
+    max_depth: u32,
     out: &mut [[f32; 4]],
 ) {
+    let tracer = Tracer {
+        scene,
+        accel,
+        max_depth,
+    };
     let color_of = |mesh: usize, i: u32| {
         let k = vertices.binary_search(&(mesh, i)).expect("traced above");
         traced[k].0
     };
-    for (k, [mesh1, t]) in surfaces.ids.iter().enumerate() {
-        if *mesh1 == 0 {
-            continue;
-        }
-        let mesh = (mesh1 - 1) as usize;
-        if small.get(mesh).and_then(|f| f.get(*t as usize)) != Some(&true) {
-            continue;
-        }
-        let m = &scene.meshes[mesh];
-        let tri = m.triangles[*t as usize];
-        let [a, b, c] = tri.map(|i| m.positions[i as usize]);
-        let p = Vec3::from_slice(&surfaces.position[k][..3]);
-        let bary = barycentric(p, a, b, c);
-        let color = color_of(mesh, tri[0]) * bary[0]
-            + color_of(mesh, tri[1]) * bary[1]
-            + color_of(mesh, tri[2]) * bary[2];
-        out[k] = [color.x, color.y, color.z, 1.0];
-    }
+    out.par_iter_mut()
+        .zip(&surfaces.ids)
+        .zip(&surfaces.position)
+        .for_each(|((out, [mesh1, t]), position)| {
+            if *mesh1 == 0 {
+                return;
+            }
+            let mesh = (mesh1 - 1) as usize;
+            let how = small.get(mesh).and_then(|f| f.get(*t as usize)).copied();
+            if how != Some(PER_VERTEX) && how != Some(TRACED) {
+                return;
+            }
+            let m = &scene.meshes[mesh];
+            let tri = m.triangles[*t as usize];
+            let [a, b, c] = tri.map(|i| m.positions[i as usize]);
+            let p = Vec3::from_slice(&position[..3]);
+            let bary = barycentric(p, a, b, c);
+            let color = if how == Some(PER_VERTEX) {
+                color_of(mesh, tri[0]) * bary[0]
+                    + color_of(mesh, tri[1]) * bary[1]
+                    + color_of(mesh, tri[2]) * bary[2]
+            } else {
+                let [na, nb, nc] = tri.map(|i| m.normals[i as usize]);
+                let mut n = (na * bary[0] + nb * bary[1] + nc * bary[2]).normalize_or_zero();
+                let d = (p - view.eye).normalize_or_zero();
+                if n.dot(d) > 0.0 {
+                    n = -n;
+                }
+                let reflected = d - 2.0 * d.dot(n) * n;
+                let face = (b - a).cross(c - a);
+                let ray = Ray {
+                    origin: offset_origin(
+                        p,
+                        if face.dot(reflected) >= 0.0 {
+                            face.normalize()
+                        } else {
+                            -face.normalize()
+                        },
+                        reflected,
+                    ),
+                    dir: reflected,
+                };
+                tracer.radiance(&ray, 1, None)
+            };
+            *out = [color.x, color.y, color.z, 1.0];
+        });
 }
 
 /// Barycentric coordinates of `p` projected onto triangle abc, clamped to it.
