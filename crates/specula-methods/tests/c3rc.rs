@@ -149,6 +149,7 @@ fn a_point_seen_twice_through_one_triangle_is_splatted_where_its_rays_show_it() 
             min_pixels: 0,
             split_pixels: 0,
             trace_self: true,
+            level_of_detail: false,
             splat_scale: 1.0,
             max_splat: 3.0,
             max_depth: 4,

@@ -247,14 +247,16 @@ impl C3rc {
     /// Every valid projection of `q` (at most three), in increasing λ. `first_only` stops at
     /// the first one (for cameras that cannot project a point twice, and for inside tests).
     pub fn project(&self, q: DVec3, first_only: bool) -> ([Projection; 3], usize) {
-        self.project_with(self.projection_cubic(q), q, first_only)
+        self.project_with(self.projection_cubic(q), q, f64::INFINITY, first_only)
     }
 
     /// [`C3rc::project`] given the cubic's coefficients for `q`.
+    /// Roots past `lambda_max` (where nothing the caller projects can be) are not checked.
     pub fn project_with(
         &self,
         cubic: [f64; 4],
         q: DVec3,
+        lambda_max: f64,
         first_only: bool,
     ) -> ([Projection; 3], usize) {
         let mut out = [Projection {
@@ -265,7 +267,7 @@ impl C3rc {
         let (roots, n) = real_roots(cubic);
         for &lambda in &roots[..n] {
             // Points on the base (λ = 0) come out a rounding error either side.
-            if lambda < -LAMBDA_EPS {
+            if lambda < -LAMBDA_EPS || lambda > lambda_max {
                 continue;
             }
             let lambda = lambda.max(0.0);
@@ -397,17 +399,17 @@ impl C3rc {
         {
             return true;
         }
-        // 1. A corner inside: the box may lie wholly inside the view volume.
-        if self.contains(lo) {
-            return true;
-        }
-        // 2. The arcs' end points: a construction ray meets the box.
+        // 1. The arcs' end points: a construction ray meets the box (cheapest first).
         if self
             .v
             .iter()
             .zip(&self.d)
             .any(|(&o, &d)| ray_meets_box(o, d, f64::INFINITY, lo, hi))
         {
+            return true;
+        }
+        // 2. A corner inside: the box may lie wholly inside the view volume.
+        if self.contains(lo) {
             return true;
         }
         // 3. The base triangle meets the box.
@@ -543,58 +545,69 @@ pub fn real_roots(c: [f64; 4]) -> ([f64; 3], usize) {
     if scale == 0.0 || !scale.is_finite() {
         return (out, 0);
     }
-    let c = c.map(|x| x / scale);
+    // Relative to the largest coefficient, below this a leading coefficient is taken as zero.
     const TINY: f64 = 1e-12;
-    let mut n = 0;
-    if c[3].abs() > TINY {
+    let tiny = TINY * scale;
+    let n;
+    // The monic polynomial x³ + a x² + b x + cc (or of lower degree) the roots are polished on.
+    let (a, b, cc, cubic);
+    if c[3].abs() > tiny {
+        let inv = 1.0 / c[3];
+        (a, b, cc, cubic) = (c[2] * inv, c[1] * inv, c[0] * inv, true);
         // Depressed cubic t³ + p t + q with x = t − a/3.
-        let (a, b, cc) = (c[2] / c[3], c[1] / c[3], c[0] / c[3]);
-        let p = b - a * a / 3.0;
-        let q = 2.0 * a * a * a / 27.0 - a * b / 3.0 + cc;
-        let shift = -a / 3.0;
-        let disc = q * q / 4.0 + p * p * p / 27.0;
+        let p = b - a * a * (1.0 / 3.0);
+        let q = a * a * a * (2.0 / 27.0) - a * b * (1.0 / 3.0) + cc;
+        let shift = -a * (1.0 / 3.0);
+        let disc = q * q * 0.25 + p * p * p * (1.0 / 27.0);
         if disc > 0.0 {
             let s = disc.sqrt();
-            let u = (-q / 2.0 + s).cbrt();
-            let v = (-q / 2.0 - s).cbrt();
-            out[0] = u + v + shift;
+            out[0] = (-0.5 * q + s).cbrt() + (-0.5 * q - s).cbrt() + shift;
             n = 1;
         } else if p == 0.0 {
             out[0] = shift;
             n = 1;
         } else {
-            let r = (-p / 3.0).sqrt();
-            let phi = (-q / (2.0 * r * r * r)).clamp(-1.0, 1.0).acos();
-            for (k, root) in out.iter_mut().enumerate() {
-                *root =
-                    2.0 * r * ((phi + 2.0 * std::f64::consts::PI * k as f64) / 3.0).cos() + shift;
-            }
+            // Three real roots: the largest by trigonometry, the other two from the quadratic
+            // left after dividing it out, t³ + pt + q = (t − r)(t² + rt + r² + p).
+            let m = (-p * (1.0 / 3.0)).sqrt();
+            let phi = (-q / (2.0 * m * m * m)).clamp(-1.0, 1.0).acos();
+            let r = 2.0 * m * (phi * (1.0 / 3.0)).cos();
+            let s = (-3.0 * r * r - 4.0 * p).max(0.0).sqrt();
+            out = [r + shift, 0.5 * (-r + s) + shift, 0.5 * (-r - s) + shift];
             n = 3;
         }
-    } else if c[2].abs() > TINY {
-        let (a, b, cc) = (c[2], c[1], c[0]);
-        let disc = b * b - 4.0 * a * cc;
+    } else if c[2].abs() > tiny {
+        let inv = 1.0 / c[2];
+        (a, b, cc, cubic) = (0.0, c[1] * inv, c[0] * inv, false);
+        // x² + b x + cc, the numerically stable pair.
+        let disc = b * b - 4.0 * cc;
         if disc >= 0.0 {
-            // The numerically stable pair.
             let s = disc.sqrt();
-            let qq = -0.5 * (b + b.signum() * s + if b == 0.0 { s } else { 0.0 });
-            if qq != 0.0 {
-                out[0] = qq / a;
-                out[1] = cc / qq;
+            let half = -0.5 * (b + if b >= 0.0 { s } else { -s });
+            if half != 0.0 {
+                out[0] = half;
+                out[1] = cc / half;
                 n = 2;
             } else {
-                out[0] = 0.0;
                 n = 1;
             }
+        } else {
+            n = 0;
         }
-    } else if c[1].abs() > TINY {
+    } else if c[1].abs() > tiny {
         out[0] = -c[0] / c[1];
-        n = 1;
+        return (out, 1);
+    } else {
+        return (out, 0);
     }
+    // Newton steps on the monic polynomial.
     for x in out.iter_mut().take(n) {
-        for _ in 0..3 {
-            let f = ((c[3] * *x + c[2]) * *x + c[1]) * *x + c[0];
-            let df = (3.0 * c[3] * *x + 2.0 * c[2]) * *x + c[1];
+        for _ in 0..2 {
+            let (f, df) = if cubic {
+                (((*x + a) * *x + b) * *x + cc, (3.0 * *x + 2.0 * a) * *x + b)
+            } else {
+                ((*x + b) * *x + cc, 2.0 * *x + b)
+            };
             if df == 0.0 {
                 break;
             }
@@ -605,6 +618,19 @@ pub fn real_roots(c: [f64; 4]) -> ([f64; 3], usize) {
             *x -= step;
         }
     }
-    out[..n].sort_by(f64::total_cmp);
+    // Three-element sorting network.
+    if n == 3 {
+        if out[0] > out[1] {
+            out.swap(0, 1);
+        }
+        if out[1] > out[2] {
+            out.swap(1, 2);
+        }
+        if out[0] > out[1] {
+            out.swap(0, 1);
+        }
+    } else if n == 2 && out[0] > out[1] {
+        out.swap(0, 1);
+    }
     (out, n)
 }

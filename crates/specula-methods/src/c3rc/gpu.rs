@@ -6,14 +6,14 @@
 //! creates no GPU objects.
 
 use bytemuck::{Pod, Zeroable};
-use glam::Mat4;
+use glam::{DMat4, Mat4};
 use specula_gpu::shaders::compose;
 use specula_gpu::util::{
     bind_group, buffer_binding, layout_entry, texture_binding, writable_buffer,
 };
 use specula_gpu::{GpuContext, GpuError};
 
-use super::phases::{Plan, ScreenView};
+use super::phases::{lod_stride, Plan, ScreenView};
 use super::points::PointCloud;
 use crate::raster::GBuffer;
 
@@ -214,6 +214,7 @@ impl GpuProjection {
         clouds: &[PointCloud],
         cloud_generation: u64,
         world_from_loaded: &[Mat4],
+        level_of_detail: bool,
         mirrors: &[usize],
         mesh_count: usize,
         view: &ScreenView,
@@ -274,11 +275,21 @@ impl GpuProjection {
         );
         ctx.queue
             .write_buffer(self.cameras.get(), 0, bytemuck::cast_slice(&cameras));
+        let object_from_world: Vec<DMat4> = world_from_loaded
+            .iter()
+            .map(|m| DMat4::from_cols_array(&m.inverse().to_cols_array().map(f64::from)))
+            .collect();
         let mut work: Vec<[u32; 4]> = Vec::new();
         for (i, leaves) in plan.leaves.iter().enumerate() {
             for &(c, k) in leaves {
                 let node = &clouds[c].nodes[k];
-                work.push([i as u32, offsets[c] + node.first, node.count, 0]);
+                let stride = if level_of_detail {
+                    let local = plan.cameras[i].world.transformed(&object_from_world[c]);
+                    lod_stride(&plan.cameras[i], &local, node, clouds[c].radius)
+                } else {
+                    1
+                };
+                work.push([i as u32, offsets[c] + node.first, node.count, stride as u32]);
             }
         }
         made |= self

@@ -118,7 +118,7 @@ pub const PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "leaf_points",
         kind: ParamKind::Integer { min: 1, max: 1_000_000 },
-        default: "384",
+        default: "256",
         doc: "kd-tree leaf size: smaller culls more precisely at more culling cost",
         invalidates: Invalidates::Resources,
     },
@@ -162,6 +162,13 @@ pub const PARAMS: &[ParamSpec] = &[
         kind: ParamKind::Flag,
         default: "true",
         doc: "trace per pixel the triangles whose vertex rays hit their own mirror (false: first order, as the paper)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "level_of_detail",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "project every k-th point of leaves the camera minifies to more than 2 points a pixel (false: every point, as the paper)",
         invalidates: Invalidates::Uniform,
     },
     ParamSpec {
@@ -224,6 +231,7 @@ pub struct C3rcMethod {
     pub min_pixels: u32,
     pub split_pixels: u32,
     pub trace_self: bool,
+    pub level_of_detail: bool,
     pub resolution: u32,
     pub dynamic: bool,
     pub shadow_resolution: u32,
@@ -239,7 +247,7 @@ impl Default for C3rcMethod {
             density: 0.0,
             near: 3.0,
             limits: TreeLimits {
-                leaf_points: 384,
+                leaf_points: 256,
                 max_depth: 12,
             },
             splat_scale: 1.5,
@@ -247,6 +255,7 @@ impl Default for C3rcMethod {
             min_pixels: 2,
             split_pixels: 0,
             trace_self: true,
+            level_of_detail: true,
             resolution: 256,
             dynamic: false,
             shadow_resolution: 1024,
@@ -527,6 +536,7 @@ impl Technique for C3rcMethod {
             "min_pixels" => self.min_pixels.to_string(),
             "split_pixels" => self.split_pixels.to_string(),
             "trace_self" => self.trace_self.to_string(),
+            "level_of_detail" => self.level_of_detail.to_string(),
             "resolution" => self.resolution.to_string(),
             "dynamic" => self.dynamic.to_string(),
             "shadow_resolution" => self.shadow_resolution.to_string(),
@@ -547,6 +557,7 @@ impl Technique for C3rcMethod {
             "min_pixels" => self.min_pixels = value.integer() as u32,
             "split_pixels" => self.split_pixels = value.integer() as u32,
             "trace_self" => self.trace_self = value.flag(),
+            "level_of_detail" => self.level_of_detail = value.flag(),
             "resolution" => self.resolution = value.integer() as u32,
             "dynamic" => self.dynamic = value.flag(),
             "shadow_resolution" => self.shadow_resolution = value.integer() as u32,
@@ -647,6 +658,7 @@ impl Technique for C3rcMethod {
             min_pixels: self.min_pixels,
             split_pixels: self.split_pixels,
             trace_self: self.trace_self,
+            level_of_detail: self.level_of_detail,
             splat_scale: self.splat_scale,
             max_splat: self.max_splat,
             max_depth: FALLBACK_MAX_DEPTH,
@@ -705,6 +717,7 @@ impl Technique for C3rcMethod {
                 &field.clouds,
                 field.generation,
                 &world_from_loaded,
+                self.level_of_detail,
                 &mirror_meshes,
                 scene.meshes.len(),
                 &view,
@@ -732,7 +745,11 @@ impl Technique for C3rcMethod {
                 &mut p.near_pixels,
             );
             stages.measured("projection (forward phase)", plan.report.projection_ms);
-            stages.measured("splatting and per-vertex colour", plan.report.splatting_ms);
+            stages.measured("splatting (resolve, holes)", plan.report.splatting_ms);
+            stages.measured(
+                "pixels without a camera (per-vertex, traced)",
+                plan.report.fallback_ms,
+            );
             gpu.queue
                 .write_buffer(&p.near_buffer, 0, bytemuck::cast_slice(&p.near_pixels));
         }
@@ -864,6 +881,10 @@ fn counters(
         ),
         ("leaves seen by cameras".into(), report.leaves_visited),
         ("points in leaves seen".into(), report.points_in_leaves),
+        (
+            "points skipped by level of detail".into(),
+            report.points_skipped_by_level_of_detail,
+        ),
         (
             "points projected (cubic solved)".into(),
             report.points_projected,

@@ -12,8 +12,8 @@ use specula_scene::{Camera, Scene};
 use specula_trace::reference::{offset_origin, Tracer};
 use specula_trace::{Ray, SceneAccel};
 
-use super::camera::C3rc;
-use super::points::PointCloud;
+use super::camera::{C3rc, PlaneBound, Projector};
+use super::points::{Node, PointCloud};
 
 /// How the camera maps world points to pixels (the raster pass's pinhole, top-left origin).
 #[derive(Clone, Copy, Debug)]
@@ -81,6 +81,8 @@ pub struct FrameSettings {
     /// Trace the pixels of triangles whose vertex rays hit their own mirror (else they get a
     /// camera like the others, first order as in the paper).
     pub trace_self: bool,
+    /// Project every k-th point of a leaf whose points would crowd into pixels.
+    pub level_of_detail: bool,
     pub splat_scale: f32,
     pub max_splat: f32,
     pub max_depth: u32,
@@ -143,12 +145,17 @@ pub struct PhaseReport {
     pub points_projected_more_than_once: u64,
     /// Valid projections of front-facing points in front of the eye.
     pub splats: u64,
+    /// Points left out where a leaf's points would crowd more than a few into a pixel.
+    pub points_skipped_by_level_of_detail: u64,
     pub covered_pixels: u64,
     pub holes_filled: u64,
     pub setup_ms: f64,
     pub culling_ms: f64,
     pub projection_ms: f64,
+    /// Resolving the splats per pixel and filling holes.
     pub splatting_ms: f64,
+    /// The pixels of triangles without a camera (per-vertex colour, traced pixels).
+    pub fallback_ms: f64,
 }
 
 /// Radiance arriving along each mirror pixel's reflected ray from the nearby objects
@@ -327,13 +334,25 @@ pub fn plan(
                     Vec::new()
                 };
                 let bound = local.plane_bound();
+                // The base's bounding sphere, for the normal-cone test.
+                let base_center = (local.v[0] + local.v[1] + local.v[2]) / 3.0;
+                let base_radius = local
+                    .v
+                    .iter()
+                    .map(|v| (*v - base_center).length())
+                    .fold(0.0, f64::max);
                 stack.clear();
                 stack.push(0usize);
                 while let Some(k) = stack.pop() {
                     let node = &cloud.nodes[k];
                     let (lo, hi) = (node.lo.as_dvec3(), node.hi.as_dvec3());
-                    // The cheap planes first, then the exact (conservative) test.
-                    if !bound.may_meet_box(lo, hi) || !local.may_see_box(lo, hi, &folds) {
+                    // The cheap planes and normal cone first (a node whose points all face
+                    // away from the mirror triangle shows nothing), then the exact
+                    // (conservative) test.
+                    if !bound.may_meet_box(lo, hi)
+                        || !node.may_face(base_center.as_vec3(), base_radius as f32)
+                        || !local.may_see_box(lo, hi, &folds)
+                    {
                         continue;
                     }
                     if node.leaf {
@@ -407,24 +426,48 @@ pub fn forward(
     let report = &mut plan.report;
     // Forward phase: the leaves' points projected with the camera, every valid projection.
     let start = Instant::now();
-    let per_camera: Vec<(Vec<Splat>, [u64; 4])> = plan
+    // Each camera in each cloud's space, once; then the work spread leaf by leaf (a few wide
+    // cameras see most of the points: per-camera work would leave a core idle).
+    let in_cloud: Vec<(C3rc, PlaneBound, Projector, f64)> = plan
         .cameras
         .par_iter()
-        .zip(&plan.leaves)
-        .map(|(camera, leaves)| {
+        .flat_map_iter(|camera| {
+            clouds.iter().map(move |placed| {
+                let local = camera.world.transformed(&placed.object_from_world);
+                let root = &placed.cloud.nodes[0];
+                let reach = local.lambda_bound(root.lo.as_dvec3(), root.hi.as_dvec3());
+                (local, local.plane_bound(), local.projector(), reach)
+            })
+        })
+        .collect();
+    let items: Vec<(usize, usize, usize)> = plan
+        .leaves
+        .iter()
+        .enumerate()
+        .flat_map(|(i, leaves)| leaves.iter().map(move |&(c, k)| (i, c, k)))
+        .collect();
+    let per_camera: Vec<(Vec<Splat>, [u64; 5])> = items
+        .par_iter()
+        .map(|&(i, c, k)| {
+            let camera = &plan.cameras[i];
             let mut splats = Vec::new();
             let (mut tried, mut solved, mut valid, mut twice) = (0u64, 0u64, 0u64, 0u64);
-            for &(c, k) in leaves {
-                let placed = &clouds[c];
-                let cloud = placed.cloud;
-                let local = camera.world.transformed(&placed.object_from_world);
+            let mut lod_skipped = 0u64;
+            {
+                let cloud = clouds[c].cloud;
+                let (local, bound, projector, reach) = &in_cloud[i * clouds.len() + c];
                 let node = &cloud.nodes[k];
                 let range = node.first as usize..(node.first + node.count) as usize;
                 tried += range.len() as u64;
-                let radius = (cloud.radius * settings.splat_scale) as f64;
-                let bound = local.plane_bound();
-                let projector = local.projector();
-                for i in range {
+                let stride = if settings.level_of_detail {
+                    lod_stride(camera, local, node, cloud.radius)
+                } else {
+                    1
+                };
+                lod_skipped += (range.len() - range.len().div_ceil(stride)) as u64;
+                // Kept points stand for the skipped ones: larger splats.
+                let radius = (cloud.radius * settings.splat_scale) as f64 * (stride as f64).sqrt();
+                for i in range.step_by(stride) {
                     let q = cloud.p_object[i].as_dvec3();
                     if !bound.may_contain(q) {
                         continue;
@@ -437,12 +480,16 @@ pub fn forward(
                         continue;
                     }
                     solved += 1;
-                    let (projections, count) =
-                        local.project_with(projector.cubic(q), q, !camera.may_project_twice);
+                    let (projections, count) = local.project_with(
+                        projector.cubic(q),
+                        q,
+                        *reach,
+                        !camera.may_project_twice,
+                    );
                     twice += (count > 1) as u64;
                     valid += count as u64;
                     for projection in &projections[..count] {
-                        let base_local = projection.base_point(&local);
+                        let base_local = projection.base_point(local);
                         if n.dot(base_local - q) <= 0.0 {
                             continue;
                         }
@@ -468,7 +515,7 @@ pub fn forward(
                     }
                 }
             }
-            (splats, [tried, solved, valid, twice])
+            (splats, [tried, solved, valid, twice, lod_skipped])
         })
         .collect();
     report.projection_ms = ms(start);
@@ -476,7 +523,8 @@ pub fn forward(
     // Splats resolved per pixel: on the reflector surface the splat came from, nearest first.
     let start = Instant::now();
     let mut depth = vec![f32::INFINITY; pixel_count];
-    for (splats, [tried, solved, valid, twice]) in &per_camera {
+    for (splats, [tried, solved, valid, twice, skipped]) in &per_camera {
+        report.points_skipped_by_level_of_detail += skipped;
         report.points_in_leaves += tried;
         report.points_projected += solved;
         report.splats += splats.len() as u64;
@@ -486,8 +534,10 @@ pub fn forward(
     resolve(&per_camera, view, surfaces, &mut depth, out);
     report.covered_pixels = depth.iter().filter(|d| d.is_finite()).count() as u64;
     report.holes_filled = fill_holes(view, surfaces, mirrors, &depth, out);
+    report.splatting_ms = ms(start);
 
     // Small triangles (per-vertex colour) and those that see their own mirror (traced).
+    let start = Instant::now();
     fallback_pixels(
         scene,
         accel,
@@ -499,7 +549,26 @@ pub fn forward(
         settings.max_depth,
         out,
     );
-    report.splatting_ms = ms(start);
+    report.fallback_ms = ms(start);
+}
+
+/// Points per pixel the level of detail keeps (about).
+const LOD_POINTS_PER_PIXEL: f64 = 4.0;
+
+/// How many of a leaf's points one projected point stands for: where the camera minifies the
+/// leaf so much that its points would crowd more than [`LOD_POINTS_PER_PIXEL`] into a pixel,
+/// every k-th point is enough. Estimated at the leaf's nearest sweep distance (its
+/// cross-section there is the smallest, so the stride the smallest).
+pub(super) fn lod_stride(camera: &TriangleCamera, local: &C3rc, node: &Node, radius: f32) -> usize {
+    let center = (local.v[0] + local.v[1] + local.v[2]) / 3.0;
+    let (lo, hi) = (node.lo.as_dvec3(), node.hi.as_dvec3());
+    let nearest = center.clamp(lo, hi);
+    let lambda = (nearest - center).length();
+    let section = local.sweep_area(lambda).max(1e-30);
+    let pixels_per_point =
+        std::f64::consts::PI * (radius as f64).powi(2) * (camera.screen_area / section);
+    let points_per_pixel = 1.0 / pixels_per_point.max(1e-30);
+    ((points_per_pixel / LOD_POINTS_PER_PIXEL).floor() as usize).clamp(1, 1 << 16)
 }
 
 /// A triangle's pixels come from its camera's splats (and the far field).
@@ -545,13 +614,14 @@ fn splat_pixels(
     s: &Splat,
     view: &ScreenView,
     surfaces: &PixelSurfaces,
+    rows: (i64, i64),
     mut f: impl FnMut(usize, f32),
 ) {
-    let (w, h) = (view.width as i64, view.height as i64);
+    let w = view.width as i64;
     let x0 = ((s.x - s.radius).floor() as i64).max(0);
     let x1 = ((s.x + s.radius).ceil() as i64).min(w);
-    let y0 = ((s.y - s.radius).floor() as i64).max(0);
-    let y1 = ((s.y + s.radius).ceil() as i64).min(h);
+    let y0 = ((s.y - s.radius).floor() as i64).max(rows.0);
+    let y1 = ((s.y + s.radius).ceil() as i64).min(rows.1);
     for py in y0..y1 {
         let dy = py as f32 + 0.5 - s.y;
         if dy.abs() > s.radius {
@@ -569,7 +639,7 @@ fn splat_pixels(
             // A pixel whose surface is farther from the splat's reflector point than the
             // splat reaches shows another part of the reflector (or something in front of it).
             let p = surfaces.position[k];
-            if (Vec3::new(p[0], p[1], p[2]) - s.p_world).length() > s.reach {
+            if (Vec3::new(p[0], p[1], p[2]) - s.p_world).length_squared() > s.reach * s.reach {
                 continue;
             }
             f(k, dx * dx + dy * dy);
@@ -582,28 +652,42 @@ fn splat_pixels(
 /// nearest the pixel's gives the colour (a point-sampled reconstruction, not the colour of
 /// whichever point happened to lie nearest the reflector).
 fn resolve(
-    per_camera: &[(Vec<Splat>, [u64; 4])],
+    per_camera: &[(Vec<Splat>, [u64; 5])],
     view: &ScreenView,
     surfaces: &PixelSurfaces,
     depth: &mut [f32],
     out: &mut [[f32; 4]],
 ) {
-    for (splats, ..) in per_camera {
-        for s in splats {
-            splat_pixels(s, view, surfaces, |k, _| depth[k] = depth[k].min(s.depth));
-        }
-    }
-    let mut nearest = vec![f32::INFINITY; depth.len()];
-    for (splats, ..) in per_camera {
-        for s in splats {
-            splat_pixels(s, view, surfaces, |k, d2| {
-                if s.depth <= depth[k] + s.band && d2 < nearest[k] {
-                    nearest[k] = d2;
-                    out[k] = [s.color.x, s.color.y, s.color.z, 1.0];
-                }
-            });
-        }
-    }
+    // One band of rows per thread: every thread reads all splats and writes its own rows.
+    let w = view.width as usize;
+    let rows = (view.height as usize)
+        .div_ceil(rayon::current_num_threads().max(1))
+        .max(1);
+    depth
+        .par_chunks_mut(rows * w)
+        .zip(out.par_chunks_mut(rows * w))
+        .enumerate()
+        .for_each(|(band, (depth, out))| {
+            let first = band * rows;
+            let range = (first as i64, (first + depth.len() / w) as i64);
+            let offset = first * w;
+            let splats = || per_camera.iter().flat_map(|(splats, _)| splats);
+            for s in splats() {
+                splat_pixels(s, view, surfaces, range, |k, _| {
+                    depth[k - offset] = depth[k - offset].min(s.depth)
+                });
+            }
+            let mut nearest = vec![f32::INFINITY; depth.len()];
+            for s in splats() {
+                splat_pixels(s, view, surfaces, range, |k, d2| {
+                    let k = k - offset;
+                    if s.depth <= depth[k] + s.band && d2 < nearest[k] {
+                        nearest[k] = d2;
+                        out[k] = [s.color.x, s.color.y, s.color.z, 1.0];
+                    }
+                });
+            }
+        });
 }
 
 /// Fills one-pixel holes between splats: an uncovered mirror pixel with at least five of its
@@ -617,43 +701,40 @@ fn fill_holes(
     out: &mut [[f32; 4]],
 ) -> u64 {
     let (w, h) = (view.width as i64, view.height as i64);
-    let mut filled = Vec::new();
-    for y in 0..h {
-        for x in 0..w {
-            let k = (y * w + x) as usize;
-            let mesh1 = surfaces.ids[k][0];
-            if out[k][3] > 0.0 || mesh1 == 0 || !mirrors.contains(&((mesh1 - 1) as usize)) {
-                continue;
-            }
-            let mut covered = 0;
-            let mut best: Option<usize> = None;
-            for (dx, dy) in [
-                (-1, -1),
-                (0, -1),
-                (1, -1),
-                (-1, 0),
-                (1, 0),
-                (-1, 1),
-                (0, 1),
-                (1, 1),
-            ] {
-                let (nx, ny) = (x + dx, y + dy);
-                if nx < 0 || ny < 0 || nx >= w || ny >= h {
-                    continue;
+    let covered_out: &[[f32; 4]] = out;
+    let filled: Vec<(usize, [f32; 4])> = (0..h)
+        .into_par_iter()
+        .flat_map_iter(|y| {
+            (0..w).filter_map(move |x| {
+                let k = (y * w + x) as usize;
+                let mesh1 = surfaces.ids[k][0];
+                if covered_out[k][3] > 0.0
+                    || mesh1 == 0
+                    || !mirrors.contains(&((mesh1 - 1) as usize))
+                {
+                    return None;
                 }
-                let n = (ny * w + nx) as usize;
-                if surfaces.ids[n][0] == mesh1 && depth[n].is_finite() {
-                    covered += 1;
-                    if best.is_none_or(|b| depth[n] < depth[b]) {
-                        best = Some(n);
+                let mut covered = 0;
+                let mut best: Option<usize> = None;
+                for dy in -1..=1 {
+                    for dx in -1..=1 {
+                        let (nx, ny) = (x + dx, y + dy);
+                        if (dx, dy) == (0, 0) || nx < 0 || ny < 0 || nx >= w || ny >= h {
+                            continue;
+                        }
+                        let n = (ny * w + nx) as usize;
+                        if surfaces.ids[n][0] == mesh1 && depth[n].is_finite() {
+                            covered += 1;
+                            if best.is_none_or(|b| depth[n] < depth[b]) {
+                                best = Some(n);
+                            }
+                        }
                     }
                 }
-            }
-            if let (true, Some(b)) = (covered >= 5, best) {
-                filled.push((k, out[b]));
-            }
-        }
-    }
+                best.filter(|_| covered >= 5).map(|b| (k, covered_out[b]))
+            })
+        })
+        .collect();
     for &(k, color) in &filled {
         out[k] = color;
     }

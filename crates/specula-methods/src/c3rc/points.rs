@@ -30,6 +30,9 @@ pub struct TreeLimits {
 pub struct Node {
     pub lo: Vec3,
     pub hi: Vec3,
+    /// Every point's normal n has n · normal_axis ≥ normal_cos (−1: any direction).
+    pub normal_axis: Vec3,
+    pub normal_cos: f32,
     pub first: u32,
     pub count: u32,
     pub leaf: bool,
@@ -79,6 +82,32 @@ pub fn area(mesh: &Mesh) -> f32 {
     (0..mesh.triangles.len())
         .map(|t| mesh.face_normal_scaled(t).length() * 0.5)
         .sum()
+}
+
+impl Node {
+    /// False only when every point of the node faces away from every point of the sphere
+    /// (`center`, `radius`): all normals n and directions u from a point to the sphere have
+    /// n · u ≤ 0 when the angle between the normal axis and the direction from the node to
+    /// the sphere exceeds 90° plus the normal cone's and the direction cone's half-angles.
+    pub fn may_face(&self, center: Vec3, radius: f32) -> bool {
+        if self.normal_cos <= 0.0 {
+            return true;
+        }
+        let box_center = (self.lo + self.hi) * 0.5;
+        let to = center - box_center;
+        let distance = to.length();
+        let spread = radius + (self.hi - self.lo).length() * 0.5;
+        if distance <= spread {
+            return true;
+        }
+        // Angles: β of the normal cone, α of the directions, θ between axis and `to`.
+        let beta = self.normal_cos.clamp(-1.0, 1.0).acos();
+        let alpha = (spread / distance).asin();
+        let theta = (self.normal_axis.dot(to) / distance)
+            .clamp(-1.0, 1.0)
+            .acos();
+        theta <= std::f32::consts::FRAC_PI_2 + alpha + beta + 1e-4
+    }
 }
 
 impl PointCloud {
@@ -153,6 +182,8 @@ impl PointCloud {
         let mut nodes = vec![Node {
             lo: Vec3::ZERO,
             hi: Vec3::ZERO,
+            normal_axis: Vec3::ZERO,
+            normal_cos: -1.0,
             first: 0,
             count: 0,
             leaf: true,
@@ -170,6 +201,22 @@ impl PointCloud {
             }
             nodes[node].lo = lo;
             nodes[node].hi = hi;
+            // The cone of the normals: their mean direction and the widest angle from it.
+            let normals = &self.n_object;
+            let axis = order[begin..end]
+                .iter()
+                .map(|&i| normals[i as usize])
+                .sum::<Vec3>()
+                .normalize_or_zero();
+            nodes[node].normal_axis = axis;
+            nodes[node].normal_cos = if axis == Vec3::ZERO {
+                -1.0
+            } else {
+                order[begin..end]
+                    .iter()
+                    .map(|&i| normals[i as usize].dot(axis))
+                    .fold(1.0, f32::min)
+            };
             let n = end - begin;
             let mid = (lo + hi) * 0.5;
             let split = n > limits.leaf_points && depth < limits.max_depth && lo != hi;
@@ -200,6 +247,8 @@ impl PointCloud {
                 nodes.push(Node {
                     lo,
                     hi,
+                    normal_axis: Vec3::ZERO,
+                    normal_cos: -1.0,
                     first: 0,
                     count: 0,
                     leaf: true,

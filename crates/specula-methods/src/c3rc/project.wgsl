@@ -47,7 +47,8 @@ struct Camera {
 @group(0) @binding(1) var<storage, read> points: array<Point>;
 @group(0) @binding(2) var<storage, read> clouds: array<mat4x4<f32>>;
 @group(0) @binding(3) var<storage, read> cameras: array<Camera>;
-// (camera, first point, point count, 0) per visible leaf of each camera.
+// (camera, first point, point count, stride) per visible leaf of each camera: every
+// stride-th point is projected, its splat grown to stand for the others (level of detail).
 @group(0) @binding(4) var<storage, read> work: array<vec4<u32>>;
 @group(0) @binding(5) var<storage, read_write> depth: array<atomic<u32>>;
 // (squared distance to the splat's centre, quantised) << 24 | point index.
@@ -151,7 +152,7 @@ struct Splat {
 };
 
 // The valid projections of point `index` by camera `camera`, as splats; returns how many.
-fn project(camera: Camera, index: u32, count_it: bool, splats: ptr<function, array<Splat, 3>>) -> u32 {
+fn project(camera: Camera, index: u32, stride: u32, count_it: bool, splats: ptr<function, array<Splat, 3>>) -> u32 {
     let point = points[index];
     let cloud = u32(point.p.w);
     let m = clouds[cloud];
@@ -185,7 +186,7 @@ fn project(camera: Camera, index: u32, count_it: bool, splats: ptr<function, arr
     );
     let roots = cubic_roots(c);
     var count = 0u;
-    let radius_world = point.n.w * settings.lens.z;
+    let radius_world = point.n.w * settings.lens.z * sqrt(f32(stride));
     for (var r = 0u; r < u32(roots[3]); r++) {
         let lambda = max(roots[r], 0.0);
         if (roots[r] < -1e-4) {
@@ -290,9 +291,9 @@ fn splat_depth(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocatio
     if (lane == 0u) {
         atomicAdd(&counts[0], item.z);
     }
-    for (var k = lane; k < item.z; k += 64u) {
+    for (var k = lane * item.w; k < item.z; k += 64u * item.w) {
         var splats: array<Splat, 3>;
-        let n = project(camera, item.y + k, true, &splats);
+        let n = project(camera, item.y + k, item.w, true, &splats);
         for (var s = 0u; s < n; s++) {
             atomicAdd(&counts[3], 1u);
             let splat = splats[s];
@@ -316,9 +317,9 @@ fn splat_nearest(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocat
     }
     let item = work[w];
     let camera = cameras[item.x];
-    for (var k = lane; k < item.z; k += 64u) {
+    for (var k = lane * item.w; k < item.z; k += 64u * item.w) {
         var splats: array<Splat, 3>;
-        let n = project(camera, item.y + k, false, &splats);
+        let n = project(camera, item.y + k, item.w, false, &splats);
         for (var s = 0u; s < n; s++) {
             let splat = splats[s];
             let side = i32(ceil(splat.x + splat.radius)) - i32(floor(splat.x - splat.radius));
