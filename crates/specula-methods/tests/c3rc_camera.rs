@@ -386,3 +386,37 @@ proptest! {
         }
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(200))]
+
+    /// The normal-cone test never skips a node with a point facing some point of the sphere.
+    #[test]
+    fn the_normal_cone_test_never_skips_a_node_facing_the_sphere(
+        centre in prop::array::uniform3(-3.0f32..3.0),
+        radius in 0.01f32..1.0,
+        seed in 0u32..1000,
+    ) {
+        // A patch of a sphere: nodes with narrow and wide normal cones.
+        let mesh = specula_scene::generators::sphere(1.0, 16, 8);
+        let limits = TreeLimits { leaf_points: 32, max_depth: 6 };
+        let cloud = PointCloud::sample(seed as usize, &mesh, glam::Mat4::IDENTITY, 300.0, 1.0, limits);
+        let centre = glam::Vec3::from_array(centre);
+        // Points on and inside the sphere (its centre and six poles).
+        let targets: Vec<glam::Vec3> = [glam::Vec3::ZERO, glam::Vec3::X, -glam::Vec3::X, glam::Vec3::Y, -glam::Vec3::Y, glam::Vec3::Z, -glam::Vec3::Z]
+            .iter()
+            .map(|d| centre + *d * radius)
+            .collect();
+        for node in cloud.nodes.iter().filter(|n| n.leaf) {
+            if node.may_face(centre, radius) {
+                continue;
+            }
+            for i in node.first as usize..(node.first + node.count) as usize {
+                for t in &targets {
+                    let facing = cloud.n_object[i].dot(*t - cloud.p_object[i]);
+                    prop_assert!(facing <= 1e-4, "skipped a point facing {t}: {facing}");
+                }
+            }
+        }
+    }
+}

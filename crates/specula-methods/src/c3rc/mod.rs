@@ -9,59 +9,85 @@
 //!    radii of a mirror ([`phases::mesh_is_near`]) is sampled uniformly by area
 //!    ([`points::PointCloud::sample`]), each point shaded as the reference shades that surface
 //!    ([`points::PointCloud::shade`]) and given a splat radius (the disc it stands for); an
-//!    eight-way kd-tree per object ([`points::PointCloud::build_tree`]), kept in the object's
-//!    loaded pose so that a rigid move keeps it (colours are shaded again after a move: light
-//!    and shadows change).
+//!    eight-way kd-tree per object ([`points::PointCloud::build_tree`]: each node splits at its
+//!    box's centre on all three axes at once), kept in the object's loaded pose so that a rigid
+//!    move keeps it (colours are shaded again after a move: light and shadows change).
 //! 2. Far field: envmap's cube maps ([`crate::envmap::CubeMaps`]) drawn from each mirror with
 //!    its nearby objects left out.
-//! 3. A C3RC per reflector triangle (§5; [`camera::C3rc::reflector`]): the view direction
-//!    reflected about each vertex normal; the base is the triangle. Only triangles the
-//!    G-buffer shows get one.
-//! 4. Backward phase (§5.2; [`phases::reflect_near`]): each camera, mapped into each object's
-//!    space, against that object's tree ([`camera::C3rc::may_see_box`]), collecting leaves.
-//! 5. Forward phase (§5.1, §6): each leaf's points projected with the camera (the cubic, every
-//!    valid projection: a point may show several times, in one camera or in several), each
-//!    splatted as a square at the pixel of its base point, sized to its footprint, with
-//!    push-back depth (its distance from the reflector) so the point nearest the reflector
-//!    wins; a splat lands only on pixels of the surface it was projected from.
+//! 3. A C3RC per visible mirror triangle (§5; [`camera::C3rc::reflector`]): the view direction
+//!    reflected about each vertex normal; the base is the triangle. The G-buffer says which
+//!    triangles are visible and how many pixels each covers ([`phases::plan`]).
+//! 4. Backward phase (§5.2; [`phases::plan`]): each camera, mapped into each object's space,
+//!    against that object's tree ([`camera::C3rc::may_see_box`]), collecting leaves.
+//! 5. Forward phase (§5.1, §6; [`phases::forward`] on the CPU, [`gpu::GpuProjection`] as GPU
+//!    compute passes): each leaf's points projected with the camera (the cubic, every valid
+//!    projection: a point may show several times, in one camera or in several, and all are
+//!    issued, which the paper's GPU could not), each splatted as a square at the pixel of its
+//!    base point, sized to its footprint (the point's disc against the sweeping triangle's
+//!    cross-section there, mapped to the triangle's screen area), with push-back depth (its
+//!    distance from the reflector) so that the point nearest the reflector wins; a splat lands
+//!    only on pixels of the surface it was projected from.
 //! 6. Shading: envmap's shading pass, taking a mirror pixel's reflected radiance from the
 //!    splats where they cover it and from the far-field cube map where they do not.
 //!
+//! Beyond the paper (each can be turned off; docs/benchmarks.md has what each bought):
+//! - The box test is conservative where the paper's two conditions are not: it also tests the
+//!   construction rays (the arcs' end points) and the base triangle against the box, and keeps
+//!   boxes where a self-intersecting camera folds over (the fold's surface bounds the volume
+//!   there and is neither a wall nor the base). Cheap conservative tests come first: four
+//!   planes around each camera, and each node's normal cone (a leaf whose points all face
+//!   away from the triangle is skipped).
+//! - Splats resolve in two steps: the nearest push-back depth finds the front surface, then
+//!   within a depth band the splat whose centre is nearest the pixel's gives the colour; pixels
+//!   left uncovered between covered neighbours are filled.
+//! - `trace_self`: a triangle whose vertex rays hit its own mirror (a teapot's body seeing its
+//!   spout, lid and knob) gets no camera: its pixels are traced, one exact ray each. C3RC is
+//!   first order (a reflector does not see itself); these are the pixels where that is wrong.
+//! - `level_of_detail`: where a camera minifies a leaf so much that its points would crowd
+//!   more than four into a pixel, every k-th point is projected with its splat grown to match.
+//! - `split_pixels`: large triangles may be cut into more cameras (rays interpolated over less).
+//!
 //! Approximations and artifacts:
 //! - Point-based: the nearby objects are points, not surfaces. Too few points or too small
-//!   splats leave holes (the far field shows through, darker or lighter speckles); too large
-//!   splats blur and fatten edges (an object's silhouette grows by about a splat). Where
-//!   reflected rays converge (concave mirrors) a point's footprint grows past `max_splat` and
-//!   holes appear.
+//!   splats leave holes (the far field shows through as speckles); too large splats blur and
+//!   fatten edges (an object's silhouette grows by about a splat). Where reflected rays
+//!   converge (concave mirrors) a point's footprint grows past `max_splat` and holes appear.
 //! - Rays inside a camera are interpolated linearly between the vertices' reflected rays, not
 //!   reflected about the interpolated normal: large curved triangles bend the reflection
 //!   slightly (continuous across edges, exact at vertices).
-//! - First order: a mirror does not see itself or other mirrors through its splats (other
-//!   specular objects are not points; the far field shows them as envmap does).
-//! - The split near/far is per object: a far object is exactly as wrong as in envmap; a near
-//!   object is right. Points are one-sided: a surface seen from its back (open meshes) is not
-//!   reflected.
+//! - Other mirrors are not points: a mirror sees other mirrors only through the far field, as
+//!   in envmap (and itself only where `trace_self` traces).
+//! - The near/far split is per object: a far object is exactly as wrong as in envmap, a near
+//!   one is right. Points are one-sided: a surface seen from its back (open meshes) is not
+//!   reflected. On scenes whose objects are all far (door-mirror) c3rc is envmap.
 //! - Triangles that cover fewer than `min_pixels` visible pixels do not pay for a camera
 //!   (§8): their pixels take the per-vertex reflected colour, the radiance traced exactly
-//!   along the reflected ray at each vertex, interpolated (counted: `small triangles`,
-//!   `pixels from per-vertex colour`).
+//!   along the reflected ray at each vertex, interpolated (counted: `small triangles`).
 //! - Dielectric objects are shaded as envmap shades them, with the nearby objects in their
 //!   cube maps.
 //!
 //! Parameters:
 //! - `points` (100000): how many points the nearby objects get in all (sets the density).
-//!   More points: fewer holes and sharper reflections, linear cost in projection.
+//!   More points: fewer holes and sharper reflections, linear cost in projection (less with
+//!   the level of detail).
 //! - `density` (0 = from `points`): points per square metre, overriding `points`.
 //! - `near` (3): objects within this many reflector radii of a mirror become points; farther
 //!   ones are the cube map's. Larger: more points, fewer objects in the wrong place.
-//! - `leaf_points` (384), `tree_depth` (12): the tree's leaf size and depth. Smaller leaves
-//!   cull more precisely (fewer wasted projections) at more culling cost. With the default,
-//!   leaves hold about 105 points (the paper's about 121); on the teapot and 100k dragon points
-//!   culling + projection took 109 ms at 32, 61 at 128, 50 at 384, 50 at 512 (640×480).
+//! - `leaf_points` (256), `tree_depth` (12): the tree's leaf size and depth. Smaller leaves
+//!   cull more precisely (fewer wasted projections) at more culling cost; 256 was the fastest
+//!   measured (teapot and 100k dragon points, culling + projection + splatting at 640×480:
+//!   39.8 ms at 128, 37.8 at 256, 42.1 at 384).
 //! - `splat_scale` (1.5): splat radius over the radius of the disc a point stands for. Larger
 //!   closes holes and blurs.
-//! - `max_splat` (6): largest splat half-size in pixels (where rays converge).
+//! - `max_splat` (6): largest splat half-size in pixels (where reflected rays converge).
 //! - `min_pixels` (2): triangles covering fewer visible pixels take the per-vertex colour.
+//! - `split_pixels` (0 = never): triangles covering more pixels are cut in four, up to three
+//!   times: each part's camera interpolates over less (mean FLIP 0.0808 -> 0.0788 on
+//!   mirror-teapot-bunny at 8), at more cameras.
+//! - `trace_self` (true), `level_of_detail` (true): above; false for the paper's algorithm.
+//! - `projection` (auto): where the forward phase runs: `cpu` (rayon), `gpu` (compute
+//!   passes, f32), `auto` (the CPU on a software GPU such as lavapipe, where it measured 2.5 to
+//!   3.6 times faster, the GPU otherwise).
 //! - `resolution` (256), `dynamic` (false), `shadow_resolution` (1024): the far-field cube maps
 //!   and the scene raster, as in envmap.
 

@@ -100,13 +100,17 @@ impl Node {
         if distance <= spread {
             return true;
         }
-        // Angles: β of the normal cone, α of the directions, θ between axis and `to`.
-        let beta = self.normal_cos.clamp(-1.0, 1.0).acos();
-        let alpha = (spread / distance).asin();
-        let theta = (self.normal_axis.dot(to) / distance)
-            .clamp(-1.0, 1.0)
-            .acos();
-        theta <= std::f32::consts::FRAC_PI_2 + alpha + beta + 1e-4
+        // Angles: β of the normal cone, α of the directions, θ between axis and `to`; the
+        // node may face the sphere when θ ≤ 90° + α + β, i.e. cos θ ≥ −sin(α + β) (always
+        // when α + β ≥ 90°). Without trigonometric calls.
+        let (cos_beta, sin_alpha) = (self.normal_cos, spread / distance);
+        let sin_beta = (1.0 - cos_beta * cos_beta).max(0.0).sqrt();
+        let cos_alpha = (1.0 - sin_alpha * sin_alpha).max(0.0).sqrt();
+        if cos_alpha * cos_beta - sin_alpha * sin_beta <= 0.0 {
+            return true;
+        }
+        let cos_theta = self.normal_axis.dot(to) / distance;
+        cos_theta >= -(sin_alpha * cos_beta + cos_alpha * sin_beta) - 1e-4
     }
 }
 
