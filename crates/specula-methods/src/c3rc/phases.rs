@@ -182,6 +182,8 @@ pub fn reflect_near(
 /// A frame's cameras and what each sees, before the forward phase.
 pub struct Plan {
     pub(super) cameras: Vec<TriangleCamera>,
+    /// First and past-last rows with a mirror pixel.
+    mirror_rows: (usize, usize),
     /// (cloud, leaf node) pairs each camera's view volume meets.
     pub leaves: Vec<Vec<(usize, usize)>>,
     /// How each triangle's (per mesh) pixels are drawn: [`C3RC`], [`PER_VERTEX`], [`TRACED`].
@@ -220,9 +222,13 @@ pub fn plan(
             ]
         })
         .collect();
-    for [mesh1, triangle] in &surfaces.ids {
+    // The rows that show a mirror: the later per-pixel passes look only there.
+    let mut mirror_rows = (view.height as usize, 0usize);
+    for (k, [mesh1, triangle]) in surfaces.ids.iter().enumerate() {
         if *mesh1 > 0 && mirrors.contains(&((mesh1 - 1) as usize)) {
             visible[(mesh1 - 1) as usize][*triangle as usize] += 1;
+            let y = k / view.width as usize;
+            mirror_rows = (mirror_rows.0.min(y), mirror_rows.1.max(y + 1));
         }
     }
     let eye = view.eye.as_dvec3();
@@ -369,6 +375,7 @@ pub fn plan(
     report.culling_ms = ms(start);
     Plan {
         cameras,
+        mirror_rows,
         leaves,
         small,
         vertices,
@@ -531,9 +538,21 @@ pub fn forward(
         report.points_projected_more_than_once += twice;
         report.valid_projections += valid;
     }
-    resolve(&per_camera, view, surfaces, &mut depth, out);
-    report.covered_pixels = depth.iter().filter(|d| d.is_finite()).count() as u64;
-    report.holes_filled = fill_holes(view, surfaces, mirrors, &depth, out);
+    resolve(
+        &per_camera,
+        view,
+        surfaces,
+        plan.mirror_rows,
+        &mut depth,
+        out,
+    );
+    let w = view.width as usize;
+    let (first, last) = plan.mirror_rows;
+    if first < last {
+        let rows = first * w..last * w;
+        report.covered_pixels = depth[rows].iter().filter(|d| d.is_finite()).count() as u64;
+        report.holes_filled = fill_holes(view, surfaces, mirrors, (first, last), &depth, out);
+    }
     report.splatting_ms = ms(start);
 
     // Small triangles (per-vertex colour) and those that see their own mirror (traced).
@@ -655,22 +674,28 @@ fn resolve(
     per_camera: &[(Vec<Splat>, [u64; 5])],
     view: &ScreenView,
     surfaces: &PixelSurfaces,
+    rows: (usize, usize),
     depth: &mut [f32],
     out: &mut [[f32; 4]],
 ) {
-    // One band of rows per thread: every thread reads all splats and writes its own rows.
+    // One band of the mirror's rows per thread: every thread reads all splats and writes its
+    // own rows.
     let w = view.width as usize;
-    let rows = (view.height as usize)
+    let (first, last) = rows;
+    if first >= last {
+        return;
+    }
+    let band = (last - first)
         .div_ceil(rayon::current_num_threads().max(1))
         .max(1);
-    depth
-        .par_chunks_mut(rows * w)
-        .zip(out.par_chunks_mut(rows * w))
+    depth[first * w..last * w]
+        .par_chunks_mut(band * w)
+        .zip(out[first * w..last * w].par_chunks_mut(band * w))
         .enumerate()
-        .for_each(|(band, (depth, out))| {
-            let first = band * rows;
-            let range = (first as i64, (first + depth.len() / w) as i64);
-            let offset = first * w;
+        .for_each(|(b, (depth, out))| {
+            let top = first + b * band;
+            let range = (top as i64, (top + depth.len() / w) as i64);
+            let offset = top * w;
             let splats = || per_camera.iter().flat_map(|(splats, _)| splats);
             for s in splats() {
                 splat_pixels(s, view, surfaces, range, |k, _| {
@@ -697,12 +722,13 @@ fn fill_holes(
     view: &ScreenView,
     surfaces: &PixelSurfaces,
     mirrors: &[usize],
+    rows: (usize, usize),
     depth: &[f32],
     out: &mut [[f32; 4]],
 ) -> u64 {
     let (w, h) = (view.width as i64, view.height as i64);
     let covered_out: &[[f32; 4]] = out;
-    let filled: Vec<(usize, [f32; 4])> = (0..h)
+    let filled: Vec<(usize, [f32; 4])> = (rows.0 as i64..rows.1 as i64)
         .into_par_iter()
         .flat_map_iter(|y| {
             (0..w).filter_map(move |x| {
