@@ -916,6 +916,11 @@ fn counters(
             report.points_projected,
         ),
         ("valid projections".into(), report.valid_projections),
+        (
+            "valid projections per thousand points considered".into(),
+            (1000 * report.valid_projections)
+                / (report.points_in_leaves - report.points_skipped_by_level_of_detail).max(1),
+        ),
         ("splats".into(), report.splats),
         (
             "points with several projections in one camera".into(),
