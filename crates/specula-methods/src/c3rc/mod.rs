@@ -791,15 +791,8 @@ impl Technique for C3rcMethod {
             gpu.queue
                 .write_buffer(&p.camera_buffer, 0, bytemuck::bytes_of(&camera_uniform));
             let group = p.bind_groups.get_or_make(g.slot, || {
-                let [color, position, normal, ids] = g.views();
-                let mut entries = vec![
-                    p.camera_buffer.as_entire_binding(),
-                    wgpu::BindingResource::TextureView(&color),
-                    wgpu::BindingResource::TextureView(&position),
-                    wgpu::BindingResource::TextureView(&normal),
-                    wgpu::BindingResource::TextureView(&ids),
-                ];
-                entries.extend(p.maps.bindings());
+                let views = g.views();
+                let mut entries = envmap::shading_bindings(&p.camera_buffer, &views, &p.maps);
                 entries.push(p.near_buffer.as_entire_binding());
                 bind_group(gpu, "c3rc", &p.layout, &entries)
             });

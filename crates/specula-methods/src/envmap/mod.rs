@@ -462,6 +462,19 @@ pub fn shading_layout_entries() -> Vec<wgpu::BindGroupLayoutEntry> {
     entries
 }
 
+/// The resources for [`shading_layout_entries`], in order: the camera, the G-buffer's views
+/// (`GBuffer::views`) and the cube maps.
+pub fn shading_bindings<'a>(
+    camera: &'a wgpu::Buffer,
+    views: &'a [wgpu::TextureView; 4],
+    maps: &'a CubeMaps,
+) -> Vec<wgpu::BindingResource<'a>> {
+    let mut entries = vec![camera.as_entire_binding()];
+    entries.extend(views.iter().map(wgpu::BindingResource::TextureView));
+    entries.extend(maps.bindings());
+    entries
+}
+
 impl EnvMap {
     fn build(&self, ctx: &GpuContext, live: &LiveScene) -> Result<Prepared, GpuError> {
         let device = &ctx.device;
@@ -589,15 +602,8 @@ impl Technique for EnvMap {
             gpu.queue
                 .write_buffer(&p.camera_buffer, 0, bytemuck::bytes_of(&camera_uniform));
             let group = p.bind_groups.get_or_make(g.slot, || {
-                let [color, position, normal, ids] = g.views();
-                let mut entries = vec![
-                    p.camera_buffer.as_entire_binding(),
-                    wgpu::BindingResource::TextureView(&color),
-                    wgpu::BindingResource::TextureView(&position),
-                    wgpu::BindingResource::TextureView(&normal),
-                    wgpu::BindingResource::TextureView(&ids),
-                ];
-                entries.extend(p.maps.bindings());
+                let views = g.views();
+                let entries = shading_bindings(&p.camera_buffer, &views, &p.maps);
                 bind_group(gpu, "envmap", &p.layout, &entries)
             });
             raster::fullscreen_pass(
