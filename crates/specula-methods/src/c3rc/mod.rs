@@ -877,6 +877,10 @@ fn counters(
         ("points".into(), points as u64),
         ("kd-tree leaves".into(), leaves as u64),
         (
+            "kd-tree points per leaf".into(),
+            (points as f64 / leaves.max(1) as f64).round() as u64,
+        ),
+        (
             "kd-tree mean leaf depth (hundredths)".into(),
             (100.0 * depth_sum / leaves.max(1) as f64).round() as u64,
         ),
