@@ -289,7 +289,12 @@ impl GpuProjection {
                 } else {
                     1
                 };
-                work.push([i as u32, offsets[c] + node.first, node.count, stride as u32]);
+                work.push([
+                    i as u32,
+                    offsets[c] + node.point_first,
+                    node.point_count,
+                    stride as u32,
+                ]);
             }
         }
         made |= self

@@ -184,7 +184,8 @@ pub struct Plan {
     pub(super) cameras: Vec<TriangleCamera>,
     /// First and past-last rows with a mirror pixel.
     mirror_rows: (usize, usize),
-    /// (cloud, leaf node) pairs each camera's view volume meets.
+    /// (cloud, node) pairs each camera's view volume meets: leaves, or inner nodes the level
+    /// of detail projects whole.
     pub leaves: Vec<Vec<(usize, usize)>>,
     /// How each triangle's (per mesh) pixels are drawn: [`C3RC`], [`PER_VERTEX`], [`TRACED`].
     small: Vec<Vec<u8>>,
@@ -361,7 +362,14 @@ pub fn plan(
                     {
                         continue;
                     }
-                    if node.leaf {
+                    // A node the camera minifies so much that the level of detail keeps few
+                    // of its points is projected whole, strided: descending would cost more
+                    // tests than the projections it saves.
+                    let whole = settings.level_of_detail
+                        && node.point_count as usize
+                            / lod_stride(camera, &local, node, cloud.radius)
+                            <= LOD_WHOLE_NODE_POINTS;
+                    if node.leaf || whole {
                         found.push((c, k));
                     } else {
                         stack.extend(node.first as usize..(node.first + node.count) as usize);
@@ -464,7 +472,7 @@ pub fn forward(
                 let cloud = clouds[c].cloud;
                 let (local, bound, projector, reach) = &in_cloud[i * clouds.len() + c];
                 let node = &cloud.nodes[k];
-                let range = node.first as usize..(node.first + node.count) as usize;
+                let range = node.points();
                 tried += range.len() as u64;
                 let stride = if settings.level_of_detail {
                     lod_stride(camera, local, node, cloud.radius)
@@ -570,6 +578,9 @@ pub fn forward(
     );
     report.fallback_ms = ms(start);
 }
+
+/// A node whose strided points number at most this is projected whole (not descended).
+const LOD_WHOLE_NODE_POINTS: usize = 128;
 
 /// Points per pixel the level of detail keeps (about).
 const LOD_POINTS_PER_PIXEL: f64 = 4.0;

@@ -36,6 +36,9 @@ pub struct Node {
     pub first: u32,
     pub count: u32,
     pub leaf: bool,
+    /// The run of points under this node (every node's are contiguous), leaf or not.
+    pub point_first: u32,
+    pub point_count: u32,
 }
 
 /// The points of one object, in its loaded pose, ordered so that each leaf's are contiguous.
@@ -85,6 +88,11 @@ pub fn area(mesh: &Mesh) -> f32 {
 }
 
 impl Node {
+    /// Indices of the points under this node.
+    pub fn points(&self) -> std::ops::Range<usize> {
+        self.point_first as usize..(self.point_first + self.point_count) as usize
+    }
+
     /// False only when every point of the node faces away from every point of the sphere
     /// (`center`, `radius`): all normals n and directions u from a point to the sphere have
     /// n · u ≤ 0 when the angle between the normal axis and the direction from the node to
@@ -191,6 +199,8 @@ impl PointCloud {
             first: 0,
             count: 0,
             leaf: true,
+            point_first: 0,
+            point_count: 0,
         }];
         let mut depth_sum = 0u64;
         let mut leaves = 0usize;
@@ -205,6 +215,8 @@ impl PointCloud {
             }
             nodes[node].lo = lo;
             nodes[node].hi = hi;
+            nodes[node].point_first = begin as u32;
+            nodes[node].point_count = (end - begin) as u32;
             // The cone of the normals: their mean direction and the widest angle from it.
             let normals = &self.n_object;
             let axis = order[begin..end]
@@ -256,6 +268,8 @@ impl PointCloud {
                     first: 0,
                     count: 0,
                     leaf: true,
+                    point_first: 0,
+                    point_count: 0,
                 });
                 at += count;
             }
