@@ -224,6 +224,86 @@ fn a_point_seen_twice_through_one_triangle_is_splatted_where_its_rays_show_it() 
 }
 
 #[test]
+fn a_point_seen_twice_in_a_concave_mirror_triangle_is_shown_there_by_the_reference() {
+    // A concave spherical mirror (R = 1 m) seen from 3 m: near its focal point the reflected
+    // rays of one triangle cross, and a point there has two valid projections in that
+    // triangle's camera. The reference renderer, looking from the eye towards each projection's
+    // base point (where its splat lands), sees the point there: both images are real.
+    let cap = specula_scene::generators::spherical_cap(1.0, 1.6, true, 8, 16).unwrap();
+    let eye = Vec3::new(0.15, 0.1, 3.0);
+    let (mut q, mut projections, mut camera) = (DVec3::ZERO, Vec::new(), None);
+    'search: for tri in &cap.triangles {
+        let v = tri.map(|i| cap.positions[i as usize].as_dvec3());
+        let n = tri.map(|i| cap.normals[i as usize].as_dvec3());
+        let c = C3rc::reflector(v, n, eye.as_dvec3());
+        if c.multiple_projection_intervals().is_empty() {
+            continue;
+        }
+        for k in 0..3000u64 {
+            let f = |s: u64| {
+                (((k.wrapping_mul(2654435761) ^ s.wrapping_mul(0x9E3779B97F4A7C15)) >> 17) % 1000)
+                    as f64
+                    / 1000.0
+            };
+            let (mut b1, mut b2) = (f(1), f(2));
+            if b1 + b2 > 1.0 {
+                (b1, b2) = (1.0 - b1, 1.0 - b2);
+            }
+            let lambda = 3.0 * f(3);
+            let point: DVec3 = (0..3)
+                .map(|i| c.sweep_vertex(i, lambda) * [b1, b2, 1.0 - b1 - b2][i])
+                .sum();
+            let (p, count) = c.project(point, false);
+            if count == 2 && (p[0].base_point(&c) - p[1].base_point(&c)).length() > 0.02 {
+                (q, projections, camera) = (point, p[..2].to_vec(), Some(c));
+                break 'search;
+            }
+        }
+    }
+    let camera = camera.expect("a point with two projections 2 cm apart on the mirror");
+    // The mirror and a small red ball at the point, as the reference renders them.
+    let mut scene = specula_scene::Scene::new("concave mirror, two images");
+    scene.materials = vec![
+        Material::mirror("mirror", Vec3::ONE),
+        Material::unlit("red", Vec3::X),
+    ];
+    let mut ball = specula_scene::generators::sphere(0.002, 16, 8);
+    ball.transform(Mat4::from_translation(q.as_vec3()));
+    ball.material = 1;
+    scene.meshes = vec![cap, ball];
+    scene.background = Background::Color(Vec3::ZERO);
+    let accel = SceneAccel::new(&scene);
+    let tracer = specula_trace::reference::Tracer {
+        scene: &scene,
+        accel: &accel,
+        max_depth: 4,
+    };
+    for projection in &projections {
+        let base = projection.base_point(&camera).as_vec3();
+        let ray = specula_trace::Ray {
+            origin: eye,
+            dir: (base - eye).normalize(),
+        };
+        let hit = accel
+            .intersect(&ray, f32::INFINITY)
+            .expect("the eye sees the mirror");
+        assert_eq!(
+            hit.mesh, 0,
+            "the eye's ray towards {base} meets the mirror first"
+        );
+        let seen = tracer.radiance(&ray, 0, None);
+        eprintln!(
+            "projection at λ {:.3}, base {base}: the reference sees {seen}",
+            projection.lambda
+        );
+        assert!(
+            seen.x > 0.5 && seen.y < 0.1,
+            "the reference does not show the point at {base}: {seen}"
+        );
+    }
+}
+
+#[test]
 fn a_moved_object_keeps_its_tree_and_renders_as_a_fresh_preparation() {
     let Some(ctx) = specula_methods::test_context("c3rc move") else {
         return;
