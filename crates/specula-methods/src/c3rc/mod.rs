@@ -538,7 +538,6 @@ impl C3rcMethod {
         let f = field.as_mut().expect("made above");
         for cloud in &mut f.clouds {
             cloud.shade(scene, live.accel(), live.world_from_loaded(cloud.mesh));
-            cloud.shaded_at = Some(live.version());
         }
         f.near = near;
         f.found_at = live.version();

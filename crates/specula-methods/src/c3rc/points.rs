@@ -47,10 +47,8 @@ pub struct PointCloud {
     pub p_object: Vec<Vec3>,
     pub n_object: Vec<Vec3>,
     uv: Vec<Vec2>,
-    /// Radiance each point leaves towards the side its normal faces (shaded at `shaded_at`).
+    /// Radiance each point leaves towards the side its normal faces.
     pub color: Vec<Vec3>,
-    /// Scene version the colours were shaded at.
-    pub shaded_at: Option<u64>,
     /// Splat radius in metres: the disc one point stands for, times the splat scale.
     pub radius: f32,
     pub nodes: Vec<Node>,
@@ -168,7 +166,6 @@ impl PointCloud {
             p_object,
             n_object,
             uv,
-            shaded_at: None,
             radius,
             nodes: Vec::new(),
             stats: TreeStats::default(),
