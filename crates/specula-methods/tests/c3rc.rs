@@ -454,3 +454,33 @@ fn the_gpu_forward_phase_draws_what_the_cpu_draws() {
         );
     }
 }
+
+#[test]
+fn the_gpu_forward_phase_follows_a_larger_frame() {
+    let Some(ctx) = specula_methods::test_context("c3rc gpu resize") else {
+        return;
+    };
+    let scene = specula_scene::load("mirror-teapot-bunny").unwrap();
+    let live = LiveScene::new(scene.clone());
+    let settings = ["points=20000".to_string(), "projection=gpu".to_string()];
+    let mut technique = by_name("c3rc").unwrap();
+    apply_parameters(technique.as_mut(), &settings).unwrap();
+    technique
+        .render(&ctx, &live, &scene.camera, 100, 75)
+        .unwrap();
+    let grown = technique
+        .render(&ctx, &live, &scene.camera, 102, 78)
+        .unwrap()
+        .image(&ctx)
+        .unwrap();
+    let mut fresh = by_name("c3rc").unwrap();
+    apply_parameters(fresh.as_mut(), &settings).unwrap();
+    let expected = fresh.render_still(&ctx, &scene, 102, 78).unwrap().image;
+    let differing = grown
+        .pixels
+        .iter()
+        .zip(&expected.pixels)
+        .filter(|(a, b)| (**a - **b).abs().max_element() > 1e-4)
+        .count();
+    assert_eq!(differing, 0, "a grown frame draws as a fresh one");
+}

@@ -361,15 +361,16 @@ impl C3rc {
     }
 
     /// Boxes around the parts of the view volume where the sweeping triangle can fold over
-    /// itself (the multiple-projection intervals, cut at `lambda_max`): `T(λ)` for λ in
+    /// itself (this camera's [`C3rc::multiple_projection_intervals`], cut at `lambda_max`):
+    /// `T(λ)` for λ in
     /// [a, b] lies in the hull of `T(a)` and `T(b)`, since each vertex moves along a segment.
     /// The fold's surface bounds the view volume there and is neither a side wall nor the
     /// base, so the §5.2 conditions miss it; an unbounded interval gives an unbounded box.
-    pub fn fold_boxes(&self, lambda_max: f64) -> Vec<(DVec3, DVec3)> {
-        self.multiple_projection_intervals()
-            .into_iter()
-            .filter(|&(a, _)| a <= lambda_max)
-            .map(|(a, b)| {
+    pub fn fold_boxes(&self, intervals: &[(f64, f64)], lambda_max: f64) -> Vec<(DVec3, DVec3)> {
+        intervals
+            .iter()
+            .filter(|&&(a, _)| a <= lambda_max)
+            .map(|&(a, b)| {
                 let b = b.min(lambda_max);
                 if !b.is_finite() {
                     return (DVec3::NEG_INFINITY, DVec3::INFINITY);

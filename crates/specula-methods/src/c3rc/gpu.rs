@@ -6,14 +6,13 @@
 //! creates no GPU objects.
 
 use bytemuck::{Pod, Zeroable};
-use glam::{DMat4, Mat4};
 use specula_gpu::shaders::compose;
 use specula_gpu::util::{
     bind_group, buffer_binding, layout_entry, texture_binding, writable_buffer,
 };
 use specula_gpu::{GpuContext, GpuError};
 
-use super::phases::{lod_stride, Plan, ScreenView};
+use super::phases::{PlacedCloud, Plan, ScreenView};
 use super::points::PointCloud;
 use crate::raster::GBuffer;
 
@@ -62,16 +61,24 @@ pub struct GpuCamera {
     pub ids: [u32; 4],
 }
 
-/// A storage buffer that grows to fit.
+/// A buffer that grows to fit (to the next power of two, so that a warm frame makes none).
 #[derive(Default)]
-struct Growing {
+pub struct Growing {
     buffer: Option<wgpu::Buffer>,
     capacity: u64,
+    /// How many buffers have been made: bind groups that hold this one follow it.
+    generation: u64,
 }
 
 impl Growing {
     /// The buffer, made again (bigger) when `size` bytes do not fit; true when it was made.
-    fn fit(&mut self, ctx: &GpuContext, label: &str, size: u64, usage: wgpu::BufferUsages) -> bool {
+    pub fn fit(
+        &mut self,
+        ctx: &GpuContext,
+        label: &str,
+        size: u64,
+        usage: wgpu::BufferUsages,
+    ) -> bool {
         let size = size.max(16);
         if self.buffer.is_some() && size <= self.capacity {
             return false;
@@ -79,11 +86,16 @@ impl Growing {
         let capacity = size.next_power_of_two();
         self.buffer = Some(writable_buffer(ctx, label, capacity, usage));
         self.capacity = capacity;
+        self.generation += 1;
         true
     }
 
-    fn get(&self) -> &wgpu::Buffer {
+    pub fn get(&self) -> &wgpu::Buffer {
         self.buffer.as_ref().expect("fitted first")
+    }
+
+    pub fn generation(&self) -> u64 {
+        self.generation
     }
 }
 
@@ -106,8 +118,9 @@ pub struct GpuProjection {
     mirror_meshes: Growing,
     /// The points uploaded: (near-field generation) they came from.
     uploaded: Option<u64>,
-    /// The bind group and the G-buffer slot and buffer generation it was made for.
-    bound: Option<(usize, u64, wgpu::BindGroup)>,
+    /// The bind group, and the G-buffer slot and buffer generations (its own, the near
+    /// buffer's) it was made for.
+    bound: Option<((usize, u64, u64), wgpu::BindGroup)>,
     generation: u64,
 }
 
@@ -211,20 +224,19 @@ impl GpuProjection {
         &mut self,
         ctx: &GpuContext,
         plan: &Plan,
-        clouds: &[PointCloud],
+        placed: &[PlacedCloud],
         cloud_generation: u64,
-        world_from_loaded: &[Mat4],
-        level_of_detail: bool,
         mirrors: &[usize],
         mesh_count: usize,
         view: &ScreenView,
         camera: &specula_scene::Camera,
         settings: (f32, f32),
         g: &GBuffer,
-        near: &wgpu::Buffer,
+        near: &Growing,
     ) -> Result<GpuCounts, GpuError> {
         let storage = wgpu::BufferUsages::STORAGE;
         let mut made = false;
+        let clouds: Vec<&PointCloud> = placed.iter().map(|p| p.cloud).collect();
         // Points: all clouds, one after another.
         let offsets: Vec<u32> = clouds
             .iter()
@@ -257,9 +269,9 @@ impl GpuProjection {
                 .write_buffer(self.points.get(), 0, bytemuck::cast_slice(&data));
             self.uploaded = Some(cloud_generation);
         }
-        let matrices: Vec<[f32; 16]> = world_from_loaded
+        let matrices: Vec<[f32; 16]> = placed
             .iter()
-            .map(|m| m.to_cols_array())
+            .map(|p| p.object_from_world.inverse().as_mat4().to_cols_array())
             .collect();
         made |= self
             .clouds
@@ -275,28 +287,23 @@ impl GpuProjection {
         );
         ctx.queue
             .write_buffer(self.cameras.get(), 0, bytemuck::cast_slice(&cameras));
-        let object_from_world: Vec<DMat4> = world_from_loaded
+        let (clouds, offsets) = (&clouds, &offsets);
+        let work: Vec<[u32; 4]> = plan
+            .seen
             .iter()
-            .map(|m| DMat4::from_cols_array(&m.inverse().to_cols_array().map(f64::from)))
+            .enumerate()
+            .flat_map(|(i, seen)| {
+                seen.iter().map(move |s| {
+                    let node = &clouds[s.cloud].nodes[s.node];
+                    [
+                        i as u32,
+                        offsets[s.cloud] + node.point_first,
+                        node.point_count,
+                        s.stride as u32,
+                    ]
+                })
+            })
             .collect();
-        let mut work: Vec<[u32; 4]> = Vec::new();
-        for (i, leaves) in plan.leaves.iter().enumerate() {
-            for &(c, k) in leaves {
-                let node = &clouds[c].nodes[k];
-                let stride = if level_of_detail {
-                    let local = plan.cameras[i].world.transformed(&object_from_world[c]);
-                    lod_stride(&plan.cameras[i], &local, node, clouds[c].radius)
-                } else {
-                    1
-                };
-                work.push([
-                    i as u32,
-                    offsets[c] + node.point_first,
-                    node.point_count,
-                    stride as u32,
-                ]);
-            }
-        }
         made |= self
             .work
             .fit(ctx, "c3rc work", (work.len() * 16) as u64, storage);
@@ -337,8 +344,8 @@ impl GpuProjection {
         if made {
             self.generation += 1;
         }
-        let key = (g.slot, self.generation);
-        if self.bound.as_ref().map(|b| (b.0, b.1)) != Some(key) {
+        let key = (g.slot, self.generation, near.generation());
+        if self.bound.as_ref().map(|b| b.0) != Some(key) {
             let position = g.position.create_view(&Default::default());
             let ids = g.ids.create_view(&Default::default());
             let group = bind_group(
@@ -353,16 +360,16 @@ impl GpuProjection {
                     self.work.get().as_entire_binding(),
                     self.depth.get().as_entire_binding(),
                     self.nearest.get().as_entire_binding(),
-                    near.as_entire_binding(),
+                    near.get().as_entire_binding(),
                     wgpu::BindingResource::TextureView(&position),
                     wgpu::BindingResource::TextureView(&ids),
                     self.counts.as_entire_binding(),
                     self.mirror_meshes.get().as_entire_binding(),
                 ],
             );
-            self.bound = Some((key.0, key.1, group));
+            self.bound = Some((key, group));
         }
-        let group = &self.bound.as_ref().expect("made above").2;
+        let group = &self.bound.as_ref().expect("made above").1;
         ctx.validated("c3rc projection", || {
             let mut encoder = ctx.device.create_command_encoder(&Default::default());
             encoder.clear_buffer(&self.counts, 0, None);
@@ -434,6 +441,6 @@ fn gpu_camera(camera: &super::phases::TriangleCamera) -> GpuCamera {
             base as f32,
             0.0,
         ],
-        ids: [camera.mesh as u32, camera.may_project_twice as u32, 0, 0],
+        ids: [camera.mesh as u32, camera.may_project_twice() as u32, 0, 0],
     }
 }

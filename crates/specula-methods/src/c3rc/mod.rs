@@ -326,13 +326,12 @@ struct Prepared {
     layout: wgpu::BindGroupLayout,
     scene_bind_group: wgpu::BindGroup,
     bind_groups: BindGroupsBySlot,
-    /// The faces generation the bind groups were made for.
-    bound: Option<Option<u64>>,
+    /// The faces' and near buffer's generations the bind groups were made for.
+    bound: Option<(Option<u64>, u64)>,
     near_field: Option<NearField>,
     /// One vec4 per pixel: what the shading pass reads (the CPU writes it, or the GPU
     /// forward phase).
-    near_buffer: wgpu::Buffer,
-    near_capacity: u64,
+    near_buffer: gpu::Growing,
     gpu_projection: Option<gpu::GpuProjection>,
     readback: Option<Readback>,
     near_pixels: Vec<[f32; 4]>,
@@ -470,13 +469,7 @@ impl C3rcMethod {
                 bind_groups: BindGroupsBySlot::default(),
                 bound: None,
                 near_field: None,
-                near_buffer: writable_buffer(
-                    ctx,
-                    "c3rc near reflection",
-                    16,
-                    wgpu::BufferUsages::STORAGE,
-                ),
-                near_capacity: 16,
+                near_buffer: gpu::Growing::default(),
                 gpu_projection: None,
                 readback: None,
                 near_pixels: Vec::new(),
@@ -492,12 +485,13 @@ impl C3rcMethod {
     }
 
     /// The nearby objects' point clouds for `live`, made when missing or when the set of
-    /// nearby objects changed; colours shaded again after a move.
-    fn update_near_field(&self, live: &LiveScene, field: &mut Option<NearField>) {
+    /// nearby objects changed; colours shaded again after a move. True when the clouds were
+    /// sampled and their trees built.
+    fn update_near_field(&self, live: &LiveScene, field: &mut Option<NearField>) -> bool {
         let scene = live.scene();
         let stale = field.as_ref().map(|f| f.found_at) != Some(live.version());
         if !stale {
-            return;
+            return false;
         }
         let near = near_objects(scene, self.near);
         let mut meshes: Vec<usize> = near.iter().flat_map(|(_, m)| m.iter().copied()).collect();
@@ -542,6 +536,7 @@ impl C3rcMethod {
         f.near = near;
         f.found_at = live.version();
         f.generation = NEXT_GENERATION.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        !same_set
     }
 }
 
@@ -635,8 +630,7 @@ impl Technique for C3rcMethod {
         let mut stages = WallStages::new();
 
         let mut field = self.prepared.as_mut().and_then(|p| p.near_field.take());
-        let rebuilt = field.is_none();
-        self.update_near_field(live, &mut field);
+        let rebuilt = self.update_near_field(live, &mut field);
         let field = field.expect("made by update_near_field");
         stages.lap(gpu, "points (sample, trees, shading)")?;
 
@@ -700,17 +694,12 @@ impl Technique for C3rcMethod {
         );
         stages.measured("c3rc set-up", plan.report.setup_ms);
         stages.measured("culling (backward phase)", plan.report.culling_ms);
-        let pixels = (width * height) as u64 * 16;
-        if p.near_capacity < pixels {
-            p.near_buffer = writable_buffer(
-                gpu,
-                "c3rc near reflection",
-                pixels,
-                wgpu::BufferUsages::STORAGE,
-            );
-            p.near_capacity = pixels;
-            p.bind_groups.clear();
-        }
+        p.near_buffer.fit(
+            gpu,
+            "c3rc near reflection",
+            (width * height) as u64 * 16,
+            wgpu::BufferUsages::STORAGE,
+        );
         let points: usize = field.clouds.iter().map(|c| c.len()).sum();
         let on_gpu = points <= gpu::MAX_POINTS
             && match self.projection {
@@ -728,22 +717,15 @@ impl Technique for C3rcMethod {
                 &mut p.near_pixels,
             );
             gpu.queue
-                .write_buffer(&p.near_buffer, 0, bytemuck::cast_slice(&p.near_pixels));
+                .write_buffer(p.near_buffer.get(), 0, bytemuck::cast_slice(&p.near_pixels));
             if p.gpu_projection.is_none() {
                 p.gpu_projection = Some(gpu::GpuProjection::new(gpu)?);
             }
-            let world_from_loaded: Vec<glam::Mat4> = field
-                .clouds
-                .iter()
-                .map(|c| live.world_from_loaded(c.mesh))
-                .collect();
             let counts = p.gpu_projection.as_mut().expect("made above").forward(
                 gpu,
                 &plan,
-                &field.clouds,
+                &placed,
                 field.generation,
-                &world_from_loaded,
-                self.level_of_detail,
                 &mirror_meshes,
                 scene.meshes.len(),
                 &view,
@@ -777,11 +759,11 @@ impl Technique for C3rcMethod {
                 plan.report.fallback_ms,
             );
             gpu.queue
-                .write_buffer(&p.near_buffer, 0, bytemuck::cast_slice(&p.near_pixels));
+                .write_buffer(p.near_buffer.get(), 0, bytemuck::cast_slice(&p.near_pixels));
         }
         let report = plan.report;
 
-        let bound = Some(p.maps.faces_generation());
+        let bound = Some((p.maps.faces_generation(), p.near_buffer.generation()));
         if p.bound != bound {
             p.bind_groups.clear();
             p.bound = bound;
@@ -793,7 +775,7 @@ impl Technique for C3rcMethod {
             let group = p.bind_groups.get_or_make(g.slot, || {
                 let views = g.views();
                 let mut entries = envmap::shading_bindings(&p.camera_buffer, &views, &p.maps);
-                entries.push(p.near_buffer.as_entire_binding());
+                entries.push(p.near_buffer.get().as_entire_binding());
                 bind_group(gpu, "c3rc", &p.layout, &entries)
             });
             raster::fullscreen_pass(
@@ -809,7 +791,8 @@ impl Technique for C3rcMethod {
         let counters = counters(&field, &report, rebuilt, faces_drawn);
         p.near_field = Some(field);
         let mut warnings = Vec::new();
-        if report.cameras + report.small_triangles == 0 && !mirror_meshes.is_empty() {
+        let visible = report.cameras + report.small_triangles + report.self_seeing_triangles;
+        if visible == 0 && !mirror_meshes.is_empty() {
             warnings.push("c3rc: no mirror triangle is visible; only the far field shows".into());
         }
         Ok(Frame {

@@ -9,6 +9,7 @@ use std::time::Instant;
 use glam::{DMat4, DVec3, Vec3};
 use rayon::prelude::*;
 use specula_scene::{Camera, Scene};
+use specula_trace::optics::reflect;
 use specula_trace::reference::{offset_origin, Tracer};
 use specula_trace::{Ray, SceneAccel};
 
@@ -101,10 +102,48 @@ pub(super) struct TriangleCamera {
     /// Pixels² the triangle covers on screen (not occlusion-aware): the image-side area the
     /// camera's cross-sections map to, for splat sizes.
     pub(super) screen_area: f64,
-    pub(super) may_project_twice: bool,
+    /// The λ intervals where the camera's sweeping triangle can fold over itself
+    /// ([`C3rc::multiple_projection_intervals`]; empty: every point projects at most once).
+    pub(super) folding: Vec<(f64, f64)>,
     /// 1 / |cos| of the angle between the view ray and the triangle (capped): how much farther
     /// apart on the surface than on the screen neighbouring pixels' points are.
     pub(super) obliquity: f32,
+}
+
+impl TriangleCamera {
+    pub(super) fn may_project_twice(&self) -> bool {
+        !self.folding.is_empty()
+    }
+}
+
+/// A camera mapped into one cloud's (loaded) space, with what culling and projection there
+/// need: its plane bound, its cubic's affine coefficients, and the largest λ at which it can
+/// reach the cloud.
+pub(super) struct InCloud {
+    camera: C3rc,
+    bound: PlaneBound,
+    projector: Projector,
+    reach: f64,
+}
+
+/// A tree node a camera's view volume meets: a leaf, or an inner node the level of detail
+/// projects whole; every `stride`-th of its points is projected.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Seen {
+    pub(super) cloud: usize,
+    pub(super) node: usize,
+    pub(super) stride: usize,
+}
+
+/// Where a visible mirror triangle's pixels get their reflected radiance.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum PixelSource {
+    /// Its camera's splats (and the far field where they leave a gap).
+    Camera,
+    /// Too small for a camera: the per-vertex colour.
+    PerVertex,
+    /// It sees its own mirror: one exact ray per pixel.
+    Traced,
 }
 
 /// A projected point.
@@ -184,11 +223,12 @@ pub struct Plan {
     pub(super) cameras: Vec<TriangleCamera>,
     /// First and past-last rows with a mirror pixel.
     mirror_rows: (usize, usize),
-    /// (cloud, node) pairs each camera's view volume meets: leaves, or inner nodes the level
-    /// of detail projects whole.
-    pub leaves: Vec<Vec<(usize, usize)>>,
-    /// How each triangle's (per mesh) pixels are drawn: [`C3RC`], [`PER_VERTEX`], [`TRACED`].
-    small: Vec<Vec<u8>>,
+    /// The nodes each camera's view volume meets.
+    pub(super) seen: Vec<Vec<Seen>>,
+    /// Each camera in each cloud's space: index camera × clouds + cloud.
+    in_cloud: Vec<InCloud>,
+    /// Where each visible triangle's (per mirror mesh) pixels come from.
+    sources: Vec<Vec<PixelSource>>,
     vertices: Vec<(usize, u32)>,
     traced: Vec<(Vec3, bool)>,
     pub report: PhaseReport,
@@ -249,7 +289,10 @@ pub fn plan(
         traced[k].1
     };
     let mut cameras = Vec::new();
-    let mut small: Vec<Vec<u8>> = visible.iter().map(|v| vec![C3RC; v.len()]).collect();
+    let mut sources: Vec<Vec<PixelSource>> = visible
+        .iter()
+        .map(|v| vec![PixelSource::Camera; v.len()])
+        .collect();
     for &mesh in mirrors {
         let m = &scene.meshes[mesh];
         for (t, &count) in visible[mesh].iter().enumerate() {
@@ -257,13 +300,13 @@ pub fn plan(
                 continue;
             }
             if count < settings.min_pixels {
-                small[mesh][t] = PER_VERTEX;
+                sources[mesh][t] = PixelSource::PerVertex;
                 report.small_triangles += 1;
                 report.small_triangle_pixels += count as u64;
                 continue;
             }
             if settings.trace_self && m.triangles[t].iter().any(|&i| sees_itself(mesh, i)) {
-                small[mesh][t] = TRACED;
+                sources[mesh][t] = PixelSource::Traced;
                 report.self_seeing_triangles += 1;
                 report.self_seeing_pixels += count as u64;
                 continue;
@@ -306,13 +349,13 @@ pub fn plan(
             report.split_triangles += (levels > 0) as u64;
             for (v, n) in subdivide(v, n, levels) {
                 let world = C3rc::reflector(v, n, eye);
-                let may_project_twice = !world.multiple_projection_intervals().is_empty();
-                report.cameras_that_can_project_twice += may_project_twice as u64;
+                let folding = world.multiple_projection_intervals();
+                report.cameras_that_can_project_twice += !folding.is_empty() as u64;
                 cameras.push(TriangleCamera {
                     mesh,
                     world,
                     screen_area: screen_area / 4f64.powi(levels as i32),
-                    may_project_twice,
+                    folding,
                     obliquity: (1.0 / cos.max(0.1)) as f32,
                 });
             }
@@ -323,69 +366,80 @@ pub fn plan(
 
     // Backward phase: each camera's view volume against every tree.
     let start = Instant::now();
-    let leaves: Vec<Vec<(usize, usize)>> = cameras
+    let culled: Vec<(Vec<Seen>, Vec<InCloud>)> = cameras
         .par_iter()
         .map(|camera| {
-            let mut found = Vec::new();
+            let mut seen = Vec::new();
+            let mut in_clouds = Vec::with_capacity(clouds.len());
             let mut stack = Vec::new();
             for (c, placed) in clouds.iter().enumerate() {
                 let cloud = placed.cloud;
-                if cloud.is_empty() {
-                    continue;
-                }
                 let local = camera.world.transformed(&placed.object_from_world);
                 let root = &cloud.nodes[0];
-                let folds = if camera.may_project_twice {
-                    local.fold_boxes(local.lambda_bound(root.lo.as_dvec3(), root.hi.as_dvec3()))
-                } else {
-                    Vec::new()
+                let in_cloud = InCloud {
+                    camera: local,
+                    bound: local.plane_bound(),
+                    projector: local.projector(),
+                    reach: local.lambda_bound(root.lo.as_dvec3(), root.hi.as_dvec3()),
                 };
-                let bound = local.plane_bound();
-                // The base's bounding sphere, for the normal-cone test.
-                let base_center = (local.v[0] + local.v[1] + local.v[2]) / 3.0;
-                let base_radius = local
-                    .v
-                    .iter()
-                    .map(|v| (*v - base_center).length())
-                    .fold(0.0, f64::max);
-                stack.clear();
-                stack.push(0usize);
-                while let Some(k) = stack.pop() {
-                    let node = &cloud.nodes[k];
-                    let (lo, hi) = (node.lo.as_dvec3(), node.hi.as_dvec3());
-                    // The cheap planes and normal cone first (a node whose points all face
-                    // away from the mirror triangle shows nothing), then the exact
-                    // (conservative) test.
-                    if !bound.may_meet_box(lo, hi)
-                        || !node.may_face(base_center.as_vec3(), base_radius as f32)
-                        || !local.may_see_box(lo, hi, &folds)
-                    {
-                        continue;
-                    }
-                    // A node the camera minifies so much that the level of detail keeps few
-                    // of its points is projected whole, strided: descending would cost more
-                    // tests than the projections it saves.
-                    let whole = settings.level_of_detail
-                        && node.point_count as usize
-                            / lod_stride(camera, &local, node, cloud.radius)
-                            <= LOD_WHOLE_NODE_POINTS;
-                    if node.leaf || whole {
-                        found.push((c, k));
-                    } else {
-                        stack.extend(node.first as usize..(node.first + node.count) as usize);
+                if !cloud.is_empty() {
+                    let folds = local.fold_boxes(&camera.folding, in_cloud.reach);
+                    // The base's bounding sphere, for the normal-cone test.
+                    let base_center = (local.v[0] + local.v[1] + local.v[2]) / 3.0;
+                    let base_radius = local
+                        .v
+                        .iter()
+                        .map(|v| (*v - base_center).length())
+                        .fold(0.0, f64::max);
+                    stack.clear();
+                    stack.push(0usize);
+                    while let Some(k) = stack.pop() {
+                        let node = &cloud.nodes[k];
+                        let (lo, hi) = (node.lo.as_dvec3(), node.hi.as_dvec3());
+                        // The cheap planes and normal cone first (a node whose points all face
+                        // away from the mirror triangle shows nothing), then the exact
+                        // (conservative) test.
+                        if !in_cloud.bound.may_meet_box(lo, hi)
+                            || !node.may_face(base_center.as_vec3(), base_radius as f32)
+                            || !local.may_see_box(lo, hi, &folds)
+                        {
+                            continue;
+                        }
+                        let stride = if settings.level_of_detail {
+                            lod_stride(camera, &local, node, cloud.radius)
+                        } else {
+                            1
+                        };
+                        // A node the camera minifies so much that the level of detail keeps
+                        // few of its points is projected whole, strided: descending would cost
+                        // more tests than the projections it saves.
+                        let whole = settings.level_of_detail
+                            && node.point_count as usize / stride <= LOD_WHOLE_NODE_POINTS;
+                        if node.leaf || whole {
+                            seen.push(Seen {
+                                cloud: c,
+                                node: k,
+                                stride,
+                            });
+                        } else {
+                            stack.extend(node.first as usize..(node.first + node.count) as usize);
+                        }
                     }
                 }
+                in_clouds.push(in_cloud);
             }
-            found
+            (seen, in_clouds)
         })
         .collect();
-    report.leaves_visited = leaves.iter().map(|l| l.len() as u64).sum();
+    let (seen, in_cloud): (Vec<Vec<Seen>>, Vec<Vec<InCloud>>) = culled.into_iter().unzip();
+    report.leaves_visited = seen.iter().map(|l| l.len() as u64).sum();
     report.culling_ms = ms(start);
     Plan {
         cameras,
         mirror_rows,
-        leaves,
-        small,
+        seen,
+        in_cloud: in_cloud.into_iter().flatten().collect(),
+        sources,
         vertices,
         traced,
         report,
@@ -411,7 +465,7 @@ impl Plan {
             accel,
             view,
             surfaces,
-            &self.small,
+            &self.sources,
             &self.vertices,
             &self.traced,
             max_depth,
@@ -441,96 +495,75 @@ pub fn forward(
     let report = &mut plan.report;
     // Forward phase: the leaves' points projected with the camera, every valid projection.
     let start = Instant::now();
-    // Each camera in each cloud's space, once; then the work spread leaf by leaf (a few wide
-    // cameras see most of the points: per-camera work would leave a core idle).
-    let in_cloud: Vec<(C3rc, PlaneBound, Projector, f64)> = plan
-        .cameras
-        .par_iter()
-        .flat_map_iter(|camera| {
-            clouds.iter().map(move |placed| {
-                let local = camera.world.transformed(&placed.object_from_world);
-                let root = &placed.cloud.nodes[0];
-                let reach = local.lambda_bound(root.lo.as_dvec3(), root.hi.as_dvec3());
-                (local, local.plane_bound(), local.projector(), reach)
-            })
-        })
-        .collect();
-    let items: Vec<(usize, usize, usize)> = plan
-        .leaves
+    // The work spread node by node (a few wide cameras see most of the points: per-camera
+    // work would leave a core idle).
+    let items: Vec<(usize, Seen)> = plan
+        .seen
         .iter()
         .enumerate()
-        .flat_map(|(i, leaves)| leaves.iter().map(move |&(c, k)| (i, c, k)))
+        .flat_map(|(i, seen)| seen.iter().map(move |&s| (i, s)))
         .collect();
-    let per_camera: Vec<(Vec<Splat>, [u64; 5])> = items
+    let per_node: Vec<(Vec<Splat>, [u64; 5])> = items
         .par_iter()
-        .map(|&(i, c, k)| {
+        .map(|&(i, seen)| {
             let camera = &plan.cameras[i];
+            let cloud = clouds[seen.cloud].cloud;
+            let InCloud {
+                camera: local,
+                bound,
+                projector,
+                reach,
+            } = &plan.in_cloud[i * clouds.len() + seen.cloud];
+            let range = cloud.nodes[seen.node].points();
+            let stride = seen.stride;
+            let (tried, skipped) = (range.len(), range.len() - range.len().div_ceil(stride));
+            let (mut solved, mut valid, mut twice) = (0u64, 0u64, 0u64);
             let mut splats = Vec::new();
-            let (mut tried, mut solved, mut valid, mut twice) = (0u64, 0u64, 0u64, 0u64);
-            let mut lod_skipped = 0u64;
-            {
-                let cloud = clouds[c].cloud;
-                let (local, bound, projector, reach) = &in_cloud[i * clouds.len() + c];
-                let node = &cloud.nodes[k];
-                let range = node.points();
-                tried += range.len() as u64;
-                let stride = if settings.level_of_detail {
-                    lod_stride(camera, local, node, cloud.radius)
-                } else {
-                    1
-                };
-                lod_skipped += (range.len() - range.len().div_ceil(stride)) as u64;
-                // Kept points stand for the skipped ones: larger splats.
-                let radius = (cloud.radius * settings.splat_scale) as f64 * (stride as f64).sqrt();
-                for i in range.step_by(stride) {
-                    let q = cloud.p_object[i].as_dvec3();
-                    if !bound.may_contain(q) {
+            // Kept points stand for the skipped ones: larger splats.
+            let radius = (cloud.radius * settings.splat_scale) as f64 * (stride as f64).sqrt();
+            for i in range.step_by(stride) {
+                let q = cloud.p_object[i].as_dvec3();
+                if !bound.may_contain(q) {
+                    continue;
+                }
+                // Points seen from behind belong to a surface whose front is nearer: a point
+                // facing away from all three base vertices faces away from every base point.
+                let n = cloud.n_object[i].as_dvec3();
+                if local.v.iter().all(|v| n.dot(*v - q) <= 0.0) {
+                    continue;
+                }
+                solved += 1;
+                let (projections, count) =
+                    local.project_with(projector.cubic(q), q, *reach, !camera.may_project_twice());
+                twice += (count > 1) as u64;
+                valid += count as u64;
+                for projection in &projections[..count] {
+                    let base_local = projection.base_point(local);
+                    if n.dot(base_local - q) <= 0.0 {
                         continue;
                     }
-                    // Points seen from behind belong to a surface whose front is nearer: a
-                    // point facing away from all three base vertices faces away from every
-                    // base point.
-                    let n = cloud.n_object[i].as_dvec3();
-                    if local.v.iter().all(|v| n.dot(*v - q) <= 0.0) {
+                    let p_world = projection.base_point(&camera.world).as_vec3();
+                    let Some((x, y, z_view)) = view.project(p_world) else {
                         continue;
-                    }
-                    solved += 1;
-                    let (projections, count) = local.project_with(
-                        projector.cubic(q),
-                        q,
-                        *reach,
-                        !camera.may_project_twice,
-                    );
-                    twice += (count > 1) as u64;
-                    valid += count as u64;
-                    for projection in &projections[..count] {
-                        let base_local = projection.base_point(local);
-                        if n.dot(base_local - q) <= 0.0 {
-                            continue;
-                        }
-                        let p_world = projection.base_point(&camera.world).as_vec3();
-                        let Some((x, y, z_view)) = view.project(p_world) else {
-                            continue;
-                        };
-                        let area = camera.world.sweep_area(projection.lambda).max(1e-30);
-                        let r = (radius * (camera.screen_area / area).sqrt()) as f32;
-                        let radius_px = r.clamp(0.5, settings.max_splat);
-                        let depth = (q - base_local).length() as f32;
-                        splats.push(Splat {
-                            x,
-                            y,
-                            radius: radius_px,
-                            depth,
-                            band: 2.0 * radius as f32 + 0.01 * depth,
-                            reach: (radius_px + 1.5) * view.footprint(z_view) * camera.obliquity,
-                            p_world,
-                            color: cloud.color[i],
-                            mesh: camera.mesh as u32,
-                        });
-                    }
+                    };
+                    let area = camera.world.sweep_area(projection.lambda).max(1e-30);
+                    let r = (radius * (camera.screen_area / area).sqrt()) as f32;
+                    let radius_px = r.clamp(0.5, settings.max_splat);
+                    let depth = (q - base_local).length() as f32;
+                    splats.push(Splat {
+                        x,
+                        y,
+                        radius: radius_px,
+                        depth,
+                        band: 2.0 * radius as f32 + 0.01 * depth,
+                        reach: (radius_px + 1.5) * view.footprint(z_view) * camera.obliquity,
+                        p_world,
+                        color: cloud.color[i],
+                        mesh: camera.mesh as u32,
+                    });
                 }
             }
-            (splats, [tried, solved, valid, twice, lod_skipped])
+            (splats, [tried as u64, solved, valid, twice, skipped as u64])
         })
         .collect();
     report.projection_ms = ms(start);
@@ -538,7 +571,7 @@ pub fn forward(
     // Splats resolved per pixel: on the reflector surface the splat came from, nearest first.
     let start = Instant::now();
     let mut depth = vec![f32::INFINITY; pixel_count];
-    for (splats, [tried, solved, valid, twice, skipped]) in &per_camera {
+    for (splats, [tried, solved, valid, twice, skipped]) in &per_node {
         report.points_skipped_by_level_of_detail += skipped;
         report.points_in_leaves += tried;
         report.points_projected += solved;
@@ -546,14 +579,7 @@ pub fn forward(
         report.points_projected_more_than_once += twice;
         report.valid_projections += valid;
     }
-    resolve(
-        &per_camera,
-        view,
-        surfaces,
-        plan.mirror_rows,
-        &mut depth,
-        out,
-    );
+    resolve(&per_node, view, surfaces, plan.mirror_rows, &mut depth, out);
     let w = view.width as usize;
     let (first, last) = plan.mirror_rows;
     if first < last {
@@ -570,7 +596,7 @@ pub fn forward(
         accel,
         view,
         surfaces,
-        &plan.small,
+        &plan.sources,
         &plan.vertices,
         &plan.traced,
         settings.max_depth,
@@ -589,7 +615,7 @@ const LOD_POINTS_PER_PIXEL: f64 = 4.0;
 /// leaf so much that its points would crowd more than [`LOD_POINTS_PER_PIXEL`] into a pixel,
 /// every k-th point is enough. Estimated at the leaf's nearest sweep distance (its
 /// cross-section there is the smallest, so the stride the smallest).
-pub(super) fn lod_stride(camera: &TriangleCamera, local: &C3rc, node: &Node, radius: f32) -> usize {
+fn lod_stride(camera: &TriangleCamera, local: &C3rc, node: &Node, radius: f32) -> usize {
     let center = (local.v[0] + local.v[1] + local.v[2]) / 3.0;
     let (lo, hi) = (node.lo.as_dvec3(), node.hi.as_dvec3());
     let nearest = center.clamp(lo, hi);
@@ -600,13 +626,6 @@ pub(super) fn lod_stride(camera: &TriangleCamera, local: &C3rc, node: &Node, rad
     let points_per_pixel = 1.0 / pixels_per_point.max(1e-30);
     ((points_per_pixel / LOD_POINTS_PER_PIXEL).floor() as usize).clamp(1, 1 << 16)
 }
-
-/// A triangle's pixels come from its camera's splats (and the far field).
-const C3RC: u8 = 0;
-/// A triangle too small for a camera: its pixels take the per-vertex colour.
-const PER_VERTEX: u8 = 1;
-/// A triangle whose mirror sees itself: its pixels are traced exactly, one ray each.
-const TRACED: u8 = 2;
 
 /// Most times a large triangle is cut in four.
 const MAX_SPLIT_LEVELS: u32 = 3;
@@ -682,7 +701,7 @@ fn splat_pixels(
 /// nearest the pixel's gives the colour (a point-sampled reconstruction, not the colour of
 /// whichever point happened to lie nearest the reflector).
 fn resolve(
-    per_camera: &[(Vec<Splat>, [u64; 5])],
+    per_node: &[(Vec<Splat>, [u64; 5])],
     view: &ScreenView,
     surfaces: &PixelSurfaces,
     rows: (usize, usize),
@@ -707,7 +726,7 @@ fn resolve(
             let top = first + b * band;
             let range = (top as i64, (top + depth.len() / w) as i64);
             let offset = top * w;
-            let splats = || per_camera.iter().flat_map(|(splats, _)| splats);
+            let splats = || per_node.iter().flat_map(|(splats, _)| splats);
             for s in splats() {
                 splat_pixels(s, view, surfaces, range, |k, _| {
                     depth[k - offset] = depth[k - offset].min(s.depth)
@@ -778,6 +797,19 @@ fn fill_holes(
     filled.len() as u64
 }
 
+/// The exact mirror reflection at `p` of the ray from the eye: the normal `n` turned to face
+/// the eye (as the reference turns it), the origin pushed off the surface whose geometric
+/// normal is `ng` (either side).
+fn reflected_ray(p: Vec3, n: Vec3, ng: Vec3, eye: Vec3) -> Ray {
+    let d = (p - eye).normalize_or_zero();
+    let n = if n.dot(d) > 0.0 { -n } else { n };
+    let dir = reflect(d, n);
+    Ray {
+        origin: offset_origin(p, ng, dir),
+        dir,
+    }
+}
+
 /// Radiance along the exact reflected ray at each (mesh, vertex) (traced through the BVH
 /// with the reference's shading), and whether that ray hits the same mesh first.
 fn trace_vertices(
@@ -796,17 +828,8 @@ fn trace_vertices(
         .par_iter()
         .map(|&(mesh, i)| {
             let m = &scene.meshes[mesh];
-            let p = m.positions[i as usize];
-            let mut n = m.normals[i as usize].normalize_or_zero();
-            let d = (p - view.eye).normalize_or_zero();
-            if n.dot(d) > 0.0 {
-                n = -n;
-            }
-            let reflected = d - 2.0 * d.dot(n) * n;
-            let ray = Ray {
-                origin: offset_origin(p, n, reflected),
-                dir: reflected,
-            };
+            let n = m.normals[i as usize].normalize_or_zero();
+            let ray = reflected_ray(m.positions[i as usize], n, n, view.eye);
             let sees_itself = accel
                 .intersect(&ray, f32::INFINITY)
                 .is_some_and(|hit| hit.mesh as usize == mesh);
@@ -824,7 +847,7 @@ fn fallback_pixels(
     accel: &SceneAccel,
     view: &ScreenView,
     surfaces: &PixelSurfaces,
-    small: &[Vec<u8>],
+    sources: &[Vec<PixelSource>],
     vertices: &[(usize, u32)],
     traced: &[(Vec3, bool)],
     max_depth: u32,
@@ -847,8 +870,8 @@ fn fallback_pixels(
                 return;
             }
             let mesh = (mesh1 - 1) as usize;
-            let how = small.get(mesh).and_then(|f| f.get(*t as usize)).copied();
-            if how != Some(PER_VERTEX) && how != Some(TRACED) {
+            let source = sources.get(mesh).and_then(|f| f.get(*t as usize)).copied();
+            if !matches!(source, Some(PixelSource::PerVertex | PixelSource::Traced)) {
                 return;
             }
             let m = &scene.meshes[mesh];
@@ -856,32 +879,15 @@ fn fallback_pixels(
             let [a, b, c] = tri.map(|i| m.positions[i as usize]);
             let p = Vec3::from_slice(&position[..3]);
             let bary = barycentric(p, a, b, c);
-            let color = if how == Some(PER_VERTEX) {
+            let color = if source == Some(PixelSource::PerVertex) {
                 color_of(mesh, tri[0]) * bary[0]
                     + color_of(mesh, tri[1]) * bary[1]
                     + color_of(mesh, tri[2]) * bary[2]
             } else {
                 let [na, nb, nc] = tri.map(|i| m.normals[i as usize]);
-                let mut n = (na * bary[0] + nb * bary[1] + nc * bary[2]).normalize_or_zero();
-                let d = (p - view.eye).normalize_or_zero();
-                if n.dot(d) > 0.0 {
-                    n = -n;
-                }
-                let reflected = d - 2.0 * d.dot(n) * n;
-                let face = (b - a).cross(c - a);
-                let ray = Ray {
-                    origin: offset_origin(
-                        p,
-                        if face.dot(reflected) >= 0.0 {
-                            face.normalize()
-                        } else {
-                            -face.normalize()
-                        },
-                        reflected,
-                    ),
-                    dir: reflected,
-                };
-                tracer.radiance(&ray, 1, None)
+                let n = (na * bary[0] + nb * bary[1] + nc * bary[2]).normalize_or_zero();
+                let face = (b - a).cross(c - a).normalize_or_zero();
+                tracer.radiance(&reflected_ray(p, n, face, view.eye), 1, None)
             };
             *out = [color.x, color.y, color.z, 1.0];
         });
