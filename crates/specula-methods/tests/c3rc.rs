@@ -377,11 +377,12 @@ fn counters_follow_the_paper_and_the_teapot_falls_back_where_it_sees_itself() {
     // The bunny, the dragon and the floor are near the teapot.
     assert_eq!(c("nearby objects"), 3);
     assert!(
-        (c("points") as f64 - 40000.0).abs() < 0.02 * 40000.0,
+        (c("points") as f64 - 40000.0).abs() < 0.002 * 40000.0,
         "{}",
         c("points")
     );
-    assert!(c("kd-tree leaves") > 0 && c("points") / c("kd-tree leaves") <= 384);
+    // No leaf holds more than `leaf_points` (256 by default); measured 147 on average.
+    assert!(c("kd-tree leaves") > 0 && c("kd-tree points per leaf") <= 256);
     assert!(c("cameras (C3RCs)") > 500);
     assert!(c("points projected (cubic solved)") <= c("points in leaves seen"));
     assert!(c("valid projections") <= c("points projected (cubic solved)") * 3);

@@ -195,7 +195,7 @@ pub const PARAMS: &[ParamSpec] = &[
         name: "level_of_detail",
         kind: ParamKind::Flag,
         default: "true",
-        doc: "project every k-th point of leaves the camera minifies to more than 2 points a pixel (false: every point, as the paper)",
+        doc: "project every k-th point of nodes the camera minifies to more than 4 points a pixel (false: every point, as the paper)",
         invalidates: Invalidates::Uniform,
     },
     ParamSpec {
