@@ -240,8 +240,7 @@ impl GpuContext {
         })?;
         let (width, height) = (texture.width(), texture.height());
         let unpadded = width * bytes_per_texel;
-        let padded = unpadded.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT)
-            * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let padded = crate::util::padded_row_bytes(unpadded);
         let buffer = self.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
             size: (padded * height) as u64,

@@ -183,3 +183,8 @@ pub fn writable_buffer(
         mapped_at_creation: false,
     })
 }
+
+/// Bytes per row of a texture-to-buffer copy: `unpadded` rounded up to wgpu's row alignment.
+pub fn padded_row_bytes(unpadded: u32) -> u32 {
+    unpadded.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT
+}

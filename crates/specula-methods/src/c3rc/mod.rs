@@ -99,7 +99,9 @@ pub mod points;
 
 use glam::{DMat4, Vec3};
 use specula_gpu::shaders::CameraUniform;
-use specula_gpu::util::{bind_group, buffer_binding, layout_entry, writable_buffer};
+use specula_gpu::util::{
+    bind_group, buffer_binding, layout_entry, padded_row_bytes, writable_buffer,
+};
 use specula_gpu::{GpuContext, GpuError, TimingSource};
 use specula_scene::{Camera, MaterialKind, Scene};
 
@@ -337,14 +339,10 @@ struct Prepared {
     near_pixels: Vec<[f32; 4]>,
 }
 
-fn padded_row(bytes: u32) -> u32 {
-    bytes.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT
-}
-
 impl Readback {
     fn new(gpu: &GpuContext, width: u32, height: u32) -> Readback {
-        let ids_row = padded_row(width * 8);
-        let position_row = padded_row(width * 16);
+        let ids_row = padded_row_bytes(width * 8);
+        let position_row = padded_row_bytes(width * 16);
         let position_offset = (ids_row * height) as u64;
         let buffer = gpu.create_buffer(&wgpu::BufferDescriptor {
             label: Some("c3rc g-buffer readback"),
