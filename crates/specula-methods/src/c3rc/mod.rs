@@ -60,7 +60,10 @@
 //!   in envmap (and itself only where `trace_self` traces).
 //! - The near/far split is per object: a far object is exactly as wrong as in envmap, a near
 //!   one is right. Points are one-sided: a surface seen from its back (open meshes) is not
-//!   reflected. On scenes whose objects are all far (door-mirror) c3rc is envmap.
+//!   reflected. On scenes whose objects are all far (door-mirror) c3rc is envmap. Splats win
+//!   over the far field wherever they cover a pixel, with no depth comparison: a far object in
+//!   front of a near one is hidden by it (the suite's concave mirror, inside a room that is
+//!   near: the yellow box 1.5 m away, beyond 3 mirror radii, does not show in the mirror).
 //! - Triangles that cover fewer than `min_pixels` visible pixels do not pay for a camera
 //!   (§8): their pixels take the per-vertex reflected colour, the radiance traced exactly
 //!   along the reflected ray at each vertex, interpolated (counted: `small triangles`).
