@@ -13,6 +13,7 @@ pub mod live_scene;
 pub mod pvrr;
 pub mod raster;
 pub mod reference;
+pub mod screen;
 pub mod registry;
 pub mod technique;
 

@@ -139,16 +139,102 @@ pub struct Tracer<'a> {
     pub max_depth: u32,
 }
 
+/// What a path records of the rays it traces: nothing (the reference), or a [`RayTree`].
+pub trait TreeRecorder {
+    /// A closest-hit ray of `kind` met mesh `mesh` (None: it left the scene).
+    fn ray(&mut self, kind: Branch, mesh: Option<u32>);
+    /// The shadow ray towards light `light` was blocked or not.
+    fn shadow(&mut self, light: usize, occluded: bool);
+}
+
+/// Why a closest-hit ray was traced.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Branch {
+    Primary = 1,
+    Reflected = 2,
+    Refracted = 3,
+    /// Straight through a thin-walled sheet.
+    Through = 4,
+}
+
+impl TreeRecorder for () {
+    fn ray(&mut self, _: Branch, _: Option<u32>) {}
+    fn shadow(&mut self, _: usize, _: bool) {}
+}
+
+/// A path's ray tree (Whitted; Glassner's "ray tree"): which object each reflected, refracted
+/// and primary ray met, in depth-first order, and which shadow rays were blocked. Two samples
+/// with equal trees see the same objects by the same optical paths under the same lights, so
+/// between them the radiance varies smoothly; a changed tree marks a discontinuity (an object's
+/// silhouette, a shadow edge, total internal reflection starting). Kept as a 64-bit FNV-1a
+/// digest of that sequence and the number of its nodes, so that comparing two trees is one
+/// comparison and a tree travels in 12 bytes (two different trees share a digest with
+/// probability about 2⁻⁶⁴).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct RayTree {
+    pub digest: u64,
+    pub nodes: u32,
+}
+
+impl Default for RayTree {
+    fn default() -> Self {
+        RayTree {
+            digest: 0xcbf2_9ce4_8422_2325,
+            nodes: 0,
+        }
+    }
+}
+
+impl RayTree {
+    fn push(&mut self, word: u32) {
+        for byte in word.to_le_bytes() {
+            self.digest = (self.digest ^ byte as u64).wrapping_mul(0x0000_0100_0000_01b3);
+        }
+        self.nodes += 1;
+    }
+}
+
+impl TreeRecorder for RayTree {
+    fn ray(&mut self, kind: Branch, mesh: Option<u32>) {
+        self.push(kind as u32);
+        self.push(mesh.map_or(0, |m| m + 1));
+    }
+
+    fn shadow(&mut self, light: usize, occluded: bool) {
+        self.push(0x8000_0000 | (light as u32) << 1 | occluded as u32);
+    }
+}
+
 impl Tracer<'_> {
     /// Radiance arriving along `ray` (towards its origin). `channel` is Some(c) once a
     /// dispersive interface has split the path into one ray per colour channel; then only that
     /// component of the result is used.
     pub fn radiance(&self, ray: &Ray, depth: u32, channel: Option<usize>) -> Vec3 {
+        self.radiance_recorded(ray, Branch::Primary, depth, channel, &mut ())
+    }
+
+    /// [`Tracer::radiance`] of a primary ray, with its ray tree.
+    pub fn radiance_with_tree(&self, ray: &Ray) -> (Vec3, RayTree) {
+        let mut tree = RayTree::default();
+        let radiance = self.radiance_recorded(ray, Branch::Primary, 0, None, &mut tree);
+        (radiance, tree)
+    }
+
+    fn radiance_recorded<R: TreeRecorder>(
+        &self,
+        ray: &Ray,
+        kind: Branch,
+        depth: u32,
+        channel: Option<usize>,
+        tree: &mut R,
+    ) -> Vec3 {
         let scene = self.scene;
         count_ray(false);
         let Some(hit) = self.accel.intersect(ray, f32::INFINITY) else {
+            tree.ray(kind, None);
             return scene.background.radiance(ray.dir, &scene.textures);
         };
+        tree.ray(kind, Some(hit.mesh));
         let sp = surface_point(scene, ray, &hit);
         let material = &scene.materials[sp.material];
         let base = || {
@@ -160,7 +246,7 @@ impl Tracer<'_> {
         };
         match material.kind {
             MaterialKind::Unlit => base(),
-            MaterialKind::Diffuse => self.diffuse(&sp, base()),
+            MaterialKind::Diffuse => self.diffuse_recorded(&sp, base(), tree),
             MaterialKind::Mirror { fresnel } => {
                 if depth >= self.max_depth {
                     return Vec3::ZERO;
@@ -171,23 +257,26 @@ impl Tracer<'_> {
                 } else {
                     material.color
                 };
-                f * self.spawn(&sp, reflect(ray.dir, sp.ns), depth, channel)
+                let reflected = reflect(ray.dir, sp.ns);
+                f * self.spawn(&sp, reflected, Branch::Reflected, depth, channel, tree)
             }
             MaterialKind::Dielectric { ior, thin_walled } => {
                 if depth >= self.max_depth {
                     return Vec3::ZERO;
                 }
+                let mut at = |ior: f32, channel| {
+                    self.dielectric(ray, &sp, ior, thin_walled, depth, channel, tree)
+                };
                 match channel {
                     None if material.is_dispersive() => {
                         let mut sum = Vec3::ZERO;
                         for c in 0..3 {
-                            sum[c] =
-                                self.dielectric(ray, &sp, ior[c], thin_walled, depth, Some(c))[c];
+                            sum[c] = at(ior[c], Some(c))[c];
                         }
                         sum
                     }
-                    None => self.dielectric(ray, &sp, ior.x, thin_walled, depth, None),
-                    Some(c) => self.dielectric(ray, &sp, ior[c], thin_walled, depth, Some(c)),
+                    None => at(ior.x, None),
+                    Some(c) => at(ior[c], Some(c)),
                 }
             }
         }
@@ -196,8 +285,17 @@ impl Tracer<'_> {
     /// Radiance a Lambertian surface of `albedo` leaves at `sp` towards the side its normals
     /// face: every light's irradiance where a shadow ray reaches it, plus the ambient term.
     pub fn diffuse(&self, sp: &SurfacePoint, albedo: Vec3) -> Vec3 {
+        self.diffuse_recorded(sp, albedo, &mut ())
+    }
+
+    fn diffuse_recorded<R: TreeRecorder>(
+        &self,
+        sp: &SurfacePoint,
+        albedo: Vec3,
+        tree: &mut R,
+    ) -> Vec3 {
         let mut irradiance = Vec3::ZERO;
-        for light in &self.scene.lights {
+        for (index, light) in self.scene.lights.iter().enumerate() {
             let sample = light.sample(sp.p);
             let cos = sp.ns.dot(sample.to_light);
             if cos <= 0.0 || sample.irradiance == Vec3::ZERO {
@@ -208,22 +306,33 @@ impl Tracer<'_> {
                 dir: sample.to_light,
             };
             count_ray(true);
-            if !self.accel.occluded(&shadow, sample.distance) {
+            let occluded = self.accel.occluded(&shadow, sample.distance);
+            tree.shadow(index, occluded);
+            if !occluded {
                 irradiance += sample.irradiance * cos;
             }
         }
         albedo * (irradiance / std::f32::consts::PI + self.scene.ambient)
     }
 
-    fn spawn(&self, sp: &SurfacePoint, dir: Vec3, depth: u32, channel: Option<usize>) -> Vec3 {
+    fn spawn<R: TreeRecorder>(
+        &self,
+        sp: &SurfacePoint,
+        dir: Vec3,
+        kind: Branch,
+        depth: u32,
+        channel: Option<usize>,
+        tree: &mut R,
+    ) -> Vec3 {
         let ray = Ray {
             origin: offset_origin(sp.p, sp.ng, dir),
             dir,
         };
-        self.radiance(&ray, depth + 1, channel)
+        self.radiance_recorded(&ray, kind, depth + 1, channel, tree)
     }
 
-    fn dielectric(
+    #[allow(clippy::too_many_arguments)]
+    fn dielectric<R: TreeRecorder>(
         &self,
         ray: &Ray,
         sp: &SurfacePoint,
@@ -231,28 +340,36 @@ impl Tracer<'_> {
         thin: bool,
         depth: u32,
         channel: Option<usize>,
+        tree: &mut R,
     ) -> Vec3 {
         let cos_i = (-ray.dir.dot(sp.ns)).clamp(0.0, 1.0);
         let reflected = reflect(ray.dir, sp.ns);
         if thin {
             let r = thin_sheet_reflectance(cos_i, ior);
-            return r * self.spawn(sp, reflected, depth, channel)
-                + (1.0 - r) * self.spawn(sp, ray.dir, depth, channel);
+            return r * self.spawn(sp, reflected, Branch::Reflected, depth, channel, tree)
+                + (1.0 - r) * self.spawn(sp, ray.dir, Branch::Through, depth, channel, tree);
         }
         // Leaving the solid when the ray hit its back face.
         let eta = if sp.backface { ior } else { 1.0 / ior };
         let r = fresnel_dielectric(cos_i, eta);
         match refract(ray.dir, sp.ns, eta) {
             Some(transmitted) if r < 1.0 => {
-                let t = self.spawn(sp, transmitted.normalize(), depth, channel);
+                let t = self.spawn(
+                    sp,
+                    transmitted.normalize(),
+                    Branch::Refracted,
+                    depth,
+                    channel,
+                    tree,
+                );
                 let rr = if r > 0.0 {
-                    self.spawn(sp, reflected, depth, channel)
+                    self.spawn(sp, reflected, Branch::Reflected, depth, channel, tree)
                 } else {
                     Vec3::ZERO
                 };
                 r * rr + (1.0 - r) * t
             }
-            _ => self.spawn(sp, reflected, depth, channel),
+            _ => self.spawn(sp, reflected, Branch::Reflected, depth, channel, tree),
         }
     }
 }

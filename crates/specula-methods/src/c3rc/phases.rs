@@ -8,7 +8,7 @@ use std::time::Instant;
 
 use glam::{DMat4, DVec3, Vec3};
 use rayon::prelude::*;
-use specula_scene::{Camera, Scene};
+use specula_scene::Scene;
 use specula_trace::optics::reflect;
 use specula_trace::reference::{offset_origin, Tracer};
 use specula_trace::{Ray, SceneAccel};
@@ -16,62 +16,7 @@ use specula_trace::{Ray, SceneAccel};
 use super::camera::{C3rc, PlaneBound, Projector};
 use super::points::{Node, PointCloud};
 
-/// How the camera maps world points to pixels (the raster pass's pinhole, top-left origin).
-#[derive(Clone, Copy, Debug)]
-pub struct ScreenView {
-    pub eye: Vec3,
-    right: Vec3,
-    up: Vec3,
-    forward: Vec3,
-    tan_half: f32,
-    aspect: f32,
-    pub width: u32,
-    pub height: u32,
-}
-
-impl ScreenView {
-    pub fn new(camera: &Camera, width: u32, height: u32) -> ScreenView {
-        let frame = camera.frame();
-        ScreenView {
-            eye: camera.eye,
-            right: frame.right,
-            up: frame.up,
-            forward: frame.forward,
-            tan_half: (camera.fov_y_deg.to_radians() * 0.5).tan(),
-            aspect: width as f32 / height as f32,
-            width,
-            height,
-        }
-    }
-
-    /// Pixel coordinates (x right, y down, pixel centres at +0.5) and view depth of `p_world`;
-    /// None behind the eye.
-    pub fn project(&self, p_world: Vec3) -> Option<(f32, f32, f32)> {
-        let v = p_world - self.eye;
-        let z = v.dot(self.forward);
-        if z <= 1e-6 {
-            return None;
-        }
-        let x = v.dot(self.right) / (z * self.tan_half * self.aspect);
-        let y = v.dot(self.up) / (z * self.tan_half);
-        Some((
-            (x + 1.0) * 0.5 * self.width as f32,
-            (1.0 - y) * 0.5 * self.height as f32,
-            z,
-        ))
-    }
-
-    /// The side of one pixel, in metres, at view depth `z`.
-    pub fn footprint(&self, z: f32) -> f32 {
-        2.0 * z * self.tan_half / self.height as f32
-    }
-}
-
-/// The G-buffer as the CPU sees it: per pixel (mesh + 1, triangle) and the world position.
-pub struct PixelSurfaces {
-    pub ids: Vec<[u32; 2]>,
-    pub position: Vec<[f32; 4]>,
-}
+pub use crate::screen::{PixelSurfaces, ScreenView};
 
 /// Per-frame knobs (see the module parameters in `c3rc/mod.rs`).
 #[derive(Clone, Copy, Debug)]
