@@ -3,6 +3,8 @@
 //! read back from the scene raster pass's G-buffer or traced on the CPU where there is no GPU.
 
 use glam::Vec3;
+use specula_gpu::util::padded_row_bytes;
+use specula_gpu::{GpuContext, GpuError};
 use rayon::prelude::*;
 use specula_scene::Camera;
 use specula_trace::{Ray, SceneAccel};
@@ -94,3 +96,77 @@ impl PixelSurfaces {
         (self.ids[k][0] != 0).then(|| Vec3::from_slice(&self.position[k][..3]))
     }
 }
+
+/// The ID buffer and positions of a G-buffer read back to the CPU into one buffer kept between
+/// frames (a steady frame creates nothing).
+pub struct SurfaceReadback {
+    buffer: wgpu::Buffer,
+    pub width: u32,
+    pub height: u32,
+    ids_row: u32,
+    position_row: u32,
+    position_offset: u64,
+}
+
+impl SurfaceReadback {
+    pub fn new(gpu: &GpuContext, width: u32, height: u32) -> SurfaceReadback {
+        let ids_row = padded_row_bytes(width * 8);
+        let position_row = padded_row_bytes(width * 16);
+        let position_offset = (ids_row * height) as u64;
+        let buffer = gpu.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("g-buffer readback (ids, positions)"),
+            size: position_offset + (position_row * height) as u64,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        SurfaceReadback {
+            buffer,
+            width,
+            height,
+            ids_row,
+            position_row,
+            position_offset,
+        }
+    }
+
+    pub fn read(&self, gpu: &GpuContext, g: &crate::raster::GBuffer) -> Result<PixelSurfaces, GpuError> {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        let size = wgpu::Extent3d {
+            width: self.width,
+            height: self.height,
+            depth_or_array_layers: 1,
+        };
+        for (texture, offset, row) in [
+            (&g.ids, 0, self.ids_row),
+            (&g.position, self.position_offset, self.position_row),
+        ] {
+            encoder.copy_texture_to_buffer(
+                texture.as_image_copy(),
+                wgpu::TexelCopyBufferInfo {
+                    buffer: &self.buffer,
+                    layout: wgpu::TexelCopyBufferLayout {
+                        offset,
+                        bytes_per_row: Some(row),
+                        rows_per_image: Some(self.height),
+                    },
+                },
+                size,
+            );
+        }
+        gpu.queue.submit([encoder.finish()]);
+        let (w, h) = (self.width as usize, self.height as usize);
+        gpu.read_mapped(&self.buffer, |bytes| {
+            let mut ids = Vec::with_capacity(w * h);
+            let mut position = Vec::with_capacity(w * h);
+            for y in 0..h {
+                let row = &bytes[y * self.ids_row as usize..][..w * 8];
+                ids.extend_from_slice(bytemuck::cast_slice::<u8, [u32; 2]>(row));
+                let start = self.position_offset as usize + y * self.position_row as usize;
+                let row = &bytes[start..][..w * 16];
+                position.extend_from_slice(bytemuck::cast_slice::<u8, [f32; 4]>(row));
+            }
+            PixelSurfaces { ids, position }
+        })
+    }
+}
+

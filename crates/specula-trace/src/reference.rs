@@ -228,14 +228,36 @@ impl Tracer<'_> {
         channel: Option<usize>,
         tree: &mut R,
     ) -> Vec3 {
-        let scene = self.scene;
         count_ray(false);
         let Some(hit) = self.accel.intersect(ray, f32::INFINITY) else {
             tree.ray(kind, None);
-            return scene.background.radiance(ray.dir, &scene.textures);
+            return self.scene.background.radiance(ray.dir, &self.scene.textures);
         };
+        self.shade_recorded(ray, &hit, kind, depth, channel, tree)
+    }
+
+    /// The radiance leaving the known first hit `hit` of the primary ray `ray` towards its
+    /// origin, with its ray tree: a path whose primary intersection is given (a vertex the ray
+    /// was aimed at) and not searched for. The primary ray is in the tree but not counted as
+    /// traced.
+    pub fn radiance_at_hit_with_tree(&self, ray: &Ray, hit: &Hit) -> (Vec3, RayTree) {
+        let mut tree = RayTree::default();
+        let radiance = self.shade_recorded(ray, hit, Branch::Primary, 0, None, &mut tree);
+        (radiance, tree)
+    }
+
+    fn shade_recorded<R: TreeRecorder>(
+        &self,
+        ray: &Ray,
+        hit: &Hit,
+        kind: Branch,
+        depth: u32,
+        channel: Option<usize>,
+        tree: &mut R,
+    ) -> Vec3 {
+        let scene = self.scene;
         tree.ray(kind, Some(hit.mesh));
-        let sp = surface_point(scene, ray, &hit);
+        let sp = surface_point(scene, ray, hit);
         let material = &scene.materials[sp.material];
         let base = || {
             let texture = material

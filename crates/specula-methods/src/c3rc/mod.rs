@@ -103,7 +103,7 @@ pub mod points;
 use glam::{DMat4, Vec3};
 use specula_gpu::shaders::CameraUniform;
 use specula_gpu::util::{
-    bind_group, buffer_binding, layout_entry, padded_row_bytes, writable_buffer,
+    bind_group, buffer_binding, layout_entry, writable_buffer,
 };
 use specula_gpu::{GpuContext, GpuError, TimingSource};
 use specula_scene::{Camera, MaterialKind, Scene};
@@ -116,7 +116,8 @@ use crate::technique::{
     Context, Frame, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, StageTime,
     Technique, TechniqueError,
 };
-use phases::{FrameSettings, PhaseReport, PixelSurfaces, PlacedCloud, ScreenView};
+use crate::screen::SurfaceReadback;
+use phases::{FrameSettings, PhaseReport, PlacedCloud, ScreenView};
 use points::{PointCloud, TreeLimits};
 
 const SHADER: &str = include_str!("c3rc.wgsl");
@@ -311,16 +312,6 @@ struct NearField {
     generation: u64,
 }
 
-/// The G-buffer readback, kept between frames.
-struct Readback {
-    buffer: wgpu::Buffer,
-    width: u32,
-    height: u32,
-    ids_row: u32,
-    position_row: u32,
-    position_offset: u64,
-}
-
 /// What depends on the scene.
 struct Prepared {
     scene_id: u64,
@@ -338,70 +329,8 @@ struct Prepared {
     /// forward phase).
     near_buffer: gpu::Growing,
     gpu_projection: Option<gpu::GpuProjection>,
-    readback: Option<Readback>,
+    readback: Option<SurfaceReadback>,
     near_pixels: Vec<[f32; 4]>,
-}
-
-impl Readback {
-    fn new(gpu: &GpuContext, width: u32, height: u32) -> Readback {
-        let ids_row = padded_row_bytes(width * 8);
-        let position_row = padded_row_bytes(width * 16);
-        let position_offset = (ids_row * height) as u64;
-        let buffer = gpu.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("c3rc g-buffer readback"),
-            size: position_offset + (position_row * height) as u64,
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
-        Readback {
-            buffer,
-            width,
-            height,
-            ids_row,
-            position_row,
-            position_offset,
-        }
-    }
-
-    fn read(&self, gpu: &GpuContext, g: &raster::GBuffer) -> Result<PixelSurfaces, GpuError> {
-        let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        let size = wgpu::Extent3d {
-            width: self.width,
-            height: self.height,
-            depth_or_array_layers: 1,
-        };
-        for (texture, offset, row) in [
-            (&g.ids, 0, self.ids_row),
-            (&g.position, self.position_offset, self.position_row),
-        ] {
-            encoder.copy_texture_to_buffer(
-                texture.as_image_copy(),
-                wgpu::TexelCopyBufferInfo {
-                    buffer: &self.buffer,
-                    layout: wgpu::TexelCopyBufferLayout {
-                        offset,
-                        bytes_per_row: Some(row),
-                        rows_per_image: Some(self.height),
-                    },
-                },
-                size,
-            );
-        }
-        gpu.queue.submit([encoder.finish()]);
-        let (w, h) = (self.width as usize, self.height as usize);
-        gpu.read_mapped(&self.buffer, |bytes| {
-            let mut ids = Vec::with_capacity(w * h);
-            let mut position = Vec::with_capacity(w * h);
-            for y in 0..h {
-                let row = &bytes[y * self.ids_row as usize..][..w * 8];
-                ids.extend_from_slice(bytemuck::cast_slice::<u8, [u32; 2]>(row));
-                let start = self.position_offset as usize + y * self.position_row as usize;
-                let row = &bytes[start..][..w * 16];
-                position.extend_from_slice(bytemuck::cast_slice::<u8, [f32; 4]>(row));
-            }
-            PixelSurfaces { ids, position }
-        })
-    }
 }
 
 /// The mirrors (specular meshes of mirror material) with their centres and radii.
@@ -654,7 +583,7 @@ impl Technique for C3rcMethod {
         stages.lap(gpu, "far-field cube maps")?;
 
         if p.readback.as_ref().map(|r| (r.width, r.height)) != Some((width, height)) {
-            p.readback = Some(Readback::new(gpu, width, height));
+            p.readback = Some(SurfaceReadback::new(gpu, width, height));
         }
         let surfaces = p.readback.as_ref().expect("made above").read(gpu, &g)?;
         stages.lap(gpu, "g-buffer readback")?;
