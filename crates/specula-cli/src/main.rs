@@ -179,7 +179,20 @@ fn height_for(scene: &Scene, width: u32, height: Option<u32>) -> u32 {
 /// The devices `methods` need: a GPU only where one of them needs it.
 fn context_for(methods: &[&MethodInfo]) -> Result<Devices> {
     if !methods.iter().any(|m| m.needs_gpu) {
-        return Ok(Devices::default());
+        if !methods.iter().any(|m| m.gpu_optional) {
+            return Ok(Devices::default());
+        }
+        // A method that uses a GPU where there is one runs on the CPU alone where there is not.
+        return Ok(match GpuContext::new() {
+            Ok(gpu) => {
+                eprintln!("GPU: {}", gpu.describe());
+                Devices::with_gpu(gpu)
+            }
+            Err(e) => {
+                eprintln!("no GPU ({e}): running on the CPU alone");
+                Devices::default()
+            }
+        });
     }
     let gpu = GpuContext::new()?;
     eprintln!("GPU: {}", gpu.describe());
@@ -200,7 +213,11 @@ fn print_methods() {
         if m.exact {
             traits.push("exact");
         }
-        traits.push(if m.needs_gpu { "GPU" } else { "CPU" });
+        traits.push(match (m.needs_gpu, m.gpu_optional) {
+            (true, _) => "GPU",
+            (false, true) => "CPU, GPU where present",
+            (false, false) => "CPU",
+        });
         if m.progressive {
             traits.push("progressive");
         }

@@ -16,6 +16,7 @@ pub mod reference;
 pub mod screen;
 pub mod registry;
 pub mod technique;
+pub mod vertex_tracing;
 
 pub use gpu_scene::GpuScene;
 pub use live_scene::{AccelUpdate, LiveScene, MoveError};

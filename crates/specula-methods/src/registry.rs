@@ -13,6 +13,7 @@ pub static METHODS: &[&MethodInfo] = &[
     &crate::distance_maps::INFO,
     &crate::image_space::INFO,
     &crate::c3rc::INFO,
+    &crate::vertex_tracing::INFO,
 ];
 
 /// The registered method called `name`.

@@ -273,6 +273,8 @@ pub struct MethodInfo {
     pub exact: bool,
     /// It cannot run without a GPU.
     pub needs_gpu: bool,
+    /// It runs without a GPU, and uses one where the run has one.
+    pub gpu_optional: bool,
     /// Its frames refine over calls (see [`Frame::converged`]).
     pub progressive: bool,
     pub params: &'static [ParamSpec],

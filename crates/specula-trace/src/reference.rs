@@ -145,6 +145,8 @@ pub trait TreeRecorder {
     fn ray(&mut self, kind: Branch, mesh: Option<u32>);
     /// The shadow ray towards light `light` was blocked or not.
     fn shadow(&mut self, light: usize, occluded: bool);
+    /// The path read texture `texture` at `uv` (an unlit or diffuse surface's colour).
+    fn texture(&mut self, _texture: usize, _uv: Vec2) {}
 }
 
 /// Why a closest-hit ray was traced.
@@ -237,13 +239,16 @@ impl Tracer<'_> {
     }
 
     /// The radiance leaving the known first hit `hit` of the primary ray `ray` towards its
-    /// origin, with its ray tree: a path whose primary intersection is given (a vertex the ray
+    /// origin, its path told to `recorder`: a path whose primary intersection is given (a vertex the ray
     /// was aimed at) and not searched for. The primary ray is in the tree but not counted as
     /// traced.
-    pub fn radiance_at_hit_with_tree(&self, ray: &Ray, hit: &Hit) -> (Vec3, RayTree) {
-        let mut tree = RayTree::default();
-        let radiance = self.shade_recorded(ray, hit, Branch::Primary, 0, None, &mut tree);
-        (radiance, tree)
+    pub fn radiance_at_hit_recorded<R: TreeRecorder>(
+        &self,
+        ray: &Ray,
+        hit: &Hit,
+        recorder: &mut R,
+    ) -> Vec3 {
+        self.shade_recorded(ray, hit, Branch::Primary, 0, None, recorder)
     }
 
     fn shade_recorded<R: TreeRecorder>(
@@ -266,6 +271,11 @@ impl Tracer<'_> {
                 .unwrap_or(Vec3::ONE);
             material.color * texture
         };
+        if let (Some(texture), MaterialKind::Unlit | MaterialKind::Diffuse) =
+            (material.texture, &material.kind)
+        {
+            tree.texture(texture, sp.uv);
+        }
         match material.kind {
             MaterialKind::Unlit => base(),
             MaterialKind::Diffuse => self.diffuse_recorded(&sp, base(), tree),

@@ -233,6 +233,7 @@ pub const INFO: MethodInfo = MethodInfo {
     summary: "continuous 3-ray cameras: nearby objects as points projected per reflector triangle over an envmap far field",
     exact: false,
     needs_gpu: true,
+    gpu_optional: false,
     progressive: false,
     params: PARAMS,
     create: || Box::new(C3rcMethod::default()),

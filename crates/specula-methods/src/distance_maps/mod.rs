@@ -208,6 +208,7 @@ pub const INFO: MethodInfo = MethodInfo {
     summary: "layered distance cube maps with linear + secant search (Umenhoffer et al.): multiple reflections and refractions",
     exact: false,
     needs_gpu: true,
+    gpu_optional: false,
     progressive: false,
     params: PARAMS,
     create: || Box::new(DistanceMaps::default()),

@@ -101,6 +101,7 @@ pub const INFO: MethodInfo = MethodInfo {
     summary: "classic dynamic cube-map reflection and refraction from each reflector's centre (the baseline)",
     exact: false,
     needs_gpu: true,
+    gpu_optional: false,
     progressive: false,
     params: PARAMS,
     create: || Box::new(EnvMap::default()),

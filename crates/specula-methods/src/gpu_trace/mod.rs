@@ -133,6 +133,7 @@ pub const INFO: MethodInfo = MethodInfo {
     summary: "exact Whitted ray tracing in WGSL compute over the CPU's SAH BVH (the reference on the GPU)",
     exact: true,
     needs_gpu: true,
+    gpu_optional: false,
     progressive: false,
     params: PARAMS,
     create: || Box::new(GpuTrace::default()),

@@ -254,6 +254,7 @@ pub const INFO: MethodInfo = MethodInfo {
     summary: "two-interface image-space refraction of nearby geometry (Wyman)",
     exact: false,
     needs_gpu: true,
+    gpu_optional: false,
     progressive: false,
     params: PARAMS,
     create: || Box::new(ImageSpace::default()),

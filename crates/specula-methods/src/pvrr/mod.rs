@@ -205,6 +205,7 @@ pub const INFO: MethodInfo = MethodInfo {
     summary: "per-vertex reflection and refraction (Kakimoto et al.): exact at every vertex",
     exact: false,
     needs_gpu: true,
+    gpu_optional: false,
     progressive: false,
     params: PARAMS,
     create: || Box::new(Pvrr::default()),

@@ -68,6 +68,7 @@ pub const INFO: MethodInfo = MethodInfo {
     summary: "exact Whitted-style ray tracing on the CPU (the ground truth)",
     exact: true,
     needs_gpu: false,
+    gpu_optional: false,
     progressive: true,
     params: PARAMS,
     create: || Box::new(Reference::default()),

@@ -1,0 +1,641 @@
+//! `vertex-tracing`: adaptive progressive vertex tracing.
+//!
+//! Paper: Ullmann, Schmidt, Beier, Bruderlin, *Adaptive progressive vertex tracing for
+//! interactive reflections*, Eurographics 2001 short paper
+//! (`../shared/seeds/004_6bde20ba87b77a0a.txt`).
+//!
+//! Steps, and where they are:
+//! 1. Visibility (§3): the ID buffer — the scene raster pass's G-buffer ids where the run has a
+//!    GPU, the CPU tracer's primary hits where it has none ([`crate::screen::PixelSurfaces`]).
+//!    A reflector vertex is seen when the ID buffer at its pixel shows its surface at its depth
+//!    ([`refine::FrameInputs::is_visible`]). The rest of the scene comes from the same pass (the
+//!    raster colour, or the reference's shading of each primary hit without a GPU).
+//! 2. Vertex rays (§3; [`refine::Package`]): for each vertex of a reflector triangle with a seen
+//!    vertex, the primary ray from the eye aimed at it — its intersection is the vertex, so it
+//!    is not searched for — then reflected, refracted and shadow rays through the reference
+//!    tracer, keeping each vertex's colour and ray tree
+//!    ([`specula_trace::reference::RayTree`]).
+//! 3. Refinement (§3.1–3.2, Figure 6): the edges in a queue, longest on the screen first; an
+//!    edge whose ends differ in colour by more than `epsilon` or in ray tree is split at its
+//!    midpoint (one new vertex, one new ray), both faces beside it cut in two (Figure 4); the
+//!    new edges join the queue. A refined face flatter than `flatness` (height over longest
+//!    edge) has its longest edge split (§3.2, the convergence fix), unless its height is under
+//!    two pixels; colour splits stop at `min_edge_px`, all splits at `max_level`.
+//! 4. Triangle filling (§3): each pixel of a face left with an unresolved edge (its ends differ
+//!    but it may not be split) is traced exactly.
+//! 5. Display: each reflector pixel belongs to the triangle the ID buffer shows there; it takes
+//!    the leaf face of that triangle's refinement it falls in, Gouraud-interpolated
+//!    (perspective-correct) from the face's corners, or its traced colour once filled.
+//!
+//! Progressive display (`budget_ms` > 0, what the viewer sets): the first call returns the
+//! Gouraud preview (original vertices only); each later call refines for about `budget_ms`
+//! (the paper's `TimeToBreak`) and shows the faces refined so far over the previous image; once
+//! the queue is empty, filling runs, also in budgeted steps; the frame says `converged` at the
+//! end. Any change of camera, size, parameters or scene starts over from the preview. `specula
+//! render --sequence DIR` writes each step as a numbered image with its time and rays.
+//!
+//! Work is cut into task packages of reflector triangles ([`refine::Package`]), refined in
+//! parallel (rayon) here and by MPI workers in `specula render --distributed` (§4; the CLI's
+//! `distributed` module and [`balance`]). A package's pixels do not depend on how the frame
+//! was cut, so both give the same image bit for bit.
+//!
+//! Beyond the paper: a vertex hidden by an occluder is shaded as its own surface (the primary
+//! hit is the vertex, not the occluder), so an occluder's edge does not leak into the
+//! reflector's interpolation; a triangle seen only between its corners (the paper's footnote:
+//! "not considered") is traced and filled; faces with a corner behind the eye are filled.
+//!
+//! Approximations and artifacts: between vertices the radiance is interpolated linearly, so a
+//! reflected feature smaller than the refined faces and seen by neither end of any edge is
+//! missed (the sampling's Nyquist limit); ε on display colours lets faint gradients band
+//! slightly; without filling, discontinuities are staircased to the last faces' size
+//! (`min_edge_px`).
+//!
+//! Parameters (quality / cost):
+//! - `epsilon` (0.03): colour difference that splits an edge. Lower follows fainter changes,
+//!   with more vertex rays.
+//! - `flatness` (0.2): the factor of flatness v; higher cuts more slivers (more rays, better
+//!   convergence at discontinuities).
+//! - `min_edge_px` (3): the shortest edge split for a colour difference, in pixels; lower
+//!   refines further before filling takes over.
+//! - `max_level` (20): the deepest split.
+//! - `refine` (true) / `fill` (true): switch off refinement (the preview alone) or filling.
+//! - `budget_ms` (0): progressive mode, milliseconds per call; 0 does everything in one call.
+//! - `package_triangles` (0): reflector triangles per task package, the parallel grain (0: the
+//!   active triangles in four packages per thread). A vertex on a package border is traced
+//!   once per package: smaller packages balance better and trace more.
+//! - `visibility` (auto): `gpu` draws the ID buffer with the scene raster pass, `cpu` traces it,
+//!   `auto` uses the GPU where the run has one.
+//! - `max_depth` (8): the reference's bound on specular bounces, for every vertex and pixel.
+//! - `shadow_resolution`: the raster pass's shadow maps (GPU visibility only).
+
+pub mod refine;
+
+use std::time::{Duration, Instant};
+
+use glam::Vec3;
+use rayon::prelude::*;
+use specula_gpu::{GpuContext, ResourceCounts, StageTime, TimingSource};
+use specula_scene::Camera;
+use specula_trace::reference::{pixel_radiance, rays_traced_on_this_thread, Tracer};
+use specula_trace::Image;
+
+use crate::live_scene::LiveScene;
+use crate::raster::{self, RasterPass, RasterSpec};
+use crate::screen::{PixelSurfaces, ScreenView, SurfaceReadback};
+use crate::technique::{
+    bad_value, Context, Frame, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels,
+    Technique, TechniqueError, COUNTER_RAYS_TRACED, COUNTER_SHADOW_RAYS,
+};
+use refine::{FrameInputs, Package, PackageCounters, PixelOwners, RefineSettings, Topology};
+pub use refine::TriangleId;
+
+pub const PARAMS: &[ParamSpec] = &[
+    ParamSpec {
+        name: "epsilon",
+        kind: ParamKind::Number { min: 0.0, max: 1.0 },
+        default: "0.03",
+        doc: "ε: display-colour difference (largest channel, 0-1) that splits an edge",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "flatness",
+        kind: ParamKind::Number { min: 0.0, max: 1.0 },
+        default: "0.2",
+        doc: "v: a refined face with height/longest edge below this has that edge split",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "min_edge_px",
+        kind: ParamKind::Number {
+            min: 0.5,
+            max: 1000.0,
+        },
+        default: "3",
+        doc: "l: shortest edge (pixels) split for a colour difference; shorter ones are filled",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "max_level",
+        kind: ParamKind::Integer { min: 0, max: 40 },
+        default: "20",
+        doc: "deepest split of an original edge",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "refine",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "adaptive refinement (false: the Gouraud preview of the original vertices only)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "fill",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "triangle filling: trace each pixel of the faces refinement left unresolved",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "budget_ms",
+        kind: ParamKind::Integer { min: 0, max: 60000 },
+        default: "0",
+        doc: "progressive mode: milliseconds per call, preview first (0: everything in one call)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "package_triangles",
+        kind: ParamKind::Integer { min: 0, max: 1 << 20 },
+        default: "0",
+        doc: "reflector triangles per task package (0: four packages per thread)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "visibility",
+        kind: ParamKind::Choice(&["auto", "cpu", "gpu"]),
+        default: "auto",
+        doc: "ID buffer from the GPU raster pass, from CPU primary rays, or the GPU where present",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "max_depth",
+        kind: ParamKind::Integer { min: 0, max: 64 },
+        default: "8",
+        doc: "most specular bounces on a vertex's or a filled pixel's path",
+        invalidates: Invalidates::Uniform,
+    },
+    raster::SHADOW_RESOLUTION,
+];
+
+pub const INFO: MethodInfo = MethodInfo {
+    name: "vertex-tracing",
+    summary: "adaptive progressive vertex tracing: rays from reflector vertices, edge refinement, triangle filling, MPI (Ullmann et al. 2001)",
+    exact: false,
+    needs_gpu: false,
+    gpu_optional: true,
+    progressive: true,
+    params: PARAMS,
+    create: || Box::new(VertexTracing::default()),
+};
+
+/// Where the ID buffer comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum VisibilitySource {
+    Auto,
+    Cpu,
+    Gpu,
+}
+
+pub struct VertexTracing {
+    pub settings: RefineSettings,
+    pub budget_ms: u32,
+    pub package_triangles: usize,
+    pub visibility: VisibilitySource,
+    pub max_depth: u32,
+    pub shadow_resolution: u32,
+    gpu: Option<GpuPass>,
+    progress: Option<Progress>,
+}
+
+impl Default for VertexTracing {
+    fn default() -> Self {
+        VertexTracing {
+            settings: RefineSettings {
+                epsilon: 0.03,
+                flatness: 0.2,
+                min_edge_px: 3.0,
+                max_level: 20,
+                refine: true,
+                fill: true,
+            },
+            budget_ms: 0,
+            package_triangles: 0,
+            visibility: VisibilitySource::Auto,
+            max_depth: 8,
+            shadow_resolution: 1024,
+            gpu: None,
+            progress: None,
+        }
+    }
+}
+
+/// The scene raster pass and its readback, for the GPU ID buffer.
+struct GpuPass {
+    scene_id: u64,
+    shadow_resolution: u32,
+    raster: RasterPass,
+    readback: Option<SurfaceReadback>,
+}
+
+/// What a progressive image was started for: a change of any part starts over.
+#[derive(Clone, Debug, PartialEq)]
+struct ViewKey {
+    camera: Camera,
+    width: u32,
+    height: u32,
+    scene: (u64, u64),
+    settings: RefineSettings,
+    package_triangles: usize,
+    max_depth: u32,
+    gpu_visibility: bool,
+}
+
+/// One frame's view of the scene, the same on every rank: the ID buffer, who owns each pixel,
+/// and the reflector triangles to trace.
+pub struct FrameSetup {
+    pub view: ScreenView,
+    pub surfaces: PixelSurfaces,
+    pub owners: PixelOwners,
+    pub topology: Topology,
+    pub active: Vec<TriangleId>,
+}
+
+impl FrameSetup {
+    /// From an ID buffer (`surfaces`) of `camera`'s `width` × `height` view.
+    pub fn new(
+        live: &LiveScene,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        surfaces: PixelSurfaces,
+        settings: RefineSettings,
+        max_depth: u32,
+    ) -> FrameSetup {
+        let topology = Topology::new(live.scene());
+        let owners = PixelOwners::new(&surfaces, &topology);
+        let mut setup = FrameSetup {
+            view: ScreenView::new(camera, width, height),
+            surfaces,
+            owners,
+            topology,
+            active: Vec::new(),
+        };
+        setup.active = setup
+            .inputs(live, camera, settings, max_depth)
+            .active_triangles();
+        setup
+    }
+
+    /// The same from the CPU's ID buffer (what every MPI rank computes for itself).
+    pub fn traced(
+        live: &LiveScene,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        settings: RefineSettings,
+        max_depth: u32,
+    ) -> FrameSetup {
+        let surfaces = PixelSurfaces::trace(live.accel(), camera, width, height);
+        FrameSetup::new(live, camera, width, height, surfaces, settings, max_depth)
+    }
+
+    pub fn inputs<'a>(
+        &'a self,
+        live: &'a LiveScene,
+        camera: &'a Camera,
+        settings: RefineSettings,
+        max_depth: u32,
+    ) -> FrameInputs<'a> {
+        FrameInputs {
+            scene: live.scene(),
+            accel: live.accel(),
+            max_depth,
+            camera,
+            view: self.view,
+            surfaces: &self.surfaces,
+            owners: &self.owners,
+            topology: &self.topology,
+            settings,
+        }
+    }
+
+    /// The active triangles `range` (indices into [`FrameSetup::active`]) as one package.
+    pub fn package(&self, range: std::ops::Range<usize>) -> Package {
+        Package::new(self.active[range].to_vec())
+    }
+
+    /// The image of everything but the reflectors from the reference's shading of each
+    /// pixel's primary ray (the CPU's stand-in for the raster pass's colour), reflector pixels
+    /// left black; with the closest-hit and shadow rays it traced.
+    pub fn rest_of_scene(
+        &self,
+        live: &LiveScene,
+        camera: &Camera,
+        max_depth: u32,
+    ) -> (Image, (u64, u64)) {
+        let (width, height) = (self.view.width, self.view.height);
+        let tracer = Tracer {
+            scene: live.scene(),
+            accel: live.accel(),
+            max_depth,
+        };
+        let topology = &self.topology;
+        let (pixels, rays): (Vec<Vec3>, Vec<(u64, u64)>) = (0..width * height)
+            .into_par_iter()
+            .map(|k| {
+                let [mesh, _] = self.surfaces.ids[k as usize];
+                if mesh != 0 && topology.is_reflector(mesh - 1) {
+                    return (Vec3::ZERO, (0, 0));
+                }
+                let before = rays_traced_on_this_thread();
+                let color = pixel_radiance(&tracer, camera, k % width, k / width, width, height, 1);
+                let after = rays_traced_on_this_thread();
+                (color, (after.0 - before.0, after.1 - before.1))
+            })
+            .unzip();
+        let rays = rays
+            .iter()
+            .fold((0, 0), |sum, r| (sum.0 + r.0, sum.1 + r.1));
+        let image = Image {
+            width,
+            height,
+            pixels,
+        };
+        (image, rays)
+    }
+}
+
+struct Progress {
+    key: ViewKey,
+    setup: FrameSetup,
+    packages: Vec<Package>,
+    image: Image,
+    /// Milliseconds so far: visibility, rest of scene, reflector (vertex rays, refinement,
+    /// filling), composition.
+    stages: [f64; 4],
+    rest_rays: (u64, u64),
+}
+
+impl Technique for VertexTracing {
+    fn info(&self) -> &'static MethodInfo {
+        &INFO
+    }
+
+    fn parameter(&self, name: &str) -> String {
+        let s = &self.settings;
+        match name {
+            "epsilon" => s.epsilon.to_string(),
+            "flatness" => s.flatness.to_string(),
+            "min_edge_px" => s.min_edge_px.to_string(),
+            "max_level" => s.max_level.to_string(),
+            "refine" => s.refine.to_string(),
+            "fill" => s.fill.to_string(),
+            "budget_ms" => self.budget_ms.to_string(),
+            "package_triangles" => self.package_triangles.to_string(),
+            "visibility" => match self.visibility {
+                VisibilitySource::Auto => "auto",
+                VisibilitySource::Cpu => "cpu",
+                VisibilitySource::Gpu => "gpu",
+            }
+            .into(),
+            "max_depth" => self.max_depth.to_string(),
+            "shadow_resolution" => self.shadow_resolution.to_string(),
+            _ => String::new(),
+        }
+    }
+
+    fn set_parameter(&mut self, name: &str, value: &ParamValue) -> Result<(), TechniqueError> {
+        let s = &mut self.settings;
+        match name {
+            "epsilon" => s.epsilon = value.number() as f32,
+            "flatness" => s.flatness = value.number() as f32,
+            "min_edge_px" => s.min_edge_px = value.number() as f32,
+            "max_level" => s.max_level = value.integer() as u32,
+            "refine" => s.refine = value.flag(),
+            "fill" => s.fill = value.flag(),
+            "budget_ms" => self.budget_ms = value.integer() as u32,
+            "package_triangles" => self.package_triangles = value.integer() as usize,
+            "visibility" => {
+                self.visibility = match value.word() {
+                    "auto" => VisibilitySource::Auto,
+                    "cpu" => VisibilitySource::Cpu,
+                    "gpu" => VisibilitySource::Gpu,
+                    _ => return Err(bad_value(INFO.name, name, value, "auto, cpu or gpu")),
+                }
+            }
+            "max_depth" => self.max_depth = value.integer() as u32,
+            "shadow_resolution" => self.shadow_resolution = value.integer() as u32,
+            _ => {}
+        }
+        Ok(())
+    }
+
+    fn invalidate(&mut self, what: Invalidates) {
+        self.progress = None;
+        if what >= Invalidates::Resources {
+            self.gpu = None;
+        }
+    }
+
+    fn prepare(&mut self, ctx: &Context, live: &LiveScene) -> Result<(), TechniqueError> {
+        if let Some(gpu) = self.gpu_for_visibility(ctx)? {
+            self.ensure_raster(gpu, live)?;
+        }
+        Ok(())
+    }
+
+    fn render(
+        &mut self,
+        ctx: &Context,
+        live: &LiveScene,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+    ) -> Result<Frame, TechniqueError> {
+        let start = Instant::now();
+        let gpu = self.gpu_for_visibility(ctx)?;
+        let key = ViewKey {
+            camera: camera.clone(),
+            width,
+            height,
+            scene: (live.id(), live.version()),
+            settings: self.settings,
+            package_triangles: self.package_triangles,
+            max_depth: self.max_depth,
+            gpu_visibility: gpu.is_some(),
+        };
+        // Without a budget every call is a whole fresh frame (as bench times it).
+        let keep = self.budget_ms > 0 && self.progress.as_ref().is_some_and(|p| p.key == key);
+        let mut fresh = false;
+        if !keep {
+            self.progress = Some(self.start_frame(gpu, live, camera, width, height, key)?);
+            fresh = true;
+        }
+        let (settings, max_depth, budget_ms) = (self.settings, self.max_depth, self.budget_ms);
+        let progress = self.progress.as_mut().expect("set above");
+        let deadline = (budget_ms > 0).then(|| start + Duration::from_millis(budget_ms as u64));
+        let inputs = progress.setup.inputs(live, camera, settings, max_depth);
+
+        let clock = Instant::now();
+        let preview_only = fresh && budget_ms > 0;
+        let results: Vec<Vec<(u32, Vec3)>> = progress
+            .packages
+            .par_iter_mut()
+            .map(|package| {
+                if !package.is_done() && !(preview_only && package.has_preview()) {
+                    // A fresh progressive frame shows its preview before any refinement.
+                    let until = if preview_only { Some(Instant::now()) } else { deadline };
+                    package.run(&inputs, until);
+                }
+                package.take_pixels(&inputs)
+            })
+            .collect();
+        progress.stages[2] += clock.elapsed().as_secs_f64() * 1e3;
+        let clock = Instant::now();
+        for (k, color) in results.into_iter().flatten() {
+            progress.image.pixels[k as usize] = color;
+        }
+        progress.stages[3] += clock.elapsed().as_secs_f64() * 1e3;
+
+        let converged = progress.packages.iter().all(Package::is_done);
+        let mut totals = PackageCounters::default();
+        for package in &progress.packages {
+            totals.add(&package.counters);
+        }
+        let names = [
+            "visibility (ID buffer)",
+            "rest of scene",
+            "reflector: vertex rays, refinement, filling",
+            "reflector: composition",
+        ];
+        let stages = names
+            .iter()
+            .zip(progress.stages)
+            .map(|(name, ms)| StageTime {
+                stage: name.to_string(),
+                milliseconds: ms,
+            })
+            .collect();
+        let counters = vec![
+            ("reflector pixels".into(), progress.setup.owners.len() as u64),
+            ("reflector triangles traced".into(), progress.setup.active.len() as u64),
+            ("task packages".into(), progress.packages.len() as u64),
+            ("vertex rays".into(), totals.vertex_rays),
+            ("filled pixels".into(), totals.filled_pixels),
+            (
+                "samples (vertex rays + filled pixels)".into(),
+                totals.vertex_rays + totals.filled_pixels,
+            ),
+            ("edges split".into(), totals.edges_split),
+            ("of which for flatness".into(), totals.flat_splits),
+            ("unresolved edges".into(), totals.unresolved_edges),
+            ("deepest level".into(), totals.deepest_level),
+            (
+                COUNTER_RAYS_TRACED.into(),
+                totals.rays + totals.vertex_rays + progress.rest_rays.0,
+            ),
+            (
+                COUNTER_SHADOW_RAYS.into(),
+                totals.shadow_rays + progress.rest_rays.1,
+            ),
+        ];
+        // Later calls of a progressive frame report their own time only.
+        if budget_ms > 0 {
+            progress.stages = [0.0; 4];
+        }
+        let mut warnings = Vec::new();
+        if progress.setup.owners.is_empty() {
+            warnings.push("no reflector pixel is visible: nothing to vertex-trace".into());
+        }
+        Ok(Frame {
+            pixels: Pixels::Image(progress.image.clone()),
+            stages,
+            counters,
+            timing: TimingSource::CpuWallClock,
+            warnings,
+            converged,
+            created: ResourceCounts::default(),
+        })
+    }
+}
+
+impl VertexTracing {
+    fn gpu_for_visibility<'c>(
+        &self,
+        ctx: &'c Context,
+    ) -> Result<Option<&'c GpuContext>, TechniqueError> {
+        match self.visibility {
+            VisibilitySource::Cpu => Ok(None),
+            VisibilitySource::Auto => Ok(ctx.gpu.as_ref()),
+            VisibilitySource::Gpu => ctx.gpu(INFO.name).map(Some),
+        }
+    }
+
+    fn ensure_raster(&mut self, gpu: &GpuContext, live: &LiveScene) -> Result<(), TechniqueError> {
+        let stale = self.gpu.as_ref().is_none_or(|p| {
+            p.scene_id != live.id() || p.shadow_resolution != self.shadow_resolution
+        });
+        if stale {
+            self.gpu = Some(GpuPass {
+                scene_id: live.id(),
+                shadow_resolution: self.shadow_resolution,
+                raster: RasterPass::new(gpu, live, RasterSpec::scene(self.shadow_resolution))?,
+                readback: None,
+            });
+        }
+        Ok(())
+    }
+
+    /// A fresh frame: the ID buffer and the rest of the scene, then the packages (nothing
+    /// traced yet).
+    fn start_frame(
+        &mut self,
+        gpu: Option<&GpuContext>,
+        live: &LiveScene,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        key: ViewKey,
+    ) -> Result<Progress, TechniqueError> {
+        let clock = Instant::now();
+        let (settings, max_depth) = (self.settings, self.max_depth);
+        let (setup, rest, rest_rays, visibility_ms) = match gpu {
+            Some(gpu) => {
+                self.ensure_raster(gpu, live)?;
+                let pass = self.gpu.as_mut().expect("made above");
+                pass.raster.begin_frame(gpu, live)?;
+                let uniform = raster::camera_uniform(camera, &live.scene().bounds(), width, height);
+                let g = pass
+                    .raster
+                    .render(gpu, live.gpu(gpu), &uniform, None)?;
+                if pass.readback.as_ref().map(|r| (r.width, r.height)) != Some((width, height)) {
+                    pass.readback = Some(SurfaceReadback::new(gpu, width, height));
+                }
+                let surfaces = pass.readback.as_ref().expect("made above").read(gpu, &g)?;
+                // The raster colour is the rest of the scene; specular pixels are black in it.
+                let rest = g.read_color(gpu)?;
+                let visibility_ms = clock.elapsed().as_secs_f64() * 1e3;
+                let setup =
+                    FrameSetup::new(live, camera, width, height, surfaces, settings, max_depth);
+                (setup, rest, (0, 0), visibility_ms)
+            }
+            None => {
+                let setup = FrameSetup::traced(live, camera, width, height, settings, max_depth);
+                let visibility_ms = clock.elapsed().as_secs_f64() * 1e3;
+                let (rest, rays) = setup.rest_of_scene(live, camera, max_depth);
+                (setup, rest, rays, visibility_ms)
+            }
+        };
+        let rest_ms = clock.elapsed().as_secs_f64() * 1e3 - visibility_ms;
+        let size = match self.package_triangles {
+            0 => setup
+                .active
+                .len()
+                .div_ceil(4 * rayon::current_num_threads())
+                .max(1),
+            n => n,
+        };
+        let count = setup.active.len();
+        let packages = (0..count)
+            .step_by(size)
+            .map(|start| setup.package(start..(start + size).min(count)))
+            .collect();
+        Ok(Progress {
+            key,
+            setup,
+            packages,
+            image: rest,
+            stages: [visibility_ms, rest_ms, 0.0, 0.0],
+            rest_rays,
+        })
+    }
+}

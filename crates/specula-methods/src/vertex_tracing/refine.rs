@@ -1,0 +1,958 @@
+//! One task package of vertex tracing (Ullmann et al. 2001, §3–3.2): a set of reflector
+//! triangles, their vertices traced, their edges refined longest first, and their pixels
+//! interpolated (Gouraud) or traced (triangle filling).
+//!
+//! A package's image depends only on its triangles, never on which other triangles share its
+//! package: every decision is a function of what it decides on. A vertex's colour and ray tree
+//! depend only on its position and its *host* triangle (the lowest-numbered triangle of its mesh
+//! that holds it, the same in every package); an edge on a triangle's boundary is split or kept
+//! by its end points alone (colour, ray tree, projected length, level), so both triangles beside
+//! it split it alike wherever they are; the flatness rule, which looks at faces, applies only to
+//! edges inside one triangle; and the queue's order among one triangle's edges is by projected
+//! length, ties broken by position. So a frame cut into packages any way — rayon's, or the MPI
+//! master's — composes the same image bit for bit. The price is the paper's redundancy: a vertex
+//! on the border of two packages is traced in both.
+
+use std::collections::{BinaryHeap, HashMap};
+use std::time::Instant;
+
+use glam::{Vec2, Vec3};
+use specula_scene::{Camera, Scene};
+use specula_trace::reference::{
+    pixel_radiance, rays_traced_on_this_thread, Branch, RayTree, Tracer, TreeRecorder,
+};
+use specula_trace::{Hit, Ray, SceneAccel};
+
+use crate::screen::{PixelSurfaces, ScreenView};
+
+/// A package's image is composed again after this many edge decisions at most when a deadline
+/// is set (how often the clock is read).
+const EDGES_PER_CLOCK_READ: u32 = 16;
+
+/// What the refinement of every package of a frame follows.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RefineSettings {
+    /// ε: two end points whose display colours differ by more (largest channel, 0–1 after
+    /// clamping and gamma 2.2) split their edge.
+    pub epsilon: f32,
+    /// v: a refined face whose height over its longest edge is below this splits that edge.
+    pub flatness: f32,
+    /// l: edges shorter than this on the screen (pixels) are not split for a colour difference.
+    pub min_edge_px: f32,
+    /// The deepest an edge may be split to.
+    pub max_level: u32,
+    /// Refine at all (false: the Gouraud preview only).
+    pub refine: bool,
+    /// Trace each pixel of the faces refinement could not resolve (triangle filling).
+    pub fill: bool,
+}
+
+/// A reflector triangle of the scene: the unit of work packages are made of.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct TriangleId {
+    pub mesh: u32,
+    pub triangle: u32,
+}
+
+/// Each reflector mesh's host triangles: the lowest-numbered triangle holding each vertex and
+/// each edge. A vertex is shaded as a point of its host, so that every package shades it alike.
+#[derive(Debug, Default)]
+pub struct Topology {
+    meshes: HashMap<u32, MeshTopology>,
+}
+
+#[derive(Debug, Default)]
+struct MeshTopology {
+    vertex_host: Vec<u32>,
+    edge_host: HashMap<(u32, u32), u32>,
+}
+
+impl Topology {
+    /// The host triangles of every specular mesh of `scene`.
+    pub fn new(scene: &Scene) -> Topology {
+        let mut meshes = HashMap::new();
+        for (index, mesh) in scene.meshes.iter().enumerate() {
+            if !scene.materials[mesh.material].is_specular() {
+                continue;
+            }
+            let mut topology = MeshTopology {
+                vertex_host: vec![u32::MAX; mesh.positions.len()],
+                edge_host: HashMap::new(),
+            };
+            for (t, tri) in mesh.triangles.iter().enumerate() {
+                let t = t as u32;
+                for i in 0..3 {
+                    let host = &mut topology.vertex_host[tri[i] as usize];
+                    *host = (*host).min(t);
+                    topology
+                        .edge_host
+                        .entry(edge_key(tri[i], tri[(i + 1) % 3]))
+                        .or_insert(t);
+                }
+            }
+            meshes.insert(index as u32, topology);
+        }
+        Topology { meshes }
+    }
+
+    pub fn is_reflector(&self, mesh: u32) -> bool {
+        self.meshes.contains_key(&mesh)
+    }
+
+    fn vertex_host(&self, mesh: u32, vertex: u32) -> u32 {
+        self.meshes[&mesh].vertex_host[vertex as usize]
+    }
+
+    fn edge_host(&self, mesh: u32, edge: (u32, u32)) -> u32 {
+        self.meshes[&mesh].edge_host[&edge]
+    }
+}
+
+/// The pixels each reflector triangle owns: those whose first surface (the ID buffer) is it.
+#[derive(Debug, Default)]
+pub struct PixelOwners {
+    /// (mesh << 32 | triangle, pixel), sorted.
+    owned: Vec<(u64, u32)>,
+}
+
+fn owner_key(id: TriangleId) -> u64 {
+    (id.mesh as u64) << 32 | id.triangle as u64
+}
+
+impl PixelOwners {
+    pub fn new(surfaces: &PixelSurfaces, topology: &Topology) -> PixelOwners {
+        let mut owned: Vec<(u64, u32)> = surfaces
+            .ids
+            .iter()
+            .enumerate()
+            .filter(|(_, ids)| ids[0] != 0 && topology.is_reflector(ids[0] - 1))
+            .map(|(k, ids)| {
+                let id = TriangleId {
+                    mesh: ids[0] - 1,
+                    triangle: ids[1],
+                };
+                (owner_key(id), k as u32)
+            })
+            .collect();
+        owned.sort_unstable();
+        PixelOwners { owned }
+    }
+
+    /// The pixels `id` owns, in raster order.
+    pub fn pixels(&self, id: TriangleId) -> impl Iterator<Item = u32> + '_ {
+        let key = owner_key(id);
+        let start = self.owned.partition_point(|(k, _)| *k < key);
+        self.owned[start..]
+            .iter()
+            .take_while(move |(k, _)| *k == key)
+            .map(|(_, pixel)| *pixel)
+    }
+
+    pub fn owns_any(&self, id: TriangleId) -> bool {
+        self.pixels(id).next().is_some()
+    }
+
+    /// Every pixel some reflector triangle owns.
+    pub fn all(&self) -> impl Iterator<Item = u32> + '_ {
+        self.owned.iter().map(|(_, pixel)| *pixel)
+    }
+
+    pub fn len(&self) -> usize {
+        self.owned.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.owned.is_empty()
+    }
+}
+
+/// What every package of one frame reads.
+pub struct FrameInputs<'a> {
+    pub scene: &'a Scene,
+    pub accel: &'a SceneAccel,
+    /// The reference's bound on specular bounces.
+    pub max_depth: u32,
+    pub camera: &'a Camera,
+    pub view: ScreenView,
+    pub surfaces: &'a PixelSurfaces,
+    pub owners: &'a PixelOwners,
+    pub topology: &'a Topology,
+    pub settings: RefineSettings,
+}
+
+impl FrameInputs<'_> {
+    fn tracer(&self) -> Tracer<'_> {
+        Tracer {
+            scene: self.scene,
+            accel: self.accel,
+            max_depth: self.max_depth,
+        }
+    }
+
+    /// Whether `p_world`, a point of triangle `host` of mesh `mesh`, is seen (the ID buffer
+    /// test): its pixel shows that mesh, and either that triangle or a surface at the point's
+    /// distance within what the host's plane spans across the pixel (a neighbouring triangle
+    /// of the same surface; not the back wall of a thin shell, or another fold of the mesh).
+    pub fn is_visible(&self, mesh: u32, host: u32, p_world: Vec3) -> bool {
+        let Some((x, y, z)) = self.view.project(p_world) else {
+            return false;
+        };
+        let (w, h) = (self.view.width as f32, self.view.height as f32);
+        if !(x >= 0.0 && y >= 0.0 && x < w && y < h) {
+            return false;
+        }
+        let k = y as usize * self.view.width as usize + x as usize;
+        let [seen_mesh, seen_triangle] = self.surfaces.ids[k];
+        if seen_mesh != mesh + 1 {
+            return false;
+        }
+        if seen_triangle == host {
+            return true;
+        }
+        let eye = self.view.eye;
+        let scene_mesh = &self.scene.meshes[mesh as usize];
+        let [a, b, c] = scene_mesh.triangles[host as usize].map(|i| scene_mesh.positions[i as usize]);
+        let normal = (b - a).cross(c - a).normalize_or_zero();
+        let cos = normal.dot((p_world - eye).normalize_or_zero()).abs();
+        // The pixel centre is within 0.71 pixel of the point: along the plane, the distance
+        // changes by at most that × tan θ footprints.
+        let tan = ((1.0 - cos * cos).max(0.0).sqrt() / cos.max(0.05)).min(20.0);
+        let tolerance = self.view.footprint(z) * (0.75 * tan + 0.25);
+        self.surfaces.position(k).is_some_and(|seen| {
+            ((seen - eye).length() - (p_world - eye).length()).abs() <= tolerance
+        })
+    }
+
+    /// The reflector triangles a frame traces: those with a visible vertex (the paper's rule:
+    /// an edge is traced when one of its ends is seen) or with pixels of their own (a triangle
+    /// seen only between its corners, which the paper leaves out), in scene order.
+    pub fn active_triangles(&self) -> Vec<TriangleId> {
+        use rayon::prelude::*;
+        let mut active = Vec::new();
+        for (index, mesh) in self.scene.meshes.iter().enumerate() {
+            let index = index as u32;
+            if !self.topology.is_reflector(index) {
+                continue;
+            }
+            let visible: Vec<bool> = (0..mesh.positions.len() as u32)
+                .into_par_iter()
+                .map(|v| {
+                    let host = self.topology.vertex_host(index, v);
+                    host != u32::MAX
+                        && self.is_visible(index, host, mesh.positions[v as usize])
+                })
+                .collect();
+            active.extend(
+                mesh.triangles
+                    .iter()
+                    .enumerate()
+                    .map(|(t, _)| TriangleId {
+                        mesh: index,
+                        triangle: t as u32,
+                    })
+                    .filter(|id| {
+                        let tri = mesh.triangles[id.triangle as usize];
+                        tri.iter().any(|&v| visible[v as usize]) || self.owners.owns_any(*id)
+                    }),
+            );
+        }
+        active
+    }
+}
+
+/// How far apart two radiances look: the largest channel difference after clamping to the
+/// display's range and a 2.2 gamma (what the refinement test compares with ε).
+pub fn display_difference(a: Vec3, b: Vec3) -> f32 {
+    let display = |c: Vec3| c.clamp(Vec3::ZERO, Vec3::ONE).powf(1.0 / 2.2);
+    (display(a) - display(b)).abs().max_element()
+}
+
+/// CheckRefinement's test on an edge's two ends (§3): their colours differ by more than ε,
+/// or their ray trees differ (another object, another optical path, a shadow edge). Beyond
+/// the paper: with equal trees, a texture the paths read that changes between the ends' texture
+/// coordinates by more than ε from its linear blend (a dial's tick seen through the cover) also
+/// splits the edge — the colours of two ends alone cannot see a feature between them.
+fn differ(a: &Vertex, b: &Vertex, inputs: &FrameInputs) -> bool {
+    let epsilon = inputs.settings.epsilon;
+    if display_difference(a.color, b.color) > epsilon || a.path.tree != b.path.tree {
+        return true;
+    }
+    let reads = a.path.read_count.min(b.path.read_count);
+    (0..reads).any(|i| {
+        let ((texture, uv_a), (_, uv_b)) = (a.path.reads[i], b.path.reads[i]);
+        let texture = &inputs.scene.textures[texture];
+        let texels = ((uv_b - uv_a) * Vec2::new(texture.width as f32, texture.height as f32))
+            .abs()
+            .max_element();
+        let steps = texels.ceil().min(TEXTURE_TEST_SAMPLES) as u32;
+        let (end_a, end_b) = (texture.sample(uv_a), texture.sample(uv_b));
+        (1..steps).any(|s| {
+            let t = s as f32 / steps as f32;
+            display_difference(texture.sample(uv_a.lerp(uv_b, t)), end_a.lerp(end_b, t)) > epsilon
+        })
+    })
+}
+
+/// Work and results of a package so far.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PackageCounters {
+    /// Vertices traced (each one primary ray aimed at it, its intersection known).
+    pub vertex_rays: u64,
+    /// Pixels traced by triangle filling.
+    pub filled_pixels: u64,
+    /// Closest-hit rays (secondary for vertices; all for filled pixels) and shadow rays.
+    pub rays: u64,
+    pub shadow_rays: u64,
+    pub edges_split: u64,
+    /// Of those, split by the flatness rule.
+    pub flat_splits: u64,
+    /// Edges whose ends differ but that the two-pixel floor or the level limit kept.
+    pub unresolved_edges: u64,
+    pub deepest_level: u64,
+    /// Wall-clock seconds of work on this package (what the load balancer measures).
+    pub seconds: f64,
+}
+
+impl PackageCounters {
+    pub fn add(&mut self, other: &PackageCounters) {
+        self.vertex_rays += other.vertex_rays;
+        self.filled_pixels += other.filled_pixels;
+        self.rays += other.rays;
+        self.shadow_rays += other.shadow_rays;
+        self.edges_split += other.edges_split;
+        self.flat_splits += other.flat_splits;
+        self.unresolved_edges += other.unresolved_edges;
+        self.deepest_level = self.deepest_level.max(other.deepest_level);
+        self.seconds += other.seconds;
+    }
+}
+
+/// The texture reads of a path kept for the texture test (the first ones, in path order).
+const TEXTURE_READS: usize = 2;
+/// The most texture samples one edge's texture test takes.
+const TEXTURE_TEST_SAMPLES: f32 = 64.0;
+
+/// What a vertex keeps of its path: the ray tree, and where it read textures.
+#[derive(Clone, Copy, Debug, Default)]
+struct PathRecord {
+    tree: RayTree,
+    reads: [(usize, Vec2); TEXTURE_READS],
+    read_count: usize,
+}
+
+impl TreeRecorder for PathRecord {
+    fn ray(&mut self, kind: Branch, mesh: Option<u32>) {
+        self.tree.ray(kind, mesh);
+    }
+
+    fn shadow(&mut self, light: usize, occluded: bool) {
+        self.tree.shadow(light, occluded);
+    }
+
+    fn texture(&mut self, texture: usize, uv: Vec2) {
+        if self.read_count < TEXTURE_READS {
+            self.reads[self.read_count] = (texture, uv);
+            self.read_count += 1;
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Vertex {
+    p_world: Vec3,
+    /// Pixel coordinates (centres at +0.5) and view depth; depth ≤ 0 behind the eye.
+    screen: Vec2,
+    depth: f32,
+    visible: bool,
+    color: Vec3,
+    path: PathRecord,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum EdgeState {
+    /// Not in the queue (made, or examined and kept).
+    Idle,
+    Queued,
+    /// Its ends differ, but it is too short or too deep to split: its faces are filled.
+    Unresolved,
+    Split,
+}
+
+#[derive(Clone, Debug)]
+struct Edge {
+    a: u32,
+    b: u32,
+    level: u32,
+    /// The original mesh edge (its vertex indices, ordered) it lies on; None inside a triangle.
+    original: Option<(u32, u32)>,
+    /// The leaf faces beside it (two inside a surface, one on its border, more where the mesh
+    /// is not a manifold).
+    faces: Vec<u32>,
+    state: EdgeState,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Face {
+    v: [u32; 3],
+    /// Index of its original triangle in the package.
+    origin: u32,
+    level: u32,
+    /// Once split: the two halves (the first holds the split edge's first end), and the line
+    /// from the new vertex to the opposite corner that separates them.
+    children: Option<([u32; 2], [u32; 2])>,
+}
+
+/// An edge in the queue: longest on the screen first; ties by position, which is the same in
+/// every package (local indices are not).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+struct Queued {
+    length_bits: u32,
+    midpoint_bits: [u32; 3],
+    edge: u32,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Phase {
+    Preview,
+    Refining,
+    Filling { next: usize },
+    Done,
+}
+
+/// One task package: a list of reflector triangles and their refinement.
+pub struct Package {
+    pub triangles: Vec<TriangleId>,
+    vertices: Vec<Vertex>,
+    /// (mesh, mesh vertex) → local vertex.
+    originals: HashMap<(u32, u32), u32>,
+    edges: Vec<Edge>,
+    edge_of: HashMap<(u32, u32), u32>,
+    faces: Vec<Face>,
+    roots: Vec<u32>,
+    queue: BinaryHeap<Queued>,
+    filled: HashMap<u32, Vec3>,
+    /// Triangles whose pixels changed since the last [`Package::take_pixels`].
+    dirty: Vec<bool>,
+    phase: Phase,
+    pub counters: PackageCounters,
+}
+
+fn edge_key(a: u32, b: u32) -> (u32, u32) {
+    (a.min(b), a.max(b))
+}
+
+fn past(deadline: Option<Instant>) -> bool {
+    deadline.is_some_and(|d| Instant::now() >= d)
+}
+
+/// Barycentric weights (of b and c) of `p` in triangle (a, b, c).
+fn barycentric(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> (f32, f32) {
+    let (e1, e2, ep) = (b - a, c - a, p - a);
+    let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+    let (dp1, dp2) = (ep.dot(e1), ep.dot(e2));
+    let det = d11 * d22 - d12 * d12;
+    if det.abs() <= f32::MIN_POSITIVE {
+        return (0.0, 0.0);
+    }
+    (
+        (d22 * dp1 - d12 * dp2) / det,
+        (d11 * dp2 - d12 * dp1) / det,
+    )
+}
+
+fn cross2(a: Vec2, b: Vec2) -> f32 {
+    a.x * b.y - a.y * b.x
+}
+
+impl Package {
+    pub fn new(triangles: Vec<TriangleId>) -> Package {
+        let count = triangles.len();
+        Package {
+            triangles,
+            vertices: Vec::new(),
+            originals: HashMap::new(),
+            edges: Vec::new(),
+            edge_of: HashMap::new(),
+            faces: Vec::new(),
+            roots: Vec::new(),
+            queue: BinaryHeap::new(),
+            filled: HashMap::new(),
+            dirty: vec![false; count],
+            phase: Phase::Preview,
+            counters: PackageCounters::default(),
+        }
+    }
+
+    pub fn is_done(&self) -> bool {
+        self.phase == Phase::Done
+    }
+
+    /// Whether the preview is traced.
+    pub fn has_preview(&self) -> bool {
+        self.phase != Phase::Preview
+    }
+
+    /// Works until `deadline` (None: to the end): the preview first (the triangles' own
+    /// vertices), then refinement, then triangle filling. Returns whether it is done.
+    pub fn run(&mut self, inputs: &FrameInputs, deadline: Option<Instant>) -> bool {
+        let start = Instant::now();
+        let before = rays_traced_on_this_thread();
+        loop {
+            match self.phase {
+                Phase::Preview => {
+                    self.preview(inputs);
+                    self.phase = Phase::Refining;
+                    if deadline.is_some() {
+                        // The preview is shown before any refinement (the paper's first image).
+                        break;
+                    }
+                }
+                Phase::Refining => {
+                    if !self.refine(inputs, deadline) {
+                        break;
+                    }
+                    self.phase = if inputs.settings.fill {
+                        Phase::Filling { next: 0 }
+                    } else {
+                        Phase::Done
+                    };
+                }
+                Phase::Filling { .. } => {
+                    if !self.fill(inputs, deadline) {
+                        break;
+                    }
+                    self.phase = Phase::Done;
+                }
+                Phase::Done => break,
+            }
+        }
+        let after = rays_traced_on_this_thread();
+        self.counters.rays += after.0 - before.0;
+        self.counters.shadow_rays += after.1 - before.1;
+        self.counters.seconds += start.elapsed().as_secs_f64();
+        self.is_done()
+    }
+
+    fn mesh_of_face(&self, face: u32) -> u32 {
+        self.triangles[self.faces[face as usize].origin as usize].mesh
+    }
+
+    /// A vertex at `p_world` on triangle `host` of `mesh`, traced: the primary ray from the eye
+    /// is aimed at it, so its intersection is known and not searched for (§3).
+    fn add_vertex(&mut self, inputs: &FrameInputs, mesh: u32, host: u32, p_world: Vec3) -> u32 {
+        let scene_mesh = &inputs.scene.meshes[mesh as usize];
+        let [i0, i1, i2] = scene_mesh.triangles[host as usize].map(|i| i as usize);
+        let (b1, b2) = barycentric(
+            p_world,
+            scene_mesh.positions[i0],
+            scene_mesh.positions[i1],
+            scene_mesh.positions[i2],
+        );
+        let eye = inputs.view.eye;
+        let to_vertex = p_world - eye;
+        let ray = Ray {
+            origin: eye,
+            dir: to_vertex.normalize(),
+        };
+        let hit = Hit {
+            t: to_vertex.length(),
+            b1,
+            b2,
+            mesh,
+            triangle: host,
+        };
+        let mut path = PathRecord::default();
+        let color = inputs
+            .tracer()
+            .radiance_at_hit_recorded(&ray, &hit, &mut path);
+        self.counters.vertex_rays += 1;
+        let (screen, depth) = match inputs.view.project(p_world) {
+            Some((x, y, z)) => (Vec2::new(x, y), z),
+            None => (Vec2::ZERO, 0.0),
+        };
+        self.vertices.push(Vertex {
+            p_world,
+            screen,
+            depth,
+            visible: inputs.is_visible(mesh, host, p_world),
+            color,
+            path,
+        });
+        (self.vertices.len() - 1) as u32
+    }
+
+    fn edge(&mut self, a: u32, b: u32, level: u32, original: Option<(u32, u32)>) -> u32 {
+        let key = edge_key(a, b);
+        if let Some(&e) = self.edge_of.get(&key) {
+            return e;
+        }
+        self.edges.push(Edge {
+            a: key.0,
+            b: key.1,
+            level,
+            original,
+            faces: Vec::new(),
+            state: EdgeState::Idle,
+        });
+        let e = (self.edges.len() - 1) as u32;
+        self.edge_of.insert(key, e);
+        e
+    }
+
+    fn enqueue(&mut self, e: u32, inputs: &FrameInputs) {
+        let edge = &self.edges[e as usize];
+        if !inputs.settings.refine || edge.state != EdgeState::Idle {
+            return;
+        }
+        let (a, b) = (
+            &self.vertices[edge.a as usize],
+            &self.vertices[edge.b as usize],
+        );
+        // The paper's rule: an edge is refined only if one of its ends is seen.
+        if !(a.visible || b.visible) {
+            return;
+        }
+        let midpoint = (a.p_world + b.p_world) * 0.5;
+        self.queue.push(Queued {
+            length_bits: (a.screen - b.screen).length().to_bits(),
+            midpoint_bits: midpoint.to_array().map(f32::to_bits),
+            edge: e,
+        });
+        self.edges[e as usize].state = EdgeState::Queued;
+    }
+
+    /// The preview: every vertex of the package's triangles traced once, the triangles'
+    /// edges put in the queue.
+    fn preview(&mut self, inputs: &FrameInputs) {
+        for index in 0..self.triangles.len() {
+            let id = self.triangles[index];
+            let mesh = &inputs.scene.meshes[id.mesh as usize];
+            let tri = mesh.triangles[id.triangle as usize];
+            let v = tri.map(|vertex| match self.originals.get(&(id.mesh, vertex)) {
+                Some(&local) => local,
+                None => {
+                    let host = inputs.topology.vertex_host(id.mesh, vertex);
+                    let local =
+                        self.add_vertex(inputs, id.mesh, host, mesh.positions[vertex as usize]);
+                    self.originals.insert((id.mesh, vertex), local);
+                    local
+                }
+            });
+            self.faces.push(Face {
+                v,
+                origin: index as u32,
+                level: 0,
+                children: None,
+            });
+            let face = (self.faces.len() - 1) as u32;
+            self.roots.push(face);
+            for i in 0..3 {
+                let e = self.edge(v[i], v[(i + 1) % 3], 0, Some(edge_key(tri[i], tri[(i + 1) % 3])));
+                self.edges[e as usize].faces.push(face);
+            }
+            self.dirty[index] = true;
+        }
+        for e in 0..self.edges.len() as u32 {
+            self.enqueue(e, inputs);
+        }
+    }
+
+    /// The longest edge of `face` on the screen, its length and the face's height over it.
+    fn longest_edge(&self, face: u32) -> (u32, f32, f32) {
+        let v = self.faces[face as usize].v;
+        let s = v.map(|i| self.vertices[i as usize].screen);
+        let lengths = [0, 1, 2].map(|i| (s[(i + 1) % 3] - s[i]).length());
+        let mut longest = 0;
+        for i in 1..3 {
+            if lengths[i] > lengths[longest] {
+                longest = i;
+            }
+        }
+        let c = lengths[longest];
+        let area2 = cross2(s[1] - s[0], s[2] - s[0]).abs();
+        let h = if c > 0.0 { area2 / c } else { 0.0 };
+        let e = self.edge_of[&edge_key(v[longest], v[(longest + 1) % 3])];
+        (e, c, h)
+    }
+
+    /// §3.2's factor of flatness: a refined face whose height is below `flatness` × its
+    /// longest edge, and still at least two pixels, has that edge split.
+    fn is_flat(&self, face: u32, settings: &RefineSettings) -> Option<u32> {
+        let f = &self.faces[face as usize];
+        if f.level == 0 || f.children.is_some() {
+            return None;
+        }
+        let (e, c, h) = self.longest_edge(face);
+        (c > 0.0 && h / c < settings.flatness && h >= 2.0).then_some(e)
+    }
+
+    /// CheckRefinement (Figure 6, line 4).
+    fn check(&self, e: u32, inputs: &FrameInputs) -> EdgeState {
+        let settings = &inputs.settings;
+        let edge = &self.edges[e as usize];
+        let (a, b) = (
+            &self.vertices[edge.a as usize],
+            &self.vertices[edge.b as usize],
+        );
+        if a.depth <= 0.0 || b.depth <= 0.0 {
+            // Behind the eye no screen length exists; such faces' pixels are traced.
+            return EdgeState::Idle;
+        }
+        let differ = differ(a, b, inputs);
+        // Flatness only inside one triangle: a border edge is decided by its ends alone.
+        let flat = edge.original.is_none()
+            && edge
+                .faces
+                .iter()
+                .any(|&f| self.is_flat(f, settings) == Some(e));
+        if edge.level >= settings.max_level {
+            return if differ {
+                EdgeState::Unresolved
+            } else {
+                EdgeState::Idle
+            };
+        }
+        if flat || (differ && (a.screen - b.screen).length() >= settings.min_edge_px) {
+            EdgeState::Split
+        } else if differ {
+            EdgeState::Unresolved
+        } else {
+            EdgeState::Idle
+        }
+    }
+
+    /// RefineEdge: one new vertex at the edge's midpoint, each face beside it cut in two
+    /// through it (Figure 4).
+    fn split(&mut self, e: u32, inputs: &FrameInputs, flat: bool) {
+        let edge = self.edges[e as usize].clone();
+        let first_face = edge.faces[0];
+        let mesh = self.mesh_of_face(first_face);
+        let host = match edge.original {
+            Some(original) => inputs.topology.edge_host(mesh, original),
+            None => self.triangles[self.faces[first_face as usize].origin as usize].triangle,
+        };
+        let p_world =
+            (self.vertices[edge.a as usize].p_world + self.vertices[edge.b as usize].p_world) * 0.5;
+        let m = self.add_vertex(inputs, mesh, host, p_world);
+        let level = edge.level + 1;
+        self.edges[e as usize].state = EdgeState::Split;
+        self.edges[e as usize].faces.clear();
+        self.counters.edges_split += 1;
+        self.counters.flat_splits += flat as u64;
+        self.counters.deepest_level = self.counters.deepest_level.max(level as u64);
+        let half_a = self.edge(edge.a, m, level, edge.original);
+        let half_b = self.edge(m, edge.b, level, edge.original);
+        let mut new_edges = vec![half_a, half_b];
+        let mut new_faces = Vec::new();
+        for &f in &edge.faces {
+            let face = self.faces[f as usize];
+            let i = (0..3)
+                .find(|&i| edge_key(face.v[i], face.v[(i + 1) % 3]) == (edge.a, edge.b))
+                .expect("a face beside an edge holds it");
+            let (p, q, c) = (face.v[i], face.v[(i + 1) % 3], face.v[(i + 2) % 3]);
+            let child_level = face.level.max(edge.level) + 1;
+            let base = self.faces.len() as u32;
+            let (first, second) = (base, base + 1);
+            for v in [[p, m, c], [m, q, c]] {
+                self.faces.push(Face {
+                    v,
+                    origin: face.origin,
+                    level: child_level,
+                    children: None,
+                });
+            }
+            self.faces[f as usize].children = Some(([first, second], [m, c]));
+            self.dirty[face.origin as usize] = true;
+            let edge_p_m = self.edge_of[&edge_key(p, m)];
+            self.edges[edge_p_m as usize].faces.push(first);
+            let edge_m_q = self.edge_of[&edge_key(m, q)];
+            self.edges[edge_m_q as usize].faces.push(second);
+            let middle = self.edge(m, c, level, None);
+            self.edges[middle as usize].faces.extend([first, second]);
+            new_edges.push(middle);
+            for (a, b, child) in [(q, c, second), (c, p, first)] {
+                let side = self.edge_of[&edge_key(a, b)];
+                for face_ref in &mut self.edges[side as usize].faces {
+                    if *face_ref == f {
+                        *face_ref = child;
+                    }
+                }
+            }
+            new_faces.extend([first, second]);
+        }
+        for new_edge in new_edges {
+            self.enqueue(new_edge, inputs);
+        }
+        // A flat new face re-examines its longest edge even if that edge was kept before:
+        // otherwise Figure 7's third edge is never cut and its neighbours never converge.
+        for face in new_faces {
+            if let Some(longest) = self.is_flat(face, &inputs.settings) {
+                if self.edges[longest as usize].original.is_none()
+                    && self.edges[longest as usize].state == EdgeState::Idle
+                {
+                    self.enqueue(longest, inputs);
+                }
+            }
+        }
+    }
+
+    /// Refine (Figure 6): until the queue is empty or the deadline passes.
+    fn refine(&mut self, inputs: &FrameInputs, deadline: Option<Instant>) -> bool {
+        let mut decisions = 0u32;
+        while let Some(next) = self.queue.pop() {
+            let e = next.edge;
+            if self.edges[e as usize].state != EdgeState::Queued {
+                continue;
+            }
+            match self.check(e, inputs) {
+                EdgeState::Split => {
+                    let flat = {
+                        let edge = &self.edges[e as usize];
+                        let (a, b) = (
+                            &self.vertices[edge.a as usize],
+                            &self.vertices[edge.b as usize],
+                        );
+                        !differ(a, b, inputs)
+                    };
+                    self.split(e, inputs, flat);
+                }
+                EdgeState::Unresolved => {
+                    self.edges[e as usize].state = EdgeState::Unresolved;
+                    self.counters.unresolved_edges += 1;
+                }
+                _ => self.edges[e as usize].state = EdgeState::Idle,
+            }
+            decisions += 1;
+            if decisions.is_multiple_of(EDGES_PER_CLOCK_READ) && past(deadline) {
+                return self.queue.is_empty();
+            }
+        }
+        true
+    }
+
+    /// The leaf face of triangle `index` that holds pixel centre `q`.
+    fn locate(&self, index: usize, q: Vec2) -> u32 {
+        let mut face = self.roots[index];
+        while let Some(([first, second], [m, c])) = self.faces[face as usize].children {
+            let (sm, sc) = (
+                self.vertices[m as usize].screen,
+                self.vertices[c as usize].screen,
+            );
+            let towards_first =
+                self.vertices[self.faces[first as usize].v[0] as usize].screen - sm;
+            let side = cross2(sc - sm, q - sm) * cross2(sc - sm, towards_first);
+            face = if side >= 0.0 { first } else { second };
+        }
+        face
+    }
+
+    /// Whether triangle filling traces this leaf's pixels: refinement left one of its edges
+    /// unresolved, none of its corners is seen, or a corner is behind the eye.
+    fn needs_filling(&self, face: u32) -> bool {
+        let v = self.faces[face as usize].v;
+        let corners = v.map(|i| &self.vertices[i as usize]);
+        corners.iter().any(|c| c.depth <= 0.0)
+            || corners.iter().all(|c| !c.visible)
+            || (0..3).any(|i| {
+                self.edge_of
+                    .get(&edge_key(v[i], v[(i + 1) % 3]))
+                    .is_some_and(|&e| self.edges[e as usize].state == EdgeState::Unresolved)
+            })
+    }
+
+    /// Triangle filling (§3): every pixel of the faces refinement could not resolve traced
+    /// as the reference traces it.
+    fn fill(&mut self, inputs: &FrameInputs, deadline: Option<Instant>) -> bool {
+        let Phase::Filling { mut next } = self.phase else {
+            return true;
+        };
+        let tracer = inputs.tracer();
+        let (width, height) = (inputs.view.width, inputs.view.height);
+        while next < self.triangles.len() {
+            let pixels: Vec<u32> = inputs.owners.pixels(self.triangles[next]).collect();
+            for k in pixels {
+                let (x, y) = (k % width, k / width);
+                let leaf = self.locate(next, Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
+                if self.needs_filling(leaf) {
+                    let color = pixel_radiance(&tracer, inputs.camera, x, y, width, height, 1);
+                    self.filled.insert(k, color);
+                    self.counters.filled_pixels += 1;
+                    self.dirty[next] = true;
+                }
+            }
+            next += 1;
+            self.phase = Phase::Filling { next };
+            if past(deadline) {
+                break;
+            }
+        }
+        next == self.triangles.len()
+    }
+
+    /// Gouraud shading of pixel centre `q` in leaf `face`, perspective-correct (the weights
+    /// of the screen triangle divided by each corner's depth).
+    fn interpolate(&self, face: u32, q: Vec2) -> Vec3 {
+        let corners = self.faces[face as usize].v.map(|i| &self.vertices[i as usize]);
+        let [s0, s1, s2] = corners.map(|c| c.screen);
+        let area = cross2(s1 - s0, s2 - s0);
+        let mean = || corners.iter().map(|c| c.color).sum::<Vec3>() / 3.0;
+        if area.abs() < 1e-12 || corners.iter().any(|c| c.depth <= 0.0) {
+            return mean();
+        }
+        let l1 = (cross2(q - s0, s2 - s0) / area).max(0.0);
+        let l2 = (cross2(s1 - s0, q - s0) / area).max(0.0);
+        let l0 = (1.0 - l1 - l2).max(0.0);
+        let weights = [l0, l1, l2]
+            .iter()
+            .zip(&corners)
+            .map(|(l, c)| l / c.depth)
+            .collect::<Vec<f32>>();
+        let total: f32 = weights.iter().sum();
+        if total <= 0.0 {
+            return mean();
+        }
+        weights
+            .iter()
+            .zip(&corners)
+            .map(|(w, c)| c.color * (w / total))
+            .sum()
+    }
+
+    /// The pixels of every triangle changed since the last call: (pixel, radiance).
+    pub fn take_pixels(&mut self, inputs: &FrameInputs) -> Vec<(u32, Vec3)> {
+        let width = inputs.view.width;
+        let mut out = Vec::new();
+        for index in 0..self.triangles.len() {
+            if !std::mem::take(&mut self.dirty[index]) {
+                continue;
+            }
+            for k in inputs.owners.pixels(self.triangles[index]) {
+                let color = match self.filled.get(&k) {
+                    Some(&c) => c,
+                    None => {
+                        let q = Vec2::new((k % width) as f32 + 0.5, (k / width) as f32 + 0.5);
+                        self.interpolate(self.locate(index, q), q)
+                    }
+                };
+                out.push((k, color));
+            }
+        }
+        out
+    }
+
+    /// Leaf faces now (for the picture of the generated triangles, Figure 13).
+    pub fn leaf_edges(&self) -> Vec<(Vec2, Vec2)> {
+        self.faces
+            .iter()
+            .filter(|f| f.children.is_none())
+            .flat_map(|f| {
+                (0..3).map(move |i| {
+                    (
+                        self.vertices[f.v[i] as usize].screen,
+                        self.vertices[f.v[(i + 1) % 3] as usize].screen,
+                    )
+                })
+            })
+            .collect()
+    }
+}
