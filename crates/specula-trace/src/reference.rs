@@ -141,12 +141,14 @@ pub struct Tracer<'a> {
 
 /// What a path records of the rays it traces: nothing (the reference), or a [`RayTree`].
 pub trait TreeRecorder {
-    /// A closest-hit ray of `kind` met mesh `mesh` (None: it left the scene).
-    fn ray(&mut self, kind: Branch, mesh: Option<u32>);
-    /// The shadow ray towards light `light` was blocked or not.
-    fn shadow(&mut self, light: usize, occluded: bool);
-    /// The path read texture `texture` at `uv` (an unlit or diffuse surface's colour).
-    fn texture(&mut self, _texture: usize, _uv: Vec2) {}
+    /// A closest-hit ray of `step` met mesh `mesh` (None: it left the scene).
+    fn ray(&mut self, step: Step, mesh: Option<u32>);
+    /// The shadow ray towards light `light`, from a surface whose radiance reaches the path's
+    /// start with `weight`, was blocked or not.
+    fn shadow(&mut self, light: usize, occluded: bool, weight: f32);
+    /// The path read texture `texture` at `uv` (an unlit or diffuse surface's colour): the
+    /// path's radiance holds `coefficient` × the texel, linearly.
+    fn texture(&mut self, _texture: usize, _uv: Vec2, _coefficient: Vec3) {}
 }
 
 /// Why a closest-hit ray was traced.
@@ -159,35 +161,75 @@ pub enum Branch {
     Through = 4,
 }
 
+/// One ray of a path: why it was traced, and the factor its radiance is scaled by on the way
+/// to the path's start (1 for a primary ray; the Fresnel terms' product after bounces).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Step {
+    pub kind: Branch,
+    pub throughput: Vec3,
+}
+
+impl Step {
+    const PRIMARY: Step = Step {
+        kind: Branch::Primary,
+        throughput: Vec3::ONE,
+    };
+
+    fn child(self, kind: Branch, factor: Vec3) -> Step {
+        Step {
+            kind,
+            throughput: self.throughput * factor,
+        }
+    }
+
+    /// The largest channel of the throughput.
+    pub fn weight(&self) -> f32 {
+        self.throughput.max_element()
+    }
+}
+
 impl TreeRecorder for () {
-    fn ray(&mut self, _: Branch, _: Option<u32>) {}
-    fn shadow(&mut self, _: usize, _: bool) {}
+    fn ray(&mut self, _: Step, _: Option<u32>) {}
+    fn shadow(&mut self, _: usize, _: bool, _: f32) {}
 }
 
 /// A path's ray tree (Whitted; Glassner's "ray tree"): which object each reflected, refracted
-/// and primary ray met, in depth-first order, and which shadow rays were blocked. Two samples
+/// and primary ray met, in depth-first order, and which shadow rays were blocked; rays whose
+/// weight is below `min_weight` are left out (a third internal bounce in a glass, whose
+/// radiance reaches the eye at 0.01 %, changes the tree but not the picture). Two samples
 /// with equal trees see the same objects by the same optical paths under the same lights, so
 /// between them the radiance varies smoothly; a changed tree marks a discontinuity (an object's
 /// silhouette, a shadow edge, total internal reflection starting). Kept as a 64-bit FNV-1a
 /// digest of that sequence and the number of its nodes, so that comparing two trees is one
 /// comparison and a tree travels in 12 bytes (two different trees share a digest with
 /// probability about 2⁻⁶⁴).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug)]
 pub struct RayTree {
     pub digest: u64,
     pub nodes: u32,
+    pub min_weight: f32,
 }
 
 impl Default for RayTree {
     fn default() -> Self {
-        RayTree {
-            digest: 0xcbf2_9ce4_8422_2325,
-            nodes: 0,
-        }
+        RayTree::with_min_weight(0.0)
     }
 }
 
 impl RayTree {
+    pub fn with_min_weight(min_weight: f32) -> RayTree {
+        RayTree {
+            digest: 0xcbf2_9ce4_8422_2325,
+            nodes: 0,
+            min_weight,
+        }
+    }
+
+    /// Whether two trees hold the same rays (digest and size).
+    pub fn same_as(&self, other: &RayTree) -> bool {
+        self.digest == other.digest && self.nodes == other.nodes
+    }
+
     fn push(&mut self, word: u32) {
         for byte in word.to_le_bytes() {
             self.digest = (self.digest ^ byte as u64).wrapping_mul(0x0000_0100_0000_01b3);
@@ -197,13 +239,17 @@ impl RayTree {
 }
 
 impl TreeRecorder for RayTree {
-    fn ray(&mut self, kind: Branch, mesh: Option<u32>) {
-        self.push(kind as u32);
-        self.push(mesh.map_or(0, |m| m + 1));
+    fn ray(&mut self, step: Step, mesh: Option<u32>) {
+        if step.weight() >= self.min_weight {
+            self.push(step.kind as u32);
+            self.push(mesh.map_or(0, |m| m + 1));
+        }
     }
 
-    fn shadow(&mut self, light: usize, occluded: bool) {
-        self.push(0x8000_0000 | (light as u32) << 1 | occluded as u32);
+    fn shadow(&mut self, light: usize, occluded: bool, weight: f32) {
+        if weight >= self.min_weight {
+            self.push(0x8000_0000 | (light as u32) << 1 | occluded as u32);
+        }
     }
 }
 
@@ -212,30 +258,30 @@ impl Tracer<'_> {
     /// dispersive interface has split the path into one ray per colour channel; then only that
     /// component of the result is used.
     pub fn radiance(&self, ray: &Ray, depth: u32, channel: Option<usize>) -> Vec3 {
-        self.radiance_recorded(ray, Branch::Primary, depth, channel, &mut ())
+        self.radiance_recorded(ray, Step::PRIMARY, depth, channel, &mut ())
     }
 
     /// [`Tracer::radiance`] of a primary ray, with its ray tree.
     pub fn radiance_with_tree(&self, ray: &Ray) -> (Vec3, RayTree) {
         let mut tree = RayTree::default();
-        let radiance = self.radiance_recorded(ray, Branch::Primary, 0, None, &mut tree);
+        let radiance = self.radiance_recorded(ray, Step::PRIMARY, 0, None, &mut tree);
         (radiance, tree)
     }
 
     fn radiance_recorded<R: TreeRecorder>(
         &self,
         ray: &Ray,
-        kind: Branch,
+        step: Step,
         depth: u32,
         channel: Option<usize>,
         tree: &mut R,
     ) -> Vec3 {
         count_ray(false);
         let Some(hit) = self.accel.intersect(ray, f32::INFINITY) else {
-            tree.ray(kind, None);
+            tree.ray(step, None);
             return self.scene.background.radiance(ray.dir, &self.scene.textures);
         };
-        self.shade_recorded(ray, &hit, kind, depth, channel, tree)
+        self.shade_recorded(ray, &hit, step, depth, channel, tree)
     }
 
     /// The radiance leaving the known first hit `hit` of the primary ray `ray` towards its
@@ -248,20 +294,20 @@ impl Tracer<'_> {
         hit: &Hit,
         recorder: &mut R,
     ) -> Vec3 {
-        self.shade_recorded(ray, hit, Branch::Primary, 0, None, recorder)
+        self.shade_recorded(ray, hit, Step::PRIMARY, 0, None, recorder)
     }
 
     fn shade_recorded<R: TreeRecorder>(
         &self,
         ray: &Ray,
         hit: &Hit,
-        kind: Branch,
+        step: Step,
         depth: u32,
         channel: Option<usize>,
         tree: &mut R,
     ) -> Vec3 {
         let scene = self.scene;
-        tree.ray(kind, Some(hit.mesh));
+        tree.ray(step, Some(hit.mesh));
         let sp = surface_point(scene, ray, hit);
         let material = &scene.materials[sp.material];
         let base = || {
@@ -271,14 +317,21 @@ impl Tracer<'_> {
                 .unwrap_or(Vec3::ONE);
             material.color * texture
         };
-        if let (Some(texture), MaterialKind::Unlit | MaterialKind::Diffuse) =
-            (material.texture, &material.kind)
-        {
-            tree.texture(texture, sp.uv);
-        }
         match material.kind {
-            MaterialKind::Unlit => base(),
-            MaterialKind::Diffuse => self.diffuse_recorded(&sp, base(), tree),
+            MaterialKind::Unlit => {
+                if let Some(texture) = material.texture {
+                    tree.texture(texture, sp.uv, step.throughput * material.color);
+                }
+                base()
+            }
+            MaterialKind::Diffuse => {
+                // Lambert is linear in the albedo: the light it receives, times the albedo.
+                let received = self.diffuse_recorded(&sp, Vec3::ONE, step.weight(), tree);
+                if let Some(texture) = material.texture {
+                    tree.texture(texture, sp.uv, step.throughput * material.color * received);
+                }
+                base() * received
+            }
             MaterialKind::Mirror { fresnel } => {
                 if depth >= self.max_depth {
                     return Vec3::ZERO;
@@ -290,14 +343,15 @@ impl Tracer<'_> {
                     material.color
                 };
                 let reflected = reflect(ray.dir, sp.ns);
-                f * self.spawn(&sp, reflected, Branch::Reflected, depth, channel, tree)
+                let next = step.child(Branch::Reflected, f);
+                f * self.spawn(&sp, reflected, next, depth, channel, tree)
             }
             MaterialKind::Dielectric { ior, thin_walled } => {
                 if depth >= self.max_depth {
                     return Vec3::ZERO;
                 }
                 let mut at = |ior: f32, channel| {
-                    self.dielectric(ray, &sp, ior, thin_walled, depth, channel, tree)
+                    self.dielectric(ray, &sp, ior, thin_walled, step, depth, channel, tree)
                 };
                 match channel {
                     None if material.is_dispersive() => {
@@ -317,13 +371,14 @@ impl Tracer<'_> {
     /// Radiance a Lambertian surface of `albedo` leaves at `sp` towards the side its normals
     /// face: every light's irradiance where a shadow ray reaches it, plus the ambient term.
     pub fn diffuse(&self, sp: &SurfacePoint, albedo: Vec3) -> Vec3 {
-        self.diffuse_recorded(sp, albedo, &mut ())
+        self.diffuse_recorded(sp, albedo, 1.0, &mut ())
     }
 
     fn diffuse_recorded<R: TreeRecorder>(
         &self,
         sp: &SurfacePoint,
         albedo: Vec3,
+        weight: f32,
         tree: &mut R,
     ) -> Vec3 {
         let mut irradiance = Vec3::ZERO;
@@ -339,7 +394,7 @@ impl Tracer<'_> {
             };
             count_ray(true);
             let occluded = self.accel.occluded(&shadow, sample.distance);
-            tree.shadow(index, occluded);
+            tree.shadow(index, occluded, weight);
             if !occluded {
                 irradiance += sample.irradiance * cos;
             }
@@ -351,7 +406,7 @@ impl Tracer<'_> {
         &self,
         sp: &SurfacePoint,
         dir: Vec3,
-        kind: Branch,
+        step: Step,
         depth: u32,
         channel: Option<usize>,
         tree: &mut R,
@@ -360,7 +415,7 @@ impl Tracer<'_> {
             origin: offset_origin(sp.p, sp.ng, dir),
             dir,
         };
-        self.radiance_recorded(&ray, kind, depth + 1, channel, tree)
+        self.radiance_recorded(&ray, step, depth + 1, channel, tree)
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -370,6 +425,7 @@ impl Tracer<'_> {
         sp: &SurfacePoint,
         ior: f32,
         thin: bool,
+        step: Step,
         depth: u32,
         channel: Option<usize>,
         tree: &mut R,
@@ -378,8 +434,12 @@ impl Tracer<'_> {
         let reflected = reflect(ray.dir, sp.ns);
         if thin {
             let r = thin_sheet_reflectance(cos_i, ior);
-            return r * self.spawn(sp, reflected, Branch::Reflected, depth, channel, tree)
-                + (1.0 - r) * self.spawn(sp, ray.dir, Branch::Through, depth, channel, tree);
+            let (mirrored, through) = (
+                step.child(Branch::Reflected, Vec3::splat(r)),
+                step.child(Branch::Through, Vec3::splat(1.0 - r)),
+            );
+            return r * self.spawn(sp, reflected, mirrored, depth, channel, tree)
+                + (1.0 - r) * self.spawn(sp, ray.dir, through, depth, channel, tree);
         }
         // Leaving the solid when the ray hit its back face.
         let eta = if sp.backface { ior } else { 1.0 / ior };
@@ -389,19 +449,20 @@ impl Tracer<'_> {
                 let t = self.spawn(
                     sp,
                     transmitted.normalize(),
-                    Branch::Refracted,
+                    step.child(Branch::Refracted, Vec3::splat(1.0 - r)),
                     depth,
                     channel,
                     tree,
                 );
                 let rr = if r > 0.0 {
-                    self.spawn(sp, reflected, Branch::Reflected, depth, channel, tree)
+                    let mirrored = step.child(Branch::Reflected, Vec3::splat(r));
+                    self.spawn(sp, reflected, mirrored, depth, channel, tree)
                 } else {
                     Vec3::ZERO
                 };
                 r * rr + (1.0 - r) * t
             }
-            _ => self.spawn(sp, reflected, Branch::Reflected, depth, channel, tree),
+            _ => self.spawn(sp, reflected, step.child(Branch::Reflected, Vec3::ONE), depth, channel, tree),
         }
     }
 }

@@ -58,6 +58,10 @@
 //! - `min_edge_px` (3): the shortest edge split for a colour difference, in pixels; lower
 //!   refines further before filling takes over.
 //! - `max_level` (20): the deepest split.
+//! - `tree_weight` (0.02): rays whose radiance reaches the eye scaled by less than this are
+//!   left out of the ray trees compared (Fresnel-weak internal bounces in glass change their
+//!   objects often and the picture hardly); 0 compares whole trees (the paper), with many more
+//!   splits in glass.
 //! - `refine` (true) / `fill` (true): switch off refinement (the preview alone) or filling.
 //! - `budget_ms` (0): progressive mode, milliseconds per call; 0 does everything in one call.
 //! - `package_triangles` (0): reflector triangles per task package, the parallel grain (0: the
@@ -67,6 +71,7 @@
 //!   `auto` uses the GPU where the run has one.
 //! - `max_depth` (8): the reference's bound on specular bounces, for every vertex and pixel.
 //! - `shadow_resolution`: the raster pass's shadow maps (GPU visibility only).
+//! - `show_faces` (false): draws the refined faces' edges over the image (Figure 13).
 
 pub mod refine;
 
@@ -122,6 +127,13 @@ pub const PARAMS: &[ParamSpec] = &[
         invalidates: Invalidates::Uniform,
     },
     ParamSpec {
+        name: "tree_weight",
+        kind: ParamKind::Number { min: 0.0, max: 1.0 },
+        default: "0.02",
+        doc: "rays reaching the eye with less weight than this are left out of the ray trees compared",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
         name: "refine",
         kind: ParamKind::Flag,
         default: "true",
@@ -133,6 +145,13 @@ pub const PARAMS: &[ParamSpec] = &[
         kind: ParamKind::Flag,
         default: "true",
         doc: "triangle filling: trace each pixel of the faces refinement left unresolved",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "deferred_textures",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "interpolate texture coordinates between alike paths and read texels per pixel (false: split edges across texture detail)",
         invalidates: Invalidates::Uniform,
     },
     ParamSpec {
@@ -161,6 +180,13 @@ pub const PARAMS: &[ParamSpec] = &[
         kind: ParamKind::Integer { min: 0, max: 64 },
         default: "8",
         doc: "most specular bounces on a vertex's or a filled pixel's path",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "show_faces",
+        kind: ParamKind::Flag,
+        default: "false",
+        doc: "draw the edges of the refined faces over the image (the paper's Figure 13)",
         invalidates: Invalidates::Uniform,
     },
     raster::SHADOW_RESOLUTION,
@@ -192,6 +218,7 @@ pub struct VertexTracing {
     pub visibility: VisibilitySource,
     pub max_depth: u32,
     pub shadow_resolution: u32,
+    pub show_faces: bool,
     gpu: Option<GpuPass>,
     progress: Option<Progress>,
 }
@@ -204,14 +231,17 @@ impl Default for VertexTracing {
                 flatness: 0.2,
                 min_edge_px: 3.0,
                 max_level: 20,
+                tree_weight: 0.02,
                 refine: true,
                 fill: true,
+                deferred_textures: true,
             },
             budget_ms: 0,
             package_triangles: 0,
             visibility: VisibilitySource::Auto,
             max_depth: 8,
             shadow_resolution: 1024,
+            show_faces: false,
             gpu: None,
             progress: None,
         }
@@ -377,8 +407,10 @@ impl Technique for VertexTracing {
             "flatness" => s.flatness.to_string(),
             "min_edge_px" => s.min_edge_px.to_string(),
             "max_level" => s.max_level.to_string(),
+            "tree_weight" => s.tree_weight.to_string(),
             "refine" => s.refine.to_string(),
             "fill" => s.fill.to_string(),
+            "deferred_textures" => s.deferred_textures.to_string(),
             "budget_ms" => self.budget_ms.to_string(),
             "package_triangles" => self.package_triangles.to_string(),
             "visibility" => match self.visibility {
@@ -389,6 +421,7 @@ impl Technique for VertexTracing {
             .into(),
             "max_depth" => self.max_depth.to_string(),
             "shadow_resolution" => self.shadow_resolution.to_string(),
+            "show_faces" => self.show_faces.to_string(),
             _ => String::new(),
         }
     }
@@ -400,8 +433,10 @@ impl Technique for VertexTracing {
             "flatness" => s.flatness = value.number() as f32,
             "min_edge_px" => s.min_edge_px = value.number() as f32,
             "max_level" => s.max_level = value.integer() as u32,
+            "tree_weight" => s.tree_weight = value.number() as f32,
             "refine" => s.refine = value.flag(),
             "fill" => s.fill = value.flag(),
+            "deferred_textures" => s.deferred_textures = value.flag(),
             "budget_ms" => self.budget_ms = value.integer() as u32,
             "package_triangles" => self.package_triangles = value.integer() as usize,
             "visibility" => {
@@ -414,6 +449,7 @@ impl Technique for VertexTracing {
             }
             "max_depth" => self.max_depth = value.integer() as u32,
             "shadow_resolution" => self.shadow_resolution = value.integer() as u32,
+            "show_faces" => self.show_faces = value.flag(),
             _ => {}
         }
         Ok(())
@@ -536,8 +572,16 @@ impl Technique for VertexTracing {
         if progress.setup.owners.is_empty() {
             warnings.push("no reflector pixel is visible: nothing to vertex-trace".into());
         }
+        let mut image = progress.image.clone();
+        if self.show_faces {
+            for package in &progress.packages {
+                for (a, b) in package.leaf_edges() {
+                    draw_line(&mut image, a, b, Vec3::new(1.0, 0.1, 0.1));
+                }
+            }
+        }
         Ok(Frame {
-            pixels: Pixels::Image(progress.image.clone()),
+            pixels: Pixels::Image(image),
             stages,
             counters,
             timing: TimingSource::CpuWallClock,
@@ -637,5 +681,17 @@ impl VertexTracing {
             stages: [visibility_ms, rest_ms, 0.0, 0.0],
             rest_rays,
         })
+    }
+}
+
+/// Draws the segment from `a` to `b` (pixel coordinates) in `color`, clipped to the image.
+fn draw_line(image: &mut Image, a: glam::Vec2, b: glam::Vec2, color: Vec3) {
+    let steps = (b - a).abs().max_element().ceil().clamp(1.0, 1e5) as u32;
+    for i in 0..=steps {
+        let p = a.lerp(b, i as f32 / steps as f32);
+        if p.x >= 0.0 && p.y >= 0.0 && p.x < image.width as f32 && p.y < image.height as f32 {
+            let k = p.y as usize * image.width as usize + p.x as usize;
+            image.pixels[k] = color;
+        }
     }
 }

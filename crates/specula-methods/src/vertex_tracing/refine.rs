@@ -19,7 +19,7 @@ use std::time::Instant;
 use glam::{Vec2, Vec3};
 use specula_scene::{Camera, Scene};
 use specula_trace::reference::{
-    pixel_radiance, rays_traced_on_this_thread, Branch, RayTree, Tracer, TreeRecorder,
+    pixel_radiance, rays_traced_on_this_thread, RayTree, Step, Tracer, TreeRecorder,
 };
 use specula_trace::{Hit, Ray, SceneAccel};
 
@@ -41,10 +41,16 @@ pub struct RefineSettings {
     pub min_edge_px: f32,
     /// The deepest an edge may be split to.
     pub max_level: u32,
+    /// Rays whose weight (the factor their radiance reaches the eye with) is below this are
+    /// left out of the ray trees compared.
+    pub tree_weight: f32,
     /// Refine at all (false: the Gouraud preview only).
     pub refine: bool,
     /// Trace each pixel of the faces refinement could not resolve (triangle filling).
     pub fill: bool,
+    /// Interpolate texture coordinates, not texture colours, between vertices whose paths
+    /// read the same textures (else: the texture test splits edges across texture detail).
+    pub deferred_textures: bool,
 }
 
 /// A reflector triangle of the scene: the unit of work packages are made of.
@@ -267,19 +273,32 @@ pub fn display_difference(a: Vec3, b: Vec3) -> f32 {
     (display(a) - display(b)).abs().max_element()
 }
 
-/// CheckRefinement's test on an edge's two ends (§3): their colours differ by more than ε,
-/// or their ray trees differ (another object, another optical path, a shadow edge). Beyond
-/// the paper: with equal trees, a texture the paths read that changes between the ends' texture
-/// coordinates by more than ε from its linear blend (a dial's tick seen through the cover) also
-/// splits the edge — the colours of two ends alone cannot see a feature between them.
+/// CheckRefinement's test on an edge's two ends (§3): their ray trees differ (another object,
+/// another optical path, a shadow edge), or their colours differ by more than ε. Beyond the
+/// paper, for paths that read textures (a dial seen through the cover): with deferred textures
+/// the texels are left out of the colours compared (they are read per pixel), and the reads'
+/// coefficients are compared instead; without, a texture that changes between the ends'
+/// texture coordinates by more than ε from its linear blend also splits the edge — the colours
+/// of two ends alone cannot see a tick between them.
 fn differ(a: &Vertex, b: &Vertex, inputs: &FrameInputs) -> bool {
     let epsilon = inputs.settings.epsilon;
-    if display_difference(a.color, b.color) > epsilon || a.path.tree != b.path.tree {
+    if !a.path.tree.same_as(&b.path.tree) {
+        return true;
+    }
+    if inputs.settings.deferred_textures && a.path.read_count == b.path.read_count {
+        // Textures are read per pixel at interpolated coordinates: what must vary gently is
+        // the rest of the colour and each read's coefficient, not the texels.
+        return display_difference(a.smooth, b.smooth) > epsilon
+            || (0..a.path.read_count).any(|i| {
+                display_difference(a.path.reads[i].2, b.path.reads[i].2) > epsilon
+            });
+    }
+    if display_difference(a.color, b.color) > epsilon {
         return true;
     }
     let reads = a.path.read_count.min(b.path.read_count);
     (0..reads).any(|i| {
-        let ((texture, uv_a), (_, uv_b)) = (a.path.reads[i], b.path.reads[i]);
+        let ((texture, uv_a, _), (_, uv_b, _)) = (a.path.reads[i], b.path.reads[i]);
         let texture = &inputs.scene.textures[texture];
         let texels = ((uv_b - uv_a) * Vec2::new(texture.width as f32, texture.height as f32))
             .abs()
@@ -333,25 +352,37 @@ const TEXTURE_READS: usize = 2;
 const TEXTURE_TEST_SAMPLES: f32 = 64.0;
 
 /// What a vertex keeps of its path: the ray tree, and where it read textures.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Copy, Debug)]
 struct PathRecord {
     tree: RayTree,
-    reads: [(usize, Vec2); TEXTURE_READS],
+    /// (texture, texture coordinates, coefficient): the path's radiance holds coefficient ×
+    /// the texel there.
+    reads: [(usize, Vec2, Vec3); TEXTURE_READS],
     read_count: usize,
 }
 
+impl PathRecord {
+    fn new(min_weight: f32) -> PathRecord {
+        PathRecord {
+            tree: RayTree::with_min_weight(min_weight),
+            reads: [(0, Vec2::ZERO, Vec3::ZERO); TEXTURE_READS],
+            read_count: 0,
+        }
+    }
+}
+
 impl TreeRecorder for PathRecord {
-    fn ray(&mut self, kind: Branch, mesh: Option<u32>) {
-        self.tree.ray(kind, mesh);
+    fn ray(&mut self, step: Step, mesh: Option<u32>) {
+        self.tree.ray(step, mesh);
     }
 
-    fn shadow(&mut self, light: usize, occluded: bool) {
-        self.tree.shadow(light, occluded);
+    fn shadow(&mut self, light: usize, occluded: bool, weight: f32) {
+        self.tree.shadow(light, occluded, weight);
     }
 
-    fn texture(&mut self, texture: usize, uv: Vec2) {
-        if self.read_count < TEXTURE_READS {
-            self.reads[self.read_count] = (texture, uv);
+    fn texture(&mut self, texture: usize, uv: Vec2, coefficient: Vec3) {
+        if coefficient.max_element() >= self.tree.min_weight && self.read_count < TEXTURE_READS {
+            self.reads[self.read_count] = (texture, uv, coefficient);
             self.read_count += 1;
         }
     }
@@ -365,6 +396,9 @@ struct Vertex {
     depth: f32,
     visible: bool,
     color: Vec3,
+    /// The colour less what the path's texture reads contribute (what deferred texturing
+    /// interpolates; the texels are read again at each pixel).
+    smooth: Vec3,
     path: PathRecord,
 }
 
@@ -561,7 +595,7 @@ impl Package {
             mesh,
             triangle: host,
         };
-        let mut path = PathRecord::default();
+        let mut path = PathRecord::new(inputs.settings.tree_weight);
         let color = inputs
             .tracer()
             .radiance_at_hit_recorded(&ray, &hit, &mut path);
@@ -570,12 +604,19 @@ impl Package {
             Some((x, y, z)) => (Vec2::new(x, y), z),
             None => (Vec2::ZERO, 0.0),
         };
+        let textured: Vec3 = path.reads[..path.read_count]
+            .iter()
+            .map(|&(texture, uv, coefficient)| {
+                coefficient * inputs.scene.textures[texture].sample(uv)
+            })
+            .sum();
         self.vertices.push(Vertex {
             p_world,
             screen,
             depth,
             visible: inputs.is_visible(mesh, host, p_world),
             color,
+            smooth: color - textured,
             path,
         });
         (self.vertices.len() - 1) as u32
@@ -890,8 +931,10 @@ impl Package {
     }
 
     /// Gouraud shading of pixel centre `q` in leaf `face`, perspective-correct (the weights
-    /// of the screen triangle divided by each corner's depth).
-    fn interpolate(&self, face: u32, q: Vec2) -> Vec3 {
+    /// of the screen triangle divided by each corner's depth). With deferred textures, where
+    /// the three corners' paths are alike, the texture coordinates and coefficients of their
+    /// texture reads are interpolated and the texels read here.
+    fn interpolate(&self, face: u32, q: Vec2, inputs: &FrameInputs) -> Vec3 {
         let corners = self.faces[face as usize].v.map(|i| &self.vertices[i as usize]);
         let [s0, s1, s2] = corners.map(|c| c.screen);
         let area = cross2(s1 - s0, s2 - s0);
@@ -902,20 +945,39 @@ impl Package {
         let l1 = (cross2(q - s0, s2 - s0) / area).max(0.0);
         let l2 = (cross2(s1 - s0, q - s0) / area).max(0.0);
         let l0 = (1.0 - l1 - l2).max(0.0);
-        let weights = [l0, l1, l2]
-            .iter()
-            .zip(&corners)
-            .map(|(l, c)| l / c.depth)
-            .collect::<Vec<f32>>();
+        let mut weights = [
+            l0 / corners[0].depth,
+            l1 / corners[1].depth,
+            l2 / corners[2].depth,
+        ];
         let total: f32 = weights.iter().sum();
         if total <= 0.0 {
             return mean();
         }
-        weights
-            .iter()
-            .zip(&corners)
-            .map(|(w, c)| c.color * (w / total))
-            .sum()
+        for w in &mut weights {
+            *w /= total;
+        }
+        let blend = |value: &dyn Fn(&Vertex) -> Vec3| -> Vec3 {
+            (0..3).map(|i| value(corners[i]) * weights[i]).sum()
+        };
+        let alike = inputs.settings.deferred_textures
+            && corners[0].path.read_count > 0
+            && corners[1..].iter().all(|c| {
+                c.path.tree.same_as(&corners[0].path.tree)
+                    && c.path.read_count == corners[0].path.read_count
+            });
+        if !alike {
+            return blend(&|c| c.color);
+        }
+        let mut color = blend(&|c| c.smooth);
+        for read in 0..corners[0].path.read_count {
+            let texture = &inputs.scene.textures[corners[0].path.reads[read].0];
+            let uv: Vec2 = (0..3)
+                .map(|i| corners[i].path.reads[read].1 * weights[i])
+                .sum();
+            color += blend(&|c| c.path.reads[read].2) * texture.sample(uv);
+        }
+        color
     }
 
     /// The pixels of every triangle changed since the last call: (pixel, radiance).
@@ -927,11 +989,12 @@ impl Package {
                 continue;
             }
             for k in inputs.owners.pixels(self.triangles[index]) {
-                let color = match self.filled.get(&k) {
+                let filled = (!self.filled.is_empty()).then(|| self.filled.get(&k)).flatten();
+                let color = match filled {
                     Some(&c) => c,
                     None => {
                         let q = Vec2::new((k % width) as f32 + 0.5, (k / width) as f32 + 0.5);
-                        self.interpolate(self.locate(index, q), q)
+                        self.interpolate(self.locate(index, q), q, inputs)
                     }
                 };
                 out.push((k, color));

@@ -1,0 +1,156 @@
+//! Vertex tracing's Table 1 (Ullmann et al. 2001) on `truck-cover`: the reference tracing the
+//! reflector's pixels against the preview, refinement without and with triangle filling —
+//! time, samples (rays aimed at a vertex or a pixel), rays, speed-up and error, in one run.
+//!
+//!   cargo bench -p specula-compare --bench vertex_tracing_table1 [-- WIDTH HEIGHT [SCENE]]
+//!
+//! What is timed is what the paper counts: shading the reflector (vertex rays, refinement,
+//! filling and interpolation) against the reference tracing the same pixels at the same
+//! resolution, both with every rayon thread; the ID buffer and the rest of the scene, which
+//! both need, are timed apart. Times are medians of 3 runs. Error: mean FLIP over the
+//! reflector's pixels against the reference.
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+use specula_compare::metrics::{flip_map, measure};
+use specula_methods::vertex_tracing::refine::RefineSettings;
+use specula_methods::vertex_tracing::{FrameSetup, VertexTracing};
+use specula_methods::LiveScene;
+use specula_trace::reference::{pixel_radiance, rays_traced_on_this_thread, Tracer};
+
+const RUNS: usize = 3;
+
+fn median(mut values: Vec<f64>) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values[values.len() / 2]
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with("--"))
+        .collect();
+    let width: u32 = args.first().and_then(|a| a.parse().ok()).unwrap_or(1024);
+    let height: u32 = args.get(1).and_then(|a| a.parse().ok()).unwrap_or(768);
+    let name = args.get(2).map_or("truck-cover", String::as_str);
+    let scene = specula_scene::load(name).expect("scene loads");
+    let live = LiveScene::new(scene);
+    let camera = live.scene().camera.clone();
+    let defaults = VertexTracing::default();
+    let max_depth = defaults.max_depth;
+
+    let start = Instant::now();
+    let setup = FrameSetup::traced(&live, &camera, width, height, defaults.settings, max_depth);
+    let visibility_ms = start.elapsed().as_secs_f64() * 1e3;
+    let start = Instant::now();
+    let (rest, _) = setup.rest_of_scene(&live, &camera, max_depth);
+    let rest_ms = start.elapsed().as_secs_f64() * 1e3;
+    let reflector_vertices: usize = live
+        .scene()
+        .meshes
+        .iter()
+        .filter(|m| live.scene().materials[m.material].is_specular())
+        .map(|m| m.positions.len())
+        .sum();
+    let pixels: Vec<u32> = setup.owners.all().collect();
+
+    // The reference: every reflector pixel traced.
+    let tracer = Tracer {
+        scene: live.scene(),
+        accel: live.accel(),
+        max_depth,
+    };
+    let mut reference = rest.clone();
+    let mut reference_times = Vec::new();
+    let mut reference_rays = 0;
+    for _ in 0..RUNS {
+        let start = Instant::now();
+        let traced: Vec<(u32, glam::Vec3, u64)> = pixels
+            .par_iter()
+            .map(|&k| {
+                let before = rays_traced_on_this_thread();
+                let c = pixel_radiance(&tracer, &camera, k % width, k / width, width, height, 1);
+                let after = rays_traced_on_this_thread();
+                (k, c, after.0 - before.0 + after.1 - before.1)
+            })
+            .collect();
+        reference_times.push(start.elapsed().as_secs_f64() * 1e3);
+        reference_rays = traced.iter().map(|t| t.2).sum::<u64>();
+        for (k, c, _) in traced {
+            reference.pixels[k as usize] = c;
+        }
+    }
+    let reference_ms = median(reference_times);
+    let mask: Vec<bool> = {
+        let mut mask = vec![false; (width * height) as usize];
+        for &k in &pixels {
+            mask[k as usize] = true;
+        }
+        mask
+    };
+
+    println!(
+        "vertex tracing, Table 1: {name} at {width}x{height}, {} reflector pixels, {reflector_vertices} reflector vertices as built, {} rayon threads",
+        pixels.len(),
+        rayon::current_num_threads()
+    );
+    println!("ID buffer (CPU primary rays) {visibility_ms:.1} ms and rest of the scene {rest_ms:.1} ms, apart from the times below");
+    println!();
+    println!("| rendered image | time (ms) | samples | rays (all kinds) | speed-up | mean FLIP (reflector) |");
+    println!("|---|---|---|---|---|---|");
+    println!(
+        "| reference ray tracing | {reference_ms:.1} | {} | {reference_rays} | 1 | 0 |",
+        pixels.len()
+    );
+    let steps = [
+        ("preview", false, false),
+        ("refinement without triangle filling", true, false),
+        ("refinement with triangle filling", true, true),
+    ];
+    for (label, refine, fill) in steps {
+        let settings = RefineSettings {
+            refine,
+            fill,
+            ..defaults.settings
+        };
+        let inputs = setup.inputs(&live, &camera, settings, max_depth);
+        let count = setup.active.len();
+        let size = count.div_ceil(4 * rayon::current_num_threads()).max(1);
+        let mut times = Vec::new();
+        let mut image = rest.clone();
+        let mut totals = specula_methods::vertex_tracing::refine::PackageCounters::default();
+        for _ in 0..RUNS {
+            let start = Instant::now();
+            let mut packages: Vec<_> = (0..count)
+                .step_by(size)
+                .map(|s| setup.package(s..(s + size).min(count)))
+                .collect();
+            let results: Vec<Vec<(u32, glam::Vec3)>> = packages
+                .par_iter_mut()
+                .map(|p| {
+                    p.run(&inputs, None);
+                    p.take_pixels(&inputs)
+                })
+                .collect();
+            for (k, c) in results.into_iter().flatten() {
+                image.pixels[k as usize] = c;
+            }
+            times.push(start.elapsed().as_secs_f64() * 1e3);
+            totals = Default::default();
+            for p in &packages {
+                totals.add(&p.counters);
+            }
+        }
+        let ms = median(times);
+        let flip = flip_map(&reference, &image);
+        let metrics = measure(&reference, &image, &flip, &mask);
+        println!(
+            "| {label} | {ms:.1} | {} | {} | {:.1} | {:.4} |",
+            totals.vertex_rays + totals.filled_pixels,
+            totals.vertex_rays + totals.rays + totals.shadow_rays,
+            reference_ms / ms,
+            metrics.mean_flip
+        );
+    }
+}
