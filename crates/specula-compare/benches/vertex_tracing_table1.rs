@@ -14,7 +14,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 use specula_compare::metrics::{flip_map, measure};
-use specula_methods::vertex_tracing::refine::RefineSettings;
+use specula_methods::vertex_tracing::refine::{OriginalSamples, RefineSettings};
 use specula_methods::vertex_tracing::{FrameSetup, VertexTracing};
 use specula_methods::LiveScene;
 use specula_trace::reference::{pixel_radiance, rays_traced_on_this_thread, Tracer};
@@ -114,14 +114,19 @@ fn main() {
             fill,
             ..defaults.settings
         };
-        let inputs = setup.inputs(&live, &camera, settings, max_depth);
         let count = setup.active.len();
-        let size = count.div_ceil(4 * rayon::current_num_threads()).max(1);
+        let size = count.div_ceil(16 * rayon::current_num_threads()).max(1);
         let mut times = Vec::new();
         let mut image = rest.clone();
         let mut totals = specula_methods::vertex_tracing::refine::PackageCounters::default();
         for _ in 0..RUNS {
             let start = Instant::now();
+            let originals = OriginalSamples::trace(
+                &setup.inputs(&live, &camera, settings, max_depth),
+                &setup.active,
+            );
+            let mut inputs = setup.inputs(&live, &camera, settings, max_depth);
+            inputs.originals = Some(&originals);
             let mut packages: Vec<_> = (0..count)
                 .step_by(size)
                 .map(|s| setup.package(s..(s + size).min(count)))
@@ -137,7 +142,7 @@ fn main() {
                 image.pixels[k as usize] = c;
             }
             times.push(start.elapsed().as_secs_f64() * 1e3);
-            totals = Default::default();
+            totals = originals.counters;
             for p in &packages {
                 totals.add(&p.counters);
             }

@@ -65,8 +65,9 @@
 //! - `refine` (true) / `fill` (true): switch off refinement (the preview alone) or filling.
 //! - `budget_ms` (0): progressive mode, milliseconds per call; 0 does everything in one call.
 //! - `package_triangles` (0): reflector triangles per task package, the parallel grain (0: the
-//!   active triangles in four packages per thread). A vertex on a package border is traced
-//!   once per package: smaller packages balance better and trace more.
+//!   active triangles in sixteen packages per thread). The original vertices are traced once
+//!   for all packages; a vertex refinement adds on a package border is traced once per
+//!   package: smaller packages balance better and trace a little more.
 //! - `visibility` (auto): `gpu` draws the ID buffer with the scene raster pass, `cpu` traces it,
 //!   `auto` uses the GPU where the run has one.
 //! - `max_depth` (8): the reference's bound on specular bounces, for every vertex and pixel.
@@ -91,8 +92,14 @@ use crate::technique::{
     bad_value, Context, Frame, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels,
     Technique, TechniqueError, COUNTER_RAYS_TRACED, COUNTER_SHADOW_RAYS,
 };
-use refine::{FrameInputs, Package, PackageCounters, PixelOwners, RefineSettings, Topology};
+use refine::{
+    FrameInputs, OriginalSamples, Package, PackageCounters, PixelOwners, RefineSettings, Topology,
+};
 pub use refine::TriangleId;
+
+/// Packages per rayon thread when `package_triangles` is 0: enough that a package holding a
+/// reflection's outline does not leave the other threads idle.
+const PACKAGES_PER_THREAD: usize = 16;
 
 pub const PARAMS: &[ParamSpec] = &[
     ParamSpec {
@@ -165,7 +172,7 @@ pub const PARAMS: &[ParamSpec] = &[
         name: "package_triangles",
         kind: ParamKind::Integer { min: 0, max: 1 << 20 },
         default: "0",
-        doc: "reflector triangles per task package (0: four packages per thread)",
+        doc: "reflector triangles per task package (0: sixteen packages per thread)",
         invalidates: Invalidates::Uniform,
     },
     ParamSpec {
@@ -335,6 +342,7 @@ impl FrameSetup {
             owners: &self.owners,
             topology: &self.topology,
             settings,
+            originals: None,
         }
     }
 
@@ -388,6 +396,7 @@ struct Progress {
     key: ViewKey,
     setup: FrameSetup,
     packages: Vec<Package>,
+    originals: OriginalSamples,
     image: Image,
     /// Milliseconds so far: visibility, rest of scene, reflector (vertex rays, refinement,
     /// filling), composition.
@@ -499,9 +508,14 @@ impl Technique for VertexTracing {
         let (settings, max_depth, budget_ms) = (self.settings, self.max_depth, self.budget_ms);
         let progress = self.progress.as_mut().expect("set above");
         let deadline = (budget_ms > 0).then(|| start + Duration::from_millis(budget_ms as u64));
-        let inputs = progress.setup.inputs(live, camera, settings, max_depth);
-
         let clock = Instant::now();
+        if fresh {
+            let inputs = progress.setup.inputs(live, camera, settings, max_depth);
+            progress.originals = OriginalSamples::trace(&inputs, &progress.setup.active);
+        }
+        let mut inputs = progress.setup.inputs(live, camera, settings, max_depth);
+        inputs.originals = Some(&progress.originals);
+
         let preview_only = fresh && budget_ms > 0;
         let results: Vec<Vec<(u32, Vec3)>> = progress
             .packages
@@ -523,7 +537,7 @@ impl Technique for VertexTracing {
         progress.stages[3] += clock.elapsed().as_secs_f64() * 1e3;
 
         let converged = progress.packages.iter().all(Package::is_done);
-        let mut totals = PackageCounters::default();
+        let mut totals = progress.originals.counters;
         for package in &progress.packages {
             totals.add(&package.counters);
         }
@@ -664,7 +678,7 @@ impl VertexTracing {
             0 => setup
                 .active
                 .len()
-                .div_ceil(4 * rayon::current_num_threads())
+                .div_ceil(PACKAGES_PER_THREAD * rayon::current_num_threads())
                 .max(1),
             n => n,
         };
@@ -677,6 +691,7 @@ impl VertexTracing {
             key,
             setup,
             packages,
+            originals: OriginalSamples::default(),
             image: rest,
             stages: [visibility_ms, rest_ms, 0.0, 0.0],
             rest_rays,

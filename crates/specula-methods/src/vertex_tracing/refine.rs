@@ -184,6 +184,8 @@ pub struct FrameInputs<'a> {
     pub owners: &'a PixelOwners,
     pub topology: &'a Topology,
     pub settings: RefineSettings,
+    /// The original vertices already traced, if this process traced them for all packages.
+    pub originals: Option<&'a OriginalSamples>,
 }
 
 impl FrameInputs<'_> {
@@ -498,6 +500,100 @@ fn cross2(a: Vec2, b: Vec2) -> f32 {
     a.x * b.y - a.y * b.x
 }
 
+/// A vertex at `p_world` on triangle `host` of `mesh`, traced: the primary ray from the eye
+/// is aimed at it, so its intersection is known and not searched for (§3).
+fn trace_vertex(inputs: &FrameInputs, mesh: u32, host: u32, p_world: Vec3) -> Vertex {
+    let scene_mesh = &inputs.scene.meshes[mesh as usize];
+    let [i0, i1, i2] = scene_mesh.triangles[host as usize].map(|i| i as usize);
+    let (b1, b2) = barycentric(
+        p_world,
+        scene_mesh.positions[i0],
+        scene_mesh.positions[i1],
+        scene_mesh.positions[i2],
+    );
+    let eye = inputs.view.eye;
+    let to_vertex = p_world - eye;
+    let ray = Ray {
+        origin: eye,
+        dir: to_vertex.normalize(),
+    };
+    let hit = Hit {
+        t: to_vertex.length(),
+        b1,
+        b2,
+        mesh,
+        triangle: host,
+    };
+    let mut path = PathRecord::new(inputs.settings.tree_weight);
+    let color = inputs
+        .tracer()
+        .radiance_at_hit_recorded(&ray, &hit, &mut path);
+    let (screen, depth) = match inputs.view.project(p_world) {
+        Some((x, y, z)) => (Vec2::new(x, y), z),
+        None => (Vec2::ZERO, 0.0),
+    };
+    let textured: Vec3 = path.reads[..path.read_count]
+        .iter()
+        .map(|&(texture, uv, coefficient)| coefficient * inputs.scene.textures[texture].sample(uv))
+        .sum();
+    Vertex {
+        p_world,
+        screen,
+        depth,
+        visible: inputs.is_visible(mesh, host, p_world),
+        color,
+        smooth: color - textured,
+        path,
+    }
+}
+
+/// The original vertices of a frame's active triangles, each traced once for every package
+/// (a process refining all packages itself shares them; an MPI worker traces its own).
+#[derive(Default)]
+pub struct OriginalSamples {
+    samples: HashMap<(u32, u32), Vertex>,
+    pub counters: PackageCounters,
+}
+
+impl OriginalSamples {
+    pub fn trace(inputs: &FrameInputs, active: &[TriangleId]) -> OriginalSamples {
+        use rayon::prelude::*;
+        let start = Instant::now();
+        let mut keys: Vec<(u32, u32)> = active
+            .iter()
+            .flat_map(|id| {
+                inputs.scene.meshes[id.mesh as usize].triangles[id.triangle as usize]
+                    .map(|v| (id.mesh, v))
+            })
+            .collect();
+        keys.sort_unstable();
+        keys.dedup();
+        let traced: Vec<((u32, u32), Vertex, (u64, u64))> = keys
+            .par_iter()
+            .map(|&(mesh, vertex)| {
+                let before = rays_traced_on_this_thread();
+                let host = inputs.topology.vertex_host(mesh, vertex);
+                let p = inputs.scene.meshes[mesh as usize].positions[vertex as usize];
+                let sample = trace_vertex(inputs, mesh, host, p);
+                let after = rays_traced_on_this_thread();
+                ((mesh, vertex), sample, (after.0 - before.0, after.1 - before.1))
+            })
+            .collect();
+        let mut counters = PackageCounters {
+            vertex_rays: traced.len() as u64,
+            ..Default::default()
+        };
+        let mut samples = HashMap::with_capacity(traced.len());
+        for (key, sample, (rays, shadow)) in traced {
+            counters.rays += rays;
+            counters.shadow_rays += shadow;
+            samples.insert(key, sample);
+        }
+        counters.seconds = start.elapsed().as_secs_f64();
+        OriginalSamples { samples, counters }
+    }
+}
+
 impl Package {
     pub fn new(triangles: Vec<TriangleId>) -> Package {
         let count = triangles.len();
@@ -571,54 +667,10 @@ impl Package {
         self.triangles[self.faces[face as usize].origin as usize].mesh
     }
 
-    /// A vertex at `p_world` on triangle `host` of `mesh`, traced: the primary ray from the eye
-    /// is aimed at it, so its intersection is known and not searched for (§3).
+    /// A vertex at `p_world` on triangle `host` of `mesh`, traced.
     fn add_vertex(&mut self, inputs: &FrameInputs, mesh: u32, host: u32, p_world: Vec3) -> u32 {
-        let scene_mesh = &inputs.scene.meshes[mesh as usize];
-        let [i0, i1, i2] = scene_mesh.triangles[host as usize].map(|i| i as usize);
-        let (b1, b2) = barycentric(
-            p_world,
-            scene_mesh.positions[i0],
-            scene_mesh.positions[i1],
-            scene_mesh.positions[i2],
-        );
-        let eye = inputs.view.eye;
-        let to_vertex = p_world - eye;
-        let ray = Ray {
-            origin: eye,
-            dir: to_vertex.normalize(),
-        };
-        let hit = Hit {
-            t: to_vertex.length(),
-            b1,
-            b2,
-            mesh,
-            triangle: host,
-        };
-        let mut path = PathRecord::new(inputs.settings.tree_weight);
-        let color = inputs
-            .tracer()
-            .radiance_at_hit_recorded(&ray, &hit, &mut path);
+        self.vertices.push(trace_vertex(inputs, mesh, host, p_world));
         self.counters.vertex_rays += 1;
-        let (screen, depth) = match inputs.view.project(p_world) {
-            Some((x, y, z)) => (Vec2::new(x, y), z),
-            None => (Vec2::ZERO, 0.0),
-        };
-        let textured: Vec3 = path.reads[..path.read_count]
-            .iter()
-            .map(|&(texture, uv, coefficient)| {
-                coefficient * inputs.scene.textures[texture].sample(uv)
-            })
-            .sum();
-        self.vertices.push(Vertex {
-            p_world,
-            screen,
-            depth,
-            visible: inputs.is_visible(mesh, host, p_world),
-            color,
-            smooth: color - textured,
-            path,
-        });
         (self.vertices.len() - 1) as u32
     }
 
@@ -672,9 +724,20 @@ impl Package {
             let v = tri.map(|vertex| match self.originals.get(&(id.mesh, vertex)) {
                 Some(&local) => local,
                 None => {
-                    let host = inputs.topology.vertex_host(id.mesh, vertex);
-                    let local =
-                        self.add_vertex(inputs, id.mesh, host, mesh.positions[vertex as usize]);
+                    let shared = inputs
+                        .originals
+                        .and_then(|o| o.samples.get(&(id.mesh, vertex)));
+                    let local = match shared {
+                        Some(sample) => {
+                            self.vertices.push(*sample);
+                            (self.vertices.len() - 1) as u32
+                        }
+                        None => {
+                            let host = inputs.topology.vertex_host(id.mesh, vertex);
+                            let p = mesh.positions[vertex as usize];
+                            self.add_vertex(inputs, id.mesh, host, p)
+                        }
+                    };
                     self.originals.insert((id.mesh, vertex), local);
                     local
                 }
