@@ -13,8 +13,8 @@ pub mod live_scene;
 pub mod pvrr;
 pub mod raster;
 pub mod reference;
-pub mod screen;
 pub mod registry;
+pub mod screen;
 pub mod technique;
 pub mod vertex_tracing;
 

@@ -3,9 +3,9 @@
 //! read back from the scene raster pass's G-buffer or traced on the CPU where there is no GPU.
 
 use glam::Vec3;
+use rayon::prelude::*;
 use specula_gpu::util::padded_row_bytes;
 use specula_gpu::{GpuContext, GpuError};
-use rayon::prelude::*;
 use specula_scene::Camera;
 use specula_trace::{Ray, SceneAccel};
 
@@ -129,7 +129,11 @@ impl SurfaceReadback {
         }
     }
 
-    pub fn read(&self, gpu: &GpuContext, g: &crate::raster::GBuffer) -> Result<PixelSurfaces, GpuError> {
+    pub fn read(
+        &self,
+        gpu: &GpuContext,
+        g: &crate::raster::GBuffer,
+    ) -> Result<PixelSurfaces, GpuError> {
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         let size = wgpu::Extent3d {
             width: self.width,
@@ -169,4 +173,3 @@ impl SurfaceReadback {
         })
     }
 }
-

@@ -279,7 +279,10 @@ impl Tracer<'_> {
         count_ray(false);
         let Some(hit) = self.accel.intersect(ray, f32::INFINITY) else {
             tree.ray(step, None);
-            return self.scene.background.radiance(ray.dir, &self.scene.textures);
+            return self
+                .scene
+                .background
+                .radiance(ray.dir, &self.scene.textures);
         };
         self.shade_recorded(ray, &hit, step, depth, channel, tree)
     }
@@ -462,7 +465,14 @@ impl Tracer<'_> {
                 };
                 r * rr + (1.0 - r) * t
             }
-            _ => self.spawn(sp, reflected, step.child(Branch::Reflected, Vec3::ONE), depth, channel, tree),
+            _ => self.spawn(
+                sp,
+                reflected,
+                step.child(Branch::Reflected, Vec3::ONE),
+                depth,
+                channel,
+                tree,
+            ),
         }
     }
 }

@@ -102,9 +102,7 @@ pub mod points;
 
 use glam::{DMat4, Vec3};
 use specula_gpu::shaders::CameraUniform;
-use specula_gpu::util::{
-    bind_group, buffer_binding, layout_entry, writable_buffer,
-};
+use specula_gpu::util::{bind_group, buffer_binding, layout_entry, writable_buffer};
 use specula_gpu::{GpuContext, GpuError, TimingSource};
 use specula_scene::{Camera, MaterialKind, Scene};
 
@@ -112,11 +110,11 @@ use crate::envmap::{self, CubeMaps, Exit};
 use crate::gpu_scene::GpuScene;
 use crate::live_scene::LiveScene;
 use crate::raster::{self, BindGroupsBySlot, OutputTexture, RasterPass, RasterSpec};
+use crate::screen::SurfaceReadback;
 use crate::technique::{
     Context, Frame, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, StageTime,
     Technique, TechniqueError,
 };
-use crate::screen::SurfaceReadback;
 use phases::{FrameSettings, PhaseReport, PlacedCloud, ScreenView};
 use points::{PointCloud, TreeLimits};
 

@@ -74,7 +74,9 @@
 //! - `shadow_resolution`: the raster pass's shadow maps (GPU visibility only).
 //! - `show_faces` (false): draws the refined faces' edges over the image (Figure 13).
 
+pub mod balance;
 pub mod refine;
+pub mod wire;
 
 use std::time::{Duration, Instant};
 
@@ -92,10 +94,8 @@ use crate::technique::{
     bad_value, Context, Frame, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels,
     Technique, TechniqueError, COUNTER_RAYS_TRACED, COUNTER_SHADOW_RAYS,
 };
-use refine::{
-    FrameInputs, OriginalSamples, Package, PackageCounters, PixelOwners, RefineSettings, Topology,
-};
 pub use refine::TriangleId;
+use refine::{FrameInputs, OriginalSamples, Package, PixelOwners, RefineSettings, Topology};
 
 /// Packages per rayon thread when `package_triangles` is 0: enough that a package holding a
 /// reflection's outline does not leave the other threads idle.
@@ -523,7 +523,11 @@ impl Technique for VertexTracing {
             .map(|package| {
                 if !package.is_done() && !(preview_only && package.has_preview()) {
                     // A fresh progressive frame shows its preview before any refinement.
-                    let until = if preview_only { Some(Instant::now()) } else { deadline };
+                    let until = if preview_only {
+                        Some(Instant::now())
+                    } else {
+                        deadline
+                    };
                     package.run(&inputs, until);
                 }
                 package.take_pixels(&inputs)
@@ -556,8 +560,14 @@ impl Technique for VertexTracing {
             })
             .collect();
         let counters = vec![
-            ("reflector pixels".into(), progress.setup.owners.len() as u64),
-            ("reflector triangles traced".into(), progress.setup.active.len() as u64),
+            (
+                "reflector pixels".into(),
+                progress.setup.owners.len() as u64,
+            ),
+            (
+                "reflector triangles traced".into(),
+                progress.setup.active.len() as u64,
+            ),
             ("task packages".into(), progress.packages.len() as u64),
             ("vertex rays".into(), totals.vertex_rays),
             ("filled pixels".into(), totals.filled_pixels),
@@ -652,9 +662,7 @@ impl VertexTracing {
                 let pass = self.gpu.as_mut().expect("made above");
                 pass.raster.begin_frame(gpu, live)?;
                 let uniform = raster::camera_uniform(camera, &live.scene().bounds(), width, height);
-                let g = pass
-                    .raster
-                    .render(gpu, live.gpu(gpu), &uniform, None)?;
+                let g = pass.raster.render(gpu, live.gpu(gpu), &uniform, None)?;
                 if pass.readback.as_ref().map(|r| (r.width, r.height)) != Some((width, height)) {
                     pass.readback = Some(SurfaceReadback::new(gpu, width, height));
                 }

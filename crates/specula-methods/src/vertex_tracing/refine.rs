@@ -219,7 +219,8 @@ impl FrameInputs<'_> {
         }
         let eye = self.view.eye;
         let scene_mesh = &self.scene.meshes[mesh as usize];
-        let [a, b, c] = scene_mesh.triangles[host as usize].map(|i| scene_mesh.positions[i as usize]);
+        let [a, b, c] =
+            scene_mesh.triangles[host as usize].map(|i| scene_mesh.positions[i as usize]);
         let normal = (b - a).cross(c - a).normalize_or_zero();
         let cos = normal.dot((p_world - eye).normalize_or_zero()).abs();
         // The pixel centre is within 0.71 pixel of the point: along the plane, the distance
@@ -246,8 +247,7 @@ impl FrameInputs<'_> {
                 .into_par_iter()
                 .map(|v| {
                     let host = self.topology.vertex_host(index, v);
-                    host != u32::MAX
-                        && self.is_visible(index, host, mesh.positions[v as usize])
+                    host != u32::MAX && self.is_visible(index, host, mesh.positions[v as usize])
                 })
                 .collect();
             active.extend(
@@ -291,9 +291,8 @@ fn differ(a: &Vertex, b: &Vertex, inputs: &FrameInputs) -> bool {
         // Textures are read per pixel at interpolated coordinates: what must vary gently is
         // the rest of the colour and each read's coefficient, not the texels.
         return display_difference(a.smooth, b.smooth) > epsilon
-            || (0..a.path.read_count).any(|i| {
-                display_difference(a.path.reads[i].2, b.path.reads[i].2) > epsilon
-            });
+            || (0..a.path.read_count)
+                .any(|i| display_difference(a.path.reads[i].2, b.path.reads[i].2) > epsilon);
     }
     if display_difference(a.color, b.color) > epsilon {
         return true;
@@ -490,10 +489,7 @@ fn barycentric(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> (f32, f32) {
     if det.abs() <= f32::MIN_POSITIVE {
         return (0.0, 0.0);
     }
-    (
-        (d22 * dp1 - d12 * dp2) / det,
-        (d11 * dp2 - d12 * dp1) / det,
-    )
+    ((d22 * dp1 - d12 * dp2) / det, (d11 * dp2 - d12 * dp1) / det)
 }
 
 fn cross2(a: Vec2, b: Vec2) -> f32 {
@@ -576,7 +572,11 @@ impl OriginalSamples {
                 let p = inputs.scene.meshes[mesh as usize].positions[vertex as usize];
                 let sample = trace_vertex(inputs, mesh, host, p);
                 let after = rays_traced_on_this_thread();
-                ((mesh, vertex), sample, (after.0 - before.0, after.1 - before.1))
+                (
+                    (mesh, vertex),
+                    sample,
+                    (after.0 - before.0, after.1 - before.1),
+                )
             })
             .collect();
         let mut counters = PackageCounters {
@@ -669,7 +669,8 @@ impl Package {
 
     /// A vertex at `p_world` on triangle `host` of `mesh`, traced.
     fn add_vertex(&mut self, inputs: &FrameInputs, mesh: u32, host: u32, p_world: Vec3) -> u32 {
-        self.vertices.push(trace_vertex(inputs, mesh, host, p_world));
+        self.vertices
+            .push(trace_vertex(inputs, mesh, host, p_world));
         self.counters.vertex_rays += 1;
         (self.vertices.len() - 1) as u32
     }
@@ -751,7 +752,12 @@ impl Package {
             let face = (self.faces.len() - 1) as u32;
             self.roots.push(face);
             for i in 0..3 {
-                let e = self.edge(v[i], v[(i + 1) % 3], 0, Some(edge_key(tri[i], tri[(i + 1) % 3])));
+                let e = self.edge(
+                    v[i],
+                    v[(i + 1) % 3],
+                    0,
+                    Some(edge_key(tri[i], tri[(i + 1) % 3])),
+                );
                 self.edges[e as usize].faces.push(face);
             }
             self.dirty[index] = true;
@@ -942,8 +948,7 @@ impl Package {
                 self.vertices[m as usize].screen,
                 self.vertices[c as usize].screen,
             );
-            let towards_first =
-                self.vertices[self.faces[first as usize].v[0] as usize].screen - sm;
+            let towards_first = self.vertices[self.faces[first as usize].v[0] as usize].screen - sm;
             let side = cross2(sc - sm, q - sm) * cross2(sc - sm, towards_first);
             face = if side >= 0.0 { first } else { second };
         }
@@ -998,7 +1003,9 @@ impl Package {
     /// the three corners' paths are alike, the texture coordinates and coefficients of their
     /// texture reads are interpolated and the texels read here.
     fn interpolate(&self, face: u32, q: Vec2, inputs: &FrameInputs) -> Vec3 {
-        let corners = self.faces[face as usize].v.map(|i| &self.vertices[i as usize]);
+        let corners = self.faces[face as usize]
+            .v
+            .map(|i| &self.vertices[i as usize]);
         let [s0, s1, s2] = corners.map(|c| c.screen);
         let area = cross2(s1 - s0, s2 - s0);
         let mean = || corners.iter().map(|c| c.color).sum::<Vec3>() / 3.0;
@@ -1052,7 +1059,9 @@ impl Package {
                 continue;
             }
             for k in inputs.owners.pixels(self.triangles[index]) {
-                let filled = (!self.filled.is_empty()).then(|| self.filled.get(&k)).flatten();
+                let filled = (!self.filled.is_empty())
+                    .then(|| self.filled.get(&k))
+                    .flatten();
                 let color = match filled {
                     Some(&c) => c,
                     None => {
