@@ -14,6 +14,8 @@ use specula_scene::Scene;
 use specula_trace::Image;
 
 mod bench;
+#[cfg(feature = "mpi")]
+mod distributed;
 
 #[derive(Parser)]
 #[command(
@@ -62,6 +64,13 @@ enum Command {
         /// Also write linear float RGB to this OpenEXR file.
         #[arg(long)]
         exr: Option<PathBuf>,
+        /// A progressive method's steps as an image sequence: DIR/step-000.png, ... and
+        /// DIR/steps.csv with the time and rays of each step (the step time is the method's
+        /// `budget_ms`, 100 unless `-p budget_ms=N` says otherwise).
+        #[arg(long, value_name = "DIR")]
+        sequence: Option<PathBuf>,
+        #[command(flatten)]
+        distributed: DistributedArgs,
     },
     /// Render the reference and each method from the same camera; report error and speed.
     /// Several scenes, or a folder of .toml scenes, give one report with a methods × scenes table.
@@ -139,6 +148,67 @@ enum Command {
 }
 
 /// `WIDTHxHEIGHT`, each from 1 to 16384.
+/// Distributed vertex tracing over MPI (`mpirun -np N specula render SCENE --method
+/// vertex-tracing --distributed`); built with `--features mpi`.
+#[derive(clap::Args)]
+struct DistributedArgs {
+    /// Run vertex-tracing as MPI master (rank 0) and workers.
+    #[arg(long)]
+    distributed: bool,
+    /// Frames to render (packages are re-sized after each from the workers' measured speeds).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100000))]
+    frames: u32,
+    /// JSON report of the distributed run: per frame, each worker's packages, triangles, busy
+    /// time and speed, the imbalance, and lost ranks.
+    #[arg(long, value_name = "FILE")]
+    report: Option<PathBuf>,
+    /// A worker that leaves a package unanswered this long is lost (its packages go to the
+    /// others).
+    #[arg(long, default_value_t = 30000, value_parser = clap::value_parser!(u64).range(1..))]
+    worker_timeout_ms: u64,
+    /// Packages each worker asks for per frame at the frame's start.
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u64).range(1..=10000))]
+    packages_per_worker: u64,
+    /// Testing aid: RANK:FACTOR makes that worker FACTOR times slower (it sleeps).
+    #[arg(long, value_name = "RANK:FACTOR", value_parser = parse_slow_rank)]
+    slow_rank: Option<(usize, f64)>,
+    /// Testing aid: RANK:N makes that worker die on receiving its N-th package.
+    #[arg(long, value_name = "RANK:N", value_parser = parse_fail_rank)]
+    fail_rank: Option<(usize, u32)>,
+}
+
+fn parse_rank_pair(text: &str) -> Result<(usize, &str), String> {
+    let (rank, value) = text
+        .split_once(':')
+        .ok_or_else(|| format!("expected RANK:VALUE, got '{text}'"))?;
+    let rank = rank
+        .parse::<usize>()
+        .ok()
+        .filter(|&r| r >= 1)
+        .ok_or_else(|| format!("expected a worker rank (1 or more), got '{rank}'"))?;
+    Ok((rank, value))
+}
+
+fn parse_slow_rank(text: &str) -> Result<(usize, f64), String> {
+    let (rank, factor) = parse_rank_pair(text)?;
+    let factor = factor
+        .parse::<f64>()
+        .ok()
+        .filter(|f| f.is_finite() && *f >= 1.0)
+        .ok_or_else(|| format!("expected a slow-down factor of 1 or more, got '{factor}'"))?;
+    Ok((rank, factor))
+}
+
+fn parse_fail_rank(text: &str) -> Result<(usize, u32), String> {
+    let (rank, n) = parse_rank_pair(text)?;
+    let n = n
+        .parse::<u32>()
+        .ok()
+        .filter(|n| *n >= 1)
+        .ok_or_else(|| format!("expected a package number of 1 or more, got '{n}'"))?;
+    Ok((rank, n))
+}
+
 fn parse_size(text: &str) -> Result<(u32, u32), String> {
     let (w, h) = text
         .split_once(['x', 'X'])
@@ -363,10 +433,15 @@ fn run(cli: Cli) -> Result<()> {
             output,
             exr,
             params,
+            sequence,
+            distributed,
         } => {
             let scene = load_scene(&scene)?;
             let height = height_for(&scene, width, height);
             let info = specula_methods::method(&method)?;
+            if distributed.distributed {
+                return render_distributed(scene, &method, width, height, &params, output, exr, &distributed);
+            }
             let mut technique = (info.create)();
             if info.exact {
                 if spp > 1 && info.param("spp").is_none() {
@@ -378,6 +453,12 @@ fn run(cli: Cli) -> Result<()> {
                 )?;
             }
             specula_methods::apply_parameters(technique.as_mut(), &params)?;
+            if sequence.is_some() && !info.progressive {
+                anyhow::bail!("--sequence needs a progressive method; {method} draws each frame at once");
+            }
+            if sequence.is_some() && technique.parameter("budget_ms") == "0" {
+                specula_methods::apply_setting(technique.as_mut(), "budget_ms=100")?;
+            }
             let ctx = context_for(&[info])?;
             let start = Instant::now();
             let live = LiveScene::new(scene);
@@ -387,7 +468,10 @@ fn run(cli: Cli) -> Result<()> {
             bar.set_message(format!("rendering with {method}"));
             technique.prepare(&ctx, &live)?;
             let start = Instant::now();
-            let frame = technique.render(&ctx, &live, &scene.camera, width, height)?;
+            let frame = match &sequence {
+                Some(dir) => write_sequence(technique.as_mut(), &ctx, &live, width, height, dir, &bar)?,
+                None => technique.render(&ctx, &live, &scene.camera, width, height)?,
+            };
             let image = frame.image(&ctx)?;
             bar.finish_and_clear();
             for warning in &frame.warnings {
@@ -608,4 +692,95 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
     }
+}
+
+/// `render --distributed`: vertex tracing over MPI (see `distributed`).
+#[allow(clippy::too_many_arguments)]
+fn render_distributed(
+    scene: Scene,
+    method: &str,
+    width: u32,
+    height: u32,
+    params: &[String],
+    output: PathBuf,
+    exr: Option<PathBuf>,
+    args: &DistributedArgs,
+) -> Result<()> {
+    use specula_methods::vertex_tracing::{VertexTracing, INFO};
+    if method != INFO.name {
+        anyhow::bail!("--distributed runs {}, not {method}", INFO.name);
+    }
+    let mut technique = VertexTracing::default();
+    specula_methods::apply_parameters(&mut technique, params)?;
+    #[cfg(feature = "mpi")]
+    {
+        let options = distributed::Options {
+            frames: args.frames,
+            width,
+            height,
+            settings: technique.settings,
+            max_depth: technique.max_depth,
+            packages_per_worker: args.packages_per_worker as usize,
+            timeout: std::time::Duration::from_millis(args.worker_timeout_ms),
+            slow: args.slow_rank,
+            fail: args.fail_rank,
+            output,
+            exr,
+            report: args.report.clone(),
+        };
+        distributed::run(scene, &options)
+    }
+    #[cfg(not(feature = "mpi"))]
+    {
+        let _ = (scene, width, height, output, exr, args, technique);
+        anyhow::bail!(
+            "this specula was built without MPI: build it with `cargo build --release --features mpi` (needs OpenMPI: apt-get install openmpi-bin libopenmpi-dev libclang-dev)"
+        )
+    }
+}
+
+/// Renders a progressive method's steps until it converges, writing each step's image as
+/// DIR/step-NNN.png and a line of DIR/steps.csv (its time, and its rays as the method counts
+/// them: vertex-tracing counts the whole image so far, the reference each call's). Returns the
+/// last frame.
+fn write_sequence(
+    technique: &mut dyn specula_methods::Technique,
+    ctx: &Devices,
+    live: &LiveScene,
+    width: u32,
+    height: u32,
+    dir: &std::path::Path,
+    bar: &ProgressBar,
+) -> Result<specula_methods::Frame> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let mut csv = String::from("step,image,milliseconds,total milliseconds,rays traced,shadow rays,samples\n");
+    let counter = |frame: &specula_methods::Frame, name: &str| {
+        frame
+            .counters
+            .iter()
+            .find(|(n, _)| n.starts_with(name))
+            .map_or(0, |(_, v)| *v)
+    };
+    let mut total_ms = 0.0;
+    for step in 0.. {
+        let clock = Instant::now();
+        let frame = technique.render(ctx, live, &live.scene().camera, width, height)?;
+        let ms = clock.elapsed().as_secs_f64() * 1e3;
+        total_ms += ms;
+        let name = format!("step-{step:03}.png");
+        frame.image(ctx)?.save_png(&dir.join(&name))?;
+        csv.push_str(&format!(
+            "{step},{name},{ms:.1},{total_ms:.1},{},{},{}\n",
+            counter(&frame, specula_methods::COUNTER_RAYS_TRACED),
+            counter(&frame, specula_methods::COUNTER_SHADOW_RAYS),
+            counter(&frame, "samples")
+        ));
+        bar.set_message(format!("step {step}: {total_ms:.0} ms"));
+        if frame.converged {
+            let path = dir.join("steps.csv");
+            std::fs::write(&path, csv).with_context(|| format!("writing {}", path.display()))?;
+            return Ok(frame);
+        }
+    }
+    unreachable!("the loop returns")
 }
