@@ -298,9 +298,10 @@ impl FrameSetup {
         max_depth: u32,
     ) -> FrameSetup {
         let topology = Topology::new(live.scene());
-        let owners = PixelOwners::new(&surfaces, &topology);
+        let view = ScreenView::new(camera, width, height);
+        let owners = PixelOwners::new(&surfaces, &topology, live.scene(), &view);
         let mut setup = FrameSetup {
-            view: ScreenView::new(camera, width, height),
+            view,
             surfaces,
             owners,
             topology,
@@ -563,6 +564,10 @@ impl Technique for VertexTracing {
             (
                 "reflector pixels".into(),
                 progress.setup.owners.len() as u64,
+            ),
+            (
+                "stray pixels (traced: the ID buffer's triangle cannot be seen there)".into(),
+                progress.setup.owners.stray() as u64,
             ),
             (
                 "reflector triangles traced".into(),

@@ -115,21 +115,66 @@ impl Topology {
 }
 
 /// The pixels each reflector triangle owns: those whose first surface (the ID buffer) is it.
+/// A pixel the ID buffer gives to a triangle that cannot be seen there — its centre outside
+/// the triangle's screen projection, or a closed glass's back face (a raster depth buffer's
+/// rounding between the two walls of a thin shell) — is *stray*: it is traced, not
+/// interpolated from a surface it is not on.
 #[derive(Debug, Default)]
 pub struct PixelOwners {
-    /// (mesh << 32 | triangle, pixel), sorted.
+    /// (mesh << 32 | triangle, pixel | STRAY), sorted.
     owned: Vec<(u64, u32)>,
 }
+
+const STRAY: u32 = 1 << 31;
 
 fn owner_key(id: TriangleId) -> u64 {
     (id.mesh as u64) << 32 | id.triangle as u64
 }
 
+/// Whether triangle `id` can be what pixel `k`'s centre sees: the centre within half a pixel
+/// of its screen projection, and a closed glass's triangle facing the eye.
+fn plausible_owner(scene: &Scene, view: &ScreenView, id: TriangleId, k: u32) -> bool {
+    let mesh = &scene.meshes[id.mesh as usize];
+    let tri = mesh.triangles[id.triangle as usize].map(|v| v as usize);
+    let [a, b, c] = tri.map(|v| mesh.positions[v]);
+    if let specula_scene::MaterialKind::Dielectric {
+        thin_walled: false, ..
+    } = scene.materials[mesh.material].kind
+    {
+        let mut normal = (b - a).cross(c - a);
+        let stored = mesh.normals[tri[0]] + mesh.normals[tri[1]] + mesh.normals[tri[2]];
+        if normal.dot(stored) < 0.0 {
+            normal = -normal;
+        }
+        if normal.dot(a - view.eye) > 0.0 {
+            return false;
+        }
+    }
+    let corners = [a, b, c].map(|p| view.project(p));
+    let [Some(pa), Some(pb), Some(pc)] = corners else {
+        // A corner behind the eye: no screen triangle to test against.
+        return true;
+    };
+    let [sa, sb, sc] = [pa, pb, pc].map(|(x, y, _)| Vec2::new(x, y));
+    let q = Vec2::new((k % view.width) as f32 + 0.5, (k / view.width) as f32 + 0.5);
+    let orientation = cross2(sb - sa, sc - sa).signum();
+    [(sa, sb), (sb, sc), (sc, sa)].iter().all(|&(from, to)| {
+        let length = (to - from).length();
+        length == 0.0 || orientation * cross2(to - from, q - from) / length >= -0.5
+    })
+}
+
 impl PixelOwners {
-    pub fn new(surfaces: &PixelSurfaces, topology: &Topology) -> PixelOwners {
+    pub fn new(
+        surfaces: &PixelSurfaces,
+        topology: &Topology,
+        scene: &Scene,
+        view: &ScreenView,
+    ) -> PixelOwners {
+        use rayon::prelude::*;
         let mut owned: Vec<(u64, u32)> = surfaces
             .ids
-            .iter()
+            .par_iter()
             .enumerate()
             .filter(|(_, ids)| ids[0] != 0 && topology.is_reflector(ids[0] - 1))
             .map(|(k, ids)| {
@@ -137,21 +182,33 @@ impl PixelOwners {
                     mesh: ids[0] - 1,
                     triangle: ids[1],
                 };
-                (owner_key(id), k as u32)
+                let k = k as u32;
+                let stray = !plausible_owner(scene, view, id, k);
+                (owner_key(id), k | if stray { STRAY } else { 0 })
             })
             .collect();
         owned.sort_unstable();
         PixelOwners { owned }
     }
 
-    /// The pixels `id` owns, in raster order.
-    pub fn pixels(&self, id: TriangleId) -> impl Iterator<Item = u32> + '_ {
+    /// The pixels `id` owns, in raster order, each with whether it is stray.
+    pub fn owned(&self, id: TriangleId) -> impl Iterator<Item = (u32, bool)> + '_ {
         let key = owner_key(id);
         let start = self.owned.partition_point(|(k, _)| *k < key);
         self.owned[start..]
             .iter()
             .take_while(move |(k, _)| *k == key)
-            .map(|(_, pixel)| *pixel)
+            .map(|(_, pixel)| (pixel & !STRAY, pixel & STRAY != 0))
+    }
+
+    /// Stray pixels in all.
+    pub fn stray(&self) -> usize {
+        self.owned.iter().filter(|(_, p)| p & STRAY != 0).count()
+    }
+
+    /// The pixels `id` owns, in raster order.
+    pub fn pixels(&self, id: TriangleId) -> impl Iterator<Item = u32> + '_ {
+        self.owned(id).map(|(pixel, _)| pixel)
     }
 
     pub fn owns_any(&self, id: TriangleId) -> bool {
@@ -160,7 +217,7 @@ impl PixelOwners {
 
     /// Every pixel some reflector triangle owns.
     pub fn all(&self) -> impl Iterator<Item = u32> + '_ {
-        self.owned.iter().map(|(_, pixel)| *pixel)
+        self.owned.iter().map(|(_, pixel)| pixel & !STRAY)
     }
 
     pub fn len(&self) -> usize {
@@ -641,11 +698,8 @@ impl Package {
                     if !self.refine(inputs, deadline) {
                         break;
                     }
-                    self.phase = if inputs.settings.fill {
-                        Phase::Filling { next: 0 }
-                    } else {
-                        Phase::Done
-                    };
+                    // Filling runs even without `fill`: stray pixels are always traced.
+                    self.phase = Phase::Filling { next: 0 };
                 }
                 Phase::Filling { .. } => {
                     if !self.fill(inputs, deadline) {
@@ -970,7 +1024,7 @@ impl Package {
     }
 
     /// Triangle filling (§3): every pixel of the faces refinement could not resolve traced
-    /// as the reference traces it.
+    /// as the reference traces it (with `fill`), and every stray pixel (always).
     fn fill(&mut self, inputs: &FrameInputs, deadline: Option<Instant>) -> bool {
         let Phase::Filling { mut next } = self.phase else {
             return true;
@@ -978,11 +1032,14 @@ impl Package {
         let tracer = inputs.tracer();
         let (width, height) = (inputs.view.width, inputs.view.height);
         while next < self.triangles.len() {
-            let pixels: Vec<u32> = inputs.owners.pixels(self.triangles[next]).collect();
-            for k in pixels {
+            let pixels: Vec<(u32, bool)> = inputs.owners.owned(self.triangles[next]).collect();
+            for (k, stray) in pixels {
                 let (x, y) = (k % width, k / width);
-                let leaf = self.locate(next, Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
-                if self.needs_filling(leaf) {
+                let trace = stray || {
+                    let leaf = self.locate(next, Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
+                    inputs.settings.fill && self.needs_filling(leaf)
+                };
+                if trace {
                     let color = pixel_radiance(&tracer, inputs.camera, x, y, width, height, 1);
                     self.filled.insert(k, color);
                     self.counters.filled_pixels += 1;
