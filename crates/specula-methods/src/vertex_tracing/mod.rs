@@ -76,6 +76,7 @@
 
 pub mod balance;
 pub mod refine;
+pub mod simulate;
 pub mod wire;
 
 use std::time::{Duration, Instant};
