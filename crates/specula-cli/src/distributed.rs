@@ -57,11 +57,24 @@ pub struct Options {
     pub report: Option<PathBuf>,
 }
 
+/// One package as the master received it: who computed it, its triangles, the seconds the
+/// worker reported and the pixels it returned (what the simulation is fed with).
+#[derive(serde::Serialize)]
+struct PackageRecord {
+    rank: usize,
+    start: usize,
+    end: usize,
+    seconds: f64,
+    pixels: usize,
+}
+
 /// One frame of the master's report.
 #[derive(serde::Serialize)]
 struct FrameReport {
     frame: u32,
     seconds: f64,
+    /// From the first package sent to the last result composited.
+    refine_seconds: f64,
     visibility_seconds: f64,
     active_triangles: usize,
     packages: u32,
@@ -72,6 +85,7 @@ struct FrameReport {
     samples: u64,
     /// Bytes of result messages received.
     result_bytes: u64,
+    package_records: Vec<PackageRecord>,
 }
 
 #[derive(serde::Serialize)]
@@ -166,6 +180,11 @@ fn master(
         );
         let visibility_seconds = start.elapsed().as_secs_f64();
         let count = setup.active.len();
+        // The rest of the scene first, so that the refinement phase timed below is the
+        // packages' alone (the workers compute their ID buffers meanwhile).
+        let (rest, _) = setup.rest_of_scene(live, &camera, options.max_depth);
+        image = rest;
+        let refine_start = Instant::now();
         balancer.start_frame(count);
         let mut sent_at = std::collections::HashMap::new();
         for w in balancer.live_workers() {
@@ -174,24 +193,30 @@ fn master(
                 sent_at.insert((w, p.id), Instant::now());
             }
         }
-        // The rest of the scene while the first packages are worked on.
-        let (rest, _) = setup.rest_of_scene(live, &camera, options.max_depth);
-        image = rest;
         let (mut packages, mut samples, mut result_bytes) = (0u32, 0u64, 0u64);
+        let mut records = Vec::new();
         let mut lost_now = Vec::new();
         while !balancer.frame_done() {
             if balancer.live_workers().is_empty() {
-                // Every worker is lost: the master finishes the frame itself.
-                while let Some(p) = balancer.next_package(0, count) {
-                    let mut package = setup.package(p.triangles.clone());
+                // No worker (one rank), or every worker lost: the master does the rest itself,
+                // as one package.
+                let remaining = balancer.take_queue();
+                for range in remaining {
+                    let mut package = setup.package(range.clone());
                     let inputs =
                         setup.inputs(live, &camera, options.settings, options.max_depth);
                     package.run(&inputs, None);
-                    composite(&mut image, &package.take_pixels(&inputs));
+                    let pixels = package.take_pixels(&inputs);
+                    composite(&mut image, &pixels);
                     samples += package.counters.vertex_rays + package.counters.filled_pixels;
                     packages += 1;
-                    // Slot 0 is lost; its bookkeeping is the master's now.
-                    balancer.finished(0, p.id, package.counters.seconds);
+                    records.push(PackageRecord {
+                        rank: 0,
+                        start: range.start,
+                        end: range.end,
+                        seconds: package.counters.seconds,
+                        pixels: pixels.len(),
+                    });
                 }
                 break;
             }
@@ -203,8 +228,15 @@ fn master(
                     pixels,
                 })) if f == frame && from >= 1 => {
                     let w = from - 1;
-                    if balancer.finished(w, id, counters.seconds).is_some() {
+                    if let Some(done) = balancer.finished(w, id, counters.seconds) {
                         sent_at.remove(&(w, id));
+                        records.push(PackageRecord {
+                            rank: from,
+                            start: done.triangles.start,
+                            end: done.triangles.end,
+                            seconds: counters.seconds,
+                            pixels: pixels.len(),
+                        });
                         composite(&mut image, &pixels);
                         packages += 1;
                         samples += counters.vertex_rays + counters.filled_pixels;
@@ -250,6 +282,7 @@ fn master(
                 }
             }
         }
+        let refine_seconds = refine_start.elapsed().as_secs_f64();
         let stats = balancer.end_frame();
         let busy: Vec<f64> = stats
             .iter()
@@ -265,6 +298,7 @@ fn master(
         report.frames.push(FrameReport {
             frame,
             seconds,
+            refine_seconds,
             visibility_seconds,
             active_triangles: count,
             packages,
@@ -273,6 +307,7 @@ fn master(
             lost_ranks: lost_now,
             samples,
             result_bytes,
+            package_records: records,
         });
     }
     write_outputs(&image, options, &report)?;

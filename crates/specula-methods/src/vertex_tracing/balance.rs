@@ -149,13 +149,14 @@ impl Balancer {
         &self.outstanding[worker]
     }
 
-    /// Whether every triangle of the frame is done.
+    /// Whether every triangle of the frame is handed out and answered.
     pub fn frame_done(&self) -> bool {
         self.queue.is_empty() && self.outstanding.iter().all(Vec::is_empty)
     }
 
-    pub fn queue_is_empty(&self) -> bool {
-        self.queue.is_empty()
+    /// Empties the queue: the ranges no worker will get (the master does them itself).
+    pub fn take_queue(&mut self) -> Vec<Range<usize>> {
+        self.queue.drain(..).collect()
     }
 
     /// Ends the frame: each live worker's speed becomes what it measured (triangles per busy
