@@ -1,0 +1,277 @@
+//! Vertex tracing's Figure 9 (Ullmann et al. 2001): speed-up and load imbalance against the
+//! number of processors, measured for 1–3 MPI ranks and extended to 1–32 workers by the
+//! discrete-event simulation (`vertex_tracing::simulate`), which is first checked against the
+//! measured runs.
+//!
+//!   scripts/vertex-tracing-figure9.sh   (runs mpirun for 1–3 ranks, then this)
+//!   cargo bench -p specula-compare --bench vertex_tracing_figure9 -- DIR
+//!
+//! DIR holds `ranks-1.json`, `ranks-2.json`, `ranks-3.json` (`specula render --distributed
+//! --report`); the chart is written to DIR/figure9.svg and the tables printed in Markdown.
+//! Speed-up is of the refinement phase (first package sent to last result composited), the
+//! part the balancer distributes; the master's ID buffer and the rest of the scene are not
+//! distributed (the paper's OpenGL part).
+
+use std::path::PathBuf;
+
+use plotters::prelude::*;
+use serde_json::Value;
+use specula_methods::vertex_tracing::simulate::{steady_frame, Network, WorkerSpec, Workload};
+
+/// Loopback as seen by MPI on one machine (shared memory between ranks).
+const LOOPBACK: WorkerSpec = WorkerSpec {
+    speed: 1.0,
+    bits_per_second: 10e9,
+    latency_seconds: 20e-6,
+};
+const PACKAGES_PER_WORKER: usize = 4;
+/// Frames simulated before the reported one (the balancer learns speeds after each).
+const FRAMES: usize = 4;
+
+struct Run {
+    ranks: usize,
+    refine_seconds: f64,
+    triangles: usize,
+    /// (start, end, seconds, pixels) of the last frame's packages.
+    packages: Vec<(usize, usize, f64, usize)>,
+}
+
+fn load(dir: &std::path::Path, ranks: usize) -> Run {
+    let path = dir.join(format!("ranks-{ranks}.json"));
+    let text = std::fs::read_to_string(&path)
+        .unwrap_or_else(|e| panic!("{}: {e} (run scripts/vertex-tracing-figure9.sh)", path.display()));
+    let report: Value = serde_json::from_str(&text).expect("a report");
+    let frame = report["frames"]
+        .as_array()
+        .and_then(|f| f.last())
+        .expect("a frame");
+    let packages = frame["package_records"]
+        .as_array()
+        .expect("package records")
+        .iter()
+        .map(|p| {
+            (
+                p["start"].as_u64().unwrap() as usize,
+                p["end"].as_u64().unwrap() as usize,
+                p["seconds"].as_f64().unwrap(),
+                p["pixels"].as_u64().unwrap() as usize,
+            )
+        })
+        .collect();
+    Run {
+        ranks,
+        refine_seconds: frame["refine_seconds"].as_f64().unwrap(),
+        triangles: frame["active_triangles"].as_u64().unwrap() as usize,
+        packages,
+    }
+}
+
+fn main() {
+    let dir: PathBuf = std::env::args()
+        .skip(1)
+        .find(|a| !a.starts_with("--"))
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from("target/figure9"));
+    let runs: Vec<Run> = (1..=3).map(|r| load(&dir, r)).collect();
+    // A package's fixed cost: what cutting the frame into the 2-rank run's packages added to
+    // the 1-rank run's single package.
+    let one_package: f64 = runs[0].packages.iter().map(|p| p.2).sum();
+    let cut: f64 = runs[1].packages.iter().map(|p| p.2).sum();
+    let per_package =
+        ((cut - one_package) / (runs[1].packages.len().max(2) - 1) as f64).max(0.0);
+
+    println!("### Measured on this machine, and the simulation fed with each run's package costs");
+    println!();
+    println!("| ranks | workers | refinement s (measured) | speed-up (measured) | refinement s (simulated) | speed-up (simulated) | difference |");
+    println!("|---|---|---|---|---|---|---|");
+    let base_measured = runs[0].refine_seconds;
+    let mut base_simulated = 0.0;
+    for run in &runs {
+        let workers = run.ranks.saturating_sub(1).max(1);
+        let workload = Workload::from_packages(run.triangles, &run.packages, per_package, 0.0);
+        let simulated = if run.ranks == 1 {
+            // The master alone: its one package, no messages.
+            workload.total_seconds() + per_package
+        } else {
+            steady_frame(
+                &workload,
+                &vec![LOOPBACK; workers],
+                Network {
+                    master_bits_per_second: LOOPBACK.bits_per_second,
+                },
+                PACKAGES_PER_WORKER,
+                1,
+            )
+            .seconds
+        };
+        if run.ranks == 1 {
+            base_simulated = simulated;
+        }
+        let measured_speedup = base_measured / run.refine_seconds;
+        let simulated_speedup = base_simulated / simulated;
+        println!(
+            "| {} | {} | {:.4} | {:.2} | {:.4} | {:.2} | {:+.1} % |",
+            run.ranks,
+            if run.ranks == 1 { 0 } else { workers },
+            run.refine_seconds,
+            measured_speedup,
+            simulated,
+            simulated_speedup,
+            100.0 * (simulated_speedup / measured_speedup - 1.0)
+        );
+    }
+
+    // The extension: the 1-worker run's costs (one process per core, no contention).
+    let measured = Workload::from_packages(runs[1].triangles, &runs[1].packages, per_package, 0.0);
+    let paper_scale = 13.2 / measured.total_seconds();
+    let scaled = Workload {
+        seconds: measured.seconds.iter().map(|s| s * paper_scale).collect(),
+        per_package_seconds: measured.per_package_seconds * paper_scale,
+        ..measured.clone()
+    };
+    let link = |mbit: f64| WorkerSpec {
+        speed: 1.0,
+        bits_per_second: mbit * 1e6,
+        latency_seconds: 0.2e-3,
+    };
+    type Scenario = (&'static str, Workload, Box<dyn Fn(usize) -> WorkerSpec>, f64);
+    let scenarios: Vec<Scenario> = vec![
+        (
+            "measured frame, 1 Gbit/s links",
+            measured.clone(),
+            Box::new(move |_| link(1000.0)),
+            1000e6,
+        ),
+        (
+            "paper-sized frame (13.2 s on one worker), 100 Mbit/s",
+            scaled.clone(),
+            Box::new(move |_| link(100.0)),
+            100e6,
+        ),
+        (
+            "paper-sized frame, mixed 10 and 100 Mbit/s links",
+            scaled.clone(),
+            Box::new(move |w| link(if w % 2 == 0 { 100.0 } else { 10.0 })),
+            100e6,
+        ),
+        (
+            "paper-sized frame, mixed links, speeds 1 and 0.5",
+            scaled.clone(),
+            Box::new(move |w| WorkerSpec {
+                speed: if w % 2 == 0 { 1.0 } else { 0.5 },
+                ..link(if w % 2 == 0 { 100.0 } else { 10.0 })
+            }),
+            100e6,
+        ),
+    ];
+    let counts: Vec<usize> = vec![1, 2, 3, 4, 6, 8, 10, 12, 16, 20, 24, 28, 32];
+    let mut curves = Vec::new();
+    println!();
+    println!("### Simulated: speed-up (frame time of one worker of speed 1 / of N workers), efficiency (speed-up / the workers' summed speed) and imbalance");
+    for (name, workload, spec, master) in &scenarios {
+        let network = Network {
+            master_bits_per_second: *master,
+        };
+        let one = steady_frame(workload, &[spec(0)], network, PACKAGES_PER_WORKER, FRAMES);
+        println!();
+        println!("{name}: one worker {:.3} s per frame", one.seconds);
+        println!();
+        println!("| workers | frame s | speed-up | efficiency | imbalance |");
+        println!("|---|---|---|---|---|");
+        let mut points = Vec::new();
+        for &n in &counts {
+            let workers: Vec<WorkerSpec> = (0..n).map(|w| spec(w)).collect();
+            let total_speed: f64 = workers.iter().map(|w| w.speed).sum();
+            let frame = steady_frame(workload, &workers, network, PACKAGES_PER_WORKER, FRAMES);
+            let speedup = one.seconds / frame.seconds;
+            println!(
+                "| {n} | {:.3} | {:.2} | {:.0} % | {:.1} % |",
+                frame.seconds,
+                speedup,
+                100.0 * speedup / total_speed,
+                100.0 * frame.imbalance
+            );
+            points.push((n as f64, speedup, frame.imbalance));
+        }
+        curves.push((name.to_string(), points));
+    }
+    let measured_points: Vec<(f64, f64)> = runs
+        .iter()
+        .filter(|r| r.ranks > 1)
+        .map(|r| ((r.ranks - 1) as f64, runs[1].refine_seconds / r.refine_seconds))
+        .collect();
+    let chart = dir.join("figure9.svg");
+    draw(&chart, &curves, &measured_points).expect("chart drawn");
+    println!();
+    println!("chart: {}", chart.display());
+}
+
+type Curve = (String, Vec<(f64, f64, f64)>);
+
+fn draw(
+    path: &std::path::Path,
+    curves: &[Curve],
+    measured: &[(f64, f64)],
+) -> Result<(), Box<dyn std::error::Error>> {
+    let root = SVGBackend::new(path, (1000, 420)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let (left, right) = root.split_horizontally(560);
+    let colors = [BLUE, RED, GREEN, MAGENTA];
+    let mut speed = ChartBuilder::on(&left)
+        .caption("(a) speed-up", ("sans-serif", 18))
+        .margin(12)
+        .x_label_area_size(32)
+        .y_label_area_size(40)
+        .build_cartesian_2d(0f64..33f64, 0f64..33f64)?;
+    speed
+        .configure_mesh()
+        .x_desc("workers")
+        .y_desc("speed-up")
+        .draw()?;
+    speed
+        .draw_series(LineSeries::new([(0.0, 0.0), (32.0, 32.0)], BLACK.mix(0.3)))?
+        .label("ideal")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLACK.mix(0.3)));
+    for (i, (name, points)) in curves.iter().enumerate() {
+        let color = colors[i % colors.len()];
+        speed
+            .draw_series(LineSeries::new(points.iter().map(|p| (p.0, p.1)), color))?
+            .label(name.as_str())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color));
+    }
+    speed
+        .draw_series(
+            measured
+                .iter()
+                .map(|&(x, y)| Circle::new((x, y), 5, BLACK.filled())),
+        )?
+        .label("measured (MPI, this machine)")
+        .legend(|(x, y)| Circle::new((x + 9, y), 4, BLACK.filled()));
+    speed
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperLeft)
+        .background_style(WHITE.mix(0.9))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 11))
+        .draw()?;
+    let mut imbalance = ChartBuilder::on(&right)
+        .caption("(b) load imbalance", ("sans-serif", 18))
+        .margin(12)
+        .x_label_area_size(32)
+        .y_label_area_size(40)
+        .build_cartesian_2d(0f64..33f64, 0f64..30f64)?;
+    imbalance
+        .configure_mesh()
+        .x_desc("workers")
+        .y_desc("imbalance %")
+        .draw()?;
+    for (i, (_, points)) in curves.iter().enumerate() {
+        let color = colors[i % colors.len()];
+        imbalance.draw_series(LineSeries::new(
+            points.iter().map(|p| (p.0, 100.0 * p.2)),
+            color,
+        ))?;
+    }
+    root.present()?;
+    Ok(())
+}
