@@ -146,9 +146,21 @@ pub trait TreeRecorder {
     /// The shadow ray towards light `light`, from a surface whose radiance reaches the path's
     /// start with `weight`, was blocked or not.
     fn shadow(&mut self, light: usize, occluded: bool, weight: f32);
-    /// The path read texture `texture` at `uv` (an unlit or diffuse surface's colour): the
-    /// path's radiance holds `coefficient` × the texel, linearly.
-    fn texture(&mut self, _texture: usize, _uv: Vec2, _coefficient: Vec3) {}
+    /// The path read a texture (an unlit or diffuse surface's colour).
+    fn texture(&mut self, _read: &TextureHit) {}
+}
+
+/// A texture read on a path: the path's radiance holds `coefficient` × the texel of `texture`
+/// at `uv`, linearly.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TextureHit {
+    pub texture: usize,
+    pub uv: Vec2,
+    pub coefficient: Vec3,
+    /// Path length from the path's start to the textured point.
+    pub distance: f32,
+    /// The textured surface's geometric normal there.
+    pub normal: Vec3,
 }
 
 /// Why a closest-hit ray was traced.
@@ -161,24 +173,36 @@ pub enum Branch {
     Through = 4,
 }
 
-/// One ray of a path: why it was traced, and the factor its radiance is scaled by on the way
-/// to the path's start (1 for a primary ray; the Fresnel terms' product after bounces).
+/// One ray of a path: why it was traced, the factor its radiance is scaled by on the way to
+/// the path's start (1 for a primary ray; the Fresnel terms' product after bounces), and how
+/// far along the path its origin is.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Step {
     pub kind: Branch,
     pub throughput: Vec3,
+    pub distance: f32,
 }
 
 impl Step {
     const PRIMARY: Step = Step {
         kind: Branch::Primary,
         throughput: Vec3::ONE,
+        distance: 0.0,
     };
+
+    /// The same ray, its end `t` further along.
+    fn advanced(self, t: f32) -> Step {
+        Step {
+            distance: self.distance + t,
+            ..self
+        }
+    }
 
     fn child(self, kind: Branch, factor: Vec3) -> Step {
         Step {
             kind,
             throughput: self.throughput * factor,
+            distance: self.distance,
         }
     }
 
@@ -311,6 +335,8 @@ impl Tracer<'_> {
     ) -> Vec3 {
         let scene = self.scene;
         tree.ray(step, Some(hit.mesh));
+        // Children start at this hit.
+        let step = step.advanced(hit.t);
         let sp = surface_point(scene, ray, hit);
         let material = &scene.materials[sp.material];
         let base = || {
@@ -323,7 +349,13 @@ impl Tracer<'_> {
         match material.kind {
             MaterialKind::Unlit => {
                 if let Some(texture) = material.texture {
-                    tree.texture(texture, sp.uv, step.throughput * material.color);
+                    tree.texture(&TextureHit {
+                        texture,
+                        uv: sp.uv,
+                        coefficient: step.throughput * material.color,
+                        distance: step.distance,
+                        normal: sp.ng,
+                    });
                 }
                 base()
             }
@@ -331,7 +363,13 @@ impl Tracer<'_> {
                 // Lambert is linear in the albedo: the light it receives, times the albedo.
                 let received = self.diffuse_recorded(&sp, Vec3::ONE, step.weight(), tree);
                 if let Some(texture) = material.texture {
-                    tree.texture(texture, sp.uv, step.throughput * material.color * received);
+                    tree.texture(&TextureHit {
+                        texture,
+                        uv: sp.uv,
+                        coefficient: step.throughput * material.color * received,
+                        distance: step.distance,
+                        normal: sp.ng,
+                    });
                 }
                 base() * received
             }

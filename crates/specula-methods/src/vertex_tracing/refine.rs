@@ -19,7 +19,7 @@ use std::time::Instant;
 use glam::{Vec2, Vec3};
 use specula_scene::{Camera, Scene};
 use specula_trace::reference::{
-    pixel_radiance, rays_traced_on_this_thread, RayTree, Step, Tracer, TreeRecorder,
+    pixel_radiance, rays_traced_on_this_thread, RayTree, Step, TextureHit, Tracer, TreeRecorder,
 };
 use specula_trace::{Hit, Ray, SceneAccel};
 
@@ -349,14 +349,20 @@ fn differ(a: &Vertex, b: &Vertex, inputs: &FrameInputs) -> bool {
         // the rest of the colour and each read's coefficient, not the texels.
         return display_difference(a.smooth, b.smooth) > epsilon
             || (0..a.path.read_count)
-                .any(|i| display_difference(a.path.reads[i].2, b.path.reads[i].2) > epsilon);
+                .any(|i| {
+                    let (ra, rb) = (&a.path.reads[i].hit, &b.path.reads[i].hit);
+                    // A crease of the textured surface (a floor meeting a wall in one mesh)
+                    // bends the texture coordinates' map: split there too.
+                    display_difference(ra.coefficient, rb.coefficient) > epsilon
+                        || ra.normal.dot(rb.normal) < CREASE_COSINE
+                });
     }
     if display_difference(a.color, b.color) > epsilon {
         return true;
     }
     let reads = a.path.read_count.min(b.path.read_count);
     (0..reads).any(|i| {
-        let ((texture, uv_a, _), (_, uv_b, _)) = (a.path.reads[i], b.path.reads[i]);
+        let (texture, uv_a, uv_b) = (a.path.reads[i].hit.texture, a.path.reads[i].hit.uv, b.path.reads[i].hit.uv);
         let texture = &inputs.scene.textures[texture];
         let texels = ((uv_b - uv_a) * Vec2::new(texture.width as f32, texture.height as f32))
             .abs()
@@ -406,16 +412,25 @@ impl PackageCounters {
 
 /// The texture reads of a path kept for the texture test (the first ones, in path order).
 const TEXTURE_READS: usize = 2;
+/// Ends whose textured surfaces' normals differ by more than about 8° split their edge.
+const CREASE_COSINE: f32 = 0.99;
 /// The most texture samples one edge's texture test takes.
 const TEXTURE_TEST_SAMPLES: f32 = 64.0;
+
+/// A texture read of a vertex's path.
+#[derive(Clone, Copy, Debug, Default)]
+struct TextureRead {
+    hit: TextureHit,
+    /// The view depth of the point that far along the primary ray (the textured point's
+    /// virtual image): what perspective-correct interpolation of `uv` divides by.
+    virtual_depth: f32,
+}
 
 /// What a vertex keeps of its path: the ray tree, and where it read textures.
 #[derive(Clone, Copy, Debug)]
 struct PathRecord {
     tree: RayTree,
-    /// (texture, texture coordinates, coefficient): the path's radiance holds coefficient ×
-    /// the texel there.
-    reads: [(usize, Vec2, Vec3); TEXTURE_READS],
+    reads: [TextureRead; TEXTURE_READS],
     read_count: usize,
 }
 
@@ -423,7 +438,7 @@ impl PathRecord {
     fn new(min_weight: f32) -> PathRecord {
         PathRecord {
             tree: RayTree::with_min_weight(min_weight),
-            reads: [(0, Vec2::ZERO, Vec3::ZERO); TEXTURE_READS],
+            reads: [TextureRead::default(); TEXTURE_READS],
             read_count: 0,
         }
     }
@@ -438,9 +453,14 @@ impl TreeRecorder for PathRecord {
         self.tree.shadow(light, occluded, weight);
     }
 
-    fn texture(&mut self, texture: usize, uv: Vec2, coefficient: Vec3) {
-        if coefficient.max_element() >= self.tree.min_weight && self.read_count < TEXTURE_READS {
-            self.reads[self.read_count] = (texture, uv, coefficient);
+    fn texture(&mut self, read: &TextureHit) {
+        if read.coefficient.max_element() >= self.tree.min_weight
+            && self.read_count < TEXTURE_READS
+        {
+            self.reads[self.read_count] = TextureRead {
+                hit: *read,
+                virtual_depth: 0.0,
+            };
             self.read_count += 1;
         }
     }
@@ -587,8 +607,18 @@ fn trace_vertex(inputs: &FrameInputs, mesh: u32, host: u32, p_world: Vec3) -> Ve
     };
     let textured: Vec3 = path.reads[..path.read_count]
         .iter()
-        .map(|&(texture, uv, coefficient)| coefficient * inputs.scene.textures[texture].sample(uv))
+        .map(|r| r.hit.coefficient * inputs.scene.textures[r.hit.texture].sample(r.hit.uv))
         .sum();
+    // Seen along the primary ray, the textured point is at its path length: its view depth
+    // is that length × the ray's cosine to the view axis.
+    let cosine = if to_vertex.length() > 0.0 {
+        depth / to_vertex.length()
+    } else {
+        1.0
+    };
+    for read in &mut path.reads[..path.read_count] {
+        read.virtual_depth = read.hit.distance * cosine;
+    }
     Vertex {
         p_world,
         screen,
@@ -1097,12 +1127,20 @@ impl Package {
             return blend(&|c| c.color);
         }
         let mut color = blend(&|c| c.smooth);
+        let at = [l0, l1, l2];
         for read in 0..corners[0].path.read_count {
-            let texture = &inputs.scene.textures[corners[0].path.reads[read].0];
+            let texture = &inputs.scene.textures[corners[0].path.reads[read].hit.texture];
+            // Texture coordinates are perspective-correct for the textured surface's virtual
+            // image (a floor seen through a sheet is deeper than the sheet).
+            let mut uv_weights = [0.0f32; 3];
+            for i in 0..3 {
+                uv_weights[i] = at[i] / corners[i].path.reads[read].virtual_depth.max(1e-12);
+            }
+            let uv_total: f32 = uv_weights.iter().sum::<f32>().max(f32::MIN_POSITIVE);
             let uv: Vec2 = (0..3)
-                .map(|i| corners[i].path.reads[read].1 * weights[i])
+                .map(|i| corners[i].path.reads[read].hit.uv * (uv_weights[i] / uv_total))
                 .sum();
-            color += blend(&|c| c.path.reads[read].2) * texture.sample(uv);
+            color += blend(&|c| c.path.reads[read].hit.coefficient) * texture.sample(uv);
         }
         color
     }
