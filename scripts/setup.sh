@@ -8,8 +8,11 @@
 #   libxkbcommon-x11-0 libxcursor1 libxrandr2 libxi6 libx11-xcb1
 #                        the X11 libraries winit loads at run time for the viewer's window
 #   assimp-testmodels    a public corpus of real and malformed model files the loader tests run
+#   openmpi-bin libopenmpi-dev libclang-dev
+#                        OpenMPI (mpirun, mpicc, headers) and libclang for the `mpi` crate's
+#                        bindings: distributed vertex tracing (specula-cli's `mpi` feature)
 set -euo pipefail
-packages=(g++ mesa-vulkan-drivers libvulkan1 xvfb xauth libxkbcommon-x11-0 libxcursor1 libxrandr2 libxi6 libx11-xcb1 assimp-testmodels)
+packages=(g++ mesa-vulkan-drivers libvulkan1 xvfb xauth libxkbcommon-x11-0 libxcursor1 libxrandr2 libxi6 libx11-xcb1 assimp-testmodels openmpi-bin libopenmpi-dev libclang-dev)
 missing=()
 for p in "${packages[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")

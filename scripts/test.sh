@@ -5,4 +5,5 @@ cd "$(dirname "$0")/.."
 scripts/setup.sh
 # Mesa prints a harmless "XDG_RUNTIME_DIR is invalid" line per device without this.
 export NODEVICE_SELECT=1
-cargo test --workspace "$@"
+# With MPI: the distributed vertex-tracing tests run mpirun on loopback.
+cargo test --workspace --features specula-cli/mpi "$@"

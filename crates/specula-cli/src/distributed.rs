@@ -136,8 +136,8 @@ fn poll(world: &mpi::topology::SimpleCommunicator) -> Result<Option<(usize, Mess
     };
     let from = probed.1.source_rank() as usize;
     let (bytes, _) = probed.matched_receive_vec::<u8>();
-    let decoded = Message::decode(&bytes)
-        .with_context(|| format!("a malformed message from rank {from}"))?;
+    let decoded =
+        Message::decode(&bytes).with_context(|| format!("a malformed message from rank {from}"))?;
     Ok(Some((from, decoded)))
 }
 
@@ -203,8 +203,7 @@ fn master(
                 let remaining = balancer.take_queue();
                 for range in remaining {
                     let mut package = setup.package(range.clone());
-                    let inputs =
-                        setup.inputs(live, &camera, options.settings, options.max_depth);
+                    let inputs = setup.inputs(live, &camera, options.settings, options.max_depth);
                     package.run(&inputs, None);
                     let pixels = package.take_pixels(&inputs);
                     composite(&mut image, &pixels);
@@ -221,12 +220,15 @@ fn master(
                 break;
             }
             match poll(world)? {
-                Some((from, Message::Result {
-                    frame: f,
-                    id,
-                    counters,
-                    pixels,
-                })) if f == frame && from >= 1 => {
+                Some((
+                    from,
+                    Message::Result {
+                        frame: f,
+                        id,
+                        counters,
+                        pixels,
+                    },
+                )) if f == frame && from >= 1 => {
                     let w = from - 1;
                     if let Some(done) = balancer.finished(w, id, counters.seconds) {
                         sent_at.remove(&(w, id));
@@ -240,9 +242,9 @@ fn master(
                         composite(&mut image, &pixels);
                         packages += 1;
                         samples += counters.vertex_rays + counters.filled_pixels;
-                        result_bytes += specula_methods::vertex_tracing::wire::result_bytes(
-                            pixels.len(),
-                        ) as u64;
+                        result_bytes +=
+                            specula_methods::vertex_tracing::wire::result_bytes(pixels.len())
+                                as u64;
                         if let Some(p) = balancer.next_package(w, count) {
                             send_package(world, w, frame, &p);
                             sent_at.insert((w, p.id), Instant::now());

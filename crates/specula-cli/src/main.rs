@@ -440,7 +440,16 @@ fn run(cli: Cli) -> Result<()> {
             let height = height_for(&scene, width, height);
             let info = specula_methods::method(&method)?;
             if distributed.distributed {
-                return render_distributed(scene, &method, width, height, &params, output, exr, &distributed);
+                return render_distributed(
+                    scene,
+                    &method,
+                    width,
+                    height,
+                    &params,
+                    output,
+                    exr,
+                    &distributed,
+                );
             }
             let mut technique = (info.create)();
             if info.exact {
@@ -454,7 +463,9 @@ fn run(cli: Cli) -> Result<()> {
             }
             specula_methods::apply_parameters(technique.as_mut(), &params)?;
             if sequence.is_some() && !info.progressive {
-                anyhow::bail!("--sequence needs a progressive method; {method} draws each frame at once");
+                anyhow::bail!(
+                    "--sequence needs a progressive method; {method} draws each frame at once"
+                );
             }
             if sequence.is_some() && technique.parameter("budget_ms") == "0" {
                 specula_methods::apply_setting(technique.as_mut(), "budget_ms=100")?;
@@ -469,7 +480,9 @@ fn run(cli: Cli) -> Result<()> {
             technique.prepare(&ctx, &live)?;
             let start = Instant::now();
             let frame = match &sequence {
-                Some(dir) => write_sequence(technique.as_mut(), &ctx, &live, width, height, dir, &bar)?,
+                Some(dir) => {
+                    write_sequence(technique.as_mut(), &ctx, &live, width, height, dir, &bar)?
+                }
                 None => technique.render(&ctx, &live, &scene.camera, width, height)?,
             };
             let image = frame.image(&ctx)?;
@@ -753,7 +766,9 @@ fn write_sequence(
     bar: &ProgressBar,
 ) -> Result<specula_methods::Frame> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    let mut csv = String::from("step,image,milliseconds,total milliseconds,rays traced,shadow rays,samples\n");
+    let mut csv = String::from(
+        "step,image,milliseconds,total milliseconds,rays traced,shadow rays,samples\n",
+    );
     let counter = |frame: &specula_methods::Frame, name: &str| {
         frame
             .counters

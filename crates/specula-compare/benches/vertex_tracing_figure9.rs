@@ -38,8 +38,12 @@ struct Run {
 
 fn load(dir: &std::path::Path, ranks: usize) -> Run {
     let path = dir.join(format!("ranks-{ranks}.json"));
-    let text = std::fs::read_to_string(&path)
-        .unwrap_or_else(|e| panic!("{}: {e} (run scripts/vertex-tracing-figure9.sh)", path.display()));
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| {
+        panic!(
+            "{}: {e} (run scripts/vertex-tracing-figure9.sh)",
+            path.display()
+        )
+    });
     let report: Value = serde_json::from_str(&text).expect("a report");
     let frame = report["frames"]
         .as_array()
@@ -77,8 +81,7 @@ fn main() {
     // the 1-rank run's single package.
     let one_package: f64 = runs[0].packages.iter().map(|p| p.2).sum();
     let cut: f64 = runs[1].packages.iter().map(|p| p.2).sum();
-    let per_package =
-        ((cut - one_package) / (runs[1].packages.len().max(2) - 1) as f64).max(0.0);
+    let per_package = ((cut - one_package) / (runs[1].packages.len().max(2) - 1) as f64).max(0.0);
 
     println!("### Measured on this machine, and the simulation fed with each run's package costs");
     println!();
@@ -134,7 +137,12 @@ fn main() {
         bits_per_second: mbit * 1e6,
         latency_seconds: 0.2e-3,
     };
-    type Scenario = (&'static str, Workload, Box<dyn Fn(usize) -> WorkerSpec>, f64);
+    type Scenario = (
+        &'static str,
+        Workload,
+        Box<dyn Fn(usize) -> WorkerSpec>,
+        f64,
+    );
     let scenarios: Vec<Scenario> = vec![
         (
             "measured frame, 1 Gbit/s links",
@@ -180,7 +188,7 @@ fn main() {
         println!("|---|---|---|---|---|");
         let mut points = Vec::new();
         for &n in &counts {
-            let workers: Vec<WorkerSpec> = (0..n).map(|w| spec(w)).collect();
+            let workers: Vec<WorkerSpec> = (0..n).map(spec).collect();
             let total_speed: f64 = workers.iter().map(|w| w.speed).sum();
             let frame = steady_frame(workload, &workers, network, PACKAGES_PER_WORKER, FRAMES);
             let speedup = one.seconds / frame.seconds;
@@ -198,7 +206,12 @@ fn main() {
     let measured_points: Vec<(f64, f64)> = runs
         .iter()
         .filter(|r| r.ranks > 1)
-        .map(|r| ((r.ranks - 1) as f64, runs[1].refine_seconds / r.refine_seconds))
+        .map(|r| {
+            (
+                (r.ranks - 1) as f64,
+                runs[1].refine_seconds / r.refine_seconds,
+            )
+        })
         .collect();
     let chart = dir.join("figure9.svg");
     draw(&chart, &curves, &measured_points).expect("chart drawn");

@@ -523,7 +523,8 @@ impl Technique for VertexTracing {
             .packages
             .par_iter_mut()
             .map(|package| {
-                if !package.is_done() && !(preview_only && package.has_preview()) {
+                let skip = package.is_done() || (preview_only && package.has_preview());
+                if !skip {
                     // A fresh progressive frame shows its preview before any refinement.
                     let until = if preview_only {
                         Some(Instant::now())

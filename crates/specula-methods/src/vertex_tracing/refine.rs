@@ -348,21 +348,24 @@ fn differ(a: &Vertex, b: &Vertex, inputs: &FrameInputs) -> bool {
         // Textures are read per pixel at interpolated coordinates: what must vary gently is
         // the rest of the colour and each read's coefficient, not the texels.
         return display_difference(a.smooth, b.smooth) > epsilon
-            || (0..a.path.read_count)
-                .any(|i| {
-                    let (ra, rb) = (&a.path.reads[i].hit, &b.path.reads[i].hit);
-                    // A crease of the textured surface (a floor meeting a wall in one mesh)
-                    // bends the texture coordinates' map: split there too.
-                    display_difference(ra.coefficient, rb.coefficient) > epsilon
-                        || ra.normal.dot(rb.normal) < CREASE_COSINE
-                });
+            || (0..a.path.read_count).any(|i| {
+                let (ra, rb) = (&a.path.reads[i].hit, &b.path.reads[i].hit);
+                // A crease of the textured surface (a floor meeting a wall in one mesh)
+                // bends the texture coordinates' map: split there too.
+                display_difference(ra.coefficient, rb.coefficient) > epsilon
+                    || ra.normal.dot(rb.normal) < CREASE_COSINE
+            });
     }
     if display_difference(a.color, b.color) > epsilon {
         return true;
     }
     let reads = a.path.read_count.min(b.path.read_count);
     (0..reads).any(|i| {
-        let (texture, uv_a, uv_b) = (a.path.reads[i].hit.texture, a.path.reads[i].hit.uv, b.path.reads[i].hit.uv);
+        let (texture, uv_a, uv_b) = (
+            a.path.reads[i].hit.texture,
+            a.path.reads[i].hit.uv,
+            b.path.reads[i].hit.uv,
+        );
         let texture = &inputs.scene.textures[texture];
         let texels = ((uv_b - uv_a) * Vec2::new(texture.width as f32, texture.height as f32))
             .abs()
@@ -454,8 +457,7 @@ impl TreeRecorder for PathRecord {
     }
 
     fn texture(&mut self, read: &TextureHit) {
-        if read.coefficient.max_element() >= self.tree.min_weight
-            && self.read_count < TEXTURE_READS
+        if read.coefficient.max_element() >= self.tree.min_weight && self.read_count < TEXTURE_READS
         {
             self.reads[self.read_count] = TextureRead {
                 hit: *read,
@@ -630,6 +632,9 @@ fn trace_vertex(inputs: &FrameInputs, mesh: u32, host: u32, p_world: Vec3) -> Ve
     }
 }
 
+/// (mesh, vertex), its sample, and the (closest-hit, shadow) rays it took.
+type TracedOriginal = ((u32, u32), Vertex, (u64, u64));
+
 /// The original vertices of a frame's active triangles, each traced once for every package
 /// (a process refining all packages itself shares them; an MPI worker traces its own).
 #[derive(Default)]
@@ -651,7 +656,7 @@ impl OriginalSamples {
             .collect();
         keys.sort_unstable();
         keys.dedup();
-        let traced: Vec<((u32, u32), Vertex, (u64, u64))> = keys
+        let traced: Vec<TracedOriginal> = keys
             .par_iter()
             .map(|&(mesh, vertex)| {
                 let before = rays_traced_on_this_thread();

@@ -263,7 +263,12 @@ mod tests {
         let one = steady_frame(&work, &fast(1, 1.0), NETWORK, 4, 2);
         assert!((one.seconds - 8.0).abs() < 1e-4, "{}", one.seconds);
         let four = steady_frame(&work, &fast(4, 1.0), NETWORK, 4, 2);
-        assert!((four.seconds - 2.0).abs() < 0.05, "{} {:?}", four.seconds, four.busy);
+        assert!(
+            (four.seconds - 2.0).abs() < 0.05,
+            "{} {:?}",
+            four.seconds,
+            four.busy
+        );
         assert!(four.imbalance < 0.02);
     }
 
