@@ -30,10 +30,16 @@ fn refined_and_filled_is_close_to_the_reference_with_either_id_buffer() {
     assert!(refined < 0.006, "{refined}");
     let preview = flip(&cpu, &["visibility=cpu", "refine=false", "fill=false"]);
     eprintln!("preview: {preview:.4}");
-    assert!(preview > 0.03 && refined < 0.15 * preview, "{preview} vs {refined}");
+    assert!(
+        preview > 0.03 && refined < 0.15 * preview,
+        "{preview} vs {refined}"
+    );
     let unfilled = flip(&cpu, &["visibility=cpu", "fill=false"]);
     eprintln!("without filling: {unfilled:.4}");
-    assert!(unfilled < 0.04 && refined < 0.3 * unfilled, "{unfilled} vs {refined}");
+    assert!(
+        unfilled < 0.04 && refined < 0.3 * unfilled,
+        "{unfilled} vs {refined}"
+    );
     let Some(gpu) = specula_methods::test_context("vertex-tracing with the GPU ID buffer") else {
         return;
     };

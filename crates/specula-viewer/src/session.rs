@@ -392,6 +392,64 @@ mod tests {
     }
 
     #[test]
+    fn vertex_tracing_refines_while_nothing_moves_and_restarts_from_the_preview_after_a_move() {
+        let scene = specula_scene::load("truck-cover").unwrap();
+        let mut session =
+            Session::new(Context::default(), scene, "truck-cover", "vertex-tracing").unwrap();
+        // The viewer's own budget, cut to 1 ms so that refinement takes several frames.
+        assert_eq!(
+            session.technique().unwrap().parameter("budget_ms"),
+            REFERENCE_BUDGET_MS.to_string()
+        );
+        session.set_param("budget_ms=1").unwrap();
+        let counter = |frame: &Frame, name: &str| {
+            frame
+                .counters
+                .iter()
+                .find(|(n, _)| n == name)
+                .map(|(_, v)| *v)
+                .unwrap()
+        };
+        let preview = session.render_technique(192, 144).unwrap();
+        assert!(!preview.converged);
+        assert_eq!(
+            counter(&preview, "edges split"),
+            0,
+            "first the Gouraud preview"
+        );
+        let mut frames = 1;
+        let mut split = 0;
+        let converged = loop {
+            let frame = session.render_technique(192, 144).unwrap();
+            frames += 1;
+            assert!(frame.converged || counter(&frame, "edges split") >= split);
+            split = counter(&frame, "edges split");
+            if frame.converged {
+                break frame;
+            }
+            assert!(frames < 10_000);
+        };
+        assert!(
+            frames > 2,
+            "refinement shown over several frames ({frames})"
+        );
+        assert!(counter(&converged, "edges split") > 0);
+        // A converged view stays as it is.
+        let again = session.render_technique(192, 144).unwrap();
+        assert!(again.converged);
+        assert_eq!(
+            again.image(&session.ctx).unwrap().pixels,
+            converged.image(&session.ctx).unwrap().pixels
+        );
+        // Anything that moves starts over from the preview.
+        let dial = session.object("dial").unwrap();
+        session.translate(dial, Vec3::new(0.0, 0.01, 0.0)).unwrap();
+        let restarted = session.render_technique(192, 144).unwrap();
+        assert!(!restarted.converged);
+        assert_eq!(counter(&restarted, "edges split"), 0);
+    }
+
+    #[test]
     fn a_scene_that_fails_to_load_keeps_the_previous_one() {
         let mut session = cpu_session("reference");
         let error = session.load("/nowhere/scene.toml").unwrap_err().to_string();
