@@ -24,13 +24,15 @@ const LOOPBACK: WorkerSpec = WorkerSpec {
     bits_per_second: 10e9,
     latency_seconds: 20e-6,
 };
-const PACKAGES_PER_WORKER: usize = 4;
+const PACKAGES_PER_WORKER: usize = 2;
 /// Frames simulated before the reported one (the balancer learns speeds after each).
 const FRAMES: usize = 4;
 
 struct Run {
     ranks: usize,
     refine_seconds: f64,
+    /// Vertex rays and filled pixels of the frame, all packages together.
+    samples: f64,
     triangles: usize,
     /// (start, end, seconds, pixels) of the last frame's packages.
     packages: Vec<(usize, usize, f64, usize)>,
@@ -65,6 +67,7 @@ fn load(dir: &std::path::Path, ranks: usize) -> Run {
     Run {
         ranks,
         refine_seconds: frame["refine_seconds"].as_f64().unwrap(),
+        samples: frame["samples"].as_f64().unwrap(),
         triangles: frame["active_triangles"].as_u64().unwrap() as usize,
         packages,
     }
@@ -77,11 +80,21 @@ fn main() {
         .map(PathBuf::from)
         .unwrap_or_else(|| PathBuf::from("target/figure9"));
     let runs: Vec<Run> = (1..=3).map(|r| load(&dir, r)).collect();
-    // A package's fixed cost: what cutting the frame into the 2-rank run's packages added to
-    // the 1-rank run's single package.
-    let one_package: f64 = runs[0].packages.iter().map(|p| p.2).sum();
-    let cut: f64 = runs[1].packages.iter().map(|p| p.2).sum();
-    let per_package = ((cut - one_package) / (runs[1].packages.len().max(2) - 1) as f64).max(0.0);
+    // A package's fixed cost: the vertices on its borders, traced again by its neighbours.
+    // Counted, not timed: the samples the 3-rank run's packages took beyond the 1-rank run's
+    // single package, per extra package, at the 1-rank run's seconds per sample.
+    let seconds_per_sample = runs[0].packages.iter().map(|p| p.2).sum::<f64>() / runs[0].samples;
+    let extra_samples = (runs[2].samples - runs[0].samples).max(0.0);
+    let extra_packages = (runs[2].packages.len() as f64 - runs[0].packages.len() as f64).max(1.0);
+    let per_package = extra_samples / extra_packages * seconds_per_sample;
+    println!(
+        "fixed cost per package: {:.0} samples ({:.3} ms), from {} against {} samples",
+        extra_samples / extra_packages,
+        per_package * 1e3,
+        runs[2].samples,
+        runs[0].samples
+    );
+    println!();
 
     println!("### Measured on this machine, and the simulation fed with each run's package costs");
     println!();
@@ -143,6 +156,10 @@ fn main() {
         Box<dyn Fn(usize) -> WorkerSpec>,
         f64,
     );
+    let free_packages = Workload {
+        per_package_seconds: 0.0,
+        ..scaled.clone()
+    };
     let scenarios: Vec<Scenario> = vec![
         (
             "measured frame, 1 Gbit/s links",
@@ -155,6 +172,18 @@ fn main() {
             scaled.clone(),
             Box::new(move |_| link(100.0)),
             100e6,
+        ),
+        (
+            "as above, packages without a fixed cost (what the border vertices cost)",
+            free_packages,
+            Box::new(move |_| link(100.0)),
+            100e6,
+        ),
+        (
+            "paper-sized frame, 10 Gbit/s links (what the network costs)",
+            scaled.clone(),
+            Box::new(move |_| link(10000.0)),
+            10e9,
         ),
         (
             "paper-sized frame, mixed 10 and 100 Mbit/s links",
@@ -229,7 +258,7 @@ fn draw(
     let root = SVGBackend::new(path, (1000, 420)).into_drawing_area();
     root.fill(&WHITE)?;
     let (left, right) = root.split_horizontally(560);
-    let colors = [BLUE, RED, GREEN, MAGENTA];
+    let colors = [BLUE, RED, CYAN, RGBColor(120, 120, 120), GREEN, MAGENTA];
     let mut speed = ChartBuilder::on(&left)
         .caption("(a) speed-up", ("sans-serif", 18))
         .margin(12)
