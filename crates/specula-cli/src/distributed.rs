@@ -26,7 +26,7 @@ use mpi::point_to_point::{Destination, MatchedReceiveVec, Source};
 use mpi::raw::AsRaw;
 use mpi::topology::Communicator;
 use specula_methods::vertex_tracing::balance::{imbalance, Balancer, WorkerFrame};
-use specula_methods::vertex_tracing::refine::{PackageCounters, RefineSettings};
+use specula_methods::vertex_tracing::refine::{OriginalSamples, PackageCounters, RefineSettings};
 use specula_methods::vertex_tracing::wire::Message;
 use specula_methods::vertex_tracing::FrameSetup;
 use specula_methods::LiveScene;
@@ -377,6 +377,9 @@ fn worker(
 ) -> Result<bool> {
     let rank = world.rank() as usize;
     let mut view: Option<(Camera, FrameSetup)> = None;
+    // The original vertices this worker traced in the frame so far: its packages come from one
+    // region of the mesh, one after another, so their borders are traced once.
+    let mut traced = OriginalSamples::default();
     let mut received = 0u32;
     loop {
         let Some((from, message)) = poll(world)? else {
@@ -402,6 +405,7 @@ fn worker(
                     options.max_depth,
                 );
                 view = Some((camera, setup));
+                traced = OriginalSamples::default();
             }
             Message::Package {
                 frame,
@@ -425,9 +429,11 @@ fn worker(
                 }
                 let clock = Instant::now();
                 let mut package = setup.package(start as usize..end as usize);
-                let inputs = setup.inputs(live, camera, options.settings, options.max_depth);
+                let mut inputs = setup.inputs(live, camera, options.settings, options.max_depth);
+                inputs.originals = Some(&traced);
                 package.run(&inputs, None);
                 let pixels = package.take_pixels(&inputs);
+                traced.absorb(&package);
                 if let Some((slow_rank, factor)) = options.slow {
                     if slow_rank == rank {
                         std::thread::sleep(clock.elapsed().mul_f64((factor - 1.0).max(0.0)));

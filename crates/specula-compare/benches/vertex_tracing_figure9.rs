@@ -24,7 +24,7 @@ const LOOPBACK: WorkerSpec = WorkerSpec {
     bits_per_second: 10e9,
     latency_seconds: 20e-6,
 };
-const PACKAGES_PER_WORKER: usize = 2;
+const PACKAGES_PER_WORKER: usize = 4;
 /// Frames simulated before the reported one (the balancer learns speeds after each).
 const FRAMES: usize = 4;
 
@@ -33,12 +33,15 @@ struct Run {
     refine_seconds: f64,
     /// Vertex rays and filled pixels of the frame, all packages together.
     samples: f64,
+    /// Packages that did not continue their worker's previous one.
+    region_starts: usize,
     triangles: usize,
     /// (start, end, seconds, pixels) of the last frame's packages.
     packages: Vec<(usize, usize, f64, usize)>,
 }
 
-fn load(dir: &std::path::Path, ranks: usize) -> Run {
+/// Every frame of a run but the first (whose package sizes the balancer had not yet measured).
+fn load(dir: &std::path::Path, ranks: usize) -> Vec<Run> {
     let path = dir.join(format!("ranks-{ranks}.json"));
     let text = std::fs::read_to_string(&path).unwrap_or_else(|e| {
         panic!(
@@ -47,30 +50,49 @@ fn load(dir: &std::path::Path, ranks: usize) -> Run {
         )
     });
     let report: Value = serde_json::from_str(&text).expect("a report");
-    let frame = report["frames"]
-        .as_array()
-        .and_then(|f| f.last())
-        .expect("a frame");
-    let packages = frame["package_records"]
-        .as_array()
-        .expect("package records")
+    let frames = report["frames"].as_array().expect("frames");
+    let skip = usize::from(frames.len() > 1);
+    frames[skip..]
         .iter()
-        .map(|p| {
-            (
-                p["start"].as_u64().unwrap() as usize,
-                p["end"].as_u64().unwrap() as usize,
-                p["seconds"].as_f64().unwrap(),
-                p["pixels"].as_u64().unwrap() as usize,
-            )
+        .map(|frame| {
+            let records = frame["package_records"]
+                .as_array()
+                .expect("package records");
+            let packages = records
+                .iter()
+                .map(|p| {
+                    (
+                        p["start"].as_u64().unwrap() as usize,
+                        p["end"].as_u64().unwrap() as usize,
+                        p["seconds"].as_f64().unwrap(),
+                        p["pixels"].as_u64().unwrap() as usize,
+                    )
+                })
+                .collect();
+            let mut last_end = std::collections::HashMap::new();
+            let mut region_starts = 0;
+            for p in records {
+                let rank = p["rank"].as_u64().unwrap();
+                let (start, end) = (p["start"].as_u64().unwrap(), p["end"].as_u64().unwrap());
+                if last_end.insert(rank, end) != Some(start) {
+                    region_starts += 1;
+                }
+            }
+            Run {
+                region_starts,
+                ranks,
+                refine_seconds: frame["refine_seconds"].as_f64().unwrap(),
+                samples: frame["samples"].as_f64().unwrap(),
+                triangles: frame["active_triangles"].as_u64().unwrap() as usize,
+                packages,
+            }
         })
-        .collect();
-    Run {
-        ranks,
-        refine_seconds: frame["refine_seconds"].as_f64().unwrap(),
-        samples: frame["samples"].as_f64().unwrap(),
-        triangles: frame["active_triangles"].as_u64().unwrap() as usize,
-        packages,
-    }
+        .collect()
+}
+
+fn mean(values: impl Iterator<Item = f64>) -> f64 {
+    let v: Vec<f64> = values.collect();
+    v.iter().sum::<f64>() / v.len().max(1) as f64
 }
 
 fn main() {
@@ -79,57 +101,66 @@ fn main() {
         .find(|a| !a.starts_with("--"))
         .map(PathBuf::from)
         .unwrap_or_else(|| PathBuf::from("target/figure9"));
-    let runs: Vec<Run> = (1..=3).map(|r| load(&dir, r)).collect();
-    // A package's fixed cost: the vertices on its borders, traced again by its neighbours.
-    // Counted, not timed: the samples the 3-rank run's packages took beyond the 1-rank run's
-    // single package, per extra package, at the 1-rank run's seconds per sample.
-    let seconds_per_sample = runs[0].packages.iter().map(|p| p.2).sum::<f64>() / runs[0].samples;
-    let extra_samples = (runs[2].samples - runs[0].samples).max(0.0);
-    let extra_packages = (runs[2].packages.len() as f64 - runs[0].packages.len() as f64).max(1.0);
-    let per_package = extra_samples / extra_packages * seconds_per_sample;
+    let runs: Vec<Vec<Run>> = (1..=3).map(|r| load(&dir, r)).collect();
+    // A package's fixed cost: the vertices on its borders, traced again when it does not
+    // continue its worker's previous package. Counted, not timed: the samples the 3-rank run
+    // took beyond the 1-rank run's single package, per extra such package, at the 1-rank run's
+    // seconds per sample (means over the frames).
+    let seconds_per_sample = mean(
+        runs[0]
+            .iter()
+            .map(|r| r.packages.iter().map(|p| p.2).sum::<f64>() / r.samples),
+    );
+    let extra_samples = (mean(runs[2].iter().map(|r| r.samples))
+        - mean(runs[0].iter().map(|r| r.samples)))
+    .max(0.0);
+    let extra_starts = (mean(runs[2].iter().map(|r| r.region_starts as f64))
+        - mean(runs[0].iter().map(|r| r.region_starts as f64)))
+    .max(1.0);
+    let per_package = extra_samples / extra_starts * seconds_per_sample;
     println!(
-        "fixed cost per package: {:.0} samples ({:.3} ms), from {} against {} samples",
-        extra_samples / extra_packages,
+        "fixed cost of a package that does not continue its worker's last: {:.0} samples ({:.3} ms); {} frames per run after the first",
+        extra_samples / extra_starts,
         per_package * 1e3,
-        runs[2].samples,
-        runs[0].samples
+        runs[0].len()
     );
     println!();
-
-    println!("### Measured on this machine, and the simulation fed with each run's package costs");
+    println!("### Measured on this machine, and the simulation fed with each frame's package costs (means over the frames)");
     println!();
     println!("| ranks | workers | refinement s (measured) | speed-up (measured) | refinement s (simulated) | speed-up (simulated) | difference |");
     println!("|---|---|---|---|---|---|---|");
-    let base_measured = runs[0].refine_seconds;
-    let mut base_simulated = 0.0;
-    for run in &runs {
-        let workers = run.ranks.saturating_sub(1).max(1);
-        let workload = Workload::from_packages(run.triangles, &run.packages, per_package, 0.0);
-        let simulated = if run.ranks == 1 {
-            // The master alone: its one package, no messages.
-            workload.total_seconds() + per_package
-        } else {
-            steady_frame(
-                &workload,
-                &vec![LOOPBACK; workers],
-                Network {
-                    master_bits_per_second: LOOPBACK.bits_per_second,
-                },
-                PACKAGES_PER_WORKER,
-                1,
-            )
-            .seconds
-        };
-        if run.ranks == 1 {
-            base_simulated = simulated;
+    let mut base = (0.0, 0.0);
+    for frames in &runs {
+        let ranks = frames[0].ranks;
+        let workers = ranks.saturating_sub(1).max(1);
+        let simulated = mean(frames.iter().map(|run| {
+            let workload = Workload::from_packages(run.triangles, &run.packages, per_package, 0.0);
+            if ranks == 1 {
+                // The master alone: its one package, no messages.
+                workload.total_seconds() + per_package
+            } else {
+                steady_frame(
+                    &workload,
+                    &vec![LOOPBACK; workers],
+                    Network {
+                        master_bits_per_second: LOOPBACK.bits_per_second,
+                    },
+                    PACKAGES_PER_WORKER,
+                    1,
+                )
+                .seconds
+            }
+        }));
+        let measured = mean(frames.iter().map(|r| r.refine_seconds));
+        if ranks == 1 {
+            base = (measured, simulated);
         }
-        let measured_speedup = base_measured / run.refine_seconds;
-        let simulated_speedup = base_simulated / simulated;
+        let (measured_speedup, simulated_speedup) = (base.0 / measured, base.1 / simulated);
         println!(
             "| {} | {} | {:.4} | {:.2} | {:.4} | {:.2} | {:+.1} % |",
-            run.ranks,
-            if run.ranks == 1 { 0 } else { workers },
-            run.refine_seconds,
+            ranks,
+            if ranks == 1 { 0 } else { workers },
+            measured,
             measured_speedup,
             simulated,
             simulated_speedup,
@@ -137,8 +168,16 @@ fn main() {
         );
     }
 
-    // The extension: the 1-worker run's costs (one process per core, no contention).
-    let measured = Workload::from_packages(runs[1].triangles, &runs[1].packages, per_package, 0.0);
+    // The extension: the 1-worker run's costs (one process per core, no contention), its
+    // frames' per-triangle costs averaged.
+    let frame_workloads: Vec<Workload> = runs[1]
+        .iter()
+        .map(|r| Workload::from_packages(r.triangles, &r.packages, per_package, 0.0))
+        .collect();
+    let mut measured = frame_workloads[0].clone();
+    for (t, seconds) in measured.seconds.iter_mut().enumerate() {
+        *seconds = mean(frame_workloads.iter().map(|w| w.seconds[t]));
+    }
     let paper_scale = 13.2 / measured.total_seconds();
     let scaled = Workload {
         seconds: measured.seconds.iter().map(|s| s * paper_scale).collect(),
@@ -232,13 +271,14 @@ fn main() {
         }
         curves.push((name.to_string(), points));
     }
-    let measured_points: Vec<(f64, f64)> = runs
+    let one_worker = mean(runs[1].iter().map(|r| r.refine_seconds));
+    let measured_points: Vec<(f64, f64)> = runs[1..]
         .iter()
-        .filter(|r| r.ranks > 1)
-        .map(|r| {
+        .map(|frames| {
+            let workers = (frames[0].ranks - 1) as f64;
             (
-                (r.ranks - 1) as f64,
-                runs[1].refine_seconds / r.refine_seconds,
+                workers,
+                one_worker / mean(frames.iter().map(|r| r.refine_seconds)),
             )
         })
         .collect();

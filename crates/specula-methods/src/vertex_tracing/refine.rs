@@ -644,6 +644,17 @@ pub struct OriginalSamples {
 }
 
 impl OriginalSamples {
+    /// Keeps the original-vertex samples `package` traced, for the next packages this
+    /// process refines in the frame (an MPI worker's packages follow one another on the mesh:
+    /// their borders are traced once).
+    pub fn absorb(&mut self, package: &Package) {
+        for (&key, &local) in &package.originals {
+            self.samples
+                .entry(key)
+                .or_insert(package.vertices[local as usize]);
+        }
+    }
+
     pub fn trace(inputs: &FrameInputs, active: &[TriangleId]) -> OriginalSamples {
         use rayon::prelude::*;
         let start = Instant::now();

@@ -4,8 +4,9 @@
 //!
 //! Model: the frame's work is the measured cost of each active triangle (seconds on a worker
 //! of speed 1, from a real run's packages: a package's time spread evenly over its triangles)
-//! and the pixels each returns; a worker of speed s computes a package in Σ cost / s plus a
-//! fixed cost per package (measured), after it has computed the frame's ID buffer itself.
+//! and the pixels each returns; a worker of speed s computes a package in Σ cost / s, plus a
+//! fixed cost (measured) when the package does not continue the worker's previous one (its
+//! border vertices are traced again), after it has computed the frame's ID buffer itself.
 //! Messages take the link's latency plus their bytes ([`super::wire`]'s sizes) over the
 //! bandwidth; results also cross the master's link, one at a time (it is shared). The master
 //! answers a result at once with the worker's next package, as the MPI master does.
@@ -26,7 +27,8 @@ pub struct Workload {
     pub seconds: Vec<f64>,
     /// Pixels the triangle returns.
     pub pixels: Vec<f64>,
-    /// Seconds a worker of speed 1 spends on each package besides its triangles.
+    /// Seconds a worker of speed 1 spends on a package that does not continue its previous
+    /// one, besides its triangles: the vertices on its borders, traced again.
     pub per_package_seconds: f64,
     /// Seconds a worker of speed 1 spends on the frame's ID buffer before any package.
     pub setup_seconds: f64,
@@ -141,6 +143,7 @@ pub fn simulate_frame(
         .collect();
     let mut master_link_free = 0.0f64;
     let mut busy = vec![0.0; workers.len()];
+    let mut last_end: Vec<Option<usize>> = vec![None; workers.len()];
     let mut packages = 0;
     let send = |events: &mut BinaryHeap<Event>, order: &mut u64, at: f64, w: usize, a| {
         let spec = workers[w];
@@ -166,7 +169,13 @@ pub fn simulate_frame(
         match event.kind {
             EventKind::PackageArrives(a) => {
                 let work: f64 = workload.seconds[a.triangles.clone()].iter().sum();
-                let seconds = (work + workload.per_package_seconds) / spec.speed;
+                let fixed = if last_end[w] == Some(a.triangles.start) {
+                    0.0
+                } else {
+                    workload.per_package_seconds
+                };
+                last_end[w] = Some(a.triangles.end);
+                let seconds = (work + fixed) / spec.speed;
                 let start = worker_free[w].max(event.time);
                 let done = start + seconds;
                 worker_free[w] = done;
