@@ -103,16 +103,24 @@ fn main() {
         "| reference ray tracing | {reference_ms:.1} | {} | {reference_rays} | 1 | 0 |",
         pixels.len()
     );
+    // The last row is the paper's refinement test alone: whole ray trees, texture colours
+    // compared as colours (no deferred textures).
+    let paper = RefineSettings {
+        tree_weight: 0.0,
+        deferred_textures: false,
+        ..defaults.settings
+    };
     let steps = [
-        ("preview", false, false),
-        ("refinement without triangle filling", true, false),
-        ("refinement with triangle filling", true, true),
+        ("preview", false, false, defaults.settings),
+        ("refinement without triangle filling", true, false, defaults.settings),
+        ("refinement with triangle filling", true, true, defaults.settings),
+        ("with filling, the paper's test alone", true, true, paper),
     ];
-    for (label, refine, fill) in steps {
+    for (label, refine, fill, base) in steps {
         let settings = RefineSettings {
             refine,
             fill,
-            ..defaults.settings
+            ..base
         };
         let count = setup.active.len();
         let size = count.div_ceil(16 * rayon::current_num_threads()).max(1);
