@@ -291,7 +291,8 @@ impl FrameInputs<'_> {
 
     /// The reflector triangles a frame traces: those with a visible vertex (the paper's rule:
     /// an edge is traced when one of its ends is seen) or with pixels of their own (a triangle
-    /// seen only between its corners, which the paper leaves out), in scene order.
+    /// seen only between its corners, which the paper leaves out), mesh by mesh, each mesh's
+    /// along a Morton curve through its box.
     pub fn active_triangles(&self) -> Vec<TriangleId> {
         use rayon::prelude::*;
         let mut active = Vec::new();
@@ -307,22 +308,48 @@ impl FrameInputs<'_> {
                     host != u32::MAX && self.is_visible(index, host, mesh.positions[v as usize])
                 })
                 .collect();
-            active.extend(
-                mesh.triangles
-                    .iter()
-                    .enumerate()
-                    .map(|(t, _)| TriangleId {
-                        mesh: index,
-                        triangle: t as u32,
-                    })
-                    .filter(|id| {
-                        let tri = mesh.triangles[id.triangle as usize];
-                        tri.iter().any(|&v| visible[v as usize]) || self.owners.owns_any(*id)
-                    }),
-            );
+            let bounds = mesh.bounds();
+            let mut seen: Vec<(u32, TriangleId)> = mesh
+                .triangles
+                .iter()
+                .enumerate()
+                .map(|(t, _)| TriangleId {
+                    mesh: index,
+                    triangle: t as u32,
+                })
+                .filter(|id| {
+                    let tri = mesh.triangles[id.triangle as usize];
+                    tri.iter().any(|&v| visible[v as usize]) || self.owners.owns_any(*id)
+                })
+                .map(|id| {
+                    let tri = mesh.triangles[id.triangle as usize];
+                    let centroid =
+                        tri.iter().map(|&v| mesh.positions[v as usize]).sum::<Vec3>() / 3.0;
+                    (morton(centroid, bounds.min, bounds.max), id)
+                })
+                .collect();
+            // Along a space-filling curve, so that a range of the list — a package — is a
+            // compact patch of the surface with a short border (the paper's future work:
+            // "group the overall scene into spatial sectors"); mesh order would give strips.
+            seen.sort_unstable();
+            active.extend(seen.into_iter().map(|(_, id)| id));
         }
         active
     }
+}
+
+/// The Morton code (10 bits an axis, interleaved) of `p` in the box `lo`..`hi`.
+fn morton(p: Vec3, lo: Vec3, hi: Vec3) -> u32 {
+    let cell = ((p - lo) / (hi - lo).max(Vec3::splat(f32::MIN_POSITIVE)) * 1023.0)
+        .clamp(Vec3::ZERO, Vec3::splat(1023.0));
+    let spread = |v: f32| {
+        let mut x = v as u32;
+        x = (x | (x << 16)) & 0x0300_00ff;
+        x = (x | (x << 8)) & 0x0300_f00f;
+        x = (x | (x << 4)) & 0x030c_30c3;
+        (x | (x << 2)) & 0x0924_9249
+    };
+    spread(cell.x) | spread(cell.y) << 1 | spread(cell.z) << 2
 }
 
 /// How far apart two radiances look: the largest channel difference after clamping to the
