@@ -112,8 +112,18 @@ fn main() {
     };
     let steps = [
         ("preview", false, false, defaults.settings),
-        ("refinement without triangle filling", true, false, defaults.settings),
-        ("refinement with triangle filling", true, true, defaults.settings),
+        (
+            "refinement without triangle filling",
+            true,
+            false,
+            defaults.settings,
+        ),
+        (
+            "refinement with triangle filling",
+            true,
+            true,
+            defaults.settings,
+        ),
         ("with filling, the paper's test alone", true, true, paper),
     ];
     for (label, refine, fill, base) in steps {

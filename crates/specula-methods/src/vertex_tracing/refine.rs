@@ -323,8 +323,11 @@ impl FrameInputs<'_> {
                 })
                 .map(|id| {
                     let tri = mesh.triangles[id.triangle as usize];
-                    let centroid =
-                        tri.iter().map(|&v| mesh.positions[v as usize]).sum::<Vec3>() / 3.0;
+                    let centroid = tri
+                        .iter()
+                        .map(|&v| mesh.positions[v as usize])
+                        .sum::<Vec3>()
+                        / 3.0;
                     (morton(centroid, bounds.min, bounds.max), id)
                 })
                 .collect();
@@ -541,6 +544,37 @@ struct Face {
     /// Once split: the two halves (the first holds the split edge's first end), and the line
     /// from the new vertex to the opposite corner that separates them.
     children: Option<([u32; 2], [u32; 2])>,
+}
+
+/// A leaf face set up for shading its pixels.
+struct Leaf {
+    v: [u32; 3],
+    s0: Vec2,
+    e1: Vec2,
+    e2: Vec2,
+    /// Zero where the screen triangle is degenerate or a corner is behind the eye (its pixels
+    /// take the corners' mean).
+    inverse_area: f32,
+    alike: bool,
+}
+
+impl Leaf {
+    /// The screen weights of `q` (may be slightly negative just outside).
+    fn weights(&self, q: Vec2) -> [f32; 3] {
+        let d = q - self.s0;
+        let l1 = cross2(d, self.e2) * self.inverse_area;
+        let l2 = cross2(self.e1, d) * self.inverse_area;
+        [1.0 - l1 - l2, l1, l2]
+    }
+
+    /// The weights of `q` if it lies in this leaf.
+    fn weights_inside(&self, q: Vec2) -> Option<[f32; 3]> {
+        if self.inverse_area == 0.0 {
+            return None;
+        }
+        let at = self.weights(q);
+        at.iter().all(|&l| l >= -1e-5).then_some(at)
+    }
 }
 
 /// An edge in the queue: longest on the screen first; ties by position, which is the same in
@@ -1082,6 +1116,20 @@ impl Package {
         face
     }
 
+    /// Whether any leaf of triangle `index`'s refinement needs filling (most need none: their
+    /// pixels are not looked at).
+    fn any_leaf_needs_filling(&self, index: usize) -> bool {
+        let mut stack = vec![self.roots[index]];
+        while let Some(face) = stack.pop() {
+            match self.faces[face as usize].children {
+                Some((children, _)) => stack.extend(children),
+                None if self.needs_filling(face) => return true,
+                None => {}
+            }
+        }
+        false
+    }
+
     /// Whether triangle filling traces this leaf's pixels: refinement left one of its edges
     /// unresolved, none of its corners is seen, or a corner is behind the eye.
     fn needs_filling(&self, face: u32) -> bool {
@@ -1105,7 +1153,12 @@ impl Package {
         let tracer = inputs.tracer();
         let (width, height) = (inputs.view.width, inputs.view.height);
         while next < self.triangles.len() {
-            let pixels: Vec<(u32, bool)> = inputs.owners.owned(self.triangles[next]).collect();
+            let any_leaf = inputs.settings.fill && self.any_leaf_needs_filling(next);
+            let pixels: Vec<(u32, bool)> = inputs
+                .owners
+                .owned(self.triangles[next])
+                .filter(|&(_, stray)| stray || any_leaf)
+                .collect();
             for (k, stray) in pixels {
                 let (x, y) = (k % width, k / width);
                 let trace = stray || {
@@ -1128,28 +1181,45 @@ impl Package {
         next == self.triangles.len()
     }
 
-    /// Gouraud shading of pixel centre `q` in leaf `face`, perspective-correct (the weights
-    /// of the screen triangle divided by each corner's depth). With deferred textures, where
-    /// the three corners' paths are alike, the texture coordinates and coefficients of their
-    /// texture reads are interpolated and the texels read here.
-    fn interpolate(&self, face: u32, q: Vec2, inputs: &FrameInputs) -> Vec3 {
-        let corners = self.faces[face as usize]
-            .v
-            .map(|i| &self.vertices[i as usize]);
+    /// What shading a leaf's pixels needs, computed once per leaf: its screen triangle, the
+    /// inverse of its area, and whether deferred texturing applies.
+    fn leaf(&self, face: u32, inputs: &FrameInputs) -> Leaf {
+        let v = self.faces[face as usize].v;
+        let corners = v.map(|i| &self.vertices[i as usize]);
         let [s0, s1, s2] = corners.map(|c| c.screen);
         let area = cross2(s1 - s0, s2 - s0);
+        let flat = area.abs() < 1e-12 || corners.iter().any(|c| c.depth <= 0.0);
+        let alike = inputs.settings.deferred_textures
+            && corners[0].path.read_count > 0
+            && corners[1..].iter().all(|c| {
+                c.path.tree.same_as(&corners[0].path.tree)
+                    && c.path.read_count == corners[0].path.read_count
+            });
+        Leaf {
+            v,
+            s0,
+            e1: s1 - s0,
+            e2: s2 - s0,
+            inverse_area: if flat { 0.0 } else { 1.0 / area },
+            alike,
+        }
+    }
+
+    /// Gouraud shading of pixel centre `q` (screen weights `at`) in `leaf`, perspective-correct
+    /// (the weights divided by each corner's depth). With deferred textures, where the three
+    /// corners' paths are alike, the texture coordinates and coefficients of their texture
+    /// reads are interpolated and the texels read here.
+    fn shade(&self, leaf: &Leaf, at: [f32; 3], inputs: &FrameInputs) -> Vec3 {
+        let corners = leaf.v.map(|i| &self.vertices[i as usize]);
         let mean = || corners.iter().map(|c| c.color).sum::<Vec3>() / 3.0;
-        if area.abs() < 1e-12 || corners.iter().any(|c| c.depth <= 0.0) {
+        if leaf.inverse_area == 0.0 {
             return mean();
         }
-        let l1 = (cross2(q - s0, s2 - s0) / area).max(0.0);
-        let l2 = (cross2(s1 - s0, q - s0) / area).max(0.0);
-        let l0 = (1.0 - l1 - l2).max(0.0);
-        let mut weights = [
-            l0 / corners[0].depth,
-            l1 / corners[1].depth,
-            l2 / corners[2].depth,
-        ];
+        let at = at.map(|l| l.max(0.0));
+        let mut weights = [0.0f32; 3];
+        for i in 0..3 {
+            weights[i] = at[i] / corners[i].depth;
+        }
         let total: f32 = weights.iter().sum();
         if total <= 0.0 {
             return mean();
@@ -1157,20 +1227,10 @@ impl Package {
         for w in &mut weights {
             *w /= total;
         }
-        let blend = |value: &dyn Fn(&Vertex) -> Vec3| -> Vec3 {
-            (0..3).map(|i| value(corners[i]) * weights[i]).sum()
-        };
-        let alike = inputs.settings.deferred_textures
-            && corners[0].path.read_count > 0
-            && corners[1..].iter().all(|c| {
-                c.path.tree.same_as(&corners[0].path.tree)
-                    && c.path.read_count == corners[0].path.read_count
-            });
-        if !alike {
-            return blend(&|c| c.color);
+        if !leaf.alike {
+            return (0..3).map(|i| corners[i].color * weights[i]).sum();
         }
-        let mut color = blend(&|c| c.smooth);
-        let at = [l0, l1, l2];
+        let mut color: Vec3 = (0..3).map(|i| corners[i].smooth * weights[i]).sum();
         for read in 0..corners[0].path.read_count {
             let texture = &inputs.scene.textures[corners[0].path.reads[read].hit.texture];
             // Texture coordinates are perspective-correct for the textured surface's virtual
@@ -1183,12 +1243,17 @@ impl Package {
             let uv: Vec2 = (0..3)
                 .map(|i| corners[i].path.reads[read].hit.uv * (uv_weights[i] / uv_total))
                 .sum();
-            color += blend(&|c| c.path.reads[read].hit.coefficient) * texture.sample(uv);
+            let coefficient: Vec3 = (0..3)
+                .map(|i| corners[i].path.reads[read].hit.coefficient * weights[i])
+                .sum();
+            color += coefficient * texture.sample(uv);
         }
         color
     }
 
-    /// The pixels of every triangle changed since the last call: (pixel, radiance).
+    /// The pixels of every triangle changed since the last call: (pixel, radiance). Pixels
+    /// come in raster order, so the leaf of the last pixel is tried before the face tree is
+    /// walked again.
     pub fn take_pixels(&mut self, inputs: &FrameInputs) -> Vec<(u32, Vec3)> {
         let width = inputs.view.width;
         let mut out = Vec::new();
@@ -1196,18 +1261,27 @@ impl Package {
             if !std::mem::take(&mut self.dirty[index]) {
                 continue;
             }
+            let mut last: Option<Leaf> = None;
             for k in inputs.owners.pixels(self.triangles[index]) {
                 let filled = (!self.filled.is_empty())
                     .then(|| self.filled.get(&k))
                     .flatten();
-                let color = match filled {
-                    Some(&c) => c,
-                    None => {
-                        let q = Vec2::new((k % width) as f32 + 0.5, (k / width) as f32 + 0.5);
-                        self.interpolate(self.locate(index, q), q, inputs)
+                if let Some(&c) = filled {
+                    out.push((k, c));
+                    continue;
+                }
+                let q = Vec2::new((k % width) as f32 + 0.5, (k / width) as f32 + 0.5);
+                let reuse = last.as_ref().and_then(|leaf| leaf.weights_inside(q));
+                let (leaf, at) = match (last.take(), reuse) {
+                    (Some(leaf), Some(at)) => (leaf, at),
+                    _ => {
+                        let leaf = self.leaf(self.locate(index, q), inputs);
+                        let at = leaf.weights(q);
+                        (leaf, at)
                     }
                 };
-                out.push((k, color));
+                out.push((k, self.shade(&leaf, at, inputs)));
+                last = Some(leaf);
             }
         }
         out
