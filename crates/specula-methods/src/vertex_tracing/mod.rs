@@ -39,10 +39,23 @@
 //! `distributed` module and [`balance`]). A package's pixels do not depend on how the frame
 //! was cut, so both give the same image bit for bit.
 //!
-//! Beyond the paper: a vertex hidden by an occluder is shaded as its own surface (the primary
-//! hit is the vertex, not the occluder), so an occluder's edge does not leak into the
-//! reflector's interpolation; a triangle seen only between its corners (the paper's footnote:
-//! "not considered") is traced and filled; faces with a corner behind the eye are filled.
+//! Beyond the paper:
+//! - Deferred textures (`deferred_textures`): where a face's corners read the same textures
+//!   along alike paths (a dial seen through the cover), their texture coordinates and
+//!   coefficients are interpolated — perspective-correct for the textured surface's virtual
+//!   image — and the texels read per pixel, so texture detail needs no refinement; a crease of
+//!   the textured surface splits the edge. Without it, a texture test splits an edge whose
+//!   texture between its ends departs from their blend by more than ε.
+//! - Ray trees leave out rays of little weight (`tree_weight`).
+//! - A vertex hidden by an occluder is shaded as its own surface (the primary hit is the
+//!   vertex, not the occluder), so an occluder's edge does not leak into the reflector's
+//!   interpolation; a triangle seen only between its corners (the paper's footnote: "not
+//!   considered") is traced and filled; faces with a corner behind the eye are filled; a pixel
+//!   the ID buffer gives to a triangle that cannot be seen there (outside its projection, a
+//!   closed glass's back face) is stray and traced.
+//! - The original vertices are traced once per process for all its packages, and the active
+//!   triangles are ordered along a Morton curve, so that a package is a compact patch with a
+//!   short border (the paper's future work: "spatial sectors").
 //!
 //! Approximations and artifacts: between vertices the radiance is interpolated linearly, so a
 //! reflected feature smaller than the refined faces and seen by neither end of any edge is
