@@ -9,8 +9,8 @@
 //! triangles at the frame's start, so that each worker asks about `packages_per_worker` times
 //! per frame; as the queue runs down, packages shrink with what is left (factoring: never
 //! more than half the worker's share of what remains, since the others still hold work), so
-//! that the last packages end close together. A worker that does not answer within the timeout is lost: its
-//! outstanding packages go back to the front of the queue for the others.
+//! that the last packages end close together. A worker that does not answer within the
+//! timeout is lost: its outstanding packages go back to the front of the queue for the others.
 
 use std::collections::VecDeque;
 use std::ops::Range;
