@@ -127,6 +127,42 @@ fn bad_input_is_a_clear_error_not_a_panic() {
             ],
             "NAME=VALUE",
         ),
+        (
+            ["render", "--distributed", "--method", "envmap"]
+                .map(String::from)
+                .to_vec(),
+            "--distributed runs vertex-tracing, not envmap",
+        ),
+        (
+            ["render", "--distributed", "--slow-rank", "0:2"]
+                .map(String::from)
+                .to_vec(),
+            "expected a worker rank (1 or more), got '0'",
+        ),
+        (
+            ["render", "--distributed", "--fail-rank", "2:x"]
+                .map(String::from)
+                .to_vec(),
+            "expected a package number of 1 or more, got 'x'",
+        ),
+        (
+            ["render", "--method", "envmap", "--sequence", "steps"]
+                .map(String::from)
+                .to_vec(),
+            "--sequence needs a progressive method",
+        ),
+        (
+            [
+                "render",
+                "--method",
+                "vertex-tracing",
+                "-p",
+                "visibility=maybe",
+            ]
+            .map(String::from)
+            .to_vec(),
+            "expected one of auto, cpu, gpu",
+        ),
     ];
     for (args, expected) in cases {
         let out = specula()
