@@ -17,7 +17,9 @@
 //! report and exits without MPI_Finalize (which would wait for the dead rank). Run with
 //! `mpirun --enable-recovery` so that mpirun does not kill the job when a rank dies.
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context, Result};
@@ -28,7 +30,7 @@ use mpi::topology::Communicator;
 use specula_methods::vertex_tracing::balance::{imbalance, Balancer, WorkerFrame};
 use specula_methods::vertex_tracing::refine::{OriginalSamples, PackageCounters, RefineSettings};
 use specula_methods::vertex_tracing::wire::Message;
-use specula_methods::vertex_tracing::FrameSetup;
+use specula_methods::vertex_tracing::{FrameSetup, Topology};
 use specula_methods::LiveScene;
 use specula_scene::{Camera, Scene};
 use specula_trace::Image;
@@ -107,10 +109,11 @@ pub fn run(scene: Scene, options: &Options) -> Result<()> {
         mpi::ffi::MPI_Comm_set_errhandler(world.as_raw(), mpi::ffi::RSMPI_ERRORS_RETURN);
     }
     let live = LiveScene::new(scene);
+    let topology = Arc::new(Topology::new(live.scene()));
     let finalize = if world.rank() == 0 {
-        master(&world, &live, options)?
+        master(&world, &live, &topology, options)?
     } else {
-        worker(&world, &live, options)?
+        worker(&world, &live, &topology, options)?
     };
     if !finalize {
         // A rank was lost: MPI_Finalize would wait for it.
@@ -144,6 +147,7 @@ fn poll(world: &mpi::topology::SimpleCommunicator) -> Result<Option<(usize, Mess
 fn master(
     world: &mpi::topology::SimpleCommunicator,
     live: &LiveScene,
+    topology: &Arc<Topology>,
     options: &Options,
 ) -> Result<bool> {
     let workers = world.size() as usize - 1;
@@ -175,6 +179,7 @@ fn master(
             &camera,
             width,
             height,
+            topology.clone(),
             options.settings,
             options.max_depth,
         );
@@ -186,12 +191,9 @@ fn master(
         image = rest;
         let refine_start = Instant::now();
         balancer.start_frame(count);
-        let mut sent_at = std::collections::HashMap::new();
+        let mut sent_at = HashMap::new();
         for w in balancer.live_workers() {
-            if let Some(p) = balancer.next_package(w, count) {
-                send_package(world, w, frame, &p);
-                sent_at.insert((w, p.id), Instant::now());
-            }
+            hand_out(world, &mut balancer, &mut sent_at, w, frame, count);
         }
         let (mut packages, mut samples, mut result_bytes) = (0u32, 0u64, 0u64);
         let mut records = Vec::new();
@@ -245,10 +247,7 @@ fn master(
                         result_bytes +=
                             specula_methods::vertex_tracing::wire::result_bytes(pixels.len())
                                 as u64;
-                        if let Some(p) = balancer.next_package(w, count) {
-                            send_package(world, w, frame, &p);
-                            sent_at.insert((w, p.id), Instant::now());
-                        }
+                        hand_out(world, &mut balancer, &mut sent_at, w, frame, count);
                     }
                 }
                 Some(_) => {}
@@ -276,10 +275,7 @@ fn master(
                 // The idle live workers take the orphans.
                 for other in balancer.live_workers() {
                     if balancer.outstanding(other).is_empty() {
-                        if let Some(p) = balancer.next_package(other, count) {
-                            send_package(world, other, frame, &p);
-                            sent_at.insert((other, p.id), Instant::now());
-                        }
+                        hand_out(world, &mut balancer, &mut sent_at, other, frame, count);
                     }
                 }
             }
@@ -320,12 +316,19 @@ fn master(
     Ok(finalize)
 }
 
-fn send_package(
+/// Sends `worker` its next package of `frame`, if any is left, and notes when (for the
+/// timeout).
+fn hand_out(
     world: &mpi::topology::SimpleCommunicator,
+    balancer: &mut Balancer,
+    sent_at: &mut HashMap<(usize, u32), Instant>,
     worker: usize,
     frame: u32,
-    p: &specula_methods::vertex_tracing::balance::Assignment,
+    triangles: usize,
 ) {
+    let Some(p) = balancer.next_package(worker, triangles) else {
+        return;
+    };
     let message = Message::Package {
         frame,
         id: p.id,
@@ -333,6 +336,7 @@ fn send_package(
         end: p.triangles.end as u32,
     };
     send(world, worker + 1, &message);
+    sent_at.insert((worker, p.id), Instant::now());
 }
 
 fn composite(image: &mut Image, pixels: &[(u32, Vec3)]) {
@@ -373,6 +377,7 @@ fn write_json(path: &Path, report: &Report) -> Result<()> {
 fn worker(
     world: &mpi::topology::SimpleCommunicator,
     live: &LiveScene,
+    topology: &Arc<Topology>,
     options: &Options,
 ) -> Result<bool> {
     let rank = world.rank() as usize;
@@ -401,6 +406,7 @@ fn worker(
                     &camera,
                     width,
                     height,
+                    topology.clone(),
                     options.settings,
                     options.max_depth,
                 );

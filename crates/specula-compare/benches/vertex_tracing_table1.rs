@@ -10,12 +10,13 @@
 //! both need, are timed apart. Times are medians of 3 runs. Error: mean FLIP over the
 //! reflector's pixels against the reference.
 
+use std::sync::Arc;
 use std::time::Instant;
 
 use rayon::prelude::*;
 use specula_compare::metrics::{flip_map, measure};
 use specula_methods::vertex_tracing::refine::{OriginalSamples, RefineSettings};
-use specula_methods::vertex_tracing::{FrameSetup, VertexTracing};
+use specula_methods::vertex_tracing::{FrameSetup, Topology, VertexTracing};
 use specula_methods::LiveScene;
 use specula_trace::reference::{pixel_radiance, rays_traced_on_this_thread, Tracer};
 
@@ -41,7 +42,16 @@ fn main() {
     let max_depth = defaults.max_depth;
 
     let start = Instant::now();
-    let setup = FrameSetup::traced(&live, &camera, width, height, defaults.settings, max_depth);
+    let topology = Arc::new(Topology::new(live.scene()));
+    let setup = FrameSetup::traced(
+        &live,
+        &camera,
+        width,
+        height,
+        topology,
+        defaults.settings,
+        max_depth,
+    );
     let visibility_ms = start.elapsed().as_secs_f64() * 1e3;
     let start = Instant::now();
     let (rest, _) = setup.rest_of_scene(&live, &camera, max_depth);
@@ -132,8 +142,6 @@ fn main() {
             fill,
             ..base
         };
-        let count = setup.active.len();
-        let size = count.div_ceil(16 * rayon::current_num_threads()).max(1);
         let mut times = Vec::new();
         let mut image = rest.clone();
         let mut totals = specula_methods::vertex_tracing::refine::PackageCounters::default();
@@ -145,10 +153,8 @@ fn main() {
             );
             let mut inputs = setup.inputs(&live, &camera, settings, max_depth);
             inputs.originals = Some(&originals);
-            let mut packages: Vec<_> = (0..count)
-                .step_by(size)
-                .map(|s| setup.package(s..(s + size).min(count)))
-                .collect();
+            // The technique's own cut (package_triangles = 0).
+            let mut packages = setup.packages(0);
             let results: Vec<Vec<(u32, glam::Vec3)>> = packages
                 .par_iter_mut()
                 .map(|p| {

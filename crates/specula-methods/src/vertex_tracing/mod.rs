@@ -92,6 +92,7 @@ pub mod refine;
 pub mod simulate;
 pub mod wire;
 
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use glam::Vec3;
@@ -108,8 +109,9 @@ use crate::technique::{
     bad_value, Context, Frame, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels,
     Technique, TechniqueError, COUNTER_RAYS_TRACED, COUNTER_SHADOW_RAYS,
 };
+pub use refine::Topology;
 pub use refine::TriangleId;
-use refine::{FrameInputs, OriginalSamples, Package, PixelOwners, RefineSettings, Topology};
+use refine::{FrameInputs, OriginalSamples, Package, PixelOwners, RefineSettings};
 
 /// Packages per rayon thread when `package_triangles` is 0: enough that a package holding a
 /// reflection's outline does not leave the other threads idle.
@@ -241,6 +243,8 @@ pub struct VertexTracing {
     pub shadow_resolution: u32,
     pub show_faces: bool,
     gpu: Option<GpuPass>,
+    /// The scene id it was built for, and the topology.
+    topology: Option<(u64, Arc<Topology>)>,
     progress: Option<Progress>,
 }
 
@@ -264,6 +268,7 @@ impl Default for VertexTracing {
             shadow_resolution: 1024,
             show_faces: false,
             gpu: None,
+            topology: None,
             progress: None,
         }
     }
@@ -296,22 +301,25 @@ pub struct FrameSetup {
     pub view: ScreenView,
     pub surfaces: PixelSurfaces,
     pub owners: PixelOwners,
-    pub topology: Topology,
+    /// Built once per scene ([`Topology::new`]): a rigid move does not change it.
+    pub topology: Arc<Topology>,
     pub active: Vec<TriangleId>,
 }
 
 impl FrameSetup {
-    /// From an ID buffer (`surfaces`) of `camera`'s `width` × `height` view.
+    /// From an ID buffer (`surfaces`) of `camera`'s `width` × `height` view, with the scene's
+    /// `topology`.
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         live: &LiveScene,
         camera: &Camera,
         width: u32,
         height: u32,
         surfaces: PixelSurfaces,
+        topology: Arc<Topology>,
         settings: RefineSettings,
         max_depth: u32,
     ) -> FrameSetup {
-        let topology = Topology::new(live.scene());
         let view = ScreenView::new(camera, width, height);
         let owners = PixelOwners::new(&surfaces, &topology, live.scene(), &view);
         let mut setup = FrameSetup {
@@ -333,11 +341,14 @@ impl FrameSetup {
         camera: &Camera,
         width: u32,
         height: u32,
+        topology: Arc<Topology>,
         settings: RefineSettings,
         max_depth: u32,
     ) -> FrameSetup {
         let surfaces = PixelSurfaces::trace(live.accel(), camera, width, height);
-        FrameSetup::new(live, camera, width, height, surfaces, settings, max_depth)
+        FrameSetup::new(
+            live, camera, width, height, surfaces, topology, settings, max_depth,
+        )
     }
 
     pub fn inputs<'a>(
@@ -364,6 +375,22 @@ impl FrameSetup {
     /// The active triangles `range` (indices into [`FrameSetup::active`]) as one package.
     pub fn package(&self, range: std::ops::Range<usize>) -> Package {
         Package::new(self.active[range].to_vec())
+    }
+
+    /// The active triangles cut into packages of `package_triangles` (0: sixteen packages per
+    /// rayon thread), in order.
+    pub fn packages(&self, package_triangles: usize) -> Vec<Package> {
+        let count = self.active.len();
+        let size = match package_triangles {
+            0 => count
+                .div_ceil(PACKAGES_PER_THREAD * rayon::current_num_threads())
+                .max(1),
+            n => n,
+        };
+        (0..count)
+            .step_by(size)
+            .map(|start| self.package(start..(start + size).min(count)))
+            .collect()
     }
 
     /// The image of everything but the reflectors from the reference's shading of each
@@ -487,6 +514,7 @@ impl Technique for VertexTracing {
     }
 
     fn prepare(&mut self, ctx: &Context, live: &LiveScene) -> Result<(), TechniqueError> {
+        self.topology(live);
         if let Some(gpu) = self.gpu_for_visibility(ctx)? {
             self.ensure_raster(gpu, live)?;
         }
@@ -648,6 +676,18 @@ impl VertexTracing {
         }
     }
 
+    /// The scene's topology, built at its first frame.
+    fn topology(&mut self, live: &LiveScene) -> Arc<Topology> {
+        match &self.topology {
+            Some((id, topology)) if *id == live.id() => topology.clone(),
+            _ => {
+                let topology = Arc::new(Topology::new(live.scene()));
+                self.topology = Some((live.id(), topology.clone()));
+                topology
+            }
+        }
+    }
+
     fn ensure_raster(&mut self, gpu: &GpuContext, live: &LiveScene) -> Result<(), TechniqueError> {
         let stale = self.gpu.as_ref().is_none_or(|p| {
             p.scene_id != live.id() || p.shadow_resolution != self.shadow_resolution
@@ -676,6 +716,7 @@ impl VertexTracing {
     ) -> Result<Progress, TechniqueError> {
         let clock = Instant::now();
         let (settings, max_depth) = (self.settings, self.max_depth);
+        let topology = self.topology(live);
         let (setup, rest, rest_rays, visibility_ms) = match gpu {
             Some(gpu) => {
                 self.ensure_raster(gpu, live)?;
@@ -690,31 +731,21 @@ impl VertexTracing {
                 // The raster colour is the rest of the scene; specular pixels are black in it.
                 let rest = g.read_color(gpu)?;
                 let visibility_ms = clock.elapsed().as_secs_f64() * 1e3;
-                let setup =
-                    FrameSetup::new(live, camera, width, height, surfaces, settings, max_depth);
+                let setup = FrameSetup::new(
+                    live, camera, width, height, surfaces, topology, settings, max_depth,
+                );
                 (setup, rest, (0, 0), visibility_ms)
             }
             None => {
-                let setup = FrameSetup::traced(live, camera, width, height, settings, max_depth);
+                let setup =
+                    FrameSetup::traced(live, camera, width, height, topology, settings, max_depth);
                 let visibility_ms = clock.elapsed().as_secs_f64() * 1e3;
                 let (rest, rays) = setup.rest_of_scene(live, camera, max_depth);
                 (setup, rest, rays, visibility_ms)
             }
         };
         let rest_ms = clock.elapsed().as_secs_f64() * 1e3 - visibility_ms;
-        let size = match self.package_triangles {
-            0 => setup
-                .active
-                .len()
-                .div_ceil(PACKAGES_PER_THREAD * rayon::current_num_threads())
-                .max(1),
-            n => n,
-        };
-        let count = setup.active.len();
-        let packages = (0..count)
-            .step_by(size)
-            .map(|start| setup.package(start..(start + size).min(count)))
-            .collect();
+        let packages = setup.packages(self.package_triangles);
         Ok(Progress {
             key,
             setup,

@@ -11,7 +11,8 @@
 //! edges inside one triangle; and the queue's order among one triangle's edges is by projected
 //! length, ties broken by position. So a frame cut into packages any way — rayon's, or the MPI
 //! master's — composes the same image bit for bit. The price is the paper's redundancy: a vertex
-//! on the border of two packages is traced in both.
+//! refinement adds on the border of two packages is traced in both (the original vertices are
+//! traced once per process, [`OriginalSamples`]).
 
 use std::collections::{BinaryHeap, HashMap};
 use std::time::Instant;
@@ -25,8 +26,7 @@ use specula_trace::{Hit, Ray, SceneAccel};
 
 use crate::screen::{PixelSurfaces, ScreenView};
 
-/// A package's image is composed again after this many edge decisions at most when a deadline
-/// is set (how often the clock is read).
+/// With a deadline, the clock is read after every this many edge decisions.
 const EDGES_PER_CLOCK_READ: u32 = 16;
 
 /// What the refinement of every package of a frame follows.
@@ -512,6 +512,18 @@ struct Vertex {
     path: PathRecord,
 }
 
+/// What CheckRefinement decides for an edge.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Decision {
+    Keep,
+    /// Its ends differ but it may not be split (too short or too deep): its faces are filled.
+    Unresolved,
+    /// Split it; `flat`: for the flatness rule alone (its ends do not differ).
+    Split {
+        flat: bool,
+    },
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum EdgeState {
     /// Not in the queue (made, or examined and kept).
@@ -958,7 +970,7 @@ impl Package {
     }
 
     /// CheckRefinement (Figure 6, line 4).
-    fn check(&self, e: u32, inputs: &FrameInputs) -> EdgeState {
+    fn check(&self, e: u32, inputs: &FrameInputs) -> Decision {
         let settings = &inputs.settings;
         let edge = &self.edges[e as usize];
         let (a, b) = (
@@ -967,7 +979,7 @@ impl Package {
         );
         if a.depth <= 0.0 || b.depth <= 0.0 {
             // Behind the eye no screen length exists; such faces' pixels are traced.
-            return EdgeState::Idle;
+            return Decision::Keep;
         }
         let differ = differ(a, b, inputs);
         // Flatness only inside one triangle: a border edge is decided by its ends alone.
@@ -978,17 +990,19 @@ impl Package {
                 .any(|&f| self.is_flat(f, settings) == Some(e));
         if edge.level >= settings.max_level {
             return if differ {
-                EdgeState::Unresolved
+                Decision::Unresolved
             } else {
-                EdgeState::Idle
+                Decision::Keep
             };
         }
-        if flat || (differ && (a.screen - b.screen).length() >= settings.min_edge_px) {
-            EdgeState::Split
+        if differ && (a.screen - b.screen).length() >= settings.min_edge_px {
+            Decision::Split { flat: false }
+        } else if flat {
+            Decision::Split { flat: !differ }
         } else if differ {
-            EdgeState::Unresolved
+            Decision::Unresolved
         } else {
-            EdgeState::Idle
+            Decision::Keep
         }
     }
 
@@ -1076,22 +1090,12 @@ impl Package {
                 continue;
             }
             match self.check(e, inputs) {
-                EdgeState::Split => {
-                    let flat = {
-                        let edge = &self.edges[e as usize];
-                        let (a, b) = (
-                            &self.vertices[edge.a as usize],
-                            &self.vertices[edge.b as usize],
-                        );
-                        !differ(a, b, inputs)
-                    };
-                    self.split(e, inputs, flat);
-                }
-                EdgeState::Unresolved => {
+                Decision::Split { flat } => self.split(e, inputs, flat),
+                Decision::Unresolved => {
                     self.edges[e as usize].state = EdgeState::Unresolved;
                     self.counters.unresolved_edges += 1;
                 }
-                _ => self.edges[e as usize].state = EdgeState::Idle,
+                Decision::Keep => self.edges[e as usize].state = EdgeState::Idle,
             }
             decisions += 1;
             if decisions.is_multiple_of(EDGES_PER_CLOCK_READ) && past(deadline) {
