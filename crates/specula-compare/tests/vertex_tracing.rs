@@ -23,7 +23,7 @@ fn flip(ctx: &specula_methods::Context, parameters: &[&str]) -> f64 {
 fn refined_and_filled_is_close_to_the_reference_with_either_id_buffer() {
     let cpu = specula_methods::Context::default();
     // Mean FLIP on the cover's pixels at 256 × 192, measured 2026-11-30: CPU ID buffer 0.0031,
-    // GPU (lavapipe) 0.0023, the Gouraud preview alone 0.0490, refinement without filling
+    // GPU (lavapipe) 0.0023 (0.0031 since the raster's near plane moved), the Gouraud preview alone 0.0490, refinement without filling
     // 0.0202. Bounds at about twice the measured.
     let refined = flip(&cpu, &["visibility=cpu"]);
     eprintln!("truck-cover, CPU ID buffer: {refined:.4}");
