@@ -207,7 +207,7 @@ pub fn run(
                 ) {
                     rays = Some(closest + shadow);
                 }
-                created += frame.created.total();
+                created += frame.created().total();
                 counters = frame.counters.clone();
                 timing = format!("{:?}", frame.timing);
                 totals.push(frame.total_milliseconds());

@@ -10,13 +10,13 @@
 //! both need, are timed apart. Times are medians of 3 runs. Error: mean FLIP over the
 //! reflector's pixels against the reference.
 
-use std::sync::Arc;
 use std::time::Instant;
 
 use rayon::prelude::*;
 use specula_compare::metrics::{flip_map, measure};
-use specula_methods::vertex_tracing::refine::{OriginalSamples, RefineSettings};
-use specula_methods::vertex_tracing::{FrameSetup, Topology, VertexTracing};
+use specula_methods::vertex_tracing::{
+    FramePhases, PackageCounters, RefineSettings, VertexTracing,
+};
 use specula_methods::LiveScene;
 use specula_trace::reference::{pixel_radiance, rays_traced_on_this_thread, Tracer};
 
@@ -42,19 +42,11 @@ fn main() {
     let max_depth = defaults.max_depth;
 
     let start = Instant::now();
-    let topology = Arc::new(Topology::new(live.scene()));
-    let setup = FrameSetup::traced(
-        &live,
-        &camera,
-        width,
-        height,
-        topology,
-        defaults.settings,
-        max_depth,
-    );
+    let phases =
+        FramePhases::visibility(&live, &camera, width, height, defaults.settings, max_depth);
     let visibility_ms = start.elapsed().as_secs_f64() * 1e3;
     let start = Instant::now();
-    let (rest, _) = setup.rest_of_scene(&live, &camera, max_depth);
+    let rest = phases.rest_of_scene();
     let rest_ms = start.elapsed().as_secs_f64() * 1e3;
     let reflector_vertices: usize = live
         .scene()
@@ -63,7 +55,7 @@ fn main() {
         .filter(|m| live.scene().materials[m.material].is_specular())
         .map(|m| m.positions.len())
         .sum();
-    let pixels: Vec<u32> = setup.owners.all().collect();
+    let pixels: Vec<u32> = phases.reflector_pixels().collect();
 
     // The reference: every reflector pixel traced.
     let tracer = Tracer {
@@ -144,32 +136,12 @@ fn main() {
         };
         let mut times = Vec::new();
         let mut image = rest.clone();
-        let mut totals = specula_methods::vertex_tracing::refine::PackageCounters::default();
+        let mut totals = PackageCounters::default();
         for _ in 0..RUNS {
             let start = Instant::now();
-            let originals = OriginalSamples::trace(
-                &setup.inputs(&live, &camera, settings, max_depth),
-                &setup.active,
-            );
-            let mut inputs = setup.inputs(&live, &camera, settings, max_depth);
-            inputs.originals = Some(&originals);
             // The technique's own cut (package_triangles = 0).
-            let mut packages = setup.packages(0);
-            let results: Vec<Vec<(u32, glam::Vec3)>> = packages
-                .par_iter_mut()
-                .map(|p| {
-                    p.run(&inputs, None);
-                    p.take_pixels(&inputs)
-                })
-                .collect();
-            for (k, c) in results.into_iter().flatten() {
-                image.pixels[k as usize] = c;
-            }
+            totals = phases.shade_reflector(settings, &mut image);
             times.push(start.elapsed().as_secs_f64() * 1e3);
-            totals = originals.counters;
-            for p in &packages {
-                totals.add(&p.counters);
-            }
         }
         let ms = median(times);
         let flip = flip_map(&reference, &image);

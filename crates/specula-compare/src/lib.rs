@@ -1,7 +1,10 @@
 //! `specula compare`: renders the reference and each technique from the same camera at the same
 //! resolution and reports, per technique, its error on the reflector/refractor pixels (a mask
-//! from the G-buffer's IDs), an error heat-map, its time per stage and its speed-up over the
-//! reference; written as a self-contained HTML page and as JSON (schema:
+//! from the primary hits, as the G-buffer's IDs) split by surface class: a technique's figures
+//! are over the surfaces it shades itself, and those it hands to another method
+//! ([`MethodInfo::delegates`]: c3rc's refractors are envmap's) are reported apart, naming that
+//! method, since their figure is the delegate's; an error heat-map, its time per stage and its
+//! speed-up over the reference; written as a self-contained HTML page and as JSON (schema:
 //! docs/compare.schema.json). A technique's time is that of its second frame (the first pays
 //! for shader compilation); the reference's is its CPU render time, BVH build included. Where
 //! there is a GPU, each technique's time is also put beside `gpu-trace`'s (the exact answer on
@@ -18,13 +21,19 @@ use base64::Engine;
 use serde::Serialize;
 use specula_gpu::TimingSource;
 use specula_methods::{
-    apply_known_parameters, apply_parameters, by_name, Context, LiveScene, TechniqueError,
+    apply_known_parameters, apply_parameters, by_name, Context, LiveScene, MethodInfo,
+    SurfaceClass, TechniqueError,
 };
 use specula_scene::Scene;
 use specula_trace::reference::primary_hits;
 use specula_trace::Image;
 
 pub use metrics::Metrics;
+
+/// The version of [`Report`]'s JSON (docs/compare.schema.json). 2: a method's `metrics` is
+/// over the surfaces it shades itself (null when none) and `delegated` holds the others;
+/// `mirror_pixels` and `refractor_pixels` split the mask.
+pub const SCHEMA_VERSION: u32 = 2;
 
 #[derive(Debug, thiserror::Error)]
 pub enum CompareError {
@@ -88,13 +97,31 @@ pub struct MethodReport {
     /// gpu-trace's frame time over this method's (null without a GPU).
     pub speedup_over_gpu_trace: Option<f64>,
     pub counters: BTreeMap<String, u64>,
-    pub metrics: Metrics,
+    /// Its figures on the masked pixels of the surfaces it shades itself (those of the classes
+    /// it does not delegate); None (null) when it delegates every masked pixel, e.g. c3rc on a
+    /// scene whose only specular surfaces are glass.
+    pub metrics: Option<Metrics>,
+    /// Per surface class it hands to another method and that is in view: its figures there,
+    /// apart (they are the delegate's, not its own).
+    pub delegated: Vec<DelegatedReport>,
     pub image: String,
     pub heat_map: String,
     /// Fallbacks the technique reported for this frame.
     pub warnings: Vec<String>,
     /// GPU objects the timed frame created (0 in a steady state).
     pub created: CreatedReport,
+}
+
+/// A method's figures on the masked pixels of one surface class it delegates
+/// ([`MethodInfo::delegates`]).
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct DelegatedReport {
+    pub material: SurfaceClass,
+    /// The method those surfaces are handed to.
+    pub delegate: String,
+    /// The method's image measured on those pixels: the delegate's figure there, as long as
+    /// the delegation is what the method declares (the suite test checks it).
+    pub metrics: Metrics,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -106,6 +133,9 @@ pub struct Report {
     pub adapter: String,
     /// Pixels whose primary visible surface (G-buffer ID) is a mirror or dielectric.
     pub mask_pixels: usize,
+    /// Of those, the mirror pixels and the dielectric (refractor) pixels.
+    pub mirror_pixels: usize,
+    pub refractor_pixels: usize,
     pub reference: ReferenceReport,
     /// gpu-trace's frame time on this run's GPU (null without a GPU).
     pub gpu_trace_ms: Option<f64>,
@@ -118,6 +148,39 @@ pub struct Comparison {
     pub reference: Image,
     /// (image, heat-map) per method, in report order.
     pub method_images: Vec<(Image, image::RgbImage)>,
+    /// Per pixel (row-major), the class of the specular surface its primary ray meets; None
+    /// off the mask.
+    pub classes: Vec<Option<SurfaceClass>>,
+}
+
+/// A method's figures from its `image`: on the masked pixels of the classes it shades itself
+/// (None where there are none), and apart on those of each class it delegates that is in
+/// view. `flip` is the FLIP map of the whole image against `reference`; `classes` the class of
+/// each pixel's primary surface.
+pub fn method_figures(
+    info: &MethodInfo,
+    reference: &Image,
+    image: &Image,
+    flip: &[f32],
+    classes: &[Option<SurfaceClass>],
+) -> (Option<Metrics>, Vec<DelegatedReport>) {
+    let own = metrics::class_mask(classes, |c| info.delegate_for(c).is_none());
+    let metrics = own
+        .contains(&true)
+        .then(|| metrics::measure(reference, image, flip, &own));
+    let delegated = info
+        .delegates
+        .iter()
+        .filter_map(|d| {
+            let mask = metrics::class_mask(classes, |c| c == d.material);
+            mask.contains(&true).then(|| DelegatedReport {
+                material: d.material,
+                delegate: d.to.to_string(),
+                metrics: metrics::measure(reference, image, flip, &mask),
+            })
+        })
+        .collect();
+    (metrics, delegated)
 }
 
 fn timing_name(t: TimingSource) -> &'static str {
@@ -178,17 +241,20 @@ pub fn compare(
     let reference_ms = start.elapsed().as_secs_f64() * 1e3;
 
     progress("mask");
-    // The pixels whose primary ray (through the pixel centre, as the G-buffer's) sees a mirror
-    // or dielectric.
-    let mask: Vec<bool> = primary_hits(scene, live.accel(), width, height)
+    // The class of the mirror or dielectric each pixel's primary ray (through the pixel
+    // centre, as the G-buffer's) sees; the mask is where there is one.
+    let classes: Vec<Option<SurfaceClass>> = primary_hits(scene, live.accel(), width, height)
         .iter()
         .map(|hit| {
-            hit.is_some_and(|h| {
-                scene.materials[scene.meshes[h.mesh as usize].material].is_specular()
+            hit.and_then(|h| {
+                SurfaceClass::of(&scene.materials[scene.meshes[h.mesh as usize].material])
             })
         })
         .collect();
-    let mask_pixels = mask.iter().filter(|&&m| m).count();
+    let count = |class: SurfaceClass| classes.iter().filter(|&&c| c == Some(class)).count();
+    let (mirror_pixels, refractor_pixels) =
+        (count(SurfaceClass::Mirror), count(SurfaceClass::Refractor));
+    let mask_pixels = mirror_pixels + refractor_pixels;
     if mask_pixels == 0 {
         return Err(CompareError::EmptyMask);
     }
@@ -203,7 +269,8 @@ pub fn compare(
         let frame = technique.render(ctx, &live, &scene.camera, width, height)?;
         let image = frame.image(ctx)?;
         let flip = metrics::flip_map(&reference, &image);
-        let metrics = metrics::measure(&reference, &image, &flip, &mask);
+        let (metrics, delegated) =
+            method_figures(technique.info(), &reference, &image, &flip, &classes);
         let total_ms = frame.total_milliseconds();
         methods.push(MethodReport {
             method: technique.name().to_string(),
@@ -222,13 +289,14 @@ pub fn compare(
             speedup_over_gpu_trace: None,
             counters: frame.counters.iter().cloned().collect(),
             metrics,
+            delegated,
             image: format!("{}.png", technique.name()),
             heat_map: format!("{}-flip.png", technique.name()),
             warnings: frame.warnings.clone(),
             created: CreatedReport {
-                textures: frame.created.textures,
-                buffers: frame.created.buffers,
-                bind_groups: frame.created.bind_groups,
+                textures: frame.created().textures,
+                buffers: frame.created().buffers,
+                bind_groups: frame.created().bind_groups,
             },
         });
         method_images.push((image, metrics::heat_map(&flip, width, height)));
@@ -257,12 +325,14 @@ pub fn compare(
     }
     Ok(Comparison {
         report: Report {
-            schema_version: 1,
+            schema_version: SCHEMA_VERSION,
             scene: scene.name.clone(),
             width,
             height,
             adapter: ctx.describe(),
             mask_pixels,
+            mirror_pixels,
+            refractor_pixels,
             reference: ReferenceReport {
                 spp: options.spp,
                 max_depth: options.max_depth,
@@ -274,6 +344,7 @@ pub fn compare(
         },
         reference,
         method_images,
+        classes,
     })
 }
 
@@ -298,6 +369,19 @@ fn data_uri(img: &image::RgbImage) -> String {
     format!(
         "data:image/png;base64,{}",
         base64::engine::general_purpose::STANDARD.encode(png_bytes(img))
+    )
+}
+
+/// RMSE, PSNR, mean FLIP and the share over 0.1, as four table cells.
+fn metric_cells(m: &Metrics) -> String {
+    format!(
+        "<td>{:.4}</td><td>{}</td><td>{:.4}</td><td>{:.1} %</td>",
+        m.rmse,
+        m.psnr_db
+            .map(|p| format!("{p:.1}"))
+            .unwrap_or_else(|| "∞".into()),
+        m.mean_flip,
+        m.share_flip_over_0_1 * 100.0
     )
 }
 
@@ -349,19 +433,30 @@ impl Comparison {
                     escape(warning)
                 ));
             }
+            let own = match &m.metrics {
+                Some(metrics) => metric_cells(metrics),
+                None => "<td colspan=\"4\">none of its own: every pixel delegated (below)</td>"
+                    .to_string(),
+            };
             rows.push_str(&format!(
-                "<tr><td>{}</td><td>{:.4}</td><td>{}</td><td>{:.4}</td><td>{:.1} %</td><td>{:.2}</td><td>{:.1}×</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
+                "<tr><td>{}</td>{own}<td>{:.2}</td><td>{:.1}×</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
                 escape(&m.method),
-                m.metrics.rmse,
-                m.metrics.psnr_db.map(|p| format!("{p:.1}")).unwrap_or_else(|| "∞".into()),
-                m.metrics.mean_flip,
-                m.metrics.share_flip_over_0_1 * 100.0,
                 m.total_ms,
                 m.speedup_over_reference,
                 m.speedup_over_gpu_trace.map(|v| format!("{v:.2}×")).unwrap_or_else(|| "–".into()),
                 stages.join("<br>"),
                 escape(&m.timing),
             ));
+            for d in &m.delegated {
+                rows.push_str(&format!(
+                    "<tr class=\"delegated\"><td>↳ {} {} pixels</td>{}<td colspan=\"5\">shaded by {}: its figure, not {}'s own</td></tr>\n",
+                    d.metrics.mask_pixels,
+                    d.material,
+                    metric_cells(&d.metrics),
+                    escape(&d.delegate),
+                    escape(&m.method),
+                ));
+            }
         }
         let mut figures = format!(
             "<figure><img src=\"{}\"><figcaption>reference ({} spp, depth {}, {:.1} ms)</figcaption></figure>\n",
@@ -393,12 +488,16 @@ body {{ font-family: sans-serif; margin: 2em; background: #fafafa; }}
 table {{ border-collapse: collapse; margin: 1em 0; }}
 td, th {{ border: 1px solid #bbb; padding: 4px 8px; text-align: right; vertical-align: top; }}
 td:first-child, th:first-child {{ text-align: left; }}
+tr.delegated td {{ color: #666; font-style: italic; }}
 figure {{ display: inline-block; margin: 0.5em; }}
 img {{ image-rendering: pixelated; width: {display_width}px; }}
 </style></head><body>
 <h1>specula compare: {scene}</h1>
 <p>{width}×{height} pixels on {adapter}. Errors are measured on the {mask} pixels whose visible surface is a mirror or
-dielectric (from the G-buffer's IDs): RMSE and PSNR on linear radiance clamped to [0, 1]; FLIP on the sRGB images.
+dielectric ({mirrors} mirror, {refractors} refractor; from the primary hits, as the G-buffer's IDs): RMSE and PSNR on
+linear radiance clamped to [0, 1]; FLIP on the sRGB images. A method's row counts the surfaces it shades itself; the
+surfaces it hands to another method (c3rc's refractors are envmap's) are on a row of their own below it, naming that
+method: that figure is the other method's.
 Speed-up is the CPU reference's render time over the technique's frame time; the next column is gpu-trace's frame
 time on the same GPU over the technique's ({gpu_trace}).</p>
 <table>
@@ -412,6 +511,8 @@ time on the same GPU over the technique's ({gpu_trace}).</p>
             height = r.height,
             adapter = escape(&r.adapter),
             mask = r.mask_pixels,
+            mirrors = r.mirror_pixels,
+            refractors = r.refractor_pixels,
             display_width = r.width.clamp(256, 512),
             gpu_trace = r
                 .gpu_trace_ms

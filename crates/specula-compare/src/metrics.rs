@@ -7,6 +7,7 @@
 //!   of mask pixels whose FLIP exceeds 0.1 (clearly visible differences).
 
 use serde::Serialize;
+use specula_methods::SurfaceClass;
 use specula_trace::Image;
 
 /// FLIP above which a pixel's difference counts as clearly visible.
@@ -43,6 +44,17 @@ pub fn heat_map(flip: &[f32], width: u32, height: u32) -> image::RgbImage {
     image::RgbImage::from_raw(width, height, colored.to_vec()).expect("size matches")
 }
 
+/// The pixels whose primary surface is of a class `keep` accepts (off the mask: never).
+pub fn class_mask(
+    classes: &[Option<SurfaceClass>],
+    keep: impl Fn(SurfaceClass) -> bool,
+) -> Vec<bool> {
+    classes.iter().map(|c| c.is_some_and(&keep)).collect()
+}
+
+/// The figures of `test` against `reference` on the pixels `mask` holds. `flip` is the FLIP
+/// map of the whole images ([`flip_map`]): FLIP filters spatially, so a pixel's value depends
+/// on its neighbours, masked or not.
 pub fn measure(reference: &Image, test: &Image, flip: &[f32], mask: &[bool]) -> Metrics {
     let pixels: Vec<usize> = (0..mask.len()).filter(|&i| mask[i]).collect();
     let n = pixels.len().max(1) as f64;

@@ -1,23 +1,64 @@
 //! `specula compare` over several scenes (or a folder of them): one comparison per scene, each
 //! in its own sub-folder, and a summary page with a methods × scenes table of mean FLIP and
-//! frame time (schema: docs/compare-suite.schema.json). A scene that fails to load or to render
-//! is a row with its error; the others still run.
+//! frame time (schema: docs/compare-suite.schema.json). A cell's figures are over the surfaces
+//! the method shades itself; those it delegates are listed apart with the delegate's name (see
+//! [`crate::method_figures`]). A scene that fails to load or to render is a row with its error;
+//! the others still run.
 
 use std::path::{Path, PathBuf};
 
 use serde::Serialize;
+use specula_methods::SurfaceClass;
 
 use crate::{escape, write_error, CompareError, Comparison};
+
+/// The version of [`SuiteReport`]'s JSON (docs/compare-suite.schema.json). 2: a cell's figures
+/// are over the surfaces the method shades itself (null when none), `pixels` counts those, and
+/// `delegated` lists the others.
+pub const SCHEMA_VERSION: u32 = 2;
 
 /// One method's figures on one scene.
 #[derive(Clone, Debug, Serialize)]
 pub struct SuiteCell {
     pub method: String,
-    pub mean_flip: f64,
-    pub share_flip_over_0_1: f64,
-    pub rmse: f64,
+    /// Masked pixels of the surfaces the method shades itself; the three figures are over
+    /// these, and are None (null) when there are none.
+    pub pixels: usize,
+    pub mean_flip: Option<f64>,
+    pub share_flip_over_0_1: Option<f64>,
+    pub rmse: Option<f64>,
     pub total_ms: f64,
     pub warnings: usize,
+    /// The surfaces in view it hands to another method, with the figure there (the
+    /// delegate's).
+    pub delegated: Vec<SuiteDelegated>,
+}
+
+/// A method's delegated surfaces on one scene ([`crate::DelegatedReport`], in short).
+#[derive(Clone, Debug, Serialize)]
+pub struct SuiteDelegated {
+    pub material: SurfaceClass,
+    pub delegate: String,
+    pub pixels: usize,
+    pub mean_flip: f64,
+}
+
+impl SuiteCell {
+    /// The cell's mean FLIP for a text table: its own figure, or, where it shades no pixel
+    /// itself, the delegates in brackets ("(envmap)").
+    pub fn flip_text(&self) -> String {
+        match self.mean_flip {
+            Some(f) => format!("{f:.4}"),
+            None => format!(
+                "({})",
+                self.delegated
+                    .iter()
+                    .map(|d| d.delegate.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        }
+    }
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -142,11 +183,22 @@ pub fn scene_row(
             .iter()
             .map(|m| SuiteCell {
                 method: m.method.clone(),
-                mean_flip: m.metrics.mean_flip,
-                share_flip_over_0_1: m.metrics.share_flip_over_0_1,
-                rmse: m.metrics.rmse,
+                pixels: m.metrics.as_ref().map_or(0, |x| x.mask_pixels),
+                mean_flip: m.metrics.as_ref().map(|x| x.mean_flip),
+                share_flip_over_0_1: m.metrics.as_ref().map(|x| x.share_flip_over_0_1),
+                rmse: m.metrics.as_ref().map(|x| x.rmse),
                 total_ms: m.total_ms,
                 warnings: m.warnings.len(),
+                delegated: m
+                    .delegated
+                    .iter()
+                    .map(|d| SuiteDelegated {
+                        material: d.material,
+                        delegate: d.delegate.clone(),
+                        pixels: d.metrics.mask_pixels,
+                        mean_flip: d.metrics.mean_flip,
+                    })
+                    .collect(),
             })
             .collect(),
         error: None,
@@ -211,12 +263,31 @@ fn suite_html(report: &SuiteReport) -> String {
         for method in &report.methods {
             match row.methods.iter().find(|c| &c.method == method) {
                 Some(c) => rows.push_str(&format!(
-                    "<td style=\"background:{}\" title=\"FLIP &gt; 0.1 on {:.1} % of the pixels; RMSE {:.4}; {} warnings\">{:.4}</td><td>{:.1}</td>",
-                    flip_colour(c.mean_flip),
-                    c.share_flip_over_0_1 * 100.0,
-                    c.rmse,
-                    c.warnings,
-                    c.mean_flip,
+                    "<td{}>{}{}</td><td>{:.1}</td>",
+                    match (c.mean_flip, c.share_flip_over_0_1, c.rmse) {
+                        (Some(flip), Some(share), Some(rmse)) => format!(
+                            " style=\"background:{}\" title=\"{} pixels of its own; FLIP &gt; 0.1 on {:.1} % of them; RMSE {:.4}; {} warnings\"",
+                            flip_colour(flip),
+                            c.pixels,
+                            share * 100.0,
+                            rmse,
+                            c.warnings
+                        ),
+                        _ => " class=\"delegated\" title=\"no pixel of its own\"".to_string(),
+                    },
+                    c.mean_flip
+                        .map(|f| format!("{f:.4}"))
+                        .unwrap_or_else(|| "–".into()),
+                    c.delegated
+                        .iter()
+                        .map(|d| format!(
+                            "<br><small>{} {}: {} {:.4}</small>",
+                            d.pixels,
+                            d.material,
+                            escape(&d.delegate),
+                            d.mean_flip
+                        ))
+                        .collect::<String>(),
                     c.total_ms
                 )),
                 None => rows.push_str("<td>–</td><td>–</td>"),
@@ -233,11 +304,15 @@ table {{ border-collapse: collapse; margin: 1em 0; }}
 td, th {{ border: 1px solid #bbb; padding: 4px 8px; text-align: right; }}
 td:first-child, th:first-child {{ text-align: left; }}
 td.error {{ text-align: left; color: #a00; }}
+td.delegated, small {{ color: #666; font-style: italic; }}
 </style></head><body>
 <h1>specula compare: {count} scenes</h1>
 <p>On {adapter}. Mean FLIP over each scene's mirror and dielectric pixels against the exact
 reference (green 0, red ≥ 0.3; hover for the share over 0.1 and the RMSE), and each method's frame
-time in milliseconds. A scene's name links to its own report with the images and heat-maps.</p>
+time in milliseconds. A cell's figure is over the surfaces the method shades itself; surfaces it
+hands to another method are listed under it in small type ("N refractor: envmap 0.36": those N
+pixels are envmap's shading, and the figure is envmap's). A scene's name links to its own report
+with the images and heat-maps.</p>
 <table>
 {head}{rows}</table>
 </body></html>

@@ -2,6 +2,19 @@
 
 use specula_compare::{compare, Options};
 
+fn assert_matches_schema(path: &std::path::Path) {
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
+    let schema: serde_json::Value =
+        serde_json::from_str(include_str!("../../../docs/compare.schema.json")).unwrap();
+    let validator = jsonschema::validator_for(&schema).unwrap();
+    let errors: Vec<String> = validator
+        .iter_errors(&json)
+        .map(|e| format!("{e} at {}", e.instance_path()))
+        .collect();
+    assert!(errors.is_empty(), "{errors:?}");
+}
+
 #[test]
 fn compare_writes_a_report_and_json_that_matches_the_schema() {
     let Some(ctx) = specula_methods::test_context("compare end to end") else {
@@ -29,24 +42,19 @@ fn compare_writes_a_report_and_json_that_matches_the_schema() {
     ] {
         assert!(dir.path().join(file).exists(), "{file} missing");
     }
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap())
-            .unwrap();
-    let schema: serde_json::Value =
-        serde_json::from_str(include_str!("../../../docs/compare.schema.json")).unwrap();
-    let validator = jsonschema::validator_for(&schema).unwrap();
-    let errors: Vec<String> = validator
-        .iter_errors(&json)
-        .map(|e| format!("{e} at {}", e.instance_path()))
-        .collect();
-    assert!(errors.is_empty(), "{errors:?}");
+    assert_matches_schema(&dir.path().join("report.json"));
     let m = &comparison.report.methods[0];
-    assert!(m.metrics.mask_pixels > 100);
+    let metrics = m
+        .metrics
+        .as_ref()
+        .expect("envmap shades its mirrors itself");
+    assert!(metrics.mask_pixels > 100 && m.delegated.is_empty());
+    assert_eq!(metrics.mask_pixels, comparison.report.mirror_pixels);
     // Measured 2026-11-30: 0.047; bound 2x.
     assert!(
-        m.metrics.mean_flip < 0.095,
+        metrics.mean_flip < 0.095,
         "envmap on the door mirror: mean FLIP {}",
-        m.metrics.mean_flip
+        metrics.mean_flip
     );
     let r = &comparison.report;
     let expected = r.reference.total_ms / m.total_ms;
@@ -60,6 +68,49 @@ fn compare_writes_a_report_and_json_that_matches_the_schema() {
     let ratio = m.speedup_over_gpu_trace.unwrap();
     assert!((ratio - gpu_trace_ms / m.total_ms).abs() <= 1e-9 * ratio);
     assert!(text.contains("vs gpu-trace"));
+}
+
+#[test]
+fn delegated_surfaces_are_reported_apart_with_their_delegate() {
+    let Some(ctx) = specula_methods::test_context("compare delegation") else {
+        return;
+    };
+    // The suite's glass sphere: its only specular surface is glass, which c3rc hands to
+    // envmap.
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenes/suite/glass-sphere.toml");
+    let scene = specula_scene::load(path.to_str().unwrap()).unwrap();
+    let options = Options {
+        width: 48,
+        height: 36,
+        methods: vec!["c3rc".into(), "envmap".into()],
+        spp: 1,
+        max_depth: 8,
+        parameters: vec![],
+    };
+    let comparison = compare(&scene, &ctx, &options, &|_| {}).unwrap();
+    let r = &comparison.report;
+    assert!(
+        r.refractor_pixels > 100 && r.mirror_pixels == 0,
+        "{} refractor, {} mirror pixels",
+        r.refractor_pixels,
+        r.mirror_pixels
+    );
+    let (c3rc, envmap) = (&r.methods[0], &r.methods[1]);
+    assert_eq!(c3rc.metrics, None, "c3rc shades no glass itself");
+    assert_eq!(c3rc.delegated.len(), 1);
+    let d = &c3rc.delegated[0];
+    assert_eq!(
+        (d.material, d.delegate.as_str()),
+        (specula_methods::SurfaceClass::Refractor, "envmap")
+    );
+    assert!(envmap.delegated.is_empty());
+    // envmap's shading on those pixels: c3rc's figure there is envmap's.
+    assert_eq!(Some(&d.metrics), envmap.metrics.as_ref());
+    let dir = tempfile::tempdir().unwrap();
+    let html = std::fs::read_to_string(comparison.write_report(dir.path()).unwrap()).unwrap();
+    assert!(html.contains("refractor pixels") && html.contains("shaded by envmap"));
+    assert_matches_schema(&dir.path().join("report.json"));
 }
 
 #[test]

@@ -67,13 +67,14 @@ fn iterative_lookup_beats_kay_greenberg_before_a_checkered_plane() {
     let scene = load(&dir, "checker.toml", SPHERE_BEFORE_CHECKER);
     let flip = |mode: &str| {
         let c = run(&ctx, &scene, 128, &[&format!("mode={mode}")]);
-        c.report.methods[0].metrics.mean_flip
+        c.report.methods[0].metrics.as_ref().unwrap().mean_flip
     };
     let (iterative, kay_greenberg) = (flip("iterative"), flip("kay-greenberg"));
     println!("mean FLIP on the sphere: iterative {iterative:.4}, kay-greenberg {kay_greenberg:.4}");
-    // Measured at 128²: iterative 0.0494, Kay–Greenberg 0.4637 (lavapipe); the bound is twice
-    // the iterative figure.
-    assert!(iterative < 0.1, "iterative {iterative}");
+    // Measured at 128² (lavapipe), 2026-12-01 with `cargo test -p specula-compare --test
+    // image_space -- --nocapture`: iterative 0.0493, Kay–Greenberg 0.4637; the bound is 1.5× the
+    // iterative figure (it was 0.1, over the measurement + 0.05).
+    assert!(iterative < 0.074, "iterative {iterative}");
     assert!(iterative < kay_greenberg);
 }
 
@@ -258,12 +259,12 @@ fn peeled_layers_follow_light_through_a_second_ball() {
     let scene = load(&dir, "two-balls.toml", TWO_BALLS);
     let flip = |layers: u32| {
         let c = run(&ctx, &scene, 128, &[&format!("layers={layers}")]);
-        c.report.methods[0].metrics.mean_flip
+        c.report.methods[0].metrics.as_ref().unwrap().mean_flip
     };
     let (two, four) = (flip(1), flip(2));
     println!("mean FLIP on the balls: 2 interfaces {two:.4}, 4 interfaces {four:.4}");
-    // Measured at 128²: 0.2877 with layers=1, 0.0532 with layers=2; the bound is twice the
-    // latter.
-    assert!(four < 0.11, "layers=2: {four}");
+    // Measured at 128², 2026-12-01: 0.2877 with layers=1, 0.0532 with layers=2; the bound is
+    // 1.5× the latter (it was 0.11, over the measurement + 0.05).
+    assert!(four < 0.08, "layers=2: {four}");
     assert!(four < 0.5 * two, "layers=2 {four} vs layers=1 {two}");
 }

@@ -16,7 +16,7 @@ fn flip(ctx: &specula_methods::Context, parameters: &[&str]) -> f64 {
         parameters: parameters.iter().map(|p| p.to_string()).collect(),
     };
     let c = compare(&scene, ctx, &options, &|_| {}).unwrap();
-    c.report.methods[0].metrics.mean_flip
+    c.report.methods[0].metrics.as_ref().unwrap().mean_flip
 }
 
 #[test]

@@ -41,6 +41,9 @@ pub struct GpuContext {
     /// they are collected and returned as an error by the next [`GpuContext::wait`].
     uncaptured: Arc<Mutex<Vec<String>>>,
     created: [AtomicU64; 3],
+    /// The staging buffer texture readbacks copy into, kept and grown to the largest readback
+    /// so far: a warm readback creates nothing.
+    readback: Mutex<Option<wgpu::Buffer>>,
 }
 
 /// How many GPU textures, buffers and bind groups were created (through [`GpuContext`]'s
@@ -135,6 +138,7 @@ impl GpuContext {
         Ok(GpuContext {
             uncaptured,
             created: Default::default(),
+            readback: Mutex::new(None),
             device,
             queue,
             adapter_info: adapter.get_info(),
@@ -233,7 +237,8 @@ impl GpuContext {
     }
 
     /// Reads a 2D texture (mip 0, layer `layer`) back to the CPU as tightly packed rows of
-    /// `bytes_per_texel` bytes, undoing wgpu's 256-byte row alignment.
+    /// `bytes_per_texel` bytes, undoing wgpu's 256-byte row alignment. The staging buffer is the
+    /// context's own, made once per size increase.
     pub fn read_texture(&self, texture: &wgpu::Texture, layer: u32) -> Result<Vec<u8>, GpuError> {
         let bytes_per_texel = texture.format().block_copy_size(None).ok_or_else(|| {
             GpuError::Readback(format!("format {:?} cannot be copied", texture.format()))
@@ -241,12 +246,17 @@ impl GpuContext {
         let (width, height) = (texture.width(), texture.height());
         let unpadded = width * bytes_per_texel;
         let padded = crate::util::padded_row_bytes(unpadded);
-        let buffer = self.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("readback"),
-            size: (padded * height) as u64,
-            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-            mapped_at_creation: false,
-        });
+        let size = (padded * height) as u64;
+        let mut kept = self.readback.lock().unwrap_or_else(|e| e.into_inner());
+        if kept.as_ref().is_none_or(|b| b.size() < size) {
+            *kept = Some(self.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("readback"),
+                size,
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+                mapped_at_creation: false,
+            }));
+        }
+        let buffer = kept.as_ref().expect("made above");
         let mut encoder = self.device.create_command_encoder(&Default::default());
         encoder.copy_texture_to_buffer(
             wgpu::TexelCopyTextureInfo {
@@ -260,7 +270,7 @@ impl GpuContext {
                 aspect: wgpu::TextureAspect::All,
             },
             wgpu::TexelCopyBufferInfo {
-                buffer: &buffer,
+                buffer,
                 layout: wgpu::TexelCopyBufferLayout {
                     offset: 0,
                     bytes_per_row: Some(padded),
@@ -274,9 +284,9 @@ impl GpuContext {
             },
         );
         self.queue.submit([encoder.finish()]);
-        self.read_mapped(&buffer, |mapped| {
+        self.read_mapped(buffer, |mapped| {
             let mut out = Vec::with_capacity((unpadded * height) as usize);
-            for row in mapped.chunks_exact(padded as usize) {
+            for row in mapped[..size as usize].chunks_exact(padded as usize) {
                 out.extend_from_slice(&row[..unpadded as usize]);
             }
             out

@@ -22,9 +22,9 @@ pub use gpu_scene::GpuScene;
 pub use live_scene::{AccelUpdate, LiveScene, MoveError};
 pub use registry::{approximate_methods, by_name, exact_method, method, METHODS};
 pub use technique::{
-    apply_known_parameters, apply_parameters, apply_setting, Context, Frame, Invalidates,
-    MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, StageTime, Technique, TechniqueError,
-    COUNTER_RAYS_TRACED, COUNTER_SHADOW_RAYS,
+    apply_known_parameters, apply_parameters, apply_setting, Context, Delegation, Drawn, Frame,
+    Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, StageTime, SurfaceClass,
+    Technique, TechniqueError, COUNTER_RAYS_TRACED, COUNTER_SHADOW_RAYS,
 };
 
 /// One frame of a still scene from its own camera, with its pixels on the CPU: for tests,
@@ -53,7 +53,7 @@ impl std::ops::Deref for Still {
     }
 }
 
-impl<T: Technique + ?Sized> RenderStill for T {
+impl RenderStill for dyn Technique + '_ {
     fn render_still(
         &mut self,
         ctx: &Context,
@@ -69,8 +69,20 @@ impl<T: Technique + ?Sized> RenderStill for T {
     }
 }
 
-/// The context for GPU tests: `None` (after a loud SKIPPED line) when this machine has no
-/// Vulkan adapter; under CI a missing adapter is a failure (see [`specula_gpu::test_context`]).
+impl<T: Technique> RenderStill for T {
+    fn render_still(
+        &mut self,
+        ctx: &Context,
+        scene: &specula_scene::Scene,
+        width: u32,
+        height: u32,
+    ) -> Result<Still, TechniqueError> {
+        (self as &mut dyn Technique).render_still(ctx, scene, width, height)
+    }
+}
+
+/// The context for GPU tests: a missing Vulkan adapter fails the test unless the runner opted
+/// out, and then it is `None` (see [`specula_gpu::test_context`]).
 pub fn test_context(test: &str) -> Option<Context> {
     specula_gpu::test_context(test).map(Context::with_gpu)
 }

@@ -54,3 +54,34 @@ pub fn exact_method() -> &'static MethodInfo {
         .find(|m| m.exact)
         .expect("the registry holds an exact method")
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::technique::SurfaceClass;
+
+    #[test]
+    fn delegations_name_registered_methods_that_shade_the_class_themselves() {
+        for info in METHODS {
+            for class in SurfaceClass::ALL {
+                let count = info
+                    .delegates
+                    .iter()
+                    .filter(|d| d.material == class)
+                    .count();
+                assert!(count <= 1, "{}: {count} delegations of {class}", info.name);
+            }
+            for d in info.delegates {
+                let delegate = method(d.to).unwrap();
+                assert_ne!(delegate.name, info.name);
+                assert!(!info.exact, "{}: an exact method delegates", info.name);
+                // No chains: the delegate's figure on those pixels is its own.
+                assert_eq!(delegate.delegate_for(d.material), None, "{}", info.name);
+            }
+        }
+        // What the code does (module docs): c3rc shades refractors as envmap does.
+        let c3rc = method("c3rc").unwrap();
+        assert_eq!(c3rc.delegate_for(SurfaceClass::Refractor), Some("envmap"));
+        assert_eq!(c3rc.delegate_for(SurfaceClass::Mirror), None);
+    }
+}

@@ -12,7 +12,7 @@ use std::fmt;
 
 pub use specula_gpu::StageTime;
 use specula_gpu::{GpuContext, GpuError, ResourceCounts, TimingSource};
-use specula_scene::Camera;
+use specula_scene::{Camera, Material, MaterialKind};
 use specula_trace::Image;
 
 use crate::live_scene::LiveScene;
@@ -79,8 +79,52 @@ pub enum Pixels {
     Image(Image),
 }
 
-/// One rendered frame: its pixels (linear radiance), where the time went, and what the
-/// technique counted (passes, texels, rays...).
+/// What a technique draws for one frame ([`Technique::draw`]): its pixels (linear radiance),
+/// where the time went, and what it counted (passes, texels, rays...). The lifecycle
+/// ([`render`](trait.Technique.html#method.render)) turns it into a [`Frame`].
+#[derive(Clone, Debug)]
+pub struct Drawn {
+    pub pixels: Pixels,
+    pub stages: Vec<StageTime>,
+    pub counters: Vec<(String, u64)>,
+    pub timing: TimingSource,
+    /// What the technique had to approximate or fall back on this frame (said once per cause).
+    pub warnings: Vec<String>,
+    /// False while a progressive technique can still refine this view: call `render` again.
+    pub converged: bool,
+}
+
+/// One rendered frame: what the technique drew, and the GPU objects created while it drew,
+/// measured by the frame lifecycle around [`Technique::draw`]. The count is a private field:
+/// only [`render`](trait.Technique.html#method.render) makes a `Frame`, so no technique can
+/// write it. A technique builds what it drew:
+///
+/// ```
+/// use specula_methods::{Drawn, Pixels};
+/// let drawn = Drawn {
+///     pixels: Pixels::Image(specula_trace::Image::new(1, 1)),
+///     stages: Vec::new(),
+///     counters: Vec::new(),
+///     timing: specula_gpu::TimingSource::CpuWallClock,
+///     warnings: Vec::new(),
+///     converged: true,
+/// };
+/// ```
+///
+/// and the same fields with a count, as a `Frame`, do not compile:
+///
+/// ```compile_fail
+/// use specula_methods::{Frame, Pixels};
+/// let frame = Frame {
+///     pixels: Pixels::Image(specula_trace::Image::new(1, 1)),
+///     stages: Vec::new(),
+///     counters: Vec::new(),
+///     timing: specula_gpu::TimingSource::CpuWallClock,
+///     warnings: Vec::new(),
+///     converged: true,
+///     created: specula_gpu::ResourceCounts::default(),
+/// };
+/// ```
 #[derive(Clone, Debug)]
 pub struct Frame {
     pub pixels: Pixels,
@@ -91,8 +135,7 @@ pub struct Frame {
     pub warnings: Vec<String>,
     /// False while a progressive technique can still refine this view: call `render` again.
     pub converged: bool,
-    /// GPU textures, buffers and bind groups created during this frame.
-    pub created: ResourceCounts,
+    created: ResourceCounts,
 }
 
 impl Frame {
@@ -100,7 +143,13 @@ impl Frame {
         self.stages.iter().map(|s| s.milliseconds).sum()
     }
 
-    /// The pixels on the CPU: read back from the GPU where they are there.
+    /// GPU textures, buffers and bind groups created while the frame was drawn.
+    pub fn created(&self) -> ResourceCounts {
+        self.created
+    }
+
+    /// The pixels on the CPU: read back from the GPU where they are there (through the
+    /// context's kept readback buffer: a warm readback creates nothing).
     pub fn image(&self, ctx: &Context) -> Result<Image, TechniqueError> {
         match &self.pixels {
             Pixels::Image(image) => Ok(image.clone()),
@@ -108,6 +157,39 @@ impl Frame {
                 Ok(crate::raster::read_rgba32f(ctx.gpu("readback")?, texture)?)
             }
         }
+    }
+}
+
+impl dyn Technique + '_ {
+    /// One frame of `camera`'s view at `width` × `height`: the frame lifecycle. The technique
+    /// draws ([`Technique::draw`]); the GPU objects created meanwhile are counted here, outside
+    /// it, from the context's own counters.
+    pub fn render(
+        &mut self,
+        ctx: &Context,
+        scene: &LiveScene,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+    ) -> Result<Frame, TechniqueError> {
+        let before = ctx.resource_counts();
+        let Drawn {
+            pixels,
+            stages,
+            counters,
+            timing,
+            warnings,
+            converged,
+        } = self.draw(ctx, scene, camera, width, height)?;
+        Ok(Frame {
+            pixels,
+            stages,
+            counters,
+            timing,
+            warnings,
+            converged,
+            created: ctx.resource_counts() - before,
+        })
     }
 }
 
@@ -263,6 +345,57 @@ impl ParamSpec {
     }
 }
 
+/// The class of specular surface a pixel's primary ray meets: what a method's
+/// [`MethodInfo::delegates`] is declared per, and what `compare` splits its figures by.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SurfaceClass {
+    /// A conductor mirror ([`MaterialKind::Mirror`]).
+    Mirror,
+    /// A dielectric, solid or thin-walled ([`MaterialKind::Dielectric`]).
+    Refractor,
+}
+
+impl SurfaceClass {
+    pub const ALL: [SurfaceClass; 2] = [SurfaceClass::Mirror, SurfaceClass::Refractor];
+
+    /// The class of a surface of `material`; None for the non-specular ones (unlit, diffuse),
+    /// which the scene raster pass draws for every technique alike.
+    pub fn of(material: &Material) -> Option<SurfaceClass> {
+        match material.kind {
+            MaterialKind::Mirror { .. } => Some(SurfaceClass::Mirror),
+            MaterialKind::Dielectric { .. } => Some(SurfaceClass::Refractor),
+            MaterialKind::Unlit | MaterialKind::Diffuse => None,
+        }
+    }
+
+    /// The word reports use ("mirror", "refractor"), as serialised.
+    pub fn name(self) -> &'static str {
+        match self {
+            SurfaceClass::Mirror => "mirror",
+            SurfaceClass::Refractor => "refractor",
+        }
+    }
+}
+
+impl fmt::Display for SurfaceClass {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A class of surfaces a method does not shade with its own algorithm but hands, code and
+/// maps alike, to another registered method: its pixels there are that method's pixels, so its
+/// figure there is that method's figure, not its own. `compare` reports such pixels apart,
+/// naming the delegate; the suite test checks they equal the delegate's.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Delegation {
+    /// The surfaces handed over.
+    pub material: SurfaceClass,
+    /// The [`MethodInfo::name`] of the method whose shading they get.
+    pub to: &'static str,
+}
+
 /// A registered method: its name, what it is, its parameters and how to make one.
 pub struct MethodInfo {
     /// The name users type (`--method`).
@@ -277,6 +410,9 @@ pub struct MethodInfo {
     pub gpu_optional: bool,
     /// Its frames refine over calls (see [`Frame::converged`]).
     pub progressive: bool,
+    /// The surface classes it hands to another method (at most one entry per class; empty
+    /// when it shades every specular surface itself).
+    pub delegates: &'static [Delegation],
     pub params: &'static [ParamSpec],
     pub create: fn() -> Box<dyn Technique>,
 }
@@ -284,6 +420,15 @@ pub struct MethodInfo {
 impl MethodInfo {
     pub fn param(&self, name: &str) -> Option<&'static ParamSpec> {
         self.params.iter().find(|p| p.name == name)
+    }
+
+    /// The method `material`'s surfaces are handed to; None where this method shades them
+    /// itself.
+    pub fn delegate_for(&self, material: SurfaceClass) -> Option<&'static str> {
+        self.delegates
+            .iter()
+            .find(|d| d.material == material)
+            .map(|d| d.to)
     }
 }
 
@@ -318,15 +463,16 @@ pub trait Technique {
     /// Builds what depends on the scene now (otherwise the first `render` does).
     fn prepare(&mut self, ctx: &Context, scene: &LiveScene) -> Result<(), TechniqueError>;
 
-    /// One frame of `camera`'s view at `width` × `height`.
-    fn render(
+    /// Draws one frame of `camera`'s view at `width` × `height`. Callers use `render` (on
+    /// `dyn Technique`), which measures what the frame created.
+    fn draw(
         &mut self,
         ctx: &Context,
         scene: &LiveScene,
         camera: &Camera,
         width: u32,
         height: u32,
-    ) -> Result<Frame, TechniqueError>;
+    ) -> Result<Drawn, TechniqueError>;
 
     /// Parameters and their current values, in spec order, for reports.
     fn parameters(&self) -> Vec<(String, String)> {

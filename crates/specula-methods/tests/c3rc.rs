@@ -425,7 +425,7 @@ fn the_gpu_forward_phase_draws_what_the_cpu_draws() {
                 .render(&ctx, &live, &scene.camera, width, height)
                 .unwrap();
             assert_eq!(
-                frame.created.total(),
+                frame.created().total(),
                 0,
                 "{projection}: a warm frame creates nothing"
             );

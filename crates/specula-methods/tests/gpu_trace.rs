@@ -232,7 +232,7 @@ fn gpu_trace_follows_moves_and_a_camera_change_uploads_nothing() {
     };
     let scene = specula_scene::load("glass-dragon").unwrap();
     let mut live = LiveScene::new(scene);
-    let mut technique = GpuTrace::new(Mode::Megakernel, 8);
+    let mut technique: Box<dyn Technique> = Box::new(GpuTrace::new(Mode::Megakernel, 8));
     technique.prepare(&ctx, &live).unwrap();
     let camera = live.scene().camera.clone();
     technique
@@ -244,7 +244,7 @@ fn gpu_trace_follows_moves_and_a_camera_change_uploads_nothing() {
     let frame = technique
         .render(&ctx, &live, &moved_camera, WIDTH, HEIGHT)
         .unwrap();
-    assert_eq!(frame.created.total(), 0);
+    assert_eq!(frame.created().total(), 0);
     // Move the glass bunny: the next frame equals the CPU reference of the moved scene.
     let bunny = live
         .scene()

@@ -6,9 +6,12 @@ use specula_methods::LiveScene;
 use specula_trace::{render, Image, RenderSettings, SceneAccel};
 
 /// Mean FLIP over pixels where the raster G-buffer shows no mirror or dielectric, at 128×128
-/// with 1024² shadow maps. Measured: 0.0018 (teapot-box), 0.0056 (mirror-teapot-bunny); the
-/// differences are shadow-map texels at shadow edges and silhouette pixels.
-const MEAN_FLIP_MAX: f32 = 0.01;
+/// with 1024² shadow maps, measured 2026-12-01 on lavapipe with `cargo test -p specula-methods
+/// --test raster -- --nocapture`: 0.0013 (teapot-box), 0.0054 (mirror-teapot-bunny); the
+/// differences are shadow-map texels at shadow edges and silhouette pixels. Bounds about 1.5×
+/// each (one bound of 0.01 for both was 7.7× the teapot-box figure).
+const MEAN_FLIP_MAX_TEAPOT_BOX: f32 = 0.002;
+const MEAN_FLIP_MAX_MIRROR_TEAPOT_BUNNY: f32 = 0.008;
 
 fn flip_map(reference: &Image, test: &Image) -> Vec<f32> {
     let to_flip = |i: &Image| {
@@ -23,7 +26,7 @@ fn flip_map(reference: &Image, test: &Image) -> Vec<f32> {
     .to_vec()
 }
 
-fn check(scene_name: &str) -> f32 {
+fn check(scene_name: &str, mean_flip_max: f32) -> f32 {
     let Some(ctx) = specula_gpu::test_context(scene_name) else {
         return 0.0;
     };
@@ -69,7 +72,7 @@ fn check(scene_name: &str) -> f32 {
         "{scene_name}: mean FLIP on {} non-specular pixels: {mean:.4}",
         diffuse.len()
     );
-    if mean > MEAN_FLIP_MAX {
+    if mean > mean_flip_max {
         let dir = std::env::temp_dir();
         image
             .save_png(&dir.join(format!("{scene_name}-raster-actual.png")))
@@ -78,7 +81,7 @@ fn check(scene_name: &str) -> f32 {
             .save_png(&dir.join(format!("{scene_name}-raster-reference.png")))
             .unwrap();
         panic!(
-            "{scene_name}: mean FLIP {mean:.4} > {MEAN_FLIP_MAX}; images in {}",
+            "{scene_name}: mean FLIP {mean:.4} > {mean_flip_max}; images in {}",
             dir.display()
         );
     }
@@ -103,12 +106,12 @@ fn check(scene_name: &str) -> f32 {
 
 #[test]
 fn teapot_box_non_specular_pixels_match_the_reference() {
-    check("teapot-box");
+    check("teapot-box", MEAN_FLIP_MAX_TEAPOT_BOX);
 }
 
 #[test]
 fn mirror_teapot_bunny_non_specular_pixels_match_the_reference() {
-    check("mirror-teapot-bunny");
+    check("mirror-teapot-bunny", MEAN_FLIP_MAX_MIRROR_TEAPOT_BUNNY);
 }
 
 #[test]

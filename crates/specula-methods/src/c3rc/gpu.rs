@@ -250,7 +250,9 @@ impl GpuProjection {
         made |= self.points.fit(
             ctx,
             "c3rc points",
-            (total * size_of::<GpuPoint>()) as u64,
+            // A binding holds one element at least, even with no point to project (a scene
+            // whose mirrors have nothing near them, or no mirror).
+            (total.max(1) * size_of::<GpuPoint>()) as u64,
             storage,
         );
         if made || self.uploaded != Some(cloud_generation) {
@@ -273,16 +275,19 @@ impl GpuProjection {
             .iter()
             .map(|p| p.object_from_world.inverse().as_mat4().to_cols_array())
             .collect();
-        made |= self
-            .clouds
-            .fit(ctx, "c3rc clouds", (matrices.len() * 64) as u64, storage);
+        made |= self.clouds.fit(
+            ctx,
+            "c3rc clouds",
+            (matrices.len().max(1) * 64) as u64,
+            storage,
+        );
         ctx.queue
             .write_buffer(self.clouds.get(), 0, bytemuck::cast_slice(&matrices));
         let cameras: Vec<GpuCamera> = plan.cameras.iter().map(gpu_camera).collect();
         made |= self.cameras.fit(
             ctx,
             "c3rc cameras",
-            (cameras.len() * size_of::<GpuCamera>()) as u64,
+            (cameras.len().max(1) * size_of::<GpuCamera>()) as u64,
             storage,
         );
         ctx.queue

@@ -115,7 +115,7 @@ use crate::gpu_scene::GpuScene;
 use crate::live_scene::LiveScene;
 use crate::raster::{self, BindGroupsBySlot, OutputTexture, RasterPass, RasterSpec, CUBE_FACES};
 use crate::technique::{
-    Context, Frame, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, Technique,
+    Context, Drawn, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, Technique,
     TechniqueError,
 };
 
@@ -210,6 +210,7 @@ pub const INFO: MethodInfo = MethodInfo {
     needs_gpu: true,
     gpu_optional: false,
     progressive: false,
+    delegates: &[],
     params: PARAMS,
     create: || Box::new(DistanceMaps::default()),
 };
@@ -1008,16 +1009,15 @@ impl Technique for DistanceMaps {
         self.ensure_prepared(ctx.gpu(INFO.name)?, scene)
     }
 
-    fn render(
+    fn draw(
         &mut self,
         ctx: &Context,
         live: &LiveScene,
         camera: &Camera,
         width: u32,
         height: u32,
-    ) -> Result<Frame, TechniqueError> {
+    ) -> Result<Drawn, TechniqueError> {
         let gpu = ctx.gpu(INFO.name)?;
-        let before = gpu.resource_counts();
         self.ensure_prepared(gpu, live)?;
         let scene = live.scene();
         let gpu_scene = live.gpu(gpu);
@@ -1080,14 +1080,13 @@ impl Technique for DistanceMaps {
                 ));
             }
         }
-        Ok(Frame {
+        Ok(Drawn {
             pixels: Pixels::Texture(output),
             stages,
             counters,
             timing,
             warnings,
             converged: true,
-            created: gpu.resource_counts() - before,
         })
     }
 }

@@ -48,7 +48,7 @@ use crate::gpu_scene::GpuScene;
 use crate::live_scene::LiveScene;
 use crate::raster::{self, BindGroupsBySlot, OutputTexture, RasterPass, RasterSpec};
 use crate::technique::{
-    Context, Frame, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, Technique,
+    Context, Drawn, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, Technique,
     TechniqueError,
 };
 
@@ -103,6 +103,7 @@ pub const INFO: MethodInfo = MethodInfo {
     needs_gpu: true,
     gpu_optional: false,
     progressive: false,
+    delegates: &[],
     params: PARAMS,
     create: || Box::new(EnvMap::default()),
 };
@@ -569,16 +570,15 @@ impl Technique for EnvMap {
         Ok(())
     }
 
-    fn render(
+    fn draw(
         &mut self,
         ctx: &Context,
         live: &LiveScene,
         camera: &Camera,
         width: u32,
         height: u32,
-    ) -> Result<Frame, TechniqueError> {
+    ) -> Result<Drawn, TechniqueError> {
         let gpu = ctx.gpu(INFO.name)?;
-        let before = gpu.resource_counts();
         self.ensure_prepared(gpu, live)?;
         let scene = live.scene();
         let gpu_scene = live.gpu(gpu);
@@ -617,7 +617,7 @@ impl Technique for EnvMap {
         })?;
         self.timer.lap(gpu, "shading")?;
         let (stages, timing) = self.timer.finish(gpu)?;
-        Ok(Frame {
+        Ok(Drawn {
             pixels: Pixels::Texture(output),
             stages,
             counters: vec![
@@ -632,7 +632,6 @@ impl Technique for EnvMap {
             timing,
             warnings: Vec::new(),
             converged: true,
-            created: gpu.resource_counts() - before,
         })
     }
 }

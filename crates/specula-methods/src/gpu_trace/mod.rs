@@ -56,7 +56,7 @@ use bytemuck::{Pod, Zeroable};
 use specula_gpu::counters::Counters;
 use specula_gpu::shaders::{self, CameraUniform};
 use specula_gpu::util::{buffer_binding, layout_entry, writable_buffer};
-use specula_gpu::{GpuContext, GpuError, ResourceCounts, StageTimer};
+use specula_gpu::{GpuContext, GpuError, StageTimer};
 use specula_scene::Camera;
 use specula_trace::SceneAccel;
 
@@ -64,7 +64,7 @@ use crate::gpu_scene::GpuScene;
 use crate::live_scene::LiveScene;
 use crate::raster::{self, OutputTexture};
 use crate::technique::{
-    Context, Frame, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, Technique,
+    Context, Drawn, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, Technique,
     TechniqueError, COUNTER_RAYS_TRACED, COUNTER_SHADOW_RAYS,
 };
 
@@ -135,6 +135,7 @@ pub const INFO: MethodInfo = MethodInfo {
     needs_gpu: true,
     gpu_optional: false,
     progressive: false,
+    delegates: &[],
     params: PARAMS,
     create: || Box::new(GpuTrace::default()),
 };
@@ -628,16 +629,15 @@ impl Technique for GpuTrace {
         Ok(())
     }
 
-    fn render(
+    fn draw(
         &mut self,
         ctx: &Context,
         live: &LiveScene,
         camera: &Camera,
         width: u32,
         height: u32,
-    ) -> Result<Frame, TechniqueError> {
+    ) -> Result<Drawn, TechniqueError> {
         let gpu = ctx.gpu(INFO.name)?;
-        let before = gpu.resource_counts();
         self.ensure_prepared(gpu, live)?;
         let output = self.output.get(gpu, width, height);
         let p = self.prepared.as_mut().expect("prepared above");
@@ -690,8 +690,7 @@ impl Technique for GpuTrace {
                 counts[DROPPED], self.max_depth
             ));
         }
-        let created: ResourceCounts = gpu.resource_counts() - before;
-        Ok(Frame {
+        Ok(Drawn {
             pixels: Pixels::Texture(output),
             stages,
             counters: COUNTER_NAMES
@@ -702,7 +701,6 @@ impl Technique for GpuTrace {
             timing,
             warnings,
             converged: true,
-            created,
         })
     }
 }

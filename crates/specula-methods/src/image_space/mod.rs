@@ -125,7 +125,7 @@ use crate::gpu_scene::GpuScene;
 use crate::live_scene::LiveScene;
 use crate::raster::{self, MeshSelection, OutputTexture, RasterPass, RasterSpec, Targets};
 use crate::technique::{
-    Context, Frame, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, Technique,
+    Context, Drawn, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, Technique,
     TechniqueError,
 };
 
@@ -256,6 +256,11 @@ pub const INFO: MethodInfo = MethodInfo {
     needs_gpu: true,
     gpu_optional: false,
     progressive: false,
+    // Mirrors are not handed to envmap: they look envmap's kind of cube map up with
+    // image-space's own parallax correction (`env_along`; `parallax`, on by default), which
+    // changes their figure (suite mirror sphere: envmap 0.20, image-space 0.017), so it is
+    // image-space's own.
+    delegates: &[],
     params: PARAMS,
     create: || Box::new(ImageSpace::default()),
 };
@@ -896,16 +901,15 @@ impl Technique for ImageSpace {
         self.ensure_prepared(ctx.gpu(INFO.name)?, scene)
     }
 
-    fn render(
+    fn draw(
         &mut self,
         ctx: &Context,
         live: &LiveScene,
         camera: &Camera,
         width: u32,
         height: u32,
-    ) -> Result<Frame, TechniqueError> {
+    ) -> Result<Drawn, TechniqueError> {
         let gpu = ctx.gpu(INFO.name)?;
-        let before = gpu.resource_counts();
         self.ensure_prepared(gpu, live)?;
         let scene = live.scene();
         let gpu_scene = live.gpu(gpu);
@@ -1049,14 +1053,13 @@ impl Technique for ImageSpace {
                 warnings.push(format!("image-space: {n} {what}"));
             }
         }
-        Ok(Frame {
+        Ok(Drawn {
             pixels: Pixels::Texture(output),
             stages,
             counters,
             timing,
             warnings,
             converged: true,
-            created: gpu.resource_counts() - before,
         })
     }
 }

@@ -28,14 +28,14 @@ use std::time::Instant;
 
 use glam::Vec3;
 use rayon::prelude::*;
-use specula_gpu::{ResourceCounts, StageTime, TimingSource};
+use specula_gpu::{StageTime, TimingSource};
 use specula_scene::Camera;
 use specula_trace::reference::{pixel_radiance, rays_traced_on_this_thread, Tracer};
 use specula_trace::Image;
 
 use crate::live_scene::LiveScene;
 use crate::technique::{
-    Context, Frame, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, Technique,
+    Context, Drawn, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, Technique,
     TechniqueError, COUNTER_RAYS_TRACED, COUNTER_SHADOW_RAYS,
 };
 
@@ -70,6 +70,7 @@ pub const INFO: MethodInfo = MethodInfo {
     needs_gpu: false,
     gpu_optional: false,
     progressive: true,
+    delegates: &[],
     params: PARAMS,
     create: || Box::new(Reference::default()),
 };
@@ -160,14 +161,14 @@ impl Technique for Reference {
         Ok(())
     }
 
-    fn render(
+    fn draw(
         &mut self,
         _: &Context,
         live: &LiveScene,
         camera: &Camera,
         width: u32,
         height: u32,
-    ) -> Result<Frame, TechniqueError> {
+    ) -> Result<Drawn, TechniqueError> {
         let start = Instant::now();
         let key = ViewKey {
             camera: camera.clone(),
@@ -259,7 +260,7 @@ impl Technique for Reference {
             }
         }
         let converged = progress.level == LEVELS.len();
-        Ok(Frame {
+        Ok(Drawn {
             pixels: Pixels::Image(progress.image.clone()),
             stages: vec![StageTime {
                 stage: "ray tracing".into(),
@@ -283,7 +284,6 @@ impl Technique for Reference {
             timing: TimingSource::CpuWallClock,
             warnings: Vec::new(),
             converged,
-            created: ResourceCounts::default(),
         })
     }
 }
