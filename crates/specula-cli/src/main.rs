@@ -1,7 +1,7 @@
 //! `specula`: renders reflections and refractions on curved mirrors and lenses, and measures
 //! how accurate and fast each technique is. See README.md for the commands.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result};
@@ -14,8 +14,6 @@ use specula_scene::Scene;
 use specula_trace::Image;
 
 mod bench;
-#[cfg(feature = "mpi")]
-mod distributed;
 
 #[derive(Parser)]
 #[command(
@@ -35,71 +33,10 @@ enum Command {
     /// List every method with its parameters: kind and range, default, what a change redoes.
     Methods,
     /// Render a scene to PNG (sRGB, clamped) and optionally EXR (linear float).
-    Render {
-        /// Built-in scene name, a .toml scene file, or a mesh/scene file (.gltf .glb .obj .ply .stl).
-        #[arg(default_value = DEFAULT_SCENE)]
-        scene: String,
-        /// Method to render with (`specula methods` lists them).
-        #[arg(long, short, default_value = "reference")]
-        method: String,
-        /// Image width in pixels.
-        #[arg(short = 'W', long, default_value_t = 640, value_parser = clap::value_parser!(u32).range(1..=16384))]
-        width: u32,
-        /// Image height in pixels (default: from the width and the camera's aspect ratio, else 480).
-        #[arg(short = 'H', long, value_parser = clap::value_parser!(u32).range(1..=16384))]
-        height: Option<u32>,
-        /// Samples per pixel of the reference: 1 = one ray through each pixel centre; more =
-        /// stratified jitter (the reference's `spp` parameter).
-        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4096))]
-        spp: u32,
-        /// Maximum number of specular bounces on a reference path (its `max_depth` parameter).
-        #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(0..=64))]
-        max_depth: u32,
-        /// A technique parameter, NAME=VALUE (repeatable), e.g. `-p resolution=512`.
-        #[arg(short = 'p', long = "param")]
-        params: Vec<String>,
-        /// PNG output file.
-        #[arg(short, long, default_value = "out.png")]
-        output: PathBuf,
-        /// Also write linear float RGB to this OpenEXR file.
-        #[arg(long)]
-        exr: Option<PathBuf>,
-        /// A progressive method's steps as an image sequence: DIR/step-000.png, ... and
-        /// DIR/steps.csv with the time and rays of each step (the step time is the method's
-        /// `budget_ms`, 100 unless `-p budget_ms=N` says otherwise).
-        #[arg(long, value_name = "DIR")]
-        sequence: Option<PathBuf>,
-        #[command(flatten)]
-        distributed: DistributedArgs,
-    },
+    Render(RenderArgs),
     /// Render the reference and each method from the same camera; report error and speed.
     /// Several scenes, or a folder of .toml scenes, give one report with a methods × scenes table.
-    Compare {
-        /// Built-in scene names, scene or mesh files, or folders of .toml scenes.
-        #[arg(default_value = DEFAULT_SCENE)]
-        scenes: Vec<String>,
-        /// Comma-separated methods (default: every method).
-        #[arg(long, value_delimiter = ',')]
-        methods: Option<Vec<String>>,
-        /// Folder for report.html, report.json and the images.
-        #[arg(long, default_value = "specula-report")]
-        report: PathBuf,
-        /// A technique parameter, NAME=VALUE (repeatable), e.g. `-p resolution=512`.
-        #[arg(short = 'p', long = "param")]
-        params: Vec<String>,
-        /// Also write the JSON report here.
-        #[arg(long)]
-        json: Option<PathBuf>,
-        #[arg(short = 'W', long, default_value_t = 320, value_parser = clap::value_parser!(u32).range(1..=16384))]
-        width: u32,
-        #[arg(short = 'H', long, value_parser = clap::value_parser!(u32).range(1..=16384))]
-        height: Option<u32>,
-        /// Samples per pixel of the reference.
-        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4096))]
-        spp: u32,
-        #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(0..=64))]
-        max_depth: u32,
-    },
+    Compare(CompareArgs),
     /// Open the interactive viewer: move the eye and objects, switch techniques, compare with
     /// the reference (split and FLIP error views). `--script FILE` runs TOML steps and exits.
     View {
@@ -122,32 +59,104 @@ enum Command {
     },
     /// Time each method: warm-up, then N frames; median and spread per method and stage, and
     /// each method's speed-up over the CPU reference and over gpu-trace (both always timed too).
-    Bench {
-        /// Built-in scene names or scene/mesh files.
-        #[arg(default_value = DEFAULT_SCENE)]
-        scenes: Vec<String>,
-        /// Comma-separated methods (default: every method).
-        #[arg(long, value_delimiter = ',')]
-        methods: Option<Vec<String>>,
-        #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=100000))]
-        frames: u32,
-        /// A technique parameter, NAME=VALUE (repeatable), e.g. `-p resolution=512`.
-        #[arg(short = 'p', long = "param")]
-        params: Vec<String>,
-        /// Write the report (adapter, driver, date, every run) as JSON here.
-        #[arg(long)]
-        json: Option<PathBuf>,
-        /// Write the runs as a markdown table here.
-        #[arg(long)]
-        markdown: Option<PathBuf>,
-        #[arg(short = 'W', long, default_value_t = 640, value_parser = clap::value_parser!(u32).range(1..=16384))]
-        width: u32,
-        #[arg(short = 'H', long, value_parser = clap::value_parser!(u32).range(1..=16384))]
-        height: Option<u32>,
-    },
+    Bench(BenchArgs),
 }
 
-/// `WIDTHxHEIGHT`, each from 1 to 16384.
+// The subcommands' arguments. (Their help text comes from the `Command` variants' doc
+// comments; these structs have none, so that they cannot override it.)
+
+#[derive(clap::Args)]
+struct RenderArgs {
+    /// Built-in scene name, a .toml scene file, or a mesh/scene file (.gltf .glb .obj .ply .stl).
+    #[arg(default_value = DEFAULT_SCENE)]
+    scene: String,
+    /// Method to render with (`specula methods` lists them).
+    #[arg(long, short, default_value = "reference")]
+    method: String,
+    /// Image width in pixels.
+    #[arg(short = 'W', long, default_value_t = 640, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    width: u32,
+    /// Image height in pixels (default: from the width and the camera's aspect ratio, else 480).
+    #[arg(short = 'H', long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    height: Option<u32>,
+    /// Samples per pixel of the reference: 1 = one ray through each pixel centre; more =
+    /// stratified jitter (the reference's `spp` parameter).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    spp: u32,
+    /// Maximum number of specular bounces on a reference path (its `max_depth` parameter).
+    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(0..=64))]
+    max_depth: u32,
+    /// A technique parameter, NAME=VALUE (repeatable), e.g. `-p resolution=512`.
+    #[arg(short = 'p', long = "param")]
+    params: Vec<String>,
+    /// PNG output file.
+    #[arg(short, long, default_value = "out.png")]
+    output: PathBuf,
+    /// Also write linear float RGB to this OpenEXR file.
+    #[arg(long)]
+    exr: Option<PathBuf>,
+    /// A progressive method's steps as an image sequence: DIR/step-000.png, ... and
+    /// DIR/steps.csv with the time and rays of each step (the step time is the method's
+    /// `budget_ms`, 100 unless `-p budget_ms=N` says otherwise).
+    #[arg(long, value_name = "DIR")]
+    sequence: Option<PathBuf>,
+    #[command(flatten)]
+    distributed: DistributedArgs,
+}
+
+#[derive(clap::Args)]
+struct CompareArgs {
+    /// Built-in scene names, scene or mesh files, or folders of .toml scenes.
+    #[arg(default_value = DEFAULT_SCENE)]
+    scenes: Vec<String>,
+    /// Comma-separated methods (default: every method).
+    #[arg(long, value_delimiter = ',')]
+    methods: Option<Vec<String>>,
+    /// Folder for report.html, report.json and the images.
+    #[arg(long, default_value = "specula-report")]
+    report: PathBuf,
+    /// A technique parameter, NAME=VALUE (repeatable), e.g. `-p resolution=512`.
+    #[arg(short = 'p', long = "param")]
+    params: Vec<String>,
+    /// Also write the JSON report here.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    #[arg(short = 'W', long, default_value_t = 320, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    width: u32,
+    #[arg(short = 'H', long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    height: Option<u32>,
+    /// Samples per pixel of the reference.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    spp: u32,
+    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(0..=64))]
+    max_depth: u32,
+}
+
+#[derive(clap::Args)]
+struct BenchArgs {
+    /// Built-in scene names or scene/mesh files.
+    #[arg(default_value = DEFAULT_SCENE)]
+    scenes: Vec<String>,
+    /// Comma-separated methods (default: every method).
+    #[arg(long, value_delimiter = ',')]
+    methods: Option<Vec<String>>,
+    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=100000))]
+    frames: u32,
+    /// A technique parameter, NAME=VALUE (repeatable), e.g. `-p resolution=512`.
+    #[arg(short = 'p', long = "param")]
+    params: Vec<String>,
+    /// Write the report (adapter, driver, date, every run) as JSON here.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Write the runs as a markdown table here.
+    #[arg(long)]
+    markdown: Option<PathBuf>,
+    #[arg(short = 'W', long, default_value_t = 640, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    width: u32,
+    #[arg(short = 'H', long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    height: Option<u32>,
+}
+
 /// Distributed vertex tracing over MPI (`mpirun -np N specula render SCENE --method
 /// vertex-tracing --distributed`); built with `--features mpi`.
 #[derive(clap::Args)]
@@ -209,6 +218,7 @@ fn parse_fail_rank(text: &str) -> Result<(usize, u32), String> {
     Ok((rank, n))
 }
 
+/// `WIDTHxHEIGHT`, each from 1 to 16384.
 fn parse_size(text: &str) -> Result<(u32, u32), String> {
     let (w, h) = text
         .split_once(['x', 'X'])
@@ -324,23 +334,41 @@ fn print_comparison(r: &specula_compare::Report) {
     for warning in r.methods.iter().flat_map(|m| &m.warnings) {
         eprintln!("warning: {warning}");
     }
-    for m in &r.methods {
-        println!(
-            "{:<16}{:>9.4}{:>11}{:>11.4}{:>10.1}%{:>12.2}{:>9.1}x{:>14}",
-            m.method,
-            m.metrics.rmse,
-            m.metrics
-                .psnr_db
+    let figures = |m: &specula_compare::Metrics| {
+        format!(
+            "{:>9.4}{:>11}{:>11.4}{:>10.1}%",
+            m.rmse,
+            m.psnr_db
                 .map(|p| format!("{p:.1}"))
                 .unwrap_or_else(|| "inf".into()),
-            m.metrics.mean_flip,
-            m.metrics.share_flip_over_0_1 * 100.0,
+            m.mean_flip,
+            m.share_flip_over_0_1 * 100.0
+        )
+    };
+    for m in &r.methods {
+        println!(
+            "{:<16}{:>42}{:>12.2}{:>9.1}x{:>14}",
+            m.method,
+            m.metrics
+                .as_ref()
+                .map(figures)
+                .unwrap_or_else(|| "all delegated (below)".into()),
             m.total_ms,
             m.speedup_over_reference,
             m.speedup_over_gpu_trace
                 .map(|v| format!("{v:.2}x"))
                 .unwrap_or_else(|| "-".into())
         );
+        for d in &m.delegated {
+            println!(
+                "{:<16}{:>42}  {} pixels shaded by {}: its figure, not {}'s",
+                format!("  {}", d.material),
+                figures(&d.metrics),
+                d.metrics.mask_pixels,
+                d.delegate,
+                m.method
+            );
+        }
     }
 }
 
@@ -366,7 +394,7 @@ fn print_suite(summary: &specula_compare::suite::SuiteReport) {
         print!("{:<width$}", row.scene);
         for m in &summary.methods {
             match row.methods.iter().find(|c| &c.method == m) {
-                Some(c) => print!("{:>22}", format!("{:.4} ({:.1})", c.mean_flip, c.total_ms)),
+                Some(c) => print!("{:>22}", format!("{} ({:.1})", c.flip_text(), c.total_ms)),
                 None => print!("{:>22}", "-"),
             }
         }
@@ -396,243 +424,16 @@ fn main() -> std::process::ExitCode {
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Scenes => {
-            for (name, description) in builtin::list() {
-                let marker = if name == DEFAULT_SCENE {
-                    " (default)"
-                } else {
-                    ""
-                };
-                println!("{name:<22}{description}{marker}");
-            }
+            print_scenes();
             Ok(())
         }
         Command::Methods => {
             print_methods();
-            // Hardware ray queries: reported, not used (gpu_trace's module doc says why).
-            match GpuContext::new() {
-                Ok(gpu) => println!(
-                    "\nGPU: {}; hardware ray queries: {}",
-                    gpu.describe(),
-                    if specula_methods::gpu_trace::ray_queries_supported(&gpu) {
-                        "offered (gpu-trace still traverses its BVH in compute shaders)"
-                    } else {
-                        "not offered (gpu-trace traverses its BVH in compute shaders)"
-                    }
-                ),
-                Err(e) => println!("\nno GPU: {e}"),
-            }
+            print_ray_queries();
             Ok(())
         }
-        Command::Render {
-            scene,
-            method,
-            width,
-            height,
-            spp,
-            max_depth,
-            output,
-            exr,
-            params,
-            sequence,
-            distributed,
-        } => {
-            let scene = load_scene(&scene)?;
-            let height = height_for(&scene, width, height);
-            let info = specula_methods::method(&method)?;
-            if distributed.distributed {
-                return render_distributed(
-                    scene,
-                    &method,
-                    width,
-                    height,
-                    &params,
-                    output,
-                    exr,
-                    &distributed,
-                );
-            }
-            let mut technique = (info.create)();
-            if info.exact {
-                if spp > 1 && info.param("spp").is_none() {
-                    anyhow::bail!("{method} traces one ray per pixel centre; --spp {spp} needs the CPU reference");
-                }
-                specula_methods::apply_known_parameters(
-                    technique.as_mut(),
-                    &[format!("spp={spp}"), format!("max_depth={max_depth}")],
-                )?;
-            }
-            specula_methods::apply_parameters(technique.as_mut(), &params)?;
-            if sequence.is_some() && !info.progressive {
-                anyhow::bail!(
-                    "--sequence needs a progressive method; {method} draws each frame at once"
-                );
-            }
-            if sequence.is_some() && technique.parameter("budget_ms") == "0" {
-                specula_methods::apply_setting(technique.as_mut(), "budget_ms=100")?;
-            }
-            let ctx = context_for(&[info])?;
-            let start = Instant::now();
-            let live = LiveScene::new(scene);
-            let build = start.elapsed();
-            let scene = live.scene();
-            let bar = spinner();
-            bar.set_message(format!("rendering with {method}"));
-            technique.prepare(&ctx, &live)?;
-            let start = Instant::now();
-            let frame = match &sequence {
-                Some(dir) => {
-                    write_sequence(technique.as_mut(), &ctx, &live, width, height, dir, &bar)?
-                }
-                None => technique.render(&ctx, &live, &scene.camera, width, height)?,
-            };
-            let image = frame.image(&ctx)?;
-            bar.finish_and_clear();
-            for warning in &frame.warnings {
-                eprintln!("warning: {warning}");
-            }
-            let counters: Vec<String> = frame
-                .counters
-                .iter()
-                .map(|(name, value)| format!("{name} {value}"))
-                .collect();
-            let summary = format!(
-                "BVH {:.1} ms, {method} {width}x{height} in {:.1} ms ({})",
-                build.as_secs_f64() * 1e3,
-                start.elapsed().as_secs_f64() * 1e3,
-                counters.join(", ")
-            );
-            let image: Image = image;
-            image.save_png(&output)?;
-            if let Some(exr) = &exr {
-                image.save_exr(exr)?;
-            }
-            eprintln!(
-                "{}: {} triangles, {summary} -> {}{}",
-                scene.name,
-                scene.triangle_count(),
-                output.display(),
-                exr.map(|e| format!(", {}", e.display()))
-                    .unwrap_or_default()
-            );
-            Ok(())
-        }
-        Command::Compare {
-            scenes,
-            methods,
-            report,
-            json,
-            width,
-            height,
-            spp,
-            max_depth,
-            params,
-        } => {
-            // By default every method but the CPU reference, which is the ground truth; gpu-trace
-            // among them shows its own error (none) and is the base of the second speed-up.
-            let methods = methods.unwrap_or_else(|| {
-                let mut all = specula_methods::approximate_methods();
-                all.insert(0, specula_methods::gpu_trace::INFO.name.to_string());
-                all
-            });
-            let mut infos = method_infos(&methods)?;
-            infos.push(specula_methods::exact_method());
-            let options = |scene: &Scene| specula_compare::Options {
-                parameters: params.clone(),
-                width,
-                height: height_for(scene, width, height),
-                methods: methods.clone(),
-                spp,
-                max_depth,
-            };
-            let is_suite = scenes.len() > 1 || scenes.iter().any(|s| PathBuf::from(s).is_dir());
-            if !is_suite {
-                let scene = load_scene(&scenes[0])?;
-                let ctx = context_for(&infos)?;
-                let bar = spinner();
-                let comparison =
-                    specula_compare::compare(&scene, &ctx, &options(&scene), &|stage| {
-                        bar.set_message(format!("rendering {stage}"))
-                    })?;
-                bar.finish_and_clear();
-                let html = comparison.write_report(&report)?;
-                if let Some(json) = &json {
-                    comparison.write_json(json)?;
-                }
-                print_comparison(&comparison.report);
-                println!("report: {}", html.display());
-                return Ok(());
-            }
-            let sources = specula_compare::suite::expand_scenes(&scenes)?;
-            let ctx = context_for(&infos)?;
-            let bar = ProgressBar::new(sources.len() as u64);
-            bar.set_style(
-                ProgressStyle::with_template("{bar:30} {pos}/{len} {msg} ({elapsed})")
-                    .expect("valid template"),
-            );
-            let mut rows = Vec::new();
-            let mut taken = Vec::new();
-            for source in &sources {
-                bar.set_message(source.clone());
-                let outcome = specula_scene::load(source)
-                    .map_err(anyhow::Error::from)
-                    .and_then(|scene| {
-                        for warning in &scene.warnings {
-                            bar.suspend(|| eprintln!("warning: {source}: {warning}"));
-                        }
-                        Ok(specula_compare::compare(
-                            &scene,
-                            &ctx,
-                            &options(&scene),
-                            &|stage| bar.set_message(format!("{source}: {stage}")),
-                        )?)
-                    })
-                    .map_err(|e| format!("{e:#}"));
-                let row = specula_compare::suite::scene_row(
-                    &report,
-                    source,
-                    outcome.as_ref().map_err(String::as_str),
-                    &mut taken,
-                )?;
-                let line = match &row.error {
-                    Some(e) => format!("error: {source}: {e}"),
-                    None => format!(
-                        "{}: {}",
-                        row.scene,
-                        row.methods
-                            .iter()
-                            .map(|c| format!("{} {:.4}", c.method, c.mean_flip))
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    ),
-                };
-                // Printed through the bar so that it works with and without a terminal.
-                bar.suspend(|| eprintln!("{line}"));
-                rows.push(row);
-                bar.inc(1);
-            }
-            bar.finish_and_clear();
-            let summary = specula_compare::suite::SuiteReport {
-                schema_version: 1,
-                adapter: ctx.describe(),
-                methods: methods.clone(),
-                scenes: rows,
-            };
-            let html = specula_compare::suite::write_summary(&report, &summary)?;
-            if let Some(json) = &json {
-                std::fs::write(json, serde_json::to_string_pretty(&summary)?)
-                    .with_context(|| format!("writing {}", json.display()))?;
-            }
-            print_suite(&summary);
-            println!("report: {}", html.display());
-            let failed = summary.scenes.iter().filter(|r| r.error.is_some()).count();
-            if failed > 0 {
-                anyhow::bail!(
-                    "{failed} of {} scenes failed (see above)",
-                    summary.scenes.len()
-                );
-            }
-            Ok(())
-        }
+        Command::Render(args) => render(args),
+        Command::Compare(args) => compare(args),
         Command::View {
             scene,
             method,
@@ -646,106 +447,386 @@ fn run(cli: Cli) -> Result<()> {
             script,
             interaction_scale,
         })?),
-        Command::Bench {
-            scenes,
-            methods,
-            frames,
-            json,
-            markdown,
-            width,
-            height,
-            params,
-        } => {
-            let methods = methods.unwrap_or_else(|| {
-                specula_methods::METHODS
-                    .iter()
-                    .map(|m| m.name.to_string())
-                    .collect()
-            });
-            let asked = method_infos(&methods)?;
-            let ctx = context_for(&asked)?;
-            let timed = bench::with_bases(&methods, ctx.gpu.is_some());
-            let mut runs = Vec::new();
-            for source in &scenes {
-                let scene = load_scene(source)?;
-                let height = height_for(&scene, width, height);
-                runs.extend(bench::run(
-                    scene, &ctx, &timed, &methods, &params, width, height, frames,
-                )?);
-            }
-            bench::add_ratios(&mut runs);
-            bench::print(&runs);
-            let report = bench::BenchReport {
-                schema_version: 2,
-                adapter: ctx.describe(),
-                driver: ctx
-                    .gpu
-                    .as_ref()
-                    .map(|g| {
-                        format!("{} {}", g.adapter_info.driver, g.adapter_info.driver_info)
-                            .trim()
-                            .to_string()
-                    })
-                    .unwrap_or_default(),
-                date: bench::utc_date(),
-                ray_queries: ctx
-                    .gpu
-                    .as_ref()
-                    .is_some_and(specula_methods::gpu_trace::ray_queries_supported),
-                runs,
-            };
-            if let Some(json) = json {
-                std::fs::write(&json, serde_json::to_string_pretty(&report)?)
-                    .with_context(|| format!("writing {}", json.display()))?;
-            }
-            if let Some(markdown) = markdown {
-                std::fs::write(&markdown, bench::markdown(&report))
-                    .with_context(|| format!("writing {}", markdown.display()))?;
-            }
-            Ok(())
-        }
+        Command::Bench(args) => bench(args),
     }
 }
 
-/// `render --distributed`: vertex tracing over MPI (see `distributed`).
-#[allow(clippy::too_many_arguments)]
-fn render_distributed(
-    scene: Scene,
-    method: &str,
-    width: u32,
-    height: u32,
-    params: &[String],
-    output: PathBuf,
-    exr: Option<PathBuf>,
-    args: &DistributedArgs,
-) -> Result<()> {
+/// `specula scenes`: the built-in scenes, the default marked.
+fn print_scenes() {
+    for (name, description) in builtin::list() {
+        let marker = if name == DEFAULT_SCENE {
+            " (default)"
+        } else {
+            ""
+        };
+        println!("{name:<22}{description}{marker}");
+    }
+}
+
+/// The end of `specula methods`: the GPU, and whether it offers hardware ray queries
+/// (reported, not used: gpu_trace's module doc says why).
+fn print_ray_queries() {
+    match GpuContext::new() {
+        Ok(gpu) => println!(
+            "\nGPU: {}; hardware ray queries: {}",
+            gpu.describe(),
+            if specula_methods::gpu_trace::ray_queries_supported(&gpu) {
+                "offered (gpu-trace still traverses its BVH in compute shaders)"
+            } else {
+                "not offered (gpu-trace traverses its BVH in compute shaders)"
+            }
+        ),
+        Err(e) => println!("\nno GPU: {e}"),
+    }
+}
+
+/// `specula render`: one frame (or, with `--sequence`, a progressive method's steps) written
+/// as PNG and optionally EXR, with a line of its timings and counters; `--distributed` runs
+/// vertex tracing over MPI instead.
+fn render(args: RenderArgs) -> Result<()> {
+    let scene = load_scene(&args.scene)?;
+    let (width, height) = (args.width, height_for(&scene, args.width, args.height));
+    let method = &args.method;
+    let info = specula_methods::method(method)?;
+    if args.distributed.distributed {
+        return render_distributed(scene, height, &args);
+    }
+    let mut technique = technique_for_render(info, &args)?;
+    let ctx = context_for(&[info])?;
+    let start = Instant::now();
+    let live = LiveScene::new(scene);
+    let build = start.elapsed();
+    let scene = live.scene();
+    let bar = spinner();
+    bar.set_message(format!("rendering with {method}"));
+    technique.prepare(&ctx, &live)?;
+    let start = Instant::now();
+    let frame = match &args.sequence {
+        Some(dir) => write_sequence(technique.as_mut(), &ctx, &live, width, height, dir, &bar)?,
+        None => technique.render(&ctx, &live, &scene.camera, width, height)?,
+    };
+    let image: Image = frame.image(&ctx)?;
+    bar.finish_and_clear();
+    for warning in &frame.warnings {
+        eprintln!("warning: {warning}");
+    }
+    let counters: Vec<String> = frame
+        .counters
+        .iter()
+        .map(|(name, value)| format!("{name} {value}"))
+        .collect();
+    let summary = format!(
+        "BVH {:.1} ms, {method} {width}x{height} in {:.1} ms ({})",
+        build.as_secs_f64() * 1e3,
+        start.elapsed().as_secs_f64() * 1e3,
+        counters.join(", ")
+    );
+    save_image(&image, &args.output, args.exr.as_deref())?;
+    eprintln!(
+        "{}: {} triangles, {summary} -> {}{}",
+        scene.name,
+        scene.triangle_count(),
+        args.output.display(),
+        args.exr
+            .as_ref()
+            .map(|e| format!(", {}", e.display()))
+            .unwrap_or_default()
+    );
+    Ok(())
+}
+
+/// The technique `render` draws with: `info`'s, with the reference's `--spp` and
+/// `--max-depth` where it is exact, the `-p` parameters, and a step time for `--sequence`.
+fn technique_for_render(
+    info: &MethodInfo,
+    args: &RenderArgs,
+) -> Result<Box<dyn specula_methods::Technique>> {
+    let (method, spp, max_depth) = (&args.method, args.spp, args.max_depth);
+    let mut technique = (info.create)();
+    if info.exact {
+        if spp > 1 && info.param("spp").is_none() {
+            anyhow::bail!(
+                "{method} traces one ray per pixel centre; --spp {spp} needs the CPU reference"
+            );
+        }
+        specula_methods::apply_known_parameters(
+            technique.as_mut(),
+            &[format!("spp={spp}"), format!("max_depth={max_depth}")],
+        )?;
+    }
+    specula_methods::apply_parameters(technique.as_mut(), &args.params)?;
+    if args.sequence.is_some() && !info.progressive {
+        anyhow::bail!("--sequence needs a progressive method; {method} draws each frame at once");
+    }
+    if args.sequence.is_some() && technique.parameter("budget_ms") == "0" {
+        specula_methods::apply_setting(technique.as_mut(), "budget_ms=100")?;
+    }
+    Ok(technique)
+}
+
+/// Writes `image` as PNG to `output` and, when asked, as OpenEXR to `exr`.
+fn save_image(image: &Image, output: &Path, exr: Option<&Path>) -> Result<()> {
+    image.save_png(output)?;
+    if let Some(exr) = exr {
+        image.save_exr(exr)?;
+    }
+    Ok(())
+}
+
+/// `specula compare`: one scene's report, or with several scenes (or a folder) the suite's.
+/// By default every method but the CPU reference, which is the ground truth; gpu-trace among
+/// them shows its own error (none) and is the base of the second speed-up.
+fn compare(args: CompareArgs) -> Result<()> {
+    let methods = args.methods.clone().unwrap_or_else(|| {
+        let mut all = specula_methods::approximate_methods();
+        all.insert(0, specula_methods::gpu_trace::INFO.name.to_string());
+        all
+    });
+    let mut infos = method_infos(&methods)?;
+    infos.push(specula_methods::exact_method());
+    let is_suite = args.scenes.len() > 1 || args.scenes.iter().any(|s| PathBuf::from(s).is_dir());
+    if is_suite {
+        return compare_suite(&args, &methods, &infos);
+    }
+    let scene = load_scene(&args.scenes[0])?;
+    let ctx = context_for(&infos)?;
+    let bar = spinner();
+    let options = compare_options(&args, &methods, &scene);
+    let comparison = specula_compare::compare(&scene, &ctx, &options, &|stage| {
+        bar.set_message(format!("rendering {stage}"))
+    })?;
+    bar.finish_and_clear();
+    let html = comparison.write_report(&args.report)?;
+    if let Some(json) = &args.json {
+        comparison.write_json(json)?;
+    }
+    print_comparison(&comparison.report);
+    println!("report: {}", html.display());
+    Ok(())
+}
+
+/// What `compare` measures `scene` with.
+fn compare_options(
+    args: &CompareArgs,
+    methods: &[String],
+    scene: &Scene,
+) -> specula_compare::Options {
+    specula_compare::Options {
+        parameters: args.params.clone(),
+        width: args.width,
+        height: height_for(scene, args.width, args.height),
+        methods: methods.to_vec(),
+        spp: args.spp,
+        max_depth: args.max_depth,
+    }
+}
+
+/// `specula compare` over several scenes: each scene's report in its own folder, then the
+/// summary (methods × scenes) as HTML, optionally JSON, and a table; fails after the summary
+/// when any scene failed.
+fn compare_suite(args: &CompareArgs, methods: &[String], infos: &[&MethodInfo]) -> Result<()> {
+    let sources = specula_compare::suite::expand_scenes(&args.scenes)?;
+    let ctx = context_for(infos)?;
+    let rows = compare_each_scene(&sources, &ctx, args, methods)?;
+    let summary = specula_compare::suite::SuiteReport {
+        schema_version: specula_compare::suite::SCHEMA_VERSION,
+        adapter: ctx.describe(),
+        methods: methods.to_vec(),
+        scenes: rows,
+    };
+    let html = specula_compare::suite::write_summary(&args.report, &summary)?;
+    if let Some(json) = &args.json {
+        std::fs::write(json, serde_json::to_string_pretty(&summary)?)
+            .with_context(|| format!("writing {}", json.display()))?;
+    }
+    print_suite(&summary);
+    println!("report: {}", html.display());
+    let failed = summary.scenes.iter().filter(|r| r.error.is_some()).count();
+    if failed > 0 {
+        anyhow::bail!(
+            "{failed} of {} scenes failed (see above)",
+            summary.scenes.len()
+        );
+    }
+    Ok(())
+}
+
+/// Compares each of `sources` in turn under a progress bar, writing its report into its own
+/// folder of `--report`; a scene that fails to load or compare gives a row holding its error.
+/// Prints a line per scene.
+fn compare_each_scene(
+    sources: &[String],
+    ctx: &Devices,
+    args: &CompareArgs,
+    methods: &[String],
+) -> Result<Vec<specula_compare::suite::SuiteRow>> {
+    let bar = ProgressBar::new(sources.len() as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:30} {pos}/{len} {msg} ({elapsed})")
+            .expect("valid template"),
+    );
+    let mut rows = Vec::new();
+    let mut taken = Vec::new();
+    for source in sources {
+        bar.set_message(source.clone());
+        let outcome = specula_scene::load(source)
+            .map_err(anyhow::Error::from)
+            .and_then(|scene| {
+                for warning in &scene.warnings {
+                    bar.suspend(|| eprintln!("warning: {source}: {warning}"));
+                }
+                Ok(specula_compare::compare(
+                    &scene,
+                    ctx,
+                    &compare_options(args, methods, &scene),
+                    &|stage| bar.set_message(format!("{source}: {stage}")),
+                )?)
+            })
+            .map_err(|e| format!("{e:#}"));
+        let row = specula_compare::suite::scene_row(
+            &args.report,
+            source,
+            outcome.as_ref().map_err(String::as_str),
+            &mut taken,
+        )?;
+        let line = match &row.error {
+            Some(e) => format!("error: {source}: {e}"),
+            None => format!(
+                "{}: {}",
+                row.scene,
+                row.methods
+                    .iter()
+                    .map(|c| format!("{} {}", c.method, c.flip_text()))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        };
+        // Printed through the bar so that it works with and without a terminal.
+        bar.suspend(|| eprintln!("{line}"));
+        rows.push(row);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    Ok(rows)
+}
+
+/// `specula bench`: every method asked for (and the exact bases) timed on each scene; the
+/// table printed, the report optionally written as JSON and markdown.
+fn bench(args: BenchArgs) -> Result<()> {
+    let methods = args.methods.clone().unwrap_or_else(|| {
+        specula_methods::METHODS
+            .iter()
+            .map(|m| m.name.to_string())
+            .collect()
+    });
+    let asked = method_infos(&methods)?;
+    let ctx = context_for(&asked)?;
+    let timed = bench::with_bases(&methods, ctx.gpu.is_some());
+    let mut runs = Vec::new();
+    for source in &args.scenes {
+        let scene = load_scene(source)?;
+        let height = height_for(&scene, args.width, args.height);
+        runs.extend(bench::run(
+            scene,
+            &ctx,
+            &timed,
+            &methods,
+            &args.params,
+            args.width,
+            height,
+            args.frames,
+        )?);
+    }
+    bench::add_ratios(&mut runs);
+    bench::print(&runs);
+    let report = bench_report(&ctx, runs);
+    if let Some(json) = &args.json {
+        std::fs::write(json, serde_json::to_string_pretty(&report)?)
+            .with_context(|| format!("writing {}", json.display()))?;
+    }
+    if let Some(markdown) = &args.markdown {
+        std::fs::write(markdown, bench::markdown(&report))
+            .with_context(|| format!("writing {}", markdown.display()))?;
+    }
+    Ok(())
+}
+
+/// The bench report of `runs`: the adapter and driver of `ctx`, today's date, and whether the
+/// adapter offers hardware ray queries.
+fn bench_report(ctx: &Devices, runs: Vec<bench::MethodBench>) -> bench::BenchReport {
+    bench::BenchReport {
+        schema_version: 2,
+        adapter: ctx.describe(),
+        driver: ctx
+            .gpu
+            .as_ref()
+            .map(|g| {
+                format!("{} {}", g.adapter_info.driver, g.adapter_info.driver_info)
+                    .trim()
+                    .to_string()
+            })
+            .unwrap_or_default(),
+        date: bench::utc_date(),
+        ray_queries: ctx
+            .gpu
+            .as_ref()
+            .is_some_and(specula_methods::gpu_trace::ray_queries_supported),
+        runs,
+    }
+}
+
+/// `render --distributed`: vertex tracing over MPI
+/// (`specula_methods::vertex_tracing::distributed`), `height` pixels high; rank 0 writes the
+/// image and the report.
+fn render_distributed(scene: Scene, height: u32, args: &RenderArgs) -> Result<()> {
     use specula_methods::vertex_tracing::{VertexTracing, INFO};
+    let method = &args.method;
     if method != INFO.name {
         anyhow::bail!("--distributed runs {}, not {method}", INFO.name);
     }
     let mut technique = VertexTracing::default();
-    specula_methods::apply_parameters(&mut technique, params)?;
+    specula_methods::apply_parameters(&mut technique, &args.params)?;
     #[cfg(feature = "mpi")]
     {
+        use specula_methods::vertex_tracing::distributed::{self, Outcome};
+        let d = &args.distributed;
         let options = distributed::Options {
-            frames: args.frames,
-            width,
+            frames: d.frames,
+            width: args.width,
             height,
             settings: technique.settings,
             max_depth: technique.max_depth,
-            packages_per_worker: args.packages_per_worker as usize,
-            timeout: std::time::Duration::from_millis(args.worker_timeout_ms),
-            slow: args.slow_rank,
-            fail: args.fail_rank,
-            output,
-            exr,
-            report: args.report.clone(),
+            packages_per_worker: d.packages_per_worker as usize,
+            timeout: std::time::Duration::from_millis(d.worker_timeout_ms),
+            slow: d.slow_rank,
+            fail: d.fail_rank,
         };
-        distributed::run(scene, &options)
+        match distributed::run(scene, &options)? {
+            Outcome::Master { image, report } => {
+                save_image(&image, &args.output, args.exr.as_deref())?;
+                if let Some(path) = &d.report {
+                    std::fs::write(path, serde_json::to_string_pretty(&report)?)
+                        .with_context(|| format!("writing {}", path.display()))?;
+                }
+                eprintln!(
+                    "distributed vertex tracing: {} ranks, {} frame(s) -> {}{}",
+                    report.ranks(),
+                    report.frames(),
+                    args.output.display(),
+                    if report.lost_ranks().is_empty() {
+                        String::new()
+                    } else {
+                        format!("; lost ranks {:?}", report.lost_ranks())
+                    }
+                );
+                Ok(())
+            }
+            Outcome::Worker => Ok(()),
+        }
     }
     #[cfg(not(feature = "mpi"))]
     {
-        let _ = (scene, width, height, output, exr, args, technique);
+        let _ = (scene, height, technique);
         anyhow::bail!(
             "this specula was built without MPI: build it with `cargo build --release --features mpi` (needs OpenMPI: apt-get install openmpi-bin libopenmpi-dev libclang-dev)"
         )
@@ -762,7 +843,7 @@ fn write_sequence(
     live: &LiveScene,
     width: u32,
     height: u32,
-    dir: &std::path::Path,
+    dir: &Path,
     bar: &ProgressBar,
 ) -> Result<specula_methods::Frame> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;

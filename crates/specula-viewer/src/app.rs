@@ -7,6 +7,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use glam::Vec3;
+use specula_gpu::GpuContext;
 use specula_methods::{Frame, Pixels};
 use specula_trace::Image;
 use winit::application::ApplicationHandler;
@@ -675,7 +676,6 @@ fn redraw(state: &mut WindowState, mut script: Option<&mut ScriptRun>) -> Result
     if let Some(script) = script.as_deref_mut() {
         advance_script(state, script)?;
     }
-    let scripted = script.is_some();
     let now = Instant::now();
     FrameTimes::push(
         &mut state.ui.times.window_ms,
@@ -683,16 +683,7 @@ fn redraw(state: &mut WindowState, mut script: Option<&mut ScriptRun>) -> Result
     );
     state.last_redraw = now;
     let (width, height) = (state.config.width, state.config.height);
-    let reduced = interacting(state, script.as_deref());
-    let scale = if reduced {
-        state.ui.settings.interaction_scale
-    } else {
-        1.0
-    };
-    let (tw, th) = (
-        ((width as f32 * scale).round() as u32).max(1),
-        ((height as f32 * scale).round() as u32).max(1),
-    );
+    let technique_size = technique_size(state, script.as_deref());
     let ctx = state.session.ctx.clone();
     let gpu = ctx.gpu.as_ref().expect("the viewer opens a GPU");
     let mut encoder = gpu
@@ -703,113 +694,208 @@ fn redraw(state: &mut WindowState, mut script: Option<&mut ScriptRun>) -> Result
 
     let view = state.session.view;
     let show_technique = view.needs_technique() && state.session.failure.is_none();
+    if show_technique {
+        if let Some(frame) = render_technique(state, script.as_deref_mut(), technique_size)? {
+            show_technique_frame(state, gpu, &mut encoder, &frame, view)?;
+        }
+    } else {
+        state.ui.dirty = false;
+    }
+    let needs_reference = view.needs_reference() || state.session.failure.is_some();
+    if needs_reference {
+        render_reference(state, width, height)?;
+    }
+    let split = (view == ViewMode::Split && show_technique).then_some(state.ui.settings.split);
+    show_reference(state, gpu, view, needs_reference, show_technique);
+    if view == ViewMode::Error && show_technique {
+        show_error_map(state, gpu);
+    }
+
+    let egui = run_egui(state, gpu, &mut encoder, (width, height));
+    if !present(state, gpu, encoder, egui, (width, height), split) {
+        return Ok(());
+    }
+    if let Some(script) = script {
+        count_script_frame(state, script);
+    }
+    Ok(())
+}
+
+/// The technique's size: the window's, or while the view moves the window's times the
+/// interaction scale.
+fn technique_size(state: &WindowState, script: Option<&ScriptRun>) -> (u32, u32) {
+    let (width, height) = (state.config.width, state.config.height);
+    let reduced = interacting(state, script);
+    let scale = if reduced {
+        state.ui.settings.interaction_scale
+    } else {
+        1.0
+    };
+    (
+        ((width as f32 * scale).round() as u32).max(1),
+        ((height as f32 * scale).round() as u32).max(1),
+    )
+}
+
+/// Renders the technique at `(tw, th)` when its last frame is stale (anything changed, a
+/// continuous or scripted run, another size), keeping its figures for the panel and the
+/// script's timing. Returns the frame; None when the last one still stands, or when the
+/// technique failed outside a script (the session keeps the failure for the panel). In a
+/// script a failure is the step's error.
+fn render_technique(
+    state: &mut WindowState,
+    script: Option<&mut ScriptRun>,
+    (tw, th): (u32, u32),
+) -> Result<Option<Frame>, ViewerError> {
+    let scripted = script.is_some();
     let technique_stale = state.ui.dirty
         || state.ui.settings.continuous
         || scripted
         || state.stats_size() != Some((tw, th));
-    let mut technique_frame: Option<Frame> = None;
-    if show_technique && technique_stale {
-        match state.session.render_technique(tw, th) {
-            Ok(frame) => {
-                state.ui.stats = Some(FrameStats {
-                    method: state.session.method().name,
-                    width: tw,
-                    height: th,
-                    total_ms: frame.total_milliseconds(),
-                    stages: frame
-                        .stages
-                        .iter()
-                        .map(|s| (s.stage.clone(), s.milliseconds))
-                        .collect(),
-                    counters: frame.counters.clone(),
-                    warnings: frame.warnings.clone(),
-                    created: frame.created.total(),
-                });
-                FrameTimes::push(&mut state.ui.times.technique_ms, frame.total_milliseconds());
-                if let Some(script) = script.as_deref_mut() {
-                    if let Some((_, _, times)) = &mut script.timing {
-                        times.push(frame.total_milliseconds());
-                    }
-                }
-                // A progressive technique keeps the frame stale until it converges.
-                state.ui.dirty = !frame.converged;
-                technique_frame = Some(frame);
-            }
-            Err(e) if scripted => {
-                return Err(ViewerError::Step {
-                    step: script.as_ref().map_or(0, |s| s.next),
-                    message: e.to_string(),
-                })
-            }
-            Err(_) => state.ui.dirty = false,
-        }
-    } else if !show_technique {
-        state.ui.dirty = false;
+    if !technique_stale {
+        return Ok(None);
     }
+    match state.session.render_technique(tw, th) {
+        Ok(frame) => {
+            state.ui.stats = Some(FrameStats {
+                method: state.session.method().name,
+                width: tw,
+                height: th,
+                total_ms: frame.total_milliseconds(),
+                stages: frame
+                    .stages
+                    .iter()
+                    .map(|s| (s.stage.clone(), s.milliseconds))
+                    .collect(),
+                counters: frame.counters.clone(),
+                warnings: frame.warnings.clone(),
+                created: frame.created().total(),
+            });
+            FrameTimes::push(&mut state.ui.times.technique_ms, frame.total_milliseconds());
+            if let Some(script) = script {
+                if let Some((_, _, times)) = &mut script.timing {
+                    times.push(frame.total_milliseconds());
+                }
+            }
+            // A progressive technique keeps the frame stale until it converges.
+            state.ui.dirty = !frame.converged;
+            Ok(Some(frame))
+        }
+        Err(e) if scripted => Err(ViewerError::Step {
+            step: script.as_ref().map_or(0, |s| s.next),
+            message: e.to_string(),
+        }),
+        Err(_) => {
+            state.ui.dirty = false;
+            Ok(None)
+        }
+    }
+}
+
+/// Shows a new technique `frame` on the left; in the error view keeps its image on the CPU
+/// for the error map instead.
+fn show_technique_frame(
+    state: &mut WindowState,
+    gpu: &GpuContext,
+    encoder: &mut wgpu::CommandEncoder,
+    frame: &Frame,
+    view: ViewMode,
+) -> Result<(), ViewerError> {
     // In the error view the left image is the error map: the technique's frame is not shown
     // (a copy recorded here would also land after the map's write, which the queue runs first).
-    if let Some(frame) = technique_frame.as_ref().filter(|_| view != ViewMode::Error) {
+    if view != ViewMode::Error {
         match &frame.pixels {
             Pixels::Texture(texture) => {
                 state
                     .presenter
-                    .show_texture(gpu, &mut encoder, Side::Left, texture)
+                    .show_texture(gpu, encoder, Side::Left, texture)
             }
             Pixels::Image(image) => state.presenter.show_image(gpu, Side::Left, image),
         }
-    }
-    if let Some(frame) = technique_frame.as_ref().filter(|_| view == ViewMode::Error) {
+    } else {
         let image = frame.image(&state.session.ctx);
         state.technique_image = Some(image.map_err(crate::session::SessionError::from)?);
         state.error_stale = true;
     }
+    Ok(())
+}
 
-    let needs_reference = view.needs_reference() || state.session.failure.is_some();
-    if needs_reference {
-        let frame = state.session.render_reference(width, height)?;
-        let converged_before = state.ui.reference_converged;
-        state.ui.reference_converged = frame.converged;
-        if !(converged_before && frame.converged && state.reference_image.is_some()) {
-            state.reference_image = Some(
-                frame
-                    .image(&state.session.ctx)
-                    .map_err(crate::session::SessionError::from)?,
-            );
-            state.error_stale = true;
-        }
+/// The reference's next step at the window's size; its image is read back unless it was
+/// converged already and still is.
+fn render_reference(state: &mut WindowState, width: u32, height: u32) -> Result<(), ViewerError> {
+    let frame = state.session.render_reference(width, height)?;
+    let converged_before = state.ui.reference_converged;
+    state.ui.reference_converged = frame.converged;
+    if !(converged_before && frame.converged && state.reference_image.is_some()) {
+        state.reference_image = Some(
+            frame
+                .image(&state.session.ctx)
+                .map_err(crate::session::SessionError::from)?,
+        );
+        state.error_stale = true;
     }
+    Ok(())
+}
+
+/// Shows the reference's image: on the right of a split view, else on the left (also in place
+/// of a technique that cannot be shown).
+fn show_reference(
+    state: &mut WindowState,
+    gpu: &GpuContext,
+    view: ViewMode,
+    needs_reference: bool,
+    show_technique: bool,
+) {
     let reference_side = if view == ViewMode::Split && show_technique {
         Side::Right
     } else {
         Side::Left
     };
-    let split = (view == ViewMode::Split && show_technique).then_some(state.ui.settings.split);
     if needs_reference && view != ViewMode::Error || !show_technique {
         if let Some(image) = &state.reference_image {
             state.presenter.show_image(gpu, reference_side, image);
         }
     }
-    if view == ViewMode::Error
-        && show_technique
-        && state.error_stale
-        && state.ui.reference_converged
-    {
-        if state.technique_image.is_none() {
+}
+
+/// The error view: the FLIP map of the technique's image against the converged reference, on
+/// the left, when either image is new; the technique renders again when its image is missing
+/// or of another size.
+fn show_error_map(state: &mut WindowState, gpu: &GpuContext) {
+    if !(state.error_stale && state.ui.reference_converged) {
+        return;
+    }
+    if state.technique_image.is_none() {
+        state.ui.dirty = true;
+    }
+    if let (Some(reference), Some(technique)) = (&state.reference_image, &state.technique_image) {
+        if (reference.width, reference.height) == (technique.width, technique.height) {
+            let map = error_image(reference, technique);
+            state.presenter.show_image(gpu, Side::Left, &map);
+            state.error_stale = false;
+        } else {
             state.ui.dirty = true;
         }
-        if let (Some(reference), Some(technique)) = (&state.reference_image, &state.technique_image)
-        {
-            if (reference.width, reference.height) == (technique.width, technique.height) {
-                let map = error_image(reference, technique);
-                state.presenter.show_image(gpu, Side::Left, &map);
-                state.error_stale = false;
-            } else {
-                state.ui.dirty = true;
-            }
-        }
     }
+}
 
-    // egui
+/// A frame of egui ready to draw: its triangles, the screen they are for, the texture changes
+/// (those to free are freed after drawing) and the command buffers its buffer updates need.
+struct EguiFrame {
+    jobs: Vec<egui::ClippedPrimitive>,
+    screen: egui_wgpu::ScreenDescriptor,
+    textures_delta: egui::TexturesDelta,
+    extra: Vec<wgpu::CommandBuffer>,
+}
+
+/// Runs the panel for this frame (loading the scene it asks for), then uploads egui's new
+/// textures and writes its buffers, recording into `encoder`.
+fn run_egui(
+    state: &mut WindowState,
+    gpu: &GpuContext,
+    encoder: &mut wgpu::CommandEncoder,
+    (width, height): (u32, u32),
+) -> EguiFrame {
     let raw_input = state.egui.take_egui_input(&state.window);
     let egui_ctx = state.egui.egui_ctx().clone();
     let mut load_request = None;
@@ -843,8 +929,26 @@ fn redraw(state: &mut WindowState, mut script: Option<&mut ScriptRun>) -> Result
     let extra =
         state
             .egui_renderer
-            .update_buffers(&gpu.device, &gpu.queue, &mut encoder, &jobs, &screen);
+            .update_buffers(&gpu.device, &gpu.queue, encoder, &jobs, &screen);
+    EguiFrame {
+        jobs,
+        screen,
+        textures_delta,
+        extra,
+    }
+}
 
+/// Draws the images (cut at `split`) and egui over them into the window's surface, submits
+/// `encoder` and presents. Returns false, drawing nothing, when the surface was lost or
+/// outdated: it is configured again and another redraw asked for.
+fn present(
+    state: &mut WindowState,
+    gpu: &GpuContext,
+    mut encoder: wgpu::CommandEncoder,
+    mut egui: EguiFrame,
+    (width, height): (u32, u32),
+    split: Option<f32>,
+) -> bool {
     let surface_texture = match state.surface.get_current_texture() {
         wgpu::CurrentSurfaceTexture::Success(t) | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
         other => {
@@ -852,10 +956,10 @@ fn redraw(state: &mut WindowState, mut script: Option<&mut ScriptRun>) -> Result
             log::warn!("surface: {other:?}");
             state.surface.configure(&gpu.device, &state.config);
             state.window.request_redraw();
-            for id in textures_delta.free.drain() {
+            for id in egui.textures_delta.free.drain() {
                 state.egui_renderer.free_texture(&id);
             }
-            return Ok(());
+            return false;
         }
     };
     let target = surface_texture
@@ -875,24 +979,30 @@ fn redraw(state: &mut WindowState, mut script: Option<&mut ScriptRun>) -> Result
         });
         state
             .egui_renderer
-            .render(&mut pass.forget_lifetime(), &jobs, &screen);
+            .render(&mut pass.forget_lifetime(), &egui.jobs, &egui.screen);
     }
-    gpu.queue
-        .submit(extra.into_iter().chain(std::iter::once(encoder.finish())));
+    gpu.queue.submit(
+        egui.extra
+            .into_iter()
+            .chain(std::iter::once(encoder.finish())),
+    );
     gpu.queue.present(surface_texture);
-    for id in textures_delta.free.drain() {
+    for id in egui.textures_delta.free.drain() {
         state.egui_renderer.free_texture(&id);
     }
-    if let Some(script) = script {
-        if script.frames_left > 0 {
-            script.frames_left -= 1;
-            if script.frames_left == 0 {
-                report_script_timing(state, script);
-                script.drag_step = None;
-            }
+    true
+}
+
+/// Counts a presented frame against the script's `frames` or `drag` step; the step's last
+/// frame reports its timing and ends its drag.
+fn count_script_frame(state: &WindowState, script: &mut ScriptRun) {
+    if script.frames_left > 0 {
+        script.frames_left -= 1;
+        if script.frames_left == 0 {
+            report_script_timing(state, script);
+            script.drag_step = None;
         }
     }
-    Ok(())
 }
 
 impl WindowState {

@@ -112,7 +112,7 @@ use crate::live_scene::LiveScene;
 use crate::raster::{self, BindGroupsBySlot, OutputTexture, RasterPass, RasterSpec};
 use crate::screen::SurfaceReadback;
 use crate::technique::{
-    Context, Frame, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, StageTime,
+    Context, Drawn, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, StageTime,
     Technique, TechniqueError,
 };
 use phases::{FrameSettings, PhaseReport, PlacedCloud, ScreenView};
@@ -233,6 +233,13 @@ pub const INFO: MethodInfo = MethodInfo {
     needs_gpu: true,
     gpu_optional: false,
     progressive: false,
+    // Refractors are shaded by envmap's shading pass from cube maps drawn as envmap draws
+    // them (module doc: "Dielectric objects are shaded as envmap shades them"); only mirrors
+    // get points and cameras.
+    delegates: &[crate::technique::Delegation {
+        material: crate::technique::SurfaceClass::Refractor,
+        to: crate::envmap::INFO.name,
+    }],
     params: PARAMS,
     create: || Box::new(C3rcMethod::default()),
 };
@@ -543,16 +550,15 @@ impl Technique for C3rcMethod {
         Ok(())
     }
 
-    fn render(
+    fn draw(
         &mut self,
         ctx: &Context,
         live: &LiveScene,
         camera: &Camera,
         width: u32,
         height: u32,
-    ) -> Result<Frame, TechniqueError> {
+    ) -> Result<Drawn, TechniqueError> {
         let gpu = ctx.gpu(INFO.name)?;
-        let before = gpu.resource_counts();
         self.ensure_prepared(gpu, live)?;
         let scene = live.scene();
         let gpu_scene = live.gpu(gpu);
@@ -724,14 +730,13 @@ impl Technique for C3rcMethod {
         if visible == 0 && !mirror_meshes.is_empty() {
             warnings.push("c3rc: no mirror triangle is visible; only the far field shows".into());
         }
-        Ok(Frame {
+        Ok(Drawn {
             pixels: Pixels::Texture(output),
             stages: stages.stages,
             counters,
             timing: TimingSource::CpuWallClock,
             warnings,
             converged: true,
-            created: gpu.resource_counts() - before,
         })
     }
 }

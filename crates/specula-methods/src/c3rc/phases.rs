@@ -8,7 +8,7 @@ use std::time::Instant;
 
 use glam::{DMat4, DVec3, Vec3};
 use rayon::prelude::*;
-use specula_scene::Scene;
+use specula_scene::{Mesh, Scene};
 use specula_trace::optics::reflect;
 use specula_trace::reference::{offset_origin, Tracer};
 use specula_trace::{Ray, SceneAccel};
@@ -193,6 +193,66 @@ pub fn plan(
     let mut report = PhaseReport::default();
     // Cameras for the triangles that cover enough pixels; the rest are small.
     let start = Instant::now();
+    let (visible, mirror_rows) = visible_triangles(scene, mirrors, view, surfaces);
+    // The exact reflected ray at every vertex of a visible triangle: its radiance (the
+    // per-vertex colour) and whether it hits its own mirror.
+    let vertices = visible_vertices(scene, mirrors, &visible);
+    let traced = trace_vertices(scene, accel, view, &vertices, settings.max_depth);
+    let sees_itself = |mesh: usize, i: u32| {
+        let k = vertices.binary_search(&(mesh, i)).expect("traced above");
+        traced[k].1
+    };
+    let (cameras, sources) = triangle_cameras(
+        scene,
+        mirrors,
+        view,
+        &visible,
+        &sees_itself,
+        settings,
+        &mut report,
+    );
+    report.cameras = cameras.len() as u64;
+    report.setup_ms = ms(start);
+
+    // Backward phase: each camera's view volume against every tree.
+    let start = Instant::now();
+    let culled: Vec<(Vec<Seen>, Vec<InCloud>)> = cameras
+        .par_iter()
+        .map(|camera| {
+            let mut seen = Vec::new();
+            let mut stack = Vec::new();
+            let in_clouds = clouds
+                .iter()
+                .enumerate()
+                .map(|(c, placed)| cull_cloud(camera, c, placed, settings, &mut seen, &mut stack))
+                .collect();
+            (seen, in_clouds)
+        })
+        .collect();
+    let (seen, in_cloud): (Vec<Vec<Seen>>, Vec<Vec<InCloud>>) = culled.into_iter().unzip();
+    report.leaves_visited = seen.iter().map(|l| l.len() as u64).sum();
+    report.culling_ms = ms(start);
+    Plan {
+        cameras,
+        mirror_rows,
+        seen,
+        in_cloud: in_cloud.into_iter().flatten().collect(),
+        sources,
+        vertices,
+        traced,
+        report,
+    }
+}
+
+/// Per mesh, the pixels the ID buffer gives each triangle of a mirror (other meshes: none);
+/// and the first and past-last rows with a mirror pixel (the later per-pixel passes look only
+/// there).
+fn visible_triangles(
+    scene: &Scene,
+    mirrors: &[usize],
+    view: &ScreenView,
+    surfaces: &PixelSurfaces,
+) -> (Vec<Vec<u32>>, (usize, usize)) {
     let mut visible: Vec<Vec<u32>> = scene
         .meshes
         .iter()
@@ -208,7 +268,6 @@ pub fn plan(
             ]
         })
         .collect();
-    // The rows that show a mirror: the later per-pixel passes look only there.
     let mut mirror_rows = (view.height as usize, 0usize);
     for (k, [mesh1, triangle]) in surfaces.ids.iter().enumerate() {
         if *mesh1 > 0 && mirrors.contains(&((mesh1 - 1) as usize)) {
@@ -217,9 +276,11 @@ pub fn plan(
             mirror_rows = (mirror_rows.0.min(y), mirror_rows.1.max(y + 1));
         }
     }
-    let eye = view.eye.as_dvec3();
-    // The exact reflected ray at every vertex of a visible triangle: its radiance (the
-    // per-vertex colour) and whether it hits its own mirror.
+    (visible, mirror_rows)
+}
+
+/// The (mesh, vertex) of every vertex of a visible mirror triangle, sorted, each once.
+fn visible_vertices(scene: &Scene, mirrors: &[usize], visible: &[Vec<u32>]) -> Vec<(usize, u32)> {
     let mut vertices: Vec<(usize, u32)> = Vec::new();
     for &mesh in mirrors {
         for (t, _) in visible[mesh].iter().enumerate().filter(|(_, &c)| c > 0) {
@@ -228,11 +289,22 @@ pub fn plan(
     }
     vertices.sort_unstable();
     vertices.dedup();
-    let traced = trace_vertices(scene, accel, view, &vertices, settings.max_depth);
-    let sees_itself = |mesh: usize, i: u32| {
-        let k = vertices.binary_search(&(mesh, i)).expect("traced above");
-        traced[k].1
-    };
+    vertices
+}
+
+/// Where each visible mirror triangle's pixels come from, and the cameras of those that get
+/// cameras: a triangle under `min_pixels` takes the per-vertex colour, one with a vertex that
+/// `sees_itself` (when `trace_self`) is traced, every other gets its cameras
+/// ([`push_triangle_cameras`]).
+fn triangle_cameras(
+    scene: &Scene,
+    mirrors: &[usize],
+    view: &ScreenView,
+    visible: &[Vec<u32>],
+    sees_itself: &dyn Fn(usize, u32) -> bool,
+    settings: FrameSettings,
+    report: &mut PhaseReport,
+) -> (Vec<TriangleCamera>, Vec<Vec<PixelSource>>) {
     let mut cameras = Vec::new();
     let mut sources: Vec<Vec<PixelSource>> = visible
         .iter()
@@ -256,139 +328,146 @@ pub fn plan(
                 report.self_seeing_pixels += count as u64;
                 continue;
             }
-            let idx = m.triangles[t].map(|i| i as usize);
-            let v = idx.map(|i| m.positions[i].as_dvec3());
-            let mut n = idx.map(|i| m.normals[i].as_dvec3());
-            // The side the eye sees reflects (the reference flips normals the same way).
-            let mut face = (v[1] - v[0]).cross(v[2] - v[0]);
-            if face.dot(n[0] + n[1] + n[2]) < 0.0 {
-                face = -face;
-            }
-            if face.dot(eye - v[0]) < 0.0 {
-                n = n.map(|x| -x);
-            }
-            let screen = v.map(|p| view.project(p.as_vec3()));
-            let screen_area = match screen {
-                [Some(a), Some(b), Some(c)] => {
-                    let (ab, ac) = ((b.0 - a.0, b.1 - a.1), (c.0 - a.0, c.1 - a.1));
-                    0.5 * (ab.0 * ac.1 - ab.1 * ac.0).abs() as f64
-                }
-                _ => count as f64,
-            }
-            .max(count as f64);
-            let centroid = (v[0] + v[1] + v[2]) / 3.0;
-            let cos = face
-                .normalize_or_zero()
-                .dot((centroid - eye).normalize_or_zero())
-                .abs();
-            // Large triangles are cut in four (normals interpolated as the reference does)
-            // until each part covers at most `split_pixels`: linear interpolation of the rays
-            // then follows the reflection of the interpolated normal more closely.
-            let mut levels = 0;
-            while settings.split_pixels > 0
-                && levels < MAX_SPLIT_LEVELS
-                && screen_area / 4f64.powi(levels as i32) > settings.split_pixels as f64
-            {
-                levels += 1;
-            }
-            report.split_triangles += (levels > 0) as u64;
-            for (v, n) in subdivide(v, n, levels) {
-                let world = C3rc::reflector(v, n, eye);
-                let folding = world.multiple_projection_intervals();
-                report.cameras_that_can_project_twice += !folding.is_empty() as u64;
-                cameras.push(TriangleCamera {
-                    mesh,
-                    world,
-                    screen_area: screen_area / 4f64.powi(levels as i32),
-                    folding,
-                    obliquity: (1.0 / cos.max(0.1)) as f32,
-                });
-            }
+            push_triangle_cameras(
+                &mut cameras,
+                m,
+                (mesh, t),
+                count,
+                view,
+                settings.split_pixels,
+                report,
+            );
         }
     }
-    report.cameras = cameras.len() as u64;
-    report.setup_ms = ms(start);
+    (cameras, sources)
+}
 
-    // Backward phase: each camera's view volume against every tree.
-    let start = Instant::now();
-    let culled: Vec<(Vec<Seen>, Vec<InCloud>)> = cameras
-        .par_iter()
-        .map(|camera| {
-            let mut seen = Vec::new();
-            let mut in_clouds = Vec::with_capacity(clouds.len());
-            let mut stack = Vec::new();
-            for (c, placed) in clouds.iter().enumerate() {
-                let cloud = placed.cloud;
-                let local = camera.world.transformed(&placed.object_from_world);
-                let root = &cloud.nodes[0];
-                let in_cloud = InCloud {
-                    camera: local,
-                    bound: local.plane_bound(),
-                    projector: local.projector(),
-                    reach: local.lambda_bound(root.lo.as_dvec3(), root.hi.as_dvec3()),
-                };
-                if !cloud.is_empty() {
-                    let folds = local.fold_boxes(&camera.folding, in_cloud.reach);
-                    // The base's bounding sphere, for the normal-cone test.
-                    let base_center = (local.v[0] + local.v[1] + local.v[2]) / 3.0;
-                    let base_radius = local
-                        .v
-                        .iter()
-                        .map(|v| (*v - base_center).length())
-                        .fold(0.0, f64::max);
-                    stack.clear();
-                    stack.push(0usize);
-                    while let Some(k) = stack.pop() {
-                        let node = &cloud.nodes[k];
-                        let (lo, hi) = (node.lo.as_dvec3(), node.hi.as_dvec3());
-                        // The cheap planes and normal cone first (a node whose points all face
-                        // away from the mirror triangle shows nothing), then the exact
-                        // (conservative) test.
-                        if !in_cloud.bound.may_meet_box(lo, hi)
-                            || !node.may_face(base_center.as_vec3(), base_radius as f32)
-                            || !local.may_see_box(lo, hi, &folds)
-                        {
-                            continue;
-                        }
-                        let stride = if settings.level_of_detail {
-                            lod_stride(camera, &local, node, cloud.radius)
-                        } else {
-                            1
-                        };
-                        // A node the camera minifies so much that the level of detail keeps
-                        // few of its points is projected whole, strided: descending would cost
-                        // more tests than the projections it saves.
-                        let whole = settings.level_of_detail
-                            && node.point_count as usize / stride <= LOD_WHOLE_NODE_POINTS;
-                        if node.leaf || whole {
-                            seen.push(Seen {
-                                cloud: c,
-                                node: k,
-                                stride,
-                            });
-                        } else {
-                            stack.extend(node.first as usize..(node.first + node.count) as usize);
-                        }
-                    }
-                }
-                in_clouds.push(in_cloud);
-            }
-            (seen, in_clouds)
-        })
-        .collect();
-    let (seen, in_cloud): (Vec<Vec<Seen>>, Vec<Vec<InCloud>>) = culled.into_iter().unzip();
-    report.leaves_visited = seen.iter().map(|l| l.len() as u64).sum();
-    report.culling_ms = ms(start);
-    Plan {
-        cameras,
-        mirror_rows,
-        seen,
-        in_cloud: in_cloud.into_iter().flatten().collect(),
-        sources,
-        vertices,
-        traced,
-        report,
+/// The cameras of triangle `t` of `m` (mesh `mesh`), which covers `count` pixels: one, or
+/// one per part when it is cut.
+fn push_triangle_cameras(
+    cameras: &mut Vec<TriangleCamera>,
+    m: &Mesh,
+    (mesh, t): (usize, usize),
+    count: u32,
+    view: &ScreenView,
+    split_pixels: u32,
+    report: &mut PhaseReport,
+) {
+    let eye = view.eye.as_dvec3();
+    let idx = m.triangles[t].map(|i| i as usize);
+    let v = idx.map(|i| m.positions[i].as_dvec3());
+    let mut n = idx.map(|i| m.normals[i].as_dvec3());
+    // The side the eye sees reflects (the reference flips normals the same way).
+    let mut face = (v[1] - v[0]).cross(v[2] - v[0]);
+    if face.dot(n[0] + n[1] + n[2]) < 0.0 {
+        face = -face;
     }
+    if face.dot(eye - v[0]) < 0.0 {
+        n = n.map(|x| -x);
+    }
+    let screen = v.map(|p| view.project(p.as_vec3()));
+    let screen_area = match screen {
+        [Some(a), Some(b), Some(c)] => {
+            let (ab, ac) = ((b.0 - a.0, b.1 - a.1), (c.0 - a.0, c.1 - a.1));
+            0.5 * (ab.0 * ac.1 - ab.1 * ac.0).abs() as f64
+        }
+        _ => count as f64,
+    }
+    .max(count as f64);
+    let centroid = (v[0] + v[1] + v[2]) / 3.0;
+    let cos = face
+        .normalize_or_zero()
+        .dot((centroid - eye).normalize_or_zero())
+        .abs();
+    // Large triangles are cut in four (normals interpolated as the reference does) until each
+    // part covers at most `split_pixels`: linear interpolation of the rays then follows the
+    // reflection of the interpolated normal more closely.
+    let mut levels = 0;
+    while split_pixels > 0
+        && levels < MAX_SPLIT_LEVELS
+        && screen_area / 4f64.powi(levels as i32) > split_pixels as f64
+    {
+        levels += 1;
+    }
+    report.split_triangles += (levels > 0) as u64;
+    for (v, n) in subdivide(v, n, levels) {
+        let world = C3rc::reflector(v, n, eye);
+        let folding = world.multiple_projection_intervals();
+        report.cameras_that_can_project_twice += !folding.is_empty() as u64;
+        cameras.push(TriangleCamera {
+            mesh,
+            world,
+            screen_area: screen_area / 4f64.powi(levels as i32),
+            folding,
+            obliquity: (1.0 / cos.max(0.1)) as f32,
+        });
+    }
+}
+
+/// The backward phase of `camera` in cloud `c` (`placed`): the camera mapped into the cloud's
+/// space, returned; the nodes its view volume meets pushed to `seen` (`stack` is scratch).
+fn cull_cloud(
+    camera: &TriangleCamera,
+    c: usize,
+    placed: &PlacedCloud,
+    settings: FrameSettings,
+    seen: &mut Vec<Seen>,
+    stack: &mut Vec<usize>,
+) -> InCloud {
+    let cloud = placed.cloud;
+    let local = camera.world.transformed(&placed.object_from_world);
+    let root = &cloud.nodes[0];
+    let in_cloud = InCloud {
+        camera: local,
+        bound: local.plane_bound(),
+        projector: local.projector(),
+        reach: local.lambda_bound(root.lo.as_dvec3(), root.hi.as_dvec3()),
+    };
+    if cloud.is_empty() {
+        return in_cloud;
+    }
+    let folds = local.fold_boxes(&camera.folding, in_cloud.reach);
+    // The base's bounding sphere, for the normal-cone test.
+    let base_center = (local.v[0] + local.v[1] + local.v[2]) / 3.0;
+    let base_radius = local
+        .v
+        .iter()
+        .map(|v| (*v - base_center).length())
+        .fold(0.0, f64::max);
+    stack.clear();
+    stack.push(0usize);
+    while let Some(k) = stack.pop() {
+        let node = &cloud.nodes[k];
+        let (lo, hi) = (node.lo.as_dvec3(), node.hi.as_dvec3());
+        // The cheap planes and normal cone first (a node whose points all face away from the
+        // mirror triangle shows nothing), then the exact (conservative) test.
+        if !in_cloud.bound.may_meet_box(lo, hi)
+            || !node.may_face(base_center.as_vec3(), base_radius as f32)
+            || !local.may_see_box(lo, hi, &folds)
+        {
+            continue;
+        }
+        let stride = if settings.level_of_detail {
+            lod_stride(camera, &local, node, cloud.radius)
+        } else {
+            1
+        };
+        // A node the camera minifies so much that the level of detail keeps few of its points
+        // is projected whole, strided: descending would cost more tests than the projections
+        // it saves.
+        let whole =
+            settings.level_of_detail && node.point_count as usize / stride <= LOD_WHOLE_NODE_POINTS;
+        if node.leaf || whole {
+            seen.push(Seen {
+                cloud: c,
+                node: k,
+                stride,
+            });
+        } else {
+            stack.extend(node.first as usize..(node.first + node.count) as usize);
+        }
+    }
+    in_cloud
 }
 
 impl Plan {

@@ -124,7 +124,7 @@ use crate::gpu_scene::GpuScene;
 use crate::live_scene::LiveScene;
 use crate::raster::{self, BindGroupsBySlot, GBuffer, RasterPass, RasterSpec};
 use crate::technique::{
-    bad_value, Context, Frame, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels,
+    bad_value, Context, Drawn, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels,
     Technique, TechniqueError,
 };
 use rays::{trace_hits, trace_paths, ChannelPaths};
@@ -207,6 +207,7 @@ pub const INFO: MethodInfo = MethodInfo {
     needs_gpu: true,
     gpu_optional: false,
     progressive: false,
+    delegates: &[],
     params: PARAMS,
     create: || Box::new(Pvrr::default()),
 };
@@ -629,32 +630,18 @@ fn plan_reflector(
             .map(|&v| frame.point_to_local(v))
             .collect()
     });
-    let reused = slot
-        .as_ref()
-        .zip(key.as_ref())
-        .and_then(|((slot, frame), key)| reuse(slot, frame, key, interaction));
-    let (paths, reused_patches) = match reused {
-        Some((paths, patches)) => {
-            tally.cache_hits += 1;
-            (paths, Some(patches))
-        }
-        None => {
-            let paths = trace_paths(scene, p.accel, mesh, eye, interaction);
-            tally.rays += paths.rays;
-            (paths, None)
-        }
-    };
+    let (paths, reused_patches) =
+        reflector_paths(p, scene, reflector, eye, slot.as_ref(), key.as_ref(), tally);
     let hits: Vec<Vec<Vec3>> = paths
         .channels
         .iter()
         .map(|c| trace_hits(p.accel, &c.exits, p.far_distance))
         .collect();
     tally.rays += (hits.len() * m.positions.len()) as u64;
-    let primary = paths.channels.len() / 2;
     let input = PatchInput {
         mesh: m,
         visible: &paths.visible,
-        primary: &paths.channels[primary].exits,
+        primary: &paths.channels[paths.channels.len() / 2].exits,
         segments: paths
             .channels
             .iter()
@@ -674,105 +661,22 @@ fn plan_reflector(
         None => {
             let patches = input.patches(&settings.limits);
             if let Some(((slot, frame), key)) = slot.zip(key) {
-                let (paths, patches) = map_state(
-                    &paths,
-                    &patches,
-                    |q| frame.point_to_local(q),
-                    |v| frame.vector_to_local(v),
-                );
-                *slot = Some(CachedReflector {
-                    key,
-                    interaction: interaction.clone(),
-                    paths,
-                    patches,
-                });
+                *slot = Some(cache_entry(&frame, key, interaction, &paths, &patches));
             }
             patches
         }
     };
-    // Vertices whose P lies behind some patch's viewpoint (the zooming region) take the
-    // radiance ray traced along their exit segment instead of the map's, per channel.
-    let mut unresolved = vec![false; m.positions.len()];
-    for patch in &patches {
-        for &t in &patch.triangles {
-            for i in m.triangles[t as usize] {
-                let i = i as usize;
-                unresolved[i] |=
-                    paths.visible[i] && hits.iter().any(|h| patch.basis.local(h[i]).z <= 0.0);
-            }
-        }
-    }
-    let tracer = specula_trace::reference::Tracer {
-        scene,
-        accel: p.accel,
-        max_depth: TRACED_DEPTH,
-    };
-    let dispersive = paths.channels.len() == 3;
-    let traced: Vec<Vec<Vec3>> = paths
-        .channels
-        .iter()
-        .enumerate()
-        .map(|(c, channel)| {
-            (0..m.positions.len())
-                .into_par_iter()
-                .map(|i| {
-                    if !unresolved[i] {
-                        return Vec3::ZERO;
-                    }
-                    let exit = channel.exits[i];
-                    let ray = specula_trace::Ray {
-                        origin: exit.origin,
-                        dir: exit.dir,
-                    };
-                    tracer.radiance(&ray, 1, dispersive.then_some(c))
-                })
-                .collect()
-        })
-        .collect();
+    let unresolved = unresolved_vertices(m, &paths.visible, &hits, &patches);
+    let traced = trace_unresolved(p, scene, m, &paths, &unresolved);
     tally.rays += unresolved.iter().filter(|&&u| u).count() as u64 * traced.len() as u64;
-    let solid_angles: Vec<f32> = patches
-        .iter()
-        .map(|patch| solid_angle(m, &patch.triangles, eye))
-        .collect();
-    let total_solid_angle = solid_angles.iter().sum::<f32>().max(f32::MIN_POSITIVE);
-    let draws = patches
-        .iter()
-        .zip(&solid_angles)
-        .map(|(patch, &solid_angle)| {
-            // The reflector's map budget is shared by its patches in proportion to how
-            // much of the view each covers.
-            let share = (solid_angle / total_solid_angle).clamp(0.0, 1.0);
-            let height = ((settings.resolution as f32 * share.sqrt()).round() as u32)
-                .clamp(MIN_MAP_TEXELS.min(settings.resolution), settings.resolution);
-            let camera = patch.extents.camera(&patch.basis, height);
-            tally.map_texels += (camera.width * camera.height) as u64;
-            let channels = paths
-                .channels
-                .iter()
-                .zip(&hits)
-                .zip(&traced)
-                .map(|((channel, h), traced)| {
-                    patch
-                        .triangles
-                        .iter()
-                        .flat_map(|&t| m.triangles[t as usize])
-                        .map(|i| {
-                            let i = i as usize;
-                            MirrorVertex {
-                                position: m.positions[i].to_array(),
-                                normal: m.normals[i].to_array(),
-                                uv: map_uv(&camera, h[i]),
-                                weight: channel.weights[i],
-                                unresolved: unresolved[i] as u32 as f32,
-                                traced: traced[i].to_array(),
-                            }
-                        })
-                        .collect()
-                })
-                .collect();
-            PatchDraw { camera, channels }
-        })
-        .collect();
+    let vertices = ReflectorVertices {
+        mesh: m,
+        paths: &paths,
+        hits: &hits,
+        traced: &traced,
+        unresolved: &unresolved,
+    };
+    let draws = patch_draws(&vertices, &patches, settings.resolution, eye, tally);
     let unresolved = unresolved.iter().filter(|&&u| u).count();
     tally.patches += patches.len() as u64;
     tally.principal_up += patches.iter().filter(|p| p.principal_up).count() as u64;
@@ -802,6 +706,184 @@ fn plan_reflector(
         additive: reflector.additive,
         patches: draws,
     });
+}
+
+/// Step 1 for `reflector` seen from `eye`: its paths from its cache entry (`slot`, the cached
+/// mode) where that is still valid for its vertices in the eye's frame (`key`), with the
+/// cached patches; else traced, without patches.
+fn reflector_paths(
+    p: &Shared,
+    scene: &Scene,
+    reflector: &Reflector,
+    eye: Vec3,
+    slot: Option<&(&mut Option<CachedReflector>, EyeFrame)>,
+    key: Option<&Vec<Vec3>>,
+    tally: &mut Tally,
+) -> (MeshPaths, Option<Vec<Patch>>) {
+    let (mesh, interaction) = (reflector.mesh, &reflector.interaction);
+    let reused = slot
+        .zip(key)
+        .and_then(|((slot, frame), key)| reuse(slot, frame, key, interaction));
+    match reused {
+        Some((paths, patches)) => {
+            tally.cache_hits += 1;
+            (paths, Some(patches))
+        }
+        None => {
+            let paths = trace_paths(scene, p.accel, mesh, eye, interaction);
+            tally.rays += paths.rays;
+            (paths, None)
+        }
+    }
+}
+
+/// The cache entry of a reflector whose `paths` and `patches` were just computed: them
+/// carried into the eye's `frame`, valid while its vertices there (`key`) and its
+/// `interaction` stay unchanged.
+fn cache_entry(
+    frame: &EyeFrame,
+    key: Vec<Vec3>,
+    interaction: &Interaction,
+    paths: &MeshPaths,
+    patches: &[Patch],
+) -> CachedReflector {
+    let (paths, patches) = map_state(
+        paths,
+        patches,
+        |q| frame.point_to_local(q),
+        |v| frame.vector_to_local(v),
+    );
+    CachedReflector {
+        key,
+        interaction: interaction.clone(),
+        paths,
+        patches,
+    }
+}
+
+/// The vertices whose P lies behind some patch's viewpoint (the zooming region): they take
+/// the radiance ray traced along their exit segment instead of the map's, per channel.
+fn unresolved_vertices(
+    m: &specula_scene::Mesh,
+    visible: &[bool],
+    hits: &[Vec<Vec3>],
+    patches: &[Patch],
+) -> Vec<bool> {
+    let mut unresolved = vec![false; m.positions.len()];
+    for patch in patches {
+        for &t in &patch.triangles {
+            for i in m.triangles[t as usize] {
+                let i = i as usize;
+                unresolved[i] |=
+                    visible[i] && hits.iter().any(|h| patch.basis.local(h[i]).z <= 0.0);
+            }
+        }
+    }
+    unresolved
+}
+
+/// Per channel, the radiance traced along each `unresolved` vertex's exit segment (zero for
+/// the others).
+fn trace_unresolved(
+    p: &Shared,
+    scene: &Scene,
+    m: &specula_scene::Mesh,
+    paths: &MeshPaths,
+    unresolved: &[bool],
+) -> Vec<Vec<Vec3>> {
+    let tracer = specula_trace::reference::Tracer {
+        scene,
+        accel: p.accel,
+        max_depth: TRACED_DEPTH,
+    };
+    let dispersive = paths.channels.len() == 3;
+    paths
+        .channels
+        .iter()
+        .enumerate()
+        .map(|(c, channel)| {
+            (0..m.positions.len())
+                .into_par_iter()
+                .map(|i| {
+                    if !unresolved[i] {
+                        return Vec3::ZERO;
+                    }
+                    let exit = channel.exits[i];
+                    let ray = specula_trace::Ray {
+                        origin: exit.origin,
+                        dir: exit.dir,
+                    };
+                    tracer.radiance(&ray, 1, dispersive.then_some(c))
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// What each vertex of a reflector brings to its patches' draws.
+struct ReflectorVertices<'a> {
+    mesh: &'a specula_scene::Mesh,
+    paths: &'a MeshPaths,
+    /// Per channel, where each vertex's exit segment hits the scene (P).
+    hits: &'a [Vec<Vec3>],
+    /// Per channel, the radiance traced for each unresolved vertex.
+    traced: &'a [Vec<Vec3>],
+    unresolved: &'a [bool],
+}
+
+/// Each patch's map camera and mirror vertices per channel. The reflector's map budget
+/// (`resolution` texels high) is shared by its patches in proportion to how much of the view
+/// from `eye` each covers.
+fn patch_draws(
+    vertices: &ReflectorVertices,
+    patches: &[Patch],
+    resolution: u32,
+    eye: Vec3,
+    tally: &mut Tally,
+) -> Vec<PatchDraw> {
+    let m = vertices.mesh;
+    let solid_angles: Vec<f32> = patches
+        .iter()
+        .map(|patch| solid_angle(m, &patch.triangles, eye))
+        .collect();
+    let total_solid_angle = solid_angles.iter().sum::<f32>().max(f32::MIN_POSITIVE);
+    patches
+        .iter()
+        .zip(&solid_angles)
+        .map(|(patch, &solid_angle)| {
+            let share = (solid_angle / total_solid_angle).clamp(0.0, 1.0);
+            let height = ((resolution as f32 * share.sqrt()).round() as u32)
+                .clamp(MIN_MAP_TEXELS.min(resolution), resolution);
+            let camera = patch.extents.camera(&patch.basis, height);
+            tally.map_texels += (camera.width * camera.height) as u64;
+            let channels = vertices
+                .paths
+                .channels
+                .iter()
+                .zip(vertices.hits)
+                .zip(vertices.traced)
+                .map(|((channel, h), traced)| {
+                    patch
+                        .triangles
+                        .iter()
+                        .flat_map(|&t| m.triangles[t as usize])
+                        .map(|i| {
+                            let i = i as usize;
+                            MirrorVertex {
+                                position: m.positions[i].to_array(),
+                                normal: m.normals[i].to_array(),
+                                uv: map_uv(&camera, h[i]),
+                                weight: channel.weights[i],
+                                unresolved: vertices.unresolved[i] as u32 as f32,
+                                traced: traced[i].to_array(),
+                            }
+                        })
+                        .collect()
+                })
+                .collect();
+            PatchDraw { camera, channels }
+        })
+        .collect()
 }
 
 /// The top level's warnings about one reflector.
@@ -1235,16 +1317,15 @@ impl Technique for Pvrr {
         Ok(())
     }
 
-    fn render(
+    fn draw(
         &mut self,
         ctx: &Context,
         live: &LiveScene,
         camera: &Camera,
         width: u32,
         height: u32,
-    ) -> Result<Frame, TechniqueError> {
+    ) -> Result<Drawn, TechniqueError> {
         let gpu = ctx.gpu(INFO.name)?;
-        let before = gpu.resource_counts();
         self.ensure_prepared(gpu, live)?;
         let scene = live.scene();
         let prepared = self.prepared.as_ref().expect("prepared above");
@@ -1316,7 +1397,7 @@ impl Technique for Pvrr {
         second_pass(gpu, &p, &camera_uniform, &g, &plan, &maps)?;
         self.timer.lap(gpu, "mirror (2nd pass)")?;
         let (stages, timing) = self.timer.finish(gpu)?;
-        Ok(Frame {
+        Ok(Drawn {
             pixels: Pixels::Texture(g.color.clone()),
             stages,
             counters: vec![
@@ -1334,7 +1415,6 @@ impl Technique for Pvrr {
             timing,
             warnings: tally.warnings,
             converged: true,
-            created: gpu.resource_counts() - before,
         })
     }
 }

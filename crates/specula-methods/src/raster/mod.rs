@@ -454,6 +454,268 @@ pub fn cube_views(position: Vec3, near: f32, far: f32, resolution: u32) -> [Shad
     })
 }
 
+/// The bind group layouts of the raster shader: the camera (group 0), the scene (group 1),
+/// the shadow maps with their views (group 2), and the light view a shadow-map layer is drawn
+/// from.
+struct Layouts {
+    camera: wgpu::BindGroupLayout,
+    shadow_view: wgpu::BindGroupLayout,
+    scene: wgpu::BindGroupLayout,
+    shadows: wgpu::BindGroupLayout,
+}
+
+impl Layouts {
+    fn new(device: &wgpu::Device) -> Layouts {
+        let camera = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("camera"),
+            entries: &[uniform_entry(0)],
+        });
+        let shadow_view = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("shadow view"),
+            entries: &[uniform_entry(1)],
+        });
+        let scene = GpuScene::bind_group_layout(device);
+        let shadows = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("shadows"),
+            entries: &[
+                layout_entry(
+                    0,
+                    wgpu::ShaderStages::FRAGMENT,
+                    buffer_binding(wgpu::BufferBindingType::Storage { read_only: true }),
+                ),
+                layout_entry(
+                    1,
+                    wgpu::ShaderStages::FRAGMENT,
+                    texture_binding(
+                        wgpu::TextureSampleType::Float { filterable: false },
+                        wgpu::TextureViewDimension::D2Array,
+                    ),
+                ),
+            ],
+        });
+        Layouts {
+            camera,
+            shadow_view,
+            scene,
+            shadows,
+        }
+    }
+}
+
+/// The pass's pipelines from `module`: the scene (the fragment stage `spec` targets, its
+/// faces culled as `spec` asks), the background, and the shadow map.
+fn pipelines(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    layouts: &Layouts,
+    spec: &RasterSpec,
+) -> [wgpu::RenderPipeline; 3] {
+    let layout = |layouts: &[Option<&wgpu::BindGroupLayout>]| {
+        device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: None,
+            bind_group_layouts: layouts,
+            ..Default::default()
+        })
+    };
+    let scene_pipeline_layout = layout(&[
+        Some(&layouts.camera),
+        Some(&layouts.scene),
+        Some(&layouts.shadows),
+    ]);
+    let depth = |write: bool, compare| {
+        Some(wgpu::DepthStencilState {
+            format: DEPTH_FORMAT,
+            depth_write_enabled: Some(write),
+            depth_compare: Some(compare),
+            stencil: Default::default(),
+            bias: Default::default(),
+        })
+    };
+    let scene_pipeline = render_pipeline(
+        device,
+        &PipelineSpec {
+            label: "scene raster",
+            layout: &scene_pipeline_layout,
+            module,
+            vertex_entry: "vs_scene",
+            fragment_entry: match spec.targets {
+                Targets::Shaded => "fs_scene",
+                Targets::Geometry => "fs_geometry",
+            },
+            vertex_buffers: &[Some(vertex_layout())],
+            depth: depth(true, wgpu::CompareFunction::Less),
+            targets: &G_BUFFER_FORMATS,
+            write_mask: wgpu::ColorWrites::ALL,
+            blend: None,
+            cull_mode: spec.cull_mode,
+        },
+    );
+    let background_pipeline_layout = layout(&[Some(&layouts.camera), Some(&layouts.scene)]);
+    let background_pipeline = render_pipeline(
+        device,
+        &PipelineSpec {
+            label: "background",
+            layout: &background_pipeline_layout,
+            module,
+            vertex_entry: "vs_fullscreen",
+            fragment_entry: "fs_background",
+            vertex_buffers: &[],
+            depth: depth(false, wgpu::CompareFunction::Always),
+            targets: &G_BUFFER_FORMATS,
+            write_mask: wgpu::ColorWrites::ALL,
+            blend: None,
+            cull_mode: None,
+        },
+    );
+    let shadow_pipeline_layout = layout(&[Some(&layouts.shadow_view)]);
+    let shadow_pipeline = render_pipeline(
+        device,
+        &PipelineSpec {
+            label: "shadow map",
+            layout: &shadow_pipeline_layout,
+            module,
+            vertex_entry: "vs_shadow",
+            fragment_entry: "fs_shadow",
+            vertex_buffers: &[Some(vertex_layout())],
+            depth: depth(true, wgpu::CompareFunction::Less),
+            targets: &[SHADOW_FORMAT],
+            write_mask: wgpu::ColorWrites::ALL,
+            blend: None,
+            cull_mode: None,
+        },
+    );
+    [scene_pipeline, background_pipeline, shadow_pipeline]
+}
+
+impl Shadows {
+    /// The shadow maps of `gpu_scene`'s lights (`resolution` texels a side, one layer per
+    /// light view), drawn with `pipeline`; with the bind group lighting.wgsl reads them by.
+    fn new(
+        ctx: &GpuContext,
+        gpu_scene: &GpuScene,
+        layouts: &Layouts,
+        pipeline: wgpu::RenderPipeline,
+        resolution: u32,
+    ) -> (Shadows, wgpu::BindGroup) {
+        let layers = gpu_scene.shadow_layers().max(1);
+        let maps = ctx.create_texture(&wgpu::TextureDescriptor {
+            label: Some("shadow maps"),
+            size: wgpu::Extent3d {
+                width: resolution,
+                height: resolution,
+                depth_or_array_layers: layers,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: SHADOW_FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let depth = texture_2d(
+            ctx,
+            "shadow depth",
+            resolution,
+            resolution,
+            DEPTH_FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        );
+        let layer_views = (0..gpu_scene.shadow_layers())
+            .map(|_| {
+                let buffer = specula_gpu::util::writable_buffer(
+                    ctx,
+                    "shadow view",
+                    size_of::<ShadowView>() as u64,
+                    wgpu::BufferUsages::UNIFORM,
+                );
+                let bind_group = ctx.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: None,
+                    layout: &layouts.shadow_view,
+                    entries: &[wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: buffer.as_entire_binding(),
+                    }],
+                });
+                (buffer, bind_group)
+            })
+            .collect();
+        let views = specula_gpu::util::writable_buffer(
+            ctx,
+            "shadow views",
+            layers as u64 * size_of::<ShadowView>() as u64,
+            wgpu::BufferUsages::STORAGE,
+        );
+        let bind_group = ctx.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("shadows"),
+            layout: &layouts.shadows,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: views.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&maps.create_view(
+                        &wgpu::TextureViewDescriptor {
+                            dimension: Some(wgpu::TextureViewDimension::D2Array),
+                            ..Default::default()
+                        },
+                    )),
+                },
+            ],
+        });
+        let shadows = Shadows {
+            pipeline,
+            maps,
+            depth,
+            layer_views,
+            views,
+            resolution,
+        };
+        (shadows, bind_group)
+    }
+}
+
+/// The camera uniform, rewritten before each draw, and its bind group (group 0).
+fn camera_binding(
+    ctx: &GpuContext,
+    layout: &wgpu::BindGroupLayout,
+) -> (wgpu::Buffer, wgpu::BindGroup) {
+    let buffer = specula_gpu::util::writable_buffer(
+        ctx,
+        "camera",
+        size_of::<CameraUniform>() as u64,
+        wgpu::BufferUsages::UNIFORM,
+    );
+    let bind_group = ctx.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("camera"),
+        layout,
+        entries: &[wgpu::BindGroupEntry {
+            binding: 0,
+            resource: buffer.as_entire_binding(),
+        }],
+    });
+    (buffer, bind_group)
+}
+
+/// Per mesh of `scene`: whether `selection` draws it.
+fn selected_meshes(scene: &Scene, selection: MeshSelection) -> Vec<bool> {
+    scene
+        .meshes
+        .iter()
+        .map(|mesh| {
+            let specular = scene.materials[mesh.material].is_specular();
+            match selection {
+                MeshSelection::All => true,
+                MeshSelection::Specular => specular,
+                MeshSelection::NonSpecular => !specular,
+            }
+        })
+        .collect()
+}
+
 impl RasterPass {
     /// Builds the pipelines and renders the shadow maps (they depend on the scene only).
     pub fn new(
@@ -481,222 +743,28 @@ impl RasterPass {
             label: Some("raster.wgsl"),
             source: wgpu::ShaderSource::Wgsl(shader_source().into()),
         });
-        let camera_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("camera"),
-            entries: &[uniform_entry(0)],
-        });
-        let shadow_view_layout =
-            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("shadow view"),
-                entries: &[uniform_entry(1)],
-            });
-        let scene_layout = GpuScene::bind_group_layout(device);
-        let shadow_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("shadows"),
-            entries: &[
-                layout_entry(
-                    0,
-                    wgpu::ShaderStages::FRAGMENT,
-                    buffer_binding(wgpu::BufferBindingType::Storage { read_only: true }),
-                ),
-                layout_entry(
-                    1,
-                    wgpu::ShaderStages::FRAGMENT,
-                    texture_binding(
-                        wgpu::TextureSampleType::Float { filterable: false },
-                        wgpu::TextureViewDimension::D2Array,
-                    ),
-                ),
-            ],
-        });
-        let layout = |layouts: &[Option<&wgpu::BindGroupLayout>]| {
-            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: None,
-                bind_group_layouts: layouts,
-                ..Default::default()
-            })
-        };
-        let scene_pipeline_layout = layout(&[
-            Some(&camera_layout),
-            Some(&scene_layout),
-            Some(&shadow_layout),
-        ]);
-        let depth = |write: bool, compare| {
-            Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(write),
-                depth_compare: Some(compare),
-                stencil: Default::default(),
-                bias: Default::default(),
-            })
-        };
-        let scene_pipeline = render_pipeline(
-            device,
-            &PipelineSpec {
-                label: "scene raster",
-                layout: &scene_pipeline_layout,
-                module: &module,
-                vertex_entry: "vs_scene",
-                fragment_entry: match spec.targets {
-                    Targets::Shaded => "fs_scene",
-                    Targets::Geometry => "fs_geometry",
-                },
-                vertex_buffers: &[Some(vertex_layout())],
-                depth: depth(true, wgpu::CompareFunction::Less),
-                targets: &G_BUFFER_FORMATS,
-                write_mask: wgpu::ColorWrites::ALL,
-                blend: None,
-                cull_mode: spec.cull_mode,
-            },
-        );
-        let background_pipeline_layout = layout(&[Some(&camera_layout), Some(&scene_layout)]);
-        let background_pipeline = render_pipeline(
-            device,
-            &PipelineSpec {
-                label: "background",
-                layout: &background_pipeline_layout,
-                module: &module,
-                vertex_entry: "vs_fullscreen",
-                fragment_entry: "fs_background",
-                vertex_buffers: &[],
-                depth: depth(false, wgpu::CompareFunction::Always),
-                targets: &G_BUFFER_FORMATS,
-                write_mask: wgpu::ColorWrites::ALL,
-                blend: None,
-                cull_mode: None,
-            },
-        );
-        let shadow_pipeline_layout = layout(&[Some(&shadow_view_layout)]);
-        let shadow_pipeline = render_pipeline(
-            device,
-            &PipelineSpec {
-                label: "shadow map",
-                layout: &shadow_pipeline_layout,
-                module: &module,
-                vertex_entry: "vs_shadow",
-                fragment_entry: "fs_shadow",
-                vertex_buffers: &[Some(vertex_layout())],
-                depth: depth(true, wgpu::CompareFunction::Less),
-                targets: &[SHADOW_FORMAT],
-                write_mask: wgpu::ColorWrites::ALL,
-                blend: None,
-                cull_mode: None,
-            },
-        );
-        let resolution = spec.shadow_resolution;
-        let layers = gpu_scene.shadow_layers().max(1);
-        let maps = ctx.create_texture(&wgpu::TextureDescriptor {
-            label: Some("shadow maps"),
-            size: wgpu::Extent3d {
-                width: resolution,
-                height: resolution,
-                depth_or_array_layers: layers,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: SHADOW_FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                | wgpu::TextureUsages::TEXTURE_BINDING
-                | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
-        let shadow_depth = texture_2d(
+        let layouts = Layouts::new(device);
+        let [scene_pipeline, background_pipeline, shadow_pipeline] =
+            pipelines(device, &module, &layouts, &spec);
+        let (shadows, shadow_bind_group) = Shadows::new(
             ctx,
-            "shadow depth",
-            resolution,
-            resolution,
-            DEPTH_FORMAT,
-            wgpu::TextureUsages::RENDER_ATTACHMENT,
+            gpu_scene,
+            &layouts,
+            shadow_pipeline,
+            spec.shadow_resolution,
         );
-        let layer_views = (0..gpu_scene.shadow_layers())
-            .map(|_| {
-                let buffer = specula_gpu::util::writable_buffer(
-                    ctx,
-                    "shadow view",
-                    size_of::<ShadowView>() as u64,
-                    wgpu::BufferUsages::UNIFORM,
-                );
-                let bind_group = ctx.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: None,
-                    layout: &shadow_view_layout,
-                    entries: &[wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: buffer.as_entire_binding(),
-                    }],
-                });
-                (buffer, bind_group)
-            })
-            .collect();
-        let views = specula_gpu::util::writable_buffer(
-            ctx,
-            "shadow views",
-            layers as u64 * size_of::<ShadowView>() as u64,
-            wgpu::BufferUsages::STORAGE,
-        );
-        let shadow_bind_group = ctx.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("shadows"),
-            layout: &shadow_layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: views.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::TextureView(&maps.create_view(
-                        &wgpu::TextureViewDescriptor {
-                            dimension: Some(wgpu::TextureViewDimension::D2Array),
-                            ..Default::default()
-                        },
-                    )),
-                },
-            ],
-        });
-        let camera_buffer = specula_gpu::util::writable_buffer(
-            ctx,
-            "camera",
-            size_of::<CameraUniform>() as u64,
-            wgpu::BufferUsages::UNIFORM,
-        );
-        let camera_bind_group = ctx.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("camera"),
-            layout: &camera_layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: camera_buffer.as_entire_binding(),
-            }],
-        });
-        let selected = scene
-            .meshes
-            .iter()
-            .map(|mesh| {
-                let specular = scene.materials[mesh.material].is_specular();
-                match spec.meshes {
-                    MeshSelection::All => true,
-                    MeshSelection::Specular => specular,
-                    MeshSelection::NonSpecular => !specular,
-                }
-            })
-            .collect();
+        let (camera_buffer, camera_bind_group) = camera_binding(ctx, &layouts.camera);
         RasterPass {
             spec,
-            scene_bind_group: gpu_scene.bind_group(ctx, &scene_layout),
+            scene_bind_group: gpu_scene.bind_group(ctx, &layouts.scene),
             scene_pipeline,
             background_pipeline,
-            shadow_layout,
+            shadow_layout: layouts.shadows,
             shadow_bind_group,
-            shadows: Shadows {
-                pipeline: shadow_pipeline,
-                maps,
-                depth: shadow_depth,
-                layer_views,
-                views,
-                resolution,
-            },
+            shadows,
             camera_buffer,
             camera_bind_group,
-            selected,
+            selected: selected_meshes(scene, spec.meshes),
             pool: RefCell::new(Vec::new()),
             next_slot: Cell::new(0),
             shadows_at: Cell::new(0),

@@ -68,6 +68,7 @@ impl Balancer {
         (0..self.workers()).filter(|&w| !self.lost[w]).collect()
     }
 
+    #[cfg_attr(not(feature = "mpi"), allow(dead_code))] // the MPI master's alone
     pub fn is_lost(&self, worker: usize) -> bool {
         self.lost[worker]
     }
@@ -135,6 +136,7 @@ impl Balancer {
     }
 
     /// Declares `worker` lost: its outstanding packages go back to the front of the queue.
+    #[cfg_attr(not(feature = "mpi"), allow(dead_code))] // the MPI master's alone
     pub fn lose(&mut self, worker: usize) -> Vec<Assignment> {
         self.lost[worker] = true;
         self.frame[worker].lost = true;
@@ -145,16 +147,19 @@ impl Balancer {
         orphans
     }
 
+    #[cfg_attr(not(feature = "mpi"), allow(dead_code))] // the MPI master's alone
     pub fn outstanding(&self, worker: usize) -> &[Assignment] {
         &self.outstanding[worker]
     }
 
     /// Whether every triangle of the frame is handed out and answered.
+    #[cfg_attr(not(feature = "mpi"), allow(dead_code))] // the MPI master's alone
     pub fn frame_done(&self) -> bool {
         self.queue.is_empty() && self.outstanding.iter().all(Vec::is_empty)
     }
 
     /// Empties the queue: the ranges no worker will get (the master does them itself).
+    #[cfg_attr(not(feature = "mpi"), allow(dead_code))] // the MPI master's alone
     pub fn take_queue(&mut self) -> Vec<Range<usize>> {
         self.queue.drain(..).collect()
     }

@@ -34,10 +34,10 @@
 //! end. Any change of camera, size, parameters or scene starts over from the preview. `specula
 //! render --sequence DIR` writes each step as a numbered image with its time and rays.
 //!
-//! Work is cut into task packages of reflector triangles ([`refine::Package`]), refined in
-//! parallel (rayon) here and by MPI workers in `specula render --distributed` (§4; the CLI's
-//! `distributed` module and [`balance`]). A package's pixels do not depend on how the frame
-//! was cut, so both give the same image bit for bit.
+//! Work is cut into task packages of reflector triangles (`refine::Package`), refined in
+//! parallel (rayon) here and by MPI workers in `specula render --distributed` (§4; the
+//! `distributed` module, feature `mpi`, with the load balancer of `balance`). A package's
+//! pixels do not depend on how the frame was cut, so both give the same image bit for bit.
 //!
 //! Beyond the paper:
 //! - Deferred textures (`deferred_textures`): where a face's corners read the same textures
@@ -87,17 +87,20 @@
 //! - `shadow_resolution`: the raster pass's shadow maps (GPU visibility only).
 //! - `show_faces` (false): draws the refined faces' edges over the image (Figure 13).
 
-pub mod balance;
-pub mod refine;
+pub(crate) mod balance;
+#[cfg(feature = "mpi")]
+pub mod distributed;
+mod phases;
+pub(crate) mod refine;
 pub mod simulate;
-pub mod wire;
+pub(crate) mod wire;
 
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use glam::Vec3;
 use rayon::prelude::*;
-use specula_gpu::{GpuContext, ResourceCounts, StageTime, TimingSource};
+use specula_gpu::{GpuContext, StageTime, TimingSource};
 use specula_scene::Camera;
 use specula_trace::reference::{pixel_radiance, rays_traced_on_this_thread, Tracer};
 use specula_trace::Image;
@@ -106,12 +109,12 @@ use crate::live_scene::LiveScene;
 use crate::raster::{self, RasterPass, RasterSpec};
 use crate::screen::{PixelSurfaces, ScreenView, SurfaceReadback};
 use crate::technique::{
-    bad_value, Context, Frame, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels,
+    bad_value, Context, Drawn, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels,
     Technique, TechniqueError, COUNTER_RAYS_TRACED, COUNTER_SHADOW_RAYS,
 };
-pub use refine::Topology;
-pub use refine::TriangleId;
-use refine::{FrameInputs, OriginalSamples, Package, PixelOwners, RefineSettings};
+pub use phases::FramePhases;
+use refine::{FrameInputs, OriginalSamples, Package, PixelOwners, Topology, TriangleId};
+pub use refine::{PackageCounters, RefineSettings};
 
 /// Packages per rayon thread when `package_triangles` is 0: enough that a package holding a
 /// reflection's outline does not leave the other threads idle.
@@ -222,6 +225,7 @@ pub const INFO: MethodInfo = MethodInfo {
     needs_gpu: false,
     gpu_optional: true,
     progressive: true,
+    delegates: &[],
     params: PARAMS,
     create: || Box::new(VertexTracing::default()),
 };
@@ -297,13 +301,13 @@ struct ViewKey {
 
 /// One frame's view of the scene, the same on every rank: the ID buffer, who owns each pixel,
 /// and the reflector triangles to trace.
-pub struct FrameSetup {
-    pub view: ScreenView,
-    pub surfaces: PixelSurfaces,
-    pub owners: PixelOwners,
+pub(crate) struct FrameSetup {
+    pub(crate) view: ScreenView,
+    pub(crate) surfaces: PixelSurfaces,
+    pub(crate) owners: PixelOwners,
     /// Built once per scene ([`Topology::new`]): a rigid move does not change it.
-    pub topology: Arc<Topology>,
-    pub active: Vec<TriangleId>,
+    pub(crate) topology: Arc<Topology>,
+    pub(crate) active: Vec<TriangleId>,
 }
 
 impl FrameSetup {
@@ -521,14 +525,14 @@ impl Technique for VertexTracing {
         Ok(())
     }
 
-    fn render(
+    fn draw(
         &mut self,
         ctx: &Context,
         live: &LiveScene,
         camera: &Camera,
         width: u32,
         height: u32,
-    ) -> Result<Frame, TechniqueError> {
+    ) -> Result<Drawn, TechniqueError> {
         let start = Instant::now();
         let gpu = self.gpu_for_visibility(ctx)?;
         let key = ViewKey {
@@ -652,14 +656,13 @@ impl Technique for VertexTracing {
                 }
             }
         }
-        Ok(Frame {
+        Ok(Drawn {
             pixels: Pixels::Image(image),
             stages,
             counters,
             timing: TimingSource::CpuWallClock,
             warnings,
             converged,
-            created: ResourceCounts::default(),
         })
     }
 }

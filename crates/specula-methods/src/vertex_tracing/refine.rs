@@ -720,6 +720,7 @@ impl OriginalSamples {
     /// Keeps the original-vertex samples `package` traced, for the next packages this
     /// process refines in the frame (an MPI worker's packages follow one another on the mesh:
     /// their borders are traced once).
+    #[cfg_attr(not(feature = "mpi"), allow(dead_code))]
     pub fn absorb(&mut self, package: &Package) {
         for (&key, &local) in &package.originals {
             self.samples

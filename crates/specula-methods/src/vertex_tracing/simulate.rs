@@ -1,13 +1,13 @@
 //! A discrete-event simulation of distributed vertex tracing (§4, Figure 9), to extend what
 //! can be measured on one machine (1–3 MPI ranks) to 1–32 workers, mixed 10 and 100 Mbit/s
-//! links and workers of different speeds. It drives the same [`Balancer`] as the MPI master.
+//! links and workers of different speeds. It drives the same `Balancer` as the MPI master.
 //!
 //! Model: the frame's work is the measured cost of each active triangle (seconds on a worker
 //! of speed 1, from a real run's packages: a package's time spread evenly over its triangles)
 //! and the pixels each returns; a worker of speed s computes a package in Σ cost / s, plus a
 //! fixed cost (measured) when the package does not continue the worker's previous one (its
 //! border vertices are traced again), after it has computed the frame's ID buffer itself.
-//! Messages take the link's latency plus their bytes ([`super::wire`]'s sizes) over the
+//! Messages take the link's latency plus their bytes (`super::wire`'s sizes) over the
 //! bandwidth; results also cross the master's link, one at a time (it is shared). The master
 //! answers a result at once with the worker's next package, as the MPI master does.
 //!
@@ -126,7 +126,7 @@ impl PartialOrd for Event {
 }
 
 /// Simulates one frame with `balancer` (whose speeds carry over from earlier frames).
-pub fn simulate_frame(
+pub(crate) fn simulate_frame(
     workload: &Workload,
     workers: &[WorkerSpec],
     network: Network,

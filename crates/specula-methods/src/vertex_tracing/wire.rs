@@ -1,6 +1,10 @@
 //! The messages of distributed vertex tracing (§4), as bytes: what the MPI master and workers
 //! send each other, and what the discrete-event simulation charges the network for. Little
 //! endian; a pixel result is 16 bytes (index and three f32).
+//!
+//! Without the feature `mpi` only the simulation uses this module (its message sizes); the
+//! codec is for the MPI master and workers (`super::distributed`) and its tests.
+#![cfg_attr(not(feature = "mpi"), allow(dead_code))]
 
 use glam::Vec3;
 use specula_scene::Camera;

@@ -7,7 +7,7 @@
 //! byte ranges of buffer views and accessors against their buffers and views, and the node
 //! hierarchy (no cycles, at most one parent per node).
 
-use serde_json::Value;
+use serde_json::{Map, Value};
 
 /// The JSON text of a `.gltf` or `.glb` file, or what is wrong with the GLB container.
 pub fn json_of(bytes: &[u8]) -> Result<&[u8], String> {
@@ -40,6 +40,25 @@ pub fn check(json: &[u8]) -> Result<(), String> {
     let Some(root) = root.as_object() else {
         return Err("the top level is not a JSON object".into());
     };
+    version(root)?;
+    required_extensions(root)?;
+    top_level_arrays(root)?;
+    let doc = Document::new(root);
+    scene_and_node_indices(&doc)?;
+    mesh_indices(&doc)?;
+    material_texture_and_image_indices(&doc)?;
+    skin_and_animation_indices(&doc)?;
+    buffer_view_and_accessor_indices(&doc)?;
+    byte_ranges(
+        doc.array("buffers"),
+        doc.array("bufferViews"),
+        doc.array("accessors"),
+    )?;
+    node_hierarchy(doc.array("nodes"))
+}
+
+/// `asset.version` says glTF 2 (glTF 1.0 and other versions said plainly).
+fn version(root: &Map<String, Value>) -> Result<(), String> {
     let version = root
         .get("asset")
         .and_then(|a| a.get("version"))
@@ -48,11 +67,15 @@ pub fn check(json: &[u8]) -> Result<(), String> {
         .iter()
         .any(|k| root.get(*k).is_some_and(Value::is_object));
     match version {
-        Some(v) if v.starts_with('2') => {}
-        Some(v) => return Err(format!("asset.version is \"{v}\": glTF {v} is not supported, only glTF 2.0 (convert the file, e.g. with Blender or gltf-pipeline)")),
-        None if old_style => return Err("glTF 1.0 is not supported, only glTF 2.0 (this file has no asset.version and uses 1.0's named objects)".into()),
-        None => return Err("asset.version: missing (glTF 2.0 files say \"2.0\")".into()),
+        Some(v) if v.starts_with('2') => Ok(()),
+        Some(v) => Err(format!("asset.version is \"{v}\": glTF {v} is not supported, only glTF 2.0 (convert the file, e.g. with Blender or gltf-pipeline)")),
+        None if old_style => Err("glTF 1.0 is not supported, only glTF 2.0 (this file has no asset.version and uses 1.0's named objects)".into()),
+        None => Err("asset.version: missing (glTF 2.0 files say \"2.0\")".into()),
     }
+}
+
+/// Every extension in `extensionsRequired` is one specula reads.
+fn required_extensions(root: &Map<String, Value>) -> Result<(), String> {
     if let Some(required) = root.get("extensionsRequired").and_then(Value::as_array) {
         for (i, e) in required.iter().enumerate() {
             let name = e.as_str().unwrap_or("?");
@@ -63,12 +86,11 @@ pub fn check(json: &[u8]) -> Result<(), String> {
             }
         }
     }
-    let len = |key: &str| -> usize { root.get(key).and_then(Value::as_array).map_or(0, Vec::len) };
-    let array = |key: &str| -> &[Value] {
-        root.get(key)
-            .and_then(Value::as_array)
-            .map_or(&[], Vec::as_slice)
-    };
+    Ok(())
+}
+
+/// The top-level collections, where present, are arrays.
+fn top_level_arrays(root: &Map<String, Value>) -> Result<(), String> {
     for key in [
         "scenes",
         "nodes",
@@ -88,81 +110,126 @@ pub fn check(json: &[u8]) -> Result<(), String> {
             return Err(format!("{key}: expected an array"));
         }
     }
-    let lights = root
-        .get("extensions")
-        .and_then(|e| e.get("KHR_lights_punctual"))
-        .and_then(|e| e.get("lights"))
-        .and_then(Value::as_array)
-        .map_or(0, Vec::len);
+    Ok(())
+}
 
-    index(root.get("scene"), "scene", len("scenes"))?;
-    for (s, scene) in array("scenes").iter().enumerate() {
+/// The document's top level: its arrays, and the counts indices into them are checked
+/// against.
+struct Document<'a> {
+    root: &'a Map<String, Value>,
+    /// Lights of `KHR_lights_punctual`.
+    lights: usize,
+}
+
+impl<'a> Document<'a> {
+    fn new(root: &'a Map<String, Value>) -> Document<'a> {
+        let lights = root
+            .get("extensions")
+            .and_then(|e| e.get("KHR_lights_punctual"))
+            .and_then(|e| e.get("lights"))
+            .and_then(Value::as_array)
+            .map_or(0, Vec::len);
+        Document { root, lights }
+    }
+
+    /// Entries of the top-level array `key` (0 when it is absent).
+    fn len(&self, key: &str) -> usize {
+        self.array(key).len()
+    }
+
+    /// The top-level array `key` (empty when it is absent).
+    fn array(&self, key: &str) -> &'a [Value] {
+        self.root
+            .get(key)
+            .and_then(Value::as_array)
+            .map_or(&[], Vec::as_slice)
+    }
+}
+
+/// The default scene, each scene's nodes, and each node's children, mesh, camera, skin and
+/// light.
+fn scene_and_node_indices(doc: &Document) -> Result<(), String> {
+    index(doc.root.get("scene"), "scene", doc.len("scenes"))?;
+    for (s, scene) in doc.array("scenes").iter().enumerate() {
         indices(
             scene.get("nodes"),
             &format!("scenes[{s}].nodes"),
-            len("nodes"),
+            doc.len("nodes"),
         )?;
     }
-    for (n, node) in array("nodes").iter().enumerate() {
+    for (n, node) in doc.array("nodes").iter().enumerate() {
         let at = |what: &str| format!("nodes[{n}].{what}");
-        indices(node.get("children"), &at("children"), len("nodes"))?;
-        index(node.get("mesh"), &at("mesh"), len("meshes"))?;
-        index(node.get("camera"), &at("camera"), len("cameras"))?;
-        index(node.get("skin"), &at("skin"), len("skins"))?;
+        indices(node.get("children"), &at("children"), doc.len("nodes"))?;
+        index(node.get("mesh"), &at("mesh"), doc.len("meshes"))?;
+        index(node.get("camera"), &at("camera"), doc.len("cameras"))?;
+        index(node.get("skin"), &at("skin"), doc.len("skins"))?;
         let light = node
             .get("extensions")
             .and_then(|e| e.get("KHR_lights_punctual"))
             .and_then(|e| e.get("light"));
-        index(light, &at("extensions.KHR_lights_punctual.light"), lights)?;
+        index(
+            light,
+            &at("extensions.KHR_lights_punctual.light"),
+            doc.lights,
+        )?;
     }
-    for (m, mesh) in array("meshes").iter().enumerate() {
+    Ok(())
+}
+
+/// Each primitive's attribute, index, morph-target and material references, and its
+/// attributes' accessor types.
+fn mesh_indices(doc: &Document) -> Result<(), String> {
+    let accessors = doc.len("accessors");
+    for (m, mesh) in doc.array("meshes").iter().enumerate() {
         let primitives = mesh.get("primitives").and_then(Value::as_array);
         for (p, primitive) in primitives.map_or(&[][..], Vec::as_slice).iter().enumerate() {
             let at = |what: &str| format!("meshes[{m}].primitives[{p}].{what}");
             if let Some(attributes) = primitive.get("attributes").and_then(Value::as_object) {
                 for (name, value) in attributes {
-                    index(
-                        Some(value),
-                        &at(&format!("attributes.{name}")),
-                        len("accessors"),
-                    )?;
+                    index(Some(value), &at(&format!("attributes.{name}")), accessors)?;
                 }
             }
-            index(primitive.get("indices"), &at("indices"), len("accessors"))?;
-            attribute_types(primitive, array("accessors"), &at)?;
-            index(primitive.get("material"), &at("material"), len("materials"))?;
+            index(primitive.get("indices"), &at("indices"), accessors)?;
+            attribute_types(primitive, doc.array("accessors"), &at)?;
+            index(
+                primitive.get("material"),
+                &at("material"),
+                doc.len("materials"),
+            )?;
             let targets = primitive.get("targets").and_then(Value::as_array);
             for (t, target) in targets.map_or(&[][..], Vec::as_slice).iter().enumerate() {
                 for (name, value) in target.as_object().into_iter().flatten() {
-                    index(
-                        Some(value),
-                        &at(&format!("targets[{t}].{name}")),
-                        len("accessors"),
-                    )?;
+                    index(Some(value), &at(&format!("targets[{t}].{name}")), accessors)?;
                 }
             }
         }
     }
-    for (m, material) in array("materials").iter().enumerate() {
-        texture_references(material, &format!("materials[{m}]"), len("textures"))?;
+    Ok(())
+}
+
+/// The materials' texture references, each texture's image and sampler, and each image's
+/// buffer view (an image has exactly one of a URI and a buffer view with a MIME type).
+fn material_texture_and_image_indices(doc: &Document) -> Result<(), String> {
+    for (m, material) in doc.array("materials").iter().enumerate() {
+        texture_references(material, &format!("materials[{m}]"), doc.len("textures"))?;
     }
-    for (t, texture) in array("textures").iter().enumerate() {
+    for (t, texture) in doc.array("textures").iter().enumerate() {
         index(
             texture.get("source"),
             &format!("textures[{t}].source"),
-            len("images"),
+            doc.len("images"),
         )?;
         index(
             texture.get("sampler"),
             &format!("textures[{t}].sampler"),
-            len("samplers"),
+            doc.len("samplers"),
         )?;
     }
-    for (i, image) in array("images").iter().enumerate() {
+    for (i, image) in doc.array("images").iter().enumerate() {
         index(
             image.get("bufferView"),
             &format!("images[{i}].bufferView"),
-            len("bufferViews"),
+            doc.len("bufferViews"),
         )?;
         match (image.get("uri"), image.get("bufferView")) {
             (Some(_), None) => {}
@@ -177,24 +244,30 @@ pub fn check(json: &[u8]) -> Result<(), String> {
             }
         }
     }
-    for (s, skin) in array("skins").iter().enumerate() {
+    Ok(())
+}
+
+/// Each skin's joints, skeleton and inverse bind matrices; each animation's samplers'
+/// accessors and its channels' samplers and target nodes.
+fn skin_and_animation_indices(doc: &Document) -> Result<(), String> {
+    for (s, skin) in doc.array("skins").iter().enumerate() {
         indices(
             skin.get("joints"),
             &format!("skins[{s}].joints"),
-            len("nodes"),
+            doc.len("nodes"),
         )?;
         index(
             skin.get("skeleton"),
             &format!("skins[{s}].skeleton"),
-            len("nodes"),
+            doc.len("nodes"),
         )?;
         index(
             skin.get("inverseBindMatrices"),
             &format!("skins[{s}].inverseBindMatrices"),
-            len("accessors"),
+            doc.len("accessors"),
         )?;
     }
-    for (a, animation) in array("animations").iter().enumerate() {
+    for (a, animation) in doc.array("animations").iter().enumerate() {
         let samplers = animation.get("samplers").and_then(Value::as_array);
         let sampler_count = samplers.map_or(0, Vec::len);
         for (s, sampler) in samplers.map_or(&[][..], Vec::as_slice).iter().enumerate() {
@@ -202,12 +275,12 @@ pub fn check(json: &[u8]) -> Result<(), String> {
             index(
                 sampler.get("input"),
                 &format!("{at}.input"),
-                len("accessors"),
+                doc.len("accessors"),
             )?;
             index(
                 sampler.get("output"),
                 &format!("{at}.output"),
-                len("accessors"),
+                doc.len("accessors"),
             )?;
         }
         let channels = animation.get("channels").and_then(Value::as_array);
@@ -219,22 +292,27 @@ pub fn check(json: &[u8]) -> Result<(), String> {
                 sampler_count,
             )?;
             let node = channel.get("target").and_then(|t| t.get("node"));
-            index(node, &format!("{at}.target.node"), len("nodes"))?;
+            index(node, &format!("{at}.target.node"), doc.len("nodes"))?;
         }
     }
-    for (v, view) in array("bufferViews").iter().enumerate() {
+    Ok(())
+}
+
+/// Each buffer view's buffer (required), each accessor's buffer view and its sparse parts'.
+fn buffer_view_and_accessor_indices(doc: &Document) -> Result<(), String> {
+    for (v, view) in doc.array("bufferViews").iter().enumerate() {
         let path = format!("bufferViews[{v}].buffer");
         let buffer = view
             .get("buffer")
             .ok_or_else(|| format!("{path}: missing"))?;
-        index(Some(buffer), &path, len("buffers"))?;
+        index(Some(buffer), &path, doc.len("buffers"))?;
     }
-    for (a, accessor) in array("accessors").iter().enumerate() {
+    for (a, accessor) in doc.array("accessors").iter().enumerate() {
         let at = |what: &str| format!("accessors[{a}].{what}");
         index(
             accessor.get("bufferView"),
             &at("bufferView"),
-            len("bufferViews"),
+            doc.len("bufferViews"),
         )?;
         if let Some(sparse) = accessor.get("sparse") {
             for part in ["indices", "values"] {
@@ -242,13 +320,12 @@ pub fn check(json: &[u8]) -> Result<(), String> {
                 index(
                     view,
                     &at(&format!("sparse.{part}.bufferView")),
-                    len("bufferViews"),
+                    doc.len("bufferViews"),
                 )?;
             }
         }
     }
-    byte_ranges(array("buffers"), array("bufferViews"), array("accessors"))?;
-    node_hierarchy(array("nodes"))
+    Ok(())
 }
 
 /// The accessor types the glTF spec allows for each vertex attribute a primitive names (the

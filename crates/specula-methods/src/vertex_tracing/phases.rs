@@ -1,0 +1,89 @@
+//! One frame of vertex tracing taken apart into the phases the paper's Table 1 times apart
+//! (`specula-compare`'s `vertex_tracing_table1` bench): the ID buffer, the rest of the scene,
+//! and the reflector shaded, which can be run again with other settings on the same ID buffer.
+
+use std::sync::Arc;
+
+use glam::Vec3;
+use rayon::prelude::*;
+use specula_scene::Camera;
+use specula_trace::Image;
+
+use super::refine::{OriginalSamples, PackageCounters, RefineSettings, Topology};
+use super::FrameSetup;
+use crate::live_scene::LiveScene;
+
+/// A frame of `camera`'s view with CPU visibility, its phases run one at a time.
+pub struct FramePhases<'a> {
+    live: &'a LiveScene,
+    camera: &'a Camera,
+    max_depth: u32,
+    setup: FrameSetup,
+}
+
+impl<'a> FramePhases<'a> {
+    /// The visibility phase: the scene's topology, the ID buffer of `camera`'s `width` ×
+    /// `height` view from CPU primary rays (what `visibility=cpu` and every MPI rank
+    /// compute), and the reflector triangles to trace, as the technique finds them with
+    /// `settings`; paths are traced to `max_depth` bounces in every phase.
+    pub fn visibility(
+        live: &'a LiveScene,
+        camera: &'a Camera,
+        width: u32,
+        height: u32,
+        settings: RefineSettings,
+        max_depth: u32,
+    ) -> FramePhases<'a> {
+        let topology = Arc::new(Topology::new(live.scene()));
+        let setup = FrameSetup::traced(live, camera, width, height, topology, settings, max_depth);
+        FramePhases {
+            live,
+            camera,
+            max_depth,
+            setup,
+        }
+    }
+
+    /// The image of everything but the reflectors (the reference's shading of each pixel's
+    /// primary ray), reflector pixels black.
+    pub fn rest_of_scene(&self) -> Image {
+        self.setup
+            .rest_of_scene(self.live, self.camera, self.max_depth)
+            .0
+    }
+
+    /// The pixels the reflectors own in the ID buffer (index y × width + x).
+    pub fn reflector_pixels(&self) -> impl Iterator<Item = u32> + '_ {
+        self.setup.owners.all()
+    }
+
+    /// The reflector phase as the technique runs it in one call without a budget: the
+    /// original vertices traced once, then the technique's own packages (`package_triangles`
+    /// 0) refined and filled in parallel with `settings`, their pixels written into `image`.
+    /// Returns the work of all of them together.
+    pub fn shade_reflector(&self, settings: RefineSettings, image: &mut Image) -> PackageCounters {
+        let (live, camera, max_depth) = (self.live, self.camera, self.max_depth);
+        let originals = OriginalSamples::trace(
+            &self.setup.inputs(live, camera, settings, max_depth),
+            &self.setup.active,
+        );
+        let mut inputs = self.setup.inputs(live, camera, settings, max_depth);
+        inputs.originals = Some(&originals);
+        let mut packages = self.setup.packages(0);
+        let results: Vec<Vec<(u32, Vec3)>> = packages
+            .par_iter_mut()
+            .map(|p| {
+                p.run(&inputs, None);
+                p.take_pixels(&inputs)
+            })
+            .collect();
+        for (k, c) in results.into_iter().flatten() {
+            image.pixels[k as usize] = c;
+        }
+        let mut totals = originals.counters;
+        for p in &packages {
+            totals.add(&p.counters);
+        }
+        totals
+    }
+}
