@@ -60,6 +60,26 @@ fn render_writes_png_and_exr_of_the_requested_size() {
         exr_image.pixels().any(|p| p.0.iter().any(|c| *c > 0.01)),
         "not all black"
     );
+    // The PNG is the EXR's linear radiance clamped to [0, 1] and sRGB-encoded (to one 8-bit
+    // step: the EXR may hold half floats).
+    let srgb = |c: f32| {
+        let c = c.clamp(0.0, 1.0);
+        let encoded = if c <= 0.0031308 {
+            12.92 * c
+        } else {
+            1.055 * c.powf(1.0 / 2.4) - 0.055
+        };
+        encoded * 255.0
+    };
+    let png_rgb = png_image.to_rgb8();
+    for (p, q) in exr_image.pixels().zip(png_rgb.pixels()) {
+        for (linear, byte) in p.0.iter().zip(q.0) {
+            assert!(
+                (srgb(*linear) - byte as f32).abs() <= 1.0,
+                "linear {linear} written as {byte}"
+            );
+        }
+    }
 }
 
 #[test]
@@ -239,7 +259,7 @@ fn compare_with_no_arguments_reports_every_method_on_the_default_scene() {
     assert!(dir.path().join("specula-report/report.html").exists());
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("r.json")).unwrap()).unwrap();
-    // Every method but the CPU reference, gpu-trace first: it matches the reference exactly.
+    // Every method but the CPU reference, gpu-trace first: it matches the reference (> 45 dB).
     let names: Vec<&str> = json["methods"]
         .as_array()
         .unwrap()
@@ -483,4 +503,73 @@ fn methods_lists_every_method_with_its_parameters_from_the_registry() {
         }
     }
     assert!(text.contains("reference (exact, CPU, progressive)"));
+}
+
+#[test]
+fn sequence_writes_every_step_and_piped_output_draws_no_progress_bar() {
+    // CPU visibility: runs without a GPU.
+    let dir = tempfile::tempdir().unwrap();
+    let out = specula()
+        .current_dir(dir.path())
+        .args([
+            "render",
+            "truck-cover",
+            "--method",
+            "vertex-tracing",
+            "-W",
+            "64",
+            "-H",
+            "48",
+            "-p",
+            "visibility=cpu",
+            "-p",
+            "budget_ms=1",
+            "--sequence",
+            "steps",
+        ])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    // Piped: no progress bar (it redraws with carriage returns and escape sequences).
+    assert!(
+        !stderr.contains('\r') && !stderr.contains('\u{1b}'),
+        "{stderr:?}"
+    );
+    let steps = dir.path().join("steps");
+    let csv = std::fs::read_to_string(steps.join("steps.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert!(
+        lines.next().unwrap().starts_with("step,image,milliseconds"),
+        "{csv}"
+    );
+    let rows: Vec<&str> = lines.collect();
+    assert!(!rows.is_empty(), "{csv}");
+    for (i, row) in rows.iter().enumerate() {
+        let name = format!("step-{i:03}.png");
+        assert!(row.contains(&name), "{row}");
+        let image = image::open(steps.join(&name)).unwrap();
+        assert_eq!((image.width(), image.height()), (64, 48));
+    }
+}
+
+#[test]
+fn gpu_methods_without_a_vulkan_adapter_say_what_to_install() {
+    // No Vulkan driver visible to the loader: no adapter.
+    let dir = tempfile::tempdir().unwrap();
+    let none = dir.path().join("no-such-icd.json");
+    let out = specula()
+        .current_dir(dir.path())
+        .args(["render", "--method", "envmap", "-W", "16"])
+        .env("VK_ICD_FILENAMES", &none)
+        .env("VK_DRIVER_FILES", &none)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(
+        stderr.contains("apt-get install mesa-vulkan-drivers"),
+        "{stderr}"
+    );
 }

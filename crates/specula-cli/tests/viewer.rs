@@ -1,8 +1,11 @@
-//! `specula view --script` under Xvfb (lavapipe): the viewer's screenshots after moving the
-//! door mirror through the update path equal `specula render` of a scene file with the mirror
-//! at the moved pose, for every GPU technique; bad scripts fail naming the step.
+//! `specula view --script` under Xvfb (lavapipe): the viewer's screenshots after moving an
+//! object through the update path equal `specula render` of a scene file with the object at the
+//! moved pose (byte for byte; c3rc to within 2 pixels, see `bounds`), for pvrr, envmap and
+//! distance-maps on door-mirror, c3rc on mirror-teapot-bunny and image-space on glass-dragon;
+//! bad scripts fail naming the step.
 //!
-//! Skipped (loudly) where `xvfb-run` is missing, except under CI, which installs it.
+//! Where `xvfb-run` is missing the tests fail, unless the runner opts out with
+//! `SPECULA_ALLOW_SKIP=xvfb`.
 
 use std::path::Path;
 use std::process::Command;
@@ -13,15 +16,18 @@ fn specula() -> Command {
     Command::new(env!("CARGO_BIN_EXE_specula"))
 }
 
-/// `xvfb-run -a specula view ...`, or None (after a SKIPPED line) without Xvfb.
+/// `xvfb-run -a specula view ...`, or None where Xvfb or a GPU adapter is missing and the runner
+/// allowed the skip.
 fn viewer(test: &str) -> Option<Command> {
+    // The viewer draws with wgpu: it needs an adapter as much as a display.
+    specula_gpu::test_context(test)?;
     let found = Command::new("xvfb-run").arg("--help").output().is_ok();
     if !found {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "{test}: xvfb-run missing under CI (scripts/setup.sh installs it)"
+        specula_testkit::missing(
+            specula_testkit::Requirement::Xvfb,
+            test,
+            "`xvfb-run --help` could not be run",
         );
-        eprintln!("\n!!!!!!!! SKIPPED {test}: xvfb-run not installed !!!!!!!!\n");
         return None;
     }
     let mut command = Command::new("xvfb-run");
@@ -40,15 +46,36 @@ fn run_ok(mut command: Command) -> String {
     stderr
 }
 
-fn mean_flip(a: &Path, b: &Path) -> f64 {
-    let (a, b) = (Image::load(a).unwrap(), Image::load(b).unwrap());
+/// How far two PNG files differ: mean and largest per-pixel FLIP, and how many pixels differ in
+/// any 8-bit channel.
+struct Difference {
+    mean_flip: f64,
+    max_flip: f64,
+    differing_pixels: usize,
+}
+
+fn difference(a: &Path, b: &Path) -> Difference {
+    let (bytes_a, bytes_b) = (
+        image::open(a).unwrap().to_rgb8(),
+        image::open(b).unwrap().to_rgb8(),
+    );
     assert_eq!(
-        (a.width, a.height),
-        (b.width, b.height),
+        bytes_a.dimensions(),
+        bytes_b.dimensions(),
         "image sizes differ"
     );
+    let differing_pixels = bytes_a
+        .pixels()
+        .zip(bytes_b.pixels())
+        .filter(|(p, q)| p != q)
+        .count();
+    let (a, b) = (Image::load(a).unwrap(), Image::load(b).unwrap());
     let flip = specula_compare::metrics::flip_map(&a, &b);
-    flip.iter().map(|&v| v as f64).sum::<f64>() / flip.len() as f64
+    Difference {
+        mean_flip: flip.iter().map(|&v| v as f64).sum::<f64>() / flip.len() as f64,
+        max_flip: flip.iter().fold(0.0f64, |m, &v| m.max(v as f64)),
+        differing_pixels,
+    }
 }
 
 const METHODS: [&str; 3] = ["pvrr", "envmap", "distance-maps"];
@@ -56,10 +83,23 @@ const MOVE_BY: [f32; 3] = [0.03, 0.02, 0.0];
 const TURN_DEGREES: f32 = 12.0;
 const SIZE: (u32, u32) = (200, 150);
 
-/// Measured 2026-11-30 on lavapipe: pvrr 0.0000, envmap 0.0000, distance-maps 0.0000 (the
-/// images are identical), image-space on glass-dragon 0.0000, c3rc on mirror-teapot-bunny
-/// 0.0000; the bound is the issue's.
-const MAX_MEAN_FLIP: f64 = 0.01;
+/// How far a screenshot may be from `specula render` at the moved pose: (pixels of the
+/// 200 × 150 PNGs that differ in any 8-bit channel, largest per-pixel FLIP, mean FLIP).
+/// Measured 2026-12-01 on lavapipe under Xvfb, five runs alike: pvrr, envmap, distance-maps
+/// (door-mirror) and image-space (glass-dragon) byte-identical; c3rc (mirror-teapot-bunny) one
+/// pixel differs, FLIP 0.0096 there, mean FLIP 0.000004 (the moved dragon keeps its kd-tree and
+/// maps its points through the move, where the renderer builds them at the moved pose: a
+/// rounding moves one splat). Bounds: 2× those, and identical where they were identical. Both
+/// images must come from the same adapter (the viewer takes one that can present to Xvfb's
+/// window; on lavapipe it is the renderer's).
+fn bounds(method: &str) -> (usize, f64, f64) {
+    match method {
+        "c3rc" => (2, 0.02, 1e-5),
+        _ => (0, 0.0, 0.0),
+    }
+}
+/// The move itself must change the image by more than this mean FLIP (measured 0.116–0.147).
+const MIN_MOVE_FLIP: f64 = 0.1;
 
 #[test]
 fn viewer_screenshots_after_a_move_match_the_renderer_at_the_moved_pose() {
@@ -157,16 +197,35 @@ fn screenshots_after_a_move_match_the_renderer(
             run_ok(render);
         }
         let shot = dir.path().join(format!("view-{m}.png"));
-        let error = mean_flip(&moved, &shot);
+        let error = difference(&moved, &shot);
         // The move must show: otherwise the comparison above proves nothing.
-        let moved_by = mean_flip(&original, &shot);
-        eprintln!("{m}: mean FLIP against the renderer {error:.4}; against the unmoved pose {moved_by:.4}");
+        let moved_by = difference(&original, &shot).mean_flip;
+        eprintln!(
+            "{m}: against the renderer mean FLIP {:.6}, largest {:.6}, {} of {} pixels differ; \
+             against the unmoved pose mean FLIP {moved_by:.4}",
+            error.mean_flip,
+            error.max_flip,
+            error.differing_pixels,
+            SIZE.0 * SIZE.1
+        );
+        let (max_pixels, max_flip, max_mean) = bounds(m);
         assert!(
-            error <= MAX_MEAN_FLIP,
-            "{m}: mean FLIP {error} > {MAX_MEAN_FLIP}"
+            error.differing_pixels <= max_pixels,
+            "{m}: {} pixels differ (at most {max_pixels})",
+            error.differing_pixels
         );
         assert!(
-            moved_by > 10.0 * MAX_MEAN_FLIP,
+            error.max_flip <= max_flip,
+            "{m}: a pixel's FLIP {} > {max_flip}",
+            error.max_flip
+        );
+        assert!(
+            error.mean_flip <= max_mean,
+            "{m}: mean FLIP {} > {max_mean}",
+            error.mean_flip
+        );
+        assert!(
+            moved_by > MIN_MOVE_FLIP,
             "{m}: the move barely shows ({moved_by})"
         );
     }

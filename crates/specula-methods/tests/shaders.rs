@@ -69,6 +69,14 @@ fn technique_shaders_validate() {
         "distance_maps/trace.wgsl",
         &distance_maps::trace_shader_source(),
     );
+    parse(
+        "gpu_trace/megakernel.wgsl",
+        &specula_methods::gpu_trace::megakernel_source(),
+    );
+    parse(
+        "gpu_trace/wavefront.wgsl",
+        &specula_methods::gpu_trace::wavefront_source(),
+    );
 }
 
 #[test]
