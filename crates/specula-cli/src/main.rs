@@ -801,13 +801,20 @@ fn render_distributed(scene: Scene, height: u32, args: &RenderArgs) -> Result<()
             slow: d.slow_rank,
             fail: d.fail_rank,
         };
-        match distributed::run(scene, &options)? {
-            Outcome::Master { image, report } => {
-                save_image(&image, &args.output, args.exr.as_deref())?;
+        // The files are written while MPI still runs: finalising can hang on a dead rank.
+        let write_outputs: distributed::Deliver = Box::new(|image, report| {
+            let written = (|| -> Result<()> {
+                save_image(image, &args.output, args.exr.as_deref())?;
                 if let Some(path) = &d.report {
-                    std::fs::write(path, serde_json::to_string_pretty(&report)?)
+                    std::fs::write(path, serde_json::to_string_pretty(report)?)
                         .with_context(|| format!("writing {}", path.display()))?;
                 }
+                Ok(())
+            })();
+            written.map_err(Into::into)
+        });
+        match distributed::run(scene, &options, write_outputs)? {
+            Outcome::Master { report, .. } => {
                 eprintln!(
                     "distributed vertex tracing: {} ranks, {} frame(s) -> {}{}",
                     report.ranks(),

@@ -284,13 +284,19 @@ impl GpuContext {
             },
         );
         self.queue.submit([encoder.finish()]);
-        self.read_mapped(buffer, |mapped| {
+        let read = self.read_mapped(buffer, |mapped| {
             let mut out = Vec::with_capacity((unpadded * height) as usize);
             for row in mapped[..size as usize].chunks_exact(padded as usize) {
                 out.extend_from_slice(&row[..unpadded as usize]);
             }
             out
-        })
+        });
+        if read.is_err() {
+            // A failed readback may leave the buffer mapped: the next one makes a fresh buffer
+            // rather than failing on this one.
+            *kept = None;
+        }
+        read
     }
 
     /// Waits for the work submitted so far, maps `buffer` (MAP_READ) and hands its bytes to

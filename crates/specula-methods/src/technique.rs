@@ -81,7 +81,7 @@ pub enum Pixels {
 
 /// What a technique draws for one frame ([`Technique::draw`]): its pixels (linear radiance),
 /// where the time went, and what it counted (passes, texels, rays...). The lifecycle
-/// ([`render`](trait.Technique.html#method.render)) turns it into a [`Frame`].
+/// (`render`, on `dyn Technique`) turns it into a [`Frame`].
 #[derive(Clone, Debug)]
 pub struct Drawn {
     pub pixels: Pixels,
@@ -96,7 +96,7 @@ pub struct Drawn {
 
 /// One rendered frame: what the technique drew, and the GPU objects created while it drew,
 /// measured by the frame lifecycle around [`Technique::draw`]. The count is a private field:
-/// only [`render`](trait.Technique.html#method.render) makes a `Frame`, so no technique can
+/// only `render` (on `dyn Technique`) makes a `Frame`, so no technique can
 /// write it. A technique builds what it drew:
 ///
 /// ```

@@ -5,7 +5,7 @@
 //! view from 10° to 120°.
 
 use glam::Vec3;
-use specula_methods::{RenderStill, METHODS};
+use specula_methods::{LiveScene, METHODS};
 use specula_scene::Camera;
 
 /// Cameras per scene.
@@ -57,44 +57,58 @@ fn no_method_writes_a_non_finite_pixel_from_random_cameras() {
         .map(|n| n.to_string())
         .chain(suite_files);
     for name in names {
-        let mut scene = specula_scene::load(&name).unwrap();
+        let scene = specula_scene::load(&name).unwrap();
         let bounds = scene.bounds();
         let (centre, radius) = (bounds.center(), bounds.radius());
-        for c in 0..CAMERAS {
-            let eye = centre + random.direction() * radius * (0.05 + 1.95 * random.next());
-            let target = centre + random.direction() * radius * 0.3 * random.next();
-            scene.camera = Camera {
-                eye,
-                target: if target.distance(eye) > 1e-4 {
-                    target
-                } else {
-                    eye + Vec3::Z
-                },
-                up: Vec3::Y,
-                fov_y_deg: 10.0 + 110.0 * random.next(),
-                aspect: None,
-            };
-            for info in METHODS {
-                let mut technique = (info.create)();
-                // Cheap settings: this is about every pixel being finite, not about quality.
-                specula_methods::apply_known_parameters(
-                    technique.as_mut(),
-                    &[
-                        "depth=1".into(),
-                        "resolution=64".into(),
-                        "max_depth=2".into(),
-                        "points=5000".into(),
-                    ],
-                )
-                .unwrap();
-                let still = technique.render_still(&ctx, &scene, SIZE.0, SIZE.1);
-                match still {
-                    Ok(still) => {
-                        let bad = still.image.pixels.iter().filter(|p| !p.is_finite()).count();
+        let cameras: Vec<Camera> = (0..CAMERAS)
+            .map(|_| {
+                let eye = centre + random.direction() * radius * (0.05 + 1.95 * random.next());
+                let target = centre + random.direction() * radius * 0.3 * random.next();
+                Camera {
+                    eye,
+                    target: if target.distance(eye) > 1e-4 {
+                        target
+                    } else {
+                        eye + Vec3::Z
+                    },
+                    up: Vec3::Y,
+                    fov_y_deg: 10.0 + 110.0 * random.next(),
+                    aspect: None,
+                }
+            })
+            .collect();
+        // One technique per method and scene, prepared once and turned to each camera, as a
+        // user turns the viewer's: preparing (and compiling shaders) once per camera made this
+        // the slowest test of the suite, and the first camera still gets a fresh frame.
+        let live = LiveScene::new(scene.clone());
+        for info in METHODS {
+            let mut technique = (info.create)();
+            // Cheap settings: this is about every pixel being finite, not about quality.
+            specula_methods::apply_known_parameters(
+                technique.as_mut(),
+                &[
+                    "depth=1".into(),
+                    "resolution=64".into(),
+                    "max_depth=2".into(),
+                    "points=5000".into(),
+                ],
+            )
+            .unwrap();
+            if let Err(e) = technique.prepare(&ctx, &live) {
+                failures.push(format!("{name}: {} failed to prepare: {e}", info.name));
+                continue;
+            }
+            for (c, camera) in cameras.iter().enumerate() {
+                let image = technique
+                    .render(&ctx, &live, camera, SIZE.0, SIZE.1)
+                    .and_then(|frame| frame.image(&ctx));
+                match image {
+                    Ok(image) => {
+                        let bad = image.pixels.iter().filter(|p| !p.is_finite()).count();
                         if bad > 0 {
                             failures.push(format!(
-                                "{name} camera {c} ({:?}): {} wrote {bad} non-finite pixels",
-                                scene.camera, info.name
+                                "{name} camera {c} ({camera:?}): {} wrote {bad} non-finite pixels",
+                                info.name
                             ));
                         }
                     }

@@ -82,7 +82,19 @@ fn gpu_trace_equals_the_cpu_reference_on_every_scene() {
         }
     }
     println!("worst {worst:.1} dB");
-    assert!(worst >= 45.0, "worst PSNR {worst:.1} dB");
+    // At 80×60, measured 2026-12-01 on lavapipe: worst 84.8 dB (glass-dragon), every other
+    // scene >= 110 dB; the bound allows twice that RMSE (6 dB less). At other sizes a pixel at
+    // the edge of a glare can see another surface in single precision (truck-cover: 50.3 dB at
+    // 320×240, docs/benchmarks.md), so there the bound is the 45 dB.
+    let floor = if every_scene_size() == (WIDTH, HEIGHT) {
+        79.0
+    } else {
+        45.0
+    };
+    assert!(
+        worst >= floor,
+        "worst PSNR {worst:.1} dB (bound {floor} dB)"
+    );
 }
 
 /// The centre pixel of a `size` × `size` gpu-trace image, after checking that the whole image
@@ -221,7 +233,9 @@ fn gpu_trace_maps_a_distant_environment_as_the_reference() {
             .unwrap()
             .image;
         let db = psnr(&cpu_reference(&with_sphere, WIDTH, HEIGHT, 8), &image);
-        assert!(db >= 45.0, "{db:.1} dB");
+        println!("with sphere: {db:.1} dB");
+        // Measured 90.7 and 90.8 dB; twice that RMSE is 6 dB less.
+        assert!(db >= 84.0, "{db:.1} dB");
     }
 }
 
@@ -264,7 +278,9 @@ fn gpu_trace_follows_moves_and_a_camera_change_uploads_nothing() {
     let image = frame.image(&ctx).unwrap();
     let reference = cpu_reference(live.scene(), WIDTH, HEIGHT, 8);
     let db = psnr(&reference, &image);
-    assert!(db >= 45.0, "after the moves: {db:.1} dB");
+    println!("after the moves: {db:.1} dB");
+    // Measured 130.4 dB; twice that RMSE is 6 dB less.
+    assert!(db >= 124.0, "after the moves: {db:.1} dB");
 }
 
 #[test]

@@ -97,8 +97,12 @@ pub fn missing(requirement: Requirement, test: &str, why: &str) {
         requirement.key()
     );
     if let Some(path) = std::env::var_os(SKIP_LOG) {
+        // libtest names each test's thread after the test: a test that checks a requirement
+        // several times is still one skipped test.
+        let current = std::thread::current();
+        let name = current.name().filter(|n| *n != "main").unwrap_or(test);
         let line = format!(
-            "{}\t{test}\t{}\n",
+            "{}\t{name}\t{}\n",
             requirement.key(),
             why.replace('\n', " ")
         );

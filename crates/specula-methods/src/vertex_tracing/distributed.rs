@@ -69,6 +69,8 @@ pub struct Options {
 pub enum Error {
     #[error("MPI could not be initialised (run under mpirun)")]
     Initialise,
+    #[error("the master's outputs: {0}")]
+    Deliver(Box<dyn std::error::Error + Send + Sync>),
     #[error("a malformed message from rank {rank}")]
     MalformedMessage {
         rank: usize,
@@ -167,14 +169,20 @@ impl PackageRecord {
     }
 }
 
+/// What the master does with the last frame's image and the report while MPI still runs (the
+/// CLI writes its files): an error here ends the run with [`Error::Deliver`].
+pub type Deliver<'a> =
+    Box<dyn FnOnce(&Image, &Report) -> Result<(), Box<dyn std::error::Error + Send + Sync>> + 'a>;
+
 /// Runs this rank's part of a distributed run of `scene` under `mpirun` (rank 0 the master,
 /// the others workers); returns when the master has the last frame (workers: when told to
-/// quit). The master prints a line per frame, and a warning per lost worker, to stderr.
+/// quit). The master prints a line per frame, and a warning per lost worker, to stderr, tells
+/// the workers to quit, then hands the image and report to `deliver`.
 ///
-/// MPI is initialised here and finalised before returning, unless a rank was lost: then
-/// MPI_Finalize, which would wait for the dead rank, is never called, and the caller should
-/// exit soon after.
-pub fn run(scene: Scene, options: &Options) -> Result<Outcome, Error> {
+/// MPI is initialised here and finalised before returning, after `deliver`, so the outputs are
+/// written even where finalising would hang; unless a rank was lost: then MPI_Finalize, which
+/// would wait for the dead rank, is never called, and the caller should exit soon after.
+pub fn run(scene: Scene, options: &Options, deliver: Deliver<'_>) -> Result<Outcome, Error> {
     let universe = mpi::initialize().ok_or(Error::Initialise)?;
     let world = universe.world();
     // Errors are returned (and a lost peer found by timeout), not fatal to the whole job.
@@ -185,6 +193,7 @@ pub fn run(scene: Scene, options: &Options) -> Result<Outcome, Error> {
     let topology = Arc::new(Topology::new(live.scene()));
     let (outcome, finalize) = if world.rank() == 0 {
         let (image, report) = master(&world, &live, &topology, options)?;
+        deliver(&image, &report).map_err(Error::Deliver)?;
         let finalize = report.lost_ranks.is_empty();
         (Outcome::Master { image, report }, finalize)
     } else {
