@@ -94,10 +94,10 @@ pub struct Drawn {
     pub converged: bool,
 }
 
-/// One rendered frame: what the technique drew, and the GPU objects created while it drew,
-/// measured by the frame lifecycle around [`Technique::draw`]. The count is a private field:
-/// only `render` (on `dyn Technique`) makes a `Frame`, so no technique can
-/// write it. A technique builds what it drew:
+/// One rendered frame: what the technique drew (its fields read through `Deref`), and the GPU
+/// objects created while it drew, measured by the frame lifecycle around [`Technique::draw`].
+/// Both fields are private: only `render` (on `dyn Technique`) makes a `Frame`, so no
+/// technique can write the count. A technique builds what it drew:
 ///
 /// ```
 /// use specula_methods::{Drawn, Pixels};
@@ -111,31 +111,33 @@ pub struct Drawn {
 /// };
 /// ```
 ///
-/// and the same fields with a count, as a `Frame`, do not compile:
+/// and the same, with a count, as a `Frame`, does not compile:
 ///
 /// ```compile_fail
-/// use specula_methods::{Frame, Pixels};
+/// use specula_methods::{Drawn, Frame, Pixels};
 /// let frame = Frame {
-///     pixels: Pixels::Image(specula_trace::Image::new(1, 1)),
-///     stages: Vec::new(),
-///     counters: Vec::new(),
-///     timing: specula_gpu::TimingSource::CpuWallClock,
-///     warnings: Vec::new(),
-///     converged: true,
+///     drawn: Drawn {
+///         pixels: Pixels::Image(specula_trace::Image::new(1, 1)),
+///         stages: Vec::new(),
+///         counters: Vec::new(),
+///         timing: specula_gpu::TimingSource::CpuWallClock,
+///         warnings: Vec::new(),
+///         converged: true,
+///     },
 ///     created: specula_gpu::ResourceCounts::default(),
 /// };
 /// ```
 #[derive(Clone, Debug)]
 pub struct Frame {
-    pub pixels: Pixels,
-    pub stages: Vec<StageTime>,
-    pub counters: Vec<(String, u64)>,
-    pub timing: TimingSource,
-    /// What the technique had to approximate or fall back on this frame (said once per cause).
-    pub warnings: Vec<String>,
-    /// False while a progressive technique can still refine this view: call `render` again.
-    pub converged: bool,
+    drawn: Drawn,
     created: ResourceCounts,
+}
+
+impl std::ops::Deref for Frame {
+    type Target = Drawn;
+    fn deref(&self) -> &Drawn {
+        &self.drawn
+    }
 }
 
 impl Frame {
@@ -173,21 +175,9 @@ impl dyn Technique + '_ {
         height: u32,
     ) -> Result<Frame, TechniqueError> {
         let before = ctx.resource_counts();
-        let Drawn {
-            pixels,
-            stages,
-            counters,
-            timing,
-            warnings,
-            converged,
-        } = self.draw(ctx, scene, camera, width, height)?;
+        let drawn = self.draw(ctx, scene, camera, width, height)?;
         Ok(Frame {
-            pixels,
-            stages,
-            counters,
-            timing,
-            warnings,
-            converged,
+            drawn,
             created: ctx.resource_counts() - before,
         })
     }

@@ -71,15 +71,18 @@ pub struct Growing {
 }
 
 impl Growing {
-    /// The buffer, made again (bigger) when `size` bytes do not fit; true when it was made.
+    /// The buffer, made again (bigger) when `elements` of `element_size` bytes do not fit; true
+    /// when it was made. It always holds one element at least: a binding may not be smaller
+    /// than the shader's element, even where there is nothing to hold (a scene with no mirror).
     pub fn fit(
         &mut self,
         ctx: &GpuContext,
         label: &str,
-        size: u64,
+        elements: usize,
+        element_size: usize,
         usage: wgpu::BufferUsages,
     ) -> bool {
-        let size = size.max(16);
+        let size = ((elements.max(1) * element_size) as u64).max(16);
         if self.buffer.is_some() && size <= self.capacity {
             return false;
         }
@@ -247,14 +250,9 @@ impl GpuProjection {
             })
             .collect();
         let total: usize = clouds.iter().map(|c| c.len()).sum();
-        made |= self.points.fit(
-            ctx,
-            "c3rc points",
-            // A binding holds one element at least, even with no point to project (a scene
-            // whose mirrors have nothing near them, or no mirror).
-            (total.max(1) * size_of::<GpuPoint>()) as u64,
-            storage,
-        );
+        made |= self
+            .points
+            .fit(ctx, "c3rc points", total, size_of::<GpuPoint>(), storage);
         if made || self.uploaded != Some(cloud_generation) {
             let mut data = Vec::with_capacity(total);
             for (k, cloud) in clouds.iter().enumerate() {
@@ -275,19 +273,17 @@ impl GpuProjection {
             .iter()
             .map(|p| p.object_from_world.inverse().as_mat4().to_cols_array())
             .collect();
-        made |= self.clouds.fit(
-            ctx,
-            "c3rc clouds",
-            (matrices.len().max(1) * 64) as u64,
-            storage,
-        );
+        made |= self
+            .clouds
+            .fit(ctx, "c3rc clouds", matrices.len(), 64, storage);
         ctx.queue
             .write_buffer(self.clouds.get(), 0, bytemuck::cast_slice(&matrices));
         let cameras: Vec<GpuCamera> = plan.cameras.iter().map(gpu_camera).collect();
         made |= self.cameras.fit(
             ctx,
             "c3rc cameras",
-            (cameras.len().max(1) * size_of::<GpuCamera>()) as u64,
+            cameras.len(),
+            size_of::<GpuCamera>(),
             storage,
         );
         ctx.queue
@@ -309,21 +305,23 @@ impl GpuProjection {
                 })
             })
             .collect();
-        made |= self
-            .work
-            .fit(ctx, "c3rc work", (work.len() * 16) as u64, storage);
+        made |= self.work.fit(ctx, "c3rc work", work.len(), 16, storage);
         ctx.queue
             .write_buffer(self.work.get(), 0, bytemuck::cast_slice(&work));
         let pixels = (view.width * view.height) as u64;
-        made |= self.depth.fit(ctx, "c3rc depth", pixels * 4, storage);
-        made |= self.nearest.fit(ctx, "c3rc nearest", pixels * 4, storage);
+        made |= self
+            .depth
+            .fit(ctx, "c3rc depth", pixels as usize, 4, storage);
+        made |= self
+            .nearest
+            .fit(ctx, "c3rc nearest", pixels as usize, 4, storage);
         let mut flags = vec![0u32; mesh_count.max(1)];
         for &m in mirrors {
             flags[m] = 1;
         }
-        made |=
-            self.mirror_meshes
-                .fit(ctx, "c3rc mirror meshes", (flags.len() * 4) as u64, storage);
+        made |= self
+            .mirror_meshes
+            .fit(ctx, "c3rc mirror meshes", flags.len(), 4, storage);
         ctx.queue
             .write_buffer(self.mirror_meshes.get(), 0, bytemuck::cast_slice(&flags));
         let frame = camera.frame();

@@ -632,7 +632,8 @@ impl Technique for C3rcMethod {
         p.near_buffer.fit(
             gpu,
             "c3rc near reflection",
-            (width * height) as u64 * 16,
+            (width * height) as usize,
+            16,
             wgpu::BufferUsages::STORAGE,
         );
         let points: usize = field.clouds.iter().map(|c| c.len()).sum();
