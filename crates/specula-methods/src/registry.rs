@@ -55,10 +55,144 @@ pub fn exact_method() -> &'static MethodInfo {
         .expect("the registry holds an exact method")
 }
 
+/// The seed techniques: each has a `paper` preset, held by a test to the "Beyond the paper"
+/// list of its module's top doc.
+pub const SEED_TECHNIQUES: &[&str] = &[
+    "pvrr",
+    "distance-maps",
+    "c3rc",
+    "image-space",
+    "vertex-tracing",
+];
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::technique::SurfaceClass;
+
+    /// Each seed technique's module source, whose top doc is read.
+    const SEED_SOURCES: &[(&str, &str)] = &[
+        ("pvrr", include_str!("pvrr/mod.rs")),
+        ("distance-maps", include_str!("distance_maps/mod.rs")),
+        ("c3rc", include_str!("c3rc/mod.rs")),
+        ("image-space", include_str!("image_space/mod.rs")),
+        ("vertex-tracing", include_str!("vertex_tracing/mod.rs")),
+    ];
+
+    /// The module's top doc, one string per line (the `//!` stripped).
+    fn top_doc(source: &str) -> Vec<&str> {
+        source
+            .lines()
+            .map_while(|l| l.strip_prefix("//!"))
+            .map(|l| l.strip_prefix(' ').unwrap_or(l))
+            .collect()
+    }
+
+    /// The items of the doc's "Beyond the paper" list: from the line starting so to the first
+    /// empty line, one string per `- ` item (its lines joined).
+    fn beyond_the_paper(doc: &[&str]) -> Vec<String> {
+        let start = doc
+            .iter()
+            .position(|l| l.starts_with("Beyond the paper"))
+            .expect("the top doc has a \"Beyond the paper\" list");
+        let mut items: Vec<String> = Vec::new();
+        for line in doc[start + 1..].iter().take_while(|l| !l.trim().is_empty()) {
+            match line.strip_prefix("- ") {
+                Some(item) => items.push(item.to_string()),
+                None => {
+                    let last = items.last_mut().expect("the list starts with an item");
+                    last.push(' ');
+                    last.push_str(line.trim());
+                }
+            }
+        }
+        items
+    }
+
+    /// The settings named in `(paper: `A=1`, `B=2`)` markers of `text`.
+    fn paper_markers(text: &str) -> Vec<String> {
+        let mut settings = Vec::new();
+        let mut rest = text;
+        while let Some(at) = rest.find("(paper: ") {
+            let marker = &rest[at..];
+            let end = marker.find(')').expect("a (paper: marker closes");
+            settings.extend(
+                marker[..end]
+                    .split('`')
+                    .skip(1)
+                    .step_by(2)
+                    .map(str::to_string),
+            );
+            rest = &marker[end..];
+        }
+        settings
+    }
+
+    #[test]
+    fn every_step_beyond_the_paper_is_switched_off_by_the_paper_preset() {
+        for (name, source) in SEED_SOURCES {
+            let info = method(name).unwrap();
+            let preset = info
+                .preset("paper")
+                .unwrap_or_else(|| panic!("{name} has no paper preset"));
+            let doc = top_doc(source);
+            let items = beyond_the_paper(&doc);
+            assert!(!items.is_empty(), "{name}: an empty Beyond the paper list");
+            for item in &items {
+                let switches = paper_markers(item);
+                assert!(
+                    !switches.is_empty(),
+                    "{name}: this step beyond the paper names no (paper: `NAME=VALUE`) \
+                     switch: {item}"
+                );
+                for switch in &switches {
+                    assert!(
+                        preset.settings.contains(&switch.as_str()),
+                        "{name}: the paper preset lacks {switch}, which switches off: {item}"
+                    );
+                    let (param, value) = switch.split_once('=').expect("NAME=VALUE");
+                    let spec = info
+                        .param(param)
+                        .unwrap_or_else(|| panic!("{name}: no parameter {param}"));
+                    // The step runs by default and the preset turns it off.
+                    assert_ne!(
+                        spec.parse(info.name, value).unwrap(),
+                        spec.parse(info.name, spec.default).unwrap(),
+                        "{name}: {switch} is the default: it switches nothing off"
+                    );
+                }
+            }
+            // Every setting of the preset is documented: a switch above, or a published
+            // default marked where its parameter is described.
+            let documented = paper_markers(&doc.join(" "));
+            for setting in preset.settings {
+                assert!(
+                    documented.iter().any(|d| d == setting),
+                    "{name}: the paper preset's {setting} is not marked (paper: `{setting}`) \
+                     in the module doc"
+                );
+            }
+            for marked in &documented {
+                assert!(
+                    preset.settings.contains(&marked.as_str()),
+                    "{name}: the doc marks (paper: `{marked}`) but the preset lacks it"
+                );
+            }
+            // And every setting applies.
+            let label = crate::preset::Label::parse(&format!("{name}:paper")).unwrap();
+            label
+                .create()
+                .unwrap_or_else(|e| panic!("{name}:paper: {e}"));
+        }
+        for info in METHODS {
+            assert_eq!(
+                info.preset("paper").is_some(),
+                SEED_TECHNIQUES.contains(&info.name),
+                "{}: a paper preset exactly for the seed techniques",
+                info.name
+            );
+        }
+    }
 
     #[test]
     fn delegations_name_registered_methods_that_shade_the_class_themselves() {

@@ -16,6 +16,7 @@ use specula_scene::{Camera, Material, MaterialKind};
 use specula_trace::Image;
 
 use crate::live_scene::LiveScene;
+use crate::preset::Preset;
 
 #[derive(Debug, thiserror::Error)]
 pub enum TechniqueError {
@@ -23,6 +24,18 @@ pub enum TechniqueError {
     Gpu(#[from] GpuError),
     #[error("unknown method '{name}'; valid methods: {valid}")]
     UnknownMethod { name: String, valid: String },
+    #[error("unknown preset in '{label}'; {valid}")]
+    UnknownPreset {
+        label: String,
+        method: &'static str,
+        valid: String,
+    },
+    #[error("'{label}' is given twice in {given}: each label runs once")]
+    DuplicateLabel { label: String, given: String },
+    #[error("'{setting}' names a label that is not in this run ({labels})")]
+    LabelNotInRun { setting: String, labels: String },
+    #[error("parameter '{setting}' belongs to none of the methods in this run ({labels})")]
+    UnusedParameter { setting: String, labels: String },
     #[error("{technique} needs a GPU and this run has none")]
     NeedsGpu { technique: &'static str },
     #[error("{technique}: bad parameter '{name}={value}': {reason}")]
@@ -404,12 +417,19 @@ pub struct MethodInfo {
     /// when it shades every specular surface itself).
     pub delegates: &'static [Delegation],
     pub params: &'static [ParamSpec],
+    /// Named lists of settings (`METHOD:PRESET`); a seed technique's `paper` runs the
+    /// published algorithm ([`crate::preset`]).
+    pub presets: &'static [Preset],
     pub create: fn() -> Box<dyn Technique>,
 }
 
 impl MethodInfo {
     pub fn param(&self, name: &str) -> Option<&'static ParamSpec> {
         self.params.iter().find(|p| p.name == name)
+    }
+
+    pub fn preset(&self, name: &str) -> Option<&'static Preset> {
+        self.presets.iter().find(|p| p.name == name)
     }
 
     /// The method `material`'s surfaces are handed to; None where this method shades them

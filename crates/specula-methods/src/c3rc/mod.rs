@@ -241,6 +241,11 @@ pub const INFO: MethodInfo = MethodInfo {
         to: crate::envmap::INFO.name,
     }],
     params: PARAMS,
+    presets: &[crate::preset::Preset {
+        name: "paper",
+        summary: "the published algorithm (Mei et al. 2007): every step beyond the paper off",
+        settings: &["trace_self=false", "level_of_detail=false"],
+    }],
     create: || Box::new(C3rcMethod::default()),
 };
 

@@ -212,6 +212,7 @@ pub const INFO: MethodInfo = MethodInfo {
     progressive: false,
     delegates: &[],
     params: PARAMS,
+    presets: &[],
     create: || Box::new(DistanceMaps::default()),
 };
 

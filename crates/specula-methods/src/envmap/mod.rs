@@ -105,6 +105,7 @@ pub const INFO: MethodInfo = MethodInfo {
     progressive: false,
     delegates: &[],
     params: PARAMS,
+    presets: &[],
     create: || Box::new(EnvMap::default()),
 };
 

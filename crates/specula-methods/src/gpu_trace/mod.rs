@@ -137,6 +137,7 @@ pub const INFO: MethodInfo = MethodInfo {
     progressive: false,
     delegates: &[],
     params: PARAMS,
+    presets: &[],
     create: || Box::new(GpuTrace::default()),
 };
 

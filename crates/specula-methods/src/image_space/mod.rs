@@ -262,6 +262,7 @@ pub const INFO: MethodInfo = MethodInfo {
     // image-space's own.
     delegates: &[],
     params: PARAMS,
+    presets: &[],
     create: || Box::new(ImageSpace::default()),
 };
 

@@ -209,6 +209,7 @@ pub const INFO: MethodInfo = MethodInfo {
     progressive: false,
     delegates: &[],
     params: PARAMS,
+    presets: &[],
     create: || Box::new(Pvrr::default()),
 };
 

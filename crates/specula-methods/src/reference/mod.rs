@@ -72,6 +72,7 @@ pub const INFO: MethodInfo = MethodInfo {
     progressive: true,
     delegates: &[],
     params: PARAMS,
+    presets: &[],
     create: || Box::new(Reference::default()),
 };
 

@@ -227,6 +227,7 @@ pub const INFO: MethodInfo = MethodInfo {
     progressive: true,
     delegates: &[],
     params: PARAMS,
+    presets: &[],
     create: || Box::new(VertexTracing::default()),
 };
 
