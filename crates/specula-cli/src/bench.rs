@@ -10,7 +10,11 @@
 
 use anyhow::Result;
 use serde::Serialize;
-use specula_methods::{Context, LiveScene};
+use specula_methods::{Context, Label, LiveScene};
+
+/// The version of [`BenchReport`]'s JSON. 3: runs are keyed by `label` (`c3rc`,
+/// `c3rc:paper`), with the method and the preset it ran.
+pub const SCHEMA_VERSION: u32 = 3;
 use specula_scene::Scene;
 
 /// The exact methods every run is compared with: the CPU reference and gpu-trace.
@@ -35,7 +39,11 @@ pub struct Spread {
 #[derive(Debug, Serialize)]
 pub struct MethodBench {
     pub scene: String,
+    /// `method`, or `method:preset`.
+    pub label: String,
     pub method: String,
+    /// The preset it ran (null: the method's defaults).
+    pub preset: Option<String>,
     /// "static", "dynamic", or "-" for a method without scene-only maps.
     pub mode: String,
     pub parameters: Vec<(String, String)>,
@@ -113,7 +121,7 @@ pub fn with_bases(methods: &[String], has_gpu: bool) -> Vec<String> {
 pub fn add_ratios(runs: &mut [MethodBench]) {
     let median_of = |runs: &[MethodBench], scene: &str, method: &str| {
         runs.iter()
-            .find(|r| r.scene == scene && r.method == method)
+            .find(|r| r.scene == scene && r.label == method)
             .map(|r| r.frame.median_ms)
     };
     for i in 0..runs.len() {
@@ -139,9 +147,10 @@ fn spread(mut values: Vec<f64>) -> Spread {
     }
 }
 
-/// Times `methods` on `scene`. The `parameters` go to the methods in `asked` that have them;
-/// the exact bases added to the list without being asked for keep their defaults (so that,
-/// say, image-space's `-p mode=ray-plane` is not handed to gpu-trace's own `mode`).
+/// Times the labels `methods` on `scene`. The `parameters` (checked beforehand with
+/// `specula_methods::check_settings`) go to the labels in `asked` they reach, after their
+/// presets; the exact bases added to the list without being asked for keep their defaults (so
+/// that, say, image-space's `-p mode=ray-plane` is not handed to gpu-trace's own `mode`).
 #[allow(clippy::too_many_arguments)]
 pub fn run(
     scene: Scene,
@@ -158,24 +167,20 @@ pub fn run(
     let camera = live.scene().camera.clone();
     let adapter = ctx.describe();
     let mut results = Vec::new();
-    let mut used = vec![false; parameters.len()];
     for name in methods {
-        let info = specula_methods::method(name)?;
+        let label = Label::parse(name)?;
+        let info = label.info;
         let modes: &[&str] = if info.param("dynamic").is_some() {
             &["static", "dynamic"]
         } else {
             &["-"]
         };
         for mode in modes {
-            let mut technique = (info.create)();
-            if asked.contains(name) {
-                // A parameter goes to the methods that have it.
-                let applied =
-                    specula_methods::apply_known_parameters(technique.as_mut(), parameters)?;
-                for (u, a) in used.iter_mut().zip(applied) {
-                    *u |= a;
-                }
-            }
+            let mut technique = if asked.contains(name) {
+                label.create_with(parameters)?
+            } else {
+                label.create()?
+            };
             if *mode != "-" {
                 specula_methods::apply_setting(
                     technique.as_mut(),
@@ -225,7 +230,9 @@ pub fn run(
                 .map(|r| r as f64 / (frame.median_ms * 1e-3));
             results.push(MethodBench {
                 scene: scene_name.clone(),
-                method: name.clone(),
+                label: label.to_string(),
+                method: info.name.to_string(),
+                preset: label.preset.map(|p| p.name.to_string()),
                 mode: mode.to_string(),
                 parameters: technique.parameters(),
                 frames,
@@ -244,13 +251,6 @@ pub fn run(
             });
         }
     }
-    if let Some(i) = used.iter().position(|u| !u) {
-        anyhow::bail!(
-            "parameter '{}' belongs to none of the methods asked for ({})",
-            parameters[i],
-            asked.join(", ")
-        );
-    }
     Ok(results)
 }
 
@@ -263,7 +263,7 @@ pub fn print(results: &[MethodBench]) {
         };
         println!(
             "{}: {}{mode} ({}x{}, {} frames on {}, {}): prepare {:.1} ms; frame median {:.2} ms (min {:.2}, max {:.2}); {}; GPU objects created {}",
-            r.scene, r.method, r.width, r.height, r.frames, r.adapter, r.timing, r.prepare_ms, r.frame.median_ms, r.frame.min_ms, r.frame.max_ms, ratios(r), r.created
+            r.scene, r.label, r.width, r.height, r.frames, r.adapter, r.timing, r.prepare_ms, r.frame.median_ms, r.frame.min_ms, r.frame.max_ms, ratios(r), r.created
         );
         for (stage, s) in &r.stages {
             println!(
@@ -308,13 +308,13 @@ pub fn markdown(report: &BenchReport) -> String {
         if report.ray_queries { "yes" } else { "no" },
         report.date
     );
-    out.push_str("| scene | method | mode | size | frame ms (median) | min–max ms | speed-up over reference | speed-up over gpu-trace | Mrays/s |\n");
+    out.push_str("| scene | label | mode | size | frame ms (median) | min–max ms | speed-up over reference | speed-up over gpu-trace | Mrays/s |\n");
     out.push_str("|---|---|---|---|---:|---:|---:|---:|---:|\n");
     for r in &report.runs {
         out.push_str(&format!(
             "| {} | {} | {} | {}×{} | {:.2} | {:.2}–{:.2} | {} | {} | {} |\n",
             r.scene,
-            r.method,
+            r.label,
             r.mode,
             r.width,
             r.height,
@@ -346,7 +346,9 @@ mod tests {
     fn run(scene: &str, method: &str, median_ms: f64) -> MethodBench {
         MethodBench {
             scene: scene.into(),
+            label: method.into(),
             method: method.into(),
+            preset: None,
             mode: "-".into(),
             parameters: Vec::new(),
             frames: 1,

@@ -8,7 +8,7 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use specula_gpu::GpuContext;
-use specula_methods::{Context as Devices, LiveScene, MethodInfo};
+use specula_methods::{Context as Devices, Label, LiveScene, MethodInfo};
 use specula_scene::builtin::{self, DEFAULT_SCENE};
 use specula_scene::Scene;
 use specula_trace::Image;
@@ -70,7 +70,7 @@ struct RenderArgs {
     /// Built-in scene name, a .toml scene file, or a mesh/scene file (.gltf .glb .obj .ply .stl).
     #[arg(default_value = DEFAULT_SCENE)]
     scene: String,
-    /// Method to render with (`specula methods` lists them).
+    /// Method to render with, or METHOD:PRESET (`specula methods` lists them).
     #[arg(long, short, default_value = "reference")]
     method: String,
     /// Image width in pixels.
@@ -109,13 +109,19 @@ struct CompareArgs {
     /// Built-in scene names, scene or mesh files, or folders of .toml scenes.
     #[arg(default_value = DEFAULT_SCENE)]
     scenes: Vec<String>,
-    /// Comma-separated methods (default: every method).
+    /// Comma-separated methods (default: every method); a method may run several times under
+    /// labels METHOD:PRESET, e.g. `c3rc,c3rc:paper` (`specula methods` lists the presets).
     #[arg(long, value_delimiter = ',')]
     methods: Option<Vec<String>>,
+    /// Run each method's published algorithm (its `paper` preset) beside it, as METHOD:paper.
+    #[arg(long)]
+    paper: bool,
     /// Folder for report.html, report.json and the images.
     #[arg(long, default_value = "specula-report")]
     report: PathBuf,
-    /// A technique parameter, NAME=VALUE (repeatable), e.g. `-p resolution=512`.
+    /// A technique parameter, NAME=VALUE (repeatable), e.g. `-p resolution=512`: applied after
+    /// the presets to every method that has it; LABEL.NAME=VALUE (`-p c3rc:paper.points=5000`)
+    /// to that label only.
     #[arg(short = 'p', long = "param")]
     params: Vec<String>,
     /// Also write the JSON report here.
@@ -137,12 +143,17 @@ struct BenchArgs {
     /// Built-in scene names or scene/mesh files.
     #[arg(default_value = DEFAULT_SCENE)]
     scenes: Vec<String>,
-    /// Comma-separated methods (default: every method).
+    /// Comma-separated methods (default: every method), or labels METHOD:PRESET as in
+    /// `compare`.
     #[arg(long, value_delimiter = ',')]
     methods: Option<Vec<String>>,
+    /// Time each method's published algorithm (its `paper` preset) beside it, as METHOD:paper.
+    #[arg(long)]
+    paper: bool,
     #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=100000))]
     frames: u32,
-    /// A technique parameter, NAME=VALUE (repeatable), e.g. `-p resolution=512`.
+    /// A technique parameter, NAME=VALUE (repeatable), e.g. `-p resolution=512`; LABEL.NAME=VALUE
+    /// for one label only, as in `compare`.
     #[arg(short = 'p', long = "param")]
     params: Vec<String>,
     /// Write the report (adapter, driver, date, every run) as JSON here.
@@ -279,11 +290,40 @@ fn context_for(methods: &[&MethodInfo]) -> Result<Devices> {
     Ok(Devices::with_gpu(gpu))
 }
 
-fn method_infos(names: &[String]) -> Result<Vec<&'static MethodInfo>> {
-    Ok(names
-        .iter()
-        .map(|n| specula_methods::method(n))
-        .collect::<Result<_, _>>()?)
+/// The labels of a run, from `--methods` (or `default`), with each one's `paper` preset
+/// beside it where `paper` asks for it and it is not there already.
+fn run_labels(
+    methods: &Option<Vec<String>>,
+    default: impl FnOnce() -> Vec<String>,
+    paper: bool,
+) -> Result<Vec<Label>> {
+    let given = methods.clone().unwrap_or_else(default);
+    let mut labels = Label::parse_list(&given)?;
+    if paper {
+        let mut with_paper = Vec::new();
+        for label in &labels {
+            with_paper.push(*label);
+            if let Some(preset) = label
+                .info
+                .preset("paper")
+                .filter(|_| label.preset.is_none())
+            {
+                let paper = Label {
+                    info: label.info,
+                    preset: Some(preset),
+                };
+                if !labels.contains(&paper) {
+                    with_paper.push(paper);
+                }
+            }
+        }
+        labels = with_paper;
+    }
+    Ok(labels)
+}
+
+fn label_names(labels: &[Label]) -> Vec<String> {
+    labels.iter().map(Label::to_string).collect()
 }
 
 /// `specula methods`: every registered method and its parameters, from the registry's specs.
@@ -311,6 +351,14 @@ fn print_methods() {
                 p.invalidates.describe()
             );
             println!("    {:<18} {}", "", p.doc);
+        }
+        for preset in m.presets {
+            println!("  preset {}:{}: {}", m.name, preset.name, preset.summary);
+            for setting in preset.settings {
+                let name = setting.split_once('=').map_or(*setting, |(n, _)| n);
+                let default = m.param(name).map_or("?", |p| p.default);
+                println!("      {setting:<28} instead of {default}");
+            }
         }
     }
 }
@@ -348,7 +396,7 @@ fn print_comparison(r: &specula_compare::Report) {
     for m in &r.methods {
         println!(
             "{:<16}{:>42}{:>12.2}{:>9.1}x{:>14}",
-            m.method,
+            m.label,
             m.metrics
                 .as_ref()
                 .map(figures)
@@ -366,7 +414,7 @@ fn print_comparison(r: &specula_compare::Report) {
                 figures(&d.metrics),
                 d.metrics.mask_pixels,
                 d.delegate,
-                m.method
+                m.label
             );
         }
     }
@@ -393,7 +441,7 @@ fn print_suite(summary: &specula_compare::suite::SuiteReport) {
         }
         print!("{:<width$}", row.scene);
         for m in &summary.methods {
-            match row.methods.iter().find(|c| &c.method == m) {
+            match row.methods.iter().find(|c| &c.label == m) {
                 Some(c) => print!("{:>22}", format!("{} ({:.1})", c.flip_text(), c.total_ms)),
                 None => print!("{:>22}", "-"),
             }
@@ -486,13 +534,13 @@ fn print_ray_queries() {
 fn render(args: RenderArgs) -> Result<()> {
     let scene = load_scene(&args.scene)?;
     let (width, height) = (args.width, height_for(&scene, args.width, args.height));
-    let method = &args.method;
-    let info = specula_methods::method(method)?;
+    let label = Label::parse(&args.method)?;
+    let method = label.to_string();
     if args.distributed.distributed {
-        return render_distributed(scene, height, &args);
+        return render_distributed(scene, height, label, &args);
     }
-    let mut technique = technique_for_render(info, &args)?;
-    let ctx = context_for(&[info])?;
+    let mut technique = technique_for_render(label, &args)?;
+    let ctx = context_for(&[label.info])?;
     let start = Instant::now();
     let live = LiveScene::new(scene);
     let build = start.elapsed();
@@ -535,14 +583,17 @@ fn render(args: RenderArgs) -> Result<()> {
     Ok(())
 }
 
-/// The technique `render` draws with: `info`'s, with the reference's `--spp` and
-/// `--max-depth` where it is exact, the `-p` parameters, and a step time for `--sequence`.
+/// The technique `render` draws with: `label`'s (its preset applied), with the reference's
+/// `--spp` and `--max-depth` where it is exact, the `-p` parameters, and a step time for
+/// `--sequence`.
 fn technique_for_render(
-    info: &MethodInfo,
+    label: Label,
     args: &RenderArgs,
 ) -> Result<Box<dyn specula_methods::Technique>> {
     let (method, spp, max_depth) = (&args.method, args.spp, args.max_depth);
-    let mut technique = (info.create)();
+    let info = label.info;
+    specula_methods::check_settings(&[label], &args.params)?;
+    let mut technique = label.create()?;
     if info.exact {
         if spp > 1 && info.param("spp").is_none() {
             anyhow::bail!(
@@ -554,7 +605,9 @@ fn technique_for_render(
             &[format!("spp={spp}"), format!("max_depth={max_depth}")],
         )?;
     }
-    specula_methods::apply_parameters(technique.as_mut(), &args.params)?;
+    for setting in label.settings_for(&args.params) {
+        specula_methods::apply_setting(technique.as_mut(), setting)?;
+    }
     if args.sequence.is_some() && !info.progressive {
         anyhow::bail!("--sequence needs a progressive method; {method} draws each frame at once");
     }
@@ -577,12 +630,18 @@ fn save_image(image: &Image, output: &Path, exr: Option<&Path>) -> Result<()> {
 /// By default every method but the CPU reference, which is the ground truth; gpu-trace among
 /// them shows its own error (none) and is the base of the second speed-up.
 fn compare(args: CompareArgs) -> Result<()> {
-    let methods = args.methods.clone().unwrap_or_else(|| {
-        let mut all = specula_methods::approximate_methods();
-        all.insert(0, specula_methods::gpu_trace::INFO.name.to_string());
-        all
-    });
-    let mut infos = method_infos(&methods)?;
+    let labels = run_labels(
+        &args.methods,
+        || {
+            let mut all = specula_methods::approximate_methods();
+            all.insert(0, specula_methods::gpu_trace::INFO.name.to_string());
+            all
+        },
+        args.paper,
+    )?;
+    specula_methods::check_settings(&labels, &args.params)?;
+    let methods = label_names(&labels);
+    let mut infos: Vec<&MethodInfo> = labels.iter().map(|l| l.info).collect();
     infos.push(specula_methods::exact_method());
     let is_suite = args.scenes.len() > 1 || args.scenes.iter().any(|s| PathBuf::from(s).is_dir());
     if is_suite {
@@ -696,7 +755,7 @@ fn compare_each_scene(
                 row.scene,
                 row.methods
                     .iter()
-                    .map(|c| format!("{} {}", c.method, c.flip_text()))
+                    .map(|c| format!("{} {}", c.label, c.flip_text()))
                     .collect::<Vec<_>>()
                     .join(", ")
             ),
@@ -713,13 +772,19 @@ fn compare_each_scene(
 /// `specula bench`: every method asked for (and the exact bases) timed on each scene; the
 /// table printed, the report optionally written as JSON and markdown.
 fn bench(args: BenchArgs) -> Result<()> {
-    let methods = args.methods.clone().unwrap_or_else(|| {
-        specula_methods::METHODS
-            .iter()
-            .map(|m| m.name.to_string())
-            .collect()
-    });
-    let asked = method_infos(&methods)?;
+    let labels = run_labels(
+        &args.methods,
+        || {
+            specula_methods::METHODS
+                .iter()
+                .map(|m| m.name.to_string())
+                .collect()
+        },
+        args.paper,
+    )?;
+    specula_methods::check_settings(&labels, &args.params)?;
+    let methods = label_names(&labels);
+    let asked: Vec<&MethodInfo> = labels.iter().map(|l| l.info).collect();
     let ctx = context_for(&asked)?;
     let timed = bench::with_bases(&methods, ctx.gpu.is_some());
     let mut runs = Vec::new();
@@ -755,7 +820,7 @@ fn bench(args: BenchArgs) -> Result<()> {
 /// adapter offers hardware ray queries.
 fn bench_report(ctx: &Devices, runs: Vec<bench::MethodBench>) -> bench::BenchReport {
     bench::BenchReport {
-        schema_version: 2,
+        schema_version: bench::SCHEMA_VERSION,
         adapter: ctx.describe(),
         driver: ctx
             .gpu
@@ -778,14 +843,21 @@ fn bench_report(ctx: &Devices, runs: Vec<bench::MethodBench>) -> bench::BenchRep
 /// `render --distributed`: vertex tracing over MPI
 /// (`specula_methods::vertex_tracing::distributed`), `height` pixels high; rank 0 writes the
 /// image and the report.
-fn render_distributed(scene: Scene, height: u32, args: &RenderArgs) -> Result<()> {
+fn render_distributed(scene: Scene, height: u32, label: Label, args: &RenderArgs) -> Result<()> {
     use specula_methods::vertex_tracing::{VertexTracing, INFO};
-    let method = &args.method;
-    if method != INFO.name {
-        anyhow::bail!("--distributed runs {}, not {method}", INFO.name);
+    if label.info.name != INFO.name {
+        anyhow::bail!("--distributed runs {}, not {label}", INFO.name);
     }
+    specula_methods::check_settings(&[label], &args.params)?;
     let mut technique = VertexTracing::default();
-    specula_methods::apply_parameters(&mut technique, &args.params)?;
+    let preset = label.preset.map_or(&[][..], |p| p.settings);
+    for setting in preset
+        .iter()
+        .copied()
+        .chain(label.settings_for(&args.params))
+    {
+        specula_methods::apply_setting(&mut technique, setting)?;
+    }
     #[cfg(feature = "mpi")]
     {
         use specula_methods::vertex_tracing::distributed::{self, Outcome};

@@ -172,6 +172,46 @@ fn bad_input_is_a_clear_error_not_a_panic() {
             "--sequence needs a progressive method",
         ),
         (
+            ["render", "--method", "c3rc:fast"]
+                .map(String::from)
+                .to_vec(),
+            "unknown preset in 'c3rc:fast'; valid: c3rc:paper",
+        ),
+        (
+            ["compare", "--methods", "pvrr:"].map(String::from).to_vec(),
+            "unknown preset in 'pvrr:'; valid: pvrr:paper",
+        ),
+        (
+            ["bench", "--methods", "envmap:paper"]
+                .map(String::from)
+                .to_vec(),
+            "envmap has no presets",
+        ),
+        (
+            ["compare", "--methods", "c3rc:paper,envmap,c3rc:paper"]
+                .map(String::from)
+                .to_vec(),
+            "'c3rc:paper' is given twice",
+        ),
+        (
+            ["compare", "--methods", "c3rc", "-p", "c3rc:paper.points=10"]
+                .map(String::from)
+                .to_vec(),
+            "names a label that is not in this run (c3rc)",
+        ),
+        (
+            [
+                "compare",
+                "--methods",
+                "c3rc,c3rc:paper",
+                "-p",
+                "c3rc:paper.magic=1",
+            ]
+            .map(String::from)
+            .to_vec(),
+            "c3rc's parameters are points",
+        ),
+        (
             [
                 "render",
                 "--method",
@@ -484,6 +524,65 @@ fn bench_parameters_go_to_the_methods_asked_for_not_to_the_added_bases() {
 }
 
 #[test]
+fn bench_paper_times_each_method_beside_its_published_algorithm() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = specula()
+        .current_dir(dir.path())
+        .args([
+            "bench",
+            "truck-cover",
+            "--methods",
+            "vertex-tracing",
+            "--paper",
+            "-p",
+            "vertex-tracing:paper.epsilon=0.05",
+            "--frames",
+            "1",
+            "-W",
+            "24",
+            "--json",
+            "b.json",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("b.json")).unwrap()).unwrap();
+    assert_eq!(json["schema_version"], 3);
+    let runs = json["runs"].as_array().unwrap();
+    let run = |label: &str| {
+        runs.iter()
+            .find(|r| r["label"] == label)
+            .unwrap_or_else(|| panic!("no run of {label}: {json}"))
+    };
+    let parameter = |label: &str, name: &str| {
+        run(label)["parameters"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|p| p[0] == name)
+            .map(|p| p[1].as_str().unwrap().to_string())
+            .unwrap()
+    };
+    assert_eq!(run("vertex-tracing:paper")["method"], "vertex-tracing");
+    assert_eq!(run("vertex-tracing:paper")["preset"], "paper");
+    assert!(run("vertex-tracing")["preset"].is_null());
+    assert_eq!(parameter("vertex-tracing:paper", "tree_weight"), "0");
+    assert_eq!(parameter("vertex-tracing:paper", "epsilon"), "0.05");
+    assert_eq!(parameter("vertex-tracing", "epsilon"), "0.03");
+    assert!(
+        run("vertex-tracing:paper")["speedup_over_reference"]
+            .as_f64()
+            .unwrap()
+            > 0.0
+    );
+}
+
+#[test]
 fn methods_lists_every_method_with_its_parameters_from_the_registry() {
     let out = specula().arg("methods").output().unwrap();
     assert!(out.status.success());
@@ -503,6 +602,30 @@ fn methods_lists_every_method_with_its_parameters_from_the_registry() {
         }
     }
     assert!(text.contains("reference (exact, CPU, progressive)"));
+    for info in specula_methods::METHODS {
+        for preset in info.presets {
+            assert!(
+                text.contains(&format!(
+                    "preset {}:{}: {}",
+                    info.name, preset.name, preset.summary
+                )),
+                "{}:{} missing: {text}",
+                info.name,
+                preset.name
+            );
+            for setting in preset.settings {
+                let name = setting.split_once('=').unwrap().0;
+                let default = info.param(name).unwrap().default;
+                assert!(
+                    text.lines().any(|l| l.trim_start().starts_with(setting)
+                        && l.trim_end().ends_with(&format!("instead of {default}"))),
+                    "{}:{} {setting} missing: {text}",
+                    info.name,
+                    preset.name
+                );
+            }
+        }
+    }
 }
 
 #[test]

@@ -21,8 +21,8 @@ use base64::Engine;
 use serde::Serialize;
 use specula_gpu::TimingSource;
 use specula_methods::{
-    apply_known_parameters, apply_parameters, by_name, Context, LiveScene, MethodInfo,
-    SurfaceClass, TechniqueError,
+    apply_parameters, apply_setting, by_name, check_settings, Context, Label, LiveScene,
+    MethodInfo, SurfaceClass, TechniqueError,
 };
 use specula_scene::Scene;
 use specula_trace::reference::primary_hits;
@@ -32,8 +32,9 @@ pub use metrics::Metrics;
 
 /// The version of [`Report`]'s JSON (docs/compare.schema.json). 2: a method's `metrics` is
 /// over the surfaces it shades itself (null when none) and `delegated` holds the others;
-/// `mirror_pixels` and `refractor_pixels` split the mask.
-pub const SCHEMA_VERSION: u32 = 2;
+/// `mirror_pixels` and `refractor_pixels` split the mask. 3: methods are keyed by `label`
+/// (`c3rc`, `c3rc:paper`), with the `preset` it runs (null for the defaults).
+pub const SCHEMA_VERSION: u32 = 3;
 
 #[derive(Debug, thiserror::Error)]
 pub enum CompareError {
@@ -43,8 +44,6 @@ pub enum CompareError {
     Gpu(#[from] specula_gpu::GpuError),
     #[error("{path}: {message}")]
     Write { path: String, message: String },
-    #[error("parameter '{setting}' belongs to none of the methods compared ({methods})")]
-    UnusedParameter { setting: String, methods: String },
     #[error("the scene has no mirror or dielectric surface in view: nothing to compare")]
     EmptyMask,
     #[error("{folder}: the folder holds no .toml scene file")]
@@ -55,11 +54,13 @@ pub enum CompareError {
 pub struct Options {
     pub width: u32,
     pub height: u32,
+    /// Labels: a method's name, or the name, a colon and a preset (`c3rc:paper`).
     pub methods: Vec<String>,
     /// Samples per pixel of the reference (1 = pixel centres, as the techniques).
     pub spp: u32,
     pub max_depth: u32,
-    /// `name=value` technique parameters, applied to every method that has them.
+    /// `NAME=VALUE` technique parameters, applied after the presets to every method that has
+    /// them; `LABEL.NAME=VALUE` to that label's only.
     pub parameters: Vec<String>,
 }
 
@@ -87,7 +88,12 @@ pub struct ReferenceReport {
 
 #[derive(Clone, Debug, Serialize)]
 pub struct MethodReport {
+    /// What the row, its images and the suite's cells are keyed by: `method` or
+    /// `method:preset`.
+    pub label: String,
     pub method: String,
+    /// The preset it runs (null: the method's defaults); `parameters` are the values in force.
+    pub preset: Option<String>,
     pub parameters: BTreeMap<String, String>,
     /// "gpu-timestamps" or "cpu-wall-clock".
     pub timing: String,
@@ -198,31 +204,25 @@ pub fn compare(
     progress: &dyn Fn(&str),
 ) -> Result<Comparison, CompareError> {
     let (width, height) = (options.width, options.height);
-    // Build every technique first so an unknown name fails before any long work.
-    let mut techniques = options
-        .methods
+    // Build every technique first so an unknown name or setting fails before any long work.
+    let labels = Label::parse_list(&options.methods)?;
+    check_settings(&labels, &options.parameters)?;
+    let mut techniques = labels
         .iter()
-        .map(|m| by_name(m))
-        .collect::<Result<Vec<_>, _>>()?;
-    let mut used = vec![false; options.parameters.len()];
-    for technique in techniques.iter_mut() {
-        if technique.name() == specula_methods::gpu_trace::INFO.name {
-            apply_parameters(
-                technique.as_mut(),
-                &[format!("max_depth={}", options.max_depth)],
-            )?;
-        }
-        let applied = apply_known_parameters(technique.as_mut(), &options.parameters)?;
-        for (u, a) in used.iter_mut().zip(applied) {
-            *u |= a;
-        }
-    }
-    if let Some(i) = used.iter().position(|u| !u) {
-        return Err(CompareError::UnusedParameter {
-            setting: options.parameters[i].clone(),
-            methods: options.methods.join(", "),
-        });
-    }
+        .map(|label| {
+            let mut technique = label.create()?;
+            if label.info.name == specula_methods::gpu_trace::INFO.name {
+                apply_parameters(
+                    technique.as_mut(),
+                    &[format!("max_depth={}", options.max_depth)],
+                )?;
+            }
+            for setting in label.settings_for(&options.parameters) {
+                apply_setting(technique.as_mut(), setting)?;
+            }
+            Ok((*label, technique))
+        })
+        .collect::<Result<Vec<_>, TechniqueError>>()?;
 
     progress("reference");
     let start = Instant::now();
@@ -261,8 +261,8 @@ pub fn compare(
 
     let mut methods = Vec::new();
     let mut method_images = Vec::new();
-    for technique in techniques.iter_mut() {
-        progress(technique.name());
+    for (label, technique) in techniques.iter_mut() {
+        progress(&label.to_string());
         technique.prepare(ctx, &live)?;
         // One untimed frame first: the first frame pays for shader compilation and first use.
         technique.render(ctx, &live, &scene.camera, width, height)?;
@@ -273,7 +273,9 @@ pub fn compare(
             method_figures(technique.info(), &reference, &image, &flip, &classes);
         let total_ms = frame.total_milliseconds();
         methods.push(MethodReport {
+            label: label.to_string(),
             method: technique.name().to_string(),
+            preset: label.preset.map(|p| p.name.to_string()),
             parameters: technique.parameters().into_iter().collect(),
             timing: timing_name(frame.timing).to_string(),
             stages: frame
@@ -290,8 +292,8 @@ pub fn compare(
             counters: frame.counters.iter().cloned().collect(),
             metrics,
             delegated,
-            image: format!("{}.png", technique.name()),
-            heat_map: format!("{}-flip.png", technique.name()),
+            image: format!("{}.png", label.file_stem()),
+            heat_map: format!("{}-flip.png", label.file_stem()),
             warnings: frame.warnings.clone(),
             created: CreatedReport {
                 textures: frame.created().textures,
@@ -303,7 +305,7 @@ pub fn compare(
     }
     let gpu_trace_ms = match methods
         .iter()
-        .find(|m| m.method == specula_methods::gpu_trace::INFO.name)
+        .find(|m| m.label == specula_methods::gpu_trace::INFO.name)
     {
         Some(m) => Some(m.total_ms),
         None if ctx.gpu.is_some() => {
@@ -440,7 +442,7 @@ impl Comparison {
             };
             rows.push_str(&format!(
                 "<tr><td>{}</td>{own}<td>{:.2}</td><td>{:.1}×</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
-                escape(&m.method),
+                escape(&m.label),
                 m.total_ms,
                 m.speedup_over_reference,
                 m.speedup_over_gpu_trace.map(|v| format!("{v:.2}×")).unwrap_or_else(|| "–".into()),
@@ -454,7 +456,7 @@ impl Comparison {
                     d.material,
                     metric_cells(&d.metrics),
                     escape(&d.delegate),
-                    escape(&m.method),
+                    escape(&m.label),
                 ));
             }
         }
@@ -474,10 +476,10 @@ impl Comparison {
             figures.push_str(&format!(
                 "<figure><img src=\"{}\"><figcaption>{} ({})</figcaption></figure>\n<figure><img src=\"{}\"><figcaption>{}: FLIP error (black = none, yellow = large)</figcaption></figure>\n",
                 data_uri(&img.to_srgb8()),
-                escape(&m.method),
+                escape(&m.label),
                 params.join(", "),
                 data_uri(heat),
-                escape(&m.method)
+                escape(&m.label)
             ));
         }
         format!(

@@ -14,12 +14,15 @@ use crate::{escape, write_error, CompareError, Comparison};
 
 /// The version of [`SuiteReport`]'s JSON (docs/compare-suite.schema.json). 2: a cell's figures
 /// are over the surfaces the method shades itself (null when none), `pixels` counts those, and
-/// `delegated` lists the others.
-pub const SCHEMA_VERSION: u32 = 2;
+/// `delegated` lists the others. 3: cells and columns are keyed by `label` (`c3rc`,
+/// `c3rc:paper`).
+pub const SCHEMA_VERSION: u32 = 3;
 
-/// One method's figures on one scene.
+/// One method's figures on one scene, under one label.
 #[derive(Clone, Debug, Serialize)]
 pub struct SuiteCell {
+    /// The method, or the method, a colon and the preset it ran (`c3rc:paper`).
+    pub label: String,
     pub method: String,
     /// Masked pixels of the surfaces the method shades itself; the three figures are over
     /// these, and are None (null) when there are none.
@@ -84,6 +87,7 @@ pub struct SuiteRow {
 pub struct SuiteReport {
     pub schema_version: u32,
     pub adapter: String,
+    /// The labels compared, in column order.
     pub methods: Vec<String>,
     pub scenes: Vec<SuiteRow>,
 }
@@ -182,6 +186,7 @@ pub fn scene_row(
             .methods
             .iter()
             .map(|m| SuiteCell {
+                label: m.label.clone(),
                 method: m.method.clone(),
                 pixels: m.metrics.as_ref().map_or(0, |x| x.mask_pixels),
                 mean_flip: m.metrics.as_ref().map(|x| x.mean_flip),
@@ -261,7 +266,7 @@ fn suite_html(report: &SuiteReport) -> String {
                 .unwrap_or_else(|| "–".into())
         ));
         for method in &report.methods {
-            match row.methods.iter().find(|c| &c.method == method) {
+            match row.methods.iter().find(|c| &c.label == method) {
                 Some(c) => rows.push_str(&format!(
                     "<td{}>{}{}</td><td>{:.1}</td>",
                     match (c.mean_flip, c.share_flip_over_0_1, c.rmse) {
@@ -309,7 +314,8 @@ td.delegated, small {{ color: #666; font-style: italic; }}
 <h1>specula compare: {count} scenes</h1>
 <p>On {adapter}. Mean FLIP over each scene's mirror and dielectric pixels against the exact
 reference (green 0, red ≥ 0.3; hover for the share over 0.1 and the RMSE), and each method's frame
-time in milliseconds. A cell's figure is over the surfaces the method shades itself; surfaces it
+time in milliseconds. A column <code>METHOD:paper</code> runs the method's published algorithm (its
+<code>paper</code> preset: every step beyond the paper off), beside the column of specula's version. A cell's figure is over the surfaces the method shades itself; surfaces it
 hands to another method are listed under it in small type ("N refractor: envmap 0.36": those N
 pixels are envmap's shading, and the figure is envmap's). A scene's name links to its own report
 with the images and heat-maps.</p>

@@ -170,3 +170,69 @@ fn parameters_reach_the_methods_that_have_them_and_unknown_ones_are_errors() {
         "{message}"
     );
 }
+
+#[test]
+fn one_method_runs_under_several_labels_keyed_in_rows_images_and_json() {
+    let Some(ctx) = specula_methods::test_context("compare labels") else {
+        return;
+    };
+    let scene = specula_scene::load("door-mirror").unwrap();
+    let options = |methods: &[&str], parameters: &[&str]| Options {
+        width: 32,
+        height: 24,
+        methods: methods.iter().map(|m| m.to_string()).collect(),
+        spp: 1,
+        max_depth: 8,
+        parameters: parameters.iter().map(|p| p.to_string()).collect(),
+    };
+    let comparison = compare(
+        &scene,
+        &ctx,
+        &options(&["c3rc", "c3rc:paper"], &["c3rc:paper.points=5000"]),
+        &|_| {},
+    )
+    .unwrap();
+    let rows = &comparison.report.methods;
+    let labels: Vec<&str> = rows.iter().map(|m| m.label.as_str()).collect();
+    assert_eq!(labels, ["c3rc", "c3rc:paper"]);
+    assert_eq!(
+        (rows[0].method.as_str(), rows[1].method.as_str()),
+        ("c3rc", "c3rc")
+    );
+    assert_eq!(rows[0].preset, None);
+    assert_eq!(rows[1].preset.as_deref(), Some("paper"));
+    // The preset, then the setting for that label only.
+    assert_eq!(rows[0].parameters["trace_self"], "true");
+    assert_eq!(rows[1].parameters["trace_self"], "false");
+    assert_eq!(rows[1].parameters["points"], "5000");
+    assert_eq!(rows[0].parameters["points"], "100000");
+    let dir = tempfile::tempdir().unwrap();
+    comparison.write_report(dir.path()).unwrap();
+    for file in [
+        "c3rc.png",
+        "c3rc-flip.png",
+        "c3rc-paper.png",
+        "c3rc-paper-flip.png",
+    ] {
+        assert!(dir.path().join(file).exists(), "{file} missing");
+    }
+    assert_matches_schema(&dir.path().join("report.json"));
+
+    let error = |methods: &[&str], parameters: &[&str]| {
+        compare(&scene, &ctx, &options(methods, parameters), &|_| {})
+            .err()
+            .unwrap()
+            .to_string()
+    };
+    let twice = error(&["c3rc:paper", "envmap", "c3rc:paper"], &[]);
+    assert!(twice.contains("'c3rc:paper' is given twice"), "{twice}");
+    let unknown = error(&["pvrr:fast"], &[]);
+    assert!(
+        unknown.contains("pvrr:fast") && unknown.contains("pvrr:paper"),
+        "{unknown}"
+    );
+    let empty = error(&["pvrr:"], &[]);
+    assert!(empty.contains("valid: pvrr:paper"), "{empty}");
+    let elsewhere = error(&["c3rc"], &["c3rc:paper.points=5000"]);
+    assert!(elsewhere.contains("not in this run (c3rc)"), "{elsewhere}");
+}

@@ -147,6 +147,24 @@ fn presets_of(info: &MethodInfo) -> String {
     }
 }
 
+/// "M's parameters are a, b; N's parameters are c" for the methods of `labels`.
+fn parameters_of(labels: &[Label]) -> String {
+    let mut methods: Vec<&MethodInfo> = Vec::new();
+    for label in labels {
+        if !methods.iter().any(|m| m.name == label.info.name) {
+            methods.push(label.info);
+        }
+    }
+    methods
+        .iter()
+        .map(|m| {
+            let names: Vec<&str> = m.params.iter().map(|p| p.name).collect();
+            format!("{}'s parameters are {}", m.name, names.join(", "))
+        })
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
 /// A `-p` setting, split: the label it is for (None: every instance that has the parameter),
 /// and the `NAME=VALUE` itself.
 pub fn split_setting(setting: &str) -> (Option<&str>, &str) {
@@ -158,70 +176,89 @@ pub fn split_setting(setting: &str) -> (Option<&str>, &str) {
     }
 }
 
-/// Applies the `-p` settings to the instances of a run, in order: a plain `NAME=VALUE` to each
-/// instance whose method has `NAME`, `LABEL.NAME=VALUE` to that instance only. Fails on a
-/// setting that reaches no instance, a label not in the run, or a name the label's method
-/// does not have.
-pub fn apply_to_instances(
-    instances: &mut [(Label, Box<dyn Technique>)],
-    settings: &[String],
-) -> Result<(), TechniqueError> {
+/// Checks the `-p` settings of a run over `labels` before anything is built: a setting
+/// `LABEL.NAME=VALUE` must name a label of the run whose method has `NAME`, and a plain
+/// `NAME=VALUE` must reach at least one of them.
+pub fn check_settings(labels: &[Label], settings: &[String]) -> Result<(), TechniqueError> {
+    let run = || {
+        labels
+            .iter()
+            .map(Label::to_string)
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
     for setting in settings {
         let (target, plain) = split_setting(setting);
-        let name = plain.split_once('=').map_or(plain, |(n, _)| n).trim();
-        let mut used = false;
-        match target {
+        let reached: Vec<&Label> = match target {
             Some(target) => {
                 let label = Label::parse(target)?;
-                let index = instances
-                    .iter()
-                    .position(|(l, _)| *l == label)
-                    .ok_or_else(|| TechniqueError::LabelNotInRun {
+                let label = labels.iter().find(|l| **l == label).ok_or_else(|| {
+                    TechniqueError::LabelNotInRun {
                         setting: setting.clone(),
-                        labels: labels_text(instances),
-                    })?;
-                apply_setting(instances[index].1.as_mut(), plain)?;
-                used = true;
-            }
-            None => {
-                for (_, technique) in instances.iter_mut() {
-                    if technique.info().param(name).is_some() {
-                        apply_setting(technique.as_mut(), plain)?;
-                        used = true;
+                        labels: run(),
                     }
-                }
+                })?;
+                vec![label]
             }
-        }
-        if !used {
+            None => labels.iter().filter(|l| l.has_param_of(plain)).collect(),
+        };
+        if reached.is_empty() {
             return Err(TechniqueError::UnusedParameter {
                 setting: setting.clone(),
-                labels: labels_text(instances),
+                labels: run(),
+                parameters: parameters_of(labels),
             });
+        }
+        for label in reached {
+            // Parses the value against the parameter's spec: a bad one fails here, early.
+            apply_setting((label.info.create)().as_mut(), plain)?;
         }
     }
     Ok(())
 }
 
-fn labels_text(instances: &[(Label, Box<dyn Technique>)]) -> String {
-    instances
-        .iter()
-        .map(|(l, _)| l.to_string())
-        .collect::<Vec<_>>()
-        .join(", ")
+impl Label {
+    /// Whether this label's method has the parameter of `NAME=VALUE`.
+    fn has_param_of(&self, setting: &str) -> bool {
+        let name = setting.split_once('=').map_or(setting, |(n, _)| n).trim();
+        self.info.param(name).is_some()
+    }
+
+    /// The `-p` settings that reach this label, in order, as plain `NAME=VALUE`: those naming
+    /// it (`LABEL.NAME=VALUE`) and the plain ones whose name its method has.
+    pub fn settings_for<'a>(&self, settings: &'a [String]) -> Vec<&'a str> {
+        settings
+            .iter()
+            .filter_map(|setting| match split_setting(setting) {
+                (Some(target), plain) => Label::parse(target)
+                    .is_ok_and(|l| l == *self)
+                    .then_some(plain),
+                (None, plain) => self.has_param_of(plain).then_some(plain),
+            })
+            .collect()
+    }
+
+    /// A new technique with the preset's settings, then the `-p` settings that reach it.
+    pub fn create_with(&self, settings: &[String]) -> Result<Box<dyn Technique>, TechniqueError> {
+        let mut technique = self.create()?;
+        for setting in self.settings_for(settings) {
+            apply_setting(technique.as_mut(), setting)?;
+        }
+        Ok(technique)
+    }
 }
 
-/// Creates an instance per label (preset applied) and applies the `-p` settings
-/// ([`apply_to_instances`]).
+/// The instances of a run: the settings checked ([`check_settings`]), then one technique per
+/// label with its preset and the settings that reach it.
 pub fn instances(
     labels: &[Label],
     settings: &[String],
 ) -> Result<Vec<(Label, Box<dyn Technique>)>, TechniqueError> {
-    let mut instances = labels
+    check_settings(labels, settings)?;
+    labels
         .iter()
-        .map(|l| Ok((*l, l.create()?)))
-        .collect::<Result<Vec<_>, TechniqueError>>()?;
-    apply_to_instances(&mut instances, settings)?;
-    Ok(instances)
+        .map(|l| Ok((*l, l.create_with(settings)?)))
+        .collect()
 }
 
 #[cfg(test)]

@@ -34,8 +34,14 @@ pub enum TechniqueError {
     DuplicateLabel { label: String, given: String },
     #[error("'{setting}' names a label that is not in this run ({labels})")]
     LabelNotInRun { setting: String, labels: String },
-    #[error("parameter '{setting}' belongs to none of the methods in this run ({labels})")]
-    UnusedParameter { setting: String, labels: String },
+    #[error(
+        "parameter '{setting}' belongs to none of the methods in this run ({labels}); {parameters}"
+    )]
+    UnusedParameter {
+        setting: String,
+        labels: String,
+        parameters: String,
+    },
     #[error("{technique} needs a GPU and this run has none")]
     NeedsGpu { technique: &'static str },
     #[error("{technique}: bad parameter '{name}={value}': {reason}")]

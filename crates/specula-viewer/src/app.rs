@@ -56,7 +56,8 @@ impl Default for Settings {
 
 /// The latest technique frame's figures, for the panel.
 pub struct FrameStats {
-    pub method: &'static str,
+    /// The label drawn (METHOD or METHOD:PRESET).
+    pub method: String,
     pub width: u32,
     pub height: u32,
     pub total_ms: f64,
@@ -661,7 +662,7 @@ fn report_script_timing(state: &WindowState, script: &mut ScriptRun) {
             "step {}: {} frames of {} at {}x{} (technique at {}x{}): {:.1} fps; technique median {:.1} ms",
             index + 1,
             times.len(),
-            state.session.method().name,
+            state.session.label(),
             state.config.width,
             state.config.height,
             stats.map_or(0, |s| s.width),
@@ -758,7 +759,7 @@ fn render_technique(
     match state.session.render_technique(tw, th) {
         Ok(frame) => {
             state.ui.stats = Some(FrameStats {
-                method: state.session.method().name,
+                method: state.session.label().to_string(),
                 width: tw,
                 height: th,
                 total_ms: frame.total_milliseconds(),
@@ -1010,7 +1011,7 @@ impl WindowState {
         self.ui
             .stats
             .as_ref()
-            .filter(|s| s.method == self.session.method().name)
+            .filter(|s| s.method == self.session.label().to_string())
             .map(|s| (s.width, s.height))
     }
 }

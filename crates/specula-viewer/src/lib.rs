@@ -49,7 +49,7 @@ pub struct Options {
 /// Opens the window and runs until it is closed (or the script ends). A scene that fails to
 /// load opens the built-in default scene with the error shown (in script mode: the error).
 pub fn run(options: Options) -> Result<(), ViewerError> {
-    specula_methods::method(&options.method).map_err(SessionError::from)?;
+    specula_methods::Label::parse(&options.method).map_err(SessionError::from)?;
     let steps = options.script.as_deref().map(script::load).transpose()?;
     let (scene, source, message) = match specula_scene::load(&options.scene) {
         Ok(scene) => (scene, options.scene.clone(), None),

@@ -4,7 +4,7 @@
 
 use egui::{Color32, RichText};
 use glam::Vec3;
-use specula_methods::{ParamKind, ParamSpec, METHODS};
+use specula_methods::{ParamKind, ParamSpec};
 
 use crate::app::UiState;
 use crate::session::{Session, ViewMode};
@@ -126,21 +126,35 @@ fn scene_section(ui: &mut egui::Ui, session: &Session, state: &mut UiState) -> O
     load
 }
 
+/// A label's line: the method's summary, and the preset's with the settings it changes.
+fn summary(label: specula_methods::Label) -> String {
+    match label.preset {
+        Some(preset) => format!(
+            "{} Preset {}: {} ({})",
+            label.info.summary,
+            preset.name,
+            preset.summary,
+            preset.settings.join(", ")
+        ),
+        None => label.info.summary.to_string(),
+    }
+}
+
 fn technique_section(ui: &mut egui::Ui, session: &mut Session, state: &mut UiState) {
-    let current = session.method().name;
+    let current = session.label();
     ui.horizontal(|ui| {
         ui.label("technique");
         egui::ComboBox::from_id_salt("technique")
-            .selected_text(current)
+            .selected_text(current.to_string())
             .show_ui(ui, |ui| {
-                for m in METHODS {
+                for label in session.labels().to_vec() {
                     if ui
-                        .selectable_label(m.name == current, m.name)
-                        .on_hover_text(m.summary)
+                        .selectable_label(label == current, label.to_string())
+                        .on_hover_text(summary(label))
                         .clicked()
                     {
                         state.message = session
-                            .set_method(m.name)
+                            .set_method(&label.to_string())
                             .err()
                             .map(|e| (true, e.to_string()));
                         state.dirty = true;
@@ -148,7 +162,7 @@ fn technique_section(ui: &mut egui::Ui, session: &mut Session, state: &mut UiSta
                 }
             });
     });
-    ui.small(session.method().summary);
+    ui.small(summary(current));
     if let Some(failure) = &session.failure {
         ui.label(
             RichText::new(format!(
@@ -413,11 +427,7 @@ fn timing_section(ui: &mut egui::Ui, session: &Session, state: &UiState) {
         ui.label(format!("window: {:.1} ms per frame", last));
     }
     graph(ui, state);
-    ui.small(format!(
-        "{} on {}",
-        session.method().name,
-        session.ctx.describe()
-    ));
+    ui.small(format!("{} on {}", session.label(), session.ctx.describe()));
 }
 
 /// The last frames' times: window frame-to-frame (white) and technique (orange); the grey line

@@ -168,7 +168,7 @@ fn step(table: toml::Table) -> Result<Step, String> {
     let raw = RawStep::deserialize(toml::Value::Table(table))
         .map_err(|e| e.to_string().trim_end().replace('\n', " "))?;
     let step = if let Some(m) = raw.method {
-        specula_methods::method(&m).map_err(|e| e.to_string())?;
+        specula_methods::Label::parse(&m).map_err(|e| e.to_string())?;
         Step::Method(m)
     } else if let Some(r) = raw.reference {
         let info = specula_methods::method(&r).map_err(|e| e.to_string())?;

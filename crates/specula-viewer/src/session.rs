@@ -6,7 +6,7 @@
 use std::rc::Rc;
 
 use glam::Vec3;
-use specula_methods::{Context, Frame, LiveScene, MethodInfo, Technique, METHODS};
+use specula_methods::{Context, Frame, Label, LiveScene, MethodInfo, Technique};
 use specula_scene::Scene;
 use specula_trace::{Image, Ray};
 
@@ -79,7 +79,10 @@ pub struct Session {
     /// What the scene was loaded from: a built-in name or a file.
     pub source: String,
     pub camera: OrbitCamera,
-    /// One slot per entry of [`METHODS`].
+    /// What the picker offers: every method and each of its presets
+    /// ([`specula_methods::all_labels`]).
+    labels: Vec<Label>,
+    /// One slot per label.
     techniques: Vec<Option<Box<dyn Technique>>>,
     current: usize,
     reference: Box<dyn Technique>,
@@ -90,18 +93,26 @@ pub struct Session {
     pub failure: Option<String>,
 }
 
+/// Where the label `name` is among `labels` (an unknown method or preset names the valid
+/// ones).
+fn position_of(labels: &[Label], name: &str) -> Result<usize, SessionError> {
+    let label = Label::parse(name)?;
+    Ok(labels
+        .iter()
+        .position(|l| *l == label)
+        .expect("all_labels holds every label that parses"))
+}
+
 impl Session {
-    /// A session on `scene` showing `method`.
+    /// A session on `scene` showing `method` (a method's name, or METHOD:PRESET).
     pub fn new(
         ctx: Context,
         scene: Scene,
         source: &str,
         method: &str,
     ) -> Result<Session, SessionError> {
-        let current = METHODS
-            .iter()
-            .position(|m| m.name == method)
-            .ok_or_else(|| specula_methods::method(method).unwrap_err())?;
+        let labels = specula_methods::all_labels();
+        let current = position_of(&labels, method)?;
         let mut reference = (default_reference(&ctx).create)();
         set_budget(reference.as_mut(), REFERENCE_BUDGET_MS)?;
         let mut session = Session {
@@ -109,7 +120,8 @@ impl Session {
             camera: OrbitCamera::from_camera(&scene.camera),
             live: LiveScene::new(scene),
             source: source.to_string(),
-            techniques: METHODS.iter().map(|_| None).collect(),
+            techniques: labels.iter().map(|_| None).collect(),
+            labels,
             current,
             reference,
             view: ViewMode::Technique,
@@ -128,8 +140,19 @@ impl Session {
         &self.live
     }
 
+    /// The current technique's method.
     pub fn method(&self) -> &'static MethodInfo {
-        METHODS[self.current]
+        self.labels[self.current].info
+    }
+
+    /// The current technique's label: its method, or METHOD:PRESET.
+    pub fn label(&self) -> Label {
+        self.labels[self.current]
+    }
+
+    /// Every label the picker offers, in order.
+    pub fn labels(&self) -> &[Label] {
+        &self.labels
     }
 
     /// Replaces the scene by the one at `source` (built-in name or file); on error the current
@@ -153,19 +176,16 @@ impl Session {
             .position(|m| scene.materials[m.material].is_specular())
     }
 
-    /// Switches to the registered method `name`.
+    /// Switches to the label `name`: a registered method, or METHOD:PRESET.
     pub fn set_method(&mut self, name: &str) -> Result<(), SessionError> {
-        self.current = METHODS
-            .iter()
-            .position(|m| m.name == name)
-            .ok_or_else(|| specula_methods::method(name).unwrap_err())?;
+        self.current = position_of(&self.labels, name)?;
         self.failure = None;
         Ok(())
     }
 
-    /// The next (or previous) registered method.
+    /// The next (or previous) label.
     pub fn cycle_method(&mut self, step: isize) {
-        let n = METHODS.len() as isize;
+        let n = self.labels.len() as isize;
         self.current = (self.current as isize + step).rem_euclid(n) as usize;
         self.failure = None;
     }
@@ -201,7 +221,7 @@ impl Session {
     pub fn technique(&mut self) -> Result<&mut dyn Technique, SessionError> {
         let slot = &mut self.techniques[self.current];
         if slot.is_none() {
-            let mut technique = (METHODS[self.current].create)();
+            let mut technique = self.labels[self.current].create()?;
             set_budget(technique.as_mut(), REFERENCE_BUDGET_MS)?;
             *slot = Some(technique);
         }
@@ -447,6 +467,30 @@ mod tests {
         let restarted = session.render_technique(192, 144).unwrap();
         assert!(!restarted.converged);
         assert_eq!(counter(&restarted, "edges split"), 0);
+    }
+
+    #[test]
+    fn the_picker_offers_each_preset_and_its_instance_runs_the_preset() {
+        let mut session = cpu_session("reference");
+        let offered: Vec<String> = session.labels().iter().map(|l| l.to_string()).collect();
+        for name in specula_methods::registry::SEED_TECHNIQUES {
+            let plain = offered.iter().position(|l| l == name).unwrap();
+            assert_eq!(offered[plain + 1], format!("{name}:paper"), "beside {name}");
+        }
+        session.set_method("vertex-tracing:paper").unwrap();
+        assert_eq!(session.label().to_string(), "vertex-tracing:paper");
+        assert_eq!(session.technique().unwrap().parameter("tree_weight"), "0");
+        session.cycle_method(-1);
+        assert_eq!(session.label().to_string(), "vertex-tracing");
+        assert_eq!(
+            session.technique().unwrap().parameter("tree_weight"),
+            "0.02"
+        );
+        let unknown = session.set_method("vertex-tracing:fast").unwrap_err();
+        assert!(
+            unknown.to_string().contains("vertex-tracing:paper"),
+            "{unknown}"
+        );
     }
 
     #[test]
