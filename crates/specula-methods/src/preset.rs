@@ -248,12 +248,12 @@ impl Label {
     }
 }
 
+/// One technique of a run, under its label.
+pub type Instance = (Label, Box<dyn Technique>);
+
 /// The instances of a run: the settings checked ([`check_settings`]), then one technique per
 /// label with its preset and the settings that reach it.
-pub fn instances(
-    labels: &[Label],
-    settings: &[String],
-) -> Result<Vec<(Label, Box<dyn Technique>)>, TechniqueError> {
+pub fn instances(labels: &[Label], settings: &[String]) -> Result<Vec<Instance>, TechniqueError> {
     check_settings(labels, settings)?;
     labels
         .iter()
@@ -314,9 +314,7 @@ mod tests {
     #[test]
     fn settings_reach_instances_in_order_the_preset_first() {
         let labels = Label::parse_list(&["c3rc".into(), "c3rc:paper".into()]).unwrap();
-        let paper_value = |instances: &[(Label, Box<dyn Technique>)], i: usize| {
-            instances[i].1.parameter("trace_self")
-        };
+        let paper_value = |instances: &[Instance], i: usize| instances[i].1.parameter("trace_self");
         let run = instances(&labels, &[]).unwrap();
         assert_eq!(paper_value(&run, 0), "true");
         assert_eq!(paper_value(&run, 1), "false");

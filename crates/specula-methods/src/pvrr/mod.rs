@@ -9,88 +9,128 @@
 //!    solid at V, traced to where it leaves, refracted out — once per colour channel when the
 //!    material's three indices differ (chromatic aberration). The segment leaving the
 //!    reflector is traced to its nearest hit P (`rays`);
-//! 2. the reflector's visible triangles form patches (`view`): a patch's virtual viewpoint is
-//!    the point nearest, in the least-squares sense, to its vertices' exit lines,
-//!    (Σ (I − r rᵀ)) c = Σ (I − r rᵀ) o; its view volume looks along the mean exit direction,
-//!    near plane just in front of the reflector, far plane past every P and the whole scene,
-//!    sides containing every exit segment between the two. Of the up vectors — the world's, and the patch's two
-//!    principal curvature directions (§4.3) — the one giving the smallest cross-section wins,
-//!    which fits the volume to cylinders and saddles;
-//! 3. adaptive subdivision (§4.1, the paper's future work): a patch whose field of view
-//!    exceeds `max_fov`, or with a P at or behind its near plane, is split in two at its median
-//!    triangle centroid, until every patch is acceptable, is one triangle, or `max_patches` is
-//!    reached. Neighbouring patches share their boundary vertices, which show the same P in
-//!    both patches, so the images meet there exactly (§4.1's continuity);
+//! 2. the reflector's visible triangles form one patch (§3), or several (step 3): a patch's
+//!    virtual viewpoint is the point nearest, in the least-squares sense, to its vertices'
+//!    exit lines (§3.2), (Σ (I − r rᵀ)) c = Σ (I − r rᵀ) o; its view volume (§3.3, `view`)
+//!    looks along the mean exit direction, near plane just in front of the reflector, far
+//!    plane past every P and the whole scene, sides containing every exit segment between the
+//!    two (with a 2 % margin). Of the up vectors — the world's, and the patch's two principal
+//!    curvature directions (§4.3) — the one giving the smallest cross-section wins, which fits
+//!    the volume to cylinders and saddles;
+//! 3. adaptive subdivision, beyond the paper (below);
 //! 4. 1st pass: per patch, the scene without the reflector is rasterised from the virtual
 //!    viewpoint into a reflection map. With `depth` ≥ 2 the other reflectors in that map are
 //!    themselves drawn by pvrr from the virtual viewpoint, recursively (§4.4, multiple
 //!    reflection);
-//! 5. each vertex's texture coordinate is the projection of its P into its patch's map;
+//! 5. each vertex's texture coordinate is where the line from its patch's viewpoint through
+//!    its P meets the patch's map (§3.1, steps 3.2–3.4);
 //! 6. 2nd pass: the reflector's patches are drawn over the scene raster with those coordinates,
 //!    so every vertex shows exactly its ray-traced P: a mirror times its Fresnel term (Schlick
 //!    or F0), a lens times the exact Fresnel transmittance along the path; for three indices,
-//!    three draws with red, green and blue colour masks share one 1st pass.
+//!    three draws with red, green and blue colour masks share one 1st pass (§4.5, Figure 15).
 //!
-//! Beyond the paper: a solid dielectric is three reflectors, drawn one over the other (float
-//! blending; on a device without it only the first): its transmitted light; its surface
-//! reflection, a mirror whose per-vertex weight is the exact Fresnel reflectance (a thin
-//! sheet's 2R / (1 + R)); and the light reflected once inside it (refracted in, reflected
-//! with weight R where it first meets the surface again, then out as the first). The paper's
-//! lens leaves both out; the reference has them (on the suite's glass sphere they took pvrr's
-//! mean FLIP from 0.343 to 0.252). Each costs its own patches and 1st passes; inside another
-//! reflector's map (depth ≥ 2) a dielectric shows its transmitted light only.
+//! Beyond the paper (each switched off by the `paper` preset; `specula methods` lists it):
+//! - adaptive subdivision (step 3; §4.1 leaves it to future work): a patch whose field of view
+//!   exceeds `max_fov`, or with a P at or behind its near plane, is split in two at its median
+//!   triangle centroid, until every patch is acceptable, is one triangle, or `max_patches` is
+//!   reached. Neighbouring patches share their boundary vertices, which show the same P in
+//!   both patches, so the images meet there (§4.1's continuity). Patches share the reflector's
+//!   map height by solid angle, and a level below the top shares `max_patches` across the
+//!   patches of the level above. The paper renders one view per reflector
+//!   ("only once for a reflector object on the 1st pass", §3.2); its divided mirror of
+//!   Figure 7 is two meshes, which here are two reflectors too (paper: `max_patches=1`);
+//! - the zooming region ray traced (§4.2): a vertex whose P lies behind its patch's viewpoint
+//!   (between a concave mirror and its rays' convergence, or between a magnifier and the point
+//!   its rays converge on) takes the radiance ray traced along its exit segment (up to 8
+//!   bounces, as the reference), blended across its triangles by the share of such corners.
+//!   The paper "simply ignore[s]" that region: such a vertex keeps the texture coordinate of
+//!   step 5, where its line through the viewpoint meets the map on the far side of the map's
+//!   centre, and shows what the map holds there (paper: `trace_zooming=false`). Either way
+//!   these vertices are counted (`unresolved vertices`), named in a warning, and striped
+//!   magenta with `markers=true`;
+//! - a dielectric's surface reflection: a mirror drawn over its transmitted light (float
+//!   blending; on a device without it, left out) whose per-vertex weight is the exact Fresnel
+//!   reflectance (a thin sheet's 2R / (1 + R)), with patches and 1st passes of its own. The
+//!   paper's lens shows its transmitted light only (§4.5) (paper: `surface_reflection=false`);
+//! - the light reflected once inside a solid dielectric: refracted in, reflected with weight R
+//!   where it first meets the surface again, refracted out where it meets it next; drawn as
+//!   the surface reflection is (on the suite's glass sphere the two took pvrr's mean FLIP from
+//!   0.343 to 0.252). Inside another reflector's map (depth ≥ 2) a dielectric shows its
+//!   transmitted light only (paper: `internal_reflection=false`).
+//!
+//! Where the paper is silent, this implementation chooses (the `paper` preset keeps these):
+//! the vertices that shape a view are those the eye sees (the paper's lens rays start at its
+//! front face, §4.5); a reflector is hidden from its own maps (the paper's near plane excludes
+//! its open mirror, §3.3; a solid's far side can reach past that plane); an exit segment that
+//! leaves the scene puts its P 4 scene radii along it; inside a solid a path follows total
+//! internal reflection until it leaves (the paper refracts twice and says nothing of it;
+//! following it keeps each vertex's path exact, the paper's premise); when a patch's exit
+//! lines are (nearly) parallel no least-squares viewpoint exists, and the view looks along
+//! their mean direction from 10 patch radii behind it, with a warning; a view volume is at
+//! most 2 atan 50 ≈ 177.7° wide (a P beyond shows the map's edge); the up vector is the
+//! candidate with the smallest cross-section, §4.3's aim (the aspect ratio "optimized for the
+//! reflection ray distribution") made a rule, as §3.3 names no up vector; the 2nd pass's
+//! weights are the scene material's (the paper names none; every specula method shades the
+//! scene's materials so, which the reference does too).
 //!
 //! Approximations and artifacts: between vertices the map is warped linearly, so error grows
 //! with triangle size and curvature and falls as the mesh is refined (a reflector with fewer
 //! than 9 visible vertices raises a warning); objects hidden from the virtual viewpoint but
 //! seen along some exit ray, or the reverse, show the wrong surface (the occlusion
 //! inconsistency of §6); a reflector does not appear in its own map (no self-reflection); a
-//! lens follows three paths (above); light reflected twice or more inside it is missing. Every
-//! path is sampled at the vertices: a solid meshed only at its rim (a box-shaped pane, whose
-//! every vertex is a corner) sends each vertex's path through the rim's edge faces, and the
-//! interior of its faces shows those wrong paths. In multiple reflection,
-//! the inner reflector's rays start at the outer one's virtual viewpoint, not at the exact
-//! bounce points.
+//! lens follows up to three paths (above; one in the paper), and light reflected twice or more
+//! inside it is missing. Every path is sampled at the vertices: a solid meshed only at its rim
+//! (a box-shaped pane, whose every vertex is a corner) sends each vertex's path through the
+//! rim's edge faces, and the interior of its faces shows those wrong paths. In multiple
+//! reflection, the inner reflector's rays start at the outer one's virtual viewpoint, not at
+//! the exact bounce points. A reflector whose exit directions spread widely (a whole sphere, a
+//! teapot) gets a wide, distorted map from one view (§4.1's reason for subdividing): with
+//! `max_patches=1` its image degrades, more of its P fall behind the viewpoint, and where a
+//! P lies before the near plane far off the view's axis the map shows what lies beyond that
+//! plane there (on the suite's mirror sphere, a ring of the black background: the viewpoint
+//! lies inside the sphere, and at wide angles the room lies wholly before the near plane).
 //!
 //! Concave mirrors (§4.2) go through the same construction: the viewpoint lands near the
 //! convergence point with the mirror behind it and the map comes out reversed (Figure 8).
 //! The "zooming region" — P between the mirror and the convergence point, so behind the
 //! viewpoint — cannot be shown by any forward view: subdivision first tries smaller patches,
-//! and vertices still unresolved take the radiance ray traced along their exit segment (up to
-//! 8 bounces, as the reference), blended across their triangles by the share of such
-//! corners; they are counted (`unresolved vertices`), named in a warning, and striped magenta
-//! with `markers=true`. A converging lens before a near wall (a magnifier) is the same case:
-//! its rays converge behind the wall.
-//!
-//! When a patch's exit lines are (nearly) parallel no least-squares viewpoint exists: the view
-//! then looks along their mean direction from 10 patch radii behind it, with a warning.
+//! then `trace_zooming` (above). A converging lens before a near wall (a magnifier) is the
+//! same case: its rays converge behind the wall.
 //!
 //! Cached mode (§5): with `cached=true` a reflector's exit segments, patches and viewpoints are
 //! kept in the eye's frame and reused while the reflector's vertices do not move relative to
 //! the eye (a spectacle lens worn, a door mirror seen by the driver), also across `prepare`
 //! of a moved scene; only the exit segments' hits P, the view volumes and the two passes are
-//! redone.
+//! redone. Changing `max_fov` or `max_patches` empties the cache.
 //!
-//! Nothing is allocated per frame once the frame's shape is known: maps come from the raster
-//! pass's G-buffer pool, 2nd-pass vertices and uniforms from arenas written in place
-//! ([`specula_gpu::arena`]), bind groups are kept per map slot.
+//! Implementation (changes no pixel): the per-vertex rays run in parallel; nothing is allocated
+//! per frame once the frame's shape is known: maps come from the raster pass's G-buffer pool,
+//! 2nd-pass vertices and uniforms from arenas written in place ([`specula_gpu::arena`]), bind
+//! groups are kept per map slot.
 //!
 //! Parameters:
-//! - `resolution` (default 512): reflection-map height in texels of an undivided reflector
-//!   (the width follows the view volume's aspect ratio); patches share it in proportion to
-//!   the solid angle each covers (height × √share, at least 16). Higher sharpens the
-//!   reflection between vertices; costs rasterising about that many texels per frame.
+//! - `resolution` (default 512; the paper states none): reflection-map height in texels of an
+//!   undivided reflector (the width follows the view volume's aspect ratio); patches share it
+//!   in proportion to the solid angle each covers (height × √share, at least 16). Higher
+//!   sharpens the reflection between vertices; costs rasterising about that many texels per
+//!   frame.
 //! - `shadow_resolution` (default 1024): shadow maps of the scene raster (see `raster`).
-//! - `max_fov` (default 90, degrees): the widest view volume a patch may keep. Lower gives
-//!   more, less distorted maps (more 1st passes).
-//! - `max_patches` (default 256): the most patches per reflector; each costs a 1st pass. A
-//!   level below the top shares this budget across all the patches of the level above (each
-//!   of N outer patches plans at most max(1, `max_patches` / N) per inner reflector), so the
-//!   1st passes of a frame stay within `max_patches` × reflectors per level.
-//! - `depth` (default 2): reflectors seen in reflectors, levels deep (1: other reflectors
-//!   appear in maps as the scene raster draws them). Each level adds at most `max_patches` 1st
-//!   passes per reflector it shows; inner reflections get coarser patches as outer ones get
-//!   finer.
+//! - `max_fov` (default 90, degrees): the widest view volume a patch may keep (subdivision
+//!   only). Lower gives more, less distorted maps (more 1st passes).
+//! - `max_patches` (default 256; 1 is the paper's one view per reflector): the most patches
+//!   per reflector; each costs a 1st pass. A level below the top shares this budget across all
+//!   the patches of the level above (each of N outer patches plans at most
+//!   max(1, `max_patches` / N) per inner reflector), so the 1st passes of a frame stay within
+//!   `max_patches` × reflectors per level.
+//! - `depth` (default 2, the paper's multiple reflection: §4.4's Figure 11 shows the
+//!   background in the car's side windows in the door mirror): reflectors seen in reflectors,
+//!   levels deep (1: other reflectors appear in maps as the scene raster draws them). Each
+//!   level adds at most `max_patches` 1st passes per reflector it shows; inner reflections get
+//!   coarser patches as outer ones get finer.
+//! - `trace_zooming` (default true): the zooming region ray traced (above); costs a traced
+//!   path per unresolved vertex.
+//! - `surface_reflection`, `internal_reflection` (default true): a dielectric's reflections
+//!   (above); each costs its own per-vertex rays, patches and 1st passes.
 //! - `ior` (default `material`): the dielectric's indices; one value, or three (red, green,
 //!   blue; the paper's Figure 15 uses 1.60,1.61,1.62), overrides the material's.
 //! - `cached` (default false): the cached mode above.
@@ -147,18 +187,40 @@ pub const PARAMS: &[ParamSpec] = &[
         invalidates: Invalidates::Uniform,
     },
     raster::SHADOW_RESOLUTION,
+    // Both shape the patches, which the cached mode keeps: changing them clears the cache.
     ParamSpec {
         name: "max_fov",
         kind: ParamKind::Number { min: 1.0, max: 170.0 },
         default: "90",
         doc: "widest view volume a patch may keep, degrees; lower: more, less distorted maps",
-        invalidates: Invalidates::Uniform,
+        invalidates: Invalidates::Resources,
     },
     ParamSpec {
         name: "max_patches",
         kind: ParamKind::Integer { min: 1, max: 4096 },
         default: "256",
-        doc: "most patches per reflector; each costs a 1st pass",
+        doc: "most patches per reflector (1: the paper's one view per reflector); each costs a 1st pass",
+        invalidates: Invalidates::Resources,
+    },
+    ParamSpec {
+        name: "trace_zooming",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "ray trace the vertices whose hit lies behind their patch's viewpoint (zooming region); false: the map where their line through the viewpoint meets it, as the paper's algorithm",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "surface_reflection",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "add a dielectric's surface reflection (the paper's lens shows transmitted light only)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "internal_reflection",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "add the light reflected once inside a solid dielectric (the paper's lens shows transmitted light only)",
         invalidates: Invalidates::Uniform,
     },
     ParamSpec {
@@ -209,7 +271,16 @@ pub const INFO: MethodInfo = MethodInfo {
     progressive: false,
     delegates: &[],
     params: PARAMS,
-    presets: &[],
+    presets: &[crate::preset::Preset {
+        name: "paper",
+        summary: "the published algorithm (Kakimoto, Tatsukawa, Chun, Nishita): one view per reflector, the zooming region as projected, a lens's transmitted light only",
+        settings: &[
+            "max_patches=1",
+            "trace_zooming=false",
+            "surface_reflection=false",
+            "internal_reflection=false",
+        ],
+    }],
     create: || Box::new(Pvrr::default()),
 };
 
@@ -230,7 +301,9 @@ pub struct GpuMirrorMaterial {
     pub f0: [f32; 3],
     pub fresnel: u32,
     pub stripes: u32,
-    pub pad: [u32; 3],
+    /// 1: blend in the ray-traced radiance of the zooming region's vertices (`trace_zooming`).
+    pub blend_traced: u32,
+    pub pad: [u32; 2],
 }
 
 /// One corner of a reflector triangle for the 2nd pass.
@@ -244,14 +317,25 @@ struct MirrorVertex {
     weight: f32,
     /// 1 where the vertex's P could not be placed in its patch's map (zooming region).
     unresolved: f32,
-    /// An unresolved vertex's radiance, ray traced along its exit segment (0 elsewhere).
+    /// An unresolved vertex's radiance, ray traced along its exit segment (0 elsewhere, and
+    /// everywhere without `trace_zooming`).
     traced: [f32; 3],
 }
 
-/// Texture coordinate ((0, 0) = top-left) of `p` in the map rendered with `view`.
-pub fn map_uv(view: &CameraUniform, p: Vec3) -> [f32; 2] {
+/// Texture coordinate ((0, 0) = top-left) of `p` in the map rendered with `view`: where the
+/// line from the map's viewpoint through `p` meets the map's plane (§3.1, step 3.3). A `p`
+/// behind the viewpoint (the zooming region) meets it beyond the viewpoint, on the far side of
+/// the map's centre; with `mirror_behind` such a `p` is first mirrored to the front of the
+/// viewpoint's plane instead, which is where `trace_zooming` looks the map up for its blend
+/// between a resolved and an unresolved corner.
+pub fn map_uv(view: &CameraUniform, p: Vec3, mirror_behind: bool) -> [f32; 2] {
     let clip = glam::Mat4::from_cols_array_2d(&view.clip_from_world) * Vec4::from((p, 1.0));
-    let ndc = clip.truncate() / clip.w.abs().max(1e-20);
+    let w = if mirror_behind || clip.w >= 0.0 {
+        clip.w.abs().max(1e-20)
+    } else {
+        clip.w.min(-1e-20)
+    };
+    let ndc = clip.truncate() / w;
     [ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5]
 }
 
@@ -391,6 +475,9 @@ pub struct Pvrr {
     pub max_fov_deg: f32,
     pub max_patches: usize,
     pub depth: u32,
+    pub trace_zooming: bool,
+    pub surface_reflection: bool,
+    pub internal_reflection: bool,
     pub ior: Option<Vec3>,
     pub cached: bool,
     pub markers: bool,
@@ -408,6 +495,9 @@ impl Default for Pvrr {
             max_fov_deg: 90.0,
             max_patches: 256,
             depth: 2,
+            trace_zooming: true,
+            surface_reflection: true,
+            internal_reflection: true,
             ior: None,
             cached: false,
             markers: false,
@@ -538,12 +628,15 @@ struct LevelPlan {
     balls: Vec<Ball>,
 }
 
-/// The settings steps 1–3 need.
+/// The settings steps 1–3 and 5 need.
 struct PlanSettings {
     resolution: u32,
     limits: PatchLimits,
     /// Marker radius as a fraction of its distance from the reflector; None: no markers.
     markers: Option<f32>,
+    trace_zooming: bool,
+    surface_reflection: bool,
+    internal_reflection: bool,
 }
 
 /// Approximate solid angle of `triangles` of `mesh` seen from `eye`.
@@ -574,9 +667,15 @@ fn plan_level(
 ) -> LevelPlan {
     let mut plan = LevelPlan::default();
     for (index, reflector) in p.reflectors.iter().enumerate() {
+        let switched_off = match reflector.interaction {
+            Interaction::SurfaceReflect { .. } => !settings.surface_reflection,
+            Interaction::InternalReflect { .. } => !settings.internal_reflection,
+            _ => false,
+        };
         // Inside another reflector's map, a dielectric shows its transmitted light only: its
         // reflections (a few per cent of it) would triple the nested levels' 1st passes.
-        if Some(reflector.mesh) == hidden || (reflector.additive && !top) {
+        let nested_reflection = reflector.additive && !top;
+        if Some(reflector.mesh) == hidden || nested_reflection || switched_off {
             continue;
         }
         let slot = cache.as_mut().map(|(slots, frame)| {
@@ -668,13 +767,17 @@ fn plan_reflector(
         }
     };
     let unresolved = unresolved_vertices(m, &paths.visible, &hits, &patches);
-    let traced = trace_unresolved(p, scene, m, &paths, &unresolved);
-    tally.rays += unresolved.iter().filter(|&&u| u).count() as u64 * traced.len() as u64;
+    let traced = settings
+        .trace_zooming
+        .then(|| trace_unresolved(p, scene, m, &paths, &unresolved));
+    if let Some(traced) = &traced {
+        tally.rays += unresolved.iter().filter(|&&u| u).count() as u64 * traced.len() as u64;
+    }
     let vertices = ReflectorVertices {
         mesh: m,
         paths: &paths,
         hits: &hits,
-        traced: &traced,
+        traced: traced.as_deref(),
         unresolved: &unresolved,
     };
     let draws = patch_draws(&vertices, &patches, settings.resolution, eye, tally);
@@ -684,7 +787,7 @@ fn plan_reflector(
     tally.unresolved += unresolved as u64;
     if top {
         let visible = paths.visible.iter().filter(|&&v| v).count();
-        report(tally, m, visible, unresolved, &patches, &settings.limits);
+        report(tally, m, visible, unresolved, &patches, settings);
     }
     if let Some(size) = settings.markers {
         for (c, (channel, h)) in paths.channels.iter().zip(&hits).enumerate() {
@@ -702,6 +805,7 @@ fn plan_reflector(
         mesh,
         material: GpuMirrorMaterial {
             stripes: settings.markers.is_some() as u32,
+            blend_traced: settings.trace_zooming as u32,
             ..reflector.material
         },
         additive: reflector.additive,
@@ -762,8 +866,9 @@ fn cache_entry(
     }
 }
 
-/// The vertices whose P lies behind some patch's viewpoint (the zooming region): they take
-/// the radiance ray traced along their exit segment instead of the map's, per channel.
+/// The vertices whose P lies behind some patch's viewpoint (the zooming region): with
+/// `trace_zooming` they take the radiance ray traced along their exit segment instead of the
+/// map's, per channel.
 fn unresolved_vertices(
     m: &specula_scene::Mesh,
     visible: &[bool],
@@ -827,8 +932,8 @@ struct ReflectorVertices<'a> {
     paths: &'a MeshPaths,
     /// Per channel, where each vertex's exit segment hits the scene (P).
     hits: &'a [Vec<Vec3>],
-    /// Per channel, the radiance traced for each unresolved vertex.
-    traced: &'a [Vec<Vec3>],
+    /// Per channel, the radiance traced for each unresolved vertex (`trace_zooming`).
+    traced: Option<&'a [Vec<Vec3>]>,
     unresolved: &'a [bool],
 }
 
@@ -862,21 +967,22 @@ fn patch_draws(
                 .channels
                 .iter()
                 .zip(vertices.hits)
-                .zip(vertices.traced)
-                .map(|((channel, h), traced)| {
+                .enumerate()
+                .map(|(c, (channel, h))| {
                     patch
                         .triangles
                         .iter()
                         .flat_map(|&t| m.triangles[t as usize])
                         .map(|i| {
                             let i = i as usize;
+                            let traced = vertices.traced.map_or(Vec3::ZERO, |t| t[c][i]);
                             MirrorVertex {
                                 position: m.positions[i].to_array(),
                                 normal: m.normals[i].to_array(),
-                                uv: map_uv(&camera, h[i]),
+                                uv: map_uv(&camera, h[i], vertices.traced.is_some()),
                                 weight: channel.weights[i],
                                 unresolved: vertices.unresolved[i] as u32 as f32,
-                                traced: traced[i].to_array(),
+                                traced: traced.to_array(),
                             }
                         })
                         .collect()
@@ -894,8 +1000,9 @@ fn report(
     visible: usize,
     unresolved: usize,
     patches: &[Patch],
-    limits: &PatchLimits,
+    settings: &PlanSettings,
 ) {
+    let limits = &settings.limits;
     if let Some(fallback) = patches.iter().find_map(|p| p.fallback.clone()) {
         tally.warnings.push(fallback);
     }
@@ -906,8 +1013,13 @@ fn report(
         ));
     }
     if unresolved > 0 {
+        let shown = if settings.trace_zooming {
+            "they show their ray-traced radiance instead"
+        } else {
+            "they show the map where their line through the viewpoint meets it, as the paper's algorithm does (trace_zooming=false)"
+        };
         tally.warnings.push(format!(
-            "pvrr: mirror '{}': {unresolved} vertices see a point between the surface and their rays' convergence (a concave mirror's zooming region), which no forward view shows; they show their ray-traced radiance instead (striped magenta with markers=true)",
+            "pvrr: mirror '{}': {unresolved} vertices see a point between the surface and their rays' convergence (a concave mirror's zooming region), which no forward view shows; {shown} (striped magenta with markers=true)",
             mesh.name
         ));
     }
@@ -1099,12 +1211,11 @@ fn render_maps(
         .map(|r| r.patches.len())
         .sum::<usize>();
     let inner_settings = PlanSettings {
-        resolution: settings.resolution,
         limits: PatchLimits {
             max_patches: (settings.limits.max_patches / patches_here.max(1)).max(1),
             ..settings.limits
         },
-        markers: settings.markers,
+        ..*settings
     };
     plan.reflectors
         .iter()
@@ -1273,6 +1384,9 @@ impl Technique for Pvrr {
             "max_fov" => self.max_fov_deg.to_string(),
             "max_patches" => self.max_patches.to_string(),
             "depth" => self.depth.to_string(),
+            "trace_zooming" => self.trace_zooming.to_string(),
+            "surface_reflection" => self.surface_reflection.to_string(),
+            "internal_reflection" => self.internal_reflection.to_string(),
             "ior" => match self.ior {
                 None => "material".to_string(),
                 Some(i) => format!("{},{},{}", i.x, i.y, i.z),
@@ -1294,6 +1408,9 @@ impl Technique for Pvrr {
             "max_fov" => self.max_fov_deg = value.number() as f32,
             "max_patches" => self.max_patches = value.integer() as usize,
             "depth" => self.depth = value.integer() as u32,
+            "trace_zooming" => self.trace_zooming = value.flag(),
+            "surface_reflection" => self.surface_reflection = value.flag(),
+            "internal_reflection" => self.internal_reflection = value.flag(),
             "ior" => {
                 self.ior = parse_ior(value.word())
                     .map_err(|reason| bad_value(INFO.name, name, value, reason))?
@@ -1351,6 +1468,9 @@ impl Technique for Pvrr {
                 max_patches: self.max_patches,
             },
             markers: self.markers.then_some(self.marker_size),
+            trace_zooming: self.trace_zooming,
+            surface_reflection: self.surface_reflection,
+            internal_reflection: self.internal_reflection,
         };
         let frame = camera.frame();
         let eye_frame = EyeFrame {

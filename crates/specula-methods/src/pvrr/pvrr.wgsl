@@ -7,6 +7,9 @@ struct MirrorMaterial {
     fresnel: u32,
     // 1: stripe the pixels of unresolved vertices magenta (the markers overlay).
     stripes: u32,
+    // 1: blend in the unresolved vertices' ray-traced radiance (trace_zooming); 0: they show
+    // the map where their texture coordinates put them, as the paper's algorithm does.
+    blend_traced: u32,
 };
 
 @group(0) @binding(0) var<uniform> camera: Camera;
@@ -75,14 +78,18 @@ fn fs_mirror(in: VertexOut) -> @location(0) vec4<f32> {
         f = fresnel_schlick(mirror.f0, -dot(d, n));
     }
     // Where a vertex's hit is one the map cannot show (zooming region), its ray-traced
-    // radiance is blended in, by the interpolated share of such vertices; the markers overlay
-    // stripes those pixels magenta.
+    // radiance is blended in (trace_zooming), by the interpolated share of such vertices; the
+    // markers overlay stripes those pixels magenta.
     if (in.unresolved > 0.0 && mirror.stripes != 0u) {
         let stripe = (i32(floor((in.clip.x + in.clip.y) / 6.0)) & 1) == 0;
         if (stripe) {
             return vec4<f32>(1.0, 0.0, 1.0, 1.0);
         }
     }
-    let seen = mix(sample_map(in.uv), in.traced, clamp(in.unresolved, 0.0, 1.0));
+    var traced_share = 0.0;
+    if (mirror.blend_traced != 0u) {
+        traced_share = clamp(in.unresolved, 0.0, 1.0);
+    }
+    let seen = mix(sample_map(in.uv), in.traced, traced_share);
     return vec4<f32>(in.weight * f * seen, 1.0);
 }

@@ -1,5 +1,6 @@
 //! Steps 2–3 of pvrr: virtual viewpoints and view volumes, one per patch of a reflector, with
-//! the adaptive subdivision of §4.1 and the principal-curvature up vector of §4.3.
+//! the principal-curvature up vector of §4.3 and the adaptive subdivision that §4.1 leaves to
+//! future work (`max_patches=1`: one patch, as the paper).
 
 use glam::{Mat3, Vec3};
 use specula_gpu::shaders::CameraUniform;
@@ -327,9 +328,10 @@ impl PatchInput<'_> {
         )
     }
 
-    /// §4.1's adaptive subdivision: the reflector's triangles that the eye can see are split in
-    /// halves (at the median centroid along the longest axis) until each patch's view volume
-    /// is under the field-of-view limit with every hit in front of its near plane. Adjacent
+    /// The adaptive subdivision §4.1 sketches: the reflector's triangles that the eye can see
+    /// are split in halves (at the median centroid along the longest axis) until each patch's
+    /// view volume is under the field-of-view limit with every hit in front of its near plane
+    /// (or `max_patches` is reached; 1: the whole reflector, the paper's one view). Adjacent
     /// patches share their boundary vertices, whose hit points P are the same in both, so the
     /// images meet there exactly.
     pub fn patches(&self, limits: &PatchLimits) -> Vec<Patch> {
