@@ -150,6 +150,12 @@ fn a_point_seen_twice_through_one_triangle_is_splatted_where_its_rays_show_it() 
             split_pixels: 0,
             trace_self: true,
             level_of_detail: false,
+            conservative_culling: true,
+            one_sided: true,
+            multiple_projections: true,
+            fixed_splat: 0.0,
+            depth_band: true,
+            fill_holes: true,
             splat_scale: 1.0,
             max_splat: 3.0,
             max_depth: 4,
@@ -484,4 +490,90 @@ fn the_gpu_forward_phase_follows_a_larger_frame() {
         .filter(|(a, b)| (**a - **b).abs().max_element() > 1e-4)
         .count();
     assert_eq!(differing, 0, "a grown frame draws as a fresh one");
+}
+
+#[test]
+fn the_paper_preset_gives_every_visible_triangle_a_camera_and_draws_alike_on_cpu_and_gpu() {
+    let Some(ctx) = specula_methods::test_context("c3rc paper preset") else {
+        return;
+    };
+    let scene = specula_scene::load("mirror-teapot-bunny").unwrap();
+    let live = LiveScene::new(scene.clone());
+    let (width, height) = (96, 72);
+    let render = |label: &str, settings: &[&str]| {
+        let mut technique = specula_methods::Label::parse(label)
+            .unwrap()
+            .create()
+            .unwrap();
+        let mut all = vec!["points=30000".to_string()];
+        all.extend(settings.iter().map(|s| s.to_string()));
+        apply_parameters(technique.as_mut(), &all).unwrap();
+        technique
+            .render(&ctx, &live, &scene.camera, width, height)
+            .unwrap();
+        let frame = technique
+            .render(&ctx, &live, &scene.camera, width, height)
+            .unwrap();
+        let image = frame.image(&ctx).unwrap();
+        assert!(image.pixels.iter().all(|p| p.is_finite()), "{label}");
+        (frame, image)
+    };
+    let (defaults, default_image) = render("c3rc", &["projection=cpu"]);
+    let (paper, cpu) = render("c3rc:paper", &["projection=cpu"]);
+    let c = |frame: &specula_methods::Frame, name| counter(frame, name);
+    eprintln!(
+        "defaults: {:?}\npaper: {:?}",
+        defaults.counters, paper.counters
+    );
+    // The defaults give small triangles the per-vertex colour and trace those that see their
+    // own mirror; the paper gives each of them a camera too (no triangle is split).
+    let small = c(&defaults, "small triangles (per-vertex colour)");
+    let self_seeing = c(
+        &defaults,
+        "triangles that see their own mirror (traced per pixel)",
+    );
+    assert!(small > 0 && self_seeing > 0);
+    assert_eq!(
+        c(&paper, "cameras (C3RCs)"),
+        c(&defaults, "cameras (C3RCs)") + small + self_seeing
+    );
+    for name in [
+        "small triangles (per-vertex colour)",
+        "triangles that see their own mirror (traced per pixel)",
+        "one-pixel holes filled",
+        "points skipped by level of detail",
+        "points with several projections in one camera",
+    ] {
+        assert_eq!(c(&paper, name), 0, "{name}");
+    }
+    assert!(c(&defaults, "one-pixel holes filled") > 0);
+    assert!(c(&defaults, "points skipped by level of detail") > 0);
+    let differing = |a: &specula_trace::Image, b: &specula_trace::Image| {
+        a.pixels
+            .iter()
+            .zip(&b.pixels)
+            .filter(|(p, q)| (**p - **q).abs().max_element() > 0.02)
+            .count()
+    };
+    assert!(
+        differing(&default_image, &cpu) > 100,
+        "the switched-off steps change the mirror"
+    );
+    // The GPU's passes follow the same switches (fixed splats, no depth band, one projection
+    // each, both sides, no hole filling): the same picture up to f32 rounding.
+    let (paper_gpu, gpu) = render("c3rc:paper", &["projection=gpu"]);
+    let share = differing(&cpu, &gpu) as f64 / cpu.pixels.len() as f64;
+    let (cv, gv) = (
+        c(&paper, "valid projections") as f64,
+        c(&paper_gpu, "valid projections") as f64,
+    );
+    eprintln!(
+        "paper preset, cpu against gpu: {:.3} % of the pixels differ; valid projections {cv} and {gv}",
+        100.0 * share
+    );
+    assert!(share < 0.002, "{share}");
+    assert!(
+        (cv - gv).abs() <= 2e-4 * cv,
+        "valid projections {cv} vs {gv}"
+    );
 }

@@ -336,6 +336,46 @@ fn the_box_test_culls_boxes_far_from_the_volume() {
 }
 
 #[test]
+fn the_papers_box_test_keeps_boxes_a_narrow_volume_passes_through_and_misses_a_straddling_one() {
+    let c = camera(0.2, 0.0);
+    let kept_by_both = |lo: DVec3, hi: DVec3| {
+        c.corner_inside_or_face_meets_wall(lo, hi) && c.may_see_box(lo, hi, &[])
+    };
+    // The volume (a prism over the base) passes through a large box from one face to the
+    // opposite one: no wall crosses a box edge and no corner is inside, but the walls' arcs lie
+    // inside the faces (condition 2 of §5.2).
+    assert!(kept_by_both(
+        DVec3::new(-1.0, -1.0, 2.0),
+        DVec3::new(2.0, 2.0, 3.0)
+    ));
+    // A box that straddles the base's inside, with its tested corner (`lo`) behind the base:
+    // the paper's conditions cull it, the conservative test keeps it.
+    let (lo, hi) = (DVec3::new(0.2, 0.2, -0.1), DVec3::new(0.3, 0.3, 0.1));
+    assert!(
+        c.contains(DVec3::new(0.25, 0.25, 0.05)),
+        "the box holds a visible point"
+    );
+    assert!(!c.corner_inside_or_face_meets_wall(lo, hi));
+    assert!(c.may_see_box(lo, hi, &[]));
+}
+
+proptest! {
+    /// The paper's test keeps no box the conservative test culls: the conservative one only adds.
+    #[test]
+    fn the_conservative_box_test_keeps_every_box_the_papers_keeps(
+        c in arbitrary_camera(),
+        lo in prop::array::uniform3(-3.0f64..3.0),
+        size in prop::array::uniform3(0.01f64..2.0),
+    ) {
+        let lo = DVec3::from_array(lo);
+        let hi = lo + DVec3::from_array(size);
+        if c.corner_inside_or_face_meets_wall(lo, hi) {
+            prop_assert!(c.may_see_box(lo, hi, &c.fold_boxes(&c.multiple_projection_intervals(), c.lambda_bound(lo, hi))));
+        }
+    }
+}
+
+#[test]
 fn the_eight_way_tree_holds_every_point_once_within_its_boxes() {
     let mesh = specula_scene::generators::sphere(1.0, 64, 32);
     let limits = TreeLimits {

@@ -12,11 +12,13 @@
 //!   a construction ray to have crossed the plane of `T(λ)`; ray i lies in that plane where
 //!   `n(λ) · d_i = 0`, a quadratic. [`C3rc::multiple_projection_intervals`] gives the λ
 //!   intervals where the rays are not all on one side.
-//! - Box–view-volume intersection (§5.2), conservative: a box is kept if one of its corners has
-//!   a valid projection (the box may be inside), if a side wall crosses one of its 12 edges
-//!   (the paper's arcs p(α) against each face's frame, solved as one quadratic per wall and
-//!   edge), and — the cases the paper's two conditions miss, where a wall's arc lies inside one
-//!   face — if a construction ray (an arc's end point) or the base triangle meets the box.
+//! - Box–view-volume intersection (§5.2): the paper's two conditions
+//!   ([`C3rc::corner_inside_or_face_meets_wall`]): a box is kept if one of its corners has a
+//!   valid projection (the box may be inside) or a face meets a side wall: a wall crosses one
+//!   of its 12 edges (the paper's arcs p(α) against each face's frame, solved as one quadratic
+//!   per wall and edge), or an arc ends inside a face (a construction ray or a base edge meets
+//!   the box). Conservative ([`C3rc::may_see_box`]): also where the base triangle's inside meets
+//!   the box, and around folds, the cases the two conditions miss.
 //!
 //! All arithmetic is in f64: the cubic's coefficients are differences of triple products of
 //! nearly parallel vectors for small reflector triangles.
@@ -393,14 +395,31 @@ impl C3rc {
     /// box `[lo, hi]` holds no point of the view volume. `folds` are this camera's
     /// [`C3rc::fold_boxes`] (empty for cameras that project every point once).
     pub fn may_see_box(&self, lo: DVec3, hi: DVec3, folds: &[(DVec3, DVec3)]) -> bool {
-        // 0. Where the sweeping triangle folds over, the volume's boundary is the fold.
+        // Where the sweeping triangle folds over, the volume's boundary is the fold.
         if folds
             .iter()
             .any(|(a, b)| a.cmple(hi).all() && lo.cmple(*b).all())
         {
             return true;
         }
-        // 1. The arcs' end points: a construction ray meets the box (cheapest first).
+        if self.corner_inside_or_face_meets_wall(lo, hi) {
+            return true;
+        }
+        // The base's inside pierced by a box edge: a box straddling the base, whose corner
+        // tested above lies behind it.
+        box_edges(lo, hi).any(|(a, b)| segment_meets_triangle(a, b, self.v))
+    }
+
+    /// The paper's box test (§5.2): true unless both of its conditions hold, (1) the box is
+    /// not wholly inside (an arbitrary corner, `lo`, has no valid projection) and (2) no face
+    /// of the box meets a side wall. A wall meets a face where its arc p(α) in the face's plane
+    /// crosses the face's frame (the paper's quadratics: the wall crosses a box edge) or has an
+    /// end inside the face (a construction ray, the arc's end at α = 0 or 1, or a base edge,
+    /// its end at λ = 0, meets the box); testing the frame alone would cull every box that a
+    /// narrow volume passes through. It misses boxes that the base's inside pierces with the
+    /// tested corner behind the base, and folds; [`C3rc::may_see_box`] keeps those.
+    pub fn corner_inside_or_face_meets_wall(&self, lo: DVec3, hi: DVec3) -> bool {
+        // The arcs' end points first (cheapest): a construction ray meets the box.
         if self
             .v
             .iter()
@@ -409,19 +428,18 @@ impl C3rc {
         {
             return true;
         }
-        // 2. A corner inside: the box may lie wholly inside the view volume.
+        // A corner inside: the box may lie wholly inside the view volume.
         if self.contains(lo) {
             return true;
         }
-        // 3. The base triangle meets the box.
+        // The arcs' ends on the base: a base edge meets the box.
         if (0..3).any(|i| {
             let (a, b) = (self.v[i], self.v[(i + 1) % 3]);
             ray_meets_box(a, b - a, 1.0, lo, hi)
-        }) || box_edges(lo, hi).any(|(a, b)| segment_meets_triangle(a, b, self.v))
-        {
+        }) {
             return true;
         }
-        // 4. A side wall crosses a box edge (the paper's arc against a face's frame).
+        // A side wall crosses a box edge (the arc against a face's frame).
         (0..3).any(|i| self.wall_crosses_box_edges(i, (i + 1) % 3, lo, hi))
     }
 

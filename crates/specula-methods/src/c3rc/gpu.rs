@@ -2,7 +2,7 @@
 //! plan (cameras and the leaves each sees) uploaded as work items, one workgroup per (camera,
 //! leaf); the projection, the two splat passes (nearest depth, then nearest centre within the
 //! depth band), the resolve and the hole filling run on the GPU into the buffer the shading
-//! pass reads. Buffers grow when a frame needs more and are otherwise reused, so a warm frame
+//! pass reads. The forward phase's switches (`FrameSettings`) travel in each camera. Buffers grow when a frame needs more and are otherwise reused, so a warm frame
 //! creates no GPU objects.
 
 use bytemuck::{Pod, Zeroable};
@@ -12,7 +12,7 @@ use specula_gpu::util::{
 };
 use specula_gpu::{GpuContext, GpuError};
 
-use super::phases::{PlacedCloud, Plan, ScreenView};
+use super::phases::{FrameSettings, PlacedCloud, Plan, ScreenView};
 use super::points::PointCloud;
 use crate::raster::GBuffer;
 
@@ -233,7 +233,7 @@ impl GpuProjection {
         mesh_count: usize,
         view: &ScreenView,
         camera: &specula_scene::Camera,
-        settings: (f32, f32),
+        settings: &FrameSettings,
         g: &GBuffer,
         near: &Growing,
     ) -> Result<GpuCounts, GpuError> {
@@ -278,7 +278,11 @@ impl GpuProjection {
             .fit(ctx, "c3rc clouds", matrices.len(), 64, storage);
         ctx.queue
             .write_buffer(self.clouds.get(), 0, bytemuck::cast_slice(&matrices));
-        let cameras: Vec<GpuCamera> = plan.cameras.iter().map(gpu_camera).collect();
+        let cameras: Vec<GpuCamera> = plan
+            .cameras
+            .iter()
+            .map(|c| gpu_camera(c, settings))
+            .collect();
         made |= self.cameras.fit(
             ctx,
             "c3rc cameras",
@@ -334,8 +338,8 @@ impl GpuProjection {
             lens: [
                 (camera.fov_y_deg.to_radians() * 0.5).tan(),
                 view.width as f32 / view.height as f32,
-                settings.0,
-                settings.1,
+                settings.splat_scale,
+                settings.max_splat,
             ],
             width: view.width,
             height: view.height,
@@ -391,8 +395,10 @@ impl GpuProjection {
                 }
                 pass.set_pipeline(&self.resolve);
                 pass.dispatch_workgroups(pixel_groups, 1, 1);
-                pass.set_pipeline(&self.fill_holes);
-                pass.dispatch_workgroups(pixel_groups, 1, 1);
+                if settings.fill_holes {
+                    pass.set_pipeline(&self.fill_holes);
+                    pass.dispatch_workgroups(pixel_groups, 1, 1);
+                }
             }
             encoder.copy_buffer_to_buffer(&self.counts, 0, &self.counts_readback, 0, 16);
             ctx.queue.submit([encoder.finish()]);
@@ -405,8 +411,8 @@ impl GpuProjection {
 }
 
 /// A camera in its own frame (origin at its first vertex, scaled by its longest edge) with
-/// its plane bound in world space.
-fn gpu_camera(camera: &super::phases::TriangleCamera) -> GpuCamera {
+/// its plane bound in world space, and the forward phase's switches.
+fn gpu_camera(camera: &super::phases::TriangleCamera, settings: &FrameSettings) -> GpuCamera {
     let c = &camera.world;
     let scale = (0..3)
         .map(|i| (c.v[(i + 1) % 3] - c.v[i]).length())
@@ -442,8 +448,13 @@ fn gpu_camera(camera: &super::phases::TriangleCamera) -> GpuCamera {
             camera.screen_area as f32,
             camera.obliquity,
             base as f32,
-            0.0,
+            0.5 * settings.fixed_splat,
         ],
-        ids: [camera.mesh as u32, camera.may_project_twice() as u32, 0, 0],
+        ids: [
+            camera.mesh as u32,
+            (camera.may_project_twice() && settings.multiple_projections) as u32,
+            settings.one_sided as u32,
+            settings.depth_band as u32,
+        ],
     }
 }

@@ -13,65 +13,105 @@
 //!    box's centre on all three axes at once), kept in the object's loaded pose so that a rigid
 //!    move keeps it (colours are shaded again after a move: light and shadows change).
 //! 2. Far field: envmap's cube maps ([`crate::envmap::CubeMaps`]) drawn from each mirror with
-//!    its nearby objects left out.
+//!    its nearby objects left out (the paper's environment-mapped background, §7).
 //! 3. A C3RC per visible mirror triangle (§5; [`camera::C3rc::reflector`]): the view direction
 //!    reflected about each vertex normal; the base is the triangle. The G-buffer says which
-//!    triangles are visible and how many pixels each covers ([`phases::plan`]).
+//!    triangles are visible and how many pixels each covers ([`phases::plan`]). The paper builds
+//!    one per triangle and its depth test hides the splats of hidden ones; here a hidden
+//!    triangle has no pixel for its splats.
 //! 4. Backward phase (§5.2; [`phases::plan`]): each camera, mapped into each object's space,
-//!    against that object's tree ([`camera::C3rc::may_see_box`]), collecting leaves.
+//!    against that object's tree ([`camera::C3rc::corner_inside_or_face_meets_wall`]: the
+//!    paper's two conditions, a face meeting a side wall read as the paper defines it, not only
+//!    where the wall crosses the face's frame, which would cull every box a narrow volume passes
+//!    through; by default the conservative [`camera::C3rc::may_see_box`], below), collecting
+//!    leaves.
 //! 5. Forward phase (§5.1, §6; [`phases::forward`] on the CPU, [`gpu::GpuProjection`] as GPU
-//!    compute passes): each leaf's points projected with the camera (the cubic, every valid
-//!    projection: a point may show several times, in one camera or in several, and all are
-//!    issued, which the paper's GPU could not), each splatted as a square at the pixel of its
-//!    base point, sized to its footprint (the point's disc against the sweeping triangle's
-//!    cross-section there, mapped to the triangle's screen area), with push-back depth (its
-//!    distance from the reflector) so that the point nearest the reflector wins; a splat lands
-//!    only on pixels of the surface it was projected from.
+//!    compute passes): each leaf's points projected with the camera (the cubic; a point may
+//!    show several times, in one camera or in several), each splatted as a square at the pixel
+//!    of its base point, with push-back depth (its distance from the reflector) so that the
+//!    point nearest the reflector wins (ties: the splat whose centre is nearest the pixel's).
+//!    A splat lands only on pixels of the mirror it was projected from whose surface point lies
+//!    within the splat's reach of its base point (the paper does not say how splats are kept
+//!    on the reflector; this keeps them off other objects and off other parts of the mirror in
+//!    front, as a depth test would).
 //! 6. Shading: envmap's shading pass, taking a mirror pixel's reflected radiance from the
 //!    splats where they cover it and from the far-field cube map where they do not.
 //!
-//! Beyond the paper (each can be turned off; docs/benchmarks.md has what each bought):
-//! - The box test is conservative where the paper's two conditions are not: it also tests the
-//!   construction rays (the arcs' end points) and the base triangle against the box, and keeps
-//!   boxes where a self-intersecting camera folds over (the fold's surface bounds the volume
-//!   there and is neither a wall nor the base). Cheap conservative tests come first: four
-//!   planes around each camera, and each node's normal cone (a leaf whose points all face
-//!   away from the triangle is skipped).
+//! Beyond the paper (each switched off by the `paper` preset; `specula methods` lists it):
+//! - Conservative box test: boxes are also kept where the base triangle's inside meets them
+//!   with the tested corner behind the base (objects touching the mirror), and where a
+//!   self-intersecting camera folds over (the fold's surface bounds the volume there and is
+//!   neither a wall nor the base); the paper's two conditions cull those and their points go
+//!   missing (paper: `conservative_culling=false`).
+//! - One-sided points: a point facing away from the reflector triangle is not splatted, and a
+//!   tree node whose normal cone faces away from it is not visited (a closed object's back
+//!   cannot show through holes in its front; an open mesh seen from its back is not reflected).
+//!   The paper splats every point with its one colour (paper: `one_sided=false`).
+//! - Every valid projection of a point is splatted (the paper's GPU issued one fragment per
+//!   vertex and so did not support multiple projections, §6); switched off, the first is kept,
+//!   at the smallest λ: nearest the reflector (paper: `multiple_projections=false`).
+//! - Footprint-sized splats: each splat's square is sized to the point's disc against the
+//!   sweeping triangle's cross-section there, mapped to the triangle's screen area, times
+//!   `splat_scale`, at most `max_splat`; the paper's squares have a fixed side of 1 or 2 pixels,
+//!   the preset takes 2 (fewer holes at the same density) (paper: `fixed_splat=2`).
 //! - Splats resolve in two steps: the nearest push-back depth finds the front surface, then
-//!   within a depth band the splat whose centre is nearest the pixel's gives the colour; pixels
-//!   left uncovered between covered neighbours are filled.
+//!   within a depth band the splat whose centre is nearest the pixel's gives the colour; the
+//!   paper's z-buffer keeps the nearest depth alone (paper: `depth_band=false`).
+//! - Mirror pixels left uncovered with at least five of their eight neighbours covered take the
+//!   front-most neighbour's colour; the paper avoids holes by its sampling rate and splat size
+//!   alone (§3.1) (paper: `fill_holes=false`).
 //! - `trace_self`: a triangle whose vertex rays hit its own mirror (a teapot's body seeing its
 //!   spout, lid and knob) gets no camera: its pixels are traced, one exact ray each. C3RC is
-//!   first order (a reflector does not see itself); these are the pixels where that is wrong.
+//!   first order (a reflector does not see itself); these are the pixels where that is wrong
+//!   (paper: `trace_self=false`).
+//! - Triangles that cover fewer than `min_pixels` visible pixels do not pay for a camera
+//!   (§8 says it does not pay off; §7 would draw the teapot's knob with the environment map):
+//!   their pixels take the per-vertex reflected colour, the radiance traced exactly along the
+//!   reflected ray at each vertex, interpolated (counted: `small triangles`). The paper builds
+//!   a camera for every triangle (paper: `min_pixels=0`).
 //! - `level_of_detail`: where a camera minifies a leaf so much that its points would crowd
 //!   more than four into a pixel, every k-th point is projected with its splat grown to match;
-//!   a node whose strided points number at most 128 is projected whole, not descended.
-//! - `split_pixels`: large triangles may be cut into more cameras (rays interpolated over less).
+//!   a node whose strided points number at most 128 is projected whole, not descended
+//!   (paper: `level_of_detail=false`).
+//!
+//! Every switch acts on both projection paths (`projection=cpu` and `gpu`): the culling, the
+//! cameras and the per-vertex and traced pixels are the CPU's on both; the GPU's passes read the
+//! splat switches from each camera and skip the hole filling. docs/benchmarks.md has what
+//! `trace_self` and `level_of_detail` bought.
+//!
+//! Implementation (changes no pixel): four planes bounding each camera's volume cull boxes and
+//! points before the exact tests (only what lies outside the volume, which has no valid
+//! projection); roots of the cubic beyond the largest λ at which the camera reaches the object
+//! are not examined; a camera that cannot fold stops at its first valid root; the per-vertex
+//! rays are traced only when `trace_self` or `min_pixels` may use them; the work is spread over
+//! threads node by node and the resolve row band by row band. (Checked: with the planes, the λ
+//! cut and the early stop removed, four scenes rendered byte-identical PNGs, with the defaults
+//! and with the paper preset.)
 //!
 //! Approximations and artifacts:
 //! - Point-based: the nearby objects are points, not surfaces. Too few points or too small
 //!   splats leave holes (the far field shows through as speckles); too large splats blur and
 //!   fatten edges (an object's silhouette grows by about a splat). Where reflected rays
 //!   converge (concave mirrors) a point's footprint grows past `max_splat` and holes appear.
+//!   With the paper's fixed 2-pixel splats, holes appear wherever a mirror magnifies the
+//!   points' spacing past 2 pixels.
 //! - Rays inside a camera are interpolated linearly between the vertices' reflected rays, not
 //!   reflected about the interpolated normal: large curved triangles bend the reflection
 //!   slightly (continuous across edges, exact at vertices).
 //! - Other mirrors are not points: a mirror sees other mirrors only through the far field, as
 //!   in envmap (and itself only where `trace_self` traces).
-//! - The near/far split is per object: a far object is exactly as wrong as in envmap, a near
-//!   one is right. Points are one-sided: a surface seen from its back (open meshes) is not
-//!   reflected. On scenes whose objects are all far (door-mirror) c3rc is envmap. Splats win
-//!   over the far field wherever they cover a pixel, with no depth comparison: a far object in
-//!   front of a near one is hidden by it (the suite's concave mirror, inside a room that is
-//!   near: the yellow box 1.5 m away, beyond 3 mirror radii, does not show in the mirror).
-//! - Triangles that cover fewer than `min_pixels` visible pixels do not pay for a camera
-//!   (§8): their pixels take the per-vertex reflected colour, the radiance traced exactly
-//!   along the reflected ray at each vertex, interpolated (counted: `small triangles`).
+//! - The near/far split is per object: a far object is exactly as wrong as in envmap, a near one is
+//!   right. On scenes whose objects are all far (door-mirror) c3rc is envmap but for the small
+//!   triangles' per-vertex colour. Splats win over the far field wherever they cover a pixel, with
+//!   no depth comparison: a far object in front of a near one is hidden by it (the suite's concave
+//!   mirror, inside a room that is near: the yellow box 1.5 m away, beyond 3 mirror radii, does not
+//!   show in the mirror).
 //! - Dielectric objects are shaded as envmap shades them, with the nearby objects in their
 //!   cube maps.
 //!
 //! Parameters:
-//! - `points` (100000): how many points the nearby objects get in all (sets the density).
+//! - `points` (100000): how many points the nearby objects get in all (sets the density; the
+//!   paper's Table 1 has 10,000 to 543,000, the 100,000-point dragon among them).
 //!   More points: fewer holes and sharper reflections, linear cost in projection (less with
 //!   the level of detail).
 //! - `density` (0 = from `points`): points per square metre, overriding `points`.
@@ -80,15 +120,21 @@
 //! - `leaf_points` (256), `tree_depth` (12): the tree's leaf size and depth. Smaller leaves
 //!   cull more precisely (fewer wasted projections) at more culling cost. On the teapot and
 //!   100k dragon points at 640×480, culling + projection + splatting took 23.3 ms at 128, 23.0
-//!   at 256 and 21.9 at 384 (within run-to-run noise; 256 holds 76 points a leaf there).
+//!   at 256 and 21.9 at 384 (within run-to-run noise; 256 holds 76 points a leaf there). The
+//!   paper states no limits, only the outcome (about 121 points a leaf, Table 1).
 //! - `splat_scale` (1.5): splat radius over the radius of the disc a point stands for. Larger
 //!   closes holes and blurs.
 //! - `max_splat` (6): largest splat half-size in pixels (where reflected rays converge).
-//! - `min_pixels` (2): triangles covering fewer visible pixels take the per-vertex colour.
-//! - `split_pixels` (0 = never): triangles covering more pixels are cut in four, up to three
-//!   times: each part's camera interpolates over less (mean FLIP 0.0793 -> 0.0777 on
-//!   mirror-teapot-bunny at 8), at more cameras.
-//! - `trace_self` (true), `level_of_detail` (true): above; false for the paper's algorithm.
+//! - `fixed_splat` (0 = footprint-sized): above; a fixed side overrides `splat_scale`,
+//!   `max_splat` and the level of detail's growth.
+//! - `min_pixels` (2): triangles covering fewer visible pixels take the per-vertex colour;
+//!   0 or 1: every visible triangle gets a camera.
+//! - `split_pixels` (0 = never): an extension beyond the paper, off by default (so also in the
+//!   paper preset): triangles covering more pixels are cut in four, up to three times: each
+//!   part's camera interpolates over less (mean FLIP 0.0793 -> 0.0777 on mirror-teapot-bunny
+//!   at 8), at more cameras.
+//! - `trace_self` (true), `level_of_detail` (true), `conservative_culling` (true), `one_sided`
+//!   (true), `multiple_projections` (true), `depth_band` (true), `fill_holes` (true): above.
 //! - `projection` (auto): where the forward phase runs: `cpu` (rayon), `gpu` (compute
 //!   passes, f32), `auto` (the CPU on a software GPU such as lavapipe, where it measured 2.3 to
 //!   3.9 times faster, the GPU otherwise).
@@ -178,7 +224,7 @@ pub const PARAMS: &[ParamSpec] = &[
         name: "min_pixels",
         kind: ParamKind::Integer { min: 0, max: 1_000_000 },
         default: "2",
-        doc: "triangles covering fewer visible pixels take the per-vertex reflected colour",
+        doc: "triangles covering fewer visible pixels take the per-vertex reflected colour (0: every visible triangle gets a camera, as the paper)",
         invalidates: Invalidates::Uniform,
     },
     ParamSpec {
@@ -200,6 +246,48 @@ pub const PARAMS: &[ParamSpec] = &[
         kind: ParamKind::Flag,
         default: "true",
         doc: "project every k-th point of nodes the camera minifies to more than 4 points a pixel (false: every point, as the paper)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "conservative_culling",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "keep the tree boxes the paper's two conditions miss: folds, the base's inside (false: the paper's test, §5.2)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "one_sided",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "skip points (and tree nodes) facing away from the reflector triangle (false: every point splats, as the paper)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "multiple_projections",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "splat every valid projection of a point (false: the first only, as the paper's GPU)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "fixed_splat",
+        kind: ParamKind::Number { min: 0.0, max: 64.0 },
+        default: "0",
+        doc: "side in pixels of every splat square (the paper: 1 or 2); 0 sizes each to its footprint (splat_scale, max_splat)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "depth_band",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "within a depth band behind the nearest splat, the nearest centre gives the colour (false: the nearest depth alone, as the paper)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "fill_holes",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "fill uncovered mirror pixels with at least 5 covered neighbours (false: the far field shows, as the paper)",
         invalidates: Invalidates::Uniform,
     },
     ParamSpec {
@@ -243,8 +331,18 @@ pub const INFO: MethodInfo = MethodInfo {
     params: PARAMS,
     presets: &[crate::preset::Preset {
         name: "paper",
-        summary: "the published algorithm (Mei et al. 2007): every step beyond the paper off",
-        settings: &["trace_self=false", "level_of_detail=false"],
+        summary: "the published algorithm (Mei, Popescu, Sacks 2007): a camera per visible triangle, the paper's box test, every point splatted once as a fixed 2-pixel square, nearest depth wins",
+        settings: &[
+            "conservative_culling=false",
+            "one_sided=false",
+            "multiple_projections=false",
+            "fixed_splat=2",
+            "depth_band=false",
+            "fill_holes=false",
+            "trace_self=false",
+            "min_pixels=0",
+            "level_of_detail=false",
+        ],
     }],
     create: || Box::new(C3rcMethod::default()),
 };
@@ -276,6 +374,12 @@ pub struct C3rcMethod {
     pub split_pixels: u32,
     pub trace_self: bool,
     pub level_of_detail: bool,
+    pub conservative_culling: bool,
+    pub one_sided: bool,
+    pub multiple_projections: bool,
+    pub fixed_splat: f32,
+    pub depth_band: bool,
+    pub fill_holes: bool,
     pub resolution: u32,
     pub dynamic: bool,
     pub shadow_resolution: u32,
@@ -300,6 +404,12 @@ impl Default for C3rcMethod {
             split_pixels: 0,
             trace_self: true,
             level_of_detail: true,
+            conservative_culling: true,
+            one_sided: true,
+            multiple_projections: true,
+            fixed_splat: 0.0,
+            depth_band: true,
+            fill_holes: true,
             resolution: 256,
             dynamic: false,
             shadow_resolution: 1024,
@@ -499,6 +609,12 @@ impl Technique for C3rcMethod {
             "split_pixels" => self.split_pixels.to_string(),
             "trace_self" => self.trace_self.to_string(),
             "level_of_detail" => self.level_of_detail.to_string(),
+            "conservative_culling" => self.conservative_culling.to_string(),
+            "one_sided" => self.one_sided.to_string(),
+            "multiple_projections" => self.multiple_projections.to_string(),
+            "fixed_splat" => self.fixed_splat.to_string(),
+            "depth_band" => self.depth_band.to_string(),
+            "fill_holes" => self.fill_holes.to_string(),
             "resolution" => self.resolution.to_string(),
             "dynamic" => self.dynamic.to_string(),
             "shadow_resolution" => self.shadow_resolution.to_string(),
@@ -520,6 +636,12 @@ impl Technique for C3rcMethod {
             "split_pixels" => self.split_pixels = value.integer() as u32,
             "trace_self" => self.trace_self = value.flag(),
             "level_of_detail" => self.level_of_detail = value.flag(),
+            "conservative_culling" => self.conservative_culling = value.flag(),
+            "one_sided" => self.one_sided = value.flag(),
+            "multiple_projections" => self.multiple_projections = value.flag(),
+            "fixed_splat" => self.fixed_splat = value.number() as f32,
+            "depth_band" => self.depth_band = value.flag(),
+            "fill_holes" => self.fill_holes = value.flag(),
             "resolution" => self.resolution = value.integer() as u32,
             "dynamic" => self.dynamic = value.flag(),
             "shadow_resolution" => self.shadow_resolution = value.integer() as u32,
@@ -619,6 +741,12 @@ impl Technique for C3rcMethod {
             split_pixels: self.split_pixels,
             trace_self: self.trace_self,
             level_of_detail: self.level_of_detail,
+            conservative_culling: self.conservative_culling,
+            one_sided: self.one_sided,
+            multiple_projections: self.multiple_projections,
+            fixed_splat: self.fixed_splat,
+            depth_band: self.depth_band,
+            fill_holes: self.fill_holes,
             splat_scale: self.splat_scale,
             max_splat: self.max_splat,
             max_depth: FALLBACK_MAX_DEPTH,
@@ -671,7 +799,7 @@ impl Technique for C3rcMethod {
                 scene.meshes.len(),
                 &view,
                 camera,
-                (self.splat_scale, self.max_splat),
+                &settings,
                 &g,
                 &p.near_buffer,
             )?;

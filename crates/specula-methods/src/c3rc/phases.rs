@@ -29,6 +29,22 @@ pub struct FrameSettings {
     pub trace_self: bool,
     /// Project every k-th point of a leaf whose points would crowd into pixels.
     pub level_of_detail: bool,
+    /// Keep the boxes the paper's two conditions miss ([`C3rc::may_see_box`]; else
+    /// [`C3rc::corner_inside_or_face_meets_wall`]).
+    pub conservative_culling: bool,
+    /// Points facing away from the reflector triangle are not splatted, and nodes whose
+    /// normal cones face away from it not visited.
+    pub one_sided: bool,
+    /// Splat every valid projection of a point (else only the first, at the smallest λ).
+    pub multiple_projections: bool,
+    /// Side in pixels of every splat square; 0: each sized to its footprint (`splat_scale`,
+    /// `max_splat`).
+    pub fixed_splat: f32,
+    /// Resolve in two steps (nearest depth, then the nearest centre within a depth band); else
+    /// the nearest push-back depth alone.
+    pub depth_band: bool,
+    /// Fill one-pixel holes between splats.
+    pub fill_holes: bool,
     pub splat_scale: f32,
     pub max_splat: f32,
     pub max_depth: u32,
@@ -99,7 +115,8 @@ struct Splat {
     radius: f32,
     /// Push-back depth: the point's distance from the reflector.
     depth: f32,
-    /// Depth range behind the front-most splat that still counts as the same surface.
+    /// Depth range behind the front-most splat that still counts as the same surface (0: only
+    /// the front-most splats).
     band: f32,
     /// How far (metres) from `p_world` a pixel's surface point may lie and still be the
     /// surface the splat came from.
@@ -195,8 +212,14 @@ pub fn plan(
     let start = Instant::now();
     let (visible, mirror_rows) = visible_triangles(scene, mirrors, view, surfaces);
     // The exact reflected ray at every vertex of a visible triangle: its radiance (the
-    // per-vertex colour) and whether it hits its own mirror.
-    let vertices = visible_vertices(scene, mirrors, &visible);
+    // per-vertex colour) and whether it hits its own mirror; needed only when a triangle may
+    // take the per-vertex colour (one covering fewer than `min_pixels`, at least one pixel)
+    // or be traced.
+    let vertices = if settings.trace_self || settings.min_pixels > 1 {
+        visible_vertices(scene, mirrors, &visible)
+    } else {
+        Vec::new()
+    };
     let traced = trace_vertices(scene, accel, view, &vertices, settings.max_depth);
     let sees_itself = |mesh: usize, i: u32| {
         let k = vertices.binary_search(&(mesh, i)).expect("traced above");
@@ -426,7 +449,11 @@ fn cull_cloud(
     if cloud.is_empty() {
         return in_cloud;
     }
-    let folds = local.fold_boxes(&camera.folding, in_cloud.reach);
+    let folds = if settings.conservative_culling {
+        local.fold_boxes(&camera.folding, in_cloud.reach)
+    } else {
+        Vec::new()
+    };
     // The base's bounding sphere, for the normal-cone test.
     let base_center = (local.v[0] + local.v[1] + local.v[2]) / 3.0;
     let base_radius = local
@@ -434,16 +461,24 @@ fn cull_cloud(
         .iter()
         .map(|v| (*v - base_center).length())
         .fold(0.0, f64::max);
+    let sees = |lo: DVec3, hi: DVec3| {
+        if settings.conservative_culling {
+            local.may_see_box(lo, hi, &folds)
+        } else {
+            local.corner_inside_or_face_meets_wall(lo, hi)
+        }
+    };
     stack.clear();
     stack.push(0usize);
     while let Some(k) = stack.pop() {
         let node = &cloud.nodes[k];
         let (lo, hi) = (node.lo.as_dvec3(), node.hi.as_dvec3());
-        // The cheap planes and normal cone first (a node whose points all face away from the
-        // mirror triangle shows nothing), then the exact (conservative) test.
+        // The cheap planes first (they cull only boxes outside the volume), and the normal
+        // cone (a node whose points all face away from the mirror triangle shows nothing when
+        // points are one-sided), then the box test.
         if !in_cloud.bound.may_meet_box(lo, hi)
-            || !node.may_face(base_center.as_vec3(), base_radius as f32)
-            || !local.may_see_box(lo, hi, &folds)
+            || (settings.one_sided && !node.may_face(base_center.as_vec3(), base_radius as f32))
+            || !sees(lo, hi)
         {
             continue;
         }
@@ -499,8 +534,8 @@ impl Plan {
 }
 
 /// The forward phase on the CPU (§5.1, §6): every leaf's points projected with the camera
-/// that sees it, splatted and resolved per pixel; one-pixel holes filled; then the pixels of
-/// the triangles without a camera.
+/// that sees it, splatted and resolved per pixel; one-pixel holes filled (`fill_holes`); then
+/// the pixels of the triangles without a camera.
 #[allow(clippy::too_many_arguments)]
 pub fn forward(
     plan: &mut Plan,
@@ -553,17 +588,18 @@ pub fn forward(
                 // Points seen from behind belong to a surface whose front is nearer: a point
                 // facing away from all three base vertices faces away from every base point.
                 let n = cloud.n_object[i].as_dvec3();
-                if local.v.iter().all(|v| n.dot(*v - q) <= 0.0) {
+                if settings.one_sided && local.v.iter().all(|v| n.dot(*v - q) <= 0.0) {
                     continue;
                 }
                 solved += 1;
+                let first_only = !settings.multiple_projections || !camera.may_project_twice();
                 let (projections, count) =
-                    local.project_with(projector.cubic(q), q, *reach, !camera.may_project_twice());
+                    local.project_with(projector.cubic(q), q, *reach, first_only);
                 twice += (count > 1) as u64;
                 valid += count as u64;
                 for projection in &projections[..count] {
                     let base_local = projection.base_point(local);
-                    if n.dot(base_local - q) <= 0.0 {
+                    if settings.one_sided && n.dot(base_local - q) <= 0.0 {
                         continue;
                     }
                     let p_world = projection.base_point(&camera.world).as_vec3();
@@ -572,14 +608,22 @@ pub fn forward(
                     };
                     let area = camera.world.sweep_area(projection.lambda).max(1e-30);
                     let r = (radius * (camera.screen_area / area).sqrt()) as f32;
-                    let radius_px = r.clamp(0.5, settings.max_splat);
+                    let radius_px = if settings.fixed_splat > 0.0 {
+                        0.5 * settings.fixed_splat
+                    } else {
+                        r.clamp(0.5, settings.max_splat)
+                    };
                     let depth = (q - base_local).length() as f32;
                     splats.push(Splat {
                         x,
                         y,
                         radius: radius_px,
                         depth,
-                        band: 2.0 * radius as f32 + 0.01 * depth,
+                        band: if settings.depth_band {
+                            2.0 * radius as f32 + 0.01 * depth
+                        } else {
+                            0.0
+                        },
                         reach: (radius_px + 1.5) * view.footprint(z_view) * camera.obliquity,
                         p_world,
                         color: cloud.color[i],
@@ -609,7 +653,9 @@ pub fn forward(
     if first < last {
         let rows = first * w..last * w;
         report.covered_pixels = depth[rows].iter().filter(|d| d.is_finite()).count() as u64;
-        report.holes_filled = fill_holes(view, surfaces, mirrors, (first, last), &depth, out);
+        if settings.fill_holes {
+            report.holes_filled = fill_holes(view, surfaces, mirrors, (first, last), &depth, out);
+        }
     }
     report.splatting_ms = ms(start);
 

@@ -1,7 +1,8 @@
 // c3rc's forward phase on the GPU (`projection=gpu`): the points of every (camera, leaf) pair
 // the CPU's backward phase found, projected with the camera (the cubic, every valid root) and
 // splatted as on the CPU (phases.rs): nearest push-back depth first, then within a depth band
-// the splat whose centre is nearest the pixel's; one-pixel holes filled. The per-vertex colour
+// the splat whose centre is nearest the pixel's; one-pixel holes filled (each step as the
+// camera's switches and the host's dispatches say, as on the CPU). The per-vertex colour
 // of small and self-seeing triangles is the CPU's, already in `near` (alpha 1): kept.
 //
 // Arithmetic is f32, in each camera's own frame: origin at its first vertex, scaled by its
@@ -37,9 +38,11 @@ struct Camera {
     frame: vec4<f32>,
     // Plane bound in world space: n·x ≥ w.
     planes: array<vec4<f32>, 4>,
-    // screen area (pixels²), obliquity, base area (world), 0
+    // screen area (pixels²), obliquity, base area (world), fixed splat half-size in pixels
+    // (0: each splat sized to its footprint)
     info: vec4<f32>,
-    // mesh, can project twice, 0, 0
+    // mesh, splat every valid projection (it can project twice, and multiple projections are
+    // wanted), one-sided points, resolve within a depth band (else the nearest depth alone)
     ids: vec4<u32>,
 };
 
@@ -169,7 +172,8 @@ fn project(camera: Camera, index: u32, stride: u32, count_it: bool, splats: ptr<
     let q = (q_world - v0) / scale;
     let v = array<vec3<f32>, 3>(camera.v[0].xyz, camera.v[1].xyz, camera.v[2].xyz);
     let d = array<vec3<f32>, 3>(camera.d[0].xyz, camera.d[1].xyz, camera.d[2].xyz);
-    if (dot(n_world, v[0] - q) <= 0.0 && dot(n_world, v[1] - q) <= 0.0 && dot(n_world, v[2] - q) <= 0.0) {
+    let one_sided = camera.ids.z != 0u;
+    if (one_sided && dot(n_world, v[0] - q) <= 0.0 && dot(n_world, v[1] - q) <= 0.0 && dot(n_world, v[2] - q) <= 0.0) {
         return 0u;
     }
     if (count_it) {
@@ -210,7 +214,7 @@ fn project(camera: Camera, index: u32, stride: u32, count_it: bool, splats: ptr<
             atomicAdd(&counts[2], 1u);
         }
         let base_local = v[0] * b1 + v[1] * b2 + v[2] * b3;
-        if (dot(n_world, base_local - q) <= 0.0) {
+        if (one_sided && dot(n_world, base_local - q) <= 0.0) {
             continue;
         }
         let p_world = v0 + base_local * scale;
@@ -221,7 +225,7 @@ fn project(camera: Camera, index: u32, stride: u32, count_it: bool, splats: ptr<
         // Cross-section of the sweeping triangle at λ against the base's screen area.
         let section = 0.5 * sqrt(len2) * scale * scale;
         let r_px = radius_world * sqrt(camera.info.x / max(section, 1e-30));
-        let radius = clamp(r_px, 0.5, settings.lens.w);
+        let radius = select(clamp(r_px, 0.5, settings.lens.w), camera.info.w, camera.info.w > 0.0);
         let depth = length(q - base_local) * scale;
         let footprint = 2.0 * screen.z * settings.lens.x / f32(settings.height);
         (*splats)[count] = Splat(
@@ -229,7 +233,7 @@ fn project(camera: Camera, index: u32, stride: u32, count_it: bool, splats: ptr<
             screen.y,
             radius,
             depth,
-            2.0 * radius_world + 0.01 * depth,
+            select(0.0, 2.0 * radius_world + 0.01 * depth, camera.ids.w != 0u),
             (radius + 1.5) * footprint * camera.info.y,
             p_world,
         );
