@@ -15,6 +15,9 @@ const COUNT_EXIT_OFF_BACK_FACES: u32 = 2u;
 const COUNT_TIR_FOLLOWED: u32 = 3u;
 const COUNT_INTERNAL_NOT_RESOLVED: u32 = 4u;
 const COUNT_REENTRIES: u32 = 5u;
+const COUNT_TIR_NOT_FOLLOWED: u32 = 6u;
+
+const FALLBACK_BACKGROUND: u32 = 1u;
 
 struct Settings {
     mode: u32,
@@ -23,8 +26,8 @@ struct Settings {
     plane_count: u32,
     // 0: each material's own index of refraction.
     index_override: f32,
-    // A nearby-geometry hit is accepted when its depth and the ray's differ by less than this
-    // fraction of the depth.
+    // The iterative mode accepts a nearby-geometry hit when its depth and the ray's differ by
+    // less than this fraction of the depth (0: any hit, as the paper).
     depth_tolerance: f32,
     // Steps of the march that follows an internally reflected ray.
     inside_steps: u32,
@@ -47,6 +50,22 @@ struct Settings {
     refractor_extent: f32,
     pad1: u32,
     pad2: u32,
+    // View depth of the far plane: what the NG z-buffer holds where nothing was drawn.
+    far_depth: f32,
+    // 1: the iterative mode's bracketed search (0: the paper's iteration from the best seed).
+    bracket: u32,
+    // 1: ray-plane's planes are discs (0: the paper's infinite planes).
+    discs: u32,
+    // 1: Fresnel's split at the exit, the reflected part followed inside (0: the paper's
+    // refraction of all of it).
+    internal_reflection: u32,
+    // 1: the first surface's Fresnel reflection is added (0: the refracted colour alone).
+    reflection: u32,
+    // What a ray that finds no nearby geometry sees: 0 the cube map, 1 the background.
+    fallback: u32,
+    // 1: dispersive materials refract once per channel (0: one path at the green index).
+    dispersion: u32,
+    pad3: u32,
 };
 
 @group(0) @binding(0) var<uniform> camera: Camera;
@@ -79,7 +98,7 @@ struct Plane {
     radius: f32,
 };
 @group(0) @binding(15) var<storage, read> planes: array<Plane>;
-@group(0) @binding(16) var<storage, read_write> counters: array<atomic<u32>, 6>;
+@group(0) @binding(16) var<storage, read_write> counters: array<atomic<u32>, 7>;
 @group(0) @binding(17) var env_faces: texture_2d_array<f32>;
 @group(0) @binding(18) var<storage, read> env_views: array<EnvView>;
 @group(0) @binding(19) var<storage, read> reflectors: array<Reflector>;
@@ -153,7 +172,7 @@ struct NearbyHit {
 };
 
 // The NG texel under world point `p`, accepted when `accept_any` or when its depth agrees with
-// p's.
+// p's within `depth_tolerance`.
 fn ng_sample(p: vec3<f32>, accept_any: bool) -> NearbyHit {
     let q = project(p);
     if (!on_screen(q)) {
@@ -163,7 +182,7 @@ fn ng_sample(p: vec3<f32>, accept_any: bool) -> NearbyHit {
     if (textureLoad(ng_ids, texel, 0).x == 0u) {
         return NearbyHit(2u, vec3<f32>(0.0));
     }
-    if (!accept_any) {
+    if (!accept_any && settings.depth_tolerance > 0.0) {
         let z_ng = view_depth(textureLoad(ng_position, texel, 0).xyz);
         if (abs(z_ng - view_depth(p)) > settings.depth_tolerance * z_ng) {
             return NearbyHit(2u, vec3<f32>(0.0));
@@ -177,7 +196,8 @@ fn kay_greenberg(p: vec3<f32>) -> NearbyHit {
     return ng_sample(p, true);
 }
 
-// §4.2: the nearest of the CPU's planes along the ray, projected into the NG texture.
+// §4.2: the nearest of the CPU's planes along the ray, projected into the NG texture. Beyond
+// the paper (`discs`): a plane catches only hits within its disc.
 fn ray_plane(p: vec3<f32>, d: vec3<f32>) -> NearbyHit {
     var t_best = 3.4e38;
     for (var i = 0u; i < settings.plane_count; i++) {
@@ -192,7 +212,8 @@ fn ray_plane(p: vec3<f32>, d: vec3<f32>) -> NearbyHit {
         if (abs(denom) > 1e-6) {
             let t = (offset - dot(normal, p)) / denom;
             let x = p + d * t;
-            if (t > 1e-5 && t < t_best && distance(x, plane.center) <= plane.radius) {
+            let on_disc = settings.discs == 0u || distance(x, plane.center) <= plane.radius;
+            if (t > 1e-5 && t < t_best && on_disc) {
                 t_best = t;
             }
         }
@@ -203,8 +224,10 @@ fn ray_plane(p: vec3<f32>, d: vec3<f32>) -> NearbyHit {
     return ng_sample(p + d * t_best, true);
 }
 
-// The ray point at `t` against the NG texture under it: x = whether there is geometry there,
-// y = z(ray point) − z(NG) (negative while the ray is in front of what the eye sees).
+// The ray point at `t` against the NG texture under it: x = -1 off the screen, 0 where no
+// geometry is (y then against the far plane's depth, what the paper's cleared z-buffer holds),
+// 1 where geometry is; y = z(ray point) − z(NG) (negative while the ray is in front of what the
+// eye sees).
 fn ng_depth_gap(p: vec3<f32>, d: vec3<f32>, t: f32) -> vec2<f32> {
     let x = p + d * t;
     let q = project(x);
@@ -213,28 +236,78 @@ fn ng_depth_gap(p: vec3<f32>, d: vec3<f32>, t: f32) -> vec2<f32> {
     }
     let texel = texel_at(q, textureDimensions(ng_ids));
     if (textureLoad(ng_ids, texel, 0).x == 0u) {
-        return vec2<f32>(0.0, 0.0);
+        return vec2<f32>(0.0, view_depth(x) - settings.far_depth);
     }
     return vec2<f32>(1.0, view_depth(x) - view_depth(textureLoad(ng_position, texel, 0).xyz));
 }
 
-// §4.3: seeds along the ray, spaced evenly on the screen between the exit point and where the
-// ray leaves the scene (or the view); the seed whose depth best agrees with the NG depth under
-// it starts the iteration t ← (z_NG(p + t·d) − z(p)) / (d · forward) (Figure 7).
-// Beyond the paper: where two consecutive seeds bracket the NG surface (the ray passes from
-// in front of it to behind it), the iteration is a secant search in that bracket instead,
-// which cannot run off; the point with the best depth agreement met anywhere is kept; and a
-// ray in front of the NG surface at every seed finds nothing nearby.
-fn iterative(p: vec3<f32>, d: vec3<f32>) -> NearbyHit {
+// §4.3's seeds along the ray p + t·d: spaced evenly on the screen between p and where the ray
+// leaves the scene, the segment cut where the clip w falls to a tenth of p's (in front of the
+// eye).
+struct SeedSpan {
+    t_end: f32,
+    w0: f32,
+    w1: f32,
+};
+
+fn seed_span(p: vec3<f32>, d: vec3<f32>) -> SeedSpan {
     var t_end = scene_exit(p, d);
     let w0 = max(project(p).z, 1e-6);
     var w1 = project(p + d * t_end).z;
-    // Keep the segment in front of the eye: cut it where w falls to a tenth of w0.
     if (w1 < 0.1 * w0) {
         let w_min = 0.1 * w0;
         t_end = t_end * (w0 - w_min) / (w0 - w1);
         w1 = w_min;
     }
+    return SeedSpan(t_end, w0, w1);
+}
+
+// The ray parameter of seed `i` of `seeds`: its projection lies at fraction (i + ½) / seeds of
+// the screen segment.
+fn seed_t(span: SeedSpan, i: u32, seeds: u32) -> f32 {
+    let s = (f32(i) + 0.5) / f32(seeds);
+    return span.t_end * s * span.w0 / ((1.0 - s) * span.w1 + s * span.w0);
+}
+
+// §4.3 as published (`bracket` off, G–J): the seed whose depth best agrees with the NG z-buffer
+// under it (empty texels hold the far plane's depth) starts `iterations` steps of
+// t ← t − (z(p + t·d) − z_NG) / (d · forward) (Figure 7); the texel the last step lands on is
+// taken. The iteration stops where its point leaves the screen (nothing to read there) or where
+// d is perpendicular to the view direction (the step's denominator is zero).
+fn iterative_as_published(p: vec3<f32>, d: vec3<f32>) -> NearbyHit {
+    let span = seed_span(p, d);
+    let seeds = max(settings.seeds, 1u);
+    var t = -1.0;
+    var best_error = 3.4e38;
+    for (var i = 0u; i < seeds; i++) {
+        let seed = seed_t(span, i, seeds);
+        let gap = ng_depth_gap(p, d, seed);
+        if (gap.x >= 0.0 && abs(gap.y) < best_error) {
+            best_error = abs(gap.y);
+            t = seed;
+        }
+    }
+    if (t < 0.0) {
+        return NearbyHit(1u, vec3<f32>(0.0));
+    }
+    let rate = dot(d, camera.forward_world);
+    for (var k = 0u; k < settings.iterations; k++) {
+        let gap = ng_depth_gap(p, d, t);
+        if (abs(rate) < 1e-3 || gap.x < 0.0) {
+            break;
+        }
+        t -= gap.y / rate;
+    }
+    return ng_sample(p + d * t, false);
+}
+
+// §4.3 with the bracketed search (`bracket`, beyond the paper): seeds over empty texels are
+// skipped; where two consecutive seeds bracket the NG surface (the ray passes from in front of
+// it to behind it), the iteration is a secant search in that bracket, which cannot run off;
+// the point with the best depth agreement met anywhere is kept; and a ray in front of the NG
+// surface at every seed finds nothing nearby.
+fn iterative(p: vec3<f32>, d: vec3<f32>) -> NearbyHit {
+    let span = seed_span(p, d);
     var best_t = -1.0;
     var best_error = 3.4e38;
     var any_on_screen = false;
@@ -248,9 +321,7 @@ fn iterative(p: vec3<f32>, d: vec3<f32>) -> NearbyHit {
     var any_behind = false;
     let seeds = max(settings.seeds, 1u);
     for (var i = 0u; i < seeds; i++) {
-        let s = (f32(i) + 0.5) / f32(seeds);
-        // The ray parameter whose projection lies at fraction s of the screen segment.
-        let t = t_end * s * w0 / ((1.0 - s) * w1 + s * w0);
+        let t = seed_t(span, i, seeds);
         let gap = ng_depth_gap(p, d, t);
         if (gap.x < 0.0) {
             previous_t = -1.0;
@@ -279,8 +350,8 @@ fn iterative(p: vec3<f32>, d: vec3<f32>) -> NearbyHit {
     if (best_t < 0.0) {
         return NearbyHit(select(1u, 2u, any_on_screen), vec3<f32>(0.0));
     }
-    // Beyond the paper: a ray that stays in front of everything the NG texture holds, at every
-    // seed, passes over the nearby geometry (beside an object's silhouette): nothing nearby.
+    // A ray that stays in front of everything the NG texture holds, at every seed, passes over
+    // the nearby geometry (beside an object's silhouette): nothing nearby.
     if (!any_behind) {
         return NearbyHit(2u, vec3<f32>(0.0));
     }
@@ -305,13 +376,11 @@ fn iterative(p: vec3<f32>, d: vec3<f32>) -> NearbyHit {
         }
     } else {
         let rate = dot(d, camera.forward_world);
-        let z_p = view_depth(p);
         var t = best_t;
         for (var k = 0u; k < settings.iterations; k++) {
             if (abs(rate) < 1e-3) {
                 break;
             }
-            let x = p + d * t;
             let t_next = t - ng_depth_gap(p, d, t).y / rate;
             if (t_next <= 0.0) {
                 break;
@@ -331,7 +400,7 @@ fn iterative(p: vec3<f32>, d: vec3<f32>) -> NearbyHit {
 }
 
 // Radiance arriving along the ray p + t·d that has left the refractor: the nearby geometry by
-// the chosen mode, else envmap's cube map (drawn without the refractor), counted.
+// the chosen mode, else `nothing_nearby`, counted.
 fn nearby(r: Reflector, p: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
     var hit: NearbyHit;
     switch settings.mode {
@@ -342,13 +411,36 @@ fn nearby(r: Reflector, p: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
             hit = ray_plane(p, d);
         }
         default: {
-            hit = iterative(p, d);
+            if (settings.bracket == 1u) {
+                hit = iterative(p, d);
+            } else {
+                hit = iterative_as_published(p, d);
+            }
         }
     }
     if (hit.status == 0u) {
         return hit.color;
     }
     count(select(COUNT_NOTHING_NEARBY, COUNT_LEFT_FRUSTUM, hit.status == 1u));
+    return nothing_nearby(r, p, d);
+}
+
+// What a ray p + t·d that finds no nearby geometry sees: envmap's cube map of the refractor
+// (beyond the paper: it holds the nearby objects too), or with `fallback` the paper's
+// background environment map along d. The zero vector (the paper's refract under total
+// internal reflection) selects no texel in any defined way: a one-colour background is that
+// colour whichever texel is read; anything else gives no light.
+fn nothing_nearby(r: Reflector, p: vec3<f32>, d: vec3<f32>) -> vec3<f32> {
+    let background = settings.fallback == FALLBACK_BACKGROUND;
+    if (dot(d, d) == 0.0) {
+        if (background && scene_info.background_texture < 0) {
+            return scene_info.background;
+        }
+        return vec3<f32>(0.0);
+    }
+    if (background) {
+        return background_radiance(d);
+    }
     return env_along(r, p, d);
 }
 
@@ -597,16 +689,27 @@ fn onward(r: Reflector, mesh: u32, p_start: vec3<f32>, d_start: vec3<f32>, ior: 
 }
 
 // Radiance of a ray inside the refractor, travelling `d`, that meets the surface `exit`:
-// refracted out (Fresnel-weighted) to the nearby geometry; the part reflected inside (all of
-// it under total internal reflection) followed once more to where it leaves. Both end in the
-// nearby geometry through one loop (one copy of the lookup in the compiled shader).
+// refracted out (Fresnel-weighted) to the nearby geometry; beyond the paper
+// (`internal_reflection`), the part reflected inside (all of it under total internal
+// reflection) followed once more to where it leaves. Both end in the nearby geometry through
+// one loop (one copy of the lookup in the compiled shader). Without `internal_reflection`, as
+// the paper's step F: all the light is refracted out, and under total internal reflection the
+// paper's refract (Cg's, as WGSL's) gives the zero vector, which goes on as it is.
 fn leave(r: Reflector, mesh: u32, exit: Surface, d: vec3<f32>, ior: f32) -> vec3<f32> {
-    let fresnel = fresnel_dielectric(dot(d, exit.normal), ior);
+    let exact_fresnel = fresnel_dielectric(dot(d, exit.normal), ior);
+    let total = exact_fresnel >= 1.0;
+    var fresnel = exact_fresnel;
+    if (settings.internal_reflection == 0u) {
+        fresnel = 0.0;
+    }
     var color = vec3<f32>(0.0);
     var rays: array<Onward, 2>;
     rays[0] = Onward(exit.position, 0.0, d, vec3<f32>(0.0));
     rays[1] = rays[0];
-    if (fresnel < 1.0) {
+    if (total && settings.internal_reflection == 0u) {
+        count(COUNT_TIR_NOT_FOLLOWED);
+        rays[0] = Onward(exit.position, 1.0, vec3<f32>(0.0), vec3<f32>(0.0));
+    } else if (fresnel < 1.0) {
         let out = onward(r, mesh, exit.position, refract(d, -exit.normal, ior), ior);
         color += (1.0 - fresnel) * out.color;
         rays[0] = Onward(out.p, (1.0 - fresnel) * out.weight, out.d, vec3<f32>(0.0));
@@ -745,6 +848,9 @@ fn fs_shade(in: FullscreenOut) -> @location(0) vec4<f32> {
         return vec4<f32>(color, 1.0);
     }
     let d_n = interpolated_normal_distance(mesh, ids.y, p);
+    if (settings.dispersion == 0u) {
+        ior = vec3<f32>(ior.y);
+    }
     // Dispersion: one refracted path per colour channel; one for all three otherwise. (One
     // call site: the compiled shader holds one copy of the path.)
     var paths = 3u;
@@ -752,7 +858,10 @@ fn fs_shade(in: FullscreenOut) -> @location(0) vec4<f32> {
         paths = 1u;
     }
     for (var c = 0u; c < paths; c++) {
-        let rf = fresnel_dielectric(cos_i, 1.0 / ior[c]);
+        var rf = fresnel_dielectric(cos_i, 1.0 / ior[c]);
+        if (settings.reflection == 0u) {
+            rf = 0.0;
+        }
         let through = rf * reflected + (1.0 - rf) * refracted(r, mesh, pixel_q, p, v, n, d_n, ior[c]);
         if (paths == 1u) {
             color = through;

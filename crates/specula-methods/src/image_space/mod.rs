@@ -7,7 +7,7 @@
 //! The paper's steps and where they are:
 //! - **Precompute d_N** at each vertex (§3): [`normal_distances`], a ray cast along the
 //!   inverted normal through the BVH against the refractor's own surface only (other objects
-//!   inside or behind it are passed through). Cast once per scene: a rigid move keeps it.
+//!   inside or behind it are passed through).
 //! - **First pass** (§3): the refractors' back faces, normals and positions (a [`RasterPass`]
 //!   whose spec culls front faces).
 //! - **Second pass** (§4.1–4.2): the nearby-geometry (NG) texture, the non-specular scene drawn
@@ -19,52 +19,100 @@
 //!   d̃·T1; E. N2 from the back-face texture where P̃2 projects (`back_face`); F. T2 (`leave`);
 //!   then the nearby geometry (`nearby`) by one of the paper's three ways (`mode`):
 //!   `kay-greenberg` (§4.1, `kay_greenberg`: P̃2 projected into the NG texture), `ray-plane`
-//!   (§4.2, `ray_plane`: the nearest of a few planes fitted on the CPU, [`fit_planes`], again
-//!   after each move, projected into it), `iterative` (§4.3, `iterative`, G–J: `seeds` samples along T2, evenly
-//!   spaced on the screen up to where the ray leaves the scene, the one whose depth best
-//!   agrees with the NG depth under it starting `iterations` steps of
-//!   t ← (z_NG − z(P̃2)) / (T2 · forward)). The first surface's Fresnel reflection is added
-//!   from envmap's cube map, as the reference has it; dispersive materials refract once per
-//!   colour channel. A ray that leaves the NG texture's frustum or finds nothing nearby takes
-//!   envmap's cube map of the refractor (drawn without it, [`CubeMaps`]), never the bare
-//!   background, and is counted. Mirrors take envmap's reflection; thin sheets look straight
-//!   through to the nearby geometry.
+//!   (§4.2, `ray_plane`: the nearest of a few planes fitted on the CPU, [`fit_planes`],
+//!   projected into it), `iterative` (§4.3, G–J: `seeds` samples along T2, evenly spaced on
+//!   the screen up to where the ray leaves the scene, the one whose depth best agrees with the
+//!   NG depth under it starting `iterations` steps of t ← t − (z(P̃2 + t·T2) − z_NG) /
+//!   (T2 · forward); `iterative_as_published`, or `iterative` with the steps below). A ray
+//!   that finds nothing nearby takes the background (§4.1: "use T̃2 to index into the
+//!   background environment map"; `nothing_nearby`). Mirrors take envmap's reflection; thin
+//!   sheets look straight through to the nearby geometry.
 //!
-//! Beyond the paper (each measured in docs/benchmarks.md, suite glass sphere at 320 × 240,
-//! mean FLIP):
+//! Beyond the paper (each switched off by the `paper` preset; figures: mean FLIP at 320 × 240):
 //! - `exit_iterations` (default 2) moves P̃2 along T1 to the depth of the back face under it,
 //!   the §4.3 iteration applied to the back-face texture (0.240 → 0.118 with the cube maps
-//!   looked up along the direction alone);
-//! - the iterative mode refines by secant where two consecutive seeds bracket the NG surface
-//!   (the ray passes from in front of it to behind it) and keeps the best-agreeing point met,
-//!   so that it cannot run off the screen where T2 is far from the view direction; a ray in
-//!   front of the NG surface at every seed passes beside the nearby geometry and takes the cube
-//!   map (the glass sphere before the dragon, `scenes/table1`: 0.253 → 0.163, with the 5 %
-//!   depth agreement below);
+//!   looked up along the direction alone; the suite's glass sphere unless named, as in
+//!   docs/benchmarks.md) (paper: `exit_iterations=0`).
+//! - `bracket`: the iterative mode skips seeds over empty NG texels, refines by secant where
+//!   two consecutive seeds bracket the NG surface (the ray passes from in front of it to
+//!   behind it) and keeps the best-agreeing point met, so that it cannot run off the screen
+//!   where T2 is far from the view direction; a ray in front of the NG surface at every seed
+//!   passes beside the nearby geometry and finds nothing (the glass sphere before the dragon,
+//!   `scenes/table1`: 0.253 → 0.163, with the depth agreement below). The paper iterates from
+//!   the best-agreeing seed (empty texels holding the far plane's depth, as a cleared
+//!   z-buffer does) and takes the texel the last step lands on (paper: `bracket=false`).
+//! - `depth_tolerance` (default 0.05): the iterative mode accepts the texel it ends on only
+//!   where its depth agrees with the ray's within that fraction (else nothing nearby); the
+//!   paper takes it whatever its depth (10 %, 5 %, 2 % measured: sphere before the dragon
+//!   0.164 / 0.163 / 0.156, the bunny 0.240 / 0.217 / 0.206, the suite's glass sphere 0.072 /
+//!   0.071 / 0.071; 5 % keeps a margin for coarse textures, where depth varies more across a
+//!   texel) (paper: `depth_tolerance=0`).
+//! - `discs`: ray-plane's planes are discs around what they were fitted to, and the plane
+//!   standing for an object that no plane fits (facing the eye through its centre) a disc as
+//!   large as its bounding sphere; the paper's planes are infinite, so such a plane catches
+//!   rays that pass far from its object (paper: `discs=false`).
+//! - `internal_reflection`: at the second interface light is split by Fresnel's equations
+//!   and the reflected part (all of it under total internal reflection, §6's second
+//!   limitation) is followed inside once more, marched in screen space (`march`) until it
+//!   leaves the refractor (between the front faces of the G-buffer and the back faces of the
+//!   first pass, or by the peeled layers), refined by bisection, and refracted out there to
+//!   the nearby geometry. In the right-angle prism 94 % of the pixels the reference shows
+//!   internally reflected show what TIR shows (0 % without). Still wrong: light trapped a
+//!   second time takes the cube map along its reflected direction (counted as `internal
+//!   reflections not resolved`). The paper's step F refracts all the light out, and under
+//!   total internal reflection its Cg `refract` returns the zero vector (as WGSL's does):
+//!   every point of that ray is P̃2, so the lookups read the NG texel behind P̃2, and where
+//!   none is there the zero vector indexes the background, which selects no texel in any
+//!   defined way: a one-colour background gives its colour whichever texel is read, and
+//!   specula returns that; any other (a textured background, the cube map) gives black. Counted
+//!   as `total internal reflections not followed` (paper: `internal_reflection=false`).
+//! - `reflection`: the first surface's Fresnel reflection, from envmap's cube map as the
+//!   reference has it, weighting the refraction by what is transmitted; the paper's steps
+//!   (A–F, G–J) return the refracted colour alone (paper: `reflection=false`).
+//! - `fallback` (default `cube-map`): a ray that leaves the NG texture's frustum or finds
+//!   nothing nearby takes envmap's cube map of the refractor (drawn without it, [`CubeMaps`]),
+//!   which also holds the nearby objects, instead of the paper's background environment map
+//!   (paper: `fallback=background`).
 //! - `parallax` (default on): cube-map lookups go towards where the ray leaves the scene's
-//!   bounding box, seen from the map's centre (0.118 → 0.072; lens 0.079 → 0.066);
-//! - ray-plane's planes are discs around what they were fitted to, and an object no plane
-//!   fits gets a disc facing the eye (an infinite plane through a ball caught rays anywhere).
+//!   bounding box, seen from the map's centre (0.118 → 0.072; lens 0.079 → 0.066); off, they
+//!   go along the direction as envmap's do (mirrors included) (paper: `parallax=false`).
+//! - `dispersion`: a dispersive material refracts once per colour channel; the paper's
+//!   refractors have one index, and the preset refracts one path at the green (d-line) index
+//!   (paper: `dispersion=false`).
+//!
+//! Where the paper is silent, what this implementation does (the preset keeps it):
+//! - An exit point P̃2 that projects where the back-face texture holds nothing takes the
+//!   normal of the back face under the pixel itself (counted as `exits off the back faces`);
+//!   the paper would read the texture's cleared value. Where no back face is under the pixel
+//!   either (an open surface), d_V is d_N and the ray leaves as through a face parallel to the
+//!   entry face.
+//! - The iterative seeds span the ray from P̃2 to where it leaves the scene's bounding sphere
+//!   (the paper: up to the far plane, which specula places just past that sphere), evenly
+//!   spaced on the screen as the paper's feature-size argument assumes, cut where the ray
+//!   comes near the eye; seeds off the screen are skipped, and the iteration stops where its
+//!   point leaves the screen (that ray takes the background) or where T2 is perpendicular to
+//!   the view direction (the step's denominator is zero).
+//! - §4.2's "few planes" are fitted by [`fit_planes`]: each set of coplanar triangles
+//!   covering at least 2 % of its mesh's area, and for a mesh not mostly covered by such sets
+//!   a plane facing the eye through its centre (the paper's plane standing for complex
+//!   geometry, its Figure 6); the `MAX_PLANES` largest.
+//! - The NG texture holds only non-specular surfaces (the paper's scenes have no mirrors), so
+//!   a mirror seen through the refractor comes from the fallback. Mirrors and thin sheets,
+//!   which the paper does not render, are shaded as above whatever the settings.
 //!
 //! The paper's four limitations (§6) and what this implementation does about them:
-//! 1. *Two interfaces only.* Removed where depth-peeled layers allow it (`layers` > 1): the
-//!    solid refractors' surfaces are peeled from the eye into 2 × `layers` layers
-//!    (`peel.wgsl`), and light that has left the refractor is marched through them (a point is
-//!    inside a refractor where an odd number of layers lie before it); where it enters a
-//!    refractor again it is refracted in and out, up to `layers` − 1 more pairs of interfaces.
-//!    Two glass balls one behind the other: mean FLIP 0.288 → 0.053 with `layers=2`; one more
-//!    raster pass of the refractors per peeled layer (glass-dragon at 320 × 240: 97.7 → 114.6
-//!    ms a frame on lavapipe). The default stays the paper's 1: on the built-in glass-dragon it
-//!    changes 0.129 to 0.127. Light reflected at these extra interfaces takes the cube map.
-//! 2. *Total internal reflection handled wrongly* (the paper refracts anyway). Removed in
-//!    part: at the second interface the Fresnel-reflected part (all of it under TIR) is
-//!    followed inside once more — marched in screen space (`march`) until it leaves the
-//!    refractor (between the front faces of the G-buffer and the back faces of the first pass,
-//!    or by the peeled layers), refined by bisection — and refracted out there to the nearby
-//!    geometry. In the right-angle prism 94 % of the pixels the reference shows internally
-//!    reflected show what TIR shows (0 % without). Still wrong: light trapped a second time
-//!    takes the cube map along its reflected direction (counted as `internal reflections not
-//!    resolved`), and with `layers=1` the march sees only two depth layers, so inside a concave
+//! 1. *Two interfaces only.* Removed where depth-peeled layers allow it, off by default
+//!    (`layers` > 1; the default 1 is the paper's two interfaces): the solid refractors'
+//!    surfaces are peeled from the eye into 2 × `layers` layers (`peel.wgsl`), and light that
+//!    has left the refractor is marched through them (a point is inside a refractor where an
+//!    odd number of layers lie before it); where it enters a refractor again it is refracted
+//!    in and out, up to `layers` − 1 more pairs of interfaces. Two glass balls one behind the
+//!    other: mean FLIP 0.288 → 0.053 with `layers=2`; one more raster pass of the refractors
+//!    per peeled layer (glass-dragon at 320 × 240: 97.7 → 114.6 ms a frame on lavapipe). On
+//!    the built-in glass-dragon it changes 0.129 to 0.127. Light reflected at these extra
+//!    interfaces takes the cube map.
+//! 2. *Total internal reflection handled wrongly.* Removed in part by `internal_reflection`
+//!    (above); with `layers=1` its march sees only two depth layers, so inside a concave
 //!    refractor it can stop at the wrong one.
 //! 3. *Aliasing* of d_V, N2 and the NG texture (nearest texels). Kept; `texture_scale` trades
 //!    it for cost (glass sphere 0.095 / 0.071 / 0.058 at 0.5 / 1 / 2).
@@ -74,13 +122,10 @@
 //!    depth-peeled NG layer would cost one more raster pass of the scene for at most those
 //!    pixels, so it is not built.
 //!
-//! Other approximations: the NG texture holds only non-specular surfaces, so a mirror seen
-//! through the refractor comes from the cube map (where other specular objects are black);
-//! the iterative search accepts a hit only where the NG depth agrees with the ray's within
-//! 5 % (else the cube map), where the paper takes whatever texel it ends on (10 % and 2 %
-//! measured: glass sphere in front of the dragon 0.164 / 0.163 / 0.156, the bunny 0.240 /
-//! 0.217 / 0.206, the suite's glass sphere 0.072 / 0.071 / 0.071 at 10 / 5 / 2 %; 5 % keeps
-//! a margin for coarse textures, where depth varies more across a texel).
+//! Implementation (changes no pixel): d_N is cast once per scene (a rigid move keeps it); the
+//! planes are fitted again only after a move, the fallback cube maps redrawn only after a move
+//! (unless `dynamic`); bind groups are kept per set of textures; each refracted path's lookups
+//! are one call site in the shader, so that it compiles once.
 //!
 //! Parameters:
 //! - `mode` (default `iterative`, the paper's choice): `kay-greenberg`, `ray-plane` or
@@ -92,16 +137,24 @@
 //!   512²); cost linear.
 //! - `iterations` (default 4; the paper: fewer than five are typically needed): refinement
 //!   steps of the iterative mode; cost linear.
-//! - `index` (default 0 = each material's own): overrides the refractors' index of refraction.
+//! - `bracket` (default true) and `depth_tolerance` (default 0.05; 0: none): the iterative
+//!   mode's search and acceptance (above); neither costs a texture read more.
+//! - `discs` (default true): ray-plane's planes are discs (above); no cost.
+//! - `index` (default 0 = each material's own): overrides the refractors' index of refraction
+//!   (the paper's scenes: 1.2, spheres 1.5).
 //! - `texture_scale` (default 1): the back-face and NG textures' size relative to the frame
 //!   (the paper draws them at the frame's size). Lower is cheaper and more aliased.
 //! - `exit_iterations` (default 2; 0 is the paper's P̃2): see above; cost two texture reads
 //!   per step.
+//! - `internal_reflection` (default true): see above; cost a march where Fresnel reflects.
+//! - `reflection` (default true), `dispersion` (default true): see above; dispersion triples
+//!   the refraction's cost on dispersive materials.
+//! - `fallback` (default `cube-map`) and `parallax` (default true): see above. The cube maps
+//!   are drawn whatever `fallback` says (mirrors and thin sheets read them).
 //! - `layers` (default 1, the paper's two interfaces): see limitation 1; cost one raster pass
 //!   of the refractors per peeled layer and a march per extra interface.
 //! - `inside_steps` (default 24): march steps following light inside a refractor or between
 //!   refractors; more find thinner parts; cost linear, only where the march runs.
-//! - `parallax` (default true): see above; false looks the cube maps up as envmap does.
 //! - `resolution` (default 256) and `dynamic` (default false): the fallback cube maps' texels
 //!   per face side, and whether they are redrawn every frame (as envmap's parameters).
 //! - `shadow_resolution` (default 1024): shadow maps of the raster passes (see `raster`).
@@ -144,14 +197,14 @@ pub fn shader_source() -> String {
 pub const MAX_PLANES: usize = 8;
 
 /// The final pass's counters, in image_space.wgsl's order: name, and what a warning says.
-const COUNTERS: [(&str, &str); 6] = [
+const COUNTERS: [(&str, &str); 7] = [
     (
         "rays that left the view",
-        "refracted rays left the nearby-geometry texture's view and took the cube map",
+        "refracted rays left the nearby-geometry texture's view and took the fallback",
     ),
     (
         "rays that found nothing nearby",
-        "refracted rays found no nearby geometry and took the cube map",
+        "refracted rays found no nearby geometry and took the fallback",
     ),
     (
         "exits off the back faces",
@@ -163,6 +216,7 @@ const COUNTERS: [(&str, &str); 6] = [
         "internally reflected rays were not resolved in the textures and took the cube map",
     ),
     ("re-entries followed", ""),
+    ("total internal reflections not followed", ""),
 ];
 
 pub const PARAMS: &[ParamSpec] = &[
@@ -185,6 +239,27 @@ pub const PARAMS: &[ParamSpec] = &[
         kind: ParamKind::Integer { min: 0, max: 32 },
         default: "4",
         doc: "iterative mode: refinement steps from the best seed",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "bracket",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "iterative mode: refine by secant between seeds that bracket the nearby surface and keep the best-agreeing point (false: the paper's iteration from the best seed)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "depth_tolerance",
+        kind: ParamKind::Number { min: 0.0, max: 1.0 },
+        default: "0.05",
+        doc: "iterative mode: the relative depth disagreement within which the texel found is accepted (0: any, as the paper)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "discs",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "ray-plane mode: planes are discs around what they were fitted to (false: the paper's infinite planes)",
         invalidates: Invalidates::Uniform,
     },
     ParamSpec {
@@ -216,6 +291,34 @@ pub const PARAMS: &[ParamSpec] = &[
         kind: ParamKind::Integer { min: 0, max: 16 },
         default: "2",
         doc: "steps moving the estimated exit point to the back face's depth (0: the paper's interpolated distance alone)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "internal_reflection",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "split light by Fresnel at the exit and follow the reflected part inside once more (false: the paper's refraction of all of it, the zero vector under total internal reflection)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "reflection",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "add the first surface's Fresnel reflection (false: the refracted colour alone, as the paper)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "fallback",
+        kind: ParamKind::Choice(&["cube-map", "background"]),
+        default: "cube-map",
+        doc: "what a ray that finds no nearby geometry sees: the refractor's cube map, or the paper's background",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "dispersion",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "refract once per colour channel on dispersive materials (false: one path at the green index)",
         invalidates: Invalidates::Uniform,
     },
     ParamSpec {
@@ -262,7 +365,22 @@ pub const INFO: MethodInfo = MethodInfo {
     // image-space's own.
     delegates: &[],
     params: PARAMS,
-    presets: &[],
+    presets: &[crate::preset::Preset {
+        name: "paper",
+        summary:
+            "the published algorithm (Wyman 2005, nearby geometry): every step beyond the paper off",
+        settings: &[
+            "exit_iterations=0",
+            "bracket=false",
+            "depth_tolerance=0",
+            "discs=false",
+            "internal_reflection=false",
+            "reflection=false",
+            "fallback=background",
+            "parallax=false",
+            "dispersion=false",
+        ],
+    }],
     create: || Box::new(ImageSpace::default()),
 };
 
@@ -280,6 +398,22 @@ impl NearbyMode {
             NearbyMode::KayGreenberg => "kay-greenberg",
             NearbyMode::RayPlane => "ray-plane",
             NearbyMode::Iterative => "iterative",
+        }
+    }
+}
+
+/// What a ray that finds no nearby geometry sees.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Fallback {
+    CubeMap = 0,
+    Background = 1,
+}
+
+impl Fallback {
+    pub fn name(self) -> &'static str {
+        match self {
+            Fallback::CubeMap => "cube-map",
+            Fallback::Background => "background",
         }
     }
 }
@@ -305,10 +439,16 @@ pub struct GpuSettings {
     pub peeled: u32,
     pub refractor_extent: f32,
     pub pad: [u32; 2],
+    /// View depth of the far plane: what a cleared z-buffer holds.
+    pub far_depth: f32,
+    pub bracket: u32,
+    pub discs: u32,
+    pub internal_reflection: u32,
+    pub reflection: u32,
+    pub fallback: u32,
+    pub dispersion: u32,
+    pub tail_pad: u32,
 }
-
-/// The relative depth disagreement within which the iterative mode accepts an NG texel.
-const DEPTH_TOLERANCE: f32 = 0.05;
 
 /// What a final-pass bind group was made for: the pool slots of the scene, back-face and NG
 /// G-buffers, the cube-map faces' texture, and the peeled layers' (0: the placeholder).
@@ -347,6 +487,9 @@ pub struct ImageSpace {
     pub mode: NearbyMode,
     pub seeds: u32,
     pub iterations: u32,
+    pub bracket: bool,
+    pub depth_tolerance: f32,
+    pub discs: bool,
     pub index: f32,
     pub texture_scale: f32,
     pub inside_steps: u32,
@@ -354,6 +497,10 @@ pub struct ImageSpace {
     pub resolution: u32,
     pub dynamic: bool,
     pub parallax: bool,
+    pub internal_reflection: bool,
+    pub reflection: bool,
+    pub fallback: Fallback,
+    pub dispersion: bool,
     pub layers: u32,
     pub shadow_resolution: u32,
     prepared: Option<Prepared>,
@@ -367,6 +514,9 @@ impl Default for ImageSpace {
             mode: NearbyMode::Iterative,
             seeds: 7,
             iterations: 4,
+            bracket: true,
+            depth_tolerance: 0.05,
+            discs: true,
             index: 0.0,
             texture_scale: 1.0,
             inside_steps: 24,
@@ -374,6 +524,10 @@ impl Default for ImageSpace {
             resolution: 256,
             dynamic: false,
             parallax: true,
+            internal_reflection: true,
+            reflection: true,
+            fallback: Fallback::CubeMap,
+            dispersion: true,
             layers: 1,
             shadow_resolution: 1024,
             prepared: None,
@@ -849,6 +1003,9 @@ impl Technique for ImageSpace {
             "mode" => self.mode.name().to_string(),
             "seeds" => self.seeds.to_string(),
             "iterations" => self.iterations.to_string(),
+            "bracket" => self.bracket.to_string(),
+            "depth_tolerance" => self.depth_tolerance.to_string(),
+            "discs" => self.discs.to_string(),
             "index" => self.index.to_string(),
             "texture_scale" => self.texture_scale.to_string(),
             "inside_steps" => self.inside_steps.to_string(),
@@ -856,6 +1013,10 @@ impl Technique for ImageSpace {
             "resolution" => self.resolution.to_string(),
             "dynamic" => self.dynamic.to_string(),
             "parallax" => self.parallax.to_string(),
+            "internal_reflection" => self.internal_reflection.to_string(),
+            "reflection" => self.reflection.to_string(),
+            "fallback" => self.fallback.name().to_string(),
+            "dispersion" => self.dispersion.to_string(),
             "layers" => self.layers.to_string(),
             "shadow_resolution" => self.shadow_resolution.to_string(),
             _ => String::new(),
@@ -873,6 +1034,9 @@ impl Technique for ImageSpace {
             }
             "seeds" => self.seeds = value.integer() as u32,
             "iterations" => self.iterations = value.integer() as u32,
+            "bracket" => self.bracket = value.flag(),
+            "depth_tolerance" => self.depth_tolerance = value.number() as f32,
+            "discs" => self.discs = value.flag(),
             "index" => self.index = value.number() as f32,
             "texture_scale" => self.texture_scale = value.number() as f32,
             "inside_steps" => self.inside_steps = value.integer() as u32,
@@ -880,6 +1044,15 @@ impl Technique for ImageSpace {
             "resolution" => self.resolution = value.integer() as u32,
             "dynamic" => self.dynamic = value.flag(),
             "parallax" => self.parallax = value.flag(),
+            "internal_reflection" => self.internal_reflection = value.flag(),
+            "reflection" => self.reflection = value.flag(),
+            "fallback" => {
+                self.fallback = match value.word() {
+                    "background" => Fallback::Background,
+                    _ => Fallback::CubeMap,
+                }
+            }
+            "dispersion" => self.dispersion = value.flag(),
             "layers" => self.layers = value.integer() as u32,
             "shadow_resolution" => self.shadow_resolution = value.integer() as u32,
             _ => {}
@@ -960,7 +1133,7 @@ impl Technique for ImageSpace {
             iterations: self.iterations,
             plane_count: p.plane_count,
             index_override: self.index,
-            depth_tolerance: DEPTH_TOLERANCE,
+            depth_tolerance: self.depth_tolerance,
             inside_steps: self.inside_steps,
             exit_iterations: self.exit_iterations,
             scene_center: bounds.center().to_array(),
@@ -972,6 +1145,14 @@ impl Technique for ImageSpace {
             peeled,
             refractor_extent: p.refractor_extent,
             pad: [0; 2],
+            far_depth: raster::depth_range(&bounds, camera.eye).1,
+            bracket: self.bracket as u32,
+            discs: self.discs as u32,
+            internal_reflection: self.internal_reflection as u32,
+            reflection: self.reflection as u32,
+            fallback: self.fallback as u32,
+            dispersion: self.dispersion as u32,
+            tail_pad: 0,
         };
         let output = self.output.get(gpu, width, height);
         p.counters.clear(gpu);
