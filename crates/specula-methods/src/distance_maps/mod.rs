@@ -1,104 +1,162 @@
-//! `distance-maps`: multiple specular reflections and refractions traced in layered distance
-//! cube maps.
+//! `distance-maps`: multiple specular reflections and refractions traced in layered distance cube
+//! maps.
 //!
-//! Paper: Umenhoffer, Patow, Szirmay-Kalos, *Robust multiple specular reflections and
-//! refractions*, GPU Gems 3, ch. 17 (`../shared/seeds/001_7674acf89cfed11c.txt`).
+//! Paper: Umenhoffer, Patow, Szirmay-Kalos, *Robust multiple specular reflections and refractions*,
+//! GPU Gems 3, ch. 17 (`../shared/seeds/001_7674acf89cfed11c.txt`).
 //!
-//! Steps, per frame:
+//! Steps, per frame (the paper's; by default the steps beyond the paper, below, replace parts of
+//! step 4):
 //! 1. the scene raster pass (G-buffer) for the camera;
-//! 2. for each specular mesh (a "reflector"), a layered distance map about its reference point
-//!    (the centre of its bounding box): per layer six 90° faces, each texel holding the material
+//! 2. for each specular mesh (a "reflector"), a layered distance map about its reference point (the
+//!    centre of its bounding box): per layer six 90° faces, each texel holding the material
 //!    (diffuse radiance, or F0 with the sign-coded index of refraction, see `codes.wgsl`), the
-//!    surface normal, the mesh, and the distance from the reference point; texels that see
-//!    nothing hold distance -1. Layers come from depth peeling (`layers=N`: the N nearest
-//!    surfaces in each direction; what lies beyond the N-th is lost) or from the paper's
-//!    simplified layers (`layers=simple`: the front faces of all specular meshes as seen from the
-//!    reference point, their back faces, then the non-specular surfaces, depth-peeled into
-//!    `diffuse_layers`). The maps depend on the scene only: they are kept until an object
-//!    moves, or redrawn every frame with `dynamic=true` (the paper's setting, for scenes that
-//!    move all the time);
+//!    surface normal, the mesh, and the distance from the reference point; texels that see nothing
+//!    hold distance -1. Layers come from depth peeling (`layers=N`: the N nearest surfaces in each
+//!    direction; what lies beyond the N-th is lost) or from the paper's simplified layers
+//!    (`layers=simple`: the front faces of all specular meshes as seen from the reference point,
+//!    their back faces, then the non-specular surfaces, depth-peeled into `diffuse_layers`). The
+//!    paper redraws the maps every frame (`dynamic=true`);
 //! 3. with min-max acceleration, the smallest and largest distance of each layer (a compute
 //!    reduction);
 //! 4. a full-screen pass over the reflector pixels traces each reflected or refracted ray in the
 //!    reflector's map (the paper's `Hit()`): per layer, a linear search marching uniformly in
-//!    texture space (`d = a·t/(1 − t)`) up to the map's far sphere, or between the layer's min
-//!    and max spheres, restarting where nothing is visible; then the secant search. At a
-//!    specular hit the path reflects or refracts again with the normal stored in the map
-//!    (a mirror's Schlick Fresnel or constant F0, as the reference; total internal
-//!    reflection), up to `max_depth` bounces; at a diffuse hit it takes the stored radiance.
+//!    texture space (`d = a·t/(1 − t)`, the step count following the texels the ray spans, at most
+//!    `linear_steps`), from the listing's t = 0.0001 up to the map's far sphere, or between the
+//!    layer's min and max spheres (each widened by 0.01 % against rounding), restarting where
+//!    nothing is visible; then the secant search in the layer with the nearest overshooting sample.
+//!    The far sphere stands in for the listing's t → 1: the ray's end at infinity cannot be
+//!    sampled, and a sample on the sphere that holds the whole scene lies behind every surface as
+//!    the paper's last samples do. At a specular hit the path reflects (a mirror; Schlick's
+//!    Fresnel, or exactly F0 for a mirror whose material has no Fresnel term, as the reference) or
+//!    refracts (a dielectric, weighted by 1 − F of Schlick's formula at the incident angle on
+//!    either side, as Listing 17-5; reflected under total internal reflection) with the normal
+//!    stored in the map, up to `max_depth` rays; at a diffuse hit it takes the stored radiance. A
+//!    thin-walled sheet (a material the paper does not have) passes the ray straight on, weighted
+//!    by 1 − its two-interface reflectance 2F/(1 + F).
 //!
-//! Beyond the paper:
-//! - every layer's bracket is refined and the nearest refined hit wins (the paper refines only
-//!   the layer with the nearest overshooting sample, which can lie past another layer's hit
-//!   where steps are long);
-//! - distances are interpolated only between texels of one mesh, and a bracket whose two
-//!   samples show different meshes counts only where the ray passes the second mesh's distance
-//!   (from in front of it to behind it), taking the overshooting sample as the hit: a ray that
-//!   goes round an object's silhouette, behind it as seen from the reference point, no longer
-//!   hits the surface the paper's interpolation spans between the two objects;
-//! - at every dielectric surface both branches are traced, reflected and refracted, with the
-//!   exact Fresnel terms (the paper's loop follows only the refracted one and uses Schlick's
-//!   formula; the first surface's reflection and the light reflected inside a glass object are
-//!   then missing: on the suite's glass sphere that alone was a mean FLIP of 0.15). A per-pixel
-//!   stack of 8 branches holds the paths still to trace; branches carrying under 0.4 % of the
-//!   pixel are dropped. Dispersive materials are traced once per colour channel; thin-walled
-//!   sheets pass rays straight through and reflect;
-//! - a ray the search does not resolve is not drawn black: where the ray leaves the map's far
-//!   sphere the map holds nothing, it left the scene and meets the background (as before);
-//!   where the map holds a surface there, the search missed one, and the ray takes the
-//!   farthest diffuse surface the map holds towards that exit point (an environment-map
-//!   estimate, off by parallax for near surfaces). A branch at `max_depth` or with no room on
-//!   the stack takes the same estimate. Each is counted in the frame's counters (`rays not
-//!   resolved`, `branches cut at max_depth`, `branches over the stack`) and named in a
-//!   warning. The estimate helps in closed scenes (the suite's lens 0.069 → 0.030 mean FLIP)
-//!   and hurts in open ones where the missed ray did leave the scene (mirror-teapot-bunny
-//!   0.046 → 0.060, truck-cover 0.148 → 0.183): a ray that passes behind an object as seen from
-//!   the reference point looks, in the map, like one that stepped over it
-//!   (docs/benchmarks.md).
+//! Where the listings are silent, this implementation chooses (for every setting unless a step
+//! beyond the paper below replaces the choice): the maps are read bilinearly (the paper
+//! interpolates between directions) over the texels that see something, the nearest texel deciding
+//! whether anything is visible and giving the material code (blending in the clear value -1 would
+//! sink every edge of a layer towards the reference point, and blending codes would invent
+//! materials); a lookup beside a cube face's edge reuses that face's edge texels, as non-seamless
+//! cube maps of the paper's hardware did; the secant search stops at a sample where the map shows
+//! nothing (Listing 17-2 would divide by the clear value); a ray whose search finds no bracket in
+//! any layer meets the background (with plain interpolation that happens only where the map shows
+//! nothing along the ray's end: it left the scene); a dispersive material is traced with its green
+//! index (the paper stores one index per texel).
+//!
+//! The figures below are mean FLIP on the suite at 160 × 120, default → the step alone switched
+//! off (`specula compare scenes/suite --methods distance-maps -p NAME=VALUE -W 160 -H 120`); the
+//! `paper` preset, everything off at depth 2, measures 0.012 (mirror-sphere) to 0.77 (glass-block).
+//!
+//! Beyond the paper (each switched off by the `paper` preset; `specula methods` lists it):
+//! - every layer's bracket is refined and the nearest refined hit wins
+//!   (paper: `refine_every_layer=false`); the paper refines only the layer with the nearest
+//!   overshooting sample, which can lie past another layer's hit where steps are long (lit-room
+//!   0.047 → 0.048, mirrors-merged 0.0210 → 0.0213, the rest unchanged);
+//! - distances, radiance and normals are interpolated only between texels of one mesh, and a
+//!   bracket whose two samples show different meshes counts only where the ray passes the second
+//!   mesh's distance (from in front of it to behind it), taking the overshooting sample as the hit;
+//!   otherwise the search starts over (paper: `interpolation=plain`): a ray that goes round an
+//!   object's silhouette, behind it as seen from the reference point, no longer hits the surface
+//!   the paper's interpolation spans between the two objects. It pays on concave-mirror (0.053 →
+//!   0.078) and costs on most other scenes of the suite (mirror-bunny 0.052 → 0.045,
+//!   mirror-sphere-nearby 0.042 → 0.034, glass-sphere 0.019 → 0.017);
+//! - the search along each secondary ray starts 2 / `resolution` of |x| away from its start
+//!   (paper: `skip_start=false`, the listing's t = 0.0001), so that the interpolated copy of the
+//!   surface a ray leaves is not taken for its hit (without it: mirror-bunny 0.052 → 0.065,
+//!   thin-sheet 0.105 → 0.156; worse with coarser maps: a mirror sphere in a box at 128², RMSE 0.02
+//!   → 0.19);
+//! - at every dielectric surface both branches are traced, reflected and refracted
+//!   (paper: `dielectric_branches=refracted`); Listing 17-5 follows only the refracted one, so the
+//!   first surface's reflection and the light reflected inside a glass object are missing
+//!   (glass-sphere 0.019 → 0.235, glass-lens 0.025 → 0.158, glass-block 0.066 → 0.218). A per-pixel
+//!   stack of 8 branches holds the paths still to trace; branches carrying under 0.4 % of the pixel
+//!   are dropped; a thin-walled sheet also reflects;
+//! - the Fresnel terms at dielectrics are exact (paper: `dielectric_fresnel=schlick`), where the
+//!   paper applies Schlick's approximation, at the incident angle also inside the glass (Schlick:
+//!   glass-sphere 0.019 → 0.064, glass-merged 0.025 → 0.056);
+//! - dispersive materials are traced once per colour channel (paper: `dispersion=false`);
+//! - a ray the search does not resolve, where the map holds a diffuse surface towards the point
+//!   where the ray leaves the map's far sphere, takes the farthest diffuse surface the map holds
+//!   towards that exit point (an environment-map estimate, off by parallax for near surfaces), and
+//!   a branch at `max_depth` or with no room on the stack takes the same estimate in the direction
+//!   it would leave in (paper: `estimate=false`). Without it the missed ray meets the background,
+//!   and a path cut at the depth limit ends with its product of Fresnel factors, as if the surface
+//!   it stops at sent radiance 1: what Listing 17-5 returns when its depth runs out (a cut path
+//!   then shows white where the reference shows the further bounces: glass-block 0.066 → 0.280,
+//!   glass-lens 0.025 → 0.126, concave-mirror 0.053 → 0.095). Each is counted in the frame's
+//!   counters (`rays not resolved`, `branches cut at max_depth`, `branches over the stack`) and
+//!   named in a warning. The estimate helps in closed scenes (the suite's lens 0.069 → 0.030 mean
+//!   FLIP, against a missed ray meeting the background) and hurts in open ones where the missed ray
+//!   did leave the scene (mirror-teapot-bunny 0.046 → 0.060, truck-cover 0.148 → 0.183): a ray that
+//!   passes behind an object as seen from the reference point looks, in the map, like one that
+//!   stepped over it (docs/benchmarks.md).
+//!
+//! Implementation (changes no pixel): with `dynamic=false` the maps and their min-max ranges are
+//! kept until an object moves instead of being redrawn every frame (they would come out the same);
+//! the counters and warnings only report.
 //!
 //! Approximations and artifacts:
-//! - sampling: each layer is a height field about the reference point, sampled at `resolution`;
-//!   the distance is interpolated bilinearly, so a hit is exact on planes (the secant step; the
-//!   tests measure 4e-5 m on a 2 m box at 128²) and off by the interpolation error elsewhere;
-//!   radiance and normals are interpolated over the texels of one mesh, so textures blur at the
-//!   map's resolution; a hit found between two meshes is accurate to one linear step;
-//! - limited layers: surfaces beyond the last layer in a direction are missing; reflections
-//!   that should see them see the layer in front, or nothing (then the background);
-//! - thin objects: the linear search can step over a surface thinner than its step (the
-//!   paper's Figure 17-6); fewer `linear_steps` miss more;
-//! - the first `2 / resolution` of |x| along each secondary ray is skipped, so that the
-//!   interpolated copy of the surface a ray leaves is not taken for its hit;
+//! - sampling: each layer is a height field about the reference point, sampled at `resolution`; the
+//!   distance is interpolated bilinearly, so a hit is exact on planes (the secant step; the tests
+//!   measure 4e-5 m on a 2 m box at 128²) and off by the interpolation error elsewhere; radiance
+//!   and normals are interpolated too, so textures blur at the map's resolution; with per-mesh
+//!   interpolation a hit found between two meshes is accurate to one linear step;
+//! - limited layers: surfaces beyond the last layer in a direction are missing; reflections that
+//!   should see them see the layer in front, or nothing (then the background);
+//! - thin objects: the linear search can step over a surface thinner than its step (the paper's
+//!   Figure 17-6); fewer `linear_steps` miss more;
 //! - diffuse radiance is stored as seen from the reference point: exact for Lambertian and unlit
 //!   surfaces (their radiance does not depend on direction), with the raster pass's shadow maps;
-//! - paths longer than `max_depth` end in the map's estimate (see above); the reference
-//!   follows them to its own depth (8 in `compare`).
+//! - paths longer than `max_depth` end as `estimate` says; the reference follows them to its own
+//!   depth (8 in `compare`).
 //!
 //! Parameters:
-//! - `resolution` (default 512, the paper's): texels per face side. Higher resolves finer
-//!   geometry and texture and makes hits more exact; cost 6 × resolution² texels per layer per
-//!   reflector per frame, and longer linear searches (steps follow the texels a ray spans).
-//! - `layers` (default `simple`, the paper's): `simple`, or a number 1 to 8 of depth-peeled
-//!   layers. More layers capture surfaces hidden from the reference point; each costs a
-//!   rasterisation of the scene into six faces and a linear search per ray.
-//! - `diffuse_layers` (default 1, the paper's): with `layers=simple`, the non-specular surfaces
-//!   in this many depth-peeled layers (1 to 6); the same trade-off.
-//! - `linear_steps` (default 80): the most steps of a linear search per layer (fewer where a
-//!   ray spans fewer texels). Fewer miss thin objects and leave stair steps the secant search
-//!   cannot always recover; cost is linear.
-//! - `secant_steps` (default 10): secant iterations after the linear search (0: the linear
-//!   search's overshooting sample is the hit). Removes stair-stepping; exact on planes in one.
-//! - `max_depth` (default 4; the paper's video uses 2): the most specular bounces on a path.
-//!   Each costs one more trace, only on paths that need it; a glass object needs 3 or more
-//!   (in, reflected inside, out): on the suite's glass sphere mean FLIP 0.098 at 2, 0.027 at 3,
-//!   0.020 at 4, 0.020 at 8 (320 × 240).
-//! - `min_max` (default true): min-max acceleration; marches only between each layer's smallest
-//!   and largest distance (fewer steps wasted and finer steps where surfaces are; the paper:
-//!   25 → 50 fps); costs a reduction over the maps.
+//! - `resolution` (default 512; (paper: `resolution=512`), its cube maps): texels per face side.
+//!   Higher resolves finer geometry and texture and makes hits more exact; cost 6 × resolution²
+//!   texels per layer per reflector per frame, and longer linear searches (steps follow the texels
+//!   a ray spans).
+//! - `layers` (default `simple`; (paper: `layers=simple`), its implementation): `simple`, or a
+//!   number 1 to 8 of depth-peeled layers. More layers capture surfaces hidden from the reference
+//!   point; each costs a rasterisation of the scene into six faces and a linear search per ray.
+//! - `diffuse_layers` (default 1; (paper: `diffuse_layers=1`), all diffuse surfaces in one layer):
+//!   with `layers=simple`, the non-specular surfaces in this many depth-peeled layers (1 to 6); the
+//!   same trade-off.
+//! - `linear_steps` (default 80; (paper: `linear_steps=80`), the finest of its Figure 17-6): the
+//!   most steps of a linear search per layer (fewer where a ray spans fewer texels). Fewer miss
+//!   thin objects and leave stair steps the secant search cannot always recover; cost is linear.
+//! - `secant_steps` (default 10; (paper: `secant_steps=10`), the finest of its Figure 17-6): secant
+//!   iterations after the linear search (0: the linear search's overshooting sample is the hit).
+//!   Removes stair-stepping; exact on planes in one.
+//! - `max_depth` (default 4; (paper: `max_depth=2`), the paper's video): the most specular bounces
+//!   on a path, the surface the camera sees being the first (the paper's MAXDEPTH). Each costs one
+//!   more trace, only on paths that need it; a glass object needs 3 or more (in, reflected inside,
+//!   out): on the suite's glass sphere mean FLIP 0.098 at 2, 0.027 at 3, 0.020 at 4, 0.020 at 8
+//!   (320 × 240); at 2 on the suite at 160 × 120, glass-block 0.066 → 0.229, glass-sphere 0.019 →
+//!   0.061.
+//! - `min_max` (default true; (paper: `min_max=true`), its 50 fps video): min-max acceleration;
+//!   marches only between each layer's smallest and largest distance (fewer steps wasted and finer
+//!   steps where surfaces are; the paper: 25 → 50 fps); costs a reduction over the maps.
+//! - `dynamic` (default false; (paper: `dynamic=true`), its maps "were updated in every frame"):
+//!   redraw the maps (and their min-max ranges) every frame even when nothing moved; otherwise only
+//!   after a move. Changes the cost, not the image.
+//! - `refine_every_layer` (default true): see Beyond the paper; costs a secant search per layer
+//!   with a bracket instead of one.
+//! - `interpolation` (default `mesh`): `mesh` or `plain`, see Beyond the paper; `plain` draws
+//!   surfaces spanned between objects at silhouettes.
+//! - `skip_start` (default true): see Beyond the paper; without it rays can hit the interpolated
+//!   copy of the surface they leave.
+//! - `dielectric_branches` (default `both`): `both` or `refracted`, see Beyond the paper; both cost
+//!   a second trace per dielectric surface on the path (up to the stack).
+//! - `dielectric_fresnel` (default `exact`): `exact` or `schlick`; no cost difference.
+//! - `dispersion` (default true): a dispersive scene costs three traces per glass pixel.
+//! - `estimate` (default true): see Beyond the paper; costs a lookup per layer for each unresolved
+//!   ray and cut branch.
 //! - `output` (default `radiance`): `first-hit` writes, instead of radiance, the world position
-//!   where each reflector pixel's first secondary ray hits (-1e30 where it finds nothing), to
-//!   check the search.
-//! - `dynamic` (default false): redraw the maps (and their min-max ranges) every frame even
-//!   when nothing moved; otherwise only after a move.
+//!   where each reflector pixel's first secondary ray hits (-1e30 where it finds nothing), to check
+//!   the search.
 //! - `shadow_resolution` (default 1024): the raster pass's shadow maps.
 
 use bytemuck::{Pod, Zeroable};
@@ -187,6 +245,55 @@ pub const PARAMS: &[ParamSpec] = &[
         invalidates: Invalidates::Uniform,
     },
     ParamSpec {
+        name: "skip_start",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "start each secondary ray's search 2/resolution of |x| away (false: the paper's t = 0.0001)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "refine_every_layer",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "refine every layer's bracket, nearest refined hit wins (false: the paper's layer with the nearest overshoot only)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "interpolation",
+        kind: ParamKind::Choice(&["mesh", "plain"]),
+        default: "mesh",
+        doc: "mesh: interpolate within one mesh, brackets across meshes only where the ray passes the second; plain: the paper's",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "dielectric_branches",
+        kind: ParamKind::Choice(&["both", "refracted"]),
+        default: "both",
+        doc: "trace reflected and refracted branches at glass (refracted: the paper's single path)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "dielectric_fresnel",
+        kind: ParamKind::Choice(&["exact", "schlick"]),
+        default: "exact",
+        doc: "Fresnel terms at glass: exact, or the paper's Schlick approximation",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "dispersion",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "trace dispersive glass once per colour channel (false: the green index, as the paper's one index)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "estimate",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "unresolved rays and cut branches take the map's estimate (false: background, and the paper's path weight)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
         name: "output",
         kind: ParamKind::Choice(&["radiance", "first-hit"]),
         default: "radiance",
@@ -212,7 +319,27 @@ pub const INFO: MethodInfo = MethodInfo {
     progressive: false,
     delegates: &[],
     params: PARAMS,
-    presets: &[],
+    presets: &[crate::preset::Preset {
+        name: "paper",
+        summary: "the published algorithm (Umenhoffer, Patow, Szirmay-Kalos 2007) at its published settings (the video's depth 2, maps redrawn every frame): every step beyond the paper off",
+        settings: &[
+            "resolution=512",
+            "layers=simple",
+            "diffuse_layers=1",
+            "linear_steps=80",
+            "secant_steps=10",
+            "max_depth=2",
+            "min_max=true",
+            "dynamic=true",
+            "skip_start=false",
+            "refine_every_layer=false",
+            "interpolation=plain",
+            "dielectric_branches=refracted",
+            "dielectric_fresnel=schlick",
+            "dispersion=false",
+            "estimate=false",
+        ],
+    }],
     create: || Box::new(DistanceMaps::default()),
 };
 
@@ -264,6 +391,16 @@ impl DistanceMaps {
     }
 }
 
+/// How the map's texels are interpolated, and which brackets a linear search accepts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Interpolation {
+    /// Only between texels of one mesh; a bracket across two meshes only where the ray passes
+    /// the second one's distance (see the module doc).
+    Mesh,
+    /// The paper's: between all visible texels, every bracket.
+    Plain,
+}
+
 /// What the tracing pass writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Output {
@@ -300,6 +437,13 @@ pub struct GpuTraceSettings {
     pub dispersive: u32,
     pub output: u32,
     pub resolution: f32,
+    pub skip_start: u32,
+    pub refine_every_layer: u32,
+    pub per_mesh: u32,
+    pub both_branches: u32,
+    pub exact_fresnel: u32,
+    pub estimate: u32,
+    pub pad: [u32; 2],
 }
 
 /// Host mirror of WGSL `MapReflector`.
@@ -388,6 +532,17 @@ pub struct DistanceMaps {
     pub secant_steps: u32,
     pub max_depth: u32,
     pub min_max: bool,
+    /// Start the search 2/resolution of |x| along each secondary ray (else at the paper's t).
+    pub skip_start: bool,
+    pub refine_every_layer: bool,
+    pub interpolation: Interpolation,
+    /// Both branches at a dielectric (else only the refracted one, as the paper).
+    pub both_branches: bool,
+    /// Exact Fresnel terms at dielectrics (else Schlick's, as the paper).
+    pub exact_fresnel: bool,
+    pub dispersion: bool,
+    /// Unresolved rays and cut branches take the map's estimate (see the module doc).
+    pub estimate: bool,
     pub output: Output,
     pub dynamic: bool,
     pub shadow_resolution: u32,
@@ -406,6 +561,13 @@ impl Default for DistanceMaps {
             secant_steps: 10,
             max_depth: 4,
             min_max: true,
+            skip_start: true,
+            refine_every_layer: true,
+            interpolation: Interpolation::Mesh,
+            both_branches: true,
+            exact_fresnel: true,
+            dispersion: true,
+            estimate: true,
             output: Output::Radiance,
             dynamic: false,
             shadow_resolution: 1024,
@@ -961,6 +1123,30 @@ impl Technique for DistanceMaps {
             "secant_steps" => self.secant_steps.to_string(),
             "max_depth" => self.max_depth.to_string(),
             "min_max" => self.min_max.to_string(),
+            "skip_start" => self.skip_start.to_string(),
+            "refine_every_layer" => self.refine_every_layer.to_string(),
+            "interpolation" => match self.interpolation {
+                Interpolation::Mesh => "mesh".into(),
+                Interpolation::Plain => "plain".into(),
+            },
+            "dielectric_branches" => {
+                let word = if self.both_branches {
+                    "both"
+                } else {
+                    "refracted"
+                };
+                word.into()
+            }
+            "dielectric_fresnel" => {
+                let word = if self.exact_fresnel {
+                    "exact"
+                } else {
+                    "schlick"
+                };
+                word.into()
+            }
+            "dispersion" => self.dispersion.to_string(),
+            "estimate" => self.estimate.to_string(),
             "output" => match self.output {
                 Output::Radiance => "radiance".into(),
                 Output::FirstHit => "first-hit".into(),
@@ -987,6 +1173,18 @@ impl Technique for DistanceMaps {
             "secant_steps" => self.secant_steps = count,
             "max_depth" => self.max_depth = count,
             "min_max" => self.min_max = value.flag(),
+            "skip_start" => self.skip_start = value.flag(),
+            "refine_every_layer" => self.refine_every_layer = value.flag(),
+            "interpolation" => {
+                self.interpolation = match value.word() {
+                    "plain" => Interpolation::Plain,
+                    _ => Interpolation::Mesh,
+                }
+            }
+            "dielectric_branches" => self.both_branches = value.word() == "both",
+            "dielectric_fresnel" => self.exact_fresnel = value.word() == "exact",
+            "dispersion" => self.dispersion = value.flag(),
+            "estimate" => self.estimate = value.flag(),
             "dynamic" => self.dynamic = value.flag(),
             "output" => {
                 self.output = match value.word() {
@@ -1028,9 +1226,18 @@ impl Technique for DistanceMaps {
             secant_steps: self.secant_steps,
             max_depth: self.max_depth,
             min_max: u32::from(self.min_max),
-            dispersive: u32::from(scene.materials.iter().any(|m| m.is_dispersive())),
+            dispersive: u32::from(
+                self.dispersion && scene.materials.iter().any(|m| m.is_dispersive()),
+            ),
             output: self.output as u32,
             resolution: self.resolution as f32,
+            skip_start: u32::from(self.skip_start),
+            refine_every_layer: u32::from(self.refine_every_layer),
+            per_mesh: u32::from(self.interpolation == Interpolation::Mesh),
+            both_branches: u32::from(self.both_branches),
+            exact_fresnel: u32::from(self.exact_fresnel),
+            estimate: u32::from(self.estimate),
+            pad: [0; 2],
         };
         let layer_count = self.layer_count() as u64;
         let p = self.prepared.as_mut().expect("prepared above");
@@ -1073,12 +1280,19 @@ impl Technique for DistanceMaps {
             ),
             ("raster passes".into(), 1 + faces),
         ];
-        for ((name, what), &count) in FALLBACK_KINDS.iter().zip(&fallbacks) {
+        for (kind, ((name, what), &count)) in FALLBACK_KINDS.iter().zip(&fallbacks).enumerate() {
             counters.push((name.to_string(), count as u64));
             if count > 0 {
-                warnings.push(format!(
-                    "distance-maps: {count} {what}; they take the farthest diffuse surface the map holds in their direction (an estimate)"
-                ));
+                let taken = match (self.estimate, kind) {
+                    (true, _) => {
+                        "they take the farthest diffuse surface the map holds in their direction (an estimate)"
+                    }
+                    (false, 0) => "they meet the background (estimate=false)",
+                    (false, _) => {
+                        "they end with their weight so far, as if the surface they stop at sent radiance 1 (estimate=false, the paper's Listing 17-5)"
+                    }
+                };
+                warnings.push(format!("distance-maps: {count} {what}; {taken}"));
             }
         }
         Ok(Drawn {

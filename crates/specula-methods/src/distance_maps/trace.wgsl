@@ -1,6 +1,6 @@
 // distance-maps, steps 2 and 3: shades each reflector pixel of the G-buffer by tracing its
 // secondary rays in the reflector's layered distance map (linear search per layer, secant
-// search in the nearest layer) and following the specular path to a diffuse surface.
+// search in each or in the nearest layer) and following the specular path to a diffuse surface.
 // Prepended: optics.wgsl, camera.wgsl, scene.wgsl, cubemap.wgsl, codes.wgsl.
 
 const OUTPUT_RADIANCE: u32 = 0u;
@@ -21,7 +21,25 @@ struct TraceSettings {
     output: u32,
     // Texels per face side.
     resolution: f32,
+    // 1: the search starts 2 / resolution of |x| along the ray; 0: at the paper's t.
+    skip_start: u32,
+    // 1: every layer's bracket is refined; 0: only the nearest overshoot's layer (the paper).
+    refine_every_layer: u32,
+    // 1: interpolation within one mesh and the cross-mesh bracket rule; 0: the paper's plain.
+    per_mesh: u32,
+    // 1: both branches at a dielectric; 0: the refracted one only (the paper).
+    both_branches: u32,
+    // 1: exact Fresnel terms at dielectrics; 0: Schlick's (the paper).
+    exact_fresnel: u32,
+    // 1: unresolved rays and cut branches take the map's estimate; 0: the background for a
+    // missed ray, the path's weight for a cut one (the paper's Listing 17-5).
+    estimate: u32,
+    pad0: u32,
+    pad1: u32,
 };
+
+// The paper's first linear-search parameter (Listing 17-1: t = 0.0001).
+const PAPER_T_START: f32 = 0.0001;
 
 // A reflector's map: its reference point, the index of its first layer (array layer of face f
 // of layer j: (first_map + j) * 6 + f), and the distance beyond which the map holds nothing
@@ -94,10 +112,16 @@ fn footprint_texel(fp: Footprint, i: u32) -> vec2<i32> {
     return clamp(fp.corner + offset, vec2<i32>(0), vec2<i32>(size - 1));
 }
 
-// What the map stores in a direction: |l'|, bilinear over the footprint's texels that show the
-// same mesh as the nearest one (so that a silhouette does not blend two objects into a
-// surface between them), and that mesh (index + 1). Distance -1 where the nearest
-// texel sees nothing.
+// Whether texel `geometry` enters the interpolation of a lookup whose nearest texel shows
+// `nearest_mesh`: any visible texel (plain), or one of the same mesh (so that a silhouette does
+// not blend two objects into a surface between them).
+fn interpolated(geometry: vec4<f32>, nearest_mesh: f32) -> bool {
+    return geometry.w > 0.0 && (settings.per_mesh == 0u || geometry.z == nearest_mesh);
+}
+
+// What the map stores in a direction: |l'|, bilinear over the footprint's texels `interpolated`
+// admits, and the nearest texel's mesh (index + 1). Distance -1 where the nearest texel sees
+// nothing.
 struct Stored {
     distance: f32,
     mesh: f32,
@@ -116,7 +140,7 @@ fn map_distance(map: u32, d: vec3<f32>) -> Stored {
     var total = 0.0;
     for (var i = 0u; i < 4u; i++) {
         let texel = textureLoad(map_geometry, footprint_texel(fp, i), fp.layer, 0);
-        if (texel.w > 0.0 && texel.z == nearest.z) {
+        if (interpolated(texel, nearest.z)) {
             sum += fp.weights[i] * texel.w;
             total += fp.weights[i];
         }
@@ -126,7 +150,7 @@ fn map_distance(map: u32, d: vec3<f32>) -> Stored {
 }
 
 // The surface a map shows in direction `d`: material and code of the nearest texel; diffuse
-// radiance and the normal interpolated over the footprint's texels of the same mesh.
+// radiance and the normal interpolated over the footprint's texels `interpolated` admits.
 struct MapSurface {
     rgb: vec3<f32>,
     code: f32,
@@ -145,7 +169,7 @@ fn map_surface(map: u32, d: vec3<f32>) -> MapSurface {
         let xy = footprint_texel(fp, i);
         let material = textureLoad(map_material, xy, fp.layer, 0);
         let geometry = textureLoad(map_geometry, xy, fp.layer, 0);
-        if (geometry.w > 0.0 && geometry.z == nearest_mesh) {
+        if (interpolated(geometry, nearest_mesh)) {
             rgb += fp.weights[i] * material.xyz;
             normal += fp.weights[i] * octahedral_decode(geometry.xy);
             total += fp.weights[i];
@@ -193,11 +217,13 @@ fn marched_range(map: u32, far: f32, x: vec3<f32>, r: vec3<f32>, d_start: f32) -
 // search: the ray crosses the layer between them.
 struct Bracket {
     found: bool,
-    // Whether both samples show the same mesh. Where they do not, the ray went from in front of
-    // one object to behind another at a silhouette (it met the second one, or something hidden
-    // behind the first): the map holds no surface between them to refine on, and the
-    // overshooting sample is taken as the hit. The other way round is no hit.
-    same_mesh: bool,
+    // Whether the secant search may refine it: with per-mesh interpolation, only where both
+    // samples show the same mesh. Where they do not, the ray went from in front of one object
+    // to behind another at a silhouette (it met the second one, or something hidden behind the
+    // first): the map holds no surface between them to refine on, and the overshooting sample
+    // is taken as the hit. The other way round is no hit. With plain interpolation every
+    // bracket is refined, as the paper's.
+    refinable: bool,
     dl: f32,
     llp: f32,
     dp: f32,
@@ -235,15 +261,21 @@ fn linear_search(map: u32, x: vec3<f32>, r: vec3<f32>, range: vec2<f32>) -> Brac
                 b.ppp = ratio;
                 overshoot = true;
             }
+            if (undershoot && overshoot && settings.per_mesh == 0u) {
+                // The paper's: the first consecutive undershooting and overshooting pair.
+                b.found = true;
+                b.refinable = true;
+                return b;
+            }
             if (undershoot && overshoot) {
-                b.same_mesh = stored.mesh == mesh;
+                b.refinable = stored.mesh == mesh;
                 // Between two meshes, a crossing needs the ray to pass the second one's distance
                 // while stepping onto it: from in front of it (the undershooting point is nearer
                 // than the second mesh here) to behind it. A ray that was already behind it went
                 // round its silhouette; one that comes out from behind an object in front of
                 // another met nothing. Either way, start over from here.
                 let crossed = ratio >= 1.0 && length(x + r * b.dl) < stored.distance;
-                if (b.same_mesh || crossed) {
+                if (b.refinable || crossed) {
                     b.found = true;
                     return b;
                 }
@@ -275,7 +307,7 @@ fn secant_search(map: u32, x: vec3<f32>, r: vec3<f32>, bracket: Bracket) -> f32 
     var dp = bracket.dp;
     var ppp = bracket.ppp;
     var d = dp;
-    let steps = select(0u, settings.secant_steps, bracket.same_mesh);
+    let steps = select(0u, settings.secant_steps, bracket.refinable);
     for (var i = 0u; i < steps; i++) {
         d = dl + (dp - dl) * (1.0 - llp) / (ppp - llp);
         let p = x + r * d;
@@ -297,16 +329,21 @@ fn secant_search(map: u32, x: vec3<f32>, r: vec3<f32>, bracket: Bracket) -> f32 
     return d;
 }
 
-// Hit(): the linear search in every layer of the reflector's map, each bracket refined by the
-// secant search; the nearest refined hit wins. (The paper refines only the layer with the
-// nearest overshooting sample; where the marching steps are long, as on rays leaving near the
-// reference point, that sample can lie beyond another layer's hit.)
+// Hit(): the linear search in every layer of the reflector's map. The paper refines only the
+// layer with the nearest overshooting sample; with `refine_every_layer` every layer's bracket
+// is refined by the secant search and the nearest refined hit wins (where the marching steps
+// are long, as on rays leaving near the reference point, the nearest overshooting sample can
+// lie beyond another layer's hit).
 fn trace_ray(reflector: MapReflector, x: vec3<f32>, r: vec3<f32>) -> Hit {
-    // Start a texel's width (at the start point's distance) away, so that the interpolated
-    // copy of the surface the ray leaves is not taken for a hit.
-    let d_start = length(x) * 2.0 / settings.resolution;
+    // Skipping a texel's width (at the start point's distance) keeps the interpolated copy of
+    // the surface the ray leaves from being taken for a hit; the paper starts at t = 0.0001.
+    let a = length(x);
+    let d_start = select(a * PAPER_T_START / (1.0 - PAPER_T_START), a * 2.0 / settings.resolution, settings.skip_start == 1u);
     var best: Hit;
     best.d = FAR;
+    var nearest: Bracket;
+    var nearest_map = 0u;
+    var nearest_dp = FAR;
     for (var j = 0u; j < settings.layers; j++) {
         let map = reflector.first_map + j;
         let range = marched_range(map, reflector.far, x, r, d_start);
@@ -317,12 +354,25 @@ fn trace_ray(reflector: MapReflector, x: vec3<f32>, r: vec3<f32>) -> Hit {
         if (!bracket.found) {
             continue;
         }
+        if (settings.refine_every_layer == 0u) {
+            if (bracket.dp < nearest_dp) {
+                nearest_dp = bracket.dp;
+                nearest = bracket;
+                nearest_map = map;
+            }
+            continue;
+        }
         let d = secant_search(map, x, r, bracket);
         if (d < best.d) {
             best.found = true;
             best.map = map;
             best.d = d;
         }
+    }
+    if (nearest_dp < FAR) {
+        best.found = true;
+        best.map = nearest_map;
+        best.d = secant_search(nearest_map, x, r, nearest);
     }
     return best;
 }
@@ -362,8 +412,10 @@ struct Split {
 
 // The branches of a path arriving along `dir` at a surface with `normal` and (rgb, code)
 // `surface`: a mirror reflects (Schlick's Fresnel or exactly F0, as the reference); a
-// dielectric reflects and refracts with the exact Fresnel terms (all reflected under total
-// internal reflection), a thin sheet reflects and passes straight through.
+// dielectric reflects and refracts (all reflected under total internal reflection), a thin
+// sheet reflects and passes straight through. The Fresnel terms at a dielectric are exact, or
+// Schlick's with the incident angle on either side (the paper's Listing 17-5); with only the
+// refracted branch (the paper's), the first branch is the refracted (or totally reflected) one.
 fn split_at(dir: vec3<f32>, normal: vec3<f32>, surface: vec4<f32>, channel: u32) -> Split {
     var out: Split;
     let code = surface.w;
@@ -376,13 +428,15 @@ fn split_at(dir: vec3<f32>, normal: vec3<f32>, surface: vec4<f32>, channel: u32)
     }
     let iors = ior_from_f0(surface.xyz);
     let ior = select(iors[min(channel, 2u)], iors.y, channel == 3u);
+    let branches = select(1u, 2u, settings.both_branches == 1u);
+    let schlick = fresnel_schlick(surface.xyz, cos_v);
     if (code > THIN_OFFSET) {
-        let sheet = thin_sheet_reflectance(cos_v, ior);
-        out.count = 2u;
+        let sheet = select(2.0 * schlick / (1.0 + schlick), vec3<f32>(thin_sheet_reflectance(cos_v, ior)), settings.exact_fresnel == 1u);
+        out.count = branches;
         out.dir0 = dir;
-        out.weight0 = vec3<f32>(1.0 - sheet);
+        out.weight0 = 1.0 - sheet;
         out.dir1 = reflect(dir, normal);
-        out.weight1 = vec3<f32>(sheet);
+        out.weight1 = sheet;
         return out;
     }
     // The stored normal points out of the solid: a ray along it is leaving.
@@ -392,24 +446,28 @@ fn split_at(dir: vec3<f32>, normal: vec3<f32>, surface: vec4<f32>, channel: u32)
         n_in = -normal;
         eta = ior;
     }
-    let f = fresnel_dielectric(cos_v, eta);
+    let exact = fresnel_dielectric(cos_v, eta);
+    let t = refract(dir, n_in, eta);
+    let total = select(dot(t, t) == 0.0, exact >= 1.0, settings.exact_fresnel == 1u);
+    let f = select(schlick, vec3<f32>(exact), settings.exact_fresnel == 1u);
     let r = reflect(dir, n_in);
-    if (f >= 1.0) {
+    if (total) {
         out.count = 1u;
         out.dir0 = r;
         out.weight0 = vec3<f32>(1.0);
         return out;
     }
-    out.count = 2u;
-    out.dir0 = refract(dir, n_in, eta);
-    out.weight0 = vec3<f32>(1.0 - f);
+    out.count = branches;
+    out.dir0 = t;
+    out.weight0 = 1.0 - f;
     out.dir1 = r;
-    out.weight1 = vec3<f32>(f);
+    out.weight1 = f;
     return out;
 }
 
 fn push(x: vec3<f32>, dir: vec3<f32>, weight: vec3<f32>, depth: u32) -> bool {
-    if (max(weight.x, max(weight.y, weight.z)) < MIN_BRANCH_WEIGHT) {
+    // The cut-off belongs to the branching: the paper's single path is followed to its end.
+    if (settings.both_branches == 1u && max(weight.x, max(weight.y, weight.z)) < MIN_BRANCH_WEIGHT) {
         return true;
     }
     if (stack_top == STACK_SIZE) {
@@ -462,12 +520,23 @@ fn first_hit(reflector: MapReflector, p_world: vec3<f32>, v: vec3<f32>, n: vec3<
     return select(vec3<f32>(NO_HIT), reflector.origin + x + branches.dir0 * hit.d, hit.found);
 }
 
+// The radiance a branch cut at `l` (at max_depth or over the stack) takes for what it would
+// see along `dir`: the map's estimate, or (estimate = 0) 1, as the paper's Listing 17-5 returns
+// its path's product of Fresnel factors, with no radiance, when the depth runs out.
+fn cut_radiance(reflector: MapReflector, l: vec3<f32>, dir: vec3<f32>) -> vec3<f32> {
+    if (settings.estimate == 0u) {
+        return vec3<f32>(1.0);
+    }
+    return estimate(reflector, l, dir).rgb;
+}
+
 // Radiance arriving at the eye along the specular paths that start at `p_world` (seen along
 // unit `v`, normal `n` facing the eye, surface `first` as (rgb, code)). `channel` 0..2 traces
 // one colour channel's index of refraction, 3 all channels with the green one. Every branch
-// is followed (both at a dielectric) until it meets a diffuse surface, up to `max_depth`
-// bounces; a ray the search cannot resolve, a branch at the depth limit and one with no room
-// left take the map's estimate (`estimate`), counted.
+// is followed (both at a dielectric, or the refracted one only) until it meets a diffuse
+// surface, up to `max_depth` bounces; a ray the search cannot resolve takes the map's
+// estimate (or the background), a branch at the depth limit and one with no room left
+// `cut_radiance`; each counted.
 fn trace_paths(reflector: MapReflector, p_world: vec3<f32>, v: vec3<f32>, n: vec3<f32>, first: vec4<f32>, channel: u32) -> vec3<f32> {
     var color = vec3<f32>(0.0);
     let x0 = p_world - reflector.origin;
@@ -487,7 +556,7 @@ fn trace_paths(reflector: MapReflector, p_world: vec3<f32>, v: vec3<f32>, n: vec
             if (e.missed) {
                 atomicAdd(&fallbacks[FALLBACK_MISSED], 1u);
             }
-            color += b.weight * e.rgb;
+            color += b.weight * select(background_radiance(b.dir), e.rgb, settings.estimate == 1u);
             continue;
         }
         let l = b.x + b.dir * hit.d;
@@ -499,19 +568,24 @@ fn trace_paths(reflector: MapReflector, p_world: vec3<f32>, v: vec3<f32>, n: vec
         let next = split_at(b.dir, s.normal, vec4<f32>(s.rgb, s.code), channel);
         if (b.depth + 1u >= settings.max_depth) {
             atomicAdd(&fallbacks[FALLBACK_DEPTH], 1u);
-            color += b.weight * next.weight0 * estimate(reflector, l, next.dir0).rgb;
+            if (settings.estimate == 0u) {
+                // Listing 17-5 stops before the cut surface's Fresnel factor.
+                color += b.weight;
+                continue;
+            }
+            color += b.weight * next.weight0 * cut_radiance(reflector, l, next.dir0);
             if (next.count == 2u) {
-                color += b.weight * next.weight1 * estimate(reflector, l, next.dir1).rgb;
+                color += b.weight * next.weight1 * cut_radiance(reflector, l, next.dir1);
             }
             continue;
         }
         if (!push(l, next.dir0, b.weight * next.weight0, b.depth + 1u)) {
             atomicAdd(&fallbacks[FALLBACK_STACK], 1u);
-            color += b.weight * next.weight0 * estimate(reflector, l, next.dir0).rgb;
+            color += b.weight * next.weight0 * cut_radiance(reflector, l, next.dir0);
         }
         if (next.count == 2u && !push(l, next.dir1, b.weight * next.weight1, b.depth + 1u)) {
             atomicAdd(&fallbacks[FALLBACK_STACK], 1u);
-            color += b.weight * next.weight1 * estimate(reflector, l, next.dir1).rgb;
+            color += b.weight * next.weight1 * cut_radiance(reflector, l, next.dir1);
         }
     }
     return color;
