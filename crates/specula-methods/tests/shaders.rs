@@ -221,6 +221,13 @@ fn host_structs_match_wgsl_layouts() {
             offset_of!(GpuSettings, layers),
             offset_of!(GpuSettings, peeled),
             offset_of!(GpuSettings, refractor_extent),
+            offset_of!(GpuSettings, far_depth),
+            offset_of!(GpuSettings, bracket),
+            offset_of!(GpuSettings, discs),
+            offset_of!(GpuSettings, internal_reflection),
+            offset_of!(GpuSettings, reflection),
+            offset_of!(GpuSettings, fallback),
+            offset_of!(GpuSettings, dispersion),
             offset_of!(GpuSettings, pad),
         ],
     );
@@ -278,6 +285,13 @@ fn host_structs_match_wgsl_layouts() {
             offset_of!(GpuTraceSettings, dispersive),
             offset_of!(GpuTraceSettings, output),
             offset_of!(GpuTraceSettings, resolution),
+            offset_of!(GpuTraceSettings, skip_start),
+            offset_of!(GpuTraceSettings, refine_every_layer),
+            offset_of!(GpuTraceSettings, per_mesh),
+            offset_of!(GpuTraceSettings, both_branches),
+            offset_of!(GpuTraceSettings, exact_fresnel),
+            offset_of!(GpuTraceSettings, estimate),
+            offset_of!(GpuTraceSettings, pad),
         ],
     );
     assert_layout(

@@ -48,8 +48,6 @@ struct Settings {
     // The largest solid refractor's bounding-sphere diameter: how far marches between
     // refractors look.
     refractor_extent: f32,
-    pad1: u32,
-    pad2: u32,
     // View depth of the far plane: what the NG z-buffer holds where nothing was drawn.
     far_depth: f32,
     // 1: the iterative mode's bracketed search (0: the paper's iteration from the best seed).
@@ -65,6 +63,8 @@ struct Settings {
     fallback: u32,
     // 1: dispersive materials refract once per channel (0: one path at the green index).
     dispersion: u32,
+    pad1: u32,
+    pad2: u32,
     pad3: u32,
 };
 

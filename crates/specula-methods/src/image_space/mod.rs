@@ -438,7 +438,6 @@ pub struct GpuSettings {
     pub layers: u32,
     pub peeled: u32,
     pub refractor_extent: f32,
-    pub pad: [u32; 2],
     /// View depth of the far plane: what a cleared z-buffer holds.
     pub far_depth: f32,
     pub bracket: u32,
@@ -447,7 +446,7 @@ pub struct GpuSettings {
     pub reflection: u32,
     pub fallback: u32,
     pub dispersion: u32,
-    pub tail_pad: u32,
+    pub pad: [u32; 3],
 }
 
 /// What a final-pass bind group was made for: the pool slots of the scene, back-face and NG
@@ -1144,7 +1143,6 @@ impl Technique for ImageSpace {
             layers: self.layers,
             peeled,
             refractor_extent: p.refractor_extent,
-            pad: [0; 2],
             far_depth: raster::depth_range(&bounds, camera.eye).1,
             bracket: self.bracket as u32,
             discs: self.discs as u32,
@@ -1152,7 +1150,7 @@ impl Technique for ImageSpace {
             reflection: self.reflection as u32,
             fallback: self.fallback as u32,
             dispersion: self.dispersion as u32,
-            tail_pad: 0,
+            pad: [0; 3],
         };
         let output = self.output.get(gpu, width, height);
         p.counters.clear(gpu);
