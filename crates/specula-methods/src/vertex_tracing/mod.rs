@@ -8,24 +8,29 @@
 //! 1. Visibility (§3): the ID buffer — the scene raster pass's G-buffer ids where the run has a
 //!    GPU, the CPU tracer's primary hits where it has none ([`crate::screen::PixelSurfaces`]).
 //!    A reflector vertex is seen when the ID buffer at its pixel shows its surface at its depth
-//!    ([`refine::FrameInputs::is_visible`]). The rest of the scene comes from the same pass (the
-//!    raster colour, or the reference's shading of each primary hit without a GPU).
+//!    ([`refine::FrameInputs::is_visible`]; the paper's ID buffer "is essentially a Z-buffer").
+//!    The rest of the scene comes from the same pass (the raster colour, or the reference's
+//!    shading of each primary hit without a GPU).
 //! 2. Vertex rays (§3; [`refine::Package`]): for each vertex of a reflector triangle with a seen
-//!    vertex, the primary ray from the eye aimed at it — its intersection is the vertex, so it
-//!    is not searched for — then reflected, refracted and shadow rays through the reference
-//!    tracer, keeping each vertex's colour and ray tree
+//!    vertex (the paper's rule: an edge is traced when one of its ends is seen), the primary
+//!    ray from the eye aimed at it — its intersection is the vertex, so it is not searched for
+//!    ("these primary ray intersections are completely avoided"): a hidden end of a seen edge
+//!    is shaded as its own surface, not as the occluder, and an occluder's edge does not leak
+//!    into the reflector's interpolation — then reflected, refracted and shadow rays through
+//!    the reference tracer, keeping each vertex's colour and ray tree
 //!    ([`specula_trace::reference::RayTree`]).
-//! 3. Refinement (§3.1–3.2, Figure 6): the edges in a queue, longest on the screen first; an
-//!    edge whose ends differ in colour by more than `epsilon` or in ray tree is split at its
-//!    midpoint (one new vertex, one new ray), both faces beside it cut in two (Figure 4); the
-//!    new edges join the queue. A refined face flatter than `flatness` (height over longest
-//!    edge) has its longest edge split (§3.2, the convergence fix), unless its height is under
-//!    two pixels; colour splits stop at `min_edge_px`, all splits at `max_level`.
+//! 3. Refinement (§3.1–3.2, Figure 6): the edges with a seen end in a queue, longest on the
+//!    screen first; an edge whose ends differ in display colour by more than `epsilon` or in
+//!    ray tree is split at its midpoint (one new vertex, one new ray), both faces beside it cut
+//!    in two (Figure 4); the new edges join the queue. A refined face flatter than `flatness`
+//!    (height over longest edge) has its longest edge split (§3.2, the convergence fix), unless
+//!    its height is under two pixels; colour splits stop at `min_edge_px`, all splits at
+//!    `max_level`. An edge with an end behind the eye has no projected length and is kept.
 //! 4. Triangle filling (§3): each pixel of a face left with an unresolved edge (its ends differ
 //!    but it may not be split) is traced exactly.
 //! 5. Display: each reflector pixel belongs to the triangle the ID buffer shows there; it takes
-//!    the leaf face of that triangle's refinement it falls in, Gouraud-interpolated
-//!    (perspective-correct) from the face's corners, or its traced colour once filled.
+//!    the leaf face of that triangle's refinement it falls in, Gouraud-interpolated from the
+//!    face's corners, or its traced colour once filled.
 //!
 //! Progressive display (`budget_ms` > 0, what the viewer sets): the first call returns the
 //! Gouraud preview (original vertices only); each later call refines for about `budget_ms`
@@ -36,32 +41,64 @@
 //!
 //! Work is cut into task packages of reflector triangles (`refine::Package`), refined in
 //! parallel (rayon) here and by MPI workers in `specula render --distributed` (§4; the
-//! `distributed` module, feature `mpi`, with the load balancer of `balance`). A package's
-//! pixels do not depend on how the frame was cut, so both give the same image bit for bit.
+//! `distributed` module, feature `mpi`, with the load balancer of `balance`; the workers get
+//! the same settings, the paper preset's included, and run the same package code).
 //!
-//! Beyond the paper:
-//! - Deferred textures (`deferred_textures`): where a face's corners read the same textures
-//!   along alike paths (a dial seen through the cover), their texture coordinates and
-//!   coefficients are interpolated — perspective-correct for the textured surface's virtual
-//!   image — and the texels read per pixel, so texture detail needs no refinement; a crease of
-//!   the textured surface splits the edge. Without it, a texture test splits an edge whose
-//!   texture between its ends departs from their blend by more than ε.
-//! - Ray trees leave out rays of little weight (`tree_weight`).
-//! - A vertex hidden by an occluder is shaded as its own surface (the primary hit is the
-//!   vertex, not the occluder), so an occluder's edge does not leak into the reflector's
-//!   interpolation; a triangle seen only between its corners (the paper's footnote: "not
-//!   considered") is traced and filled; faces with a corner behind the eye are filled; a pixel
-//!   the ID buffer gives to a triangle that cannot be seen there (outside its projection, a
-//!   closed glass's back face) is stray and traced.
-//! - The original vertices are traced once per process for all its packages, and the active
-//!   triangles are ordered along a Morton curve, so that a package is a compact patch with a
-//!   short border (the paper's future work: "spatial sectors").
+//! Beyond the paper (each switched off by the `paper` preset; `specula methods` lists it):
+//! - Deferred textures: where a face's corners read the same textures along alike paths (a
+//!   dial seen through the cover), their texture coordinates and coefficients are
+//!   interpolated — perspective-correct for the textured surface's virtual image — and the
+//!   texels read per pixel, so texture detail needs no refinement; a crease of the textured
+//!   surface splits the edge. Switched off, a texture test splits an edge whose texture between
+//!   its ends departs from their blend by more than ε, and texels are interpolated as colours
+//!   like the rest (paper: `deferred_textures=false`).
+//! - Ray trees leave out rays of little weight, which change objects often in glass and the
+//!   picture hardly (paper: `tree_weight=0`): the paper compares whole trees.
+//! - Perspective-correct Gouraud interpolation (each corner's weight divided by its depth).
+//!   The paper interpolates "linearly by means of Gouraud shading", on the screen
+//!   (paper: `perspective_correct=false`), which bends a large face's gradient.
+//! - The flatness rule is kept off triangle borders: a border edge is split or kept by its ends
+//!   alone, alike in the two triangles beside it wherever their packages are. The paper's rule
+//!   cuts any longest edge, a border edge too — Figure 7's third edge can be one
+//!   (paper: `flatness_inside_triangles=false`); a package then splits a border edge by its own
+//!   side's faces, which the neighbour's package does not see, so along package borders the
+//!   image depends on how the frame was cut (the thread count, `package_triangles`; a few dozen
+//!   pixels by a level or two at 640×480 with one-triangle packages on truck-cover and
+//!   glass-sphere).
+//! - Faces none of whose corners is seen are traced: a triangle seen only between its corners
+//!   (behind an occluder with a gap) is made active and filled, and so is such a leaf face of an
+//!   active triangle. The paper's footnote leaves the first case "not considered" and renders
+//!   every face of its seen triangles (paper: `trace_unseen=false`): such a triangle is not
+//!   drawn, its pixels keep the rest of the scene's colour there (the raster pass draws
+//!   reflectors black), and such a leaf face is Gouraud-interpolated like any other.
+//! - Faces with a corner behind the eye are traced. The paper is silent; switched off
+//!   (paper: `trace_behind_eye=false`) each pixel takes the corners' colours weighted by where
+//!   its ray meets the face — what rasterizing the face clipped at the near plane gives (no
+//!   screen triangle exists to interpolate linearly on).
+//! - Stray pixels are traced: a pixel the ID buffer gives to a triangle that cannot be seen
+//!   there (its centre outside the triangle's projection by half a pixel, a raster depth
+//!   buffer's rounding; or a closed glass's back face between the two walls of a thin shell).
+//!   The paper's display gives every pixel of a triangle that triangle's interpolated colour
+//!   (paper: `trace_stray=false`): a stray pixel takes the leaf face the face tree's separating
+//!   lines put it in, its weights clamped to the face and summing to one (near the face's
+//!   nearest side's colour).
+//!
+//! Implementation (changes no pixel): the original vertices are traced once per process for all
+//! its packages (a vertex's sample is a function of its position and host triangle alone), and
+//! the active triangles are ordered along a Morton curve, so that a package is a compact patch
+//! with a short border (the paper's future work: "spatial sectors"). A package's pixels do not
+//! depend on how the frame was cut (`refine`'s doc says why; the test
+//! `the_image_does_not_depend_on_how_the_frame_is_cut_into_packages` holds it bit for bit), so
+//! the cut, the order, rayon's scheduling and MPI give the same image — with
+//! `flatness_inside_triangles` on, the default; the paper's flatness rule (above) makes the cut
+//! matter along package borders.
 //!
 //! Approximations and artifacts: between vertices the radiance is interpolated linearly, so a
 //! reflected feature smaller than the refined faces and seen by neither end of any edge is
 //! missed (the sampling's Nyquist limit); ε on display colours lets faint gradients band
 //! slightly; without filling, discontinuities are staircased to the last faces' size
-//! (`min_edge_px`).
+//! (`min_edge_px`). The paper states no values for ε, v, l, the deepest split or the ray
+//! depth, so the `paper` preset keeps specula's defaults for them.
 //!
 //! Parameters (quality / cost):
 //! - `epsilon` (0.03): colour difference that splits an edge. Lower follows fainter changes,
@@ -76,6 +113,17 @@
 //!   objects often and the picture hardly); 0 compares whole trees (the paper), with many more
 //!   splits in glass.
 //! - `refine` (true) / `fill` (true): switch off refinement (the preview alone) or filling.
+//! - `deferred_textures` (true): see above; off, textured reflections refine (and fill) along
+//!   texture detail: more rays.
+//! - `perspective_correct` (true): off, faces are interpolated linearly on the screen (the
+//!   paper); the same cost, a bent gradient across large faces (the preview's most).
+//! - `flatness_inside_triangles` (true): off, the flatness rule cuts border edges too (the
+//!   paper): a few more splits along discontinuities near triangle borders, and an image that
+//!   depends on the package cut there.
+//! - `trace_unseen` (true) / `trace_behind_eye` (true) / `trace_stray` (true): off, those
+//!   pixels are interpolated (or not drawn) instead of traced: fewer rays, the paper's holes and
+//!   smears where a reflector is seen between occluders, reaches behind the eye, or meets the
+//!   ID buffer's rounding.
 //! - `budget_ms` (0): progressive mode, milliseconds per call; 0 does everything in one call.
 //! - `package_triangles` (0): reflector triangles per task package, the parallel grain (0: the
 //!   active triangles in sixteen packages per thread). The original vertices are traced once
@@ -181,6 +229,41 @@ pub const PARAMS: &[ParamSpec] = &[
         invalidates: Invalidates::Uniform,
     },
     ParamSpec {
+        name: "perspective_correct",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "Gouraud interpolation perspective-correct (false: linear on the screen, the paper's)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "flatness_inside_triangles",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "the flatness rule leaves triangle borders alone, so packages never disagree (false: any longest edge, the paper's)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "trace_unseen",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "trace faces seen only between their corners (false: the paper: a triangle with no seen corner is not drawn)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "trace_behind_eye",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "trace faces with a corner behind the eye (false: interpolate them where each pixel's ray meets them)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "trace_stray",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "trace pixels the ID buffer gives to a triangle that cannot be seen there (false: interpolate them from that triangle, the paper's display)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
         name: "budget_ms",
         kind: ParamKind::Integer { min: 0, max: 60000 },
         default: "0",
@@ -227,7 +310,19 @@ pub const INFO: MethodInfo = MethodInfo {
     progressive: true,
     delegates: &[],
     params: PARAMS,
-    presets: &[],
+    presets: &[crate::preset::Preset {
+        name: "paper",
+        summary: "the published algorithm (Ullmann et al. 2001): whole ray trees, texels interpolated as colours, Gouraud linear on the screen, the flatness rule on any edge, faces with no seen corner not drawn, nothing traced but vertices and unresolved faces",
+        settings: &[
+            "tree_weight=0",
+            "deferred_textures=false",
+            "perspective_correct=false",
+            "flatness_inside_triangles=false",
+            "trace_unseen=false",
+            "trace_behind_eye=false",
+            "trace_stray=false",
+        ],
+    }],
     create: || Box::new(VertexTracing::default()),
 };
 
@@ -265,6 +360,11 @@ impl Default for VertexTracing {
                 refine: true,
                 fill: true,
                 deferred_textures: true,
+                perspective_correct: true,
+                flatness_inside_triangles: true,
+                trace_unseen: true,
+                trace_behind_eye: true,
+                trace_stray: true,
             },
             budget_ms: 0,
             package_triangles: 0,
@@ -467,6 +567,11 @@ impl Technique for VertexTracing {
             "refine" => s.refine.to_string(),
             "fill" => s.fill.to_string(),
             "deferred_textures" => s.deferred_textures.to_string(),
+            "perspective_correct" => s.perspective_correct.to_string(),
+            "flatness_inside_triangles" => s.flatness_inside_triangles.to_string(),
+            "trace_unseen" => s.trace_unseen.to_string(),
+            "trace_behind_eye" => s.trace_behind_eye.to_string(),
+            "trace_stray" => s.trace_stray.to_string(),
             "budget_ms" => self.budget_ms.to_string(),
             "package_triangles" => self.package_triangles.to_string(),
             "visibility" => match self.visibility {
@@ -493,6 +598,11 @@ impl Technique for VertexTracing {
             "refine" => s.refine = value.flag(),
             "fill" => s.fill = value.flag(),
             "deferred_textures" => s.deferred_textures = value.flag(),
+            "perspective_correct" => s.perspective_correct = value.flag(),
+            "flatness_inside_triangles" => s.flatness_inside_triangles = value.flag(),
+            "trace_unseen" => s.trace_unseen = value.flag(),
+            "trace_behind_eye" => s.trace_behind_eye = value.flag(),
+            "trace_stray" => s.trace_stray = value.flag(),
             "budget_ms" => self.budget_ms = value.integer() as u32,
             "package_triangles" => self.package_triangles = value.integer() as usize,
             "visibility" => {
@@ -614,7 +724,7 @@ impl Technique for VertexTracing {
                 progress.setup.owners.len() as u64,
             ),
             (
-                "stray pixels (traced: the ID buffer's triangle cannot be seen there)".into(),
+                "stray pixels (the ID buffer's triangle cannot be seen there; traced with trace_stray)".into(),
                 progress.setup.owners.stray() as u64,
             ),
             (

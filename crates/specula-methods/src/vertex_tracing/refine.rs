@@ -8,9 +8,11 @@
 //! that holds it, the same in every package); an edge on a triangle's boundary is split or kept
 //! by its end points alone (colour, ray tree, projected length, level), so both triangles beside
 //! it split it alike wherever they are; the flatness rule, which looks at faces, applies only to
-//! edges inside one triangle; and the queue's order among one triangle's edges is by projected
-//! length, ties broken by position. So a frame cut into packages any way — rayon's, or the MPI
-//! master's — composes the same image bit for bit. The price is the paper's redundancy: a vertex
+//! edges inside one triangle (with `flatness_inside_triangles`, the default: the paper's rule,
+//! on any longest edge, lets a package split a border edge by the faces on its own side); and
+//! the queue's order among one triangle's edges is by projected length, ties broken by
+//! position. So a frame cut into packages any way — rayon's, or the MPI master's — composes the
+//! same image bit for bit. The price is the paper's redundancy: a vertex
 //! refinement adds on the border of two packages is traced in both (the original vertices are
 //! traced once per process, [`OriginalSamples`]).
 
@@ -51,6 +53,21 @@ pub struct RefineSettings {
     /// Interpolate texture coordinates, not texture colours, between vertices whose paths
     /// read the same textures (else: the texture test splits edges across texture detail).
     pub deferred_textures: bool,
+    /// Gouraud weights divided by each corner's depth (else: linear on the screen, the
+    /// paper's Gouraud shading).
+    pub perspective_correct: bool,
+    /// The flatness rule leaves triangle borders alone, so that a package's image does not
+    /// depend on its neighbours (else: the paper's rule, any longest edge).
+    pub flatness_inside_triangles: bool,
+    /// Trace the pixels of faces none of whose corners is seen, and make a triangle seen only
+    /// between its corners active for it (else: the paper — such a triangle is not drawn, such
+    /// a refined face is interpolated).
+    pub trace_unseen: bool,
+    /// Trace the pixels of faces with a corner behind the eye (else: interpolate them at the
+    /// point where the pixel's ray meets the face).
+    pub trace_behind_eye: bool,
+    /// Trace stray pixels (else: interpolate them in the leaf face they fall in or beside).
+    pub trace_stray: bool,
 }
 
 /// A reflector triangle of the scene: the unit of work packages are made of.
@@ -117,8 +134,8 @@ impl Topology {
 /// The pixels each reflector triangle owns: those whose first surface (the ID buffer) is it.
 /// A pixel the ID buffer gives to a triangle that cannot be seen there — its centre outside
 /// the triangle's screen projection, or a closed glass's back face (a raster depth buffer's
-/// rounding between the two walls of a thin shell) — is *stray*: it is traced, not
-/// interpolated from a surface it is not on.
+/// rounding between the two walls of a thin shell) — is *stray*: with `trace_stray` it is
+/// traced, not interpolated from a surface it is not on.
 #[derive(Debug, Default)]
 pub struct PixelOwners {
     /// (mesh << 32 | triangle, pixel | STRAY), sorted.
@@ -290,9 +307,9 @@ impl FrameInputs<'_> {
     }
 
     /// The reflector triangles a frame traces: those with a visible vertex (the paper's rule:
-    /// an edge is traced when one of its ends is seen) or with pixels of their own (a triangle
-    /// seen only between its corners, which the paper leaves out), mesh by mesh, each mesh's
-    /// along a Morton curve through its box.
+    /// an edge is traced when one of its ends is seen) and, with `trace_unseen`, those with
+    /// pixels of their own (a triangle seen only between its corners, which the paper leaves
+    /// out), mesh by mesh, each mesh's along a Morton curve through its box.
     pub fn active_triangles(&self) -> Vec<TriangleId> {
         use rayon::prelude::*;
         let mut active = Vec::new();
@@ -319,7 +336,8 @@ impl FrameInputs<'_> {
                 })
                 .filter(|id| {
                     let tri = mesh.triangles[id.triangle as usize];
-                    tri.iter().any(|&v| visible[v as usize]) || self.owners.owns_any(*id)
+                    tri.iter().any(|&v| visible[v as usize])
+                        || (self.settings.trace_unseen && self.owners.owns_any(*id))
                 })
                 .map(|id| {
                     let tri = mesh.triangles[id.triangle as usize];
@@ -564,9 +582,10 @@ struct Leaf {
     s0: Vec2,
     e1: Vec2,
     e2: Vec2,
-    /// Zero where the screen triangle is degenerate or a corner is behind the eye (its pixels
-    /// take the corners' mean).
+    /// Zero where the screen triangle is degenerate or a corner is behind the eye.
     inverse_area: f32,
+    /// A corner is behind the eye: no screen triangle exists.
+    behind_eye: bool,
     alike: bool,
 }
 
@@ -646,6 +665,34 @@ fn barycentric(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> (f32, f32) {
 
 fn cross2(a: Vec2, b: Vec2) -> f32 {
     a.x * b.y - a.y * b.x
+}
+
+/// The unit direction of the primary ray through pixel point `q`.
+fn pixel_ray(inputs: &FrameInputs, q: Vec2) -> Vec3 {
+    let view = &inputs.view;
+    inputs
+        .camera
+        .ray_direction(q.x, q.y, view.width, view.height)
+}
+
+/// The weights of a, b and c (clamped to the triangle, summing to one) of the point where the
+/// ray from `eye` along `dir` meets the plane of triangle (a, b, c) in front of the eye: the
+/// Gouraud weights of rasterizing the triangle clipped at the near plane, which need no screen
+/// position of its corners. None where the ray misses the plane.
+fn weights_on_ray(eye: Vec3, dir: Vec3, a: Vec3, b: Vec3, c: Vec3) -> Option<[f32; 3]> {
+    let normal = (b - a).cross(c - a);
+    let along = dir.dot(normal);
+    if along.abs() <= f32::MIN_POSITIVE {
+        return None;
+    }
+    let t = (a - eye).dot(normal) / along;
+    if !t.is_finite() || t <= 0.0 {
+        return None;
+    }
+    let (b1, b2) = barycentric(eye + dir * t, a, b, c);
+    let weights = [1.0 - b1 - b2, b1, b2].map(|w| w.max(0.0));
+    let total: f32 = weights.iter().sum();
+    (total > 0.0).then(|| weights.map(|w| w / total))
 }
 
 /// A vertex at `p_world` on triangle `host` of `mesh`, traced: the primary ray from the eye
@@ -818,7 +865,7 @@ impl Package {
                     if !self.refine(inputs, deadline) {
                         break;
                     }
-                    // Filling runs even without `fill`: stray pixels are always traced.
+                    // Filling runs even without `fill`: stray pixels are traced (`trace_stray`).
                     self.phase = Phase::Filling { next: 0 };
                 }
                 Phase::Filling { .. } => {
@@ -983,8 +1030,9 @@ impl Package {
             return Decision::Keep;
         }
         let differ = differ(a, b, inputs);
-        // Flatness only inside one triangle: a border edge is decided by its ends alone.
-        let flat = edge.original.is_none()
+        // With `flatness_inside_triangles`, a border edge is decided by its ends alone, the same
+        // in both triangles beside it, whichever packages hold them.
+        let flat = (edge.original.is_none() || !settings.flatness_inside_triangles)
             && edge
                 .faces
                 .iter()
@@ -1073,8 +1121,9 @@ impl Package {
         // otherwise Figure 7's third edge is never cut and its neighbours never converge.
         for face in new_faces {
             if let Some(longest) = self.is_flat(face, &inputs.settings) {
-                if self.edges[longest as usize].original.is_none()
-                    && self.edges[longest as usize].state == EdgeState::Idle
+                let edge = &self.edges[longest as usize];
+                if (edge.original.is_none() || !inputs.settings.flatness_inside_triangles)
+                    && edge.state == EdgeState::Idle
                 {
                     self.enqueue(longest, inputs);
                 }
@@ -1107,15 +1156,21 @@ impl Package {
     }
 
     /// The leaf face of triangle `index` that holds pixel centre `q`.
-    fn locate(&self, index: usize, q: Vec2) -> u32 {
+    fn locate(&self, index: usize, q: Vec2, inputs: &FrameInputs) -> u32 {
         let mut face = self.roots[index];
         while let Some(([first, second], [m, c])) = self.faces[face as usize].children {
-            let (sm, sc) = (
-                self.vertices[m as usize].screen,
-                self.vertices[c as usize].screen,
-            );
-            let towards_first = self.vertices[self.faces[first as usize].v[0] as usize].screen - sm;
-            let side = cross2(sc - sm, q - sm) * cross2(sc - sm, towards_first);
+            let first_corner = &self.vertices[self.faces[first as usize].v[0] as usize];
+            let (m, c) = (&self.vertices[m as usize], &self.vertices[c as usize]);
+            let side = if c.depth <= 0.0 {
+                // A corner behind the eye has no screen position: which side of the plane
+                // through the eye and the separating line the pixel's ray passes.
+                let eye = inputs.view.eye;
+                let normal = (m.p_world - eye).cross(c.p_world - eye);
+                pixel_ray(inputs, q).dot(normal) * (first_corner.p_world - eye).dot(normal)
+            } else {
+                let line = c.screen - m.screen;
+                cross2(line, q - m.screen) * cross2(line, first_corner.screen - m.screen)
+            };
             face = if side >= 0.0 { first } else { second };
         }
         face
@@ -1123,12 +1178,12 @@ impl Package {
 
     /// Whether any leaf of triangle `index`'s refinement needs filling (most need none: their
     /// pixels are not looked at).
-    fn any_leaf_needs_filling(&self, index: usize) -> bool {
+    fn any_leaf_needs_filling(&self, index: usize, settings: &RefineSettings) -> bool {
         let mut stack = vec![self.roots[index]];
         while let Some(face) = stack.pop() {
             match self.faces[face as usize].children {
                 Some((children, _)) => stack.extend(children),
-                None if self.needs_filling(face) => return true,
+                None if self.needs_filling(face, settings) => return true,
                 None => {}
             }
         }
@@ -1136,12 +1191,13 @@ impl Package {
     }
 
     /// Whether triangle filling traces this leaf's pixels: refinement left one of its edges
-    /// unresolved, none of its corners is seen, or a corner is behind the eye.
-    fn needs_filling(&self, face: u32) -> bool {
+    /// unresolved, none of its corners is seen (with `trace_unseen`), or a corner is behind
+    /// the eye (with `trace_behind_eye`).
+    fn needs_filling(&self, face: u32, settings: &RefineSettings) -> bool {
         let v = self.faces[face as usize].v;
         let corners = v.map(|i| &self.vertices[i as usize]);
-        corners.iter().any(|c| c.depth <= 0.0)
-            || corners.iter().all(|c| !c.visible)
+        (settings.trace_behind_eye && corners.iter().any(|c| c.depth <= 0.0))
+            || (settings.trace_unseen && corners.iter().all(|c| !c.visible))
             || (0..3).any(|i| {
                 self.edge_of
                     .get(&edge_key(v[i], v[(i + 1) % 3]))
@@ -1150,25 +1206,27 @@ impl Package {
     }
 
     /// Triangle filling (§3): every pixel of the faces refinement could not resolve traced
-    /// as the reference traces it (with `fill`), and every stray pixel (always).
+    /// as the reference traces it (with `fill`), and every stray pixel (with `trace_stray`).
     fn fill(&mut self, inputs: &FrameInputs, deadline: Option<Instant>) -> bool {
         let Phase::Filling { mut next } = self.phase else {
             return true;
         };
         let tracer = inputs.tracer();
+        let settings = &inputs.settings;
         let (width, height) = (inputs.view.width, inputs.view.height);
         while next < self.triangles.len() {
-            let any_leaf = inputs.settings.fill && self.any_leaf_needs_filling(next);
+            let any_leaf = settings.fill && self.any_leaf_needs_filling(next, settings);
             let pixels: Vec<(u32, bool)> = inputs
                 .owners
                 .owned(self.triangles[next])
-                .filter(|&(_, stray)| stray || any_leaf)
+                .filter(|&(_, stray)| (stray && settings.trace_stray) || any_leaf)
                 .collect();
             for (k, stray) in pixels {
                 let (x, y) = (k % width, k / width);
-                let trace = stray || {
-                    let leaf = self.locate(next, Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
-                    inputs.settings.fill && self.needs_filling(leaf)
+                let trace = (stray && settings.trace_stray) || {
+                    let q = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+                    let leaf = self.locate(next, q, inputs);
+                    settings.fill && self.needs_filling(leaf, settings)
                 };
                 if trace {
                     let color = pixel_radiance(&tracer, inputs.camera, x, y, width, height, 1);
@@ -1193,7 +1251,8 @@ impl Package {
         let corners = v.map(|i| &self.vertices[i as usize]);
         let [s0, s1, s2] = corners.map(|c| c.screen);
         let area = cross2(s1 - s0, s2 - s0);
-        let flat = area.abs() < 1e-12 || corners.iter().any(|c| c.depth <= 0.0);
+        let behind_eye = corners.iter().any(|c| c.depth <= 0.0);
+        let flat = area.abs() < 1e-12 || behind_eye;
         let alike = inputs.settings.deferred_textures
             && corners[0].path.read_count > 0
             && corners[1..].iter().all(|c| {
@@ -1206,24 +1265,37 @@ impl Package {
             e1: s1 - s0,
             e2: s2 - s0,
             inverse_area: if flat { 0.0 } else { 1.0 / area },
+            behind_eye,
             alike,
         }
     }
 
-    /// Gouraud shading of pixel centre `q` (screen weights `at`) in `leaf`, perspective-correct
-    /// (the weights divided by each corner's depth). With deferred textures, where the three
-    /// corners' paths are alike, the texture coordinates and coefficients of their texture
-    /// reads are interpolated and the texels read here.
-    fn shade(&self, leaf: &Leaf, at: [f32; 3], inputs: &FrameInputs) -> Vec3 {
+    /// Gouraud shading of pixel centre `q` (screen weights `at`) in `leaf`: with
+    /// `perspective_correct` the weights divided by each corner's depth, else linear on the
+    /// screen (the paper's). With deferred textures, where the three corners' paths are alike,
+    /// the texture coordinates and coefficients of their texture reads are interpolated and
+    /// the texels read here. A leaf with a corner behind the eye takes, without
+    /// `trace_behind_eye`, the weights of the point where the pixel's ray meets it; any other
+    /// leaf without a screen triangle the corners' mean.
+    fn shade(&self, leaf: &Leaf, q: Vec2, at: [f32; 3], inputs: &FrameInputs) -> Vec3 {
+        let settings = &inputs.settings;
         let corners = leaf.v.map(|i| &self.vertices[i as usize]);
         let mean = || corners.iter().map(|c| c.color).sum::<Vec3>() / 3.0;
+        let blend = |weights: [f32; 3]| (0..3).map(|i| corners[i].color * weights[i]).sum();
+        if leaf.behind_eye && !settings.trace_behind_eye {
+            let [a, b, c] = corners.map(|c| c.p_world);
+            return weights_on_ray(inputs.view.eye, pixel_ray(inputs, q), a, b, c)
+                .map_or_else(mean, blend);
+        }
         if leaf.inverse_area == 0.0 {
             return mean();
         }
         let at = at.map(|l| l.max(0.0));
-        let mut weights = [0.0f32; 3];
-        for i in 0..3 {
-            weights[i] = at[i] / corners[i].depth;
+        let mut weights = at;
+        if settings.perspective_correct {
+            for i in 0..3 {
+                weights[i] /= corners[i].depth;
+            }
         }
         let total: f32 = weights.iter().sum();
         if total <= 0.0 {
@@ -1233,7 +1305,7 @@ impl Package {
             *w /= total;
         }
         if !leaf.alike {
-            return (0..3).map(|i| corners[i].color * weights[i]).sum();
+            return blend(weights);
         }
         let mut color: Vec3 = (0..3).map(|i| corners[i].smooth * weights[i]).sum();
         for read in 0..corners[0].path.read_count {
@@ -1280,12 +1352,12 @@ impl Package {
                 let (leaf, at) = match (last.take(), reuse) {
                     (Some(leaf), Some(at)) => (leaf, at),
                     _ => {
-                        let leaf = self.leaf(self.locate(index, q), inputs);
+                        let leaf = self.leaf(self.locate(index, q, inputs), inputs);
                         let at = leaf.weights(q);
                         (leaf, at)
                     }
                 };
-                out.push((k, self.shade(&leaf, at, inputs)));
+                out.push((k, self.shade(&leaf, q, at, inputs)));
                 last = Some(leaf);
             }
         }
@@ -1306,5 +1378,35 @@ impl Package {
                 })
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn weights_on_ray_are_the_barycentrics_of_the_point_the_ray_meets() {
+        let eye = Vec3::new(0.0, 1.0, 0.0);
+        // A floor triangle with a corner behind the eye (the view looks along -z).
+        let (a, b, c) = (
+            Vec3::new(-2.0, 0.0, -6.0),
+            Vec3::new(2.0, 0.0, -6.0),
+            Vec3::new(0.0, 0.0, 4.0),
+        );
+        let expected = [0.2f32, 0.3, 0.5];
+        let point = a * expected[0] + b * expected[1] + c * expected[2];
+        let weights = weights_on_ray(eye, (point - eye).normalize(), a, b, c).unwrap();
+        for (w, e) in weights.iter().zip(expected) {
+            assert!((w - e).abs() < 1e-5, "{weights:?}");
+        }
+        // A point outside takes the face's nearest side: weights clamped, summing to one.
+        let outside = a * 1.2 + b * 0.3 - c * 0.5;
+        let clamped = weights_on_ray(eye, (outside - eye).normalize(), a, b, c).unwrap();
+        assert!((clamped.iter().sum::<f32>() - 1.0).abs() < 1e-6);
+        assert_eq!(clamped[2], 0.0);
+        // Away from the plane, or along it: no weights.
+        assert!(weights_on_ray(eye, Vec3::Y, a, b, c).is_none());
+        assert!(weights_on_ray(eye, Vec3::X, a, b, c).is_none());
     }
 }
