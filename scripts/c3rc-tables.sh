@@ -6,19 +6,22 @@
 # mean leaf depth, points per leaf) and rendering (culling, projection with the splats'
 # resolve, as the paper's projection includes rasterising the points, their total, share of
 # valid projections), beside the paper's figures. Writes c3rc-tables.md and the JSON into
-# --out (default c3rc-tables-report). Needs python3 for the table.
-#   scripts/c3rc-tables.sh [--out DIR] [--frames N] [-- extra bench arguments]
+# --out (default c3rc-tables-report). `--method c3rc:paper` times the published algorithm (the
+# paper preset: every step beyond the paper off) instead of c3rc's defaults. Needs python3.
+#   scripts/c3rc-tables.sh [--out DIR] [--frames N] [--method LABEL] [-- extra bench arguments]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=c3rc-tables-report
 frames=10
+method=c3rc
 extra=()
 while [ $# -gt 0 ]; do
     case "$1" in
         --out) out="$2"; shift 2 ;;
         --frames) frames="$2"; shift 2 ;;
+        --method) method="$2"; shift 2 ;;
         --) shift; extra=("$@"); break ;;
-        *) echo "usage: scripts/c3rc-tables.sh [--out DIR] [--frames N] [-- bench args]" >&2; exit 2 ;;
+        *) echo "usage: scripts/c3rc-tables.sh [--out DIR] [--frames N] [--method LABEL] [-- bench args]" >&2; exit 2 ;;
     esac
 done
 mkdir -p "$out"
@@ -38,13 +41,13 @@ rows=(
 )
 for row in "${rows[@]}"; do
     read -r name scene points _ <<< "$row"
-    "$specula" bench "scenes/c3rc/$scene.toml" --methods c3rc --frames "$frames" \
+    "$specula" bench "scenes/c3rc/$scene.toml" --methods "$method" --frames "$frames" \
         -W 640 -H 480 -p "points=$points" ${extra[@]+"${extra[@]}"} \
         --json "$out/$name.json" > "$out/$name.txt"
 done
-python3 - "$out" "${rows[@]}" <<'PY'
+python3 - "$out" "$method" "${rows[@]}" <<'PY'
 import json, sys
-out, rows = sys.argv[1], sys.argv[2:]
+out, label, rows = sys.argv[1], sys.argv[2], sys.argv[3:]
 lines = [
     "| scene | points ×1000 | tree build ms | mean leaf depth | points per leaf | culling ms | projection and splatting ms | total ms | valid projections % | pixels without a camera ms | total with them ms | paper: points, build ms, depth, per leaf | paper: total, culling, projection ms, valid % | speed-up over the paper: total, with them |",
     "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
@@ -52,7 +55,7 @@ lines = [
 for row in rows:
     name, scene, points, pk, pbuild, pdepth, pleaf, ptotal, pcull, pproj, pvalid = row.split()
     run = next(r for r in json.load(open(f"{out}/{name}.json"))["runs"]
-               if r["method"] == "c3rc" and r["mode"] == "static")
+               if r["label"] == label and r["mode"] == "static")
     c = dict(run["counters"])
     stage = dict((n, s["median_ms"]) for n, s in run["stages"])
     cull, proj = stage["culling (backward phase)"], stage["projection (forward phase)"]
@@ -60,7 +63,7 @@ for row in rows:
     proj += stage["splatting (resolve, holes)"]
     # Small triangles' per-vertex colour and self-seeing triangles' traced pixels: work the
     # paper's cameras did for those triangles.
-    without = stage["pixels without a camera (per-vertex, traced)"]
+    without = stage.get("pixels without a camera (per-vertex, traced)", 0.0)
     leaves = c["kd-tree leaves"]
     # Of the points the leaves hold that were not left out by the level of detail.
     considered = c["points in leaves seen"] - c.get("points skipped by level of detail", 0)

@@ -105,13 +105,16 @@ fn main() {
         "| reference ray tracing | {reference_ms:.1} | {} | {reference_rays} | 1 | 0 |",
         pixels.len()
     );
-    // The last row is the paper's refinement test alone: whole ray trees, texture colours
-    // compared as colours (no deferred textures).
-    let paper = RefineSettings {
-        tree_weight: 0.0,
-        deferred_textures: false,
-        ..defaults.settings
-    };
+    // The last row is the published algorithm: the `paper` preset's settings (every step
+    // beyond the paper off: whole ray trees, texture colours compared as colours, ...).
+    let mut published = VertexTracing::default();
+    let preset = specula_methods::vertex_tracing::INFO
+        .preset("paper")
+        .expect("vertex-tracing has a paper preset");
+    for setting in preset.settings {
+        specula_methods::apply_setting(&mut published, setting).expect("the preset applies");
+    }
+    let paper = published.settings;
     let steps = [
         ("preview", false, false, defaults.settings),
         (
@@ -126,7 +129,7 @@ fn main() {
             true,
             defaults.settings,
         ),
-        ("with filling, the paper's test alone", true, true, paper),
+        ("with filling, vertex-tracing:paper", true, true, paper),
     ];
     for (label, refine, fill, base) in steps {
         let settings = RefineSettings {
