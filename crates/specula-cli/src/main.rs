@@ -13,6 +13,7 @@ use specula_scene::builtin::{self, DEFAULT_SCENE};
 use specula_scene::Scene;
 use specula_trace::Image;
 
+mod analyze;
 mod bench;
 
 #[derive(Parser)]
@@ -60,6 +61,10 @@ enum Command {
     /// Time each method: warm-up, then N frames; median and spread per method and stage, and
     /// each method's speed-up over the CPU reference and over gpu-trace (both always timed too).
     Bench(BenchArgs),
+    /// Answer a design question with exact rays: `mirror-view` (what a mirror shows from the
+    /// eye points: field of view, ground footprint, a required region's blind part).
+    #[command(subcommand)]
+    Analyze(analyze::Kind),
 }
 
 // The subcommands' arguments. (Their help text comes from the `Command` variants' doc
@@ -496,6 +501,7 @@ fn run(cli: Cli) -> Result<()> {
             interaction_scale,
         })?),
         Command::Bench(args) => bench(args),
+        Command::Analyze(kind) => analyze::run(kind),
     }
 }
 

@@ -1,0 +1,57 @@
+//! `specula analyze`: the questions a design engineer asks of a scene, answered with exact
+//! rays through the reference tracer's geometry and optics (the BVH, the shading normals,
+//! `reflect`), not with a technique's approximation.
+//!
+//! - [`frame`]: the vehicle frame (forward, up, right) and the eye points analyses run from:
+//!   the camera's eye, given points, an eyebox grid, or UN ECE R46's two ocular points.
+//! - [`mirror_view`]: what a driver sees in a mirror: the mirror's field of view (horizontal
+//!   and vertical extent of the reflected directions, their solid angle), its footprint on the
+//!   ground, and the share of a required region seen, per eye point and for all together.
+//!
+//! Objects are named as the scene names them (`NAME#k` for a component split on load); an
+//! unknown name is an error listing the valid ones ([`object`]).
+
+pub mod frame;
+pub mod mirror_view;
+
+use specula_scene::Scene;
+
+#[derive(Debug, thiserror::Error)]
+pub enum AnalyzeError {
+    #[error("unknown {role} '{name}'; the scene's objects are: {valid}")]
+    UnknownObject {
+        role: &'static str,
+        name: String,
+        valid: String,
+    },
+    #[error("{role} '{name}' is {kind}, not {expected}")]
+    WrongMaterial {
+        role: &'static str,
+        name: String,
+        kind: String,
+        expected: &'static str,
+    },
+    #[error("{option}: {reason}")]
+    BadOption {
+        option: &'static str,
+        reason: String,
+    },
+}
+
+/// The mesh the scene names `name`, for the analysis's `role` (`--mirror`, `--surface`...).
+pub fn object(scene: &Scene, role: &'static str, name: &str) -> Result<usize, AnalyzeError> {
+    scene
+        .meshes
+        .iter()
+        .position(|m| m.name == name)
+        .ok_or_else(|| AnalyzeError::UnknownObject {
+            role,
+            name: name.to_string(),
+            valid: scene
+                .meshes
+                .iter()
+                .map(|m| m.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
+        })
+}

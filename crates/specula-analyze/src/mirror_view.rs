@@ -1,0 +1,795 @@
+//! `specula analyze mirror-view`: what is seen in a mirror, from each eye point and from all
+//! together (ambinocular, as UN ECE R46 judges: a point counts when any eye sees it).
+//!
+//! Steps, per eye point:
+//! 1. Each mirror triangle is cut into n × n sub-triangles; at each of their corners S the
+//!    exact ray from the eye towards S is traced through the whole scene. S is seen when that
+//!    ray's first hit is the mirror at S (the car body may hide part of the mirror).
+//! 2. At the hit the ray is reflected about the mirror's shading normal (as the reference
+//!    reflects it) and followed to its first hit. Its direction is a sample of the field of
+//!    view; where it meets the ground plane (`ground_y`) before any object, the point it meets
+//!    is a sample of the footprint (objects occlude the road).
+//! 3. Figures: the horizontal and vertical extent of the seen directions in the vehicle frame;
+//!    their solid angle, summed exactly over the sub-triangles whose three corners are seen
+//!    (each a spherical triangle of reflected directions); the ground seen, the sub-triangles
+//!    whose three corners meet the ground, rasterised on a grid and clipped to `range_m` of the
+//!    eye (horizontally); the share of a required region the footprint covers.
+//! 4. n doubles until each figure changes by less than its tolerance (relative for the solid
+//!    angle and the areas, in degrees for the extents), or the sample budget is spent (then the
+//!    report says the figures did not converge).
+//!
+//! Ambinocular figures: the extents over every eye's directions, and the solid angle and the
+//! areas of the union of the eyes' sub-triangles, rasterised (the solid angle on a grid of
+//! horizontal angle × elevation, each cell weighted by its solid angle). `region_seen_by_all` is
+//! the share every eye sees; the blind part is the region no eye sees.
+//!
+//! Exactness: a flat mirror maps its triangles to the ground and to directions projectively
+//! (through the eye's mirror image), so its sub-triangles tile the footprint and the spherical
+//! image exactly at any n; a curved mirror converges as n grows. The grids' cells are stated in
+//! the report (`ground_cell_m`, `direction_cell_deg`): a footprint's area is exact to about
+//! its perimeter × half a cell.
+
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+use serde::Serialize;
+use specula_scene::{MaterialKind, Scene};
+use specula_trace::optics::reflect;
+use specula_trace::reference::{offset_origin, surface_point};
+use specula_trace::{Ray, SceneAccel};
+
+use crate::frame::VehicleFrame;
+use crate::AnalyzeError;
+
+/// The version of [`Report`]'s JSON (docs/analyze-mirror-view.schema.json).
+pub const SCHEMA_VERSION: u32 = 1;
+
+/// The most levels a sub-triangle on an edge of what is seen is cut in four.
+const MAX_DEPTH: u32 = 16;
+
+/// Cells per side of the grids areas and solid angles of unions are counted on.
+const GRID: usize = 2048;
+
+/// A required region on the ground: x and z bounds, metres.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Region {
+    pub x0: f32,
+    pub z0: f32,
+    pub x1: f32,
+    pub z1: f32,
+}
+
+impl Region {
+    /// The region between two corners, in either order; it must have an area.
+    pub fn new(x0: f32, z0: f32, x1: f32, z1: f32) -> Result<Region, AnalyzeError> {
+        let region = Region {
+            x0: x0.min(x1),
+            z0: z0.min(z1),
+            x1: x0.max(x1),
+            z1: z0.max(z1),
+        };
+        if ![x0, z0, x1, z1].iter().all(|v| v.is_finite()) || region.area() <= 0.0 {
+            return Err(AnalyzeError::BadOption {
+                option: "--region",
+                reason: format!(
+                    "X0,Z0,X1,Z1 = {x0},{z0},{x1},{z1} has no area: the corners must differ in \
+                     x and in z"
+                ),
+            });
+        }
+        Ok(region)
+    }
+
+    pub fn area(&self) -> f64 {
+        f64::from(self.x1 - self.x0) * f64::from(self.z1 - self.z0)
+    }
+}
+
+/// What the analysis is asked.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// The mirror's mesh.
+    pub mirror: usize,
+    pub frame: VehicleFrame,
+    /// The ground plane's height (world y).
+    pub ground_y: f32,
+    /// Ground farther than this from the eye, horizontally, is not counted.
+    pub range_m: f32,
+    pub region: Option<Region>,
+    /// Refinement stops when the solid angle and the areas change by less than this share.
+    pub tolerance: f64,
+    /// ... and the extents by less than this many degrees.
+    pub tolerance_deg: f64,
+    /// The most ray samples one eye point may take.
+    pub max_samples: usize,
+}
+
+impl Options {
+    /// Checks the options against `scene`: the mesh is a mirror, the range positive.
+    pub fn validate(&self, scene: &Scene) -> Result<(), AnalyzeError> {
+        let mesh = &scene.meshes[self.mirror];
+        let material = &scene.materials[mesh.material];
+        if !matches!(material.kind, MaterialKind::Mirror { .. }) {
+            return Err(AnalyzeError::WrongMaterial {
+                role: "--mirror",
+                name: mesh.name.clone(),
+                kind: format!("{:?}", material.kind).to_lowercase(),
+                expected: "a mirror",
+            });
+        }
+        if !(self.range_m.is_finite() && self.range_m > 0.0) {
+            return Err(AnalyzeError::BadOption {
+                option: "--range",
+                reason: format!("{} m: the range must be a positive distance", self.range_m),
+            });
+        }
+        if !self.ground_y.is_finite() {
+            return Err(AnalyzeError::BadOption {
+                option: "--ground",
+                reason: format!("{} is not a height", self.ground_y),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// The lowest point of the scene's objects: the default ground.
+pub fn lowest_point(scene: &Scene) -> f32 {
+    scene.bounds().min.y
+}
+
+/// One corner of a sub-triangle, as the eye sees it in the mirror.
+#[derive(Clone, Copy, Debug)]
+struct Sample {
+    /// The reflected direction (unit), where the mirror is seen at this point.
+    reflected: Option<Vec3>,
+    /// Where the reflected ray meets the ground before any object (x, z).
+    ground: Option<Vec2>,
+}
+
+/// What one eye sees at one subdivision.
+struct Sampled {
+    samples: usize,
+    seen: usize,
+    /// Spherical triangles of reflected directions whose three corners are seen.
+    directions: Vec<[Vec3; 3]>,
+    /// Ground triangles (x, z) whose three corners meet the ground.
+    ground: Vec<[Vec2; 3]>,
+    solid_angle_sr: f64,
+}
+
+/// Solid angle of the spherical triangle of unit vectors `a`, `b`, `c` (Van Oosterom and
+/// Strackee 1983).
+pub fn spherical_triangle_solid_angle(a: Vec3, b: Vec3, c: Vec3) -> f64 {
+    let (a, b, c) = (a.as_dvec3(), b.as_dvec3(), c.as_dvec3());
+    let numerator = a.dot(b.cross(c)).abs();
+    let denominator = 1.0 + a.dot(b) + b.dot(c) + c.dot(a);
+    2.0 * numerator.atan2(denominator)
+}
+
+/// Where corner (i, j) of a triangle cut `n` times per side starts its row: the corners
+/// (i, j) with i + j ≤ n at barycentric (1 − i/n − j/n, i/n, j/n) are stored row by row, row i
+/// holding n + 1 − i of them.
+fn row_start(n: usize, i: usize) -> usize {
+    i * (n + 1) - i * i.saturating_sub(1) / 2
+}
+
+/// One eye's samples: each mirror triangle cut `n` times per side, and each sub-triangle whose
+/// corners disagree (seen or hidden, meeting the ground or not) cut in four again, `depth`
+/// times more, so that the edges of what is seen (the car body's outline, the buildings' on
+/// the road) are followed at a fraction of a uniform grid's cost.
+fn sample_eye(
+    scene: &Scene,
+    accel: &SceneAccel,
+    eye: Vec3,
+    options: &Options,
+    n: usize,
+    depth: u32,
+) -> Sampled {
+    let mesh = &scene.meshes[options.mirror];
+    let parts: Vec<Sampled> = mesh
+        .triangles
+        .par_iter()
+        .enumerate()
+        .map(|(triangle, corners)| {
+            let [p0, p1, p2] = corners.map(|i| mesh.positions[i as usize]);
+            let sample = |b: Vec2| {
+                let at = MirrorPoint {
+                    p: p0 * (1.0 - b.x - b.y) + p1 * b.x + p2 * b.y,
+                    triangle: triangle as u32,
+                    b1: b.x,
+                    b2: b.y,
+                };
+                sample_point(scene, accel, eye, at, options)
+            };
+            let bary = |i: usize, j: usize| Vec2::new(i as f32 / n as f32, j as f32 / n as f32);
+            let mut grid = Vec::with_capacity((n + 1) * (n + 2) / 2);
+            for i in 0..=n {
+                for j in 0..=n - i {
+                    grid.push(sample(bary(i, j)));
+                }
+            }
+            let mut part = Sampled::empty();
+            part.samples = grid.len();
+            part.seen = grid.iter().filter(|s| s.reflected.is_some()).count();
+            let at = |i: usize, j: usize| (bary(i, j), grid[row_start(n, i) + j]);
+            for i in 0..n {
+                for j in 0..n - i {
+                    descend(
+                        &sample,
+                        [at(i, j), at(i + 1, j), at(i, j + 1)],
+                        depth,
+                        &mut part,
+                    );
+                    if j + 1 < n - i {
+                        let cell = [at(i + 1, j), at(i + 1, j + 1), at(i, j + 1)];
+                        descend(&sample, cell, depth, &mut part);
+                    }
+                }
+            }
+            part
+        })
+        .collect();
+    let mut sampled = Sampled::empty();
+    for part in parts {
+        sampled.samples += part.samples;
+        sampled.seen += part.seen;
+        sampled.solid_angle_sr += part.solid_angle_sr;
+        sampled.directions.extend(part.directions);
+        sampled.ground.extend(part.ground);
+    }
+    sampled
+}
+
+impl Sampled {
+    fn empty() -> Sampled {
+        Sampled {
+            samples: 0,
+            seen: 0,
+            directions: Vec::new(),
+            ground: Vec::new(),
+            solid_angle_sr: 0.0,
+        }
+    }
+}
+
+/// Adds a sub-triangle (barycentric corners with their samples) to `part`: whole where its
+/// corners agree or `depth` is spent, else cut in four at its edges' midpoints.
+fn descend(
+    sample: &impl Fn(Vec2) -> Sample,
+    corners: [(Vec2, Sample); 3],
+    depth: u32,
+    part: &mut Sampled,
+) {
+    let status = |s: &Sample| (s.reflected.is_some(), s.ground.is_some());
+    let agree = status(&corners[0].1) == status(&corners[1].1)
+        && status(&corners[1].1) == status(&corners[2].1);
+    if depth == 0 || agree {
+        let samples = corners.map(|c| c.1);
+        if let [Some(a), Some(b), Some(c)] = samples.map(|s| s.reflected) {
+            part.solid_angle_sr += spherical_triangle_solid_angle(a, b, c);
+            part.directions.push([a, b, c]);
+        }
+        if let [Some(a), Some(b), Some(c)] = samples.map(|s| s.ground) {
+            part.ground.push([a, b, c]);
+        }
+        return;
+    }
+    let mut midpoint = |a: usize, b: usize| {
+        let m = (corners[a].0 + corners[b].0) * 0.5;
+        let s = sample(m);
+        part.samples += 1;
+        part.seen += usize::from(s.reflected.is_some());
+        (m, s)
+    };
+    let (m01, m12, m20) = (midpoint(0, 1), midpoint(1, 2), midpoint(2, 0));
+    for child in [
+        [corners[0], m01, m20],
+        [m01, corners[1], m12],
+        [m20, m12, corners[2]],
+        [m01, m12, m20],
+    ] {
+        descend(sample, child, depth - 1, part);
+    }
+}
+
+/// A point of the mirror: on triangle `triangle` at barycentric (1 − b1 − b2, b1, b2).
+#[derive(Clone, Copy)]
+struct MirrorPoint {
+    p: Vec3,
+    triangle: u32,
+    b1: f32,
+    b2: f32,
+}
+
+/// The eye's ray towards mirror point `at`: whether nothing hides it, and where its reflection
+/// goes. The point is on the mirror by construction, so only what lies before it is looked for
+/// (a ray aimed exactly at a mirror's outer edge could otherwise slip past it).
+fn sample_point(
+    scene: &Scene,
+    accel: &SceneAccel,
+    eye: Vec3,
+    at: MirrorPoint,
+    options: &Options,
+) -> Sample {
+    let unseen = Sample {
+        reflected: None,
+        ground: None,
+    };
+    let to_point = at.p - eye;
+    let distance = to_point.length();
+    let Some(dir) = to_point.try_normalize() else {
+        return unseen;
+    };
+    let ray = Ray { origin: eye, dir };
+    let slack = 1e-3 * distance + 1e-4;
+    if accel.intersect(&ray, distance - slack).is_some() {
+        return unseen;
+    }
+    let hit = specula_trace::Hit {
+        t: distance,
+        b1: at.b1,
+        b2: at.b2,
+        mesh: options.mirror as u32,
+        triangle: at.triangle,
+    };
+    let sp = surface_point(scene, &ray, &hit);
+    let reflected = reflect(dir, sp.ns).normalize();
+    // Interpolated normals can send a grazing reflection into the mirror: not a view.
+    if reflected.dot(sp.ng) <= 0.0 {
+        return unseen;
+    }
+    let origin = offset_origin(sp.p, sp.ng, reflected);
+    let ground = (reflected.y < 0.0)
+        .then(|| (options.ground_y - origin.y) / reflected.y)
+        .filter(|t| *t > 0.0)
+        .and_then(|t| {
+            let blocked = accel.intersect(
+                &Ray {
+                    origin,
+                    dir: reflected,
+                },
+                t * (1.0 - 1e-4) - 1e-4,
+            );
+            blocked.is_none().then(|| {
+                let g = origin + reflected * t;
+                Vec2::new(g.x, g.z)
+            })
+        });
+    Sample {
+        reflected: Some(reflected),
+        ground,
+    }
+}
+
+/// A grid of cells over a rectangle, marking what is covered.
+struct Raster {
+    min: Vec2,
+    cell: Vec2,
+    columns: usize,
+    rows: usize,
+    covered: Vec<bool>,
+}
+
+impl Raster {
+    fn new(min: Vec2, max: Vec2, columns: usize, rows: usize) -> Raster {
+        Raster {
+            min,
+            cell: (max - min) / Vec2::new(columns as f32, rows as f32),
+            columns,
+            rows,
+            covered: vec![false; columns * rows],
+        }
+    }
+
+    fn centre(&self, column: usize, row: usize) -> Vec2 {
+        self.min + self.cell * Vec2::new(column as f32 + 0.5, row as f32 + 0.5)
+    }
+
+    /// Marks the cells whose centres lie in triangle `t` and pass `keep`.
+    fn fill(&mut self, t: &[Vec2; 3], keep: &impl Fn(Vec2) -> bool) {
+        let lo = t[0].min(t[1]).min(t[2]);
+        let hi = t[0].max(t[1]).max(t[2]);
+        let first = ((lo - self.min) / self.cell).floor().max(Vec2::ZERO);
+        let last = ((hi - self.min) / self.cell).ceil();
+        let (c0, r0) = (first.x as usize, first.y as usize);
+        let c1 = (last.x.max(0.0) as usize).min(self.columns);
+        let r1 = (last.y.max(0.0) as usize).min(self.rows);
+        let edge = |a: Vec2, b: Vec2, p: Vec2| (b - a).perp_dot(p - a);
+        let area = edge(t[0], t[1], t[2]);
+        if area == 0.0 || !area.is_finite() {
+            return;
+        }
+        for row in r0..r1 {
+            for column in c0..c1 {
+                let p = self.centre(column, row);
+                let w = [
+                    edge(t[1], t[2], p),
+                    edge(t[2], t[0], p),
+                    edge(t[0], t[1], p),
+                ];
+                let inside = w.iter().all(|w| w * area >= 0.0);
+                if inside && keep(p) {
+                    self.covered[row * self.columns + column] = true;
+                }
+            }
+        }
+    }
+
+    fn cell_area(&self) -> f64 {
+        f64::from(self.cell.x) * f64::from(self.cell.y)
+    }
+
+    fn count(&self) -> usize {
+        self.covered.iter().filter(|c| **c).count()
+    }
+}
+
+/// Figures of one eye point, or of all together.
+#[derive(Clone, Debug, Serialize)]
+pub struct Figures {
+    pub horizontal_deg: f64,
+    pub vertical_deg: f64,
+    pub solid_angle_sr: f64,
+    pub ground_area_m2: f64,
+    /// Share of the region seen by any eye point (for one eye point: by it). Null without a
+    /// region.
+    pub region_seen_by_any: Option<f64>,
+    /// Share seen by every eye point (for one eye point: by it).
+    pub region_seen_by_all: Option<f64>,
+    /// The region's area no eye point sees, m².
+    pub blind_area_m2: Option<f64>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct EyeReport {
+    pub position: [f32; 3],
+    #[serde(flatten)]
+    pub figures: Figures,
+    /// Cuts per side of each mirror triangle at the last refinement, and the levels of cutting
+    /// in four on the edges of what is seen beyond that.
+    pub subdivision: u32,
+    pub edge_depth: u32,
+    /// Ray samples on the mirror, and of those, the ones that see it.
+    pub samples: usize,
+    pub seen_samples: usize,
+    /// Samples per m² of mirror surface.
+    pub density_per_m2: f64,
+    /// Whether every figure changed by less than its tolerance at the last doubling.
+    pub converged: bool,
+}
+
+/// What `specula analyze mirror-view` reports (docs/analyze-mirror-view.schema.json).
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    pub schema_version: u32,
+    pub scene: String,
+    pub mirror: String,
+    pub forward: [f32; 3],
+    pub up: [f32; 3],
+    pub ground_y: f32,
+    pub range_m: f32,
+    pub region: Option<Region>,
+    pub tolerance: f64,
+    pub tolerance_deg: f64,
+    /// The longer cell side of the ground grid the union's area is counted on, m (each eye's
+    /// own grid spans only its footprint, so its cells are finer), and of the direction grid
+    /// of the ambinocular solid angle, degrees.
+    pub ground_cell_m: f64,
+    pub direction_cell_deg: f64,
+    /// All eye points together: a point counts when any eye sees it.
+    #[serde(flatten)]
+    pub figures: Figures,
+    pub eyes: Vec<EyeReport>,
+}
+
+/// The analysis's outcome: the report, and the footprints for plots.
+pub struct MirrorView {
+    pub report: Report,
+    /// Per eye point, its ground triangles (x, z), unclipped.
+    pub footprints: Vec<Vec<[Vec2; 3]>>,
+}
+
+/// One eye's sampling, refined until its figures hold.
+struct Refined {
+    sampled: Sampled,
+    /// Levels of cutting on the edges of what is seen, beyond the grid.
+    depth: u32,
+    /// The ground seen within range, m² ([`clipped_area`]).
+    ground_area_m2: f64,
+    subdivision: usize,
+    converged: bool,
+}
+
+fn extents(frame: &VehicleFrame, reference: Vec3, directions: &[[Vec3; 3]]) -> (f64, f64) {
+    let mut h = (f64::INFINITY, f64::NEG_INFINITY);
+    let mut v = (f64::INFINITY, f64::NEG_INFINITY);
+    for d in directions.iter().flatten() {
+        let (x, y) = (frame.horizontal_deg(*d, reference), frame.elevation_deg(*d));
+        h = (h.0.min(x), h.1.max(x));
+        v = (v.0.min(y), v.1.max(y));
+    }
+    if h.0 > h.1 {
+        return (0.0, 0.0);
+    }
+    (h.1 - h.0, v.1 - v.0)
+}
+
+/// The horizontal reference of a set of directions: their mean's horizontal part.
+fn reference_of<'a>(frame: &VehicleFrame, directions: impl Iterator<Item = &'a [Vec3; 3]>) -> Vec3 {
+    let sum: Vec3 = directions.flat_map(|t| t.iter()).copied().sum();
+    frame.horizontal(sum).unwrap_or(frame.forward)
+}
+
+/// The ground `eye` sees within `range` (x, z), m²: its triangles rasterised on a grid over
+/// their bounds clipped to the range's square, each cell counted when its centre is in a
+/// triangle and within range.
+fn clipped_area(ground: &[[Vec2; 3]], eye: Vec2, range: f32) -> f64 {
+    let (mut lo, mut hi) = (eye - range, eye + range);
+    let (mut t_lo, mut t_hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
+    for p in ground.iter().flatten() {
+        t_lo = t_lo.min(*p);
+        t_hi = t_hi.max(*p);
+    }
+    lo = lo.max(t_lo);
+    hi = hi.min(t_hi);
+    if !(lo.x < hi.x && lo.y < hi.y) {
+        return 0.0;
+    }
+    let mut raster = Raster::new(lo, hi, GRID, GRID);
+    let keep = |p: Vec2| p.distance(eye) <= range;
+    for t in ground {
+        raster.fill(t, &keep);
+    }
+    raster.count() as f64 * raster.cell_area()
+}
+
+/// Samples one eye point ever finer until its figures hold: the grid doubles while the extents
+/// move (they follow the mirror's curvature), then the sub-triangles on the edges of what is
+/// seen are cut further, a level at a time, until the solid angle and the ground area hold too.
+fn refine(scene: &Scene, accel: &SceneAccel, eye: Vec3, options: &Options) -> Refined {
+    let triangles = scene.meshes[options.mirror].triangles.len().max(1);
+    let samples_at = |n: usize| triangles * (n + 1) * (n + 2) / 2;
+    let eye_xz = Vec2::new(eye.x, eye.z);
+    let area = |s: &Sampled| clipped_area(&s.ground, eye_xz, options.range_m);
+    let (mut n, mut depth) = (1, 0);
+    while samples_at(n * 2) <= 1000 {
+        n *= 2;
+    }
+    let mut current = sample_eye(scene, accel, eye, options, n, depth);
+    let mut current_area = area(&current);
+    let mut extents_hold = false;
+    let done = |sampled, ground_area_m2, n, depth, converged| Refined {
+        sampled,
+        ground_area_m2,
+        subdivision: n,
+        depth,
+        converged,
+    };
+    loop {
+        let (next_n, next_depth) = if extents_hold {
+            (n, depth + 1)
+        } else {
+            (n * 2, depth)
+        };
+        // A deeper level at most doubles the samples on the edges; a finer grid quadruples all.
+        let estimate = if extents_hold {
+            2 * current.samples
+        } else {
+            samples_at(next_n)
+        };
+        if estimate > options.max_samples || next_depth > MAX_DEPTH {
+            return done(current, current_area, n, depth, false);
+        }
+        let next = sample_eye(scene, accel, eye, options, next_n, next_depth);
+        let next_area = area(&next);
+        let reference = reference_of(&options.frame, next.directions.iter());
+        let (h0, v0) = extents(&options.frame, reference, &current.directions);
+        let (h1, v1) = extents(&options.frame, reference, &next.directions);
+        let close = |a: f64, b: f64| (a - b).abs() <= options.tolerance * b.abs().max(1e-9);
+        let extents_close =
+            (h0 - h1).abs() <= options.tolerance_deg && (v0 - v1).abs() <= options.tolerance_deg;
+        let converged = extents_close
+            && close(current.solid_angle_sr, next.solid_angle_sr)
+            && close(current_area, next_area);
+        extents_hold |= extents_close;
+        (n, depth) = (next_n, next_depth);
+        current = next;
+        current_area = next_area;
+        if converged {
+            return done(current, current_area, n, depth, true);
+        }
+    }
+}
+
+/// Runs the analysis from `eyes`, calling `progress` after each eye point.
+pub fn analyze(
+    scene: &Scene,
+    accel: &SceneAccel,
+    eyes: &[Vec3],
+    options: &Options,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<MirrorView, AnalyzeError> {
+    options.validate(scene)?;
+    let mirror = &scene.meshes[options.mirror];
+    let mirror_area: f64 = (0..mirror.triangles.len())
+        .map(|t| 0.5 * f64::from(mirror.face_normal_scaled(t).length()))
+        .sum();
+    let refined: Vec<Refined> = eyes
+        .iter()
+        .enumerate()
+        .map(|(k, eye)| {
+            let r = refine(scene, accel, *eye, options);
+            progress(k + 1);
+            r
+        })
+        .collect();
+    let frame = &options.frame;
+
+    // The ground grid: over every footprint, within the range square of every eye.
+    let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
+    for t in refined.iter().flat_map(|r| &r.sampled.ground) {
+        for p in t {
+            lo = lo.min(*p);
+            hi = hi.max(*p);
+        }
+    }
+    let (mut range_lo, mut range_hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
+    for e in eyes {
+        let e = Vec2::new(e.x, e.z);
+        range_lo = range_lo.min(e - options.range_m);
+        range_hi = range_hi.max(e + options.range_m);
+    }
+    let (lo, hi) = (lo.max(range_lo), hi.min(range_hi));
+    // The union of the eyes' footprints, each clipped to its own range.
+    let mut union_ground = Raster::new(lo, hi.max(lo + 1e-6), GRID, GRID);
+    if lo.x < hi.x && lo.y < hi.y {
+        for (k, r) in refined.iter().enumerate() {
+            let e = Vec2::new(eyes[k].x, eyes[k].z);
+            let keep = |p: Vec2| p.distance(e) <= options.range_m;
+            for t in &r.sampled.ground {
+                union_ground.fill(t, &keep);
+            }
+        }
+    }
+    let region_grid = |k: Option<usize>| {
+        options.region.map(|region| {
+            let mut raster = Raster::new(
+                Vec2::new(region.x0, region.z0),
+                Vec2::new(region.x1, region.z1),
+                512,
+                512,
+            );
+            for (i, r) in refined.iter().enumerate() {
+                if k.is_some_and(|k| k != i) {
+                    continue;
+                }
+                let e = Vec2::new(eyes[i].x, eyes[i].z);
+                let keep = |p: Vec2| p.distance(e) <= options.range_m;
+                for t in &r.sampled.ground {
+                    raster.fill(t, &keep);
+                }
+            }
+            raster
+        })
+    };
+    let region_share = |raster: &Raster| raster.count() as f64 / raster.covered.len() as f64;
+
+    // The direction grid for the ambinocular solid angle.
+    let reference = reference_of(frame, refined.iter().flat_map(|r| &r.sampled.directions));
+    let angles = |d: Vec3| {
+        Vec2::new(
+            frame.horizontal_deg(d, reference) as f32,
+            frame.elevation_deg(d) as f32,
+        )
+    };
+    let (mut a_lo, mut a_hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
+    for d in refined.iter().flat_map(|r| &r.sampled.directions).flatten() {
+        let a = angles(*d);
+        a_lo = a_lo.min(a);
+        a_hi = a_hi.max(a);
+    }
+    let a_side = (a_hi - a_lo).max_element().max(1e-6);
+
+    let mut eye_reports = Vec::with_capacity(eyes.len());
+    let any_region = region_grid(None);
+    let mut all_region: Option<Vec<bool>> = None;
+    for (k, r) in refined.iter().enumerate() {
+        let own_reference = reference_of(frame, r.sampled.directions.iter());
+        let (horizontal_deg, vertical_deg) = extents(frame, own_reference, &r.sampled.directions);
+        let region = region_grid(Some(k));
+        let share = region.as_ref().map(region_share);
+        if let Some(region) = &region {
+            all_region = Some(match all_region {
+                None => region.covered.clone(),
+                Some(all) => all
+                    .iter()
+                    .zip(&region.covered)
+                    .map(|(a, b)| *a && *b)
+                    .collect(),
+            });
+        }
+        eye_reports.push(EyeReport {
+            position: eyes[k].to_array(),
+            figures: Figures {
+                horizontal_deg,
+                vertical_deg,
+                solid_angle_sr: r.sampled.solid_angle_sr,
+                ground_area_m2: r.ground_area_m2,
+                region_seen_by_any: share,
+                region_seen_by_all: share,
+                blind_area_m2: options
+                    .region
+                    .zip(share)
+                    .map(|(region, share)| region.area() * (1.0 - share)),
+            },
+            subdivision: r.subdivision as u32,
+            edge_depth: r.depth,
+            samples: r.sampled.samples,
+            seen_samples: r.sampled.seen,
+            density_per_m2: r.sampled.samples as f64 / mirror_area.max(1e-12),
+            converged: r.converged,
+        });
+    }
+
+    let mut directions = Raster::new(a_lo, a_lo + Vec2::splat(a_side), GRID, GRID);
+    for t in refined.iter().flat_map(|r| &r.sampled.directions) {
+        directions.fill(&t.map(angles), &|_| true);
+    }
+    let cell_sr = |row: usize| {
+        let elevation = (directions.centre(0, row).y as f64).to_radians();
+        elevation.cos()
+            * f64::from(directions.cell.x).to_radians()
+            * f64::from(directions.cell.y).to_radians()
+    };
+    let union_solid_angle: f64 = (0..directions.rows)
+        .map(|row| {
+            let covered = directions.covered[row * directions.columns..][..directions.columns]
+                .iter()
+                .filter(|c| **c)
+                .count();
+            covered as f64 * cell_sr(row)
+        })
+        .sum();
+    let (horizontal_deg, vertical_deg) = extents(
+        frame,
+        reference,
+        &refined
+            .iter()
+            .flat_map(|r| r.sampled.directions.iter().copied())
+            .collect::<Vec<_>>(),
+    );
+    let any_share = any_region.as_ref().map(region_share);
+    let all_share =
+        all_region.map(|all| all.iter().filter(|c| **c).count() as f64 / all.len() as f64);
+    let report = Report {
+        schema_version: SCHEMA_VERSION,
+        scene: scene.name.clone(),
+        mirror: mirror.name.clone(),
+        forward: frame.forward.to_array(),
+        up: frame.up.to_array(),
+        ground_y: options.ground_y,
+        range_m: options.range_m,
+        region: options.region,
+        tolerance: options.tolerance,
+        tolerance_deg: options.tolerance_deg,
+        ground_cell_m: f64::from(union_ground.cell.max_element()),
+        direction_cell_deg: f64::from(a_side) / GRID as f64,
+        figures: Figures {
+            horizontal_deg,
+            vertical_deg,
+            solid_angle_sr: union_solid_angle,
+            ground_area_m2: union_ground.count() as f64 * union_ground.cell_area(),
+            region_seen_by_any: any_share,
+            region_seen_by_all: all_share,
+            blind_area_m2: options
+                .region
+                .zip(any_share)
+                .map(|(region, share)| region.area() * (1.0 - share)),
+        },
+        eyes: eye_reports,
+    };
+    Ok(MirrorView {
+        report,
+        footprints: refined.into_iter().map(|r| r.sampled.ground).collect(),
+    })
+}

@@ -1,0 +1,232 @@
+//! `specula analyze KIND SCENE ...`: the analyses of `specula_analyze`, on all cores, with a
+//! progress bar over the eye points, a table on the terminal and the JSON report.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use glam::Vec3;
+use indicatif::{ProgressBar, ProgressStyle};
+use specula_analyze::frame::{Eyes, VehicleFrame};
+use specula_analyze::mirror_view::{self, Region};
+use specula_scene::builtin::DEFAULT_SCENE;
+use specula_trace::SceneAccel;
+
+#[derive(clap::Subcommand)]
+pub enum Kind {
+    /// What is seen in a mirror from the eye points: its field of view (horizontal and
+    /// vertical extent, solid angle), its footprint on the ground within a range, and the
+    /// share of a required region seen by any and by every eye point (its blind part).
+    MirrorView(MirrorViewArgs),
+}
+
+/// Where the eyes are, in the vehicle frame.
+#[derive(clap::Args)]
+pub struct EyeArgs {
+    /// An eye point X,Y,Z in metres (repeatable; default: the camera's eye).
+    #[arg(long = "eye", value_parser = parse_point, allow_hyphen_values = true, conflicts_with_all = ["eyebox", "ocular"])]
+    eyes: Vec<Vec3>,
+    /// A grid of NX × NY eye points spanning W × H metres, centred on the camera's eye,
+    /// horizontal and vertical in the vehicle frame: W,H,NX,NY.
+    #[arg(long, value_parser = parse_eyebox, conflicts_with = "ocular")]
+    eyebox: Option<Eyes>,
+    /// UN ECE R46's two ocular points: 65 mm apart across the vehicle, centred on the
+    /// camera's eye.
+    #[arg(long)]
+    ocular: bool,
+    /// The vehicle's longitudinal axis X,Y,Z (default: the camera's view direction projected on
+    /// the ground plane); up is +Y.
+    #[arg(long, value_parser = parse_point, allow_hyphen_values = true)]
+    forward: Option<Vec3>,
+}
+
+impl EyeArgs {
+    fn eyes(&self) -> Eyes {
+        if self.ocular {
+            Eyes::Ocular
+        } else if let Some(eyebox) = &self.eyebox {
+            eyebox.clone()
+        } else if !self.eyes.is_empty() {
+            Eyes::Points(self.eyes.clone())
+        } else {
+            Eyes::Camera
+        }
+    }
+}
+
+#[derive(clap::Args)]
+pub struct MirrorViewArgs {
+    /// Built-in scene name, a .toml scene file, or a mesh/scene file.
+    #[arg(default_value = DEFAULT_SCENE)]
+    scene: String,
+    /// The mirror, as the scene names it (`NAME#k` for a component).
+    #[arg(long)]
+    mirror: String,
+    #[command(flatten)]
+    eyes: EyeArgs,
+    /// The ground plane's height Y in metres (default: the lowest point of the scene).
+    #[arg(long, allow_hyphen_values = true)]
+    ground: Option<f32>,
+    /// Ground farther than this from an eye point, horizontally, is not counted (metres).
+    #[arg(long, default_value_t = 100.0)]
+    range: f32,
+    /// A required region on the ground, X0,Z0,X1,Z1 in metres.
+    #[arg(long, value_parser = parse_region, allow_hyphen_values = true)]
+    region: Option<Region>,
+    /// Refinement stops when the solid angle and the areas change by less than this share.
+    #[arg(long, default_value_t = 0.005)]
+    tolerance: f64,
+    /// ... and the extents by less than this many degrees.
+    #[arg(long, default_value_t = 0.05)]
+    tolerance_deg: f64,
+    /// Write the report as JSON here (schema: docs/analyze-mirror-view.schema.json).
+    #[arg(long)]
+    json: Option<PathBuf>,
+}
+
+fn numbers<const N: usize>(text: &str, what: &str) -> Result<[f32; N], String> {
+    let values: Vec<f32> = text
+        .split(',')
+        .map(|v| v.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("expected {what}, got '{text}'"))?;
+    let values: [f32; N] = values
+        .try_into()
+        .map_err(|_| format!("expected {what} ({N} numbers), got '{text}'"))?;
+    if values.iter().any(|v| !v.is_finite()) {
+        return Err(format!("expected {what}, finite numbers, got '{text}'"));
+    }
+    Ok(values)
+}
+
+fn parse_point(text: &str) -> Result<Vec3, String> {
+    numbers::<3>(text, "X,Y,Z").map(Vec3::from_array)
+}
+
+fn parse_eyebox(text: &str) -> Result<Eyes, String> {
+    let [width, height, columns, rows] = numbers::<4>(text, "W,H,NX,NY")?;
+    let count = |v: f32| {
+        (v.fract() == 0.0 && (0.0..=10_000.0).contains(&v))
+            .then_some(v as u32)
+            .ok_or_else(|| format!("NX and NY must be whole numbers, got '{text}'"))
+    };
+    Ok(Eyes::Eyebox {
+        width,
+        height,
+        columns: count(columns)?,
+        rows: count(rows)?,
+    })
+}
+
+fn parse_region(text: &str) -> Result<Region, String> {
+    let [x0, z0, x1, z1] = numbers::<4>(text, "X0,Z0,X1,Z1")?;
+    Region::new(x0, z0, x1, z1).map_err(|e| e.to_string())
+}
+
+pub fn run(kind: Kind) -> Result<()> {
+    match kind {
+        Kind::MirrorView(args) => mirror_view(args),
+    }
+}
+
+fn mirror_view(args: MirrorViewArgs) -> Result<()> {
+    let scene = crate::load_scene(&args.scene)?;
+    let mirror = specula_analyze::object(&scene, "--mirror", &args.mirror)?;
+    let frame = VehicleFrame::new(&scene.camera, args.eyes.forward)?;
+    let eyes = args.eyes.eyes().points(scene.camera.eye, &frame)?;
+    let options = mirror_view::Options {
+        mirror,
+        frame,
+        ground_y: args
+            .ground
+            .unwrap_or_else(|| mirror_view::lowest_point(&scene)),
+        range_m: args.range,
+        region: args.region,
+        tolerance: args.tolerance,
+        tolerance_deg: args.tolerance_deg,
+        max_samples: 4_000_000,
+    };
+    options.validate(&scene)?;
+    let accel = SceneAccel::new(&scene);
+    let bar = ProgressBar::new(eyes.len() as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:30} {pos}/{len} eye points ({elapsed})")
+            .expect("valid template"),
+    );
+    let view = mirror_view::analyze(&scene, &accel, &eyes, &options, &|done| {
+        bar.set_position(done as u64)
+    })?;
+    bar.finish_and_clear();
+    print_mirror_view(&view.report);
+    if let Some(json) = &args.json {
+        std::fs::write(json, serde_json::to_string_pretty(&view.report)?)
+            .with_context(|| format!("writing {}", json.display()))?;
+    }
+    Ok(())
+}
+
+fn share(value: Option<f64>) -> String {
+    value
+        .map(|v| format!("{:.1} %", v * 100.0))
+        .unwrap_or_else(|| "-".into())
+}
+
+fn print_mirror_view(r: &mirror_view::Report) {
+    println!(
+        "{}: mirror '{}', ground y = {} m, range {} m{}",
+        r.scene,
+        r.mirror,
+        r.ground_y,
+        r.range_m,
+        r.region
+            .map(|g| format!(", region x {}..{}, z {}..{}", g.x0, g.x1, g.z0, g.z1))
+            .unwrap_or_default()
+    );
+    println!(
+        "{:<28}{:>10}{:>10}{:>12}{:>12}{:>10}{:>10}{:>12}",
+        "eye point",
+        "horiz °",
+        "vert °",
+        "solid sr",
+        "ground m²",
+        "region",
+        "blind m²",
+        "samples/m²"
+    );
+    let row = |label: String, f: &mirror_view::Figures, density: String| {
+        println!(
+            "{label:<28}{:>10.2}{:>10.2}{:>12.5}{:>12.2}{:>10}{:>10}{:>12}",
+            f.horizontal_deg,
+            f.vertical_deg,
+            f.solid_angle_sr,
+            f.ground_area_m2,
+            share(f.region_seen_by_any),
+            f.blind_area_m2
+                .map(|b| format!("{b:.2}"))
+                .unwrap_or_else(|| "-".into()),
+            density
+        )
+    };
+    for eye in &r.eyes {
+        let [x, y, z] = eye.position;
+        row(
+            format!("({x:.3}, {y:.3}, {z:.3})"),
+            &eye.figures,
+            format!(
+                "{:.0}{}",
+                eye.density_per_m2,
+                if eye.converged {
+                    ""
+                } else {
+                    " (not converged)"
+                }
+            ),
+        );
+    }
+    if r.eyes.len() > 1 {
+        row("all eye points (any)".into(), &r.figures, String::new());
+        println!(
+            "region seen by every eye point: {}",
+            share(r.figures.region_seen_by_all)
+        );
+    }
+}

@@ -1,0 +1,107 @@
+//! `specula analyze` end to end: the JSON against its schema, the ocular points, and bad input.
+
+use std::process::Command;
+
+fn specula() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_specula"))
+}
+
+#[test]
+fn mirror_view_from_the_ocular_points_writes_json_that_matches_the_schema() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = specula()
+        .current_dir(dir.path())
+        .args([
+            "analyze",
+            "mirror-view",
+            "door-mirror",
+            "--mirror",
+            "door mirror",
+            "--ocular",
+            "--region",
+            "-4,2,4,30",
+            "--json",
+            "view.json",
+        ])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let text = std::fs::read_to_string(dir.path().join("view.json")).unwrap();
+    let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let schema: serde_json::Value = serde_json::from_str(include_str!(
+        "../../../docs/analyze-mirror-view.schema.json"
+    ))
+    .unwrap();
+    let validator = jsonschema::validator_for(&schema).unwrap();
+    let errors: Vec<String> = validator
+        .iter_errors(&json)
+        .map(|e| format!("{e} at {}", e.instance_path()))
+        .collect();
+    assert!(errors.is_empty(), "{errors:?}");
+    let eyes = json["eyes"].as_array().unwrap();
+    assert_eq!(eyes.len(), 2);
+    let x = |k: usize, i: usize| eyes[k]["position"][i].as_f64().unwrap();
+    let apart = ((x(0, 0) - x(1, 0)).powi(2) + (x(0, 2) - x(1, 2)).powi(2)).sqrt();
+    assert!(
+        (apart - 0.065).abs() < 1e-5,
+        "ocular points {apart} m apart"
+    );
+    // Ambinocular: the union is at least each eye's, the intersection at most.
+    let figure = |v: &serde_json::Value, name: &str| v[name].as_f64().unwrap();
+    for eye in eyes {
+        assert!(eye["converged"].as_bool().unwrap());
+        for name in ["horizontal_deg", "solid_angle_sr", "ground_area_m2"] {
+            assert!(
+                figure(&json, name) >= figure(eye, name) * 0.999,
+                "{name}: all {} < one eye {}",
+                json[name],
+                eye[name]
+            );
+        }
+        assert!(figure(&json, "region_seen_by_any") >= figure(eye, "region_seen_by_any"));
+        assert!(figure(&json, "region_seen_by_all") <= figure(eye, "region_seen_by_any"));
+    }
+}
+
+#[test]
+fn bad_mirror_view_input_is_a_clear_error() {
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec!["--mirror", "mirrr"],
+            "unknown --mirror 'mirrr'; the scene's objects are: door mirror",
+        ),
+        (
+            vec!["--mirror", "ground"],
+            "--mirror 'ground' is diffuse, not a mirror",
+        ),
+        (
+            vec!["--mirror", "door mirror", "--eyebox", "0.3,0.1,0,3"],
+            "at least one point",
+        ),
+        (
+            vec!["--mirror", "door mirror", "--region", "1,2,1,5"],
+            "has no area",
+        ),
+        (vec!["--mirror", "door mirror", "--range", "0"], "--range"),
+        (vec!["--mirror", "door mirror", "--eye", "1,2"], "X,Y,Z"),
+        (
+            vec!["--mirror", "door mirror", "--forward", "0,1,0"],
+            "no horizontal part",
+        ),
+    ];
+    for (args, expected) in cases {
+        let out = specula()
+            .args(["analyze", "mirror-view", "door-mirror"])
+            .args(&args)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
+        assert!(
+            stderr.contains(expected),
+            "{args:?}: {stderr:?} should mention {expected:?}"
+        );
+    }
+}
