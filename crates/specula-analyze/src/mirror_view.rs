@@ -640,9 +640,16 @@ pub fn analyze(
         range_hi = range_hi.max(e + options.range_m);
     }
     let (lo, hi) = (lo.max(range_lo), hi.min(range_hi));
-    // The union of the eyes' footprints, each clipped to its own range.
-    let mut union_ground = Raster::new(lo, hi.max(lo + 1e-6), GRID, GRID);
-    if lo.x < hi.x && lo.y < hi.y {
+    let has_ground = lo.x < hi.x && lo.y < hi.y;
+    // The union of the eyes' footprints, each clipped to its own range (a unit grid counting
+    // nothing where no eye sees the ground).
+    let (lo, hi) = if has_ground {
+        (lo, hi)
+    } else {
+        (Vec2::ZERO, Vec2::ONE)
+    };
+    let mut union_ground = Raster::new(lo, hi, GRID, GRID);
+    if has_ground {
         for (k, r) in refined.iter().enumerate() {
             let e = Vec2::new(eyes[k].x, eyes[k].z);
             let keep = |p: Vec2| p.distance(e) <= options.range_m;
@@ -687,6 +694,10 @@ pub fn analyze(
         let a = angles(*d);
         a_lo = a_lo.min(a);
         a_hi = a_hi.max(a);
+    }
+    let has_directions = a_lo.x <= a_hi.x;
+    if !has_directions {
+        (a_lo, a_hi) = (Vec2::ZERO, Vec2::ONE);
     }
     let a_side = (a_hi - a_lo).max_element().max(1e-6);
 
@@ -772,8 +783,16 @@ pub fn analyze(
         region: options.region,
         tolerance: options.tolerance,
         tolerance_deg: options.tolerance_deg,
-        ground_cell_m: f64::from(union_ground.cell.max_element()),
-        direction_cell_deg: f64::from(a_side) / GRID as f64,
+        ground_cell_m: if has_ground {
+            f64::from(union_ground.cell.max_element())
+        } else {
+            0.0
+        },
+        direction_cell_deg: if has_directions {
+            f64::from(a_side) / GRID as f64
+        } else {
+            0.0
+        },
         figures: Figures {
             horizontal_deg,
             vertical_deg,

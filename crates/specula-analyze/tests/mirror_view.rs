@@ -306,6 +306,48 @@ fn a_convex_mirror_s_field_of_view_is_bounded_by_its_rim_s_reflections() {
 }
 
 #[test]
+fn a_hidden_mirror_shows_nothing_and_says_so_with_finite_zeros() {
+    let eye = Vec3::new(0.0, 1.2, 0.0);
+    let mirror = Rectangle::tilted(Vec3::new(0.0, 1.15, -1.0), 0.3);
+    let mut scene = scene_with(mirror.mesh(), eye);
+    // A wall between the eye and the mirror.
+    scene.materials.push(Material::diffuse("wall", Vec3::ONE));
+    let mut wall = Rectangle::tilted(Vec3::new(0.0, 1.2, -0.5), 0.0);
+    (wall.width, wall.height) = (2.0, 2.0);
+    scene.meshes.push(Mesh {
+        name: "wall".into(),
+        material: 1,
+        ..wall.mesh()
+    });
+    let accel = SceneAccel::new(&scene);
+    let region = Region::new(-1.0, 1.0, 1.0, 3.0).unwrap();
+    let view = analyze(
+        &scene,
+        &accel,
+        &[eye],
+        &options(&scene, eye, Some(region)),
+        &|_| {},
+    )
+    .unwrap();
+    let r = &view.report;
+    assert_eq!(r.eyes[0].seen_samples, 0);
+    for f in [&r.figures, &r.eyes[0].figures] {
+        assert_eq!(
+            (
+                f.horizontal_deg,
+                f.vertical_deg,
+                f.solid_angle_sr,
+                f.ground_area_m2
+            ),
+            (0.0, 0.0, 0.0, 0.0)
+        );
+        assert_eq!(f.region_seen_by_any, Some(0.0));
+        assert_eq!(f.blind_area_m2, Some(region.area()));
+    }
+    assert!(r.ground_cell_m.is_finite() && r.direction_cell_deg.is_finite());
+}
+
+#[test]
 fn bad_input_is_named() {
     let eye = Vec3::new(0.0, 1.2, 0.0);
     let mirror = Rectangle::tilted(Vec3::new(0.0, 1.15, -1.0), 0.3);
