@@ -7,12 +7,16 @@
 //! - [`mirror_view`]: what a driver sees in a mirror: the mirror's field of view (horizontal
 //!   and vertical extent of the reflected directions, their solid angle), its footprint on the
 //!   ground, and the share of a required region seen, per eye point and for all together.
+//! - [`plot`] and [`report`]: the plots (PNG, and SVG with axes and legends) and the report
+//!   folder (HTML, JSON, plots).
 //!
 //! Objects are named as the scene names them (`NAME#k` for a component split on load); an
 //! unknown name is an error listing the valid ones ([`object`]).
 
 pub mod frame;
 pub mod mirror_view;
+pub mod plot;
+pub mod report;
 
 use specula_scene::Scene;
 
@@ -31,6 +35,8 @@ pub enum AnalyzeError {
         kind: String,
         expected: &'static str,
     },
+    #[error("{path}: {message}")]
+    Write { path: String, message: String },
     #[error("{option}: {reason}")]
     BadOption {
         option: &'static str,

@@ -81,6 +81,10 @@ pub struct MirrorViewArgs {
     /// Write the report as JSON here (schema: docs/analyze-mirror-view.schema.json).
     #[arg(long)]
     json: Option<PathBuf>,
+    /// Write a report folder: report.html (figures, parameters, plots), report.json, the
+    /// ground map and the mirror seen from the first eye point as PNG and SVG.
+    #[arg(long)]
+    report: Option<PathBuf>,
 }
 
 fn numbers<const N: usize>(text: &str, what: &str) -> Result<[f32; N], String> {
@@ -160,6 +164,10 @@ fn mirror_view(args: MirrorViewArgs) -> Result<()> {
     if let Some(json) = &args.json {
         std::fs::write(json, serde_json::to_string_pretty(&view.report)?)
             .with_context(|| format!("writing {}", json.display()))?;
+    }
+    if let Some(dir) = &args.report {
+        let html = specula_analyze::report::write_mirror_view(dir, &view, &scene, &accel, mirror)?;
+        println!("report: {}", html.display());
     }
     Ok(())
 }

@@ -22,6 +22,8 @@ fn mirror_view_from_the_ocular_points_writes_json_that_matches_the_schema() {
             "-4,2,4,30",
             "--json",
             "view.json",
+            "--report",
+            "report",
         ])
         .output()
         .unwrap();
@@ -41,6 +43,24 @@ fn mirror_view_from_the_ocular_points_writes_json_that_matches_the_schema() {
     assert!(errors.is_empty(), "{errors:?}");
     let eyes = json["eyes"].as_array().unwrap();
     assert_eq!(eyes.len(), 2);
+    // The report folder: the same JSON, each plot as PNG and SVG, the page linking them.
+    let report = dir.path().join("report");
+    let same: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(report.join("report.json")).unwrap())
+            .unwrap();
+    assert_eq!(same, json);
+    for plot in ["ground", "mirror"] {
+        let png = image::open(report.join(format!("{plot}.png"))).unwrap();
+        assert!(png.width() >= 16 && png.height() >= 16);
+        let svg = std::fs::read_to_string(report.join(format!("{plot}.svg"))).unwrap();
+        assert!(svg.starts_with("<svg") && svg.contains("data:image/png;base64,"));
+    }
+    let html = std::fs::read_to_string(report.join("report.html")).unwrap();
+    assert!(
+        html.contains("ground.svg")
+            && html.contains("mirror.svg")
+            && html.contains("all eye points")
+    );
     let x = |k: usize, i: usize| eyes[k]["position"][i].as_f64().unwrap();
     let apart = ((x(0, 0) - x(1, 0)).powi(2) + (x(0, 2) - x(1, 2)).powi(2)).sqrt();
     assert!(

@@ -1,0 +1,444 @@
+//! Plots of an analysis, as PNG (a raster of the figure) and SVG (the same raster embedded,
+//! with axes, labels and a legend in vector text). Written by hand on the `image` crate, so that
+//! plots cost no plotting library or system font to build; the PNG carries no text, the SVG
+//! reads it.
+
+use base64::Engine;
+use glam::{Vec2, Vec3};
+use image::{Rgb, RgbImage};
+use specula_scene::{Camera, Scene};
+use specula_trace::optics::reflect;
+use specula_trace::reference::{offset_origin, render, surface_point, RenderSettings};
+use specula_trace::{Ray, SceneAccel};
+
+use crate::mirror_view::{MirrorView, Region};
+
+/// Eye points' colours, in order (then again).
+const PALETTE: [[u8; 3]; 6] = [
+    [31, 119, 180],
+    [44, 160, 44],
+    [148, 103, 189],
+    [255, 127, 14],
+    [23, 190, 207],
+    [140, 86, 75],
+];
+
+/// A plot: its raster and the SVG around it.
+pub struct Plot {
+    pub png: RgbImage,
+    pub svg: String,
+}
+
+/// Axis-aligned extent of a map, metres.
+#[derive(Clone, Copy, Debug)]
+pub struct Extent {
+    pub min: Vec2,
+    pub max: Vec2,
+}
+
+impl Extent {
+    fn grow(self, by: f32) -> Extent {
+        let pad = (self.max - self.min) * by;
+        Extent {
+            min: self.min - pad,
+            max: self.max + pad,
+        }
+    }
+}
+
+/// What the ground map shows: around the region when there is one (its surroundings by half
+/// its size), else the footprints within range.
+pub fn ground_extent(view: &MirrorView) -> Extent {
+    if let Some(region) = view.report.region {
+        return Extent {
+            min: Vec2::new(region.x0, region.z0),
+            max: Vec2::new(region.x1, region.z1),
+        }
+        .grow(0.25);
+    }
+    let range = view.report.range_m;
+    let (mut min, mut max) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
+    for (k, footprint) in view.footprints.iter().enumerate() {
+        let [x, _, z] = view.report.eyes[k].position;
+        let eye = Vec2::new(x, z);
+        for p in footprint.iter().flatten() {
+            let p = eye + (*p - eye).clamp_length_max(range);
+            min = min.min(p);
+            max = max.max(p);
+        }
+    }
+    if min.x >= max.x || min.y >= max.y {
+        return Extent {
+            min: Vec2::ZERO,
+            max: Vec2::ONE,
+        };
+    }
+    Extent { min, max }.grow(0.05)
+}
+
+/// The ground map, `longest` pixels along its longer side: each eye point's footprint (within
+/// range) in its colour, blended where several overlap; the region outlined; its blind part (no
+/// eye sees it) in red.
+pub fn ground_map(view: &MirrorView, longest: u32) -> Plot {
+    let extent = ground_extent(view);
+    let size = extent.max - extent.min;
+    let scale = longest as f32 / size.max_element();
+    let width = ((size.x * scale).round() as u32).max(16);
+    let height = ((size.y * scale).round() as u32).max(16);
+    let to_ground = |x: u32, y: u32| {
+        // The image's top row is the extent's largest z.
+        Vec2::new(
+            extent.min.x + size.x * (x as f32 + 0.5) / width as f32,
+            extent.max.y - size.y * (y as f32 + 0.5) / height as f32,
+        )
+    };
+    let range = view.report.range_m;
+    // Per eye, which pixels its footprint covers.
+    let covered: Vec<Vec<bool>> = view
+        .footprints
+        .iter()
+        .enumerate()
+        .map(|(k, footprint)| {
+            let [x, _, z] = view.report.eyes[k].position;
+            let eye = Vec2::new(x, z);
+            let mut mask = vec![false; (width * height) as usize];
+            for t in footprint {
+                fill_triangle(t, width, height, &extent, &mut mask, &|p| {
+                    p.distance(eye) <= range
+                });
+            }
+            mask
+        })
+        .collect();
+    let region = view.report.region;
+    let inside = |p: Vec2, r: &Region| p.x >= r.x0 && p.x <= r.x1 && p.y >= r.z0 && p.y <= r.z1;
+    let png = RgbImage::from_fn(width, height, |x, y| {
+        let i = (y * width + x) as usize;
+        let p = to_ground(x, y);
+        let eyes: Vec<usize> = (0..covered.len()).filter(|k| covered[*k][i]).collect();
+        if eyes.is_empty() {
+            return match region {
+                Some(r) if inside(p, &r) => Rgb([214, 39, 40]),
+                _ => Rgb([235, 235, 235]),
+            };
+        }
+        let mut sum = [0u32; 3];
+        for k in &eyes {
+            for (c, v) in sum.iter_mut().zip(PALETTE[k % PALETTE.len()]) {
+                *c += u32::from(v);
+            }
+        }
+        // Lighter outside the region, full colour inside it.
+        let light = region.is_some_and(|r| !inside(p, &r));
+        Rgb(sum.map(|c| {
+            let c = c / eyes.len() as u32;
+            if light {
+                ((c + 2 * 255) / 3) as u8
+            } else {
+                c as u8
+            }
+        }))
+    });
+    let mut png = png;
+    if let Some(r) = region {
+        let to_pixel = |p: Vec2| {
+            Vec2::new(
+                (p.x - extent.min.x) / size.x * width as f32,
+                (extent.max.y - p.y) / size.y * height as f32,
+            )
+        };
+        let corners = [
+            Vec2::new(r.x0, r.z0),
+            Vec2::new(r.x1, r.z0),
+            Vec2::new(r.x1, r.z1),
+            Vec2::new(r.x0, r.z1),
+        ]
+        .map(to_pixel);
+        for i in 0..4 {
+            draw_line(&mut png, corners[i], corners[(i + 1) % 4], Rgb([0, 0, 0]));
+        }
+    }
+    let mut legend: Vec<(String, [u8; 3])> = view
+        .report
+        .eyes
+        .iter()
+        .enumerate()
+        .map(|(k, e)| {
+            let [x, y, z] = e.position;
+            (
+                format!("eye {} ({x:.3}, {y:.3}, {z:.3})", k + 1),
+                PALETTE[k % PALETTE.len()],
+            )
+        })
+        .collect();
+    if region.is_some() {
+        legend.push(("blind: the region no eye sees".into(), [214, 39, 40]));
+    }
+    let title = format!(
+        "{}: ground seen in '{}' (y = {} m, within {} m)",
+        view.report.scene, view.report.mirror, view.report.ground_y, range
+    );
+    let svg = svg_around(&png, &title, ("x (m)", "z (m)"), Some(extent), &legend);
+    Plot { png, svg }
+}
+
+/// The mirror seen from eye point `eye`, as the reference renders it, with the ground's
+/// 1 m grid (5 m lines darker) drawn where the mirror shows the ground.
+pub fn mirror_from_eye(
+    scene: &Scene,
+    accel: &SceneAccel,
+    mirror: usize,
+    eye: Vec3,
+    ground_y: f32,
+    width: u32,
+) -> Plot {
+    let bounds = scene.meshes[mirror].bounds();
+    let (centre, radius) = (bounds.center(), bounds.radius().max(1e-3));
+    let distance = eye.distance(centre).max(radius * 1.01);
+    let fov_y_deg = (2.0 * (radius / distance).asin().to_degrees() * 1.1).clamp(1.0, 170.0);
+    let height = (width * 3 / 4).max(1);
+    let camera = Camera {
+        eye,
+        target: centre,
+        up: Vec3::Y,
+        fov_y_deg,
+        aspect: None,
+    };
+    let mut view_scene = scene.clone();
+    view_scene.camera = camera.clone();
+    let settings = RenderSettings {
+        width,
+        height,
+        spp: 1,
+        max_depth: 8,
+    };
+    let image = render(&view_scene, accel, &settings, &|_, _| {});
+    let mut png = image.to_srgb8();
+    // Where each pixel's ray, reflected in the mirror, meets the ground (x, z).
+    let ground: Vec<Option<Vec2>> = (0..width * height)
+        .map(|i| {
+            let (x, y) = (i % width, i / width);
+            let dir = camera.ray_direction(x as f32 + 0.5, y as f32 + 0.5, width, height);
+            let ray = Ray { origin: eye, dir };
+            let hit = accel.intersect(&ray, f32::INFINITY)?;
+            if hit.mesh as usize != mirror {
+                return None;
+            }
+            let sp = surface_point(scene, &ray, &hit);
+            let r = reflect(dir, sp.ns).normalize();
+            let origin = offset_origin(sp.p, sp.ng, r);
+            let t = (r.y < 0.0).then(|| (ground_y - origin.y) / r.y)?;
+            let blocked = accel.intersect(&Ray { origin, dir: r }, t * (1.0 - 1e-4) - 1e-4);
+            blocked.is_none().then(|| {
+                let g = origin + r * t;
+                Vec2::new(g.x, g.z)
+            })
+        })
+        .collect();
+    let cell = |g: Vec2, spacing: f32| (g / spacing).floor();
+    for y in 0..height.saturating_sub(1) {
+        for x in 0..width.saturating_sub(1) {
+            let i = (y * width + x) as usize;
+            let Some(g) = ground[i] else { continue };
+            for (spacing, colour) in [(5.0, [20, 20, 20]), (1.0, [250, 250, 250])] {
+                let crosses = [ground[i + 1], ground[i + width as usize]]
+                    .iter()
+                    .flatten()
+                    .any(|n| cell(*n, spacing) != cell(g, spacing));
+                if crosses {
+                    png.put_pixel(x, y, Rgb(colour));
+                    break;
+                }
+            }
+        }
+    }
+    let [x, y, z] = eye.to_array();
+    let title = format!(
+        "'{}' from the eye at ({x:.3}, {y:.3}, {z:.3}): the ground's 1 m grid (5 m dark)",
+        scene.meshes[mirror].name
+    );
+    let svg = svg_around(&png, &title, ("", ""), None, &[]);
+    Plot { png, svg }
+}
+
+/// Marks the pixels of a `width` × `height` map over `extent` whose centres lie in `t` (ground
+/// x, z) and pass `keep`.
+fn fill_triangle(
+    t: &[Vec2; 3],
+    width: u32,
+    height: u32,
+    extent: &Extent,
+    mask: &mut [bool],
+    keep: &impl Fn(Vec2) -> bool,
+) {
+    let size = extent.max - extent.min;
+    let to_pixel = |p: Vec2| {
+        Vec2::new(
+            (p.x - extent.min.x) / size.x * width as f32,
+            (extent.max.y - p.y) / size.y * height as f32,
+        )
+    };
+    let [a, b, c] = t.map(to_pixel);
+    let lo = a.min(b).min(c).floor().max(Vec2::ZERO);
+    let hi = a
+        .max(b)
+        .max(c)
+        .ceil()
+        .min(Vec2::new(width as f32, height as f32));
+    let edge = |p: Vec2, q: Vec2, s: Vec2| (q - p).perp_dot(s - p);
+    let area = edge(a, b, c);
+    if area == 0.0 || !area.is_finite() || lo.x >= hi.x || lo.y >= hi.y {
+        return;
+    }
+    for y in lo.y as u32..hi.y as u32 {
+        for x in lo.x as u32..hi.x as u32 {
+            let s = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+            let inside = [edge(b, c, s), edge(c, a, s), edge(a, b, s)]
+                .iter()
+                .all(|w| w * area >= 0.0);
+            if inside {
+                let g = Vec2::new(
+                    extent.min.x + size.x * s.x / width as f32,
+                    extent.max.y - size.y * s.y / height as f32,
+                );
+                if keep(g) {
+                    mask[(y * width + x) as usize] = true;
+                }
+            }
+        }
+    }
+}
+
+fn draw_line(png: &mut RgbImage, a: Vec2, b: Vec2, colour: Rgb<u8>) {
+    let steps = (b - a).abs().max_element().ceil().max(1.0) as u32;
+    for k in 0..=steps {
+        let p = a + (b - a) * (k as f32 / steps as f32);
+        let (x, y) = (p.x.round(), p.y.round());
+        if x >= 0.0 && y >= 0.0 && (x as u32) < png.width() && (y as u32) < png.height() {
+            png.put_pixel(x as u32, y as u32, colour);
+        }
+    }
+}
+
+/// PNG bytes of `png`.
+pub fn png_bytes(png: &RgbImage) -> Vec<u8> {
+    let mut bytes = Vec::new();
+    png.write_to(
+        &mut std::io::Cursor::new(&mut bytes),
+        image::ImageFormat::Png,
+    )
+    .expect("a PNG encodes in memory");
+    bytes
+}
+
+/// `text` safe in HTML and SVG.
+pub fn html_escape(text: &str) -> String {
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
+
+/// An SVG page holding `png` with a title, axes with ticks over `extent` (metres) and a legend.
+fn svg_around(
+    png: &RgbImage,
+    title: &str,
+    labels: (&str, &str),
+    extent: Option<Extent>,
+    legend: &[(String, [u8; 3])],
+) -> String {
+    let (w, h) = (png.width() as f32, png.height() as f32);
+    let (left, top, bottom) = (60.0, 30.0, 45.0);
+    let legend_height = 18.0 * legend.len() as f32;
+    let (page_w, page_h) = (w + left + 20.0, h + top + bottom + legend_height);
+    let data = base64::engine::general_purpose::STANDARD.encode(png_bytes(png));
+    let mut svg = format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{page_w}\" height=\"{page_h}\" \
+         font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" \
+         fill=\"white\"/>\n<text x=\"{left}\" y=\"18\" font-size=\"14\">{}</text>\n<image \
+         x=\"{left}\" y=\"{top}\" width=\"{w}\" height=\"{h}\" \
+         href=\"data:image/png;base64,{data}\"/>\n<rect x=\"{left}\" y=\"{top}\" width=\"{w}\" \
+         height=\"{h}\" fill=\"none\" stroke=\"black\"/>\n",
+        html_escape(title)
+    );
+    if let Some(e) = extent {
+        let size = e.max - e.min;
+        for (axis, span, from) in [(0, size.x, e.min.x), (1, size.y, e.min.y)] {
+            let step = nice_step(span / 6.0);
+            let mut v = (from / step).ceil() * step;
+            while v <= from + span {
+                let f = (v - from) / span;
+                let (x1, y1, x2, y2, tx, ty, anchor) = if axis == 0 {
+                    let x = left + f * w;
+                    (x, top + h, x, top + h + 5.0, x, top + h + 18.0, "middle")
+                } else {
+                    let y = top + h - f * h;
+                    (left - 5.0, y, left, y, left - 8.0, y + 4.0, "end")
+                };
+                svg.push_str(&format!(
+                    "<line x1=\"{x1}\" y1=\"{y1}\" x2=\"{x2}\" y2=\"{y2}\" stroke=\"black\"/>\
+                     <text x=\"{tx}\" y=\"{ty}\" text-anchor=\"{anchor}\">{}</text>\n",
+                    format_tick(v, step)
+                ));
+                v += step;
+            }
+        }
+        svg.push_str(&format!(
+            "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\">{}</text>\n<text x=\"14\" y=\"{}\" \
+             transform=\"rotate(-90 14 {})\" text-anchor=\"middle\">{}</text>\n",
+            left + w * 0.5,
+            top + h + 34.0,
+            html_escape(labels.0),
+            top + h * 0.5,
+            top + h * 0.5,
+            html_escape(labels.1)
+        ));
+    }
+    for (k, (text, [r, g, b])) in legend.iter().enumerate() {
+        let y = top + h + bottom + 18.0 * k as f32;
+        svg.push_str(&format!(
+            "<rect x=\"{left}\" y=\"{}\" width=\"12\" height=\"12\" fill=\"rgb({r},{g},{b})\"/>\
+             <text x=\"{}\" y=\"{}\">{}</text>\n",
+            y - 10.0,
+            left + 18.0,
+            y,
+            html_escape(text)
+        ));
+    }
+    svg.push_str("</svg>\n");
+    svg
+}
+
+/// 1, 2 or 5 times a power of ten, near `raw`.
+fn nice_step(raw: f32) -> f32 {
+    let power = 10f32.powf(raw.max(1e-6).log10().floor());
+    let m = raw / power;
+    power
+        * if m < 1.5 {
+            1.0
+        } else if m < 3.5 {
+            2.0
+        } else if m < 7.5 {
+            5.0
+        } else {
+            10.0
+        }
+}
+
+fn format_tick(v: f32, step: f32) -> String {
+    let decimals = (-step.log10().floor()).max(0.0) as usize;
+    format!("{v:.decimals$}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ticks_are_round() {
+        assert_eq!(nice_step(0.9), 1.0);
+        assert_eq!(nice_step(23.0), 20.0);
+        assert!((nice_step(0.04) - 0.05).abs() < 1e-7);
+        assert_eq!(format_tick(2.5, 0.5), "2.5");
+        assert_eq!(format_tick(20.0, 10.0), "20");
+    }
+}

@@ -1,0 +1,139 @@
+//! An analysis's report folder: `report.html` (the figures, the parameters and the plots),
+//! `report.json`, and each plot as PNG and SVG.
+
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+use specula_scene::Scene;
+use specula_trace::SceneAccel;
+
+use crate::mirror_view::{Figures, MirrorView};
+use crate::plot::{self, Plot};
+use crate::AnalyzeError;
+
+fn write_error(path: &Path, e: impl std::fmt::Display) -> AnalyzeError {
+    AnalyzeError::Write {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    }
+}
+
+fn write(path: &Path, bytes: &[u8]) -> Result<(), AnalyzeError> {
+    std::fs::write(path, bytes).map_err(|e| write_error(path, e))
+}
+
+fn write_plot(dir: &Path, name: &str, plot: &Plot) -> Result<(), AnalyzeError> {
+    write(
+        &dir.join(format!("{name}.png")),
+        &plot::png_bytes(&plot.png),
+    )?;
+    write(&dir.join(format!("{name}.svg")), plot.svg.as_bytes())
+}
+
+fn share(value: Option<f64>) -> String {
+    value
+        .map(|v| format!("{:.1} %", v * 100.0))
+        .unwrap_or_else(|| "–".into())
+}
+
+fn cells(f: &Figures) -> String {
+    format!(
+        "<td>{:.2}</td><td>{:.2}</td><td>{:.5}</td><td>{:.2}</td><td>{}</td><td>{}</td><td>{}</td>",
+        f.horizontal_deg,
+        f.vertical_deg,
+        f.solid_angle_sr,
+        f.ground_area_m2,
+        share(f.region_seen_by_any),
+        share(f.region_seen_by_all),
+        f.blind_area_m2
+            .map(|b| format!("{b:.2}"))
+            .unwrap_or_else(|| "–".into())
+    )
+}
+
+/// Writes the mirror-view report into `dir`: the JSON, the ground map and the mirror seen from
+/// the first eye point (PNG and SVG each), and the HTML page; returns the page's path.
+pub fn write_mirror_view(
+    dir: &Path,
+    view: &MirrorView,
+    scene: &Scene,
+    accel: &SceneAccel,
+    mirror: usize,
+) -> Result<PathBuf, AnalyzeError> {
+    std::fs::create_dir_all(dir).map_err(|e| write_error(dir, e))?;
+    let r = &view.report;
+    let json = serde_json::to_string_pretty(r).map_err(|e| write_error(dir, e))?;
+    write(&dir.join("report.json"), json.as_bytes())?;
+    write_plot(dir, "ground", &plot::ground_map(view, 640))?;
+    let eye = Vec3::from_array(r.eyes[0].position);
+    write_plot(
+        dir,
+        "mirror",
+        &plot::mirror_from_eye(scene, accel, mirror, eye, r.ground_y, 480),
+    )?;
+    let mut rows = String::new();
+    for (k, e) in r.eyes.iter().enumerate() {
+        let [x, y, z] = e.position;
+        rows.push_str(&format!(
+            "<tr><td>eye {} ({x:.3}, {y:.3}, {z:.3})</td>{}<td>{} × {} + {} levels, {} rays, {:.0}/m²{}</td></tr>\n",
+            k + 1,
+            cells(&e.figures),
+            e.subdivision,
+            e.subdivision,
+            e.edge_depth,
+            e.samples,
+            e.density_per_m2,
+            if e.converged { "" } else { " <b>not converged</b>" }
+        ));
+    }
+    if r.eyes.len() > 1 {
+        rows.push_str(&format!(
+            "<tr><td><b>all eye points</b> (any)</td>{}<td></td></tr>\n",
+            cells(&r.figures)
+        ));
+    }
+    let region = r
+        .region
+        .map(|g| format!("x {} … {} m, z {} … {} m", g.x0, g.x1, g.z0, g.z1))
+        .unwrap_or_else(|| "none".into());
+    let html = format!(
+        r#"<!DOCTYPE html>
+<html><head><meta charset="utf-8"><title>specula analyze mirror-view: {scene}</title>
+<style>
+body {{ font-family: sans-serif; margin: 2em; background: #fafafa; }}
+table {{ border-collapse: collapse; margin: 1em 0; }}
+td, th {{ border: 1px solid #bbb; padding: 4px 8px; text-align: right; }}
+td:first-child, th:first-child {{ text-align: left; }}
+figure {{ display: inline-block; margin: 0.5em; vertical-align: top; }}
+</style></head><body>
+<h1>What '{mirror}' shows: {scene}</h1>
+<p>Exact rays from each eye point to points of the mirror, reflected about its shading normals and
+followed through the scene (docs/analyses.md). Vehicle frame: forward ({fx:.3}, {fy:.3}, {fz:.3}),
+up +Y. Ground: y = {ground} m, counted within {range} m of an eye point where no object hides it.
+Required region: {region}. Refinement stopped when the solid angle and the ground area changed by
+less than {tol} and the extents by less than {tol_deg}°. "All eye points": a point counts when any
+eye sees it (R46's ambinocular view); grids: ground {ground_cell:.3} m, directions
+{direction_cell:.4}°.</p>
+<table>
+<tr><th>eye point</th><th>horizontal °</th><th>vertical °</th><th>solid angle sr</th><th>ground m²</th><th>region seen (any)</th><th>region seen (all)</th><th>blind m²</th><th>sampling</th></tr>
+{rows}</table>
+<figure><img src="ground.svg"><figcaption>The ground seen in the mirror, per eye point (ground.png: the same map)</figcaption></figure>
+<figure><img src="mirror.svg"><figcaption>The mirror from eye 1, with the ground's grid where it shows the ground</figcaption></figure>
+</body></html>
+"#,
+        scene = plot::html_escape(&r.scene),
+        mirror = plot::html_escape(&r.mirror),
+        fx = r.forward[0],
+        fy = r.forward[1],
+        fz = r.forward[2],
+        ground = r.ground_y,
+        range = r.range_m,
+        tol = r.tolerance,
+        tol_deg = r.tolerance_deg,
+        ground_cell = r.ground_cell_m,
+        direction_cell = r.direction_cell_deg,
+    );
+    let path = dir.join("report.html");
+    write(&path, html.as_bytes())?;
+    Ok(path)
+}
