@@ -14,6 +14,7 @@
 //! unknown name is an error listing the valid ones ([`object`]).
 
 pub mod frame;
+pub mod glare;
 pub mod mirror_view;
 pub mod plot;
 pub mod report;

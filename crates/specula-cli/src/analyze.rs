@@ -7,6 +7,7 @@ use anyhow::{Context, Result};
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
 use specula_analyze::frame::{Eyes, VehicleFrame};
+use specula_analyze::glare;
 use specula_analyze::mirror_view::{self, Region};
 use specula_scene::builtin::DEFAULT_SCENE;
 use specula_trace::SceneAccel;
@@ -17,6 +18,38 @@ pub enum Kind {
     /// vertical extent, solid angle), its footprint on the ground within a range, and the
     /// share of a required region seen by any and by every eye point (its blind part).
     MirrorView(MirrorViewArgs),
+    /// Whether and how brightly a source is seen reflected in a surface, per eye point: the
+    /// glare's relative luminance (over the source's own), its veiling ratio (over what the
+    /// pixel shows without it), its solid angle and centroid; the share of eye points that see
+    /// it and the worst one.
+    Glare(GlareArgs),
+}
+
+#[derive(clap::Args)]
+pub struct GlareArgs {
+    /// Built-in scene name, a .toml scene file, or a mesh/scene file.
+    #[arg(default_value = DEFAULT_SCENE)]
+    scene: String,
+    /// The reflecting surface (a mirror or a glass), as the scene names it.
+    #[arg(long)]
+    surface: String,
+    /// The source (an unlit or lit surface: a window, a lamp), as the scene names it.
+    #[arg(long)]
+    source: String,
+    #[command(flatten)]
+    eyes: EyeArgs,
+    /// Each eye point's image, WIDTHxHEIGHT (aimed at the surface, fitted to it).
+    #[arg(long, default_value = "320x240", value_parser = crate::parse_size)]
+    size: (u32, u32),
+    /// Relative luminance above which a pixel counts as glare.
+    #[arg(long, default_value_t = 1e-3)]
+    threshold: f64,
+    /// Specular bounces a path may take (as the reference's --max-depth).
+    #[arg(long, default_value_t = 8)]
+    max_depth: u32,
+    /// Write the report as JSON here (schema: docs/analyze-glare.schema.json).
+    #[arg(long)]
+    json: Option<PathBuf>,
 }
 
 /// Where the eyes are, in the vehicle frame.
@@ -129,6 +162,7 @@ fn parse_region(text: &str) -> Result<Region, String> {
 pub fn run(kind: Kind) -> Result<()> {
     match kind {
         Kind::MirrorView(args) => mirror_view(args),
+        Kind::Glare(args) => glare(args),
     }
 }
 
@@ -170,6 +204,82 @@ fn mirror_view(args: MirrorViewArgs) -> Result<()> {
         println!("report: {}", html.display());
     }
     Ok(())
+}
+
+fn glare(args: GlareArgs) -> Result<()> {
+    let scene = crate::load_scene(&args.scene)?;
+    let surface = specula_analyze::object(&scene, "--surface", &args.surface)?;
+    let source = specula_analyze::object(&scene, "--source", &args.source)?;
+    let frame = VehicleFrame::new(&scene.camera, args.eyes.forward)?;
+    let eyes = args.eyes.eyes().points(scene.camera.eye, &frame)?;
+    let options = glare::Options {
+        surface,
+        source,
+        width: args.size.0,
+        height: args.size.1,
+        max_depth: args.max_depth,
+        threshold: args.threshold,
+    };
+    options.validate(&scene)?;
+    let accel = SceneAccel::new(&scene);
+    let bar = ProgressBar::new(eyes.len() as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:30} {pos}/{len} eye points ({elapsed})")
+            .expect("valid template"),
+    );
+    let result = glare::analyze(&scene, &accel, &eyes, &options, &|done| {
+        bar.set_position(done as u64)
+    })?;
+    bar.finish_and_clear();
+    let r = &result.report;
+    println!(
+        "{}: '{}' reflected in '{}', {}x{} per eye point",
+        r.scene, r.source, r.surface, r.width, r.height
+    );
+    println!(
+        "{:<28}{:>7}{:>12}{:>12}{:>14}{:>16}",
+        "eye point", "glare", "rel. lum.", "veiling", "solid sr", "centroid px"
+    );
+    for e in &r.eyes {
+        let [x, y, z] = e.position;
+        println!(
+            "{:<28}{:>7}{:>12.5}{:>12}{:>14.3e}{:>16}",
+            format!("({x:.3}, {y:.3}, {z:.3})"),
+            if e.glare { "yes" } else { "no" },
+            e.max_relative_luminance,
+            veiling(e.max_veiling_ratio),
+            e.solid_angle_sr,
+            e.centroid_px
+                .map(|[cx, cy]| format!("{cx:.0}, {cy:.0}"))
+                .unwrap_or_else(|| "-".into())
+        );
+    }
+    match r.worst_eye {
+        Some(k) => println!(
+            "glare seen from {:.0} % of the eye points; the worst: eye {} (veiling ratio {})",
+            r.share_with_glare * 100.0,
+            k + 1,
+            veiling(r.eyes[k].max_veiling_ratio)
+        ),
+        None => println!(
+            "no glare: no eye point sees '{}' reflected in '{}'",
+            r.source, r.surface
+        ),
+    }
+    if let Some(json) = &args.json {
+        std::fs::write(json, serde_json::to_string_pretty(r)?)
+            .with_context(|| format!("writing {}", json.display()))?;
+    }
+    Ok(())
+}
+
+/// A veiling ratio, or "over black" where the glare veils (nearly) nothing.
+fn veiling(ratio: f64) -> String {
+    if ratio >= glare::MAX_VEILING_RATIO {
+        "over black".into()
+    } else {
+        format!("{ratio:.4}")
+    }
 }
 
 fn share(value: Option<f64>) -> String {

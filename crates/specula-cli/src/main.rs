@@ -235,7 +235,7 @@ fn parse_fail_rank(text: &str) -> Result<(usize, u32), String> {
 }
 
 /// `WIDTHxHEIGHT`, each from 1 to 16384.
-fn parse_size(text: &str) -> Result<(u32, u32), String> {
+pub(crate) fn parse_size(text: &str) -> Result<(u32, u32), String> {
     let (w, h) = text
         .split_once(['x', 'X'])
         .ok_or_else(|| format!("expected WIDTHxHEIGHT, e.g. 640x480, got '{text}'"))?;
@@ -258,7 +258,7 @@ fn parse_scale(text: &str) -> Result<f32, String> {
         .ok_or_else(|| format!("expected a number from 0.125 to 1, got '{text}'"))
 }
 
-fn load_scene(name: &str) -> Result<Scene> {
+pub(crate) fn load_scene(name: &str) -> Result<Scene> {
     let scene = specula_scene::load(name).with_context(|| format!("loading scene '{name}'"))?;
     for warning in &scene.warnings {
         eprintln!("warning: {warning}");

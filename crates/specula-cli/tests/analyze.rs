@@ -125,3 +125,87 @@ fn bad_mirror_view_input_is_a_clear_error() {
         );
     }
 }
+
+#[test]
+fn glare_over_an_eyebox_writes_json_that_matches_the_schema() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = specula()
+        .current_dir(dir.path())
+        .args([
+            "analyze",
+            "glare",
+            "truck-cover",
+            "--surface",
+            "cover glass",
+            "--source",
+            "side window",
+            "--eyebox",
+            "0.3,0.15,3,2",
+            "--size",
+            "96x72",
+            "--json",
+            "glare.json",
+        ])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("glare.json")).unwrap())
+            .unwrap();
+    let schema: serde_json::Value =
+        serde_json::from_str(include_str!("../../../docs/analyze-glare.schema.json")).unwrap();
+    let validator = jsonschema::validator_for(&schema).unwrap();
+    let errors: Vec<String> = validator
+        .iter_errors(&json)
+        .map(|e| format!("{e} at {}", e.instance_path()))
+        .collect();
+    assert!(errors.is_empty(), "{errors:?}");
+    let eyes = json["eyes"].as_array().unwrap();
+    assert_eq!(eyes.len(), 6);
+    let with = eyes.iter().filter(|e| e["glare"] == true).count();
+    assert!((json["share_with_glare"].as_f64().unwrap() - with as f64 / 6.0).abs() < 1e-12);
+}
+
+#[test]
+fn bad_glare_input_is_a_clear_error() {
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec!["--surface", "cover", "--source", "side window"],
+            "unknown --surface 'cover'; the scene's objects are:",
+        ),
+        (
+            vec!["--surface", "cover glass", "--source", "sun"],
+            "unknown --source 'sun'",
+        ),
+        (
+            vec!["--surface", "side window", "--source", "cover glass"],
+            "--surface 'side window' is unlit, not a mirror or a glass",
+        ),
+        (
+            vec![
+                "--surface",
+                "cover glass",
+                "--source",
+                "side window",
+                "--eyebox",
+                "0.3,0.1,3,0",
+            ],
+            "at least one point",
+        ),
+    ];
+    for (args, expected) in cases {
+        let out = specula()
+            .args(["analyze", "glare", "truck-cover"])
+            .args(&args)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
+        assert!(
+            stderr.contains(expected),
+            "{args:?}: {stderr:?} should mention {expected:?}"
+        );
+    }
+}

@@ -1,0 +1,218 @@
+//! `glare` against closed forms: a flat metal plate (F0 = 1) shows a small emitter exactly to the
+//! eye points whose line to the emitter's mirror image crosses the plate, at the emitter's own
+//! luminance; a thick glass pane's front reflection has the unpolarised Fresnel reflectance at
+//! its angle.
+
+use glam::{Mat4, Vec3};
+use specula_analyze::frame::{Eyes, VehicleFrame};
+use specula_analyze::glare::{analyze, Options};
+use specula_scene::{generators, Camera, Material, MaterialKind, Mesh, Scene};
+use specula_trace::SceneAccel;
+
+fn placed(mut mesh: Mesh, name: &str, material: usize, world_from_object: Mat4) -> Mesh {
+    mesh.name = name.into();
+    mesh.material = material;
+    for p in &mut mesh.positions {
+        *p = world_from_object.transform_point3(*p);
+    }
+    for n in &mut mesh.normals {
+        *n = world_from_object.transform_vector3(*n).normalize();
+    }
+    mesh
+}
+
+/// A scene of a reflecting `surface` (material 0) and a small unlit white ball (material 1,
+/// radius `radius`) at `emitter`, seen from `eye`.
+fn scene(
+    surface: Mesh,
+    surface_material: Material,
+    emitter: Vec3,
+    radius: f32,
+    eye: Vec3,
+) -> Scene {
+    let mut scene = Scene::new("glare closed form");
+    scene.materials.push(surface_material);
+    scene
+        .materials
+        .push(Material::unlit("emitter", Vec3::splat(4.0)));
+    scene
+        .meshes
+        .push(placed(surface, "surface", 0, Mat4::IDENTITY));
+    scene.meshes.push(placed(
+        generators::sphere(radius, 24, 12),
+        "emitter",
+        1,
+        Mat4::from_translation(emitter),
+    ));
+    scene.camera = Camera {
+        eye,
+        target: Vec3::ZERO,
+        up: Vec3::Y,
+        fov_y_deg: 40.0,
+        aspect: None,
+    };
+    scene
+}
+
+fn options(width: u32, height: u32) -> Options {
+    Options {
+        surface: 0,
+        source: 1,
+        width,
+        height,
+        max_depth: 8,
+        threshold: 1e-3,
+    }
+}
+
+#[test]
+fn a_metal_plate_shows_the_emitter_to_the_eyes_whose_line_to_its_image_crosses_it() {
+    // A 0.4 m square plate in z = 0 facing +z; the emitter beside the eyes.
+    let plate = placed(
+        generators::plane(glam::Vec2::splat(0.4), 1),
+        "plate",
+        0,
+        Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2),
+    );
+    let metal = Material::new("metal", MaterialKind::Mirror { fresnel: false }, Vec3::ONE);
+    let emitter = Vec3::new(0.35, 0.0, 0.6);
+    let centre = Vec3::new(0.05, 0.0, 0.6);
+    let scene = scene(plate, metal, emitter, 0.02, centre);
+    let plate_mesh = &scene.meshes[0];
+    let bounds = plate_mesh.bounds();
+    assert!(
+        (bounds.max.z - bounds.min.z).abs() < 1e-6 && bounds.max.x > 0.19,
+        "the plate lies in z = 0: {bounds:?}"
+    );
+    let frame = VehicleFrame::new(&scene.camera, Some(Vec3::NEG_Z)).unwrap();
+    let columns = 9;
+    let eyes = Eyes::Eyebox {
+        width: 0.4,
+        height: 0.1,
+        columns,
+        rows: 3,
+    }
+    .points(centre, &frame)
+    .unwrap();
+    let accel = SceneAccel::new(&scene);
+    let glare = analyze(&scene, &accel, &eyes, &options(160, 120), &|_| {}).unwrap();
+
+    // Where each eye's line to the emitter's mirror image meets the plate's plane.
+    let image = Vec3::new(emitter.x, emitter.y, -emitter.z);
+    let step = 0.4 / (columns - 1) as f32 * 0.5; // an eye step, on the plate
+    let (mut with, mut without) = (0, 0);
+    for (eye, figures) in eyes.iter().zip(&glare.report.eyes) {
+        let t = eye.z / (eye.z - image.z);
+        let p = *eye + (image - *eye) * t;
+        let inside = p.x.abs() <= bounds.max.x && p.y.abs() <= bounds.max.y;
+        let margin = (p.x.abs() - bounds.max.x).abs();
+        eprintln!(
+            "eye {eye}: meets the plane at {p}, inside {inside}; glare {} (relative {:.4})",
+            figures.glare, figures.max_relative_luminance
+        );
+        if margin > step {
+            assert_eq!(figures.glare, inside, "eye {eye}");
+        }
+        if figures.glare {
+            with += 1;
+            // Measured: 1 exactly (F0 = 1, no Fresnel): the source's own luminance.
+            assert!((figures.max_relative_luminance - 1.0).abs() < 1e-3);
+        } else {
+            without += 1;
+        }
+    }
+    eprintln!("{with} eye points with glare, {without} without");
+    assert!(with * 10 >= eyes.len() * 3 && without * 10 >= eyes.len() * 3);
+    let share = glare.report.share_with_glare;
+    assert!((share - with as f64 / eyes.len() as f64).abs() < 1e-12);
+    assert!(glare.report.worst_eye.is_some());
+}
+
+/// The unpolarised Fresnel reflectance from air into index `n` at incidence `cos_i`, from the
+/// Fresnel equations.
+fn fresnel(cos_i: f64, n: f64) -> f64 {
+    let sin_t = (1.0 - cos_i * cos_i).sqrt() / n;
+    let cos_t = (1.0 - sin_t * sin_t).sqrt();
+    let rs = (cos_i - n * cos_t) / (cos_i + n * cos_t);
+    let rp = (n * cos_i - cos_t) / (n * cos_i + cos_t);
+    0.5 * (rs * rs + rp * rp)
+}
+
+#[test]
+fn a_thick_glass_pane_s_front_reflection_has_the_fresnel_reflectance_of_its_angle() {
+    let thickness = 0.06;
+    let pane = generators::cuboid(Vec3::new(0.3, 0.3, thickness));
+    let emitter = Vec3::new(0.25, 0.0, 0.45);
+    let eye = Vec3::new(-0.25, 0.0, 0.45);
+    let scene = scene(pane, Material::glass("glass", 1.5), emitter, 0.008, eye);
+    let accel = SceneAccel::new(&scene);
+    let glare = analyze(&scene, &accel, &[eye], &options(640, 480), &|_| {}).unwrap();
+    let figures = &glare.report.eyes[0];
+    assert!(figures.glare);
+    // The front face's specular point for the emitter's centre.
+    let front = thickness * 0.5;
+    let image = Vec3::new(emitter.x, emitter.y, 2.0 * front - emitter.z);
+    let p = eye + (image - eye) * ((eye.z - front) / (eye.z - image.z));
+    let cos_i = f64::from((eye - p).normalize().z);
+    let expected = fresnel(cos_i, 1.5);
+    // The pixel whose ray goes through the specular point (the box's rim and back face show the
+    // emitter too, by other paths, elsewhere in the image).
+    let images = &glare.images[0];
+    let (width, height) = (640, 480);
+    let towards = (p - eye).normalize();
+    let pixel = (0..width * height)
+        .max_by(|a, b| {
+            let along = |i: u32| {
+                let d = images.camera.ray_direction(
+                    (i % width) as f32 + 0.5,
+                    (i / width) as f32 + 0.5,
+                    width,
+                    height,
+                );
+                d.dot(towards)
+            };
+            along(*a).total_cmp(&along(*b))
+        })
+        .unwrap();
+    let relative = images.relative[pixel as usize];
+    eprintln!(
+        "front reflection at {:.2}°: relative luminance {relative:.5}, Fresnel {expected:.5}",
+        cos_i.acos().to_degrees()
+    );
+    // Measured: 0.05 % (the pixel's ray is not exactly the centre's); the issue asks 2 %.
+    assert!((relative - expected).abs() / expected < 0.005);
+    assert!(figures.max_relative_luminance >= relative);
+}
+
+#[test]
+fn bad_input_and_no_glare() {
+    let plate = placed(
+        generators::plane(glam::Vec2::splat(0.4), 1),
+        "plate",
+        0,
+        Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2),
+    );
+    let metal = Material::new("metal", MaterialKind::Mirror { fresnel: false }, Vec3::ONE);
+    // The emitter behind the plate: no path reaches it by a reflection.
+    let eye = Vec3::new(0.0, 0.0, 0.6);
+    let scene = scene(plate, metal, Vec3::new(0.0, 0.0, -0.5), 0.02, eye);
+    let accel = SceneAccel::new(&scene);
+    let glare = analyze(&scene, &accel, &[eye], &options(64, 48), &|_| {}).unwrap();
+    assert!(!glare.report.eyes[0].glare);
+    assert_eq!(glare.report.share_with_glare, 0.0);
+    assert_eq!(glare.report.worst_eye, None);
+
+    let swapped = Options {
+        surface: 1,
+        source: 0,
+        ..options(64, 48)
+    };
+    let error = swapped.validate(&scene).unwrap_err().to_string();
+    assert!(error.contains("--surface 'emitter' is unlit"), "{error}");
+    let mirror_source = Options {
+        source: 0,
+        ..options(64, 48)
+    };
+    let error = mirror_source.validate(&scene).unwrap_err().to_string();
+    assert!(error.contains("--source 'surface'"), "{error}");
+}
