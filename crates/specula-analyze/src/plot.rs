@@ -429,6 +429,154 @@ fn format_tick(v: f32, step: f32) -> String {
     format!("{v:.decimals$}")
 }
 
+/// A colour from a scale of `t` in [0, 1]: dark blue through teal and green to yellow.
+fn scale_colour(t: f64) -> [u8; 3] {
+    const STOPS: [[f64; 3]; 5] = [
+        [68.0, 1.0, 84.0],
+        [59.0, 82.0, 139.0],
+        [33.0, 145.0, 140.0],
+        [94.0, 201.0, 98.0],
+        [253.0, 231.0, 37.0],
+    ];
+    let x = t.clamp(0.0, 1.0) * (STOPS.len() - 1) as f64;
+    let i = (x.floor() as usize).min(STOPS.len() - 2);
+    let f = x - i as f64;
+    [0, 1, 2].map(|c| (STOPS[i][c] * (1.0 - f) + STOPS[i + 1][c] * f).round() as u8)
+}
+
+/// The eye points seen from the front, each a square coloured by how much of its view the glare
+/// covers (its solid angle; grey: no glare), with its largest relative luminance written in it
+/// (SVG).
+pub fn glare_eyebox(report: &crate::glare::Report, frame: &crate::frame::VehicleFrame) -> Plot {
+    let eyes: Vec<Vec3> = report
+        .eyes
+        .iter()
+        .map(|e| Vec3::from_array(e.position))
+        .collect();
+    let mean = eyes.iter().copied().sum::<Vec3>() / eyes.len() as f32;
+    let at: Vec<Vec2> = eyes
+        .iter()
+        .map(|e| Vec2::new((*e - mean).dot(frame.right), (*e - mean).dot(frame.up)))
+        .collect();
+    // The smallest spacing between eye points sets the squares' size.
+    let mut spacing = f32::INFINITY;
+    for (i, a) in at.iter().enumerate() {
+        for b in &at[i + 1..] {
+            let d = (*a - *b).abs().max_element();
+            if d > 1e-6 {
+                spacing = spacing.min(d);
+            }
+        }
+    }
+    if !spacing.is_finite() {
+        spacing = 0.05;
+    }
+    let lo = at.iter().fold(Vec2::splat(f32::INFINITY), |m, p| m.min(*p)) - spacing * 0.5;
+    let hi = at
+        .iter()
+        .fold(Vec2::splat(f32::NEG_INFINITY), |m, p| m.max(*p))
+        + spacing * 0.5;
+    let scale = 480.0 / (hi - lo).max_element();
+    let (width, height) = (
+        (((hi - lo).x * scale).round() as u32).max(8),
+        (((hi - lo).y * scale).round() as u32).max(8),
+    );
+    let widest = report
+        .eyes
+        .iter()
+        .map(|e| e.solid_angle_sr)
+        .fold(0.0f64, f64::max)
+        .max(1e-12);
+    let mut png = RgbImage::from_pixel(width, height, Rgb([255, 255, 255]));
+    let side = (spacing * scale * 0.9).max(2.0);
+    let mut texts = String::new();
+    for (e, p) in report.eyes.iter().zip(&at) {
+        let centre = Vec2::new((p.x - lo.x) * scale, (hi.y - p.y) * scale);
+        let colour = if e.glare {
+            scale_colour(e.solid_angle_sr / widest)
+        } else {
+            [200, 200, 200]
+        };
+        let (x0, y0) = ((centre - side * 0.5).max(Vec2::ZERO)).into();
+        for y in y0 as u32..((y0 + side) as u32).min(height) {
+            for x in x0 as u32..((x0 + side) as u32).min(width) {
+                png.put_pixel(x, y, Rgb(colour));
+            }
+        }
+        texts.push_str(&format!(
+            "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\" font-size=\"10\" fill=\"{}\">{}</text>\n",
+            60.0 + centre.x,
+            30.0 + centre.y + 4.0,
+            if e.glare && e.solid_angle_sr / widest > 0.6 { "black" } else { "white" },
+            if e.glare {
+                format!("{:.4}", e.max_relative_luminance)
+            } else {
+                "none".into()
+            }
+        ));
+    }
+    let title = format!(
+        "'{}' in '{}' per eye point (seen from the front): the glare's solid angle (colour) and largest relative luminance",
+        report.source, report.surface
+    );
+    let legend = vec![
+        ("no glare".to_string(), [200, 200, 200]),
+        (
+            format!("the widest glare, {widest:.3e} sr"),
+            scale_colour(1.0),
+        ),
+        ("a tenth of it".to_string(), scale_colour(0.1)),
+    ];
+    let extent = Extent { min: lo, max: hi };
+    let mut svg = svg_around(
+        &png,
+        &title,
+        ("right of the eye (m)", "up (m)"),
+        Some(extent),
+        &legend,
+    );
+    svg.insert_str(svg.len() - "</svg>\n".len(), &texts);
+    Plot { png, svg }
+}
+
+/// Eye point `k`'s image as the reference renders it, its glare pixels outlined in magenta.
+pub fn glare_image(glare: &crate::glare::Glare, k: usize) -> Plot {
+    let (width, height) = (glare.report.width, glare.report.height);
+    let images = &glare.images[k];
+    let mut image = specula_trace::Image::new(width, height);
+    image.pixels.clone_from(&images.radiance);
+    let mut png = image.to_srgb8();
+    let threshold = glare.report.threshold;
+    let lit = |x: u32, y: u32| images.relative[(y * width + x) as usize] > threshold;
+    for y in 0..height {
+        for x in 0..width {
+            if !lit(x, y) {
+                continue;
+            }
+            let edge = x == 0
+                || y == 0
+                || x + 1 == width
+                || y + 1 == height
+                || !lit(x - 1, y)
+                || !lit(x + 1, y)
+                || !lit(x, y - 1)
+                || !lit(x, y + 1);
+            if edge {
+                png.put_pixel(x, y, Rgb([255, 0, 255]));
+            }
+        }
+    }
+    let [x, y, z] = glare.report.eyes[k].position;
+    let title = format!(
+        "eye {} ({x:.3}, {y:.3}, {z:.3}): glare of '{}' in '{}' outlined",
+        k + 1,
+        glare.report.source,
+        glare.report.surface
+    );
+    let svg = svg_around(&png, &title, ("", ""), None, &[]);
+    Plot { png, svg }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

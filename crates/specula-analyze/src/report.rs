@@ -137,3 +137,81 @@ eye sees it (R46's ambinocular view); grids: ground {ground_cell:.3} m, directio
     write(&path, html.as_bytes())?;
     Ok(path)
 }
+
+/// Writes the glare report into `dir`: the JSON, the eye points' map and the worst eye point's
+/// image with its glare outlined (PNG and SVG each), and the HTML page; returns its path.
+pub fn write_glare(
+    dir: &Path,
+    glare: &crate::glare::Glare,
+    frame: &crate::frame::VehicleFrame,
+) -> Result<PathBuf, AnalyzeError> {
+    std::fs::create_dir_all(dir).map_err(|e| write_error(dir, e))?;
+    let r = &glare.report;
+    let json = serde_json::to_string_pretty(r).map_err(|e| write_error(dir, e))?;
+    write(&dir.join("report.json"), json.as_bytes())?;
+    write_plot(dir, "eyebox", &plot::glare_eyebox(r, frame))?;
+    let shown = r.worst_eye.unwrap_or(0);
+    write_plot(dir, "worst", &plot::glare_image(glare, shown))?;
+    let mut rows = String::new();
+    for (k, e) in r.eyes.iter().enumerate() {
+        let [x, y, z] = e.position;
+        let veiling = if e.max_veiling_ratio >= crate::glare::MAX_VEILING_RATIO {
+            "over black".to_string()
+        } else {
+            format!("{:.4}", e.max_veiling_ratio)
+        };
+        rows.push_str(&format!(
+            "<tr><td>eye {} ({x:.3}, {y:.3}, {z:.3})</td><td>{}</td><td>{:.5}</td><td>{veiling}</td><td>{:.3e}</td><td>{}</td></tr>\n",
+            k + 1,
+            if e.glare { "yes" } else { "no" },
+            e.max_relative_luminance,
+            e.solid_angle_sr,
+            e.centroid_px
+                .map(|[cx, cy]| format!("{cx:.0}, {cy:.0}"))
+                .unwrap_or_else(|| "–".into()),
+        ));
+    }
+    let verdict = match r.worst_eye {
+        Some(k) => format!(
+            "Glare is seen from {:.0} % of the eye points; the worst is eye {} (shown below).",
+            r.share_with_glare * 100.0,
+            k + 1
+        ),
+        None => "No glare: no eye point sees the source reflected in the surface.".into(),
+    };
+    let html = format!(
+        r#"<!DOCTYPE html>
+<html><head><meta charset="utf-8"><title>specula analyze glare: {scene}</title>
+<style>
+body {{ font-family: sans-serif; margin: 2em; background: #fafafa; }}
+table {{ border-collapse: collapse; margin: 1em 0; }}
+td, th {{ border: 1px solid #bbb; padding: 4px 8px; text-align: right; }}
+td:first-child, th:first-child {{ text-align: left; }}
+figure {{ display: inline-block; margin: 0.5em; vertical-align: top; }}
+</style></head><body>
+<h1>Glare of '{source}' in '{surface}': {scene}</h1>
+<p>Each eye point's image ({width}×{height}, aimed at the surface) traced as the reference traces it;
+a pixel's glare is what its paths bring from the source after at least one specular reflection on
+the surface, with the reference's unpolarised Fresnel factors (docs/analyses.md). Relative
+luminance: the glare's Y over the source's own; veiling ratio: the glare's Y over that of what the
+pixel shows without it ("over black" where that is nearly nothing). A pixel shows glare above a
+relative luminance of {threshold}. {verdict}</p>
+<table>
+<tr><th>eye point</th><th>glare</th><th>relative luminance</th><th>veiling ratio</th><th>solid angle sr</th><th>centroid px</th></tr>
+{rows}</table>
+<figure><img src="eyebox.svg"><figcaption>The eye points: the glare's solid angle (colour) and relative luminance (figure)</figcaption></figure>
+<figure><img src="worst.svg"><figcaption>Eye {shown_eye}'s view, the glare outlined in magenta</figcaption></figure>
+</body></html>
+"#,
+        scene = plot::html_escape(&r.scene),
+        source = plot::html_escape(&r.source),
+        surface = plot::html_escape(&r.surface),
+        width = r.width,
+        height = r.height,
+        threshold = r.threshold,
+        shown_eye = shown + 1,
+    );
+    let path = dir.join("report.html");
+    write(&path, html.as_bytes())?;
+    Ok(path)
+}

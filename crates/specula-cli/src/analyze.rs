@@ -50,6 +50,10 @@ pub struct GlareArgs {
     /// Write the report as JSON here (schema: docs/analyze-glare.schema.json).
     #[arg(long)]
     json: Option<PathBuf>,
+    /// Write a report folder: report.html, report.json, the eye points' map and the worst eye
+    /// point's view with its glare outlined, as PNG and SVG.
+    #[arg(long)]
+    report: Option<PathBuf>,
 }
 
 /// Where the eyes are, in the vehicle frame.
@@ -269,6 +273,10 @@ fn glare(args: GlareArgs) -> Result<()> {
     if let Some(json) = &args.json {
         std::fs::write(json, serde_json::to_string_pretty(r)?)
             .with_context(|| format!("writing {}", json.display()))?;
+    }
+    if let Some(dir) = &args.report {
+        let html = specula_analyze::report::write_glare(dir, &result, &frame)?;
+        println!("report: {}", html.display());
     }
     Ok(())
 }

@@ -145,6 +145,8 @@ fn glare_over_an_eyebox_writes_json_that_matches_the_schema() {
             "96x72",
             "--json",
             "glare.json",
+            "--report",
+            "report",
         ])
         .output()
         .unwrap();
@@ -163,6 +165,15 @@ fn glare_over_an_eyebox_writes_json_that_matches_the_schema() {
     assert!(errors.is_empty(), "{errors:?}");
     let eyes = json["eyes"].as_array().unwrap();
     assert_eq!(eyes.len(), 6);
+    let report = dir.path().join("report");
+    for plot in ["eyebox", "worst"] {
+        let png = image::open(report.join(format!("{plot}.png"))).unwrap();
+        assert!(png.width() >= 8 && png.height() >= 8);
+        let svg = std::fs::read_to_string(report.join(format!("{plot}.svg"))).unwrap();
+        assert!(svg.starts_with("<svg") && svg.contains("data:image/png;base64,"));
+    }
+    let html = std::fs::read_to_string(report.join("report.html")).unwrap();
+    assert!(html.contains("eyebox.svg") && html.contains("worst.svg"));
     let with = eyes.iter().filter(|e| e["glare"] == true).count();
     assert!((json["share_with_glare"].as_f64().unwrap() - with as f64 / 6.0).abs() < 1e-12);
 }
