@@ -216,3 +216,60 @@ fn bad_input_and_no_glare() {
     let error = mirror_source.validate(&scene).unwrap_err().to_string();
     assert!(error.contains("--source 'surface'"), "{error}");
 }
+
+#[test]
+fn an_ellipsoidal_cover_shows_the_eye_at_one_focus_what_sits_at_the_other() {
+    // Seed 004's closed form: every ray from one focus reflects through the other.
+    let (a, b) = (1.0f32, 0.6f32);
+    let c = (a * a - b * b).sqrt();
+    let mut cover = generators::sphere(1.0, 128, 64);
+    for p in &mut cover.positions {
+        *p *= Vec3::new(a, b, b);
+    }
+    for n in &mut cover.normals {
+        // Normals of a scaled sphere: the inverse transpose of the scale.
+        *n = (*n / Vec3::new(a, b, b)).normalize();
+    }
+    let metal = Material::new("metal", MaterialKind::Mirror { fresnel: false }, Vec3::ONE);
+    let eye = Vec3::new(-c, 0.0, 0.0);
+    let (width, height) = (96, 72);
+    // The share of the cover's pixels that show an emitter at `at`, and the largest relative
+    // luminance.
+    let shown = |at: Vec3| {
+        let scene = scene(cover.clone(), metal.clone(), at, 0.04, eye);
+        let accel = SceneAccel::new(&scene);
+        // One reflection: inside a closed mirror, later bounces reach the emitter anyway.
+        let one_bounce = Options {
+            max_depth: 1,
+            ..options(width, height)
+        };
+        let glare = analyze(&scene, &accel, &[eye], &one_bounce, &|_| {}).unwrap();
+        let images = &glare.images[0];
+        let (mut cover_pixels, mut with_glare) = (0, 0);
+        for i in 0..width * height {
+            let dir = images.camera.ray_direction(
+                (i % width) as f32 + 0.5,
+                (i / width) as f32 + 0.5,
+                width,
+                height,
+            );
+            let hit = accel.intersect(&specula_trace::Ray { origin: eye, dir }, f32::INFINITY);
+            if hit.is_some_and(|h| h.mesh == 0) {
+                cover_pixels += 1;
+                with_glare += usize::from(images.relative[i as usize] > 1e-3);
+            }
+        }
+        assert!(cover_pixels > 1000);
+        (
+            with_glare as f64 / cover_pixels as f64,
+            glare.report.eyes[0].max_relative_luminance,
+        )
+    };
+    let (at_focus, relative) = shown(Vec3::new(c, 0.0, 0.0));
+    // The same emitter a little off the focus: the cover shows it only in part.
+    let (off_focus, _) = shown(Vec3::new(c - 0.3, 0.0, 0.0));
+    eprintln!("the cover shows the emitter on {at_focus:.4} of its pixels at the focus, {off_focus:.4} 0.3 m off it");
+    assert_eq!(at_focus, 1.0);
+    assert!((relative - 1.0).abs() < 1e-3);
+    assert!(off_focus < 0.5);
+}
