@@ -83,6 +83,15 @@ impl Options {
                 expected: "an emitting or lit surface (unlit or diffuse)",
             });
         }
+        if !(self.threshold.is_finite() && self.threshold >= 0.0) {
+            return Err(AnalyzeError::BadOption {
+                option: "--threshold",
+                reason: format!(
+                    "{}: a relative luminance, finite and not negative",
+                    self.threshold
+                ),
+            });
+        }
         if self.width == 0 || self.height == 0 {
             return Err(AnalyzeError::BadOption {
                 option: "--size",
@@ -124,8 +133,8 @@ pub struct Report {
     pub eyes: Vec<EyeGlare>,
     /// Share of the eye points that see glare.
     pub share_with_glare: f64,
-    /// The eye point with the largest veiling ratio (index into `eyes`); null when none sees
-    /// glare.
+    /// The eye point with the largest veiling ratio (index into `eyes`; among equal ratios, the
+    /// one whose glare covers the largest solid angle); null when none sees glare.
     pub worst_eye: Option<usize>,
 }
 
@@ -421,11 +430,16 @@ pub fn analyze(
         progress(k + 1);
     }
     let with_glare = eye_reports.iter().filter(|e| e.glare).count();
+    // The largest veiling ratio; among equals (several "over black"), the widest glare.
     let worst_eye = eye_reports
         .iter()
         .enumerate()
         .filter(|(_, e)| e.glare)
-        .max_by(|a, b| a.1.max_veiling_ratio.total_cmp(&b.1.max_veiling_ratio))
+        .max_by(|a, b| {
+            a.1.max_veiling_ratio
+                .total_cmp(&b.1.max_veiling_ratio)
+                .then(a.1.solid_angle_sr.total_cmp(&b.1.solid_angle_sr))
+        })
         .map(|(k, _)| k);
     Ok(Glare {
         report: Report {

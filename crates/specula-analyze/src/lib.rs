@@ -7,6 +7,8 @@
 //! - [`mirror_view`]: what a driver sees in a mirror: the mirror's field of view (horizontal
 //!   and vertical extent of the reflected directions, their solid angle), its footprint on the
 //!   ground, and the share of a required region seen, per eye point and for all together.
+//! - [`glare`]: whether, where and how brightly a source is seen reflected in a surface (a
+//!   cover glass reflecting a window over a dial), per eye point and over them.
 //! - [`plot`] and [`report`]: the plots (PNG, and SVG with axes and legends) and the report
 //!   folder (HTML, JSON, plots).
 //!
@@ -29,6 +31,12 @@ pub enum AnalyzeError {
         name: String,
         valid: String,
     },
+    #[error("{role} '{name}' names {count} objects of the scene; an analysis takes one (rename them in the scene file)")]
+    AmbiguousObject {
+        role: &'static str,
+        name: String,
+        count: usize,
+    },
     #[error("{role} '{name}' is {kind}, not {expected}")]
     WrongMaterial {
         role: &'static str,
@@ -45,20 +53,32 @@ pub enum AnalyzeError {
     },
 }
 
-/// The mesh the scene names `name`, for the analysis's `role` (`--mirror`, `--surface`...).
+/// The mesh the scene names `name`, for the analysis's `role` (`--mirror`, `--surface`...): an
+/// unknown name lists the scene's objects, a name several objects share is refused (say which
+/// with `NAME#k` where the loader split one, or rename them in the scene file).
 pub fn object(scene: &Scene, role: &'static str, name: &str) -> Result<usize, AnalyzeError> {
-    scene
-        .meshes
-        .iter()
-        .position(|m| m.name == name)
-        .ok_or_else(|| AnalyzeError::UnknownObject {
+    let matches: Vec<usize> = (0..scene.meshes.len())
+        .filter(|&m| scene.meshes[m].name == name)
+        .collect();
+    let mut names: Vec<&str> = scene.meshes.iter().map(|m| m.name.as_str()).collect();
+    names.dedup();
+    let mut valid: Vec<&str> = Vec::new();
+    for n in names {
+        if !valid.contains(&n) {
+            valid.push(n);
+        }
+    }
+    match matches.as_slice() {
+        [one] => Ok(*one),
+        [] => Err(AnalyzeError::UnknownObject {
             role,
             name: name.to_string(),
-            valid: scene
-                .meshes
-                .iter()
-                .map(|m| m.name.as_str())
-                .collect::<Vec<_>>()
-                .join(", "),
-        })
+            valid: valid.join(", "),
+        }),
+        several => Err(AnalyzeError::AmbiguousObject {
+            role,
+            name: name.to_string(),
+            count: several.len(),
+        }),
+    }
 }

@@ -3,12 +3,14 @@
 //!
 //! Steps, per eye point:
 //! 1. Each mirror triangle is cut into n × n sub-triangles; at each of their corners S the
-//!    exact ray from the eye towards S is traced through the whole scene. S is seen when that
-//!    ray's first hit is the mirror at S (the car body may hide part of the mirror).
+//!    exact ray from the eye towards S is traced through the whole scene. S is seen when nothing
+//!    lies before it (the car body may hide part of the mirror; a window pane, thin-walled
+//!    glass, hides nothing; solid glass, which would bend the ray, is taken as hiding).
 //! 2. At the hit the ray is reflected about the mirror's shading normal (as the reference
 //!    reflects it) and followed to its first hit. Its direction is a sample of the field of
-//!    view; where it meets the ground plane (`ground_y`) before any object, the point it meets
-//!    is a sample of the footprint (objects occlude the road).
+//!    view; where it meets the ground plane (`ground_y`) before any object (window panes
+//!    passed, as above), the point it meets is a sample of the footprint (objects occlude the
+//!    road).
 //! 3. Figures: the horizontal and vertical extent of the seen directions in the vehicle frame;
 //!    their solid angle, summed exactly over the sub-triangles whose three corners are seen
 //!    (each a spherical triangle of reflected directions); the ground seen, the sub-triangles
@@ -121,6 +123,17 @@ impl Options {
                 option: "--range",
                 reason: format!("{} m: the range must be a positive distance", self.range_m),
             });
+        }
+        for (option, value) in [
+            ("--tolerance", self.tolerance),
+            ("--tolerance-deg", self.tolerance_deg),
+        ] {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(AnalyzeError::BadOption {
+                    option,
+                    reason: format!("{value}: a tolerance must be a positive number"),
+                });
+            }
         }
         if !self.ground_y.is_finite() {
             return Err(AnalyzeError::BadOption {
@@ -292,6 +305,49 @@ fn descend(
     }
 }
 
+/// The first hit along `ray` within `t_max` that hides what lies behind it: thin-walled sheets
+/// (a side window the driver looks through, a glazed shelter) pass light straight through and
+/// are passed; solid glass, which bends rays, hides (a limit of these analyses).
+pub fn first_opaque_hit(
+    scene: &Scene,
+    accel: &SceneAccel,
+    ray: &Ray,
+    t_max: f32,
+) -> Option<specula_trace::Hit> {
+    let mut origin = ray.origin;
+    let mut travelled = 0.0;
+    for _ in 0..64 {
+        let hit = accel.intersect(
+            &Ray {
+                origin,
+                dir: ray.dir,
+            },
+            t_max - travelled,
+        )?;
+        let material = &scene.materials[scene.meshes[hit.mesh as usize].material];
+        if !matches!(
+            material.kind,
+            MaterialKind::Dielectric {
+                thin_walled: true,
+                ..
+            }
+        ) {
+            return Some(specula_trace::Hit {
+                t: travelled + hit.t,
+                ..hit
+            });
+        }
+        let p = origin + ray.dir * hit.t;
+        let step = hit.t + 2e-5 * (1.0 + p.abs().max_element());
+        origin += ray.dir * step;
+        travelled += step;
+        if travelled >= t_max {
+            return None;
+        }
+    }
+    None
+}
+
 /// A point of the mirror: on triangle `triangle` at barycentric (1 − b1 − b2, b1, b2).
 #[derive(Clone, Copy)]
 struct MirrorPoint {
@@ -322,7 +378,7 @@ fn sample_point(
     };
     let ray = Ray { origin: eye, dir };
     let slack = 1e-3 * distance + 1e-4;
-    if accel.intersect(&ray, distance - slack).is_some() {
+    if first_opaque_hit(scene, accel, &ray, distance - slack).is_some() {
         return unseen;
     }
     let hit = specula_trace::Hit {
@@ -343,7 +399,9 @@ fn sample_point(
         .then(|| (options.ground_y - origin.y) / reflected.y)
         .filter(|t| *t > 0.0)
         .and_then(|t| {
-            let blocked = accel.intersect(
+            let blocked = first_opaque_hit(
+                scene,
+                accel,
                 &Ray {
                     origin,
                     dir: reflected,
@@ -545,7 +603,10 @@ fn clipped_area(ground: &[[Vec2; 3]], eye: Vec2, range: f32) -> f64 {
 
 /// Samples one eye point ever finer until its figures hold: the grid doubles while the extents
 /// move (they follow the mirror's curvature), then the sub-triangles on the edges of what is
-/// seen are cut further, a level at a time, until the solid angle and the ground area hold too.
+/// seen are cut further, a level at a time, until the solid angle and the ground area hold;
+/// then the grid is doubled once more at that depth, and the figures must hold there too (else
+/// refinement goes on from that grid), so that a curvature the straight sub-triangles cannot
+/// follow is measured, not assumed away.
 fn refine(scene: &Scene, accel: &SceneAccel, eye: Vec3, options: &Options) -> Refined {
     let triangles = scene.meshes[options.mirror].triangles.len().max(1);
     let samples_at = |n: usize| triangles * (n + 1) * (n + 2) / 2;
@@ -565,6 +626,22 @@ fn refine(scene: &Scene, accel: &SceneAccel, eye: Vec3, options: &Options) -> Re
         depth,
         converged,
     };
+    // Whether `b`'s figures are within tolerance of `a`'s: (extents, all of them).
+    let compare = |a: &Sampled, a_area: f64, b: &Sampled, b_area: f64| {
+        let reference = reference_of(&options.frame, b.directions.iter());
+        let (h0, v0) = extents(&options.frame, reference, &a.directions);
+        let (h1, v1) = extents(&options.frame, reference, &b.directions);
+        let close = |x: f64, y: f64| (x - y).abs() <= options.tolerance * y.abs().max(1e-9);
+        let extents_close =
+            (h0 - h1).abs() <= options.tolerance_deg && (v0 - v1).abs() <= options.tolerance_deg;
+        // Seen points but no whole sub-triangle yet: nothing to compare, so nothing holds.
+        let measured = b.seen == 0 || !b.directions.is_empty();
+        let all = measured
+            && extents_close
+            && close(a.solid_angle_sr, b.solid_angle_sr)
+            && close(a_area, b_area);
+        (extents_close, all)
+    };
     loop {
         let (next_n, next_depth) = if extents_hold {
             (n, depth + 1)
@@ -575,29 +652,40 @@ fn refine(scene: &Scene, accel: &SceneAccel, eye: Vec3, options: &Options) -> Re
         let estimate = if extents_hold {
             2 * current.samples
         } else {
-            samples_at(next_n)
+            4 * current.samples
         };
         if estimate > options.max_samples || next_depth > MAX_DEPTH {
             return done(current, current_area, n, depth, false);
         }
         let next = sample_eye(scene, accel, eye, options, next_n, next_depth);
         let next_area = area(&next);
-        let reference = reference_of(&options.frame, next.directions.iter());
-        let (h0, v0) = extents(&options.frame, reference, &current.directions);
-        let (h1, v1) = extents(&options.frame, reference, &next.directions);
-        let close = |a: f64, b: f64| (a - b).abs() <= options.tolerance * b.abs().max(1e-9);
-        let extents_close =
-            (h0 - h1).abs() <= options.tolerance_deg && (v0 - v1).abs() <= options.tolerance_deg;
-        let converged = extents_close
-            && close(current.solid_angle_sr, next.solid_angle_sr)
-            && close(current_area, next_area);
+        let (extents_close, converged) = compare(&current, current_area, &next, next_area);
+        let deepened = extents_hold;
         extents_hold |= extents_close;
         (n, depth) = (next_n, next_depth);
         current = next;
         current_area = next_area;
-        if converged {
+        if !converged {
+            continue;
+        }
+        if !deepened {
+            // Converged as the grid doubled: the grid has been checked.
             return done(current, current_area, n, depth, true);
         }
+        // Converged as the edges were cut further: check a finer grid at this depth.
+        if 4 * current.samples > options.max_samples {
+            return done(current, current_area, n, depth, false);
+        }
+        let finer = sample_eye(scene, accel, eye, options, n * 2, depth);
+        let finer_area = area(&finer);
+        let (_, holds) = compare(&current, current_area, &finer, finer_area);
+        n *= 2;
+        current = finer;
+        current_area = finer_area;
+        if holds {
+            return done(current, current_area, n, depth, true);
+        }
+        extents_hold = false;
     }
 }
 
@@ -614,12 +702,13 @@ pub fn analyze(
     let mirror_area: f64 = (0..mirror.triangles.len())
         .map(|t| 0.5 * f64::from(mirror.face_normal_scaled(t).length()))
         .sum();
+    // Eye points in parallel (a flat mirror has two triangles: too few to share out alone).
+    let done = std::sync::atomic::AtomicUsize::new(0);
     let refined: Vec<Refined> = eyes
-        .iter()
-        .enumerate()
-        .map(|(k, eye)| {
+        .par_iter()
+        .map(|eye| {
             let r = refine(scene, accel, *eye, options);
-            progress(k + 1);
+            progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
             r
         })
         .collect();

@@ -86,10 +86,10 @@ pub fn ground_map(view: &MirrorView, longest: u32) -> Plot {
     let width = ((size.x * scale).round() as u32).max(16);
     let height = ((size.y * scale).round() as u32).max(16);
     let to_ground = |x: u32, y: u32| {
-        // The image's top row is the extent's largest z.
+        // Seen from above with x to the right (+Y up, right-handed), +z runs down the page.
         Vec2::new(
             extent.min.x + size.x * (x as f32 + 0.5) / width as f32,
-            extent.max.y - size.y * (y as f32 + 0.5) / height as f32,
+            extent.min.y + size.y * (y as f32 + 0.5) / height as f32,
         )
     };
     let range = view.report.range_m;
@@ -144,7 +144,7 @@ pub fn ground_map(view: &MirrorView, longest: u32) -> Plot {
         let to_pixel = |p: Vec2| {
             Vec2::new(
                 (p.x - extent.min.x) / size.x * width as f32,
-                (extent.max.y - p.y) / size.y * height as f32,
+                (p.y - extent.min.y) / size.y * height as f32,
             )
         };
         let corners = [
@@ -175,10 +175,16 @@ pub fn ground_map(view: &MirrorView, longest: u32) -> Plot {
         legend.push(("blind: the region no eye sees".into(), [214, 39, 40]));
     }
     let title = format!(
-        "{}: ground seen in '{}' (y = {} m, within {} m)",
+        "{}: ground seen in '{}' from above (y = {} m, within {} m)",
         view.report.scene, view.report.mirror, view.report.ground_y, range
     );
-    let svg = svg_around(&png, &title, ("x (m)", "z (m)"), Some(extent), &legend);
+    let svg = svg_around(
+        &png,
+        &title,
+        ("x (m)", "z (m)"),
+        Some((extent, true)),
+        &legend,
+    );
     Plot { png, svg }
 }
 
@@ -220,7 +226,7 @@ pub fn mirror_from_eye(
             let (x, y) = (i % width, i / width);
             let dir = camera.ray_direction(x as f32 + 0.5, y as f32 + 0.5, width, height);
             let ray = Ray { origin: eye, dir };
-            let hit = accel.intersect(&ray, f32::INFINITY)?;
+            let hit = crate::mirror_view::first_opaque_hit(scene, accel, &ray, f32::INFINITY)?;
             if hit.mesh as usize != mirror {
                 return None;
             }
@@ -228,7 +234,12 @@ pub fn mirror_from_eye(
             let r = reflect(dir, sp.ns).normalize();
             let origin = offset_origin(sp.p, sp.ng, r);
             let t = (r.y < 0.0).then(|| (ground_y - origin.y) / r.y)?;
-            let blocked = accel.intersect(&Ray { origin, dir: r }, t * (1.0 - 1e-4) - 1e-4);
+            let blocked = crate::mirror_view::first_opaque_hit(
+                scene,
+                accel,
+                &Ray { origin, dir: r },
+                t * (1.0 - 1e-4) - 1e-4,
+            );
             blocked.is_none().then(|| {
                 let g = origin + r * t;
                 Vec2::new(g.x, g.z)
@@ -275,7 +286,7 @@ fn fill_triangle(
     let to_pixel = |p: Vec2| {
         Vec2::new(
             (p.x - extent.min.x) / size.x * width as f32,
-            (extent.max.y - p.y) / size.y * height as f32,
+            (p.y - extent.min.y) / size.y * height as f32,
         )
     };
     let [a, b, c] = t.map(to_pixel);
@@ -299,7 +310,7 @@ fn fill_triangle(
             if inside {
                 let g = Vec2::new(
                     extent.min.x + size.x * s.x / width as f32,
-                    extent.max.y - size.y * s.y / height as f32,
+                    extent.min.y + size.y * s.y / height as f32,
                 );
                 if keep(g) {
                     mask[(y * width + x) as usize] = true;
@@ -343,7 +354,7 @@ fn svg_around(
     png: &RgbImage,
     title: &str,
     labels: (&str, &str),
-    extent: Option<Extent>,
+    extent: Option<(Extent, bool)>,
     legend: &[(String, [u8; 3])],
 ) -> String {
     let (w, h) = (png.width() as f32, png.height() as f32);
@@ -360,7 +371,7 @@ fn svg_around(
          height=\"{h}\" fill=\"none\" stroke=\"black\"/>\n",
         html_escape(title)
     );
-    if let Some(e) = extent {
+    if let Some((e, y_down)) = extent {
         let size = e.max - e.min;
         for (axis, span, from) in [(0, size.x, e.min.x), (1, size.y, e.min.y)] {
             let step = nice_step(span / 6.0);
@@ -371,7 +382,7 @@ fn svg_around(
                     let x = left + f * w;
                     (x, top + h, x, top + h + 5.0, x, top + h + 18.0, "middle")
                 } else {
-                    let y = top + h - f * h;
+                    let y = if y_down { top + f * h } else { top + h - f * h };
                     (left - 5.0, y, left, y, left - 8.0, y + 4.0, "end")
                 };
                 svg.push_str(&format!(
@@ -516,7 +527,7 @@ pub fn glare_eyebox(report: &crate::glare::Report, frame: &crate::frame::Vehicle
         ));
     }
     let title = format!(
-        "'{}' in '{}' per eye point (seen from the front): the glare's solid angle (colour) and largest relative luminance",
+        "'{}' in '{}' per eye point (seen from behind the driver): the glare's solid angle (colour) and largest relative luminance",
         report.source, report.surface
     );
     let legend = vec![
@@ -532,7 +543,7 @@ pub fn glare_eyebox(report: &crate::glare::Report, frame: &crate::frame::Vehicle
         &png,
         &title,
         ("right of the eye (m)", "up (m)"),
-        Some(extent),
+        Some((extent, false)),
         &legend,
     );
     svg.insert_str(svg.len() - "</svg>\n".len(), &texts);

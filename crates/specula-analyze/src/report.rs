@@ -199,7 +199,7 @@ relative luminance of {threshold}. {verdict}</p>
 <table>
 <tr><th>eye point</th><th>glare</th><th>relative luminance</th><th>veiling ratio</th><th>solid angle sr</th><th>centroid px</th></tr>
 {rows}</table>
-<figure><img src="eyebox.svg"><figcaption>The eye points: the glare's solid angle (colour) and relative luminance (figure)</figcaption></figure>
+<figure><img src="eyebox.svg"><figcaption>The eye points as the driver's head moves (seen from behind the driver): the glare's solid angle (colour) and relative luminance (figure)</figcaption></figure>
 <figure><img src="worst.svg"><figcaption>Eye {shown_eye}'s view, the glare outlined in magenta</figcaption></figure>
 </body></html>
 "#,

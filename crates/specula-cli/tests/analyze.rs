@@ -20,6 +20,9 @@ fn mirror_view_from_the_ocular_points_writes_json_that_matches_the_schema() {
             "--ocular",
             "--region",
             "-4,2,4,30",
+            // 2 %: converges within the ray budget at both eye points (0.5 % does at one).
+            "--tolerance",
+            "0.02",
             "--json",
             "view.json",
             "--report",
@@ -104,6 +107,14 @@ fn bad_mirror_view_input_is_a_clear_error() {
             "has no area",
         ),
         (vec!["--mirror", "door mirror", "--range", "0"], "--range"),
+        (
+            vec!["--mirror", "building"],
+            "--mirror 'building' names 20 objects of the scene",
+        ),
+        (
+            vec!["--mirror", "door mirror", "--tolerance", "0"],
+            "--tolerance: 0: a tolerance must be a positive number",
+        ),
         (vec!["--mirror", "door mirror", "--eye", "1,2"], "X,Y,Z"),
         (
             vec!["--mirror", "door mirror", "--forward", "0,1,0"],
