@@ -153,18 +153,36 @@ pub struct Glare {
 }
 
 /// The camera of an eye point: at the eye, aimed at the surface's bounding-sphere centre, the
-/// sphere filling the frame's height with a tenth to spare.
-pub fn eye_camera(scene: &Scene, surface: usize, eye: Vec3) -> Camera {
+/// sphere filling the frame's narrower side with a tenth to spare (170° at most, where the eye is
+/// inside the sphere). None for an eye at the centre itself, which has no direction to look.
+pub fn eye_camera(
+    scene: &Scene,
+    surface: usize,
+    eye: Vec3,
+    width: u32,
+    height: u32,
+) -> Option<Camera> {
     let bounds = scene.meshes[surface].bounds();
     let (centre, radius) = (bounds.center(), bounds.radius().max(1e-4));
+    if eye.distance(centre) < 1e-6 * (1.0 + radius) {
+        return None;
+    }
     let distance = eye.distance(centre).max(radius * 1.01);
-    Camera {
+    let fitted = (2.0 * (radius / distance).asin() * 1.1).min(170f32.to_radians());
+    // The field of view is vertical: widen it where the frame is narrower than tall.
+    let aspect = width as f32 / height.max(1) as f32;
+    let fov_y = if aspect < 1.0 {
+        2.0 * ((fitted * 0.5).tan() / aspect).atan()
+    } else {
+        fitted
+    };
+    Some(Camera {
         eye,
         target: centre,
         up: Vec3::Y,
-        fov_y_deg: (2.0 * (radius / distance).asin().to_degrees() * 1.1).clamp(0.5, 170.0),
+        fov_y_deg: fov_y.to_degrees().clamp(0.5, 170.0),
         aspect: None,
-    }
+    })
 }
 
 /// What a path brings from the source after reflecting on the surface, and the source's own
@@ -365,7 +383,15 @@ pub fn analyze(
     let mut eye_reports = Vec::with_capacity(eyes.len());
     let mut images = Vec::with_capacity(eyes.len());
     for (k, eye) in eyes.iter().enumerate() {
-        let camera = eye_camera(scene, options.surface, *eye);
+        let camera = eye_camera(scene, options.surface, *eye, width, height).ok_or_else(|| {
+            AnalyzeError::BadOption {
+                option: "--eye",
+                reason: format!(
+                    "{eye} is the centre of '{}': an eye point there has no direction to look",
+                    scene.meshes[options.surface].name
+                ),
+            }
+        })?;
         let pixels: Vec<(Vec3, Split)> = (0..width * height)
             .into_par_iter()
             .map(|i| {

@@ -198,18 +198,15 @@ pub fn mirror_from_eye(
     ground_y: f32,
     width: u32,
 ) -> Plot {
-    let bounds = scene.meshes[mirror].bounds();
-    let (centre, radius) = (bounds.center(), bounds.radius().max(1e-3));
-    let distance = eye.distance(centre).max(radius * 1.01);
-    let fov_y_deg = (2.0 * (radius / distance).asin().to_degrees() * 1.1).clamp(1.0, 170.0);
     let height = (width * 3 / 4).max(1);
-    let camera = Camera {
+    // An eye at the mirror's very centre looks along −z: it has no direction to the mirror.
+    let camera = crate::glare::eye_camera(scene, mirror, eye, width, height).unwrap_or(Camera {
         eye,
-        target: centre,
+        target: eye + Vec3::NEG_Z,
         up: Vec3::Y,
-        fov_y_deg,
+        fov_y_deg: 90.0,
         aspect: None,
-    };
+    });
     let mut view_scene = scene.clone();
     view_scene.camera = camera.clone();
     let settings = RenderSettings {

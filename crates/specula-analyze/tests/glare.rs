@@ -273,3 +273,70 @@ fn an_ellipsoidal_cover_shows_the_eye_at_one_focus_what_sits_at_the_other() {
     assert!((relative - 1.0).abs() < 1e-3);
     assert!(off_focus < 0.5);
 }
+
+#[test]
+fn a_window_over_a_dial_veils_it_by_the_sheet_s_reflectance() {
+    // A thin glass sheet (n = 1.5) in z = 0 over an unlit dial of radiance L_d in z = −0.2; the
+    // emitter (L_s = 4) beside the eye. Where the emitter's reflection falls on the dial:
+    // glare r·L_s over (1 − r)·L_d, r = 2R / (1 + R) (a sheet's two faces, the reference's).
+    let sheet = Material::new(
+        "sheet",
+        MaterialKind::Dielectric {
+            ior: Vec3::splat(1.5),
+            thin_walled: true,
+        },
+        Vec3::ONE,
+    );
+    let pane = placed(
+        generators::plane(glam::Vec2::splat(0.4), 1),
+        "sheet",
+        0,
+        Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2),
+    );
+    let emitter = Vec3::new(0.3, 0.0, 0.5);
+    let eye = Vec3::new(-0.3, 0.0, 0.5);
+    let mut scene = scene(pane, sheet, emitter, 0.01, eye);
+    let dial_radiance = 0.5;
+    scene
+        .materials
+        .push(Material::unlit("dial", Vec3::splat(dial_radiance)));
+    scene.meshes.push(placed(
+        generators::plane(glam::Vec2::splat(2.0), 1),
+        "dial",
+        2,
+        Mat4::from_translation(Vec3::new(0.0, 0.0, -0.2))
+            * Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2),
+    ));
+    let accel = SceneAccel::new(&scene);
+    let (width, height) = (320, 240);
+    let glare = analyze(&scene, &accel, &[eye], &options(width, height), &|_| {}).unwrap();
+    let images = &glare.images[0];
+    // The pixel through the specular point of the emitter's centre.
+    let image = Vec3::new(emitter.x, emitter.y, -emitter.z);
+    let p = eye + (image - eye) * (eye.z / (eye.z - image.z));
+    let towards = (p - eye).normalize();
+    let along = |i: u32| {
+        images
+            .camera
+            .ray_direction(
+                (i % width) as f32 + 0.5,
+                (i / width) as f32 + 0.5,
+                width,
+                height,
+            )
+            .dot(towards)
+    };
+    let pixel = (0..width * height)
+        .max_by(|a, b| along(*a).total_cmp(&along(*b)))
+        .unwrap() as usize;
+    let y = specula_analyze::glare::luminance;
+    let veiling = y(images.glare[pixel]) / y(images.radiance[pixel] - images.glare[pixel]);
+    let cos_i = f64::from((eye - p).normalize().z);
+    let r_face = fresnel(cos_i, 1.5);
+    let r = 2.0 * r_face / (1.0 + r_face);
+    let expected = r * 4.0 / ((1.0 - r) * dial_radiance as f64);
+    eprintln!("veiling ratio {veiling:.5}, closed form {expected:.5}");
+    // Measured 2026-12-02: 0.09 % (the pixel's ray is not exactly the centre's).
+    assert!((veiling - expected).abs() / expected < 0.003);
+    assert!(glare.report.eyes[0].max_veiling_ratio >= veiling * 0.999);
+}
