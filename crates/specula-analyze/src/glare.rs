@@ -38,6 +38,15 @@ pub const SCHEMA_VERSION: u32 = 1;
 /// Veiling ratios are capped here where the pixel shows (nearly) nothing but the glare.
 pub const MAX_VEILING_RATIO: f64 = 1e6;
 
+/// A veiling ratio as reports print it: "over black" where the glare veils (nearly) nothing.
+pub fn veiling_text(ratio: f64) -> String {
+    if ratio >= MAX_VEILING_RATIO {
+        "over black".into()
+    } else {
+        format!("{ratio:.4}")
+    }
+}
+
 /// Rec. 709 luminance of linear RGB.
 pub fn luminance(c: Vec3) -> f64 {
     f64::from(0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z)

@@ -395,28 +395,30 @@ fn sample_point(
         return unseen;
     }
     let origin = offset_origin(sp.p, sp.ng, reflected);
-    let ground = (reflected.y < 0.0)
-        .then(|| (options.ground_y - origin.y) / reflected.y)
-        .filter(|t| *t > 0.0)
-        .and_then(|t| {
-            let blocked = first_opaque_hit(
-                scene,
-                accel,
-                &Ray {
-                    origin,
-                    dir: reflected,
-                },
-                t * (1.0 - 1e-4) - 1e-4,
-            );
-            blocked.is_none().then(|| {
-                let g = origin + reflected * t;
-                Vec2::new(g.x, g.z)
-            })
-        });
+    let ground = ground_seen(scene, accel, origin, reflected, options.ground_y);
     Sample {
         reflected: Some(reflected),
         ground,
     }
+}
+
+/// Where the ray from `origin` along `dir` meets the ground plane y = `ground_y` (x, z), when it
+/// goes down and nothing opaque lies before it.
+pub(crate) fn ground_seen(
+    scene: &Scene,
+    accel: &SceneAccel,
+    origin: Vec3,
+    dir: Vec3,
+    ground_y: f32,
+) -> Option<Vec2> {
+    let t = (dir.y < 0.0)
+        .then(|| (ground_y - origin.y) / dir.y)
+        .filter(|t| *t > 0.0)?;
+    let blocked = first_opaque_hit(scene, accel, &Ray { origin, dir }, t * (1.0 - 1e-4) - 1e-4);
+    blocked.is_none().then(|| {
+        let g = origin + dir * t;
+        Vec2::new(g.x, g.z)
+    })
 }
 
 /// A grid of cells over a rectangle, marking what is covered.

@@ -230,17 +230,7 @@ pub fn mirror_from_eye(
             let sp = surface_point(scene, &ray, &hit);
             let r = reflect(dir, sp.ns).normalize();
             let origin = offset_origin(sp.p, sp.ng, r);
-            let t = (r.y < 0.0).then(|| (ground_y - origin.y) / r.y)?;
-            let blocked = crate::mirror_view::first_opaque_hit(
-                scene,
-                accel,
-                &Ray { origin, dir: r },
-                t * (1.0 - 1e-4) - 1e-4,
-            );
-            blocked.is_none().then(|| {
-                let g = origin + r * t;
-                Vec2::new(g.x, g.z)
-            })
+            crate::mirror_view::ground_seen(scene, accel, origin, r, ground_y)
         })
         .collect();
     let cell = |g: Vec2, spacing: f32| (g / spacing).floor();

@@ -155,11 +155,7 @@ pub fn write_glare(
     let mut rows = String::new();
     for (k, e) in r.eyes.iter().enumerate() {
         let [x, y, z] = e.position;
-        let veiling = if e.max_veiling_ratio >= crate::glare::MAX_VEILING_RATIO {
-            "over black".to_string()
-        } else {
-            format!("{:.4}", e.max_veiling_ratio)
-        };
+        let veiling = crate::glare::veiling_text(e.max_veiling_ratio);
         rows.push_str(&format!(
             "<tr><td>eye {} ({x:.3}, {y:.3}, {z:.3})</td><td>{}</td><td>{:.5}</td><td>{veiling}</td><td>{:.3e}</td><td>{}</td></tr>\n",
             k + 1,

@@ -128,6 +128,24 @@ fn a_metal_plate_shows_the_emitter_to_the_eyes_whose_line_to_its_image_crosses_i
     assert!(glare.report.worst_eye.is_some());
 }
 
+/// The pixel of a `width` × `height` image from `camera` whose ray is nearest direction `dir`.
+fn pixel_towards(camera: &Camera, width: u32, height: u32, dir: Vec3) -> usize {
+    let towards = dir.normalize();
+    let along = |i: u32| {
+        camera
+            .ray_direction(
+                (i % width) as f32 + 0.5,
+                (i / width) as f32 + 0.5,
+                width,
+                height,
+            )
+            .dot(towards)
+    };
+    (0..width * height)
+        .max_by(|a, b| along(*a).total_cmp(&along(*b)))
+        .expect("an image has pixels") as usize
+}
+
 /// The unpolarised Fresnel reflectance from air into index `n` at incidence `cos_i`, from the
 /// Fresnel equations.
 fn fresnel(cos_i: f64, n: f64) -> f64 {
@@ -159,22 +177,8 @@ fn a_thick_glass_pane_s_front_reflection_has_the_fresnel_reflectance_of_its_angl
     // emitter too, by other paths, elsewhere in the image).
     let images = &glare.images[0];
     let (width, height) = (640, 480);
-    let towards = (p - eye).normalize();
-    let pixel = (0..width * height)
-        .max_by(|a, b| {
-            let along = |i: u32| {
-                let d = images.camera.ray_direction(
-                    (i % width) as f32 + 0.5,
-                    (i / width) as f32 + 0.5,
-                    width,
-                    height,
-                );
-                d.dot(towards)
-            };
-            along(*a).total_cmp(&along(*b))
-        })
-        .unwrap();
-    let relative = images.relative[pixel as usize];
+    let pixel = pixel_towards(&images.camera, width, height, p - eye);
+    let relative = images.relative[pixel];
     eprintln!(
         "front reflection at {:.2}°: relative luminance {relative:.5}, Fresnel {expected:.5}",
         cos_i.acos().to_degrees()
@@ -314,21 +318,7 @@ fn a_window_over_a_dial_veils_it_by_the_sheet_s_reflectance() {
     // The pixel through the specular point of the emitter's centre.
     let image = Vec3::new(emitter.x, emitter.y, -emitter.z);
     let p = eye + (image - eye) * (eye.z / (eye.z - image.z));
-    let towards = (p - eye).normalize();
-    let along = |i: u32| {
-        images
-            .camera
-            .ray_direction(
-                (i % width) as f32 + 0.5,
-                (i / width) as f32 + 0.5,
-                width,
-                height,
-            )
-            .dot(towards)
-    };
-    let pixel = (0..width * height)
-        .max_by(|a, b| along(*a).total_cmp(&along(*b)))
-        .unwrap() as usize;
+    let pixel = pixel_towards(&images.camera, width, height, p - eye);
     let y = specula_analyze::glare::luminance;
     let veiling = y(images.glare[pixel]) / y(images.radiance[pixel] - images.glare[pixel]);
     let cos_i = f64::from((eye - p).normalize().z);

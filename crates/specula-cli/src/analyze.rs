@@ -163,6 +163,25 @@ fn parse_region(text: &str) -> Result<Region, String> {
     Region::new(x0, z0, x1, z1).map_err(|e| e.to_string())
 }
 
+/// The progress bar over `count` eye points.
+fn eye_bar(count: usize) -> ProgressBar {
+    let bar = ProgressBar::new(count as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:30} {pos}/{len} eye points ({elapsed})")
+            .expect("valid template"),
+    );
+    bar
+}
+
+/// Writes `report` as JSON to `path`, where one was asked for.
+fn write_json(path: Option<&std::path::Path>, report: &impl serde::Serialize) -> Result<()> {
+    if let Some(path) = path {
+        std::fs::write(path, serde_json::to_string_pretty(report)?)
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}
+
 pub fn run(kind: Kind) -> Result<()> {
     match kind {
         Kind::MirrorView(args) => mirror_view(args),
@@ -189,20 +208,13 @@ fn mirror_view(args: MirrorViewArgs) -> Result<()> {
     };
     options.validate(&scene)?;
     let accel = SceneAccel::new(&scene);
-    let bar = ProgressBar::new(eyes.len() as u64);
-    bar.set_style(
-        ProgressStyle::with_template("{bar:30} {pos}/{len} eye points ({elapsed})")
-            .expect("valid template"),
-    );
+    let bar = eye_bar(eyes.len());
     let view = mirror_view::analyze(&scene, &accel, &eyes, &options, &|done| {
         bar.set_position(done as u64)
     })?;
     bar.finish_and_clear();
     print_mirror_view(&view.report);
-    if let Some(json) = &args.json {
-        std::fs::write(json, serde_json::to_string_pretty(&view.report)?)
-            .with_context(|| format!("writing {}", json.display()))?;
-    }
+    write_json(args.json.as_deref(), &view.report)?;
     if let Some(dir) = &args.report {
         let html = specula_analyze::report::write_mirror_view(dir, &view, &scene, &accel, mirror)?;
         println!("report: {}", html.display());
@@ -226,11 +238,7 @@ fn glare(args: GlareArgs) -> Result<()> {
     };
     options.validate(&scene)?;
     let accel = SceneAccel::new(&scene);
-    let bar = ProgressBar::new(eyes.len() as u64);
-    bar.set_style(
-        ProgressStyle::with_template("{bar:30} {pos}/{len} eye points ({elapsed})")
-            .expect("valid template"),
-    );
+    let bar = eye_bar(eyes.len());
     let result = glare::analyze(&scene, &accel, &eyes, &options, &|done| {
         bar.set_position(done as u64)
     })?;
@@ -251,7 +259,7 @@ fn glare(args: GlareArgs) -> Result<()> {
             format!("({x:.3}, {y:.3}, {z:.3})"),
             if e.glare { "yes" } else { "no" },
             e.max_relative_luminance,
-            veiling(e.max_veiling_ratio),
+            glare::veiling_text(e.max_veiling_ratio),
             e.solid_angle_sr,
             e.centroid_px
                 .map(|[cx, cy]| format!("{cx:.0}, {cy:.0}"))
@@ -263,31 +271,19 @@ fn glare(args: GlareArgs) -> Result<()> {
             "glare seen from {:.0} % of the eye points; the worst: eye {} (veiling ratio {})",
             r.share_with_glare * 100.0,
             k + 1,
-            veiling(r.eyes[k].max_veiling_ratio)
+            glare::veiling_text(r.eyes[k].max_veiling_ratio)
         ),
         None => println!(
             "no glare: no eye point sees '{}' reflected in '{}'",
             r.source, r.surface
         ),
     }
-    if let Some(json) = &args.json {
-        std::fs::write(json, serde_json::to_string_pretty(r)?)
-            .with_context(|| format!("writing {}", json.display()))?;
-    }
+    write_json(args.json.as_deref(), r)?;
     if let Some(dir) = &args.report {
         let html = specula_analyze::report::write_glare(dir, &result, &frame)?;
         println!("report: {}", html.display());
     }
     Ok(())
-}
-
-/// A veiling ratio, or "over black" where the glare veils (nearly) nothing.
-fn veiling(ratio: f64) -> String {
-    if ratio >= glare::MAX_VEILING_RATIO {
-        "over black".into()
-    } else {
-        format!("{ratio:.4}")
-    }
 }
 
 fn share(value: Option<f64>) -> String {

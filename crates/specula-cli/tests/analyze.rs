@@ -6,6 +6,31 @@ fn specula() -> Command {
     Command::new(env!("CARGO_BIN_EXE_specula"))
 }
 
+fn assert_matches_schema(json: &serde_json::Value, schema: &str) {
+    let schema: serde_json::Value = serde_json::from_str(schema).unwrap();
+    let validator = jsonschema::validator_for(&schema).unwrap();
+    let errors: Vec<String> = validator
+        .iter_errors(json)
+        .map(|e| format!("{e} at {}", e.instance_path()))
+        .collect();
+    assert!(errors.is_empty(), "{errors:?}");
+}
+
+/// Runs `specula COMMAND... ARGS` for each case: it must fail, without a panic, and say
+/// `expected`.
+fn assert_each_fails_naming(command: &[&str], cases: &[(Vec<&str>, &str)]) {
+    for (args, expected) in cases {
+        let out = specula().args(command).args(args).output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
+        assert!(
+            stderr.contains(expected),
+            "{args:?}: {stderr:?} should mention {expected:?}"
+        );
+    }
+}
+
 #[test]
 fn mirror_view_from_the_ocular_points_writes_json_that_matches_the_schema() {
     let dir = tempfile::tempdir().unwrap();
@@ -34,16 +59,10 @@ fn mirror_view_from_the_ocular_points_writes_json_that_matches_the_schema() {
     assert!(out.status.success(), "{stderr}");
     let text = std::fs::read_to_string(dir.path().join("view.json")).unwrap();
     let json: serde_json::Value = serde_json::from_str(&text).unwrap();
-    let schema: serde_json::Value = serde_json::from_str(include_str!(
-        "../../../docs/analyze-mirror-view.schema.json"
-    ))
-    .unwrap();
-    let validator = jsonschema::validator_for(&schema).unwrap();
-    let errors: Vec<String> = validator
-        .iter_errors(&json)
-        .map(|e| format!("{e} at {}", e.instance_path()))
-        .collect();
-    assert!(errors.is_empty(), "{errors:?}");
+    assert_matches_schema(
+        &json,
+        include_str!("../../../docs/analyze-mirror-view.schema.json"),
+    );
     let eyes = json["eyes"].as_array().unwrap();
     assert_eq!(eyes.len(), 2);
     // The report folder: the same JSON, each plot as PNG and SVG, the page linking them.
@@ -121,20 +140,7 @@ fn bad_mirror_view_input_is_a_clear_error() {
             "no horizontal part",
         ),
     ];
-    for (args, expected) in cases {
-        let out = specula()
-            .args(["analyze", "mirror-view", "door-mirror"])
-            .args(&args)
-            .output()
-            .unwrap();
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        assert!(!out.status.success(), "{args:?} succeeded");
-        assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
-        assert!(
-            stderr.contains(expected),
-            "{args:?}: {stderr:?} should mention {expected:?}"
-        );
-    }
+    assert_each_fails_naming(&["analyze", "mirror-view", "door-mirror"], &cases);
 }
 
 #[test]
@@ -166,14 +172,10 @@ fn glare_over_an_eyebox_writes_json_that_matches_the_schema() {
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("glare.json")).unwrap())
             .unwrap();
-    let schema: serde_json::Value =
-        serde_json::from_str(include_str!("../../../docs/analyze-glare.schema.json")).unwrap();
-    let validator = jsonschema::validator_for(&schema).unwrap();
-    let errors: Vec<String> = validator
-        .iter_errors(&json)
-        .map(|e| format!("{e} at {}", e.instance_path()))
-        .collect();
-    assert!(errors.is_empty(), "{errors:?}");
+    assert_matches_schema(
+        &json,
+        include_str!("../../../docs/analyze-glare.schema.json"),
+    );
     let eyes = json["eyes"].as_array().unwrap();
     assert_eq!(eyes.len(), 6);
     let report = dir.path().join("report");
@@ -215,19 +217,16 @@ fn bad_glare_input_is_a_clear_error() {
             ],
             "at least one point",
         ),
+        (
+            vec![
+                "--surface",
+                "cover glass",
+                "--source",
+                "side window",
+                "--threshold=-1",
+            ],
+            "--threshold",
+        ),
     ];
-    for (args, expected) in cases {
-        let out = specula()
-            .args(["analyze", "glare", "truck-cover"])
-            .args(&args)
-            .output()
-            .unwrap();
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        assert!(!out.status.success(), "{args:?} succeeded");
-        assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
-        assert!(
-            stderr.contains(expected),
-            "{args:?}: {stderr:?} should mention {expected:?}"
-        );
-    }
+    assert_each_fails_naming(&["analyze", "glare", "truck-cover"], &cases);
 }
