@@ -21,7 +21,7 @@ pub mod vertex_tracing;
 
 pub use gpu_scene::GpuScene;
 pub use live_scene::{AccelUpdate, LiveScene, MoveError};
-pub use preset::{all_labels, check_settings, instances, Label, Preset};
+pub use preset::{all_labels, check_settings, Label, Preset};
 pub use registry::{approximate_methods, by_name, exact_method, method, METHODS};
 pub use technique::{
     apply_known_parameters, apply_parameters, apply_setting, Context, Delegation, Drawn, Frame,

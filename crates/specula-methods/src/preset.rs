@@ -248,22 +248,22 @@ impl Label {
     }
 }
 
-/// One technique of a run, under its label.
-pub type Instance = (Label, Box<dyn Technique>);
-
-/// The instances of a run: the settings checked ([`check_settings`]), then one technique per
-/// label with its preset and the settings that reach it.
-pub fn instances(labels: &[Label], settings: &[String]) -> Result<Vec<Instance>, TechniqueError> {
-    check_settings(labels, settings)?;
-    labels
-        .iter()
-        .map(|l| Ok((*l, l.create_with(settings)?)))
-        .collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// One technique of a run, under its label.
+    type Instance = (Label, Box<dyn Technique>);
+
+    /// The instances of a run: the settings checked ([`check_settings`]), then one technique per
+    /// label with its preset and the settings that reach it.
+    fn instances(labels: &[Label], settings: &[String]) -> Result<Vec<Instance>, TechniqueError> {
+        check_settings(labels, settings)?;
+        labels
+            .iter()
+            .map(|l| Ok((*l, l.create_with(settings)?)))
+            .collect()
+    }
 
     #[test]
     fn labels_parse_and_print() {
