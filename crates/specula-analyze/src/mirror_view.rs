@@ -549,6 +549,29 @@ pub struct MirrorView {
     pub footprints: Vec<Vec<[Vec2; 3]>>,
 }
 
+impl MirrorView {
+    /// How many eye points see each cell of a `columns` × `rows` grid over the ground from
+    /// `min` to `max` (x, z), within their range: a cell counts for an eye point when its
+    /// centre lies in one of that eye's footprint triangles, as the figures count it. Row-major,
+    /// row 0 at `min.y`.
+    pub fn seen_counts(&self, min: Vec2, max: Vec2, columns: usize, rows: usize) -> Vec<u16> {
+        let mut counts = vec![0u16; columns * rows];
+        let range = self.report.range_m;
+        for (k, footprint) in self.footprints.iter().enumerate() {
+            let [x, _, z] = self.report.eyes[k].position;
+            let eye = Vec2::new(x, z);
+            let mut raster = Raster::new(min, max, columns, rows);
+            for t in footprint {
+                raster.fill(t, &|p| p.distance(eye) <= range);
+            }
+            for (count, covered) in counts.iter_mut().zip(&raster.covered) {
+                *count += u16::from(*covered);
+            }
+        }
+        counts
+    }
+}
+
 /// One eye's sampling, refined until its figures hold.
 struct Refined {
     sampled: Sampled,

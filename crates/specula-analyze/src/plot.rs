@@ -428,7 +428,7 @@ fn format_tick(v: f32, step: f32) -> String {
 }
 
 /// A colour from a scale of `t` in [0, 1]: dark blue through teal and green to yellow.
-fn scale_colour(t: f64) -> [u8; 3] {
+pub fn scale_colour(t: f64) -> [u8; 3] {
     const STOPS: [[f64; 3]; 5] = [
         [68.0, 1.0, 84.0],
         [59.0, 82.0, 139.0],

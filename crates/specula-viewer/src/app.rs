@@ -27,6 +27,9 @@ const ORBIT_DEG_PER_PIXEL: f32 = 0.3;
 /// The view counts as moving this long after the last input, so the technique stays at the
 /// reduced resolution through a series of key presses.
 const INTERACTION_LINGER: Duration = Duration::from_millis(200);
+/// How often the window looks for the analysis's news while it computes.
+const ANALYSIS_POLL: std::time::Duration = std::time::Duration::from_millis(30);
+
 /// Frames kept for the frame-time graph.
 const GRAPH_FRAMES: usize = 180;
 
@@ -122,7 +125,23 @@ struct WindowState {
     error_stale: bool,
     /// egui wants another frame at once (an animation, a hover).
     egui_repaint: bool,
+    /// The analysis's overlay as drawn last, and what it was drawn for.
+    overlay: Option<(OverlayKey, egui::TextureHandle)>,
 }
+
+/// What an overlay depends on: the analysis's outcome and chosen eye point, the scene's
+/// version, the view's camera and the overlay's size.
+#[derive(PartialEq)]
+struct OverlayKey {
+    revision: u64,
+    glare_eye: usize,
+    version: u64,
+    camera: [f32; 10],
+    size: (u32, u32),
+}
+
+/// The overlay is computed at this fraction of the window's side (a ray per pixel).
+const OVERLAY_SCALE: u32 = 3;
 
 /// A script being run: its steps, the one at hand, and the frames it still wants.
 struct ScriptRun {
@@ -254,6 +273,7 @@ impl App {
             reference_image: None,
             error_stale: true,
             egui_repaint: false,
+            overlay: None,
         });
         Ok(())
     }
@@ -378,7 +398,20 @@ impl ApplicationHandler for App {
     }
 
     fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
-        event_loop.set_control_flow(ControlFlow::Wait);
+        let polling = self.state.as_ref().is_some_and(analysis_busy);
+        event_loop.set_control_flow(if polling {
+            ControlFlow::WaitUntil(Instant::now() + ANALYSIS_POLL)
+        } else {
+            ControlFlow::Wait
+        });
+    }
+
+    fn new_events(&mut self, _: &ActiveEventLoop, cause: winit::event::StartCause) {
+        if let (winit::event::StartCause::ResumeTimeReached { .. }, Some(state)) =
+            (cause, &self.state)
+        {
+            state.window.request_redraw();
+        }
     }
 }
 
@@ -417,6 +450,12 @@ fn wants_another_frame(state: &WindowState, scripted: bool) -> bool {
         || state.ui.settings.continuous
         || (state.session.view.needs_reference() && !state.ui.reference_converged)
         || state.ui.last_input.elapsed() < INTERACTION_LINGER
+}
+
+/// Whether the analysis is computing: the window then looks for its news a few times a second
+/// without drawing frames in a busy loop.
+fn analysis_busy(state: &WindowState) -> bool {
+    state.session.analysis.as_ref().is_some_and(|a| a.busy())
 }
 
 /// Mouse drag: left orbits (Shift: pans; Ctrl: moves the selected object in the view plane),
@@ -639,6 +678,30 @@ fn advance_script(state: &mut WindowState, script: &mut ScriptRun) -> Result<(),
             Step::Screenshot(path) => {
                 save_view(state, &path).map_err(|e| at(&e))?;
                 eprintln!("step {}: saved {}", index + 1, path.display());
+                if let Some(analysis) = &state.session.analysis {
+                    eprintln!(
+                        "step {}: {}",
+                        index + 1,
+                        crate::analysis::summary(analysis, state.session.scene())
+                    );
+                }
+            }
+            Step::Analysis(None) => state.session.analysis = None,
+            Step::Analysis(Some(request)) => {
+                let settings = request
+                    .settings(state.session.scene())
+                    .map_err(|e| at(&e))?;
+                let mut analysis = crate::analysis::Analysis::new(settings);
+                analysis.finish(state.session.live());
+                if let Some(error) = &analysis.error {
+                    return Err(at(error));
+                }
+                eprintln!(
+                    "step {}: {}",
+                    index + 1,
+                    crate::analysis::summary(&analysis, state.session.scene())
+                );
+                state.session.analysis = Some(analysis);
             }
             Step::View(mode) => state.session.view = mode,
         }
@@ -712,6 +775,7 @@ fn redraw(state: &mut WindowState, mut script: Option<&mut ScriptRun>) -> Result
         show_error_map(state, gpu);
     }
 
+    update_overlay(state);
     let egui = run_egui(state, gpu, &mut encoder, (width, height));
     if !present(state, gpu, encoder, egui, (width, height), split) {
         return Ok(());
@@ -880,6 +944,62 @@ fn show_error_map(state: &mut WindowState, gpu: &GpuContext) {
     }
 }
 
+/// Takes the analysis's news and draws its overlay again where anything it depends on
+/// changed.
+fn update_overlay(state: &mut WindowState) {
+    state.session.update_analysis();
+    let Some(analysis) = &state.session.analysis else {
+        state.overlay = None;
+        return;
+    };
+    let camera = state.session.camera.camera();
+    let size = (
+        state.config.width.div_ceil(OVERLAY_SCALE),
+        state.config.height.div_ceil(OVERLAY_SCALE),
+    );
+    let key = OverlayKey {
+        revision: analysis.revision,
+        glare_eye: analysis.glare_eye(),
+        version: state.session.live().version(),
+        camera: [
+            camera.eye.x,
+            camera.eye.y,
+            camera.eye.z,
+            camera.target.x,
+            camera.target.y,
+            camera.target.z,
+            camera.up.x,
+            camera.up.y,
+            camera.up.z,
+            camera.fov_y_deg,
+        ],
+        size,
+    };
+    if state.overlay.as_ref().is_some_and(|(k, _)| *k == key) {
+        return;
+    }
+    let Some(overlay) = analysis.overlay(state.session.live(), &camera, size.0, size.1) else {
+        state.overlay = None;
+        return;
+    };
+    let image = egui::ColorImage::from_rgba_unmultiplied(
+        [overlay.width as usize, overlay.height as usize],
+        overlay.pixels.as_flattened(),
+    );
+    let texture = match state.overlay.take() {
+        Some((_, mut texture)) => {
+            texture.set(image, egui::TextureOptions::LINEAR);
+            texture
+        }
+        None => state.egui.egui_ctx().load_texture(
+            "analysis overlay",
+            image,
+            egui::TextureOptions::LINEAR,
+        ),
+    };
+    state.overlay = Some((key, texture));
+}
+
 /// A frame of egui ready to draw: its triangles, the screen they are for, the texture changes
 /// (those to free are freed after drawing) and the command buffers its buffer updates need.
 struct EguiFrame {
@@ -900,7 +1020,17 @@ fn run_egui(
     let raw_input = state.egui.take_egui_input(&state.window);
     let egui_ctx = state.egui.egui_ctx().clone();
     let mut load_request = None;
+    let overlay = state.overlay.as_ref().map(|(_, texture)| texture.id());
     let mut output = egui_ctx.run_pass(raw_input, |ctx| {
+        if let Some(texture) = overlay {
+            // Under the panels, over the view.
+            ctx.layer_painter(egui::LayerId::background()).image(
+                texture,
+                ctx.content_rect(),
+                egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)),
+                egui::Color32::WHITE,
+            );
+        }
         load_request = crate::panel::show(ctx, &mut state.session, &mut state.ui);
     });
     state

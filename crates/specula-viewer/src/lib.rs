@@ -6,6 +6,8 @@
 //! progressively on CPU threads as the reference. Script mode ([`script`]) runs the same loop
 //! from a TOML file of steps, for tests and repeatable captures.
 
+pub mod analysis;
+pub mod analysis_panel;
 pub mod app;
 pub mod orbit;
 pub mod panel;

@@ -1,6 +1,6 @@
 //! The egui panel: scene, technique picker, the parameter controls built from the registry's
-//! specs, the view, the selected object's move controls, per-stage timings, the frame-time
-//! graph, and the key help.
+//! specs, the view, the selected object's move controls, the analysis
+//! ([`crate::analysis_panel`]), per-stage timings, the frame-time graph, and the key help.
 
 use egui::{Color32, RichText};
 use glam::Vec3;
@@ -81,6 +81,8 @@ pub fn show(ctx: &egui::Context, session: &mut Session, ui_state: &mut UiState) 
                     .show(ui, |ui| view_section(ui, session, ui_state));
                 egui::CollapsingHeader::new("object")
                     .show(ui, |ui| object_section(ui, session, ui_state));
+                egui::CollapsingHeader::new("analysis")
+                    .show(ui, |ui| crate::analysis_panel::show(ui, session, ui_state));
                 egui::CollapsingHeader::new("timings")
                     .show(ui, |ui| timing_section(ui, session, ui_state));
             });

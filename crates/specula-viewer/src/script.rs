@@ -20,14 +20,29 @@
 //! [[step]]
 //! view = "split"                                    # technique | reference | split | error
 //! [[step]]
+//! analysis = { kind = "mirror-view", object = "door mirror", eyes = "ocular", region = [1, 2, 5, 20] }
+//! [[step]]
+//! analysis = { kind = "glare", object = "cover glass", source = "side window", eyebox = [0.3, 0.15, 5, 3] }
+//! [[step]]
+//! analysis = { kind = "off" }
+//! [[step]]
 //! screenshot = "mirror.png"                         # the view at the window size, no UI
 //! ```
+//!
+//! An `analysis` step also takes `eye = [x, y, z]` (the centre eye point), `range`, `ground`
+//! and `tolerance`; `eyes` is "centre" or "ocular", `eyebox` is [W, H, NX, NY], `region` is
+//! [X0, Z0, X1, Z1]. The step waits for the analysis and prints its figures; so does each
+//! screenshot taken while one is on (the screenshot shows its overlay).
 
 use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 use serde::Deserialize;
 
+use specula_analyze::frame::Eyes;
+use specula_analyze::mirror_view::Region;
+
+use crate::analysis::{Kind, Request};
 use crate::session::ViewMode;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -56,6 +71,8 @@ pub enum Step {
     },
     Screenshot(PathBuf),
     View(ViewMode),
+    /// Turns the analysis on (or off: None).
+    Analysis(Option<Request>),
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -90,6 +107,22 @@ struct RawStep {
     drag: Option<[f32; 3]>,
     screenshot: Option<PathBuf>,
     view: Option<String>,
+    analysis: Option<RawAnalysis>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawAnalysis {
+    kind: String,
+    object: Option<String>,
+    source: Option<String>,
+    eye: Option<[f32; 3]>,
+    eyes: Option<String>,
+    eyebox: Option<[f32; 4]>,
+    region: Option<[f32; 4]>,
+    range: Option<f32>,
+    ground: Option<f32>,
+    tolerance: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -108,7 +141,7 @@ struct RawRotate {
 }
 
 const STEP_KEYS: &str =
-    "method, reference, param, orbit, translate, rotate, frames, drag, view or screenshot";
+    "method, reference, param, orbit, translate, rotate, frames, drag, view, analysis or screenshot";
 
 /// Reads a script; relative screenshot paths resolve against the current directory.
 pub fn load(path: &Path) -> Result<Vec<Step>, ScriptError> {
@@ -230,10 +263,86 @@ fn step(table: toml::Table) -> Result<Step, String> {
                 ViewMode::ALL.map(|m| m.name()).join(", ")
             )
         })?)
+    } else if let Some(a) = raw.analysis {
+        Step::Analysis(analysis(a)?)
     } else {
         unreachable!("a one-key table that deserialised names one of the fields")
     };
     Ok(step)
+}
+
+fn analysis(a: RawAnalysis) -> Result<Option<Request>, String> {
+    let kind = match a.kind.as_str() {
+        "off" => {
+            let others = a.object.is_some()
+                || a.source.is_some()
+                || a.eye.is_some()
+                || a.eyes.is_some()
+                || a.eyebox.is_some()
+                || a.region.is_some()
+                || a.range.is_some()
+                || a.ground.is_some()
+                || a.tolerance.is_some();
+            if others {
+                return Err("analysis: kind = \"off\" takes no other key".into());
+            }
+            return Ok(None);
+        }
+        "mirror-view" => Kind::MirrorView,
+        "glare" => Kind::Glare,
+        other => {
+            return Err(format!(
+                "analysis.kind = \"{other}\": expected mirror-view, glare or off"
+            ))
+        }
+    };
+    let object = a
+        .object
+        .ok_or("analysis needs object = \"NAME\" (the mirror, or the glaring surface)")?;
+    if let Some(eye) = a.eye {
+        finite(&eye, "analysis.eye")?;
+    }
+    let eyes = match (a.eyes.as_deref(), a.eyebox) {
+        (Some(_), Some(_)) => return Err("analysis: give eyes or eyebox, not both".into()),
+        (None | Some("centre"), None) => Eyes::Camera,
+        (Some("ocular"), None) => Eyes::Ocular,
+        (Some(other), None) => return Err(format!(
+            "analysis.eyes = \"{other}\": expected centre or ocular (or eyebox = [W, H, NX, NY])"
+        )),
+        (None, Some([width, height, columns, rows])) => {
+            finite(&[width, height], "analysis.eyebox")?;
+            let count = |v: f32| {
+                (v.fract() == 0.0 && (1.0..=10_000.0).contains(&v))
+                    .then_some(v as u32)
+                    .ok_or(format!(
+                        "analysis.eyebox = [W, H, NX, NY]: NX and NY must be whole numbers ≥ 1, got {v}"
+                    ))
+            };
+            Eyes::Eyebox {
+                width,
+                height,
+                columns: count(columns)?,
+                rows: count(rows)?,
+            }
+        }
+    };
+    let region = a
+        .region
+        .map(|[x0, z0, x1, z1]| {
+            Region::new(x0, z0, x1, z1).map_err(|e| format!("analysis.region: {e}"))
+        })
+        .transpose()?;
+    Ok(Some(Request {
+        kind,
+        object,
+        source: a.source,
+        eye: a.eye.map(Vec3::from_array),
+        eyes,
+        region,
+        range_m: a.range,
+        ground_y: a.ground,
+        tolerance: a.tolerance,
+    }))
 }
 
 #[cfg(test)]

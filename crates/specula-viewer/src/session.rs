@@ -10,6 +10,7 @@ use specula_methods::{Context, Frame, Label, LiveScene, MethodInfo, Technique};
 use specula_scene::Scene;
 use specula_trace::{Image, Ray};
 
+use crate::analysis::Analysis;
 use crate::orbit::OrbitCamera;
 
 /// What the window shows.
@@ -91,6 +92,8 @@ pub struct Session {
     pub selected: Option<usize>,
     /// Why the current technique failed on this scene; the reference is shown instead.
     pub failure: Option<String>,
+    /// The analysis drawn over the view, if one is on.
+    pub analysis: Option<Analysis>,
 }
 
 /// Where the label `name` is among `labels` (an unknown method or preset names the valid
@@ -127,6 +130,7 @@ impl Session {
             view: ViewMode::Technique,
             selected: None,
             failure: None,
+            analysis: None,
         };
         session.selected = session.first_specular();
         Ok(session)
@@ -164,6 +168,8 @@ impl Session {
         self.source = source.to_string();
         self.selected = self.first_specular();
         self.failure = None;
+        // Its objects were the old scene's.
+        self.analysis = None;
         Ok(())
     }
 
@@ -304,8 +310,34 @@ impl Session {
     }
 
     /// The current view at `width` × `height` as an image on the CPU, complete (the reference
-    /// converged): what a screenshot saves.
+    /// converged, the analysis finished and drawn over it): what a screenshot saves.
     pub fn view_image(
+        &mut self,
+        width: u32,
+        height: u32,
+        split: f32,
+    ) -> Result<Image, SessionError> {
+        let mut image = self.view_image_alone(width, height, split)?;
+        if let Some(analysis) = &mut self.analysis {
+            analysis.finish(&self.live);
+            if let Some(overlay) =
+                analysis.overlay(&self.live, &self.camera.camera(), width, height)
+            {
+                draw_overlay(&mut image, &overlay);
+            }
+        }
+        Ok(image)
+    }
+
+    /// Advances the analysis (see [`Analysis::update`]); returns whether what it shows changed.
+    pub fn update_analysis(&mut self) -> bool {
+        match &mut self.analysis {
+            Some(analysis) => analysis.update(&self.live),
+            None => false,
+        }
+    }
+
+    fn view_image_alone(
         &mut self,
         width: u32,
         height: u32,
@@ -352,6 +384,25 @@ fn set_budget(technique: &mut dyn Technique, budget_ms: u32) -> Result<(), Sessi
         specula_methods::apply_setting(technique, &format!("budget_ms={budget_ms}"))?;
     }
     Ok(())
+}
+
+/// Blends `overlay` (sRGB, straight alpha, any size: sampled at the nearest pixel) over
+/// `image` (linear radiance).
+pub fn draw_overlay(image: &mut Image, overlay: &crate::analysis::Overlay) {
+    for y in 0..image.height {
+        let oy = (y as u64 * overlay.height as u64 / image.height as u64) as u32;
+        for x in 0..image.width {
+            let ox = (x as u64 * overlay.width as u64 / image.width as u64) as u32;
+            let [r, g, b, a] = overlay.pixels[(oy * overlay.width + ox) as usize];
+            if a == 0 {
+                continue;
+            }
+            let colour = Vec3::new(r as f32, g as f32, b as f32) / 255.0;
+            let colour = Vec3::from_array(colour.to_array().map(srgb_to_linear));
+            let pixel = &mut image.pixels[(y * image.width + x) as usize];
+            *pixel = pixel.lerp(colour, a as f32 / 255.0);
+        }
+    }
 }
 
 /// `left` where x < `split` × width, `right` elsewhere (same size).

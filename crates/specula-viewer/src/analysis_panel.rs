@@ -1,0 +1,445 @@
+//! The panel's analysis section: the kind (off, mirror view, glare), what is analysed, the eye
+//! points, the figures as they arrive, and for glare the eye points' heat map (click a cell to
+//! show that eye point's glare over the view).
+
+use egui::{Color32, RichText};
+use glam::Vec3;
+use specula_analyze::frame::Eyes;
+use specula_analyze::mirror_view::Region;
+
+use crate::analysis::{Analysed, Analysis, Kind, Settings};
+use crate::app::UiState;
+use crate::session::Session;
+
+pub fn show(ui: &mut egui::Ui, session: &mut Session, state: &mut UiState) {
+    let current = session.analysis.as_ref().map(|a| a.settings.kind);
+    ui.horizontal(|ui| {
+        if ui.selectable_label(current.is_none(), "off").clicked() {
+            session.analysis = None;
+        }
+        for kind in [Kind::MirrorView, Kind::Glare] {
+            if ui
+                .selectable_label(current == Some(kind), kind.name())
+                .clicked()
+                && current != Some(kind)
+            {
+                match Settings::first(session.scene(), kind) {
+                    Some(settings) => session.analysis = Some(Analysis::new(settings)),
+                    None => {
+                        state.message = Some((
+                            true,
+                            format!(
+                                "{}: this scene has no {}",
+                                kind.name(),
+                                match kind {
+                                    Kind::MirrorView => "mirror",
+                                    Kind::Glare => "mirror or glass with a source to reflect",
+                                }
+                            ),
+                        ))
+                    }
+                }
+            }
+        }
+    });
+    if session.analysis.is_none() {
+        ui.small(
+            "mirror-view: the ground seen in a mirror, drawn on the ground; glare: where a \
+             source is seen reflected in a surface, drawn on it. Both follow every move.",
+        );
+        return;
+    }
+    let scene = session.scene();
+    let names: Vec<String> = scene.meshes.iter().map(|m| m.name.clone()).collect();
+    let camera_eye = scene.camera.eye;
+    let view_eye = session.camera.camera().eye;
+    let settings = &session.analysis.as_ref().expect("checked above").settings;
+    let objects = Settings::objects(scene, settings.kind);
+    let sources = Settings::sources(scene);
+    let mirror_side = {
+        let centre = scene.meshes[settings.object].bounds().center();
+        specula_analyze::frame::VehicleFrame::new(&scene.camera, None)
+            .map(|f| (f, (centre - settings.eye).dot(f.right).signum()))
+            .ok()
+    };
+    let analysis = session.analysis.as_mut().expect("checked above");
+    let mut edited = analysis.settings.clone();
+    what_section(ui, &mut edited, &names, &objects, &sources);
+    eye_section(ui, &mut edited, camera_eye, view_eye);
+    if edited.kind == Kind::MirrorView {
+        ground_section(ui, &mut edited, mirror_side);
+    }
+    if edited != analysis.settings {
+        analysis.settings = edited;
+    }
+    ui.separator();
+    figures_section(ui, analysis);
+}
+
+fn what_section(
+    ui: &mut egui::Ui,
+    settings: &mut Settings,
+    names: &[String],
+    objects: &[usize],
+    sources: &[usize],
+) {
+    let role = match settings.kind {
+        Kind::MirrorView => "mirror",
+        Kind::Glare => "surface",
+    };
+    egui::Grid::new("analysed").num_columns(2).show(ui, |ui| {
+        ui.label(role);
+        egui::ComboBox::from_id_salt("analysis object")
+            .selected_text(&names[settings.object])
+            .show_ui(ui, |ui| {
+                for &m in objects {
+                    ui.selectable_value(&mut settings.object, m, &names[m]);
+                }
+            });
+        ui.end_row();
+        if let Some(source) = &mut settings.source {
+            ui.label("source");
+            egui::ComboBox::from_id_salt("analysis source")
+                .selected_text(&names[*source])
+                .show_ui(ui, |ui| {
+                    for &m in sources {
+                        ui.selectable_value(source, m, &names[m]);
+                    }
+                });
+            ui.end_row();
+            ui.label("threshold");
+            ui.add(
+                egui::DragValue::new(&mut settings.threshold)
+                    .range(1e-6..=1.0)
+                    .speed(1e-4),
+            )
+            .on_hover_text("relative luminance above which a pixel counts as glare");
+            ui.end_row();
+        }
+    });
+}
+
+fn eye_section(ui: &mut egui::Ui, settings: &mut Settings, camera_eye: Vec3, view_eye: Vec3) {
+    ui.horizontal(|ui| {
+        ui.label("eye");
+        for (value, name) in [
+            (&mut settings.eye.x, "x"),
+            (&mut settings.eye.y, "y"),
+            (&mut settings.eye.z, "z"),
+        ] {
+            ui.add(
+                egui::DragValue::new(value)
+                    .speed(0.002)
+                    .prefix(format!("{name} ")),
+            )
+            .on_hover_text("the centre eye point, world metres: drag to move it");
+        }
+    });
+    ui.horizontal(|ui| {
+        if ui
+            .button("the view's eye")
+            .on_hover_text("put the centre eye point where the view's camera is")
+            .clicked()
+        {
+            settings.eye = view_eye;
+        }
+        if ui
+            .button("the scene's eye")
+            .on_hover_text("put it back at the scene camera's eye")
+            .clicked()
+        {
+            settings.eye = camera_eye;
+        }
+    });
+    let mut choice = match settings.eyes {
+        Eyes::Camera | Eyes::Points(_) => 0,
+        Eyes::Ocular => 1,
+        Eyes::Eyebox { .. } => 2,
+    };
+    ui.horizontal(|ui| {
+        ui.label("eye points");
+        ui.selectable_value(&mut choice, 0, "centre");
+        ui.selectable_value(&mut choice, 1, "ocular (R46)")
+            .on_hover_text("two points 65 mm apart across the vehicle");
+        ui.selectable_value(&mut choice, 2, "eyebox");
+    });
+    settings.eyes = match (choice, &settings.eyes) {
+        (0, _) => Eyes::Camera,
+        (1, _) => Eyes::Ocular,
+        (_, Eyes::Eyebox { .. }) => settings.eyes.clone(),
+        _ => Eyes::Eyebox {
+            width: 0.3,
+            height: 0.15,
+            columns: 5,
+            rows: 3,
+        },
+    };
+    if let Eyes::Eyebox {
+        width,
+        height,
+        columns,
+        rows,
+    } = &mut settings.eyes
+    {
+        ui.horizontal(|ui| {
+            ui.add(
+                egui::DragValue::new(width)
+                    .range(0.0..=2.0)
+                    .speed(0.005)
+                    .suffix(" m"),
+            );
+            ui.label("×");
+            ui.add(
+                egui::DragValue::new(height)
+                    .range(0.0..=2.0)
+                    .speed(0.005)
+                    .suffix(" m"),
+            );
+            ui.add(egui::DragValue::new(columns).range(1..=15));
+            ui.label("×");
+            ui.add(egui::DragValue::new(rows).range(1..=15));
+        })
+        .response
+        .on_hover_text("width × height in the vehicle frame, columns × rows of eye points");
+    }
+}
+
+fn ground_section(
+    ui: &mut egui::Ui,
+    settings: &mut Settings,
+    mirror_side: Option<(specula_analyze::frame::VehicleFrame, f32)>,
+) {
+    egui::Grid::new("ground").num_columns(2).show(ui, |ui| {
+        ui.label("ground y");
+        ui.add(
+            egui::DragValue::new(&mut settings.ground_y)
+                .speed(0.01)
+                .suffix(" m"),
+        );
+        ui.end_row();
+        ui.label("range");
+        ui.add(
+            egui::DragValue::new(&mut settings.range_m)
+                .range(0.1..=10_000.0)
+                .speed(0.5)
+                .suffix(" m"),
+        );
+        ui.end_row();
+        ui.label("tolerance");
+        ui.add(
+            egui::DragValue::new(&mut settings.tolerance)
+                .range(1e-4..=0.5)
+                .speed(1e-3),
+        )
+        .on_hover_text("refinement stops when the figures change by less than this share");
+        ui.end_row();
+    });
+    let mut has_region = settings.region.is_some();
+    ui.checkbox(&mut has_region, "required region")
+        .on_hover_text("a rectangle on the ground, x and z bounds in metres");
+    match (has_region, settings.region) {
+        (false, _) => settings.region = None,
+        (true, None) => settings.region = default_region(settings.eye, mirror_side),
+        (true, Some(mut region)) => {
+            ui.horizontal(|ui| {
+                ui.label("x");
+                ui.add(egui::DragValue::new(&mut region.x0).speed(0.05));
+                ui.add(egui::DragValue::new(&mut region.x1).speed(0.05));
+                ui.label("z");
+                ui.add(egui::DragValue::new(&mut region.z0).speed(0.05));
+                ui.add(egui::DragValue::new(&mut region.z1).speed(0.05));
+            });
+            // A region dragged flat keeps its last area.
+            if let Ok(region) = Region::new(region.x0, region.z0, region.x1, region.z1) {
+                settings.region = Some(region);
+            }
+        }
+    }
+}
+
+/// A first region to edit: 4 m wide from 1 m beside the eye on the mirror's side, from 4 m to
+/// 20 m behind it (the shape of R46's field of vision for a main exterior mirror), as x and z
+/// bounds.
+fn default_region(
+    eye: Vec3,
+    mirror_side: Option<(specula_analyze::frame::VehicleFrame, f32)>,
+) -> Option<Region> {
+    let (frame, side) = mirror_side?;
+    let corner =
+        |lateral: f32, behind: f32| eye + frame.right * side * lateral - frame.forward * behind;
+    let (a, b) = (corner(1.0, 4.0), corner(5.0, 20.0));
+    let (c, d) = (corner(1.0, 20.0), corner(5.0, 4.0));
+    let xs = [a.x, b.x, c.x, d.x];
+    let zs = [a.z, b.z, c.z, d.z];
+    let min = |v: [f32; 4]| v.into_iter().fold(f32::INFINITY, f32::min);
+    let max = |v: [f32; 4]| v.into_iter().fold(f32::NEG_INFINITY, f32::max);
+    Region::new(min(xs), min(zs), max(xs), max(zs)).ok()
+}
+
+fn figures_section(ui: &mut egui::Ui, analysis: &mut Analysis) {
+    if let Some(error) = &analysis.error {
+        ui.label(RichText::new(error).color(Color32::LIGHT_RED));
+        return;
+    }
+    let Some(outcome) = analysis.outcome() else {
+        ui.small("computing…");
+        return;
+    };
+    let progress = if analysis.busy() {
+        " (updating…)"
+    } else {
+        ""
+    };
+    ui.small(format!(
+        "centre eye point {:.0} ms; {} eye point{} {:.0} ms{progress}",
+        outcome.centre_milliseconds,
+        outcome.eyes.len(),
+        if outcome.eyes.len() == 1 { "" } else { "s" },
+        outcome.milliseconds,
+    ));
+    if !outcome.complete {
+        ui.small("the centre eye point's result; every eye point's follows");
+    }
+    let mut select = None;
+    match &outcome.result {
+        Analysed::MirrorView { view, .. } => {
+            let f = &view.report.figures;
+            egui::Grid::new("mirror figures")
+                .num_columns(2)
+                .show(ui, |ui| {
+                    let mut row = |name: &str, value: String| {
+                        ui.label(name);
+                        ui.label(value);
+                        ui.end_row();
+                    };
+                    row("horizontal", format!("{:.2}°", f.horizontal_deg));
+                    row("vertical", format!("{:.2}°", f.vertical_deg));
+                    row("solid angle", format!("{:.4} sr", f.solid_angle_sr));
+                    row(
+                        "ground",
+                        format!(
+                            "{:.2} m² within {} m",
+                            f.ground_area_m2, view.report.range_m
+                        ),
+                    );
+                    if let (Some(any), Some(blind)) = (f.region_seen_by_any, f.blind_area_m2) {
+                        row(
+                            "region seen",
+                            format!("{:.1} % by any eye point", any * 100.0),
+                        );
+                        if let Some(all) = f.region_seen_by_all {
+                            row("", format!("{:.1} % by every one", all * 100.0));
+                        }
+                        row("blind", format!("{blind:.2} m²"));
+                    }
+                    let unconverged = view.report.eyes.iter().filter(|e| !e.converged).count();
+                    if unconverged > 0 {
+                        row(
+                            "not converged",
+                            format!("{unconverged} eye point(s): raise the tolerance"),
+                        );
+                    }
+                });
+            ui.small(
+                "on the ground: cyan seen (stronger: by every eye point); in the region green \
+                 seen, red blind",
+            );
+        }
+        Analysed::Glare(g) => {
+            let r = &g.report;
+            let shown = analysis.glare_eye().min(r.eyes.len() - 1);
+            ui.label(match r.worst_eye {
+                Some(k) => format!(
+                    "glare from {:.0} % of the eye points; worst: eye point {}",
+                    r.share_with_glare * 100.0,
+                    k + 1
+                ),
+                None => format!(
+                    "no glare: no eye point sees '{}' in '{}'",
+                    r.source, r.surface
+                ),
+            });
+            let e = &r.eyes[shown];
+            ui.small(format!(
+                "eye point {} shown: relative luminance {:.4}, veiling ratio {}, {:.3e} sr",
+                shown + 1,
+                e.max_relative_luminance,
+                specula_analyze::glare::veiling_text(e.max_veiling_ratio),
+                e.solid_angle_sr
+            ));
+            if r.eyes.len() > 1 && outcome.complete {
+                select = eyebox_map(ui, analysis, g, shown);
+            }
+            ui.small(format!(
+                "on the surface: the glare's relative luminance, log scale from {} (blue) to 1 \
+                 (yellow)",
+                analysis.settings.threshold
+            ));
+        }
+    }
+    if let Some(k) = select {
+        analysis.selected_eye = Some(k);
+    }
+}
+
+/// The eye points as cells seen from the driver's seat (right to the right, up up), each
+/// coloured by its largest relative luminance (grey: no glare); the worst outlined red, the one
+/// shown white. Returns the cell clicked.
+fn eyebox_map(
+    ui: &mut egui::Ui,
+    analysis: &Analysis,
+    glare: &specula_analyze::glare::Glare,
+    shown: usize,
+) -> Option<usize> {
+    let count = glare.report.eyes.len();
+    let (columns, rows) = match analysis.settings.eyes {
+        Eyes::Eyebox { columns, rows, .. } if (columns * rows) as usize == count => {
+            (columns as usize, rows as usize)
+        }
+        _ => (count, 1),
+    };
+    let cell = (240.0 / columns as f32).min(24.0);
+    let (rect, response) = ui.allocate_exact_size(
+        egui::vec2(cell * columns as f32, cell * rows as f32),
+        egui::Sense::click(),
+    );
+    let painter = ui.painter_at(rect);
+    let threshold = analysis.settings.threshold;
+    let cell_rect = |k: usize| {
+        let (column, row) = (k % columns, k / columns);
+        // Row 0 is the lowest.
+        let min =
+            rect.left_top() + egui::vec2(column as f32 * cell, (rows - 1 - row) as f32 * cell);
+        egui::Rect::from_min_size(min, egui::vec2(cell, cell)).shrink(1.0)
+    };
+    for (k, e) in glare.report.eyes.iter().enumerate() {
+        let colour = if e.glare {
+            let t = (e.max_relative_luminance.log10() - threshold.log10()) / -threshold.log10();
+            let [r, g, b] = specula_analyze::plot::scale_colour(t);
+            Color32::from_rgb(r, g, b)
+        } else {
+            Color32::from_gray(90)
+        };
+        painter.rect_filled(cell_rect(k), 1.0, colour);
+        let outline = if k == shown {
+            Some(Color32::WHITE)
+        } else if glare.report.worst_eye == Some(k) {
+            Some(Color32::RED)
+        } else {
+            None
+        };
+        if let Some(outline) = outline {
+            painter.rect_stroke(
+                cell_rect(k),
+                1.0,
+                egui::Stroke::new(2.0, outline),
+                egui::StrokeKind::Inside,
+            );
+        }
+    }
+    let clicked = response
+        .clicked()
+        .then(|| response.interact_pointer_pos())
+        .flatten()?;
+    (0..count).find(|&k| cell_rect(k).expand(1.0).contains(clicked))
+}
