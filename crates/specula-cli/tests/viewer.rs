@@ -2,7 +2,8 @@
 //! object through the update path equal `specula render` of a scene file with the object at the
 //! moved pose (byte for byte; c3rc to within 2 pixels, see `bounds`), for pvrr, envmap and
 //! distance-maps on door-mirror, c3rc on mirror-teapot-bunny and image-space on glass-dragon;
-//! bad scripts fail naming the step.
+//! the analysis panel's figures are `specula analyze`'s and its overlay follows a move; bad
+//! scripts fail naming the step.
 //!
 //! Where `xvfb-run` is missing the tests fail, unless the runner opts out with
 //! `SPECULA_ALLOW_SKIP=xvfb`.
@@ -249,6 +250,21 @@ fn bad_script_steps_fail_naming_the_step() {
             "wing",
         ),
         ("[[step]]\nparam = \"zoom=2\"\n", "step 1", "zoom"),
+        (
+            "[[step]]\nanalysis = { kind = \"mirror-view\", object = \"wing mirror\" }\n",
+            "step 1",
+            "the scene's objects are: door mirror",
+        ),
+        (
+            "[[step]]\nanalysis = { kind = \"glare\", object = \"door mirror\" }\n",
+            "step 1",
+            "glare needs a source",
+        ),
+        (
+            "[[step]]\ncamera = \"analysis\"\n",
+            "step 1",
+            "no analysis is on",
+        ),
     ];
     for (i, (text, step, what)) in cases.iter().enumerate() {
         let path = dir.path().join(format!("bad{i}.toml"));
@@ -264,4 +280,149 @@ fn bad_script_steps_fail_naming_the_step() {
             "{text:?}: {stderr} should name {step} and {what}"
         );
     }
+}
+
+/// The share of pixels near `colour` (within 40 in every 8-bit channel) in `shot` that are not
+/// near it in `plain`: what an overlay of that colour covers.
+fn drawn_over(plain: &Path, shot: &Path, colour: [u8; 3]) -> f64 {
+    let (plain, shot) = (
+        image::open(plain).unwrap().to_rgb8(),
+        image::open(shot).unwrap().to_rgb8(),
+    );
+    let near = |p: &image::Rgb<u8>| (0..3).all(|c| p.0[c].abs_diff(colour[c]) <= 40);
+    let count = plain
+        .pixels()
+        .zip(shot.pixels())
+        .filter(|(a, b)| !near(a) && near(b))
+        .count();
+    count as f64 / (shot.width() * shot.height()) as f64
+}
+
+#[test]
+fn the_analysis_panel_shows_the_command_s_figures_and_its_overlay_follows_a_turned_mirror() {
+    let test =
+        "the_analysis_panel_shows_the_command_s_figures_and_its_overlay_follows_a_turned_mirror";
+    let Some(mut view) = viewer(test) else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let script = dir.path().join("analysis.toml");
+    let shot = |name: &str| dir.path().join(name).display().to_string();
+    std::fs::write(
+        &script,
+        format!(
+            r#"
+[[step]]
+method = "reference"
+[[step]]
+analysis = {{ kind = "mirror-view", object = "door mirror", eyes = "ocular", region = [1, 2, 5, 20] }}
+[[step]]
+camera = "analysis"
+[[step]]
+screenshot = "{before}"
+[[step]]
+window_screenshot = "{window}"
+[[step]]
+rotate = {{ object = "door mirror", axis = [0, 1, 0], degrees = 6 }}
+[[step]]
+screenshot = "{after}"
+[[step]]
+analysis = {{ kind = "off" }}
+[[step]]
+screenshot = "{plain}"
+"#,
+            plain = shot("plain.png"),
+            before = shot("before.png"),
+            after = shot("after.png"),
+            window = shot("window.png"),
+        ),
+    )
+    .unwrap();
+    view.args(["door-mirror", "--size", "320x200", "--script"])
+        .arg(&script);
+    let log = run_ok(view);
+
+    // The command, with the panel's tolerances, gives the figures the panel printed.
+    let json = dir.path().join("mirror-view.json");
+    let out = specula()
+        .args([
+            "analyze",
+            "mirror-view",
+            "door-mirror",
+            "--mirror",
+            "door mirror",
+            "--ocular",
+            "--region",
+            "1,2,5,20",
+            "--tolerance",
+            "0.02",
+            "--tolerance-deg",
+            "0.1",
+            "--json",
+        ])
+        .arg(&json)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let figure = |name: &str| report[name].as_f64().unwrap();
+    let expected = format!(
+        "horizontal {:.2}°, vertical {:.2}°, {:.4} sr, ground {:.2} m², region seen by any {:.1} %, by all {:.1} %, blind {:.2} m²",
+        figure("horizontal_deg"),
+        figure("vertical_deg"),
+        figure("solid_angle_sr"),
+        figure("ground_area_m2"),
+        figure("region_seen_by_any") * 100.0,
+        figure("region_seen_by_all") * 100.0,
+        figure("blind_area_m2"),
+    );
+    assert!(
+        log.contains(&format!("step 2: mirror-view of 'door mirror': {expected}")),
+        "the panel's figures should be the command's: {expected}\n{log}"
+    );
+    let after_line = log
+        .lines()
+        .find(|l| l.starts_with("step 7: mirror-view"))
+        .unwrap_or_else(|| panic!("the turned mirror's figures: {log}"));
+    assert!(
+        !after_line.contains(&expected),
+        "turning the mirror changes the figures"
+    );
+
+    // The overlay: the blind part (red) and the seen part of the region (green) are drawn over
+    // the plain view, and turning the mirror moves them.
+    let (plain, before, after) = (
+        dir.path().join("plain.png"),
+        dir.path().join("before.png"),
+        dir.path().join("after.png"),
+    );
+    let (red, green) = ([187, 96, 93], [67, 150, 66]);
+    let (blind, seen) = (
+        drawn_over(&plain, &before, red),
+        drawn_over(&plain, &before, green),
+    );
+    eprintln!("the overlay covers {blind:.4} of the view in red, {seen:.4} in green");
+    assert!(blind > 0.02 && seen > 0.02, "{blind}, {seen}");
+    // The window as shown: the view and its overlay under the panels.
+    let window = image::open(dir.path().join("window.png"))
+        .unwrap()
+        .to_rgb8();
+    assert_eq!(window.dimensions(), (320, 200));
+    let differs = difference(&before, &dir.path().join("window.png"));
+    assert!(
+        differs.differing_pixels > 1000,
+        "the panels: {} pixels",
+        differs.differing_pixels
+    );
+    let moved = difference(&before, &after);
+    assert!(
+        moved.differing_pixels > 500,
+        "{} pixels changed",
+        moved.differing_pixels
+    );
 }

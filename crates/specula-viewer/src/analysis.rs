@@ -306,7 +306,7 @@ pub struct Analysis {
     pub error: Option<String>,
     /// Bumped whenever the shown outcome changes: the overlay is drawn again.
     pub revision: u64,
-    /// The glare eye point the overlay shows (None: the worst, else the first).
+    /// The glare eye point the overlay shows (None: the one nearest the centre eye point).
     pub selected_eye: Option<usize>,
 }
 
@@ -463,14 +463,52 @@ impl Analysis {
         });
     }
 
-    /// The glare eye point the overlay shows: the selected one, else the worst, else the first.
+    /// The glare eye point the overlay shows: the selected one, else the one nearest the
+    /// centre eye point (the view's eye, as the scene opens).
     pub fn glare_eye(&self) -> usize {
         if let Some(k) = self.selected_eye {
             return k;
         }
-        match self.shown.as_ref().map(|o| &o.result) {
-            Some(Analysed::Glare(g)) => g.report.worst_eye.unwrap_or(0),
-            _ => 0,
+        let Some(outcome) = &self.shown else {
+            return 0;
+        };
+        (0..outcome.eyes.len())
+            .min_by(|a, b| {
+                let distance = |k: usize| outcome.eyes[k].distance(self.settings.eye);
+                distance(*a).total_cmp(&distance(*b))
+            })
+            .unwrap_or(0)
+    }
+
+    /// A camera that shows the analysis's result whole: for a mirror view the required region
+    /// (else the ground seen) from above, 60° down, from the eye's side; for glare the shown
+    /// eye point's own camera (the overlay is then exactly its glare image).
+    pub fn overview(&self, fov_y_deg: f32) -> Option<Camera> {
+        let outcome = self.shown.as_ref()?;
+        match &outcome.result {
+            Analysed::MirrorView { view, ground } => {
+                let (min, max) = match view.report.region {
+                    Some(r) => (Vec2::new(r.x0, r.z0), Vec2::new(r.x1, r.z1)),
+                    None => (ground.min, ground.max),
+                };
+                let centre = (min + max) * 0.5;
+                let target = Vec3::new(centre.x, self.settings.ground_y, centre.y);
+                let towards_eye = Vec2::new(self.settings.eye.x, self.settings.eye.z) - centre;
+                let side = towards_eye.try_normalize().unwrap_or(Vec2::Y);
+                let distance = 0.6 * (max - min).length() / (fov_y_deg.to_radians() * 0.5).tan();
+                let dir = Vec3::new(side.x * 0.5, 0.866, side.y * 0.5);
+                Some(Camera {
+                    eye: target + dir * distance,
+                    target,
+                    up: Vec3::Y,
+                    fov_y_deg,
+                    aspect: None,
+                })
+            }
+            Analysed::Glare(g) => {
+                let k = self.glare_eye().min(g.images.len() - 1);
+                Some(g.images[k].camera.clone())
+            }
         }
     }
 

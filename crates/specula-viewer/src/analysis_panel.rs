@@ -11,6 +11,7 @@ use crate::analysis::{Analysed, Analysis, Kind, Settings};
 use crate::app::UiState;
 use crate::session::Session;
 
+/// The main panel's section: the kind (off, mirror view, glare).
 pub fn show(ui: &mut egui::Ui, session: &mut Session, state: &mut UiState) {
     let current = session.analysis.as_ref().map(|a| a.settings.kind);
     ui.horizontal(|ui| {
@@ -42,13 +43,29 @@ pub fn show(ui: &mut egui::Ui, session: &mut Session, state: &mut UiState) {
             }
         }
     });
+    ui.small(match current {
+        None => {
+            "mirror-view: the ground seen in a mirror, drawn on the ground; glare: where a source \
+             is seen reflected in a surface, drawn on it. Both follow every move."
+        }
+        Some(_) => "its settings and figures are in the analysis window",
+    });
+}
+
+/// The analysis window (top right, while an analysis is on): what is analysed, the eye
+/// points, the figures as they arrive, the glare's eye point map, and a button to the view
+/// that shows the result whole.
+pub fn window(ctx: &egui::Context, session: &mut Session, state: &mut UiState) {
     if session.analysis.is_none() {
-        ui.small(
-            "mirror-view: the ground seen in a mirror, drawn on the ground; glare: where a \
-             source is seen reflected in a surface, drawn on it. Both follow every move.",
-        );
         return;
     }
+    egui::Window::new("analysis")
+        .default_width(300.0)
+        .anchor(egui::Align2::RIGHT_TOP, egui::vec2(-8.0, 8.0))
+        .show(ctx, |ui| contents(ui, session, state));
+}
+
+fn contents(ui: &mut egui::Ui, session: &mut Session, state: &mut UiState) {
     let scene = session.scene();
     let names: Vec<String> = scene.meshes.iter().map(|m| m.name.clone()).collect();
     let camera_eye = scene.camera.eye;
@@ -74,6 +91,22 @@ pub fn show(ui: &mut egui::Ui, session: &mut Session, state: &mut UiState) {
     }
     ui.separator();
     figures_section(ui, analysis);
+    let (label, hover) = match analysis.settings.kind {
+        Kind::MirrorView => (
+            "look at the ground",
+            "the view from above the required region (else the ground seen)",
+        ),
+        Kind::Glare => (
+            "look from the eye point",
+            "the view from the eye point shown, aimed at the surface",
+        ),
+    };
+    if ui.button(label).on_hover_text(hover).clicked() {
+        if let Some(camera) = analysis.overview(session.camera.fov_y_deg) {
+            session.camera = crate::orbit::OrbitCamera::from_camera(&camera);
+            state.dirty = true;
+        }
+    }
 }
 
 fn what_section(
@@ -369,6 +402,10 @@ fn figures_section(ui: &mut egui::Ui, analysis: &mut Analysis) {
             ));
             if r.eyes.len() > 1 && outcome.complete {
                 select = eyebox_map(ui, analysis, g, shown);
+                ui.small(
+                    "eye points as seen from the seat, coloured by the glare's solid angle \
+                     (grey: none); red: the worst, white: shown. Click one to show it.",
+                );
             }
             ui.small(format!(
                 "on the surface: the glare's relative luminance, log scale from {} (blue) to 1 \
@@ -383,8 +420,9 @@ fn figures_section(ui: &mut egui::Ui, analysis: &mut Analysis) {
 }
 
 /// The eye points as cells seen from the driver's seat (right to the right, up up), each
-/// coloured by its largest relative luminance (grey: no glare); the worst outlined red, the one
-/// shown white. Returns the cell clicked.
+/// coloured by the glare's solid angle, as the report's map (dark blue: little of the view,
+/// yellow: the most of any eye point; grey: no glare); the worst outlined red, the one shown
+/// white. Returns the cell clicked.
 fn eyebox_map(
     ui: &mut egui::Ui,
     analysis: &Analysis,
@@ -404,7 +442,6 @@ fn eyebox_map(
         egui::Sense::click(),
     );
     let painter = ui.painter_at(rect);
-    let threshold = analysis.settings.threshold;
     let cell_rect = |k: usize| {
         let (column, row) = (k % columns, k / columns);
         // Row 0 is the lowest.
@@ -412,10 +449,15 @@ fn eyebox_map(
             rect.left_top() + egui::vec2(column as f32 * cell, (rows - 1 - row) as f32 * cell);
         egui::Rect::from_min_size(min, egui::vec2(cell, cell)).shrink(1.0)
     };
+    let widest = glare
+        .report
+        .eyes
+        .iter()
+        .map(|e| e.solid_angle_sr)
+        .fold(0.0, f64::max);
     for (k, e) in glare.report.eyes.iter().enumerate() {
-        let colour = if e.glare {
-            let t = (e.max_relative_luminance.log10() - threshold.log10()) / -threshold.log10();
-            let [r, g, b] = specula_analyze::plot::scale_colour(t);
+        let colour = if e.glare && widest > 0.0 {
+            let [r, g, b] = specula_analyze::plot::scale_colour(e.solid_angle_sr / widest);
             Color32::from_rgb(r, g, b)
         } else {
             Color32::from_gray(90)

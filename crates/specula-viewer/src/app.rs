@@ -9,6 +9,7 @@ use std::time::{Duration, Instant};
 use glam::Vec3;
 use specula_gpu::GpuContext;
 use specula_methods::{Frame, Pixels};
+use specula_scene::Camera;
 use specula_trace::Image;
 use winit::application::ApplicationHandler;
 use winit::dpi::PhysicalSize;
@@ -28,7 +29,7 @@ const ORBIT_DEG_PER_PIXEL: f32 = 0.3;
 /// reduced resolution through a series of key presses.
 const INTERACTION_LINGER: Duration = Duration::from_millis(200);
 /// How often the window looks for the analysis's news while it computes.
-const ANALYSIS_POLL: std::time::Duration = std::time::Duration::from_millis(30);
+const ANALYSIS_POLL: Duration = Duration::from_millis(30);
 
 /// Frames kept for the frame-time graph.
 const GRAPH_FRAMES: usize = 180;
@@ -127,6 +128,10 @@ struct WindowState {
     egui_repaint: bool,
     /// The analysis's overlay as drawn last, and what it was drawn for.
     overlay: Option<(OverlayKey, egui::TextureHandle)>,
+    /// Save the next frame, as the window shows it, here.
+    capture: Option<PathBuf>,
+    /// Why the last window screenshot could not be saved.
+    capture_failure: Option<String>,
 }
 
 /// What an overlay depends on: the analysis's outcome and chosen eye point, the scene's
@@ -274,6 +279,8 @@ impl App {
             error_stale: true,
             egui_repaint: false,
             overlay: None,
+            capture: None,
+            capture_failure: None,
         });
         Ok(())
     }
@@ -686,7 +693,32 @@ fn advance_script(state: &mut WindowState, script: &mut ScriptRun) -> Result<(),
                     );
                 }
             }
+            Step::WindowScreenshot(path) => {
+                // This frame is drawn, and kept, before any later step runs.
+                state.capture = Some(path);
+                script.frames_left = 1;
+                script.drag_step = None;
+            }
             Step::Analysis(None) => state.session.analysis = None,
+            Step::Camera { eye, target } => {
+                state.session.camera = crate::orbit::OrbitCamera::from_camera(&Camera {
+                    eye,
+                    target,
+                    up: Vec3::Y,
+                    fov_y_deg: state.session.camera.fov_y_deg,
+                    aspect: None,
+                })
+            }
+            Step::AnalysisCamera => {
+                let fov = state.session.camera.fov_y_deg;
+                let camera = state
+                    .session
+                    .analysis
+                    .as_ref()
+                    .and_then(|a| a.overview(fov))
+                    .ok_or_else(|| at(&"camera = \"analysis\": no analysis is on"))?;
+                state.session.camera = crate::orbit::OrbitCamera::from_camera(&camera);
+            }
             Step::Analysis(Some(request)) => {
                 let settings = request
                     .settings(state.session.scene())
@@ -779,6 +811,17 @@ fn redraw(state: &mut WindowState, mut script: Option<&mut ScriptRun>) -> Result
     let egui = run_egui(state, gpu, &mut encoder, (width, height));
     if !present(state, gpu, encoder, egui, (width, height), split) {
         return Ok(());
+    }
+    if let Some(failure) = state.capture_failure.take() {
+        match &script {
+            Some(script) => {
+                return Err(ViewerError::Step {
+                    step: script.next,
+                    message: failure,
+                })
+            }
+            None => state.ui.message = Some((true, failure)),
+        }
     }
     if let Some(script) = script {
         count_script_frame(state, script);
@@ -1096,14 +1139,35 @@ fn present(
     let target = surface_texture
         .texture
         .create_view(&wgpu::TextureViewDescriptor::default());
-    state
-        .presenter
-        .draw(gpu, &mut encoder, &target, (width, height), split);
-    {
+    // A window screenshot draws the same frame once more, into a texture it can read back.
+    let capture = state.capture.take().map(|path| {
+        let texture = gpu.create_texture(&wgpu::TextureDescriptor {
+            label: Some("window screenshot"),
+            size: wgpu::Extent3d {
+                width,
+                height,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: state.config.format,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        (path, texture)
+    });
+    let capture_view = capture
+        .as_ref()
+        .map(|(_, t)| t.create_view(&wgpu::TextureViewDescriptor::default()));
+    for target in std::iter::once(&target).chain(capture_view.as_ref()) {
+        state
+            .presenter
+            .draw(gpu, &mut encoder, target, (width, height), split);
         let pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("egui"),
             color_attachments: &[specula_gpu::util::color_attachment(
-                &target,
+                target,
                 wgpu::LoadOp::Load,
             )],
             ..Default::default()
@@ -1121,7 +1185,37 @@ fn present(
     for id in egui.textures_delta.free.drain() {
         state.egui_renderer.free_texture(&id);
     }
+    if let Some((path, texture)) = capture {
+        let saved = save_texture(gpu, &texture, &path);
+        if saved.is_ok() {
+            eprintln!("saved the window to {}", path.display());
+        }
+        state.capture_failure = saved.err();
+    }
     true
+}
+
+/// Saves an 8-bit RGBA or BGRA texture (sRGB-encoded or not: the bytes are the window's) as PNG.
+fn save_texture(
+    gpu: &GpuContext,
+    texture: &wgpu::Texture,
+    path: &std::path::Path,
+) -> Result<(), String> {
+    let mut bytes = gpu.read_texture(texture, 0).map_err(|e| e.to_string())?;
+    let bgra = matches!(
+        texture.format(),
+        wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Bgra8UnormSrgb
+    );
+    for texel in bytes.chunks_exact_mut(4) {
+        if bgra {
+            texel.swap(0, 2);
+        }
+        texel[3] = 255;
+    }
+    image::RgbaImage::from_raw(texture.width(), texture.height(), bytes)
+        .ok_or("the window's texture has an unexpected size")?
+        .save(path)
+        .map_err(|e| format!("{}: {e}", path.display()))
 }
 
 /// Counts a presented frame against the script's `frames` or `drag` step; the step's last

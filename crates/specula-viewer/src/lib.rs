@@ -3,8 +3,10 @@
 //! A winit window with a wgpu surface and egui panels ([`app`], [`panel`]) drives a windowless
 //! [`session::Session`]: the live scene (objects moved through the update path), an orbit
 //! camera ([`orbit`]), one instance of each registered method, and the exact method refined
-//! progressively on CPU threads as the reference. Script mode ([`script`]) runs the same loop
-//! from a TOML file of steps, for tests and repeatable captures.
+//! progressively on CPU threads as the reference. The [`analysis`] panel runs `specula
+//! analyze`'s mirror-view and glare on the live scene off the window's thread and draws them over
+//! the view. Script mode ([`script`]) runs the same loop from a TOML file of steps, for tests and
+//! repeatable captures.
 
 pub mod analysis;
 pub mod analysis_panel;

@@ -36,7 +36,7 @@ pub const KEYS: &[(&str, &str)] = &[
     ("V", "cycle views: technique, split, error"),
     (
         "P or F12",
-        "screenshot of the view (no UI) to specula-N.png",
+        "screenshot of the view (analysis overlay, no UI) to specula-N.png",
     ),
     ("Home or 0", "reset the view to the scene's camera"),
     ("C", "render continuously (for timing)"),
@@ -64,6 +64,7 @@ pub fn show(ctx: &egui::Context, session: &mut Session, ui_state: &mut UiState) 
     if !ui_state.settings.show_panel {
         return None;
     }
+    crate::analysis_panel::window(ctx, session, ui_state);
     egui::Window::new("specula")
         .default_width(260.0)
         .default_pos((8.0, 8.0))
@@ -82,6 +83,7 @@ pub fn show(ctx: &egui::Context, session: &mut Session, ui_state: &mut UiState) 
                 egui::CollapsingHeader::new("object")
                     .show(ui, |ui| object_section(ui, session, ui_state));
                 egui::CollapsingHeader::new("analysis")
+                    .default_open(true)
                     .show(ui, |ui| crate::analysis_panel::show(ui, session, ui_state));
                 egui::CollapsingHeader::new("timings")
                     .show(ui, |ui| timing_section(ui, session, ui_state));

@@ -26,7 +26,13 @@
 //! [[step]]
 //! analysis = { kind = "off" }
 //! [[step]]
+//! camera = { eye = [3, 18, -4], target = [3, -1, 10] }   # the view, world metres
+//! [[step]]
+//! camera = "analysis"                               # the analysis's overview (its panel button)
+//! [[step]]
 //! screenshot = "mirror.png"                         # the view at the window size, no UI
+//! [[step]]
+//! window_screenshot = "window.png"                  # the window as shown: panel, overlay
 //! ```
 //!
 //! An `analysis` step also takes `eye = [x, y, z]` (the centre eye point), `range`, `ground`
@@ -73,6 +79,15 @@ pub enum Step {
     View(ViewMode),
     /// Turns the analysis on (or off: None).
     Analysis(Option<Request>),
+    /// Puts the view's camera here.
+    Camera {
+        eye: Vec3,
+        target: Vec3,
+    },
+    /// Puts the view's camera at the analysis's overview.
+    AnalysisCamera,
+    /// Draws a frame and saves the window as shown (the panel, the overlay) to this file.
+    WindowScreenshot(PathBuf),
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -108,6 +123,15 @@ struct RawStep {
     screenshot: Option<PathBuf>,
     view: Option<String>,
     analysis: Option<RawAnalysis>,
+    camera: Option<toml::Value>,
+    window_screenshot: Option<PathBuf>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawCamera {
+    eye: [f32; 3],
+    target: [f32; 3],
 }
 
 #[derive(Deserialize)]
@@ -141,7 +165,8 @@ struct RawRotate {
 }
 
 const STEP_KEYS: &str =
-    "method, reference, param, orbit, translate, rotate, frames, drag, view, analysis or screenshot";
+    "method, reference, param, orbit, translate, rotate, frames, drag, view, analysis, camera, \
+     screenshot or window_screenshot";
 
 /// Reads a script; relative screenshot paths resolve against the current directory.
 pub fn load(path: &Path) -> Result<Vec<Step>, ScriptError> {
@@ -263,8 +288,33 @@ fn step(table: toml::Table) -> Result<Step, String> {
                 ViewMode::ALL.map(|m| m.name()).join(", ")
             )
         })?)
+    } else if let Some(path) = raw.window_screenshot {
+        if path.as_os_str().is_empty() {
+            return Err("window_screenshot needs a file name".into());
+        }
+        Step::WindowScreenshot(path)
     } else if let Some(a) = raw.analysis {
         Step::Analysis(analysis(a)?)
+    } else if let Some(c) = raw.camera {
+        if c.as_str() == Some("analysis") {
+            Step::AnalysisCamera
+        } else {
+            let c = RawCamera::deserialize(c).map_err(|e| {
+                format!(
+                    "camera: expected \"analysis\" or {{ eye = [x, y, z], target = [x, y, z] }}: {}",
+                    e.to_string().trim_end().replace('\n', " ")
+                )
+            })?;
+            finite(&c.eye, "camera.eye")?;
+            finite(&c.target, "camera.target")?;
+            if c.eye == c.target {
+                return Err("camera: the eye and the target are the same point".into());
+            }
+            Step::Camera {
+                eye: Vec3::from_array(c.eye),
+                target: Vec3::from_array(c.target),
+            }
+        }
     } else {
         unreachable!("a one-key table that deserialised names one of the fields")
     };
@@ -306,9 +356,11 @@ fn analysis(a: RawAnalysis) -> Result<Option<Request>, String> {
         (Some(_), Some(_)) => return Err("analysis: give eyes or eyebox, not both".into()),
         (None | Some("centre"), None) => Eyes::Camera,
         (Some("ocular"), None) => Eyes::Ocular,
-        (Some(other), None) => return Err(format!(
+        (Some(other), None) => {
+            return Err(format!(
             "analysis.eyes = \"{other}\": expected centre or ocular (or eyebox = [W, H, NX, NY])"
-        )),
+        ))
+        }
         (None, Some([width, height, columns, rows])) => {
             finite(&[width, height], "analysis.eyebox")?;
             let count = |v: f32| {
@@ -372,10 +424,22 @@ drag = [90, 0, 30]
 view = "split"
 [[step]]
 screenshot = "a.png"
+[[step]]
+analysis = { kind = "mirror-view", object = "door mirror", eyes = "ocular", region = [1, 2, 5, 20], range = 50 }
+[[step]]
+analysis = { kind = "glare", object = "cover glass", source = "side window", eyebox = [0.3, 0.15, 5, 3] }
+[[step]]
+analysis = { kind = "off" }
+[[step]]
+camera = { eye = [3, 18, -4], target = [3, -1, 10] }
+[[step]]
+camera = "analysis"
+[[step]]
+window_screenshot = "w.png"
 "#,
         )
         .unwrap();
-        assert_eq!(steps.len(), 9);
+        assert_eq!(steps.len(), 15);
         assert_eq!(steps[0], Step::Method("envmap".into()));
         assert_eq!(
             steps[4],
@@ -386,6 +450,40 @@ screenshot = "a.png"
             }
         );
         assert_eq!(steps[7], Step::View(ViewMode::Split));
+        let Step::Analysis(Some(mirror)) = &steps[9] else {
+            panic!("{:?}", steps[9])
+        };
+        assert_eq!(
+            (mirror.kind, &mirror.eyes, mirror.range_m),
+            (Kind::MirrorView, &Eyes::Ocular, Some(50.0))
+        );
+        assert_eq!(
+            mirror.region,
+            Some(Region::new(1.0, 2.0, 5.0, 20.0).unwrap())
+        );
+        let Step::Analysis(Some(glare)) = &steps[10] else {
+            panic!("{:?}", steps[10])
+        };
+        assert_eq!(glare.source.as_deref(), Some("side window"));
+        assert_eq!(
+            glare.eyes,
+            Eyes::Eyebox {
+                width: 0.3,
+                height: 0.15,
+                columns: 5,
+                rows: 3
+            }
+        );
+        assert_eq!(steps[11], Step::Analysis(None));
+        assert_eq!(
+            steps[12],
+            Step::Camera {
+                eye: Vec3::new(3.0, 18.0, -4.0),
+                target: Vec3::new(3.0, -1.0, 10.0)
+            }
+        );
+        assert_eq!(steps[13], Step::AnalysisCamera);
+        assert_eq!(steps[14], Step::WindowScreenshot("w.png".into()));
     }
 
     #[test]
@@ -420,6 +518,43 @@ screenshot = "a.png"
             ),
             ("[[step]]\ntranslate = { object = \"a\" }", "step 1", "by"),
             ("[[step]]\ndrag = [10, 0, 2.5]", "step 1", "whole number"),
+            (
+                "[[step]]\nanalysis = { kind = \"fog\", object = \"m\" }",
+                "step 1",
+                "mirror-view, glare or off",
+            ),
+            (
+                "[[step]]\nanalysis = { kind = \"glare\" }",
+                "step 1",
+                "needs object",
+            ),
+            (
+                "[[step]]\nanalysis = { kind = \"off\", object = \"m\" }",
+                "step 1",
+                "no other key",
+            ),
+            (
+                "[[step]]\nanalysis = { kind = \"mirror-view\", object = \"m\", eyes = \"ocular\", eyebox = [1, 1, 2, 2] }",
+                "step 1",
+                "not both",
+            ),
+            (
+                "[[step]]\nanalysis = { kind = \"mirror-view\", object = \"m\", eyebox = [1, 1, 2.5, 2] }",
+                "step 1",
+                "whole numbers",
+            ),
+            (
+                "[[step]]\nanalysis = { kind = \"mirror-view\", object = \"m\", region = [1, 2, 1, 5] }",
+                "step 1",
+                "no area",
+            ),
+            (
+                "[[step]]\ncamera = { eye = [1, 2, 3], target = [1, 2, 3] }",
+                "step 1",
+                "same point",
+            ),
+            ("[[step]]\ncamera = \"above\"", "step 1", "expected \"analysis\""),
+            ("[[step]]\nwindow_screenshot = \"\"", "step 1", "file name"),
             ("title = \"x\"", "s.toml", "unknown field"),
             ("", "s.toml", "no [[step]]"),
         ];
