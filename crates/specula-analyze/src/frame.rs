@@ -44,6 +44,23 @@ impl VehicleFrame {
         })
     }
 
+    /// The frame for an analysis that needs vehicle axes only to place `eyes` (glare): as
+    /// [`VehicleFrame::new`], except that a camera looking straight up or down, with no
+    /// `forward` given, is no error where the eye points need no axes (the camera's eye, given
+    /// points): world −Z is taken as forward, which then only orients the report's map.
+    pub fn for_eyes(
+        camera: &Camera,
+        forward: Option<Vec3>,
+        eyes: &Eyes,
+    ) -> Result<VehicleFrame, AnalyzeError> {
+        match VehicleFrame::new(camera, forward) {
+            Err(_) if forward.is_none() && matches!(eyes, Eyes::Camera | Eyes::Points(_)) => {
+                VehicleFrame::new(camera, Some(Vec3::NEG_Z))
+            }
+            result => result,
+        }
+    }
+
     /// `d`'s angle above the ground plane, degrees.
     pub fn elevation_deg(&self, d: Vec3) -> f64 {
         f64::from(d.normalize().dot(self.up).clamp(-1.0, 1.0))
@@ -172,6 +189,20 @@ mod tests {
         assert!(frame.right.abs_diff_eq(Vec3::X, 1e-6));
         let vertical = VehicleFrame::new(&camera(), Some(Vec3::Y)).unwrap_err();
         assert!(vertical.to_string().contains("--forward"), "{vertical}");
+    }
+
+    #[test]
+    fn a_camera_looking_straight_down_needs_a_forward_axis_only_where_the_eyes_do() {
+        let down = Camera {
+            target: camera().eye - Vec3::Y,
+            ..camera()
+        };
+        let one = VehicleFrame::for_eyes(&down, None, &Eyes::Camera).unwrap();
+        assert!(one.forward.abs_diff_eq(Vec3::NEG_Z, 1e-6));
+        let ocular = VehicleFrame::for_eyes(&down, None, &Eyes::Ocular).unwrap_err();
+        assert!(ocular.to_string().contains("--forward"), "{ocular}");
+        let given = VehicleFrame::for_eyes(&down, Some(Vec3::X), &Eyes::Ocular).unwrap();
+        assert!(given.forward.abs_diff_eq(Vec3::X, 1e-6));
     }
 
     #[test]

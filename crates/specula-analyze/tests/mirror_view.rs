@@ -484,3 +484,31 @@ fn two_eyes_see_the_union_and_the_intersection_of_their_footprints() {
     assert!((f.region_seen_by_any.unwrap() - any as f64 / cells).abs() < 3e-4);
     assert!((f.region_seen_by_all.unwrap() - all as f64 / cells).abs() < 1.1e-3);
 }
+
+#[test]
+fn a_zero_area_triangle_in_the_mirror_changes_no_figure() {
+    // Meshes built through the library (not the loaders, which drop them) may carry degenerate
+    // triangles: they cover nothing and must not turn a figure into NaN.
+    let eye = Vec3::new(0.05, 1.2, 0.0);
+    let mirror = Rectangle::tilted(Vec3::new(0.0, 1.15, -1.0), 0.3);
+    let clean = scene_with(mirror.mesh(), eye);
+    let mut mesh = mirror.mesh();
+    mesh.triangles.push([0, 0, 1]);
+    mesh.triangles.push([1, 2, 2]);
+    let degenerate = scene_with(mesh, eye);
+    let figures = |scene: &Scene| {
+        let accel = SceneAccel::new(scene);
+        let view = analyze(scene, &accel, &[eye], &options(scene, eye, None), &|_| {}).unwrap();
+        view.report.figures
+    };
+    let (a, b) = (figures(&clean), figures(&degenerate));
+    for (x, y) in [
+        (a.horizontal_deg, b.horizontal_deg),
+        (a.vertical_deg, b.vertical_deg),
+        (a.solid_angle_sr, b.solid_angle_sr),
+        (a.ground_area_m2, b.ground_area_m2),
+    ] {
+        assert!(y.is_finite(), "{b:?}");
+        assert!((x - y).abs() <= 1e-6 * x.abs(), "{a:?}\n{b:?}");
+    }
+}

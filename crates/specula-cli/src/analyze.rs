@@ -226,8 +226,9 @@ fn glare(args: GlareArgs) -> Result<()> {
     let scene = crate::load_scene(&args.scene)?;
     let surface = specula_analyze::object(&scene, "--surface", &args.surface)?;
     let source = specula_analyze::object(&scene, "--source", &args.source)?;
-    let frame = VehicleFrame::new(&scene.camera, args.eyes.forward)?;
-    let eyes = args.eyes.eyes().points(scene.camera.eye, &frame)?;
+    let eye_points = args.eyes.eyes();
+    let frame = VehicleFrame::for_eyes(&scene.camera, args.eyes.forward, &eye_points)?;
+    let eyes = eye_points.points(scene.camera.eye, &frame)?;
     let options = glare::Options {
         surface,
         source,

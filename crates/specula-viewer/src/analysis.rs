@@ -139,6 +139,14 @@ impl Settings {
         Some(Settings::new(scene, kind, object, source))
     }
 
+    /// The vehicle frame of the scene's camera (glare needs one only to place an eyebox).
+    fn frame(&self, scene: &Scene) -> Result<VehicleFrame, AnalyzeError> {
+        match self.kind {
+            Kind::MirrorView => VehicleFrame::new(&scene.camera, None),
+            Kind::Glare => VehicleFrame::for_eyes(&scene.camera, None, &self.eyes),
+        }
+    }
+
     fn mirror_options(&self, frame: VehicleFrame) -> mirror_view::Options {
         mirror_view::Options {
             mirror: self.object,
@@ -171,7 +179,7 @@ impl Settings {
     /// Checks the settings against `scene` as the command would: the object's material, the
     /// source's, the eye points, the range, the tolerances.
     pub fn check(&self, scene: &Scene) -> Result<(), AnalyzeError> {
-        let frame = VehicleFrame::new(&scene.camera, None)?;
+        let frame = self.frame(scene)?;
         self.eyes.points(self.eye, &frame)?;
         match self.kind {
             Kind::MirrorView => self.mirror_options(frame).validate(scene),
@@ -718,7 +726,7 @@ fn run(
     deliver: &dyn Fn(Outcome),
 ) -> Result<(), AnalyzeError> {
     let accel = SceneAccel::new(scene);
-    let frame = VehicleFrame::new(&scene.camera, None)?;
+    let frame = settings.frame(scene)?;
     let all = settings.eyes.points(settings.eye, &frame)?;
     let centre = vec![settings.eye];
     let only_centre = all == centre;
