@@ -9,6 +9,8 @@
 //!   ground, and the share of a required region seen, per eye point and for all together.
 //! - [`glare`]: whether, where and how brightly a source is seen reflected in a surface (a
 //!   cover glass reflecting a window over a dial), per eye point and over them.
+//! - [`lens`]: a spectacle lens's power, cylinder, prism, lateral colour and distortion as the
+//!   wearer gets them at each gaze direction, from exact rays through the lens.
 //! - [`plot`] and [`report`]: the plots (PNG, and SVG with axes and legends) and the report
 //!   folder (HTML, JSON, plots).
 //!
@@ -17,6 +19,7 @@
 
 pub mod frame;
 pub mod glare;
+pub mod lens;
 pub mod mirror_view;
 pub mod plot;
 pub mod report;

@@ -37,7 +37,7 @@ pub struct Extent {
 }
 
 impl Extent {
-    fn grow(self, by: f32) -> Extent {
+    pub(crate) fn grow(self, by: f32) -> Extent {
         let pad = (self.max - self.min) * by;
         Extent {
             min: self.min - pad,
@@ -307,7 +307,7 @@ fn fill_triangle(
     }
 }
 
-fn draw_line(png: &mut RgbImage, a: Vec2, b: Vec2, colour: Rgb<u8>) {
+pub(crate) fn draw_line(png: &mut RgbImage, a: Vec2, b: Vec2, colour: Rgb<u8>) {
     let steps = (b - a).abs().max_element().ceil().max(1.0) as u32;
     for k in 0..=steps {
         let p = a + (b - a) * (k as f32 / steps as f32);
@@ -337,7 +337,7 @@ pub fn html_escape(text: &str) -> String {
 }
 
 /// An SVG page holding `png` with a title, axes with ticks over `extent` (metres) and a legend.
-fn svg_around(
+pub(crate) fn svg_around(
     png: &RgbImage,
     title: &str,
     labels: (&str, &str),
@@ -407,7 +407,7 @@ fn svg_around(
 }
 
 /// 1, 2 or 5 times a power of ten, near `raw`.
-fn nice_step(raw: f32) -> f32 {
+pub(crate) fn nice_step(raw: f32) -> f32 {
     let power = 10f32.powf(raw.max(1e-6).log10().floor());
     let m = raw / power;
     power

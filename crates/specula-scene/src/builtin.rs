@@ -15,7 +15,7 @@ type Builder = fn() -> Result<Scene, SceneError>;
 /// (name, one-line description, constructor) of every built-in scene.
 const SCENES: &[(&str, &str, Builder)] = &[
     ("door-mirror", "free-form convex car door mirror (bicubic patch, 49 vertices) reflecting a small town with red marker balls [pvrr]", door_mirror),
-    ("spectacle-lens", "dispersive meniscus spectacle lens (-3.05 D at n = 1.61, ~1,900 triangles) 6.5 cm in front of the eye, over a colour chart [pvrr]", spectacle_lens),
+    ("spectacle-lens", "dispersive meniscus spectacle lens (back vertex power -3.02 D at n_d = 1.61; the thin-lens sum F1 + F2 is -3.05 D; ~1,900 triangles) 6.5 cm in front of the eye, over a colour chart [pvrr]", spectacle_lens),
     ("teapot-box", "mirror Utah teapot in a box room with coloured walls [distance-maps]", teapot_box),
     ("glass-dragon", "glass bunny refracting the Stanford dragon and two textured planes behind it [image-space]", glass_dragon),
     ("mirror-teapot-bunny", "mirror teapot reflecting the Stanford bunny and dragon on a checkered floor [c3rc]", mirror_teapot_bunny),

@@ -9,16 +9,16 @@ use glam::{Vec2, Vec3};
 use crate::{Mesh, SceneError};
 
 /// One tessellated vertex: position, unit normal, texture coordinate.
-struct Sample {
-    p: Vec3,
-    n: Vec3,
-    uv: Vec2,
+pub(crate) struct Sample {
+    pub p: Vec3,
+    pub n: Vec3,
+    pub uv: Vec2,
 }
 
 /// Appends a (nu+1) × (nv+1) vertex grid over the parameter square [0,1]², two triangles per
 /// cell, each wound counter-clockwise around its vertices' normals. Cells collapsed to a point
 /// (poles, apexes) give zero-area triangles, which are removed.
-fn append_grid(mesh: &mut Mesh, nu: u32, nv: u32, f: impl Fn(f32, f32) -> Sample) {
+pub(crate) fn append_grid(mesh: &mut Mesh, nu: u32, nv: u32, f: impl Fn(f32, f32) -> Sample) {
     let base = mesh.positions.len() as u32;
     for j in 0..=nv {
         for i in 0..=nu {
@@ -59,12 +59,23 @@ fn push_oriented(mesh: &mut Mesh, [a, b, c]: [u32; 3]) {
     }
 }
 
-fn finish(mut mesh: Mesh) -> Mesh {
+/// The angle of grid column `u` around an axis: the last column is the first again exactly, so
+/// that the seam's vertices coincide (sin(2π) in floating point is not 0, and a ray along the
+/// seam would slip through the crack).
+pub(crate) fn turn(u: f32) -> f32 {
+    if u >= 1.0 {
+        0.0
+    } else {
+        u * TAU
+    }
+}
+
+pub(crate) fn finish(mut mesh: Mesh) -> Mesh {
     mesh.drop_degenerate_triangles();
     mesh
 }
 
-fn empty(name: &str) -> Mesh {
+pub(crate) fn empty(name: &str) -> Mesh {
     Mesh {
         name: name.to_string(),
         ..Default::default()
@@ -75,7 +86,7 @@ fn empty(name: &str) -> Mesh {
 pub fn sphere(radius: f32, segments: u32, rings: u32) -> Mesh {
     let mut mesh = empty("sphere");
     append_grid(&mut mesh, segments.max(3), rings.max(2), |u, v| {
-        let (phi, theta) = (u * TAU, v * PI);
+        let (phi, theta) = (turn(u), v * PI);
         let n = Vec3::new(
             theta.sin() * phi.sin(),
             theta.cos(),
@@ -112,7 +123,7 @@ pub fn spherical_cap(
     let theta_max = (aperture * 0.5 / r).asin();
     let mut mesh = empty(if concave { "concave cap" } else { "convex cap" });
     append_grid(&mut mesh, segments.max(3), rings.max(1), |u, v| {
-        let (phi, theta) = (u * TAU, v * theta_max);
+        let (phi, theta) = (turn(u), v * theta_max);
         let radial = Vec3::new(phi.cos(), phi.sin(), 0.0) * theta.sin();
         let (p, n) = if concave {
             let center = Vec3::new(0.0, 0.0, r);
@@ -280,7 +291,7 @@ pub fn lens(spec: &LensSpec) -> Result<Mesh, SceneError> {
     let mut mesh = empty("lens");
     for (front, r, vertex_z) in [(true, r1, 0.0), (false, r2, t)] {
         append_grid(&mut mesh, segments, rings, |u, v| {
-            let (phi, rho) = (u * TAU, v * rim);
+            let (phi, rho) = (turn(u), v * rim);
             let p = Vec3::new(rho * phi.cos(), rho * phi.sin(), vertex_z + sag(r, rho));
             Sample {
                 p,
@@ -291,7 +302,7 @@ pub fn lens(spec: &LensSpec) -> Result<Mesh, SceneError> {
     }
     let (z_front, z_back) = (sag(r1, rim), t + sag(r2, rim));
     append_grid(&mut mesh, segments, 1, |u, v| {
-        let phi = u * TAU;
+        let phi = turn(u);
         let radial = Vec3::new(phi.cos(), phi.sin(), 0.0);
         Sample {
             p: radial * rim + Vec3::Z * (z_front + v * (z_back - z_front)),

@@ -15,6 +15,7 @@ pub mod loaders;
 pub mod material;
 pub mod mesh;
 pub mod scene;
+pub mod spectacle;
 pub mod texture;
 
 pub use camera::Camera;
@@ -23,6 +24,7 @@ pub use light::Light;
 pub use material::{Material, MaterialKind};
 pub use mesh::{Aabb, Mesh};
 pub use scene::{Background, Scene};
+pub use spectacle::Prescription;
 pub use texture::Texture;
 
 /// Loads a scene by built-in name or file path (`.toml`, `.gltf`, `.glb`, `.obj`, `.ply`, `.stl`).

@@ -49,6 +49,9 @@ pub struct Scene {
     /// their lights, so that shadowed parts are not pitch black. Default zero.
     pub ambient: Vec3,
     pub warnings: Vec<String>,
+    /// The prescription each spectacle lens made from one was made from, by object name (what
+    /// `specula analyze lens` compares the lens's powers with).
+    pub prescriptions: Vec<(String, crate::Prescription)>,
 }
 
 impl Scene {
@@ -65,6 +68,7 @@ impl Scene {
             background: Background::Color(Vec3::ZERO),
             ambient: Vec3::ZERO,
             warnings: vec![],
+            prescriptions: vec![],
         }
     }
 

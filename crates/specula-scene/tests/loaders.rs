@@ -1044,3 +1044,84 @@ fn toml_checker_and_merged_errors_name_the_path() {
         assert_mentions(&error_of(&path), parts);
     }
 }
+
+const SPECTACLES: &str = r#"
+name = "spectacles"
+[camera]
+eye = [0, 0, 0]
+target = [0, 0, -1]
+[materials.crown]
+type = "dielectric"
+ior = 1.6
+abbe = 42
+[[objects]]
+name = "right lens"
+translate = [0, 0, -0.014]
+shape = { type = "spectacle-lens", sphere = -2.0, cylinder = -1.0, axis = 30, index = 1.6, abbe = 42, center_thickness = 0.002, base_curve = 4.0, diameter = 0.05, rings = 12, segments = 48 }
+[[objects]]
+name = "left lens"
+material = "crown"
+translate = [0.065, 0, -0.014]
+shape = { type = "spectacle-lens", sphere = -2.0, index = 1.6, abbe = 42, center_thickness = 0.002, base_curve = 4.0, diameter = 0.05, rings = 12, segments = 48 }
+"#;
+
+#[test]
+fn toml_spectacle_lenses_keep_their_prescription_and_make_their_glass() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = load(write(dir.path(), "s.toml", SPECTACLES).to_str().unwrap()).unwrap();
+    assert_eq!(scene.prescriptions.len(), 2);
+    let (name, right) = &scene.prescriptions[0];
+    assert_eq!(name, "right lens");
+    assert_eq!(
+        (right.sphere, right.cylinder, right.axis_deg),
+        (-2.0, -1.0, 30.0)
+    );
+    // Made from its index and Abbe number: n_C, n_d, n_F with n_F − n_C = (n_d − 1) / V.
+    let glass = &scene.materials[scene.meshes[0].material];
+    let MaterialKind::Dielectric { ior, .. } = glass.kind else {
+        panic!("{glass:?}")
+    };
+    assert!((ior.y - 1.6).abs() < 1e-6 && ((ior.z - ior.x) - 0.6 / 42.0).abs() < 1e-6);
+    assert_eq!(
+        scene.materials[scene.meshes[1].material].name, "crown",
+        "a given material that agrees is kept"
+    );
+}
+
+#[test]
+fn toml_spectacle_lens_errors_name_the_object_and_what_is_wrong() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        (
+            SPECTACLES.replace("ior = 1.6\nabbe = 42", "ior = 1.5\nabbe = 42"),
+            vec!["objects[1].material", "'crown'", "make them agree"],
+        ),
+        (
+            SPECTACLES.replace("sphere = -2.0, index", "sphere = 8.0, index"),
+            vec!["objects[1].shape", "edge would be", "mm thick"],
+        ),
+        (
+            SPECTACLES.replace(
+                "base_curve = 4.0, diameter = 0.05, rings = 12, segments = 48 }\n[[objects]]",
+                "base_curve = 40.0, diameter = 0.05, rings = 12, segments = 48 }\n[[objects]]",
+            ),
+            vec!["objects[0].shape", "does not reach"],
+        ),
+        (
+            SPECTACLES.replace(
+                "shape = { type = \"spectacle-lens\", sphere = -2.0, cylinder",
+                "shape = { type = \"spectacle-lens\", cylinder",
+            ),
+            vec!["s.toml", "sphere"],
+        ),
+    ];
+    for (text, wanted) in cases {
+        let message = error_of(&write(dir.path(), "s.toml", text));
+        assert_mentions(&message, &wanted);
+    }
+    let other = TOML_SCENE.replacen("material = \"grey\"\n", "", 1);
+    assert_mentions(
+        &error_of(&write(dir.path(), "m.toml", other)),
+        &["material: missing", "spectacle-lens"],
+    );
+}

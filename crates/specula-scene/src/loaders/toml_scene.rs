@@ -10,7 +10,10 @@ use serde::Deserialize;
 
 use crate::generators::{self, LensSpec};
 use crate::material::{conductor_f0, ior_from_abbe};
-use crate::{Background, Camera, Light, Material, MaterialKind, Mesh, Scene, SceneError, Texture};
+use crate::{
+    Background, Camera, Light, Material, MaterialKind, Mesh, Prescription, Scene, SceneError,
+    Texture,
+};
 
 /// A colour or a grey level.
 #[derive(Deserialize, Clone, Copy, Debug)]
@@ -177,7 +180,9 @@ pub enum Scale {
 #[serde(deny_unknown_fields)]
 pub struct ObjectSpec {
     pub name: Option<String>,
-    pub material: String,
+    /// Required, except for a spectacle lens, which makes its glass from its index and Abbe
+    /// number when none is given.
+    pub material: Option<String>,
     pub translate: Option<[f32; 3]>,
     /// Euler angles in degrees, applied about X, then Y, then Z.
     pub rotate_deg: Option<[f32; 3]>,
@@ -201,6 +206,9 @@ pub struct PartSpec {
 
 fn n48() -> u32 {
     48
+}
+fn n192() -> u32 {
+    192
 }
 fn n24() -> u32 {
     24
@@ -253,6 +261,24 @@ pub enum ShapeSpec {
         #[serde(default = "n16")]
         rings: u32,
         #[serde(default = "n48")]
+        segments: u32,
+    },
+    /// A spectacle lens made from a prescription (crate::spectacle): powers in dioptres, the
+    /// axis in TABO degrees, lengths in metres, the base curve in the material's own index.
+    SpectacleLens {
+        sphere: f64,
+        #[serde(default)]
+        cylinder: f64,
+        #[serde(default)]
+        axis: f64,
+        index: f64,
+        abbe: f64,
+        center_thickness: f64,
+        base_curve: f64,
+        diameter: f64,
+        #[serde(default = "n48")]
+        rings: u32,
+        #[serde(default = "n192")]
         segments: u32,
     },
     Box {
@@ -323,6 +349,38 @@ fn placement(
     Ok(m)
 }
 
+/// A spectacle-lens shape's prescription and tessellation.
+fn prescription_of(shape: &ShapeSpec) -> Option<(Prescription, u32, u32)> {
+    match *shape {
+        ShapeSpec::SpectacleLens {
+            sphere,
+            cylinder,
+            axis,
+            index,
+            abbe,
+            center_thickness,
+            base_curve,
+            diameter,
+            rings,
+            segments,
+        } => Some((
+            Prescription {
+                sphere,
+                cylinder,
+                axis_deg: axis,
+                index,
+                abbe,
+                center_thickness,
+                base_curve,
+                diameter,
+            },
+            rings,
+            segments,
+        )),
+        _ => None,
+    }
+}
+
 fn shape_meshes(
     shape: &ShapeSpec,
     base: &Path,
@@ -384,6 +442,15 @@ fn shape_meshes(
             rings: *rings,
             segments: *segments,
         })?],
+        ShapeSpec::SpectacleLens { .. } => {
+            let (prescription, rings, segments) =
+                prescription_of(shape).expect("a spectacle lens has one");
+            vec![crate::spectacle::spectacle_lens(
+                &prescription,
+                rings,
+                segments,
+            )?]
+        }
         ShapeSpec::Box { size } => vec![generators::cuboid(Vec3::from_array(*size))],
         ShapeSpec::Plane { size, subdivisions } => {
             vec![generators::plane(Vec2::from_array(*size), *subdivisions)]
@@ -606,6 +673,41 @@ fn based_scene(
     Ok(scene)
 }
 
+/// A spectacle lens's given material must be the glass its prescription was computed for.
+fn lens_glass_agrees(material: &Material, p: &Prescription) -> Result<(), String> {
+    let wanted = p.indices();
+    match material.kind {
+        MaterialKind::Dielectric {
+            ior,
+            thin_walled: false,
+        } if (ior - wanted).abs().max_element() <= 1e-4 => Ok(()),
+        MaterialKind::Dielectric {
+            ior,
+            thin_walled: false,
+        } => Err(format!(
+            "'{}' has indices {:.4} / {:.4} / {:.4}, but the prescription's index {} and Abbe \
+             number {} give {:.4} / {:.4} / {:.4}: make them agree (e.g. type = \"dielectric\", \
+             ior = {}, abbe = {}), or leave material out and the lens makes its own",
+            material.name,
+            ior.x,
+            ior.y,
+            ior.z,
+            p.index,
+            p.abbe,
+            wanted.x,
+            wanted.y,
+            wanted.z,
+            p.index,
+            p.abbe
+        )),
+        _ => Err(format!(
+            "'{}' is not a solid dielectric: a spectacle lens is glass (leave material out and \
+             the lens makes its own)",
+            material.name
+        )),
+    }
+}
+
 fn camera_from_spec(c: &CameraSpec) -> Camera {
     Camera {
         eye: Vec3::from_array(c.eye),
@@ -668,22 +770,56 @@ fn listed_scene(shown: &str, file: &SceneFile, base: &Path) -> Result<Scene, Sce
         materials.push(m);
     }
     let mut meshes = Vec::new();
+    let mut prescriptions = Vec::new();
     for (i, object) in file.objects.iter().enumerate() {
         let path = format!("objects[{i}]");
-        let Some(&material) = material_index.get(&object.material) else {
-            let known: Vec<&str> = material_index.keys().map(String::as_str).collect();
-            return Err(SceneError::invalid(
-                shown,
-                format!(
-                    "{path}.material: unknown material '{}' (defined: {})",
-                    object.material,
-                    if known.is_empty() {
-                        "none".to_string()
-                    } else {
-                        known.join(", ")
-                    }
-                ),
-            ));
+        let prescription = prescription_of(&object.shape).map(|(p, _, _)| p);
+        let material = match (&object.material, prescription) {
+            (Some(name), _) => {
+                let Some(&material) = material_index.get(name) else {
+                    let known: Vec<&str> = material_index.keys().map(String::as_str).collect();
+                    return Err(SceneError::invalid(
+                        shown,
+                        format!(
+                            "{path}.material: unknown material '{name}' (defined: {})",
+                            if known.is_empty() {
+                                "none".to_string()
+                            } else {
+                                known.join(", ")
+                            }
+                        ),
+                    ));
+                };
+                if let Some(p) = prescription {
+                    lens_glass_agrees(&materials[material], &p)
+                        .map_err(|e| SceneError::invalid(shown, format!("{path}.material: {e}")))?;
+                }
+                material
+            }
+            (None, Some(p)) => {
+                let name = object
+                    .name
+                    .clone()
+                    .unwrap_or_else(|| "spectacle lens".into());
+                materials.push(Material::new(
+                    format!("{name} glass"),
+                    MaterialKind::Dielectric {
+                        ior: p.indices(),
+                        thin_walled: false,
+                    },
+                    Vec3::ONE,
+                ));
+                materials.len() - 1
+            }
+            (None, None) => {
+                return Err(SceneError::invalid(
+                    shown,
+                    format!(
+                        "{path}.material: missing (only a spectacle-lens shape makes its own \
+                         glass)"
+                    ),
+                ))
+            }
         };
         let world_from_object = placement(object.translate, object.rotate_deg, object.scale)
             .map_err(|e| at(path.clone(), e))?;
@@ -701,6 +837,9 @@ fn listed_scene(shown: &str, file: &SceneFile, base: &Path) -> Result<Scene, Sce
             }
             mesh.transform(world_from_object);
             mesh.material = material;
+            if let Some(p) = prescription {
+                prescriptions.push((mesh.name.clone(), p));
+            }
             meshes.push(mesh);
         }
     }
@@ -771,6 +910,7 @@ fn listed_scene(shown: &str, file: &SceneFile, base: &Path) -> Result<Scene, Sce
     scene.background = background;
     scene.ambient = file.ambient.map(Color::vec3).unwrap_or(Vec3::ZERO);
     scene.warnings = warnings;
+    scene.prescriptions = prescriptions;
     match &file.camera {
         Some(c) => scene.camera = camera_from_spec(c),
         None => scene.use_default_camera(shown),

@@ -1,0 +1,385 @@
+//! A spectacle lens made from a prescription: a spherical front surface of the given base
+//! curve and a toric back surface (minus-cylinder form), each principal meridian of the back
+//! solved with the thick-lens formula so that the lens's back vertex power is the
+//! prescription's in that meridian.
+//!
+//! **Frame** (the lens's own, before a scene places it): light travels +Z, from the object to
+//! the eye, so the wearer looks along −Z with +Y up and +X on the wearer's right. The front
+//! vertex is at the origin, the back vertex at (0, 0, `center_thickness`). An examiner facing
+//! the wearer looks along +Z and has −X on the right: a TABO axis θ (degrees anticlockwise from
+//! the examiner's right) is the meridian (−cos θ, sin θ, 0).
+//!
+//! **Powers.** The base curve is the front surface's power in the material's own index n_d:
+//! F1 = (n_d − 1) / R1. In each principal meridian the back vertex power is
+//! F_v = F1 / (1 − (t / n_d) F1) + F2, so F2 = F_v − F1 / (1 − (t / n_d) F1) and
+//! R2 = (1 − n_d) / F2 (flat where F2 = 0). The axis meridian has F_v = sphere, the meridian
+//! across it sphere + cylinder. A plus cylinder is transposed to minus form first.
+//!
+//! **Surfaces.** The back is a torus whose two principal meridians are circular arcs: along the
+//! axis meridian (u) the radius R2 of the sphere's power, across it (v) that of sphere +
+//! cylinder; it is the circle in the v-meridian swept about an axis parallel to v at distance
+//! R_u from the vertex, z(u, v) = R_u − sgn(R_u) √((R_u − z_v(v))² − u²) with z_v the v-arc's
+//! sag. Normals are the surfaces' exact normals at the vertices.
+//!
+//! **Tessellation.** `rings` rings from the centre to the rim and `segments` around, per
+//! surface, and one band of quads for the edge. Interpolated normals reproduce a sphere's
+//! normals exactly in direction (the normalised mix of (p_i − c) / R is the normal at the mixed
+//! point), so a spherical surface's power is right at any tessellation; a torus's normals are
+//! only approximated between the vertices, so a toric lens's cylinder converges as the
+//! tessellation grows (docs/analyses.md measures it).
+
+use std::f64::consts::TAU;
+
+use glam::{DVec3, Vec2, Vec3};
+
+use crate::generators::{append_grid, empty, finish, Sample};
+use crate::{Mesh, SceneError};
+
+/// A spectacle lens's prescription and blank. Lengths in metres, powers in dioptres.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Prescription {
+    /// Back vertex power in the axis meridian.
+    pub sphere: f64,
+    /// Cylinder (minus form; a plus cylinder is transposed).
+    pub cylinder: f64,
+    /// Cylinder axis, TABO degrees.
+    pub axis_deg: f64,
+    /// n_d.
+    pub index: f64,
+    /// Abbe number V = (n_d − 1) / (n_F − n_C).
+    pub abbe: f64,
+    pub center_thickness: f64,
+    /// Front surface power in the material's index, (n_d − 1) / R1.
+    pub base_curve: f64,
+    pub diameter: f64,
+}
+
+impl Prescription {
+    /// The same prescription in minus-cylinder form, axis in [0, 180).
+    pub fn minus_cylinder(&self) -> Prescription {
+        let mut p = *self;
+        if p.cylinder > 0.0 {
+            p.sphere += p.cylinder;
+            p.cylinder = -p.cylinder;
+            p.axis_deg += 90.0;
+        }
+        p.axis_deg = p.axis_deg.rem_euclid(180.0);
+        p
+    }
+
+    /// The glass's red, green and blue indices (n_C, n_d, n_F), as the reference uses them
+    /// ([`crate::material::ior_from_abbe`]).
+    pub fn indices(&self) -> Vec3 {
+        crate::material::ior_from_abbe(self.index as f32, self.abbe as f32)
+    }
+
+    /// Back vertex power of the front surface alone, F1 / (1 − (t / n) F1).
+    fn front_effective(&self) -> f64 {
+        let f1 = self.base_curve;
+        f1 / (1.0 - self.center_thickness / self.index * f1)
+    }
+
+    /// The back surface's curvature (1 / R2) for back vertex power `vertex_power`.
+    fn back_curvature(&self, vertex_power: f64) -> f64 {
+        let f2 = vertex_power - self.front_effective();
+        f2 / (1.0 - self.index)
+    }
+
+    /// The front surface's curvature, 1 / R1.
+    fn front_curvature(&self) -> f64 {
+        self.base_curve / (self.index - 1.0)
+    }
+
+    fn check(&self) -> Result<(), SceneError> {
+        let bad = |message: String| Err(SceneError::invalid("spectacle-lens", message));
+        let values = [
+            ("sphere", self.sphere),
+            ("cylinder", self.cylinder),
+            ("axis", self.axis_deg),
+            ("index", self.index),
+            ("abbe", self.abbe),
+            ("center_thickness", self.center_thickness),
+            ("base_curve", self.base_curve),
+            ("diameter", self.diameter),
+        ];
+        for (name, value) in values {
+            if !value.is_finite() {
+                return bad(format!("{name} = {value} is not a number"));
+            }
+        }
+        if self.index <= 1.0 {
+            return bad(format!("index {} must exceed 1", self.index));
+        }
+        if self.abbe <= 0.0 {
+            return bad(format!("abbe {} must be positive", self.abbe));
+        }
+        if self.center_thickness <= 0.0 || self.diameter <= 0.0 {
+            return bad(format!(
+                "center_thickness {} m and diameter {} m must be positive",
+                self.center_thickness, self.diameter
+            ));
+        }
+        if 1.0 - self.center_thickness / self.index * self.base_curve <= 0.0 {
+            return bad(format!(
+                "a base curve of {} D focuses inside a {} m thick lens: no back surface can make \
+                 this power",
+                self.base_curve, self.center_thickness
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Sag of a circular arc of curvature `c` at distance `r` from its vertex (None beyond the
+/// arc's reach).
+fn arc_sag(c: f64, r: f64) -> Option<f64> {
+    let k = 1.0 - c * c * r * r;
+    (k >= 0.0).then(|| c * r * r / (1.0 + k.sqrt()))
+}
+
+/// d(sag)/dr of the arc.
+fn arc_slope(c: f64, r: f64) -> f64 {
+    c * r / (1.0 - c * c * r * r).max(1e-300).sqrt()
+}
+
+/// A toric surface with curvature `cu` along u and `cv` along v at its vertex: its sag and its
+/// gradient (∂z/∂u, ∂z/∂v) at (u, v); None where (u, v) lies beyond the surface.
+fn toric(cu: f64, cv: f64, u: f64, v: f64) -> Option<(f64, f64, f64)> {
+    let zv = arc_sag(cv, v)?;
+    let dzv = arc_slope(cv, v);
+    if cu == 0.0 {
+        return Some((zv, 0.0, dzv));
+    }
+    let radius = 1.0 / cu;
+    let d = radius - zv;
+    let k = d * d - u * u;
+    if k < 0.0 || d * radius <= 0.0 {
+        return None;
+    }
+    let s = k.sqrt();
+    let sign = radius.signum();
+    Some((radius - sign * s, sign * u / s, sign * d * dzv / s))
+}
+
+/// The lens surfaces' shape, in the lens's frame (module doc).
+struct Shape {
+    front_c: f64,
+    /// Back curvatures along the axis meridian and across it.
+    back_cu: f64,
+    back_cv: f64,
+    /// Unit vectors of the axis meridian and across it, in the (x, y) plane.
+    axis: [f64; 2],
+    across: [f64; 2],
+    thickness: f64,
+}
+
+impl Shape {
+    fn new(p: &Prescription) -> Shape {
+        let theta = p.axis_deg.to_radians();
+        Shape {
+            front_c: p.front_curvature(),
+            back_cu: p.back_curvature(p.sphere),
+            back_cv: p.back_curvature(p.sphere + p.cylinder),
+            axis: [-theta.cos(), theta.sin()],
+            across: [theta.sin(), theta.cos()],
+            thickness: p.center_thickness,
+        }
+    }
+
+    /// The front surface's point and outward normal (facing −Z) at (x, y).
+    fn front(&self, x: f64, y: f64) -> Option<(DVec3, DVec3)> {
+        let r = x.hypot(y);
+        let z = arc_sag(self.front_c, r)?;
+        let slope = arc_slope(self.front_c, r);
+        let (gx, gy) = if r > 0.0 {
+            (slope * x / r, slope * y / r)
+        } else {
+            (0.0, 0.0)
+        };
+        Some((DVec3::new(x, y, z), DVec3::new(gx, gy, -1.0).normalize()))
+    }
+
+    /// The back surface's point and outward normal (facing +Z) at (x, y).
+    fn back(&self, x: f64, y: f64) -> Option<(DVec3, DVec3)> {
+        let u = x * self.axis[0] + y * self.axis[1];
+        let v = x * self.across[0] + y * self.across[1];
+        let (z, dzu, dzv) = toric(self.back_cu, self.back_cv, u, v)?;
+        let gx = dzu * self.axis[0] + dzv * self.across[0];
+        let gy = dzu * self.axis[1] + dzv * self.across[1];
+        Some((
+            DVec3::new(x, y, self.thickness + z),
+            DVec3::new(-gx, -gy, 1.0).normalize(),
+        ))
+    }
+}
+
+/// The lens of `prescription` with `rings` × `segments` per surface (module doc). Refused,
+/// saying why: values that are not numbers, an index ≤ 1, and a prescription no lens of that
+/// diameter can have (a surface that does not reach the rim, an edge thinner than nothing).
+pub fn spectacle_lens(
+    prescription: &Prescription,
+    rings: u32,
+    segments: u32,
+) -> Result<Mesh, SceneError> {
+    prescription.check()?;
+    let p = prescription.minus_cylinder();
+    let shape = Shape::new(&p);
+    let rim = p.diameter * 0.5;
+    let segments = segments.max(8);
+    let rings = rings.max(2);
+    let bad = |message: String| SceneError::invalid("spectacle-lens", message);
+    // Every rim point must exist on both surfaces, with glass between them.
+    let mut thinnest = f64::INFINITY;
+    for k in 0..segments * 4 {
+        let phi = TAU * f64::from(k) / f64::from(segments * 4);
+        let (x, y) = (rim * phi.cos(), rim * phi.sin());
+        let (Some((front, _)), Some((back, _))) = (shape.front(x, y), shape.back(x, y)) else {
+            return Err(bad(format!(
+                "a surface of this prescription does not reach a {} mm rim: choose a smaller \
+                 diameter or a flatter base curve",
+                p.diameter * 1e3
+            )));
+        };
+        thinnest = thinnest.min(back.z - front.z);
+    }
+    if thinnest <= 0.0 {
+        return Err(bad(format!(
+            "the edge would be {:.2} mm thick at a {} mm diameter: no lens can have this \
+             prescription there; make the centre thicker or the lens smaller",
+            thinnest * 1e3,
+            p.diameter * 1e3
+        )));
+    }
+    let mut mesh = empty("spectacle lens");
+    let to_sample = |(point, normal): (DVec3, DVec3), x: f64, y: f64| Sample {
+        p: point.as_vec3(),
+        n: normal.as_vec3(),
+        uv: Vec2::new((0.5 + x / p.diameter) as f32, (0.5 - y / p.diameter) as f32),
+    };
+    let at = |u: f32, v: f32| {
+        // The seam's columns coincide exactly (see generators::turn).
+        let phi = if u >= 1.0 { 0.0 } else { f64::from(u) * TAU };
+        let rho = f64::from(v) * rim;
+        (rho * phi.cos(), rho * phi.sin())
+    };
+    append_grid(&mut mesh, segments, rings, |u, v| {
+        let (x, y) = at(u, v);
+        to_sample(shape.front(x, y).expect("checked to the rim"), x, y)
+    });
+    append_grid(&mut mesh, segments, rings, |u, v| {
+        let (x, y) = at(u, v);
+        to_sample(shape.back(x, y).expect("checked to the rim"), x, y)
+    });
+    append_grid(&mut mesh, segments, 1, |u, v| {
+        let (x, y) = at(u, 1.0);
+        let front = shape.front(x, y).expect("checked").0;
+        let back = shape.back(x, y).expect("checked").0;
+        let point = front.lerp(back, f64::from(v));
+        Sample {
+            p: point.as_vec3(),
+            n: Vec3::new(x as f32, y as f32, 0.0).normalize(),
+            uv: Vec2::new(u, v),
+        }
+    });
+    Ok(finish(mesh))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn prescription(sphere: f64, cylinder: f64, axis_deg: f64) -> Prescription {
+        Prescription {
+            sphere,
+            cylinder,
+            axis_deg,
+            index: 1.6,
+            abbe: 42.0,
+            center_thickness: 0.002,
+            base_curve: 4.0,
+            diameter: 0.05,
+        }
+    }
+
+    #[test]
+    fn each_meridian_s_back_curvature_gives_its_back_vertex_power() {
+        let p = prescription(-2.0, -1.0, 30.0);
+        let shape = Shape::new(&p);
+        // Thick-lens formula, forwards: F1 / (1 − t F1 / n) + (1 − n) / R2.
+        let power = |c2: f64| p.front_effective() + (1.0 - p.index) * c2;
+        assert!((power(shape.back_cu) - -2.0).abs() < 1e-12);
+        assert!((power(shape.back_cv) - -3.0).abs() < 1e-12);
+        assert!((p.front_curvature() - 4.0 / 0.6).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_toric_surface_has_its_principal_curvatures_along_its_meridians() {
+        let (cu, cv) = (1.0 / 0.08, 1.0 / 0.12);
+        // Second differences of the sag along each meridian at the vertex.
+        let h = 1e-4;
+        let along_u = toric(cu, cv, h, 0.0).unwrap().0 * 2.0 / (h * h);
+        let along_v = toric(cu, cv, 0.0, h).unwrap().0 * 2.0 / (h * h);
+        assert!((along_u - cu).abs() < 1e-4 * cu, "{along_u} against {cu}");
+        assert!((along_v - cv).abs() < 1e-4 * cv, "{along_v} against {cv}");
+        // The gradient is the sag's.
+        let (u, v) = (0.01, -0.015);
+        let (z, du, dv) = toric(cu, cv, u, v).unwrap();
+        let e = 1e-7;
+        let du_fd = (toric(cu, cv, u + e, v).unwrap().0 - z) / e;
+        let dv_fd = (toric(cu, cv, u, v + e).unwrap().0 - z) / e;
+        assert!((du - du_fd).abs() < 1e-5 && (dv - dv_fd).abs() < 1e-5);
+    }
+
+    #[test]
+    fn a_plus_cylinder_is_transposed() {
+        let p = prescription(-3.0, 1.0, 120.0).minus_cylinder();
+        assert_eq!((p.sphere, p.cylinder, p.axis_deg), (-2.0, -1.0, 30.0));
+    }
+
+    #[test]
+    fn impossible_prescriptions_are_refused_saying_why() {
+        let thin_edge = Prescription {
+            sphere: 6.0,
+            center_thickness: 0.002,
+            diameter: 0.07,
+            ..prescription(6.0, 0.0, 0.0)
+        };
+        let e = spectacle_lens(&thin_edge, 8, 32).unwrap_err().to_string();
+        assert!(e.contains("edge would be") && e.contains("mm thick"), "{e}");
+        let steep = Prescription {
+            base_curve: 30.0,
+            ..prescription(-2.0, 0.0, 0.0)
+        };
+        let e = spectacle_lens(&steep, 8, 32).unwrap_err().to_string();
+        assert!(e.contains("does not reach"), "{e}");
+        let glass = Prescription {
+            index: 0.9,
+            ..prescription(-2.0, 0.0, 0.0)
+        };
+        let e = spectacle_lens(&glass, 8, 32).unwrap_err().to_string();
+        assert!(e.contains("index 0.9 must exceed 1"), "{e}");
+        let nan = Prescription {
+            sphere: f64::NAN,
+            ..prescription(-2.0, 0.0, 0.0)
+        };
+        let e = spectacle_lens(&nan, 8, 32).unwrap_err().to_string();
+        assert!(e.contains("sphere = NaN"), "{e}");
+    }
+
+    #[test]
+    fn the_mesh_is_closed_with_the_thickness_asked() {
+        let p = prescription(-2.0, -1.0, 30.0);
+        let mesh = spectacle_lens(&p, 12, 48).unwrap();
+        mesh.check_topology("test").unwrap();
+        let bounds = mesh.bounds();
+        assert!((bounds.extent().x - 0.05).abs() < 1e-4);
+        // The back vertex (the grid's centre) sits at the centre thickness.
+        let centre = mesh
+            .positions
+            .iter()
+            .filter(|q| q.x.abs() < 1e-9 && q.y.abs() < 1e-9)
+            .map(|q| q.z)
+            .fold(f32::NEG_INFINITY, f32::max);
+        assert!((centre - 0.002).abs() < 1e-7, "{centre}");
+    }
+}
