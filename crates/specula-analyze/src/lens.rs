@@ -37,7 +37,11 @@
 //! base up. **Lateral colour:** the angle between g' traced with the glass's red and blue indices
 //! (n_C and n_F), arcminutes. **Distortion:** the object-space angle of g' from the central
 //! chief ray's g'₀ against the gaze angle of g from `forward`, as the percent departure from the
-//! central magnification M₀ (their ratio at 0.1° of gaze): 100 (θ_object / (M₀ θ_gaze) − 1).
+//! central magnification M₀ in that direction: 100 (θ_object / (M₀ θ_gaze) − 1). M₀ is the
+//! length of J u, J the derivative of the object's tangent coordinates by the gaze's at the
+//! centre (central differences at ±0.1°; a 2 × 2 matrix, since a toric lens magnifies its
+//! meridians differently) and u the gaze's direction on the tangent screen; the report's
+//! `central_magnification` is the mean of J's two column lengths.
 
 use glam::{DQuat, DVec3};
 use rayon::prelude::*;
@@ -76,9 +80,14 @@ pub struct Gaze {
 }
 
 impl Gaze {
-    /// The grid's values along one axis, ascending, 0 included.
+    /// The grid's values along one axis, ascending, 0 included (0 alone for a grid
+    /// [`analyze`] refuses: a step that is not positive, too many cells).
     fn values(max: f64, step: f64) -> Vec<f64> {
-        let n = (max / step + 1e-9).floor() as i64;
+        let n = (max / step + 1e-9).floor();
+        if !(step > 0.0 && (0.0..=1e6).contains(&n)) {
+            return vec![0.0];
+        }
+        let n = n as i64;
         (-n..=n).map(|k| k as f64 * step).collect()
     }
 
@@ -247,6 +256,40 @@ impl<'a> LensTracer<'a> {
         .map(|d| crossings(d.normalize()) % 2 == 1);
         odd.iter().filter(|o| **o).count() >= 2
     }
+}
+
+/// The mesh named `name`, for `--lens`: an unknown name lists the scene's refractors (solid
+/// dielectrics), the objects a lens analysis takes.
+pub fn find_lens(scene: &Scene, name: &str) -> Result<usize, AnalyzeError> {
+    crate::object(scene, "--lens", name).map_err(|e| match e {
+        AnalyzeError::UnknownObject { role, name, .. } => {
+            let mut lenses: Vec<&str> = scene
+                .meshes
+                .iter()
+                .filter(|m| {
+                    matches!(
+                        scene.materials[m.material].kind,
+                        MaterialKind::Dielectric {
+                            thin_walled: false,
+                            ..
+                        }
+                    )
+                })
+                .map(|m| m.name.as_str())
+                .collect();
+            lenses.dedup();
+            AnalyzeError::UnknownObject {
+                role,
+                name,
+                valid: if lenses.is_empty() {
+                    "none (no object of this scene is a solid glass)".into()
+                } else {
+                    format!("(its lenses) {}", lenses.join(", "))
+                },
+            }
+        }
+        other => other,
+    })
 }
 
 /// The back vertex: where the camera's view axis first meets the lens (the camera is taken as
@@ -511,31 +554,38 @@ pub fn analyze(
         vertex_sphere_radius,
     };
     let centre_object = primary.dir;
-    // The central magnification: object angle over gaze angle at a small gaze, averaged over
-    // four directions.
-    let small: Vec<f64> = [(1.0, 0.0), (-1.0, 0.0), (0.0, 1.0), (0.0, -1.0)]
-        .iter()
-        .filter_map(|(h, v)| {
-            let frame = setup.frame(h * CENTRAL_GAZE_DEG, v * CENTRAL_GAZE_DEG);
-            let chief = setup.chief(&frame, indices.y).ok()?;
-            Some(
-                angle_between(chief.dir, centre_object)
-                    / angle_between(frame.gaze, options.forward),
-            )
-        })
-        .collect();
-    let central_magnification = if small.is_empty() {
-        1.0
-    } else {
-        small.iter().sum::<f64>() / small.len() as f64
+    // The central magnification, per direction: the derivative of the object's tangent
+    // coordinates by the gaze's at the centre (2 × 2: a toric lens magnifies its meridians
+    // differently), by central differences at ±0.1° of gaze.
+    let tangent_of = |out: DVec3| {
+        let along = out.dot(options.forward);
+        [out.dot(right) / along, out.dot(options.up) / along]
     };
+    let delta = CENTRAL_GAZE_DEG.to_radians().tan();
+    let mut central = [[1.0, 0.0], [0.0, 1.0]];
+    for (k, (h, v)) in [(1.0, 0.0), (0.0, 1.0)].into_iter().enumerate() {
+        let at = |sign: f64| {
+            let frame = setup.frame(sign * h * CENTRAL_GAZE_DEG, sign * v * CENTRAL_GAZE_DEG);
+            setup
+                .chief(&frame, indices.y)
+                .ok()
+                .map(|c| tangent_of(c.dir))
+        };
+        if let (Some(plus), Some(minus)) = (at(1.0), at(-1.0)) {
+            for (row, column) in central.iter_mut().enumerate() {
+                column[k] = (plus[row] - minus[row]) / (2.0 * delta);
+            }
+        }
+    }
+    let central_magnification =
+        0.5 * (central[0][0].hypot(central[1][0]) + central[0][1].hypot(central[1][1]));
     let cell = |h: f64, v: f64| {
         figures(
             &setup,
             h,
             v,
             centre_object,
-            central_magnification,
+            &central,
             options.prescription.as_ref(),
         )
     };
@@ -604,8 +654,9 @@ fn validate(options: &Options) -> Result<(), AnalyzeError> {
             ),
         });
     }
-    let cells = g.horizontal().len() * g.vertical().len();
-    if cells > 1_000_000 {
+    let cells = (2.0 * (g.h_max_deg / g.step_deg).floor() + 1.0)
+        * (2.0 * (g.v_max_deg / g.step_deg).floor() + 1.0);
+    if cells > 1e6 {
         return Err(AnalyzeError::BadOption {
             option: "--gaze",
             reason: format!("{cells} gaze directions: take a larger step"),
@@ -634,7 +685,7 @@ fn figures(
     h: f64,
     v: f64,
     centre_object: DVec3,
-    central_magnification: f64,
+    central: &[[f64; 2]; 2],
     prescription: Option<&Prescription>,
 ) -> Cell {
     let outside = Cell {
@@ -693,8 +744,14 @@ fn figures(
     };
     let gaze_angle = angle_between(frame.gaze, o.forward);
     let distortion = if gaze_angle > 1e-9 {
+        // The central magnification in this gaze's direction.
+        let (th, tv) = (h.to_radians().tan(), v.to_radians().tan());
+        let length = th.hypot(tv);
+        let (uh, uv) = (th / length, tv / length);
+        let magnification = (central[0][0] * uh + central[0][1] * uv)
+            .hypot(central[1][0] * uh + central[1][1] * uv);
         let object_angle = angle_between(out, centre_object);
-        100.0 * (object_angle / (central_magnification * gaze_angle) - 1.0)
+        100.0 * (object_angle / (magnification * gaze_angle) - 1.0)
     } else {
         0.0
     };
@@ -745,12 +802,27 @@ pub fn primary_frame(camera: &Camera) -> (DVec3, DVec3) {
 /// behind the back vertex on the camera's view axis, a 30° × 30° grid every 2.5°, an object at
 /// infinity, a 0.5 mm bundle, and the prescription the lens was made from, if any.
 pub fn default_options(scene: &Scene, lens: usize) -> Result<Options, AnalyzeError> {
+    default_options_with(scene, lens, true)
+}
+
+/// [`default_options`], finding the back vertex only where `find_centre` (else the rotation
+/// centre is the camera's eye, for the caller to replace).
+pub fn default_options_with(
+    scene: &Scene,
+    lens: usize,
+    find_centre: bool,
+) -> Result<Options, AnalyzeError> {
+    indices(scene, lens)?;
     let (forward, up) = primary_frame(&scene.camera);
-    let vertex = back_vertex(scene, lens, &scene.camera)?;
+    let rotation_centre = if find_centre {
+        back_vertex(scene, lens, &scene.camera)? - forward * ROTATION_CENTRE_BEHIND_VERTEX_M
+    } else {
+        scene.camera.eye.as_dvec3()
+    };
     Ok(Options {
         lens,
         eye: Eye::Right,
-        rotation_centre: vertex - forward * ROTATION_CENTRE_BEHIND_VERTEX_M,
+        rotation_centre,
         forward,
         up,
         gaze: Gaze {

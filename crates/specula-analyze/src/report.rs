@@ -211,3 +211,120 @@ relative luminance of {threshold}. {verdict}</p>
     write(&path, html.as_bytes())?;
     Ok(path)
 }
+
+/// The largest |value| of a cell quantity over the lens, and where (gaze h, v).
+fn extreme(
+    report: &crate::lens::Report,
+    value: impl Fn(&crate::lens::Cell) -> Option<f64>,
+) -> String {
+    report
+        .grid
+        .iter()
+        .filter_map(|c| value(c).map(|v| (v, c.gaze_deg)))
+        .max_by(|a, b| a.0.abs().total_cmp(&b.0.abs()))
+        .map(|(v, [h, g])| format!("{v:.3} at ({h}, {g})°"))
+        .unwrap_or_else(|| "–".into())
+}
+
+/// Writes the lens report into `dir`: the JSON, the four maps and the distortion picture (PNG
+/// and SVG each), and the HTML page; returns its path.
+pub fn write_lens(dir: &Path, r: &crate::lens::Report) -> Result<PathBuf, AnalyzeError> {
+    use crate::lens_plot::{self, Map};
+    std::fs::create_dir_all(dir).map_err(|e| write_error(dir, e))?;
+    let json = serde_json::to_string_pretty(r).map_err(|e| write_error(dir, e))?;
+    write(&dir.join("report.json"), json.as_bytes())?;
+    let mut figures = String::new();
+    for map in Map::of(r) {
+        write_plot(dir, map.name(), &lens_plot::lens_map(r, map))?;
+        figures.push_str(&format!(
+            "<figure><img src=\"{0}.svg\"><figcaption>{0}</figcaption></figure>\n",
+            map.name()
+        ));
+    }
+    write_plot(dir, "distortion", &lens_plot::distortion(r))?;
+    let c = &r.centre;
+    let number = |v: Option<f64>| v.map(|v| format!("{v:.3}")).unwrap_or_else(|| "–".into());
+    let prescription = match &r.prescription {
+        Some(p) => format!(
+            "Prescription: {:.2} / {:.2} × {:.0} (n_d {}, V {}); the power error and unwanted \
+             cylinder are against it.",
+            p.sphere_d, p.cylinder_d, p.axis_deg, p.index, p.abbe
+        ),
+        None => "No prescription given: no power error or unwanted cylinder.".into(),
+    };
+    let centre_prism = c
+        .prism_d
+        .map(|[h, v]| format!("{h:.3} Δ horizontal (base out +), {v:.3} Δ vertical (base up +)"))
+        .unwrap_or_else(|| "–".into());
+    let html = format!(
+        r#"<!DOCTYPE html>
+<html><head><meta charset="utf-8"><title>specula analyze lens: {scene}</title>
+<style>
+body {{ font-family: sans-serif; margin: 2em; background: #fafafa; }}
+table {{ border-collapse: collapse; margin: 1em 0; }}
+td, th {{ border: 1px solid #bbb; padding: 4px 8px; text-align: right; }}
+td:first-child, th:first-child {{ text-align: left; }}
+figure {{ display: inline-block; margin: 0.5em; vertical-align: top; }}
+</style></head><body>
+<h1>'{lens}' as worn: {scene}</h1>
+<p>The {eye} eye turns about its centre of rotation ({cx:.4}, {cy:.4}, {cz:.4}) by Listing's law;
+at each gaze the chief ray from the centre is traced through the lens with Snell's law at its own
+normals, and a narrow bundle ({step} mm) from the object ({object}) around it gives the
+vergences at the vertex sphere (radius {radius:.1} mm), docs/analyses.md. Indices (red, green,
+blue): {n0}, {n1}, {n2}. Gaze grid ±{hmax}° × ±{vmax}° every {gstep}°. The finite differences
+changed by at most {fd:.1e} D between the bundle and half of it. {prescription}</p>
+<table>
+<tr><th>at the centre</th><th></th></tr>
+<tr><td>sphere</td><td>{sphere} D</td></tr>
+<tr><td>cylinder</td><td>{cylinder} D</td></tr>
+<tr><td>axis (TABO)</td><td>{axis}°</td></tr>
+<tr><td>mean power</td><td>{mean} D</td></tr>
+<tr><td>prism</td><td>{centre_prism}</td></tr>
+<tr><th>over the lens, the largest</th><th></th></tr>
+<tr><td>cylinder</td><td>{max_cyl} D</td></tr>
+<tr><td>prism</td><td>{max_prism} Δ</td></tr>
+<tr><td>lateral colour</td><td>{max_colour}′</td></tr>
+<tr><td>distortion</td><td>{max_distortion} %</td></tr>
+<tr><td>unwanted cylinder</td><td>{max_unwanted} D</td></tr>
+<tr><td>power error</td><td>{max_error} D</td></tr>
+</table>
+{figures}<figure><img src="distortion.svg"><figcaption>distortion</figcaption></figure>
+</body></html>
+"#,
+        scene = plot::html_escape(&r.scene),
+        lens = plot::html_escape(&r.lens),
+        eye = match r.eye {
+            crate::lens::Eye::Right => "right",
+            crate::lens::Eye::Left => "left",
+        },
+        cx = r.rotation_centre[0],
+        cy = r.rotation_centre[1],
+        cz = r.rotation_centre[2],
+        step = r.step_mm,
+        object = r
+            .object_distance_m
+            .map(|d| format!("{d} m from the centre of rotation"))
+            .unwrap_or_else(|| "at infinity".into()),
+        radius = r.vertex_sphere_radius_m * 1e3,
+        n0 = r.indices[0],
+        n1 = r.indices[1],
+        n2 = r.indices[2],
+        hmax = r.gaze.h_max_deg,
+        vmax = r.gaze.v_max_deg,
+        gstep = r.gaze.step_deg,
+        fd = r.finite_difference_change_d,
+        sphere = number(c.sphere_d),
+        cylinder = number(c.cylinder_d),
+        axis = number(c.axis_deg),
+        mean = number(c.mean_power_d),
+        max_cyl = extreme(r, |c| c.cylinder_d),
+        max_prism = extreme(r, |c| c.prism_d.map(|[h, v]| h.hypot(v))),
+        max_colour = extreme(r, |c| c.lateral_colour_arcmin),
+        max_distortion = extreme(r, |c| c.distortion_percent),
+        max_unwanted = extreme(r, |c| c.unwanted_cylinder_d),
+        max_error = extreme(r, |c| c.power_error_d),
+    );
+    let path = dir.join("report.html");
+    write(&path, html.as_bytes())?;
+    Ok(path)
+}

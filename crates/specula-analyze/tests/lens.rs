@@ -325,3 +325,31 @@ fn the_built_in_spectacle_lens_has_its_back_vertex_power_at_the_centre() {
     // Measured 2026-12-02: 3.5e-4 D off (its coarse mesh: 10 rings).
     assert!((sphere - vertex).abs() < 8e-4);
 }
+
+#[test]
+fn a_plane_parallel_plate_has_no_power_prism_colour_or_distortion_at_any_gaze() {
+    // Refraction in and out of parallel faces leaves every ray's direction as it was.
+    let scene = spherical(f32::INFINITY, f32::INFINITY, 0.003, 1.6, 0.08);
+    let report = run(&scene, |o| o.gaze.step_deg = 10.0);
+    let mut largest = [0.0f64; 5];
+    for c in &report.grid {
+        let figures = [
+            c.mean_power_d.unwrap().abs(),
+            c.cylinder_d.unwrap().abs(),
+            c.prism_d.map(|[h, v]| h.hypot(v)).unwrap(),
+            c.lateral_colour_arcmin.unwrap(),
+            c.distortion_percent.unwrap().abs(),
+        ];
+        for (l, f) in largest.iter_mut().zip(figures) {
+            *l = l.max(f);
+        }
+    }
+    eprintln!(
+        "largest over ±30°: mean power {:.1e} D, cylinder {:.1e} D, prism {:.1e} Δ, colour \
+         {:.1e}′, distortion {:.1e} %; central magnification {}",
+        largest[0], largest[1], largest[2], largest[3], largest[4], report.central_magnification
+    );
+    // Measured: 0 to 5e-13 (rounding).
+    assert!(largest.iter().all(|l| *l < 1e-9), "{largest:?}");
+    assert!((report.central_magnification - 1.0).abs() < 1e-6);
+}

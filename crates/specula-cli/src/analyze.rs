@@ -23,6 +23,59 @@ pub enum Kind {
     /// pixel shows without it), its solid angle and centroid; the share of eye points that see
     /// it and the worst one.
     Glare(GlareArgs),
+    /// A spectacle lens as worn, per gaze direction: sphere, cylinder and axis at the vertex
+    /// sphere, mean power, prism, lateral colour and distortion, from exact rays (Listing's
+    /// law about the eye's centre of rotation).
+    Lens(LensArgs),
+}
+
+#[derive(clap::Args)]
+pub struct LensArgs {
+    /// Built-in scene name, a .toml scene file, or a mesh/scene file.
+    #[arg(default_value = "spectacle-lens")]
+    scene: String,
+    /// The lens (a solid glass), as the scene names it.
+    #[arg(long)]
+    lens: String,
+    /// The eye behind the lens: it decides which way is base in and base out.
+    #[arg(long, value_enum, default_value = "right")]
+    eye: EyeSide,
+    /// The eye's centre of rotation X,Y,Z (default: 27 mm behind the lens's back vertex along
+    /// the camera's view axis: 12 mm vertex distance and 15 mm).
+    #[arg(long, value_parser = parse_point, allow_hyphen_values = true)]
+    rotation_centre: Option<Vec3>,
+    /// The gaze grid H_MAX,V_MAX,STEP in degrees (cells at 0 included).
+    #[arg(long, default_value = "30,30,2.5", value_parser = parse_gaze)]
+    gaze: [f32; 3],
+    /// The object's distance from the eye's centre of rotation, metres (default: infinity;
+    /// e.g. 0.4 for near vision).
+    #[arg(long)]
+    object_distance: Option<f64>,
+    /// The prescription SPHERE,CYLINDER,AXIS the power error and unwanted cylinder are taken
+    /// against (default: the one a spectacle-lens shape was made from, if any).
+    #[arg(long, value_parser = parse_point, allow_hyphen_values = true)]
+    prescription: Option<Vec3>,
+    /// The bundle's half-width at the lens, millimetres (each figure is also taken at half of
+    /// it, and the change reported).
+    #[arg(long, default_value_t = 0.5)]
+    step_mm: f64,
+    /// Write the report as JSON here (schema: docs/analyze-lens.schema.json).
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Write a report folder: report.html, report.json, the maps (mean power, cylinder, prism,
+    /// lateral colour) and the distortion picture as PNG and SVG.
+    #[arg(long)]
+    report: Option<PathBuf>,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum EyeSide {
+    Right,
+    Left,
+}
+
+fn parse_gaze(text: &str) -> Result<[f32; 3], String> {
+    numbers::<3>(text, "H_MAX,V_MAX,STEP")
 }
 
 #[derive(clap::Args)]
@@ -186,7 +239,148 @@ pub fn run(kind: Kind) -> Result<()> {
     match kind {
         Kind::MirrorView(args) => mirror_view(args),
         Kind::Glare(args) => glare(args),
+        Kind::Lens(args) => lens(args),
     }
+}
+
+fn lens(args: LensArgs) -> Result<()> {
+    use specula_analyze::lens;
+    let scene = crate::load_scene(&args.scene)?;
+    let mesh = lens::find_lens(&scene, &args.lens)?;
+    let mut options = lens::default_options_with(&scene, mesh, args.rotation_centre.is_none())?;
+    if let Some(centre) = args.rotation_centre {
+        options.rotation_centre = centre.as_dvec3();
+    }
+    options.eye = match args.eye {
+        EyeSide::Right => lens::Eye::Right,
+        EyeSide::Left => lens::Eye::Left,
+    };
+    let [h, v, step] = args.gaze.map(f64::from);
+    options.gaze = lens::Gaze {
+        h_max_deg: h,
+        v_max_deg: v,
+        step_deg: step,
+    };
+    options.object_distance_m = args.object_distance;
+    if !(args.step_mm.is_finite() && args.step_mm > 0.0) {
+        anyhow::bail!(
+            "--step-mm {}: the bundle needs a positive width",
+            args.step_mm
+        );
+    }
+    options.step_m = args.step_mm * 1e-3;
+    if let Some(rx) = args.prescription {
+        let base = options.prescription.unwrap_or(specula_scene::Prescription {
+            sphere: 0.0,
+            cylinder: 0.0,
+            axis_deg: 0.0,
+            index: 1.5,
+            abbe: 58.0,
+            center_thickness: 0.002,
+            base_curve: 0.0,
+            diameter: 0.05,
+        });
+        options.prescription = Some(specula_scene::Prescription {
+            sphere: f64::from(rx.x),
+            cylinder: f64::from(rx.y),
+            axis_deg: f64::from(rx.z),
+            ..base
+        });
+    }
+    let rows = options.gaze.vertical().len();
+    let bar = ProgressBar::new(rows as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:30} {pos}/{len} gaze rows ({elapsed})")
+            .expect("valid template"),
+    );
+    let report = lens::analyze(&scene, &options, &|done| bar.set_position(done as u64))?;
+    bar.finish_and_clear();
+    print_lens(&report);
+    write_json(args.json.as_deref(), &report)?;
+    if let Some(dir) = &args.report {
+        let html = specula_analyze::report::write_lens(dir, &report)?;
+        println!("report: {}", html.display());
+    }
+    Ok(())
+}
+
+fn print_lens(r: &specula_analyze::lens::Report) {
+    let number = |v: Option<f64>, digits: usize| {
+        v.map(|v| format!("{v:.digits$}"))
+            .unwrap_or_else(|| "outside".into())
+    };
+    println!(
+        "{}: '{}', {} eye, centre of rotation ({:.4}, {:.4}, {:.4}), object {}",
+        r.scene,
+        r.lens,
+        match r.eye {
+            specula_analyze::lens::Eye::Right => "right",
+            specula_analyze::lens::Eye::Left => "left",
+        },
+        r.rotation_centre[0],
+        r.rotation_centre[1],
+        r.rotation_centre[2],
+        r.object_distance_m
+            .map(|d| format!("at {d} m"))
+            .unwrap_or_else(|| "at infinity".into())
+    );
+    println!(
+        "{:<14}{:>10}{:>10}{:>8}{:>10}{:>16}{:>10}{:>10}",
+        "gaze h, v °",
+        "sphere D",
+        "cyl D",
+        "axis °",
+        "mean D",
+        "prism Δ (h, v)",
+        "colour ′",
+        "dist. %"
+    );
+    let h = r.gaze.horizontal();
+    let v = r.gaze.vertical();
+    // Across the centre row, then down the centre column, every few cells from the centre.
+    let every = h.len().max(v.len()).div_ceil(7).max(1) as i64;
+    let shown = |values: &[f64], x: f64| {
+        let i = values.iter().position(|y| *y == x).unwrap_or(0) as i64;
+        (i - (values.len() / 2) as i64) % every == 0
+    };
+    let across = r
+        .grid
+        .iter()
+        .filter(|c| c.gaze_deg[1] == 0.0 && shown(&h, c.gaze_deg[0]));
+    let down = r
+        .grid
+        .iter()
+        .filter(|c| c.gaze_deg[0] == 0.0 && c.gaze_deg[1] != 0.0 && shown(&v, c.gaze_deg[1]));
+    for c in across.chain(down) {
+        // An axis means nothing without cylinder.
+        let axis = c
+            .axis_deg
+            .filter(|_| c.cylinder_d.is_some_and(|x| x.abs() >= 0.005));
+        println!(
+            "{:<14}{:>10}{:>10}{:>8}{:>10}{:>16}{:>10}{:>10}",
+            format!("{}, {}", c.gaze_deg[0], c.gaze_deg[1]),
+            number(c.sphere_d, 3),
+            number(c.cylinder_d, 3),
+            if c.outside {
+                "outside".into()
+            } else {
+                axis.map(|a| format!("{a:.0}"))
+                    .unwrap_or_else(|| "–".into())
+            },
+            number(c.mean_power_d, 3),
+            c.prism_d
+                .map(|[a, b]| format!("{a:.2}, {b:.2}"))
+                .unwrap_or_else(|| "outside".into()),
+            number(c.lateral_colour_arcmin, 2),
+            number(c.distortion_percent, 2),
+        );
+    }
+    let outside = r.grid.iter().filter(|c| c.outside).count();
+    println!(
+        "{} gaze directions, {outside} outside the lens; finite differences changed by at most {:.1e} D",
+        r.grid.len(),
+        r.finite_difference_change_d
+    );
 }
 
 fn mirror_view(args: MirrorViewArgs) -> Result<()> {

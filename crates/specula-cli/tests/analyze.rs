@@ -230,3 +230,133 @@ fn bad_glare_input_is_a_clear_error() {
     ];
     assert_each_fails_naming(&["analyze", "glare", "truck-cover"], &cases);
 }
+
+#[test]
+fn lens_writes_json_that_matches_the_schema_and_a_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = specula()
+        .current_dir(dir.path())
+        .args([
+            "analyze",
+            "lens",
+            "spectacle-lens",
+            "--lens",
+            "spectacle lens",
+            "--gaze",
+            "30,20,5",
+            "--eye",
+            "left",
+            "--json",
+            "lens.json",
+            "--report",
+            "report",
+        ])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("0, 0") && stdout.contains("-3.018"),
+        "{stdout}"
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("lens.json")).unwrap())
+            .unwrap();
+    assert_matches_schema(
+        &json,
+        include_str!("../../../docs/analyze-lens.schema.json"),
+    );
+    assert_eq!(json["grid"].as_array().unwrap().len(), 13 * 9);
+    assert_eq!(json["eye"], "left");
+    // Looking out (to the wearer's left, the left eye's temple) through a minus lens: base out.
+    let out_cell = json["grid"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["gaze_deg"][0] == -20.0 && c["gaze_deg"][1] == 0.0)
+        .unwrap();
+    assert!(out_cell["prism_d"][0].as_f64().unwrap() > 1.0, "{out_cell}");
+    for name in [
+        "report.html",
+        "mean-power.png",
+        "mean-power.svg",
+        "cylinder.svg",
+        "prism.svg",
+        "lateral-colour.svg",
+        "distortion.png",
+        "distortion.svg",
+    ] {
+        assert!(dir.path().join("report").join(name).is_file(), "{name}");
+    }
+}
+
+#[test]
+fn bad_lens_input_is_a_clear_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let impossible = dir.path().join("impossible.toml");
+    std::fs::write(
+        &impossible,
+        "[[objects]]\nname = \"lens\"\nshape = { type = \"spectacle-lens\", sphere = 10.0, \
+         index = 1.5, abbe = 58, center_thickness = 0.002, base_curve = 12.0, diameter = 0.07 }\n",
+    )
+    .unwrap();
+    let cases = [
+        (
+            vec!["spectacle-lens", "--lens", "monocle"],
+            "unknown --lens 'monocle'; the scene's objects are: (its lenses) spectacle lens",
+        ),
+        (
+            vec!["spectacle-lens", "--lens", "colour chart"],
+            "--lens 'colour chart' is unlit, not a refractor",
+        ),
+        (
+            vec![
+                "spectacle-lens",
+                "--lens",
+                "spectacle lens",
+                "--rotation-centre",
+                "0,0,-0.066",
+            ],
+            "lies inside 'spectacle lens'",
+        ),
+        (
+            vec![
+                "spectacle-lens",
+                "--lens",
+                "spectacle lens",
+                "--rotation-centre",
+                "0,0,-0.5",
+            ],
+            "does not see through",
+        ),
+        (
+            vec![
+                "spectacle-lens",
+                "--lens",
+                "spectacle lens",
+                "--gaze",
+                "30,30,0",
+            ],
+            "--gaze",
+        ),
+        (
+            vec![
+                "spectacle-lens",
+                "--lens",
+                "spectacle lens",
+                "--object-distance=-0.4",
+            ],
+            "--object-distance",
+        ),
+        (
+            vec![impossible.to_str().unwrap(), "--lens", "lens"],
+            "edge would be",
+        ),
+        (
+            vec!["door-mirror", "--lens", "door mirror"],
+            "not a refractor",
+        ),
+    ];
+    assert_each_fails_naming(&["analyze", "lens"], &cases);
+}

@@ -1,0 +1,440 @@
+//! The lens analysis's plots: contour maps over the gaze grid (mean power, cylinder with its
+//! axis, prism with its base, lateral colour) and the distortion picture. Each map is drawn as
+//! the wearer looks through the lens: h to the wearer's right, v up. Iso-lines come from
+//! marching squares over the grid's cells, values between cell centres from bilinear
+//! interpolation; cells outside the lens are grey.
+
+use glam::Vec2;
+use image::{Rgb, RgbImage};
+
+use crate::lens::{Cell, Eye, Report};
+use crate::plot::{draw_line, nice_step, scale_colour, svg_around, Extent, Plot};
+
+/// What a map shows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Map {
+    MeanPower,
+    Cylinder,
+    Prism,
+    LateralColour,
+    /// Against a prescription: the cylinder the wearer gets but did not order.
+    UnwantedCylinder,
+}
+
+impl Map {
+    pub const ALL: [Map; 5] = [
+        Map::MeanPower,
+        Map::Cylinder,
+        Map::Prism,
+        Map::LateralColour,
+        Map::UnwantedCylinder,
+    ];
+
+    /// The maps a report has: the unwanted cylinder only against a prescription.
+    pub fn of(report: &Report) -> Vec<Map> {
+        Map::ALL
+            .into_iter()
+            .filter(|m| *m != Map::UnwantedCylinder || report.prescription.is_some())
+            .collect()
+    }
+
+    /// The plot's file name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Map::MeanPower => "mean-power",
+            Map::Cylinder => "cylinder",
+            Map::Prism => "prism",
+            Map::LateralColour => "lateral-colour",
+            Map::UnwantedCylinder => "unwanted-cylinder",
+        }
+    }
+
+    fn what(self) -> &'static str {
+        match self {
+            Map::MeanPower => "mean power (D)",
+            Map::Cylinder => "cylinder (D, its magnitude; ticks: the axis)",
+            Map::Prism => "prism (Δ; arrows point to the base)",
+            Map::LateralColour => "lateral colour (arcmin)",
+            Map::UnwantedCylinder => "unwanted cylinder against the prescription (D)",
+        }
+    }
+
+    /// The value a cell shows.
+    pub fn value(self, cell: &Cell) -> Option<f64> {
+        match self {
+            Map::MeanPower => cell.mean_power_d,
+            Map::Cylinder => cell.cylinder_d.map(f64::abs),
+            Map::Prism => cell.prism_d.map(|[h, v]| h.hypot(v)),
+            Map::LateralColour => cell.lateral_colour_arcmin,
+            Map::UnwantedCylinder => cell.unwanted_cylinder_d,
+        }
+    }
+}
+
+const OUTSIDE: Rgb<u8> = Rgb([200, 200, 200]);
+const INK: Rgb<u8> = Rgb([0, 0, 0]);
+
+/// The segments of the iso-line at `level` over a `columns` × `rows` grid of values (row-major,
+/// row 0 first), in grid coordinates (column, row); cells with a missing corner have none.
+pub fn iso_segments(
+    values: &[Option<f64>],
+    columns: usize,
+    rows: usize,
+    level: f64,
+) -> Vec<[[f64; 2]; 2]> {
+    let mut segments = Vec::new();
+    for j in 0..rows.saturating_sub(1) {
+        for i in 0..columns.saturating_sub(1) {
+            let corner = |di: usize, dj: usize| values[(j + dj) * columns + i + di];
+            let (Some(a), Some(b), Some(c), Some(d)) =
+                (corner(0, 0), corner(1, 0), corner(1, 1), corner(0, 1))
+            else {
+                continue;
+            };
+            // Corners counter-clockwise from (i, j): a (0,0), b (1,0), c (1,1), d (0,1).
+            let corners = [
+                ([0.0, 0.0], a),
+                ([1.0, 0.0], b),
+                ([1.0, 1.0], c),
+                ([0.0, 1.0], d),
+            ];
+            let mut crossings = Vec::with_capacity(4);
+            for k in 0..4 {
+                let (p, u) = corners[k];
+                let (q, w) = corners[(k + 1) % 4];
+                if (u < level) != (w < level) {
+                    let t = (level - u) / (w - u);
+                    crossings.push([
+                        i as f64 + p[0] + (q[0] - p[0]) * t,
+                        j as f64 + p[1] + (q[1] - p[1]) * t,
+                    ]);
+                }
+            }
+            match crossings.len() {
+                2 => segments.push([crossings[0], crossings[1]]),
+                4 => {
+                    // A saddle: the centre's value says which pairs join.
+                    let centre = 0.25 * (a + b + c + d);
+                    if (centre < level) == (a < level) {
+                        segments.push([crossings[0], crossings[3]]);
+                        segments.push([crossings[1], crossings[2]]);
+                    } else {
+                        segments.push([crossings[0], crossings[1]]);
+                        segments.push([crossings[2], crossings[3]]);
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
+    segments
+}
+
+/// The grid's layout on a map: pixels per cell and the gaze extent.
+struct Layout {
+    columns: usize,
+    rows: usize,
+    cell_px: f32,
+    width: u32,
+    height: u32,
+}
+
+impl Layout {
+    fn new(report: &Report) -> Layout {
+        let (columns, rows) = (report.columns, report.rows);
+        let cell_px = (480.0 / columns.max(rows) as f32).clamp(6.0, 48.0).round();
+        Layout {
+            columns,
+            rows,
+            cell_px,
+            width: (cell_px * columns as f32) as u32,
+            height: (cell_px * rows as f32) as u32,
+        }
+    }
+
+    /// A grid coordinate (column, row; cell centres at whole numbers) as a pixel (row 0 at the
+    /// bottom: v up).
+    fn pixel(&self, at: [f64; 2]) -> Vec2 {
+        Vec2::new(
+            (at[0] as f32 + 0.5) * self.cell_px,
+            self.height as f32 - (at[1] as f32 + 0.5) * self.cell_px,
+        )
+    }
+
+    /// The grid coordinate of a pixel's centre.
+    fn grid(&self, x: u32, y: u32) -> [f64; 2] {
+        [
+            f64::from((x as f32 + 0.5) / self.cell_px - 0.5),
+            f64::from((self.height as f32 - y as f32 - 0.5) / self.cell_px - 0.5),
+        ]
+    }
+
+    fn extent(&self, report: &Report) -> Extent {
+        let half = (report.gaze.step_deg * 0.5) as f32;
+        let (h, v) = (report.gaze.horizontal(), report.gaze.vertical());
+        Extent {
+            min: Vec2::new(h[0] as f32 - half, v[0] as f32 - half),
+            max: Vec2::new(h[h.len() - 1] as f32 + half, v[v.len() - 1] as f32 + half),
+        }
+    }
+}
+
+/// `values` bilinearly at grid coordinate `at` (clamped to the grid); None where a corner is
+/// outside the lens.
+fn sample(values: &[Option<f64>], layout: &Layout, at: [f64; 2]) -> Option<f64> {
+    let x = at[0].clamp(0.0, (layout.columns - 1) as f64);
+    let y = at[1].clamp(0.0, (layout.rows - 1) as f64);
+    let (i, j) = (
+        (x.floor() as usize).min(layout.columns.saturating_sub(2)),
+        (y.floor() as usize).min(layout.rows.saturating_sub(2)),
+    );
+    if layout.columns < 2 || layout.rows < 2 {
+        return values[y.round() as usize * layout.columns + x.round() as usize];
+    }
+    let (fx, fy) = (x - i as f64, y - j as f64);
+    let v = |di: usize, dj: usize| values[(j + dj) * layout.columns + i + di];
+    let (a, b, c, d) = (v(0, 0)?, v(1, 0)?, v(0, 1)?, v(1, 1)?);
+    Some((a * (1.0 - fx) + b * fx) * (1.0 - fy) + (c * (1.0 - fx) + d * fx) * fy)
+}
+
+/// A round contour interval for values spanning `lo`..`hi` (about eight lines).
+fn interval(lo: f64, hi: f64) -> f64 {
+    f64::from(nice_step(((hi - lo) / 8.0).max(1e-6) as f32))
+}
+
+/// A map of one quantity over the gaze grid (module doc).
+pub fn lens_map(report: &Report, map: Map) -> Plot {
+    let layout = Layout::new(report);
+    let values: Vec<Option<f64>> = report.grid.iter().map(|c| map.value(c)).collect();
+    let known = values.iter().flatten();
+    let (mut lo, mut hi) = known.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+        (lo.min(*v), hi.max(*v))
+    });
+    if !lo.is_finite() {
+        (lo, hi) = (0.0, 1.0);
+    }
+    if hi - lo < 1e-9 {
+        (lo, hi) = (lo - 0.5, hi + 0.5);
+    }
+    let mut png = RgbImage::from_fn(layout.width, layout.height, |x, y| {
+        match sample(&values, &layout, layout.grid(x, y)) {
+            Some(v) => Rgb(scale_colour((v - lo) / (hi - lo))),
+            None => OUTSIDE,
+        }
+    });
+    let step = interval(lo, hi);
+    let mut level = (lo / step).ceil() * step;
+    while level <= hi {
+        for [a, b] in iso_segments(&values, layout.columns, layout.rows, level) {
+            draw_line(&mut png, layout.pixel(a), layout.pixel(b), INK);
+        }
+        level += step;
+    }
+    // Ticks and arrows on every few cells, so that they do not crowd.
+    let every = layout.columns.max(layout.rows).div_ceil(12).max(1);
+    let reach = 0.42 * every as f32 * layout.cell_px;
+    let side = match report.eye {
+        Eye::Right => 1.0,
+        Eye::Left => -1.0,
+    };
+    let largest_prism = report
+        .grid
+        .iter()
+        .filter_map(|c| c.prism_d.map(|[h, v]| h.hypot(v)))
+        .fold(0.0, f64::max);
+    for (k, cell) in report.grid.iter().enumerate() {
+        let (i, j) = (k % layout.columns, k / layout.columns);
+        if i % every != 0 || j % every != 0 {
+            continue;
+        }
+        let centre = layout.pixel([i as f64, j as f64]);
+        match map {
+            Map::Cylinder => {
+                if let (Some(axis), Some(cylinder)) = (cell.axis_deg, cell.cylinder_d) {
+                    if cylinder.abs() < 0.5 * step {
+                        continue;
+                    }
+                    // TABO from the examiner's right (the wearer's left), on a map as the
+                    // wearer looks: (−cos θ, sin θ), y down the page.
+                    let a = axis.to_radians() as f32;
+                    let d = Vec2::new(-a.cos(), -a.sin()) * reach;
+                    draw_line(&mut png, centre - d, centre + d, INK);
+                }
+            }
+            Map::Prism => {
+                if let Some([h, v]) = cell.prism_d {
+                    let magnitude = h.hypot(v);
+                    if largest_prism <= 0.0 || magnitude < 1e-3 * largest_prism {
+                        continue;
+                    }
+                    // Base out is towards the temple: the wearer's right for the right eye.
+                    let base = Vec2::new((h * side) as f32, -(v as f32)).normalize();
+                    let tip = centre + base * reach * (magnitude / largest_prism) as f32;
+                    draw_line(&mut png, centre, tip, INK);
+                    let back = -base * 0.35 * reach;
+                    let across = Vec2::new(-base.y, base.x) * 0.2 * reach;
+                    draw_line(&mut png, tip, tip + back + across, INK);
+                    draw_line(&mut png, tip, tip + back - across, INK);
+                }
+            }
+            Map::MeanPower | Map::LateralColour | Map::UnwantedCylinder => {}
+        }
+    }
+    let title = format!(
+        "'{}', {} eye: {} over the gaze, as the wearer looks",
+        report.lens,
+        match report.eye {
+            Eye::Right => "right",
+            Eye::Left => "left",
+        },
+        map.what()
+    );
+    let legend = vec![
+        (format!("{lo:.3}"), scale_colour(0.0)),
+        (
+            format!("{hi:.3}; iso-lines every {step}"),
+            scale_colour(1.0),
+        ),
+        (
+            "outside the lens".into(),
+            [OUTSIDE.0[0], OUTSIDE.0[1], OUTSIDE.0[2]],
+        ),
+    ];
+    let svg = svg_around(
+        &png,
+        &title,
+        ("gaze h (°, the wearer's right)", "gaze v (°, up)"),
+        Some((layout.extent(report), false)),
+        &legend,
+    );
+    Plot { png, svg }
+}
+
+/// The distortion picture: straight object-space lines (constant horizontal or vertical
+/// tangent of the object direction, a square grid) drawn where the wearer sees them, on the
+/// gaze's tangent screen (tan h, tan v), where a lens without distortion draws them straight
+/// and evenly spaced. Grey: outside the lens.
+pub fn distortion(report: &Report) -> Plot {
+    let layout = Layout::new(report);
+    let (h, v) = (report.gaze.horizontal(), report.gaze.vertical());
+    let half = report.gaze.step_deg.to_radians() * 0.5;
+    let tan_range = |values: &[f64]| {
+        (
+            (values[0].to_radians() - half).tan(),
+            (values[values.len() - 1].to_radians() + half).tan(),
+        )
+    };
+    let ((x0, x1), (y0, y1)) = (tan_range(&h), tan_range(&v));
+    let scale = 480.0 / (x1 - x0).max(y1 - y0);
+    let (width, height) = (
+        (((x1 - x0) * scale).round() as u32).max(8),
+        (((y1 - y0) * scale).round() as u32).max(8),
+    );
+    // Tangent-screen coordinates to grid coordinates and pixels.
+    let grid_of = |tx: f64, ty: f64| {
+        [
+            (tx.atan().to_degrees() - h[0]) / report.gaze.step_deg,
+            (ty.atan().to_degrees() - v[0]) / report.gaze.step_deg,
+        ]
+    };
+    let pixel_of = |at: [f64; 2]| {
+        let gh = (h[0] + at[0] * report.gaze.step_deg).to_radians().tan();
+        let gv = (v[0] + at[1] * report.gaze.step_deg).to_radians().tan();
+        Vec2::new(((gh - x0) * scale) as f32, ((y1 - gv) * scale) as f32)
+    };
+    let inside: Vec<Option<f64>> = report
+        .grid
+        .iter()
+        .map(|c| (!c.outside).then_some(1.0))
+        .collect();
+    let mut png = RgbImage::from_fn(width, height, |x, y| {
+        let tx = x0 + (f64::from(x) + 0.5) / scale;
+        let ty = y1 - (f64::from(y) + 0.5) / scale;
+        match sample(&inside, &layout, grid_of(tx, ty)) {
+            Some(_) => Rgb([255, 255, 255]),
+            None => OUTSIDE,
+        }
+    });
+    let object_x: Vec<Option<f64>> = report
+        .grid
+        .iter()
+        .map(|c| c.object_tangent.map(|t| t[0]))
+        .collect();
+    let object_y: Vec<Option<f64>> = report
+        .grid
+        .iter()
+        .map(|c| c.object_tangent.map(|t| t[1]))
+        .collect();
+    let span = |values: &[Option<f64>]| {
+        values
+            .iter()
+            .flatten()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                (a.min(*v), b.max(*v))
+            })
+    };
+    let (ax, bx) = span(&object_x);
+    let (ay, by) = span(&object_y);
+    let step = if ax.is_finite() {
+        interval(ax.min(ay), bx.max(by)) * 0.5
+    } else {
+        1.0
+    };
+    for (values, (lo, hi)) in [(&object_x, (ax, bx)), (&object_y, (ay, by))] {
+        if !lo.is_finite() {
+            continue;
+        }
+        let mut level = (lo / step).ceil() * step;
+        while level <= hi {
+            for [a, b] in iso_segments(values, layout.columns, layout.rows, level) {
+                draw_line(&mut png, pixel_of(a), pixel_of(b), INK);
+            }
+            level += step;
+        }
+    }
+    let title = format!(
+        "'{}': straight object lines (every {step} in tangent) as the wearer sees them, on the \
+         gaze's tangent screen",
+        report.lens
+    );
+    let svg = svg_around(
+        &png,
+        &title,
+        ("tan h (the wearer's right)", "tan v (up)"),
+        Some((
+            Extent {
+                min: Vec2::new(x0 as f32, y0 as f32),
+                max: Vec2::new(x1 as f32, y1 as f32),
+            },
+            false,
+        )),
+        &[(
+            "outside the lens".into(),
+            [OUTSIDE.0[0], OUTSIDE.0[1], OUTSIDE.0[2]],
+        )],
+    );
+    Plot { png, svg }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn iso_lines_of_a_plane_are_straight_where_the_level_lies() {
+        // v = column: the level 1.5 runs down the middle of columns 1 and 2.
+        let (columns, rows) = (4, 3);
+        let values: Vec<Option<f64>> = (0..rows)
+            .flat_map(|_| (0..columns).map(|i| Some(i as f64)))
+            .collect();
+        let segments = iso_segments(&values, columns, rows, 1.5);
+        assert_eq!(segments.len(), 2);
+        for [a, b] in segments {
+            assert!((a[0] - 1.5).abs() < 1e-12 && (b[0] - 1.5).abs() < 1e-12);
+        }
+        // A missing corner drops its cells.
+        let mut holed = values.clone();
+        holed[1] = None;
+        assert_eq!(iso_segments(&holed, columns, rows, 1.5).len(), 1);
+    }
+}
