@@ -8,7 +8,7 @@ use glam::Vec2;
 use image::{Rgb, RgbImage};
 
 use crate::lens::{Cell, Eye, Report};
-use crate::plot::{draw_line, nice_step, scale_colour, svg_around, Extent, Plot};
+use crate::plot::{draw_line, scale_colour, svg_around, Extent, Plot};
 
 /// What a map shows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -181,25 +181,70 @@ impl Layout {
 
 /// `values` bilinearly at grid coordinate `at` (clamped to the grid); None where a corner is
 /// outside the lens.
-fn sample(values: &[Option<f64>], layout: &Layout, at: [f64; 2]) -> Option<f64> {
-    let x = at[0].clamp(0.0, (layout.columns - 1) as f64);
-    let y = at[1].clamp(0.0, (layout.rows - 1) as f64);
-    let (i, j) = (
-        (x.floor() as usize).min(layout.columns.saturating_sub(2)),
-        (y.floor() as usize).min(layout.rows.saturating_sub(2)),
-    );
-    if layout.columns < 2 || layout.rows < 2 {
-        return values[y.round() as usize * layout.columns + x.round() as usize];
+fn sample(values: &[Option<f64>], columns: usize, rows: usize, at: [f64; 2]) -> Option<f64> {
+    let x = at[0].clamp(0.0, (columns - 1) as f64);
+    let y = at[1].clamp(0.0, (rows - 1) as f64);
+    if columns < 2 || rows < 2 {
+        return values[y.round() as usize * columns + x.round() as usize];
     }
+    let (i, j) = (
+        (x.floor() as usize).min(columns - 2),
+        (y.floor() as usize).min(rows - 2),
+    );
     let (fx, fy) = (x - i as f64, y - j as f64);
-    let v = |di: usize, dj: usize| values[(j + dj) * layout.columns + i + di];
+    let v = |di: usize, dj: usize| values[(j + dj) * columns + i + di];
     let (a, b, c, d) = (v(0, 0)?, v(1, 0)?, v(0, 1)?, v(1, 1)?);
     Some((a * (1.0 - fx) + b * fx) * (1.0 - fy) + (c * (1.0 - fx) + d * fx) * fy)
 }
 
+/// `values` (one per cell of `report`'s grid) at gaze (`h_deg`, `v_deg`), bilinearly; None
+/// beyond the grid's cells or next to a cell outside the lens.
+pub fn value_at(report: &Report, values: &[Option<f64>], h_deg: f64, v_deg: f64) -> Option<f64> {
+    let step = report.gaze.step_deg;
+    let (h0, v0) = (
+        -((report.columns / 2) as f64) * step,
+        -((report.rows / 2) as f64) * step,
+    );
+    let at = [(h_deg - h0) / step, (v_deg - v0) / step];
+    let inside = |a: f64, n: usize| a >= -0.5 && a <= n as f64 - 0.5;
+    if !(inside(at[0], report.columns) && inside(at[1], report.rows)) {
+        return None;
+    }
+    sample(values, report.columns, report.rows, at)
+}
+
+/// 1, 2 or 5 times a power of ten, the nearest at or above `raw`.
+fn round_step(raw: f64) -> f64 {
+    let power = 10f64.powf(raw.max(1e-9).log10().floor());
+    let m = raw / power;
+    power
+        * if m <= 1.0 {
+            1.0
+        } else if m <= 2.0 {
+            2.0
+        } else if m <= 5.0 {
+            5.0
+        } else {
+            10.0
+        }
+}
+
 /// A round contour interval for values spanning `lo`..`hi` (about eight lines).
-fn interval(lo: f64, hi: f64) -> f64 {
-    f64::from(nice_step(((hi - lo) / 8.0).max(1e-6) as f32))
+pub fn interval(lo: f64, hi: f64) -> f64 {
+    round_step(((hi - lo) / 8.0).max(1e-6))
+}
+
+/// The contour interval of `map` over `report`: about eight lines, and for a vergence (mean
+/// power, cylinder) no finer than twice the finite differences' change, so that no line
+/// follows their noise.
+pub fn map_interval(report: &Report, map: Map, lo: f64, hi: f64) -> f64 {
+    let step = interval(lo, hi);
+    match map {
+        Map::MeanPower | Map::Cylinder | Map::UnwantedCylinder => {
+            step.max(round_step(2.0 * report.finite_difference_change_d))
+        }
+        Map::Prism | Map::LateralColour => step,
+    }
 }
 
 /// A map of one quantity over the gaze grid (module doc).
@@ -217,12 +262,12 @@ pub fn lens_map(report: &Report, map: Map) -> Plot {
         (lo, hi) = (lo - 0.5, hi + 0.5);
     }
     let mut png = RgbImage::from_fn(layout.width, layout.height, |x, y| {
-        match sample(&values, &layout, layout.grid(x, y)) {
+        match sample(&values, layout.columns, layout.rows, layout.grid(x, y)) {
             Some(v) => Rgb(scale_colour((v - lo) / (hi - lo))),
             None => OUTSIDE,
         }
     });
-    let step = interval(lo, hi);
+    let step = map_interval(report, map, lo, hi);
     let mut level = (lo / step).ceil() * step;
     while level <= hi {
         for [a, b] in iso_segments(&values, layout.columns, layout.rows, level) {
@@ -350,7 +395,7 @@ pub fn distortion(report: &Report) -> Plot {
     let mut png = RgbImage::from_fn(width, height, |x, y| {
         let tx = x0 + (f64::from(x) + 0.5) / scale;
         let ty = y1 - (f64::from(y) + 0.5) / scale;
-        match sample(&inside, &layout, grid_of(tx, ty)) {
+        match sample(&inside, layout.columns, layout.rows, grid_of(tx, ty)) {
             Some(_) => Rgb([255, 255, 255]),
             None => OUTSIDE,
         }

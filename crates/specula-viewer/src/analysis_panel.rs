@@ -18,7 +18,7 @@ pub fn show(ui: &mut egui::Ui, session: &mut Session, state: &mut UiState) {
         if ui.selectable_label(current.is_none(), "off").clicked() {
             session.analysis = None;
         }
-        for kind in [Kind::MirrorView, Kind::Glare] {
+        for kind in [Kind::MirrorView, Kind::Glare, Kind::Lens] {
             if ui
                 .selectable_label(current == Some(kind), kind.name())
                 .clicked()
@@ -35,6 +35,7 @@ pub fn show(ui: &mut egui::Ui, session: &mut Session, state: &mut UiState) {
                                 match kind {
                                     Kind::MirrorView => "mirror",
                                     Kind::Glare => "mirror or glass with a source to reflect",
+                                    Kind::Lens => "lens (solid glass)",
                                 }
                             ),
                         ))
@@ -46,7 +47,8 @@ pub fn show(ui: &mut egui::Ui, session: &mut Session, state: &mut UiState) {
     ui.small(match current {
         None => {
             "mirror-view: the ground seen in a mirror, drawn on the ground; glare: where a source \
-             is seen reflected in a surface, drawn on it. Both follow every move."
+             is seen reflected in a surface, drawn on it; lens: a spectacle lens's mean power or \
+             cylinder as worn, drawn on the lens. All follow every move."
         }
         Some(_) => "its settings and figures are in the analysis window",
     });
@@ -79,10 +81,18 @@ fn contents(ui: &mut egui::Ui, session: &mut Session, state: &mut UiState) {
             .map(|f| (f, (centre - settings.eye).dot(f.right).signum()))
             .ok()
     };
+    let default_centre = (settings.kind == Kind::Lens).then(|| {
+        specula_analyze::lens::default_options(scene, settings.object)
+            .map(|o| o.rotation_centre.as_vec3())
+            .unwrap_or(camera_eye)
+    });
     let analysis = session.analysis.as_mut().expect("checked above");
     let mut edited = analysis.settings.clone();
     what_section(ui, &mut edited, &names, &objects, &sources);
-    eye_section(ui, &mut edited, camera_eye, view_eye);
+    match default_centre {
+        Some(default) => lens_section(ui, &mut edited, &mut analysis.lens_map, default, view_eye),
+        None => eye_section(ui, &mut edited, camera_eye, view_eye),
+    }
     if edited.kind == Kind::MirrorView {
         ground_section(ui, &mut edited, mirror_side);
     }
@@ -99,6 +109,10 @@ fn contents(ui: &mut egui::Ui, session: &mut Session, state: &mut UiState) {
         Kind::Glare => (
             "look from the eye point",
             "the view from the eye point shown, aimed at the surface",
+        ),
+        Kind::Lens => (
+            "look through the lens",
+            "the view from the eye's centre of rotation, along the primary gaze",
         ),
     };
     if ui.button(label).on_hover_text(hover).clicked() {
@@ -119,6 +133,7 @@ fn what_section(
     let role = match settings.kind {
         Kind::MirrorView => "mirror",
         Kind::Glare => "surface",
+        Kind::Lens => "lens",
     };
     egui::Grid::new("analysed").num_columns(2).show(ui, |ui| {
         ui.label(role);
@@ -149,6 +164,61 @@ fn what_section(
             .on_hover_text("relative luminance above which a pixel counts as glare");
             ui.end_row();
         }
+    });
+}
+
+/// A lens's eye: its centre of rotation (dragged, the view's eye, or the default 27 mm behind
+/// the back vertex), which eye (base in and out), and what the overlay maps.
+fn lens_section(
+    ui: &mut egui::Ui,
+    settings: &mut Settings,
+    map: &mut crate::analysis::LensMap,
+    default_centre: Vec3,
+    view_eye: Vec3,
+) {
+    use specula_analyze::lens::Eye;
+    use specula_analyze::lens_plot::Map;
+    ui.horizontal(|ui| {
+        ui.label("centre of rotation");
+        for (value, name) in [
+            (&mut settings.eye.x, "x"),
+            (&mut settings.eye.y, "y"),
+            (&mut settings.eye.z, "z"),
+        ] {
+            ui.add(
+                egui::DragValue::new(value)
+                    .speed(0.0005)
+                    .prefix(format!("{name} ")),
+            )
+            .on_hover_text("the eye's centre of rotation, world metres: drag to move it");
+        }
+    });
+    ui.horizontal(|ui| {
+        if ui
+            .button("the view's eye")
+            .on_hover_text("put the centre of rotation where the view's camera is")
+            .clicked()
+        {
+            settings.eye = view_eye;
+        }
+        if ui
+            .button("27 mm behind the lens")
+            .on_hover_text(
+                "the default: 27 mm behind the back vertex on the scene camera's view axis",
+            )
+            .clicked()
+        {
+            settings.eye = default_centre;
+        }
+    });
+    ui.horizontal(|ui| {
+        ui.label("eye");
+        ui.selectable_value(&mut settings.lens_eye, Eye::Right, "right");
+        ui.selectable_value(&mut settings.lens_eye, Eye::Left, "left");
+        ui.separator();
+        ui.label("map");
+        ui.selectable_value(map, Map::MeanPower, "mean power");
+        ui.selectable_value(map, Map::Cylinder, "cylinder");
     });
 }
 
@@ -378,6 +448,64 @@ fn figures_section(ui: &mut egui::Ui, analysis: &mut Analysis) {
                  seen, red blind",
             );
         }
+        Analysed::Lens(r) => {
+            let c = &r.centre;
+            let number = |v: Option<f64>| {
+                v.map(|v| format!("{v:.3}"))
+                    .unwrap_or_else(|| "outside".into())
+            };
+            egui::Grid::new("lens figures")
+                .num_columns(2)
+                .show(ui, |ui| {
+                    let mut row = |name: &str, value: String| {
+                        ui.label(name);
+                        ui.label(value);
+                        ui.end_row();
+                    };
+                    row(
+                        "at the centre",
+                        format!(
+                            "{} / {} × {}",
+                            number(c.sphere_d),
+                            number(c.cylinder_d),
+                            c.axis_deg.map(|a| format!("{a:.0}")).unwrap_or_default()
+                        ),
+                    );
+                    row("mean power", format!("{} D", number(c.mean_power_d)));
+                    if let Some([h, v]) = c.prism_d {
+                        row("prism", format!("{h:.2} Δ out, {v:.2} Δ up"));
+                    }
+                    let largest = |f: &dyn Fn(&specula_analyze::lens::Cell) -> Option<f64>| {
+                        r.grid
+                            .iter()
+                            .filter_map(f)
+                            .fold(0.0, |a: f64, v| a.max(v.abs()))
+                    };
+                    row(
+                        "largest cylinder",
+                        format!(
+                            "{:.3} D over ±{}° × ±{}°",
+                            largest(&|c| c.cylinder_d),
+                            r.gaze.h_max_deg,
+                            r.gaze.v_max_deg
+                        ),
+                    );
+                    if r.prescription.is_some() {
+                        row(
+                            "unwanted cylinder",
+                            format!("{:.3} D at most", largest(&|c| c.unwanted_cylinder_d)),
+                        );
+                    }
+                    row(
+                        "outside the lens",
+                        format!(
+                            "{} of {} gazes",
+                            r.grid.iter().filter(|c| c.outside).count(),
+                            r.grid.len()
+                        ),
+                    );
+                });
+        }
         Analysed::Glare(g) => {
             let r = &g.report;
             let shown = analysis.glare_eye().min(r.eyes.len() - 1);
@@ -416,6 +544,28 @@ fn figures_section(ui: &mut egui::Ui, analysis: &mut Analysis) {
     }
     if let Some(k) = select {
         analysis.selected_eye = Some(k);
+    }
+    if let Some(Analysed::Lens(r)) = analysis.outcome().map(|o| &o.result) {
+        let values: Vec<f64> = r
+            .grid
+            .iter()
+            .filter_map(|c| analysis.lens_map.value(c))
+            .collect();
+        let (lo, hi) = values
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                (a.min(*v), b.max(*v))
+            });
+        if lo.is_finite() {
+            ui.small(format!(
+                "on the lens: {} from {lo:.3} D (blue) to {hi:.3} D (yellow), lines every {} D",
+                match analysis.lens_map {
+                    specula_analyze::lens_plot::Map::Cylinder => "cylinder",
+                    _ => "mean power",
+                },
+                specula_analyze::lens_plot::map_interval(r, analysis.lens_map, lo, hi)
+            ));
+        }
     }
 }
 

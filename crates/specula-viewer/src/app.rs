@@ -724,6 +724,9 @@ fn advance_script(state: &mut WindowState, script: &mut ScriptRun) -> Result<(),
                     .settings(state.session.scene())
                     .map_err(|e| at(&e))?;
                 let mut analysis = crate::analysis::Analysis::new(settings);
+                if let Some(map) = request.lens_map {
+                    analysis.lens_map = map;
+                }
                 analysis.finish(state.session.live());
                 if let Some(error) = &analysis.error {
                     return Err(at(error));

@@ -35,9 +35,10 @@
 //! window_screenshot = "window.png"                  # the window as shown: panel, overlay
 //! ```
 //!
-//! An `analysis` step also takes `eye = [x, y, z]` (the centre eye point), `range`, `ground`
-//! and `tolerance`; `eyes` is "centre" or "ocular", `eyebox` is [W, H, NX, NY], `region` is
-//! [X0, Z0, X1, Z1]. The step waits for the analysis and prints its figures; so does each
+//! An `analysis` step also takes `eye = [x, y, z]` (the centre eye point; a lens's centre of
+//! rotation), `range`, `ground` and `tolerance`; `eyes` is "centre" or "ocular", `eyebox` is
+//! [W, H, NX, NY], `region` is [X0, Z0, X1, Z1]; `kind = "lens"` takes `map = "mean-power"` or
+//! `"cylinder"`. The step waits for the analysis and prints its figures; so does each
 //! screenshot taken while one is on (the screenshot shows its overlay).
 
 use std::path::{Path, PathBuf};
@@ -48,7 +49,7 @@ use serde::Deserialize;
 use specula_analyze::frame::Eyes;
 use specula_analyze::mirror_view::Region;
 
-use crate::analysis::{Kind, Request};
+use crate::analysis::{Kind, LensMap, Request};
 use crate::session::ViewMode;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -147,6 +148,7 @@ struct RawAnalysis {
     range: Option<f32>,
     ground: Option<f32>,
     tolerance: Option<f64>,
+    map: Option<String>,
 }
 
 #[derive(Deserialize)]
@@ -332,7 +334,8 @@ fn analysis(a: RawAnalysis) -> Result<Option<Request>, String> {
                 || a.region.is_some()
                 || a.range.is_some()
                 || a.ground.is_some()
-                || a.tolerance.is_some();
+                || a.tolerance.is_some()
+                || a.map.is_some();
             if others {
                 return Err("analysis: kind = \"off\" takes no other key".into());
             }
@@ -340,9 +343,10 @@ fn analysis(a: RawAnalysis) -> Result<Option<Request>, String> {
         }
         "mirror-view" => Kind::MirrorView,
         "glare" => Kind::Glare,
+        "lens" => Kind::Lens,
         other => {
             return Err(format!(
-                "analysis.kind = \"{other}\": expected mirror-view, glare or off"
+                "analysis.kind = \"{other}\": expected mirror-view, glare, lens or off"
             ))
         }
     };
@@ -384,8 +388,20 @@ fn analysis(a: RawAnalysis) -> Result<Option<Request>, String> {
             Region::new(x0, z0, x1, z1).map_err(|e| format!("analysis.region: {e}"))
         })
         .transpose()?;
+    let lens_map = match (a.map.as_deref(), kind) {
+        (None, _) => None,
+        (Some("mean-power"), Kind::Lens) => Some(LensMap::MeanPower),
+        (Some("cylinder"), Kind::Lens) => Some(LensMap::Cylinder),
+        (Some(other), Kind::Lens) => {
+            return Err(format!(
+                "analysis.map = \"{other}\": expected mean-power or cylinder"
+            ))
+        }
+        (Some(_), _) => return Err("analysis.map: only a lens analysis draws a map".into()),
+    };
     Ok(Some(Request {
         kind,
+        lens_map,
         object,
         source: a.source,
         eye: a.eye.map(Vec3::from_array),
