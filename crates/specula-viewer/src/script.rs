@@ -537,7 +537,17 @@ window_screenshot = "w.png"
             (
                 "[[step]]\nanalysis = { kind = \"fog\", object = \"m\" }",
                 "step 1",
-                "mirror-view, glare or off",
+                "mirror-view, glare, lens or off",
+            ),
+            (
+                "[[step]]\nanalysis = { kind = \"lens\", object = \"l\", map = \"prism\" }",
+                "step 1",
+                "mean-power or cylinder",
+            ),
+            (
+                "[[step]]\nanalysis = { kind = \"glare\", object = \"c\", map = \"cylinder\" }",
+                "step 1",
+                "only a lens",
             ),
             (
                 "[[step]]\nanalysis = { kind = \"glare\" }",
