@@ -360,3 +360,33 @@ fn bad_lens_input_is_a_clear_error() {
     ];
     assert_each_fails_naming(&["analyze", "lens"], &cases);
 }
+
+#[test]
+fn the_example_spectacles_give_back_their_prescription_at_the_centre() {
+    let scene =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/spectacles.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("lens.json");
+    let out = specula()
+        .args(["analyze", "lens"])
+        .arg(&scene)
+        .args(["--lens", "right lens", "--gaze", "10,10,10", "--json"])
+        .arg(&json)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let centre = &report["centre"];
+    let figure = |name: &str| centre[name].as_f64().unwrap();
+    assert_eq!(report["prescription"]["axis_deg"], 30.0);
+    // Measured 2026-12-02: −3.0001 / −1.0000 × 30.00.
+    assert!((figure("sphere_d") + 3.0).abs() < 3e-4, "{centre}");
+    assert!((figure("cylinder_d") + 1.0).abs() < 3e-4, "{centre}");
+    assert!((figure("axis_deg") - 30.0).abs() < 0.05, "{centre}");
+    assert!(figure("unwanted_cylinder_d") < 3e-4, "{centre}");
+}
