@@ -15,7 +15,7 @@
 //! once, or whose bundle does, is **outside the lens**.
 //!
 //! **Power.** From the object point on the chief ray (at infinity, or `object_distance` from C
-//! along the ray's path) a narrow bundle around the chief ray is traced through the lens to the
+//! in a straight line; at least 1 cm before the lens) a narrow bundle around the chief ray is traced through the lens to the
 //! vertex sphere (about C, through the back vertex), where the chief ray meets it at P. In the
 //! plane through P across the chief ray, in the eye's own (right, up), each ray's position x and
 //! slope u are measured; the bundle's vergence matrix is L = −(∂u/∂s)(∂x/∂s)⁻¹ (central
@@ -30,18 +30,21 @@
 //!
 //! **Against a prescription** (given, or the one a spectacle-lens shape was made from): the
 //! power-vector difference (M, J0, J45) with M = S + C/2, J0 = −(C/2) cos 2A,
-//! J45 = −(C/2) sin 2A: the power error ΔM and the unwanted cylinder 2 √(ΔJ0² + ΔJ45²).
+//! J45 = −(C/2) sin 2A: the power error ΔM and the unwanted cylinder 2 √(ΔJ0² + ΔJ45²). For a
+//! near object, ΔM is taken against the prescription plus the object's own vergence at the
+//! vertex sphere (what the wearer should get).
 //!
 //! **Prism:** the chief ray's deviation, 100 × the tangent of g' from g along the eye's right and
 //! up: horizontal positive base out (towards the temple of the chosen eye), vertical positive
 //! base up. **Lateral colour:** the angle between g' traced with the glass's red and blue indices
-//! (n_C and n_F), arcminutes. **Distortion:** the object-space angle of g' from the central
-//! chief ray's g'₀ against the gaze angle of g from `forward`, as the percent departure from the
-//! central magnification M₀ in that direction: 100 (θ_object / (M₀ θ_gaze) − 1). M₀ is the
-//! length of J u, J the derivative of the object's tangent coordinates by the gaze's at the
-//! centre (central differences at ±0.1°; a 2 × 2 matrix, since a toric lens magnifies its
-//! meridians differently) and u the gaze's direction on the tangent screen; the report's
-//! `central_magnification` is the mean of J's two column lengths.
+//! (n_C and n_F), arcminutes. **Distortion**, as lens design reports it (negative: barrel): on
+//! tangent screens (tangents along the primary right and up over forward), the gaze g_t against
+//! the paraxial image of the object's offset from the central chief ray's,
+//! 100 (|g_t| / |J⁻¹ (o_t − o_t₀)| − 1), where J is the derivative of the object's tangents by
+//! the gaze's at the centre (central differences at ±0.1°; a 2 × 2 matrix, since a toric lens
+//! magnifies its meridians differently). A view whose straight object lines stay straight and
+//! evenly spaced (the distortion picture) has none. The report's `spectacle_magnification` is
+//! 1 / |J e| along the horizontal and the vertical: the gaze's tangent per the object's.
 
 use glam::{DQuat, DVec3};
 use rayon::prelude::*;
@@ -61,7 +64,7 @@ pub const ROTATION_CENTRE_BEHIND_VERTEX_M: f64 = 0.027;
 /// A surface met beyond this incidence is the lens's edge, not an optical surface.
 const EDGE_INCIDENCE_DEG: f64 = 75.0;
 
-/// The gaze angle at which the central magnification is taken.
+/// The gaze angle at which the central magnification (J) is taken.
 const CENTRAL_GAZE_DEG: f64 = 0.1;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -83,7 +86,8 @@ impl Gaze {
     /// The grid's values along one axis, ascending, 0 included (0 alone for a grid
     /// [`analyze`] refuses: a step that is not positive, too many cells).
     fn values(max: f64, step: f64) -> Vec<f64> {
-        let n = (max / step + 1e-9).floor();
+        // A relative slack: 30 / 0.1 is 299.99999999999994 in floating point.
+        let n = (max / step * (1.0 + 1e-9) + 1e-9).floor();
         if !(step > 0.0 && (0.0..=1e6).contains(&n)) {
             return vec![0.0];
         }
@@ -179,9 +183,11 @@ impl<'a> LensTracer<'a> {
     /// The next surface point of the ray from `origin` along `dir`: the point, the interpolated
     /// normal (as stored: outward), in double precision.
     fn next_hit(&self, origin: DVec3, dir: DVec3) -> Option<(DVec3, DVec3)> {
-        // Past the surface the ray starts on; the exact point is found again below.
+        // Past the surface the ray starts on (by more than single precision's step there); the
+        // exact point is found again below.
+        let nudge = 1e-6 * (1.0 + origin.abs().max_element());
         let ray = Ray {
-            origin: (origin + dir * 1e-6).as_vec3(),
+            origin: (origin + dir * nudge).as_vec3(),
             dir: dir.as_vec3(),
         };
         let hit = self.accel.intersect(&ray, f32::INFINITY)?;
@@ -198,7 +204,22 @@ impl<'a> LensTracer<'a> {
         let denominator = d00 * d11 - d01 * d01;
         let b1 = (d11 * d20 - d01 * d21) / denominator;
         let b2 = (d00 * d21 - d01 * d20) / denominator;
-        let normal = (n[0] * (1.0 - b1 - b2) + n[1] * b1 + n[2] * b2).normalize();
+        // A sliver the single-precision test accepted but double precision cannot solve: its
+        // own hit, as the BVH found it.
+        let (point, b1, b2) = if point.is_finite() && b1.is_finite() && b2.is_finite() {
+            (point, b1, b2)
+        } else {
+            (
+                (ray.origin + ray.dir * hit.t).as_dvec3(),
+                f64::from(hit.b1),
+                f64::from(hit.b2),
+            )
+        };
+        // Within the triangle (a point on its edge may fall a rounding outside): no
+        // extrapolated normals.
+        let weights = DVec3::new(1.0 - b1 - b2, b1, b2).max(DVec3::ZERO);
+        let weights = weights / weights.element_sum().max(1e-300);
+        let normal = (n[0] * weights.x + n[1] * weights.y + n[2] * weights.z).try_normalize()?;
         Some((point, normal))
     }
 
@@ -233,8 +254,8 @@ impl<'a> LensTracer<'a> {
         Ok(Traced { points, dir: d })
     }
 
-    /// Whether `p` lies inside the lens: an odd number of crossings along each of three
-    /// directions (all three must agree; a ray grazing an edge could miscount one).
+    /// Whether `p` lies inside the lens: an odd number of crossings along at least two of three
+    /// directions (a ray grazing an edge could miscount one).
     pub fn contains(&self, p: DVec3) -> bool {
         let crossings = |dir: DVec3| {
             let mut count = 0;
@@ -408,7 +429,9 @@ pub struct Report {
     /// The largest change of any vergence between the bundle's step and half of it, over the
     /// grid, dioptres.
     pub finite_difference_change_d: f64,
-    pub central_magnification: f64,
+    /// At the centre, the gaze's tangent per the object's, horizontally and vertically (below 1
+    /// a minus lens minifies).
+    pub spectacle_magnification: [f64; 2],
     pub prescription: Option<PrescriptionReport>,
     pub centre: Cell,
     /// Row by row from the lowest v, each from the smallest h.
@@ -455,13 +478,16 @@ impl Setup<'_> {
         let b = out.cross(a);
         let front = chief.points[1];
         let p = o.rotation_centre + frame.gaze * self.vertex_sphere_radius;
+        let object = self.object_point(chief);
         let measure = |s1: f64, s2: f64| -> Result<([f64; 2], [f64; 2]), Failure> {
-            let (origin, dir) = match o.object_distance_m {
+            let (origin, dir) = match object {
                 None => (front + out * 0.01 + (a * s1 + b * s2) * step, -out),
-                Some(distance) => {
-                    let along = distance - (front - o.rotation_centre).length();
-                    let object = front + out * along.max(1e-3);
-                    (object, (-out + (a * s1 + b * s2) * step).normalize())
+                Some(object) => {
+                    let dir = (-out + (a * s1 + b * s2) * step).normalize();
+                    // Started on its own line 10 mm before the lens, so that a far object's
+                    // distance never reaches the single-precision BVH.
+                    let t = (front + out * 0.01 - object).dot(out) / dir.dot(out);
+                    (object + dir * t, dir)
                 }
             };
             let traced = self.tracer.trace(origin, dir, ior)?;
@@ -504,6 +530,16 @@ impl Setup<'_> {
         Ok([l[0][0], 0.5 * (l[0][1] + l[1][0]), l[1][1]])
     }
 
+    /// The object point on the chief ray's object-space line, `object_distance` from the centre
+    /// of rotation (None: at infinity).
+    fn object_point(&self, chief: &Traced) -> Option<DVec3> {
+        let distance = self.options.object_distance_m?;
+        let from_centre = chief.points[1] - self.options.rotation_centre;
+        let along = from_centre.dot(chief.dir);
+        let reach = along * along - from_centre.length_squared() + distance * distance;
+        Some(chief.points[1] + chief.dir * (-along + reach.max(0.0).sqrt()))
+    }
+
     /// The chief ray at a gaze, traced out of the eye with index `ior`.
     fn chief(&self, frame: &EyeFrame, ior: f64) -> Result<Traced, Failure> {
         self.tracer
@@ -511,6 +547,7 @@ impl Setup<'_> {
     }
 }
 
+/// The angle between two unit directions, accurate when small.
 fn angle_between(a: DVec3, b: DVec3) -> f64 {
     a.cross(b).length().atan2(a.dot(b))
 }
@@ -546,6 +583,19 @@ pub fn analyze(
             ),
         })?;
     let vertex_sphere_radius = (primary.points[0] - options.rotation_centre).length();
+    if let Some(distance) = options.object_distance_m {
+        let front = (primary.points[1] - options.rotation_centre).length();
+        if distance < front + 0.01 {
+            return Err(AnalyzeError::BadOption {
+                option: "--object-distance",
+                reason: format!(
+                    "{distance} m from the centre of rotation puts the object at or behind the \
+                     lens, whose front is {front:.4} m away: give more than {:.3} m",
+                    front + 0.01
+                ),
+            });
+        }
+    }
     let setup = Setup {
         tracer,
         options,
@@ -553,7 +603,6 @@ pub fn analyze(
         indices,
         vertex_sphere_radius,
     };
-    let centre_object = primary.dir;
     // The central magnification, per direction: the derivative of the object's tangent
     // coordinates by the gaze's at the centre (2 × 2: a toric lens magnifies its meridians
     // differently), by central differences at ±0.1° of gaze.
@@ -562,33 +611,32 @@ pub fn analyze(
         [out.dot(right) / along, out.dot(options.up) / along]
     };
     let delta = CENTRAL_GAZE_DEG.to_radians().tan();
-    let mut central = [[1.0, 0.0], [0.0, 1.0]];
+    let mut j = [[0.0; 2]; 2];
     for (k, (h, v)) in [(1.0, 0.0), (0.0, 1.0)].into_iter().enumerate() {
         let at = |sign: f64| {
             let frame = setup.frame(sign * h * CENTRAL_GAZE_DEG, sign * v * CENTRAL_GAZE_DEG);
-            setup
-                .chief(&frame, indices.y)
-                .ok()
-                .map(|c| tangent_of(c.dir))
+            setup.chief(&frame, indices.y).map(|c| tangent_of(c.dir))
         };
-        if let (Some(plus), Some(minus)) = (at(1.0), at(-1.0)) {
-            for (row, column) in central.iter_mut().enumerate() {
-                column[k] = (plus[row] - minus[row]) / (2.0 * delta);
-            }
+        let (plus, minus) = at(1.0)
+            .and_then(|p| Ok((p, at(-1.0)?)))
+            .map_err(|failure| AnalyzeError::BadOption {
+                option: "--rotation-centre",
+                reason: format!(
+                    "the primary gaze meets the edge of '{}' ({failure:?}): the centre of \
+                     rotation must look through the lens",
+                    lens.name
+                ),
+            })?;
+        for (row, column) in j.iter_mut().enumerate() {
+            column[k] = (plus[row] - minus[row]) / (2.0 * delta);
         }
     }
-    let central_magnification =
-        0.5 * (central[0][0].hypot(central[1][0]) + central[0][1].hypot(central[1][1]));
-    let cell = |h: f64, v: f64| {
-        figures(
-            &setup,
-            h,
-            v,
-            centre_object,
-            &central,
-            options.prescription.as_ref(),
-        )
+    let central = Central {
+        j,
+        object_tangent: tangent_of(primary.dir),
     };
+    let spectacle_magnification = [1.0 / j[0][0].hypot(j[1][0]), 1.0 / j[0][1].hypot(j[1][1])];
+    let cell = |h: f64, v: f64| figures(&setup, h, v, &central, options.prescription.as_ref());
     let (horizontal, vertical) = (options.gaze.horizontal(), options.gaze.vertical());
     let done = std::sync::atomic::AtomicUsize::new(0);
     let rows: Vec<Vec<Cell>> = vertical
@@ -622,7 +670,7 @@ pub fn analyze(
         rows: vertical.len(),
         step_mm: options.step_m * 1e3,
         finite_difference_change_d,
-        central_magnification,
+        spectacle_magnification,
         prescription: options.prescription.map(|p| {
             let p = p.minus_cylinder();
             PrescriptionReport {
@@ -654,8 +702,7 @@ fn validate(options: &Options) -> Result<(), AnalyzeError> {
             ),
         });
     }
-    let cells = (2.0 * (g.h_max_deg / g.step_deg).floor() + 1.0)
-        * (2.0 * (g.v_max_deg / g.step_deg).floor() + 1.0);
+    let cells = g.horizontal().len() as f64 * g.vertical().len() as f64;
     if cells > 1e6 {
         return Err(AnalyzeError::BadOption {
             option: "--gaze",
@@ -670,6 +717,20 @@ fn validate(options: &Options) -> Result<(), AnalyzeError> {
             });
         }
     }
+    let (f, u) = (options.forward, options.up);
+    let unit = |v: DVec3| v.is_finite() && (v.length() - 1.0).abs() < 1e-6;
+    if !(unit(f) && unit(u) && f.dot(u).abs() < 1e-6) {
+        return Err(AnalyzeError::BadOption {
+            option: "forward and up",
+            reason: format!("{f} and {u} must be perpendicular unit vectors"),
+        });
+    }
+    if !(options.step_m.is_finite() && options.step_m > 0.0) {
+        return Err(AnalyzeError::BadOption {
+            option: "--step-mm",
+            reason: format!("{} m: the bundle needs a positive width", options.step_m),
+        });
+    }
     if !options.rotation_centre.is_finite() {
         return Err(AnalyzeError::BadOption {
             option: "--rotation-centre",
@@ -679,13 +740,45 @@ fn validate(options: &Options) -> Result<(), AnalyzeError> {
     Ok(())
 }
 
+/// The central chief ray's object tangents and the derivative J of the object's tangents by
+/// the gaze's there.
+struct Central {
+    j: [[f64; 2]; 2],
+    object_tangent: [f64; 2],
+}
+
+impl Central {
+    /// The distortion at gaze (`h`, `v`) degrees whose chief ray leaves along the object
+    /// tangents `object` (module doc); 0 at the centre, None where J cannot be inverted.
+    fn distortion(&self, h: f64, v: f64, object: [f64; 2]) -> Option<f64> {
+        let gaze = [h.to_radians().tan(), v.to_radians().tan()];
+        let length = gaze[0].hypot(gaze[1]);
+        if length < 1e-12 {
+            return Some(0.0);
+        }
+        let j = self.j;
+        let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+        if det.abs() < 1e-12 {
+            return None;
+        }
+        let offset = [
+            object[0] - self.object_tangent[0],
+            object[1] - self.object_tangent[1],
+        ];
+        let paraxial = [
+            (j[1][1] * offset[0] - j[0][1] * offset[1]) / det,
+            (-j[1][0] * offset[0] + j[0][0] * offset[1]) / det,
+        ];
+        Some(100.0 * (length / paraxial[0].hypot(paraxial[1]) - 1.0))
+    }
+}
+
 /// One gaze direction's figures (see the module doc).
 fn figures(
     setup: &Setup,
     h: f64,
     v: f64,
-    centre_object: DVec3,
-    central: &[[f64; 2]; 2],
+    central: &Central,
     prescription: Option<&Prescription>,
 ) -> Cell {
     let outside = Cell {
@@ -742,31 +835,33 @@ fn figures(
         (Ok(red), Ok(blue)) => Some(angle_between(red.dir, blue.dir).to_degrees() * 60.0),
         _ => None,
     };
-    let gaze_angle = angle_between(frame.gaze, o.forward);
-    let distortion = if gaze_angle > 1e-9 {
-        // The central magnification in this gaze's direction.
-        let (th, tv) = (h.to_radians().tan(), v.to_radians().tan());
-        let length = th.hypot(tv);
-        let (uh, uv) = (th / length, tv / length);
-        let magnification = (central[0][0] * uh + central[0][1] * uv)
-            .hypot(central[1][0] * uh + central[1][1] * uv);
-        let object_angle = angle_between(out, centre_object);
-        100.0 * (object_angle / (magnification * gaze_angle) - 1.0)
-    } else {
-        0.0
-    };
+    let forward_part = out.dot(o.forward);
+    let object_tangent = [
+        out.dot(setup.right) / forward_part,
+        out.dot(o.up) / forward_part,
+    ];
+    let distortion = central.distortion(h, v, object_tangent);
     let (power_error_d, unwanted_cylinder_d) = match prescription {
         Some(p) => {
             let p = p.minus_cylinder();
             let rx = Power::power_vector(p.sphere, p.cylinder, p.axis_deg);
             let got = Power::power_vector(power.sphere_d, power.cylinder_d, power.axis_deg);
-            let (dm, dj0, dj45) = (got[0] - rx[0], got[1] - rx[1], got[2] - rx[2]);
+            // From a near object the wearer should get its own vergence at the vertex sphere
+            // plus the prescription.
+            let vertex_point = o.rotation_centre + frame.gaze * setup.vertex_sphere_radius;
+            let object_vergence = setup
+                .object_point(&chief)
+                .map_or(0.0, |object| -1.0 / (object - vertex_point).length());
+            let (dm, dj0, dj45) = (
+                got[0] - rx[0] - object_vergence,
+                got[1] - rx[1],
+                got[2] - rx[2],
+            );
             (Some(dm), Some(2.0 * dj0.hypot(dj45)))
         }
         None => (None, None),
     };
     let back = chief.points[0] - (o.rotation_centre + o.forward * setup.vertex_sphere_radius);
-    let forward_part = out.dot(o.forward);
     Cell {
         gaze_deg: [h, v],
         outside: false,
@@ -776,26 +871,32 @@ fn figures(
         mean_power_d: Some(power.mean_power_d),
         prism_d: Some(prism),
         lateral_colour_arcmin: colour,
-        distortion_percent: Some(distortion),
+        distortion_percent: distortion,
         power_error_d,
         unwanted_cylinder_d,
         back_point_mm: Some([back.dot(setup.right) * 1e3, back.dot(o.up) * 1e3]),
-        object_tangent: Some([
-            out.dot(setup.right) / forward_part,
-            out.dot(o.up) / forward_part,
-        ]),
+        object_tangent: Some(object_tangent),
         fd_change_d,
     }
 }
 
-/// The primary gaze and up of `camera`: its view direction, and its up made perpendicular.
-pub fn primary_frame(camera: &Camera) -> (DVec3, DVec3) {
+/// The primary gaze and up of `camera`: its view direction, and its up made perpendicular
+/// (refused where they are parallel: the axes and prisms would have no orientation).
+pub fn primary_frame(camera: &Camera) -> Result<(DVec3, DVec3), AnalyzeError> {
     let forward = (camera.target - camera.eye).as_dvec3().normalize();
     let up = camera.up.as_dvec3();
     let up = (up - forward * up.dot(forward))
         .try_normalize()
-        .unwrap_or_else(|| forward.any_orthonormal_vector());
-    (forward, up)
+        .filter(|_| forward.is_finite())
+        .ok_or_else(|| AnalyzeError::BadOption {
+            option: "camera",
+            reason: format!(
+                "the camera's up {} is parallel to its view direction: the wearer's up (for \
+                 the axis and the prism) is undefined",
+                camera.up
+            ),
+        })?;
+    Ok((forward, up))
 }
 
 /// The default options for `lens` in `scene`: the right eye, its centre of rotation 27 mm
@@ -813,7 +914,7 @@ pub fn default_options_with(
     find_centre: bool,
 ) -> Result<Options, AnalyzeError> {
     indices(scene, lens)?;
-    let (forward, up) = primary_frame(&scene.camera);
+    let (forward, up) = primary_frame(&scene.camera)?;
     let rotation_centre = if find_centre {
         back_vertex(scene, lens, &scene.camera)? - forward * ROTATION_CENTRE_BEHIND_VERTEX_M
     } else {

@@ -115,12 +115,14 @@ pub fn iso_segments(
                 4 => {
                     // A saddle: the centre's value says which pairs join.
                     let centre = 0.25 * (a + b + c + d);
+                    // With the centre on a's (and c's) side, a and c join: the lines cut off
+                    // b (edges 0 and 1) and d (edges 2 and 3).
                     if (centre < level) == (a < level) {
-                        segments.push([crossings[0], crossings[3]]);
-                        segments.push([crossings[1], crossings[2]]);
-                    } else {
                         segments.push([crossings[0], crossings[1]]);
                         segments.push([crossings[2], crossings[3]]);
+                    } else {
+                        segments.push([crossings[0], crossings[3]]);
+                        segments.push([crossings[1], crossings[2]]);
                     }
                 }
                 _ => {}
@@ -476,6 +478,16 @@ mod tests {
         assert_eq!(segments.len(), 2);
         for [a, b] in segments {
             assert!((a[0] - 1.5).abs() < 1e-12 && (b[0] - 1.5).abs() < 1e-12);
+        }
+        // A saddle whose centre sides with a and c: the lines cut off b and d.
+        // Row 0: a = 1, b = 0; row 1: d = 0, c = 1.
+        let saddle = [Some(1.0), Some(0.0), Some(0.0), Some(1.0)];
+        let lines = iso_segments(&saddle, 2, 2, 0.4);
+        assert_eq!(lines.len(), 2);
+        for [p, q] in lines {
+            // Each line runs near b = (1, 0) or near d = (0, 1), never across the a–c diagonal.
+            let mid = [(p[0] + q[0]) * 0.5, (p[1] + q[1]) * 0.5];
+            assert!((mid[0] - mid[1]).abs() > 0.2, "{p:?} {q:?}");
         }
         // A missing corner drops its cells.
         let mut holed = values.clone();

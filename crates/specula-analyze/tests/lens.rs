@@ -346,12 +346,15 @@ fn a_plane_parallel_plate_has_no_power_prism_colour_or_distortion_at_any_gaze() 
     }
     eprintln!(
         "largest over ±30°: mean power {:.1e} D, cylinder {:.1e} D, prism {:.1e} Δ, colour \
-         {:.1e}′, distortion {:.1e} %; central magnification {}",
-        largest[0], largest[1], largest[2], largest[3], largest[4], report.central_magnification
+         {:.1e}′, distortion {:.1e} %; spectacle magnification {:?}",
+        largest[0], largest[1], largest[2], largest[3], largest[4], report.spectacle_magnification
     );
     // Measured: 0 to 5e-13 (rounding).
     assert!(largest.iter().all(|l| *l < 1e-9), "{largest:?}");
-    assert!((report.central_magnification - 1.0).abs() < 1e-6);
+    assert!(report
+        .spectacle_magnification
+        .iter()
+        .all(|m| (m - 1.0).abs() < 1e-9));
 }
 
 #[test]
@@ -379,4 +382,64 @@ fn a_toric_lens_converges_as_its_tessellation_doubles() {
     eprintln!("48 × 192 against 96 × 384 rings × segments: {largest:.2e} D at most");
     // Measured 2026-12-02: 3.7e-3 D (at a 30°, 30° corner).
     assert!(largest < 7e-3);
+}
+
+#[test]
+fn a_near_object_s_exit_vergence_follows_the_thick_lens_vergence_equations() {
+    // Object at 0.4 m from the centre of rotation, on the axis: its vergence at the front
+    // vertex L1 = −1/u, then L1' = L1 + F1, L2 = L1' / (1 − (t/n) L1'), L2' = L2 + F2 at the back
+    // vertex, which the vertex sphere touches at the centre.
+    let (r1, r2, t, n) = (0.12f32, 0.075f32, 0.002f32, 1.6f32);
+    let scene = spherical(r1, r2, t, n, 0.05);
+    let report = run(&scene, |o| {
+        o.gaze.h_max_deg = 0.0;
+        o.gaze.v_max_deg = 0.0;
+        o.object_distance_m = Some(0.4);
+    });
+    let (r1, r2, t, n) = (f64::from(r1), f64::from(r2), f64::from(t), f64::from(n));
+    let u = 0.4 - (report.vertex_sphere_radius_m + t);
+    let l1 = -1.0 / u + (n - 1.0) / r1;
+    let expected = l1 / (1.0 - t / n * l1) + (1.0 - n) / r2;
+    let sphere = report.centre.sphere_d.unwrap();
+    eprintln!("near: {sphere:.5} D against {expected:.5} D");
+    // Measured 2026-12-02: −5.68888 D against −5.68876 D (1.2e-4 D).
+    assert!(
+        (sphere - expected).abs() < 3e-4,
+        "{sphere} against {expected}"
+    );
+    // An object nearer than the lens is refused.
+    let mut options = default_options(&scene, 0).unwrap();
+    options.object_distance_m = Some(0.02);
+    let error = analyze(&scene, &options, &|_| {}).unwrap_err().to_string();
+    assert!(error.contains("at or behind the lens"), "{error}");
+}
+
+#[test]
+fn an_oblique_minus_cylinder_s_axis_is_where_an_examiner_reads_it() {
+    // Axis 45 (TABO, from the examiner's right, the wearer's left): the sphere meridian runs up
+    // to the wearer's left, so in world coordinates (x the wearer's right) the direction
+    // (−1, 1) meets the sphere power and (1, 1) the more minus sphere + cylinder. A left/right
+    // mirror of the conventions would swap them.
+    let p = prescription(-1.0, -2.0, 45.0);
+    let scene = generated(&p, 48, 192);
+    let tracer = LensTracer::new(&scene.meshes[0]);
+    let power = |offset: DVec3| {
+        let slope = |sign: f64| {
+            let origin = DVec3::new(0.0, 0.0, -0.05) + offset * sign;
+            let out = tracer.trace(origin, DVec3::Z, 1.6).unwrap().dir;
+            (out / out.z).dot(offset.normalize())
+        };
+        -(slope(1.0) - slope(-1.0)) / (2.0 * offset.length())
+    };
+    let up_left = power(DVec3::new(-1e-3, 1e-3, 0.0));
+    let up_right = power(DVec3::new(1e-3, 1e-3, 0.0));
+    eprintln!("world: {up_left:.4} D along (−1, 1), {up_right:.4} D along (1, 1)");
+    // Measured 2026-12-02: −0.9951 and −2.9858 D (a 1 mm pair sees a little spherical
+    // aberration).
+    assert!((up_left - -1.0).abs() < 0.01 && (up_right - -3.0).abs() < 0.03);
+    let report = run(&scene, |o| {
+        o.gaze.h_max_deg = 0.0;
+        o.gaze.v_max_deg = 0.0;
+    });
+    assert!((report.centre.axis_deg.unwrap() - 45.0).abs() < 0.05);
 }

@@ -46,7 +46,7 @@ pub struct LensArgs {
     rotation_centre: Option<Vec3>,
     /// The gaze grid H_MAX,V_MAX,STEP in degrees (cells at 0 included).
     #[arg(long, default_value = "30,30,2.5", value_parser = parse_gaze)]
-    gaze: [f32; 3],
+    gaze: [f64; 3],
     /// The object's distance from the eye's centre of rotation, metres (default: infinity;
     /// e.g. 0.4 for near vision).
     #[arg(long)]
@@ -74,8 +74,16 @@ enum EyeSide {
     Left,
 }
 
-fn parse_gaze(text: &str) -> Result<[f32; 3], String> {
-    numbers::<3>(text, "H_MAX,V_MAX,STEP")
+/// In double precision: a step of 0.1 as a float would end the grid at 29.9°.
+fn parse_gaze(text: &str) -> Result<[f64; 3], String> {
+    let values: Vec<f64> = text
+        .split(',')
+        .map(|v| v.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("expected H_MAX,V_MAX,STEP, got '{text}'"))?;
+    values
+        .try_into()
+        .map_err(|_| format!("expected H_MAX,V_MAX,STEP (3 numbers), got '{text}'"))
 }
 
 #[derive(clap::Args)]
@@ -255,7 +263,7 @@ fn lens(args: LensArgs) -> Result<()> {
         EyeSide::Right => lens::Eye::Right,
         EyeSide::Left => lens::Eye::Left,
     };
-    let [h, v, step] = args.gaze.map(f64::from);
+    let [h, v, step] = args.gaze;
     options.gaze = lens::Gaze {
         h_max_deg: h,
         v_max_deg: v,

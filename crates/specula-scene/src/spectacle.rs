@@ -134,7 +134,8 @@ impl Prescription {
 /// arc's reach).
 fn arc_sag(c: f64, r: f64) -> Option<f64> {
     let k = 1.0 - c * c * r * r;
-    (k >= 0.0).then(|| c * r * r / (1.0 + k.sqrt()))
+    // Short of the arc's end, where its slope is infinite.
+    (k > 1e-12).then(|| c * r * r / (1.0 + k.sqrt()))
 }
 
 /// d(sag)/dr of the arc.
@@ -153,7 +154,7 @@ fn toric(cu: f64, cv: f64, u: f64, v: f64) -> Option<(f64, f64, f64)> {
     let radius = 1.0 / cu;
     let d = radius - zv;
     let k = d * d - u * u;
-    if k < 0.0 || d * radius <= 0.0 {
+    if k <= 1e-12 * d * d || d * radius <= 0.0 {
         return None;
     }
     let s = k.sqrt();
@@ -230,6 +231,27 @@ pub fn spectacle_lens(
     let bad = |message: String| SceneError::invalid("spectacle-lens", message);
     // Every rim point must exist on both surfaces, with glass between them.
     let mut thinnest = f64::INFINITY;
+    let at = |u: f32, v: f32| {
+        // The seam's columns coincide exactly (see generators::turn).
+        let phi = if u >= 1.0 { 0.0 } else { f64::from(u) * TAU };
+        let rho = f64::from(v) * rim;
+        (rho * phi.cos(), rho * phi.sin())
+    };
+    // Every vertex the mesh places must lie on both surfaces (the grid's own coordinates, so
+    // that building it cannot fail), and the rim, sampled finer, must hold glass.
+    let reaches = (0..=segments).all(|i| {
+        (0..=rings).all(|j| {
+            let (x, y) = at(i as f32 / segments as f32, j as f32 / rings as f32);
+            shape.front(x, y).is_some() && shape.back(x, y).is_some()
+        })
+    });
+    if !reaches {
+        return Err(bad(format!(
+            "a surface of this prescription does not reach a {} mm rim: choose a smaller \
+             diameter or a flatter base curve",
+            p.diameter * 1e3
+        )));
+    }
     for k in 0..segments * 4 {
         let phi = TAU * f64::from(k) / f64::from(segments * 4);
         let (x, y) = (rim * phi.cos(), rim * phi.sin());
@@ -255,12 +277,6 @@ pub fn spectacle_lens(
         p: point.as_vec3(),
         n: normal.as_vec3(),
         uv: Vec2::new((0.5 + x / p.diameter) as f32, (0.5 - y / p.diameter) as f32),
-    };
-    let at = |u: f32, v: f32| {
-        // The seam's columns coincide exactly (see generators::turn).
-        let phi = if u >= 1.0 { 0.0 } else { f64::from(u) * TAU };
-        let rho = f64::from(v) * rim;
-        (rho * phi.cos(), rho * phi.sin())
     };
     append_grid(&mut mesh, segments, rings, |u, v| {
         let (x, y) = at(u, v);

@@ -1119,6 +1119,15 @@ fn toml_spectacle_lens_errors_name_the_object_and_what_is_wrong() {
         let message = error_of(&write(dir.path(), "s.toml", text));
         assert_mentions(&message, &wanted);
     }
+    let scaled = SPECTACLES.replacen(
+        "translate = [0, 0, -0.014]\n",
+        "translate = [0, 0, -0.014]\nscale = [-1, 1, 1]\n",
+        1,
+    );
+    assert_mentions(
+        &error_of(&write(dir.path(), "x.toml", scaled)),
+        &["objects[0].scale", "would change its powers"],
+    );
     let other = TOML_SCENE.replacen("material = \"grey\"\n", "", 1);
     assert_mentions(
         &error_of(&write(dir.path(), "m.toml", other)),

@@ -821,6 +821,15 @@ fn listed_scene(shown: &str, file: &SceneFile, base: &Path) -> Result<Scene, Sce
                 ))
             }
         };
+        if prescription.is_some() && object.scale.is_some() {
+            return Err(SceneError::invalid(
+                shown,
+                format!(
+                    "{path}.scale: a spectacle lens is made to its prescription's size; a scale \
+                     would change its powers (or mirror its axis): set the diameter instead"
+                ),
+            ));
+        }
         let world_from_object = placement(object.translate, object.rotate_deg, object.scale)
             .map_err(|e| at(path.clone(), e))?;
         for mut mesh in shape_meshes(&object.shape, base, &mut warnings)
