@@ -63,6 +63,7 @@ fn main() {
         accel: live.accel(),
         max_depth,
     };
+    let pixel_rays = camera.pixel_rays(width, height);
     let mut reference = rest.clone();
     let mut reference_times = Vec::new();
     let mut reference_rays = 0;
@@ -72,7 +73,7 @@ fn main() {
             .par_iter()
             .map(|&k| {
                 let before = rays_traced_on_this_thread();
-                let c = pixel_radiance(&tracer, &camera, k % width, k / width, width, height, 1);
+                let c = pixel_radiance(&tracer, &pixel_rays, k % width, k / width, 1);
                 let after = rays_traced_on_this_thread();
                 (k, c, after.0 - before.0 + after.1 - before.1)
             })

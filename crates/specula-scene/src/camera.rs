@@ -21,6 +21,29 @@ pub struct CameraFrame {
     pub forward: Vec3,
 }
 
+/// A camera's rays for one image size ([`Camera::pixel_rays`]): the same directions as
+/// [`Camera::ray_direction`], bit for bit.
+#[derive(Clone, Copy, Debug)]
+pub struct PixelRays {
+    pub eye: Vec3,
+    pub frame: CameraFrame,
+    tan_half: f32,
+    aspect: f32,
+    width: f32,
+    height: f32,
+}
+
+impl PixelRays {
+    /// Unit direction (world space) of the ray through the image point (`x`, `y`) in pixels
+    /// from the top-left corner.
+    #[inline]
+    pub fn direction(&self, x: f32, y: f32) -> Vec3 {
+        let ndc_x = (2.0 * x / self.width - 1.0) * self.tan_half * self.aspect;
+        let ndc_y = (1.0 - 2.0 * y / self.height) * self.tan_half;
+        (self.frame.forward + ndc_x * self.frame.right + ndc_y * self.frame.up).normalize()
+    }
+}
+
 impl Camera {
     pub fn frame(&self) -> CameraFrame {
         let forward = (self.target - self.eye).normalize();
@@ -37,12 +60,20 @@ impl Camera {
     /// Unit direction (world space) of the ray through the image point (`x`, `y`) in pixels,
     /// measured from the top-left corner of a `width` x `height` image.
     pub fn ray_direction(&self, x: f32, y: f32, width: u32, height: u32) -> Vec3 {
-        let frame = self.frame();
-        let tan_half = (self.fov_y_deg.to_radians() * 0.5).tan();
-        let aspect = width as f32 / height as f32;
-        let ndc_x = (2.0 * x / width as f32 - 1.0) * tan_half * aspect;
-        let ndc_y = (1.0 - 2.0 * y / height as f32) * tan_half;
-        (frame.forward + ndc_x * frame.right + ndc_y * frame.up).normalize()
+        self.pixel_rays(width, height).direction(x, y)
+    }
+
+    /// The rays of a `width` × `height` image, the frame and field of view worked out once (a
+    /// frame's millions of rays need not each recompute them).
+    pub fn pixel_rays(&self, width: u32, height: u32) -> PixelRays {
+        PixelRays {
+            eye: self.eye,
+            frame: self.frame(),
+            tan_half: (self.fov_y_deg.to_radians() * 0.5).tan(),
+            aspect: width as f32 / height as f32,
+            width: width as f32,
+            height: height as f32,
+        }
     }
 
     pub fn is_valid(&self) -> bool {

@@ -18,7 +18,7 @@ pub mod scene;
 pub mod spectacle;
 pub mod texture;
 
-pub use camera::Camera;
+pub use camera::{Camera, PixelRays};
 pub use error::SceneError;
 pub use light::Light;
 pub use material::{Material, MaterialKind};

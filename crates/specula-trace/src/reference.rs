@@ -47,7 +47,8 @@ impl Default for RenderSettings {
     }
 }
 
-const TILE: u32 = 16;
+/// Rows in one band of a frame that a thread renders at a time.
+const BAND_ROWS: u32 = 16;
 
 /// What the shading at a hit needs: position, normals facing the incoming ray, texture
 /// coordinate, and whether the ray arrived from the back of the surface.
@@ -335,10 +336,14 @@ impl Tracer<'_> {
     ) -> Vec3 {
         let scene = self.scene;
         tree.ray(step, Some(hit.mesh));
+        let material = &scene.materials[scene.meshes[hit.mesh as usize].material];
+        // An unlit, untextured surface's radiance is its colour: nothing of the hit is needed.
+        if material.kind == MaterialKind::Unlit && material.texture.is_none() {
+            return material.color;
+        }
         // Children start at this hit.
         let step = step.advanced(hit.t);
         let sp = surface_point(scene, ray, hit);
-        let material = &scene.materials[sp.material];
         let base = || {
             let texture = material
                 .texture
@@ -555,28 +560,28 @@ pub fn pixel_samples(x: u32, y: u32, spp: u32) -> Vec<Vec2> {
 /// `spp` samples ([`pixel_samples`]).
 pub fn pixel_radiance(
     tracer: &Tracer,
-    camera: &specula_scene::Camera,
+    rays: &specula_scene::PixelRays,
     x: u32,
     y: u32,
-    width: u32,
-    height: u32,
     spp: u32,
 ) -> Vec3 {
+    let trace = |s: Vec2| {
+        let dir = rays.direction(x as f32 + s.x, y as f32 + s.y);
+        tracer.radiance(
+            &Ray {
+                origin: rays.eye,
+                dir,
+            },
+            0,
+            None,
+        )
+    };
+    // One ray through the centre: no sample list to make.
+    if spp <= 1 {
+        return trace(Vec2::splat(0.5));
+    }
     let samples = pixel_samples(x, y, spp);
-    let sum: Vec3 = samples
-        .iter()
-        .map(|s| {
-            let dir = camera.ray_direction(x as f32 + s.x, y as f32 + s.y, width, height);
-            tracer.radiance(
-                &Ray {
-                    origin: camera.eye,
-                    dir,
-                },
-                0,
-                None,
-            )
-        })
-        .sum();
+    let sum: Vec3 = samples.iter().map(|s| trace(*s)).sum();
     sum / samples.len() as f32
 }
 
@@ -599,40 +604,25 @@ pub fn render(
         accel,
         max_depth,
     };
-    let tiles_x = width.div_ceil(TILE);
-    let tiles_y = height.div_ceil(TILE);
-    let total = (tiles_x * tiles_y) as usize;
+    let rays = scene.camera.pixel_rays(width, height);
+    // Bands of rows, each written in place: the rays of a band are as coherent as a tile's
+    // and nothing is gathered or copied afterwards.
+    let band = (BAND_ROWS * width) as usize;
+    let total = (height as usize).div_ceil(BAND_ROWS as usize);
     let done = AtomicUsize::new(0);
-    let tiles: Vec<(u32, u32, Vec<Vec3>)> = (0..tiles_x * tiles_y)
-        .into_par_iter()
-        .map(|tile| {
-            let (x0, y0) = ((tile % tiles_x) * TILE, (tile / tiles_x) * TILE);
-            let mut pixels = Vec::with_capacity((TILE * TILE) as usize);
-            for y in y0..(y0 + TILE).min(height) {
-                for x in x0..(x0 + TILE).min(width) {
-                    pixels.push(pixel_radiance(
-                        &tracer,
-                        &scene.camera,
-                        x,
-                        y,
-                        width,
-                        height,
-                        spp,
-                    ));
-                }
+    let mut image = Image::new(width, height);
+    image
+        .pixels
+        .par_chunks_mut(band)
+        .enumerate()
+        .for_each(|(k, pixels)| {
+            let y0 = k as u32 * BAND_ROWS;
+            for (i, pixel) in pixels.iter_mut().enumerate() {
+                let (x, y) = (i as u32 % width, y0 + i as u32 / width);
+                *pixel = pixel_radiance(&tracer, &rays, x, y, spp);
             }
             progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
-            (x0, y0, pixels)
-        })
-        .collect();
-    let mut image = Image::new(width, height);
-    for (x0, y0, pixels) in tiles {
-        let tile_width = (x0 + TILE).min(width) - x0;
-        for (i, p) in pixels.into_iter().enumerate() {
-            let (x, y) = (x0 + i as u32 % tile_width, y0 + i as u32 / tile_width);
-            image.pixels[(y * width + x) as usize] = p;
-        }
-    }
+        });
     image
 }
 

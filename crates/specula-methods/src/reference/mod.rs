@@ -205,6 +205,7 @@ impl Technique for Reference {
         let (tiles_x, tiles_y) = (width.div_ceil(TILE), height.div_ceil(TILE));
         let tiles = tiles_x * tiles_y;
         let batch = (rayon::current_num_threads() as u32 * 2).max(1);
+        let pixel_rays = camera.pixel_rays(width, height);
         let (mut camera_rays, mut rays_traced, mut shadow_rays) = (0u64, 0u64, 0u64);
         while progress.level < LEVELS.len() {
             let level = progress.level;
@@ -225,13 +226,7 @@ impl Technique for Reference {
                                 .filter(move |&x| traced_at(x, y, level, first_level))
                                 .map(move |x| (x, y))
                         })
-                        .map(|(x, y)| {
-                            (
-                                x,
-                                y,
-                                pixel_radiance(&tracer, camera, x, y, width, height, spp),
-                            )
-                        })
+                        .map(|(x, y)| (x, y, pixel_radiance(&tracer, &pixel_rays, x, y, spp)))
                         .collect();
                     let after = rays_traced_on_this_thread();
                     (pixels, (after.0 - before.0, after.1 - before.1))

@@ -514,6 +514,7 @@ impl FrameSetup {
             max_depth,
         };
         let topology = &self.topology;
+        let pixel_rays = camera.pixel_rays(width, height);
         let (pixels, rays): (Vec<Vec3>, Vec<(u64, u64)>) = (0..width * height)
             .into_par_iter()
             .map(|k| {
@@ -522,7 +523,7 @@ impl FrameSetup {
                     return (Vec3::ZERO, (0, 0));
                 }
                 let before = rays_traced_on_this_thread();
-                let color = pixel_radiance(&tracer, camera, k % width, k / width, width, height, 1);
+                let color = pixel_radiance(&tracer, &pixel_rays, k % width, k / width, 1);
                 let after = rays_traced_on_this_thread();
                 (color, (after.0 - before.0, after.1 - before.1))
             })

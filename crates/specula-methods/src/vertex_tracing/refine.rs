@@ -1214,6 +1214,7 @@ impl Package {
         let tracer = inputs.tracer();
         let settings = &inputs.settings;
         let (width, height) = (inputs.view.width, inputs.view.height);
+        let pixel_rays = inputs.camera.pixel_rays(width, height);
         while next < self.triangles.len() {
             let any_leaf = settings.fill && self.any_leaf_needs_filling(next, settings);
             let pixels: Vec<(u32, bool)> = inputs
@@ -1229,7 +1230,7 @@ impl Package {
                     settings.fill && self.needs_filling(leaf, settings)
                 };
                 if trace {
-                    let color = pixel_radiance(&tracer, inputs.camera, x, y, width, height, 1);
+                    let color = pixel_radiance(&tracer, &pixel_rays, x, y, 1);
                     self.filled.insert(k, color);
                     self.counters.filled_pixels += 1;
                     self.dirty[next] = true;
