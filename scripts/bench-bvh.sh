@@ -22,6 +22,8 @@ echo "$ours"
 embree_rate=$(echo "$embree" | sed -n 's/.*median \([0-9.]*\) Mrays\/s.*/\1/p')
 ours_rate=$(echo "$ours" | grep -A2 'primary_rays/single_thread' | sed -n 's/.*thrpt: *\[[0-9.]* Melem\/s \([0-9.]*\) Melem\/s.*/\1/p' | head -1)
 echo "single-thread ratio specula / Embree: $(python3 -c "print(f'{$ours_rate / $embree_rate:.2f}')") ($ours_rate / $embree_rate Mrays/s)"
+warm_frame_rate=$(echo "$ours" | grep -A2 'reference_frame/single_thread' | sed -n 's/.*thrpt: *\[[0-9.]* Melem\/s \([0-9.]*\) Melem\/s.*/\1/p' | head -1)
+echo "a warm reference frame of the same rays (criterion, 1 thread): $warm_frame_rate Mrays/s; frame / kernel time: $(python3 -c "print(f'{$ours_rate / $warm_frame_rate:.2f}')")"
 
 # A whole frame of the same rays through `specula render` (unlit dragon, the benchmark's camera),
 # one thread, against the kernel's time for them; and each whole process (load, build, trace,
@@ -42,5 +44,5 @@ done
 median() { printf '%s\n' "$@" | sort -g | sed -n 2p; }
 frame=$(median "${frame_ms[@]}")
 kernel_ms=$(python3 -c "print(1048576 / ($ours_rate * 1e6) * 1e3)")
-echo "specula render frame (1 thread): median ${frame} ms of ${frame_ms[*]}; the kernel on the same rays: $(python3 -c "print(f'{$kernel_ms:.1f}')") ms; frame / kernel: $(python3 -c "print(f'{$frame / $kernel_ms:.2f}')")"
+echo "a cold frame in specula render (1 thread, its first and only): median ${frame} ms of ${frame_ms[*]}; the kernel on the same rays: $(python3 -c "print(f'{$kernel_ms:.1f}')") ms; frame / kernel: $(python3 -c "print(f'{$frame / $kernel_ms:.2f}')")"
 echo "whole process (load, build, trace, write; median of 3): specula $(median "${specula_s[@]}") s, Embree's script $(median "${embree_s[@]}") s; Embree / specula: $(python3 -c "print(f'{$(median "${embree_s[@]}") / $(median "${specula_s[@]}"):.2f}')")"

@@ -75,6 +75,56 @@ fn bench(c: &mut Criterion) {
         })
     });
     trace.finish();
+
+    // A whole frame of the same rays as the reference renders it (the dragon unlit, the same
+    // camera; directions equal to rounding), warm as the kernel above is: what a frame spends
+    // beyond traversal.
+    let (lo, hi) = positions
+        .iter()
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| {
+            (lo.min(p), hi.max(p))
+        });
+    let centre = (lo + hi) / 2.0;
+    let mut scene = specula_scene::Scene::new("dragon, unlit");
+    scene
+        .materials
+        .push(specula_scene::Material::unlit("white", Vec3::ONE));
+    scene.meshes.push(specula_scene::Mesh {
+        name: "dragon".into(),
+        positions: positions.clone(),
+        triangles: (0..triangles.len() as u32)
+            .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
+            .collect(),
+        material: 0,
+        ..Default::default()
+    });
+    scene.camera = specula_scene::Camera {
+        eye: centre + Vec3::new(0.0, 0.0, 2.2 * (hi - lo).length() / 2.0),
+        target: centre,
+        up: Vec3::Y,
+        fov_y_deg: 40.0,
+        aspect: None,
+    };
+    let settings = specula_trace::reference::RenderSettings {
+        width: 1024,
+        height: 1024,
+        spp: 1,
+        max_depth: 8,
+    };
+    let one_thread = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("a thread pool");
+    let mut frame = c.benchmark_group("reference_frame");
+    frame.sample_size(10);
+    frame.throughput(Throughput::Elements(rays.len() as u64));
+    frame.bench_function("single_thread", |b| {
+        b.iter(|| {
+            one_thread
+                .install(|| specula_trace::reference::render(&scene, &accel, &settings, &|_, _| {}))
+        })
+    });
+    frame.finish();
 }
 
 criterion_group!(benches, bench);
