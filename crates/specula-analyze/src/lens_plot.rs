@@ -8,7 +8,7 @@ use glam::Vec2;
 use image::{Rgb, RgbImage};
 
 use crate::lens::{Cell, Eye, Report};
-use crate::plot::{draw_line, scale_colour, svg_around, Extent, Plot};
+use crate::plot::{draw_line, plot_around, scale_colour, Extent, Plot};
 
 /// What a map shows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -347,14 +347,13 @@ pub fn lens_map(report: &Report, map: Map) -> Plot {
             [OUTSIDE.0[0], OUTSIDE.0[1], OUTSIDE.0[2]],
         ),
     ];
-    let svg = svg_around(
-        &png,
+    plot_around(
+        png,
         &title,
         ("gaze h (°, the wearer's right)", "gaze v (°, up)"),
         Some((layout.extent(report), false)),
         &legend,
-    );
-    Plot { png, svg }
+    )
 }
 
 /// The distortion picture: straight object-space lines (constant horizontal or vertical
@@ -444,8 +443,8 @@ pub fn distortion(report: &Report) -> Plot {
          gaze's tangent screen",
         report.lens
     );
-    let svg = svg_around(
-        &png,
+    plot_around(
+        png,
         &title,
         ("tan h (the wearer's right)", "tan v (up)"),
         Some((
@@ -459,8 +458,7 @@ pub fn distortion(report: &Report) -> Plot {
             "outside the lens".into(),
             [OUTSIDE.0[0], OUTSIDE.0[1], OUTSIDE.0[2]],
         )],
-    );
-    Plot { png, svg }
+    )
 }
 
 #[cfg(test)]

@@ -1,7 +1,7 @@
-//! Plots of an analysis, as PNG (a raster of the figure) and SVG (the same raster embedded,
-//! with axes, labels and a legend in vector text). Written by hand on the `image` crate, so that
-//! plots cost no plotting library or system font to build; the PNG carries no text, the SVG
-//! reads it.
+//! Plots of an analysis, as PNG and SVG: the figure's raster with its title, axes, ticks and
+//! legend, drawn into the PNG with an 8 × 8 bitmap font compiled in (`font8x8`) and written as
+//! vector text around the same raster in the SVG. Drawn by hand on the `image` crate, so that
+//! plots cost no plotting library or system font to build.
 
 use base64::Engine;
 use glam::{Vec2, Vec3};
@@ -23,7 +23,7 @@ const PALETTE: [[u8; 3]; 6] = [
     [140, 86, 75],
 ];
 
-/// A plot: its raster and the SVG around it.
+/// A plot: its raster with its text (the PNG) and the SVG around the bare raster.
 pub struct Plot {
     pub png: RgbImage,
     pub svg: String,
@@ -178,14 +178,13 @@ pub fn ground_map(view: &MirrorView, longest: u32) -> Plot {
         "{}: ground seen in '{}' from above (y = {} m, within {} m)",
         view.report.scene, view.report.mirror, view.report.ground_y, range
     );
-    let svg = svg_around(
-        &png,
+    plot_around(
+        png,
         &title,
         ("x (m)", "z (m)"),
         Some((extent, true)),
         &legend,
-    );
-    Plot { png, svg }
+    )
 }
 
 /// The mirror seen from eye point `eye`, as the reference renders it, with the ground's
@@ -255,8 +254,7 @@ pub fn mirror_from_eye(
         "'{}' from the eye at ({x:.3}, {y:.3}, {z:.3}): the ground's 1 m grid (5 m dark)",
         scene.meshes[mirror].name
     );
-    let svg = svg_around(&png, &title, ("", ""), None, &[]);
-    Plot { png, svg }
+    plot_around(png, &title, ("", ""), None, &[])
 }
 
 /// Marks the pixels of a `width` × `height` map over `extent` whose centres lie in `t` (ground
@@ -406,6 +404,194 @@ pub(crate) fn svg_around(
     svg
 }
 
+/// The 8 × 8 glyph of `c` (rows top down, bit k = column k); a few typographic characters the
+/// font lacks stand in for their ASCII look-alikes.
+fn glyph(c: char) -> Option<[u8; 8]> {
+    use font8x8::UnicodeFonts;
+    let c = match c {
+        '−' | '–' | '—' => '-',
+        '′' | '’' => '\'',
+        '×' => 'x',
+        other => other,
+    };
+    font8x8::BASIC_FONTS
+        .get(c)
+        .or_else(|| font8x8::LATIN_FONTS.get(c))
+        .or_else(|| font8x8::GREEK_FONTS.get(c))
+}
+
+/// Draws `text` with its top-left corner at (`x`, `y`), each glyph `scale` pixels per font
+/// pixel; `vertical` writes it upwards (rotated a quarter turn anticlockwise). Returns its
+/// length in pixels.
+fn draw_text(
+    png: &mut RgbImage,
+    text: &str,
+    (x, y): (i64, i64),
+    scale: i64,
+    colour: Rgb<u8>,
+    vertical: bool,
+) -> i64 {
+    let mut advance = 0;
+    for c in text.chars() {
+        if let Some(rows) = glyph(c) {
+            for (row, bits) in rows.iter().enumerate() {
+                for column in 0..8 {
+                    if bits & (1 << column) == 0 {
+                        continue;
+                    }
+                    for dy in 0..scale {
+                        for dx in 0..scale {
+                            let (gx, gy) = (column as i64 * scale + dx, row as i64 * scale + dy);
+                            let (px, py) = if vertical {
+                                (x + gy, y - advance - gx)
+                            } else {
+                                (x + advance + gx, y + gy)
+                            };
+                            if px >= 0
+                                && py >= 0
+                                && (px as u32) < png.width()
+                                && (py as u32) < png.height()
+                            {
+                                png.put_pixel(px as u32, py as u32, colour);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        advance += 8 * scale;
+    }
+    advance
+}
+
+/// The PNG of a plot: `raster` with the title above, the axes' ticks and labels over `extent`
+/// and the legend below, as [`svg_around`] writes them (the SVG's own text: numbers and words in
+/// the same places).
+fn png_around(
+    raster: &RgbImage,
+    title: &str,
+    labels: (&str, &str),
+    extent: Option<(Extent, bool)>,
+    legend: &[(String, [u8; 3])],
+) -> RgbImage {
+    let (w, h) = (i64::from(raster.width()), i64::from(raster.height()));
+    let (left, bottom, right) = (64i64, 40i64, 16i64);
+    let line = 14i64;
+    let width = (left + w + right).max(320);
+    // The title wrapped at words to the page's width.
+    let per_line = ((width - left - right) / 8).max(16) as usize;
+    let mut title_lines: Vec<String> = vec![String::new()];
+    for word in title.split(' ') {
+        let current = title_lines.last_mut().expect("one line at least");
+        if !current.is_empty() && current.chars().count() + 1 + word.chars().count() > per_line {
+            title_lines.push(word.to_string());
+        } else {
+            if !current.is_empty() {
+                current.push(' ');
+            }
+            current.push_str(word);
+        }
+    }
+    let top = 10 + 12 * title_lines.len() as i64;
+    let legend_height = line * legend.len() as i64 + 6;
+    let height = top + h + bottom + legend_height;
+    let ink = Rgb([0, 0, 0]);
+    let mut png = RgbImage::from_pixel(width as u32, height as u32, Rgb([255, 255, 255]));
+    image::imageops::overlay(&mut png, raster, left, top);
+    for x in left - 1..=left + w {
+        for y in [top - 1, top + h] {
+            png.put_pixel(x as u32, y as u32, ink);
+        }
+    }
+    for y in top - 1..=top + h {
+        for x in [left - 1, left + w] {
+            png.put_pixel(x as u32, y as u32, ink);
+        }
+    }
+    for (k, text) in title_lines.iter().enumerate() {
+        draw_text(&mut png, text, (left, 4 + 12 * k as i64), 1, ink, false);
+    }
+    if let Some((e, y_down)) = extent {
+        let size = e.max - e.min;
+        for (axis, span, from) in [(0, size.x, e.min.x), (1, size.y, e.min.y)] {
+            let step = nice_step(span / 6.0);
+            let mut v = (from / step).ceil() * step;
+            while v <= from + span {
+                let f = f64::from((v - from) / span);
+                let text = format_tick(v, step);
+                let chars = text.chars().count() as i64;
+                if axis == 0 {
+                    let x = left + (f * w as f64) as i64;
+                    for dy in 0..5 {
+                        png.put_pixel(x.clamp(0, width - 1) as u32, (top + h + dy) as u32, ink);
+                    }
+                    draw_text(&mut png, &text, (x - 4 * chars, top + h + 7), 1, ink, false);
+                } else {
+                    let y = if y_down {
+                        top + (f * h as f64) as i64
+                    } else {
+                        top + h - (f * h as f64) as i64
+                    };
+                    for dx in 1..=5 {
+                        png.put_pixel((left - dx) as u32, y.clamp(0, height - 1) as u32, ink);
+                    }
+                    draw_text(
+                        &mut png,
+                        &text,
+                        (left - 8 - 8 * chars, y - 4),
+                        1,
+                        ink,
+                        false,
+                    );
+                }
+                v += step;
+            }
+        }
+        let x_label = labels.0.chars().count() as i64 * 8;
+        draw_text(
+            &mut png,
+            labels.0,
+            (left + (w - x_label) / 2, top + h + 22),
+            1,
+            ink,
+            false,
+        );
+        let y_label = labels.1.chars().count() as i64 * 8;
+        draw_text(
+            &mut png,
+            labels.1,
+            (2, top + (h + y_label) / 2),
+            1,
+            ink,
+            true,
+        );
+    }
+    for (k, (text, colour)) in legend.iter().enumerate() {
+        let y = top + h + bottom + line * k as i64;
+        for dy in 0..10 {
+            for dx in 0..10 {
+                png.put_pixel((left + dx) as u32, (y + dy) as u32, Rgb(*colour));
+            }
+        }
+        draw_text(&mut png, text, (left + 16, y + 1), 1, ink, false);
+    }
+    png
+}
+
+/// A plot of `raster`: the PNG with its text drawn in, the SVG with it in vector text.
+pub(crate) fn plot_around(
+    raster: RgbImage,
+    title: &str,
+    labels: (&str, &str),
+    extent: Option<(Extent, bool)>,
+    legend: &[(String, [u8; 3])],
+) -> Plot {
+    Plot {
+        png: png_around(&raster, title, labels, extent, legend),
+        svg: svg_around(&raster, title, labels, extent, legend),
+    }
+}
+
 /// 1, 2 or 5 times a power of ten, near `raw`.
 pub(crate) fn nice_step(raw: f32) -> f32 {
     let power = 10f32.powf(raw.max(1e-6).log10().floor());
@@ -424,6 +610,8 @@ pub(crate) fn nice_step(raw: f32) -> f32 {
 
 fn format_tick(v: f32, step: f32) -> String {
     let decimals = (-step.log10().floor()).max(0.0) as usize;
+    // A tick at zero reached by adding steps may be −1e-8: no "-0.0".
+    let v = if (v / step).round() == 0.0 { 0.0 } else { v };
     format!("{v:.decimals$}")
 }
 
@@ -487,7 +675,6 @@ pub fn glare_eyebox(report: &crate::glare::Report, frame: &crate::frame::Vehicle
         .max(1e-12);
     let mut png = RgbImage::from_pixel(width, height, Rgb([255, 255, 255]));
     let side = (spacing * scale * 0.9).max(2.0);
-    let mut texts = String::new();
     for (e, p) in report.eyes.iter().zip(&at) {
         let centre = Vec2::new((p.x - lo.x) * scale, (hi.y - p.y) * scale);
         let colour = if e.glare {
@@ -501,17 +688,27 @@ pub fn glare_eyebox(report: &crate::glare::Report, frame: &crate::frame::Vehicle
                 png.put_pixel(x, y, Rgb(colour));
             }
         }
-        texts.push_str(&format!(
-            "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\" font-size=\"10\" fill=\"{}\">{}</text>\n",
-            60.0 + centre.x,
-            30.0 + centre.y + 4.0,
-            if e.glare && e.solid_angle_sr / widest > 0.6 { "black" } else { "white" },
-            if e.glare {
-                format!("{:.4}", e.max_relative_luminance)
-            } else {
-                "none".into()
-            }
-        ));
+        // The largest relative luminance, written in the square (the PNG's and the SVG's
+        // raster alike).
+        let text = if e.glare {
+            format!("{:.4}", e.max_relative_luminance)
+        } else {
+            "none".into()
+        };
+        let ink = if e.glare && e.solid_angle_sr / widest > 0.6 {
+            Rgb([0, 0, 0])
+        } else {
+            Rgb([255, 255, 255])
+        };
+        let half = 4 * text.chars().count() as i64;
+        draw_text(
+            &mut png,
+            &text,
+            (centre.x as i64 - half, centre.y as i64 - 4),
+            1,
+            ink,
+            false,
+        );
     }
     let title = format!(
         "'{}' in '{}' per eye point (seen from behind the driver): the glare's solid angle (colour) and largest relative luminance",
@@ -526,15 +723,13 @@ pub fn glare_eyebox(report: &crate::glare::Report, frame: &crate::frame::Vehicle
         ("a tenth of it".to_string(), scale_colour(0.1)),
     ];
     let extent = Extent { min: lo, max: hi };
-    let mut svg = svg_around(
-        &png,
+    plot_around(
+        png,
         &title,
         ("right of the eye (m)", "up (m)"),
         Some((extent, false)),
         &legend,
-    );
-    svg.insert_str(svg.len() - "</svg>\n".len(), &texts);
-    Plot { png, svg }
+    )
 }
 
 /// Eye point `k`'s image as the reference renders it, its glare pixels outlined in magenta.
@@ -571,13 +766,42 @@ pub fn glare_image(glare: &crate::glare::Glare, k: usize) -> Plot {
         glare.report.source,
         glare.report.surface
     );
-    let svg = svg_around(&png, &title, ("", ""), None, &[]);
-    Plot { png, svg }
+    plot_around(png, &title, ("", ""), None, &[])
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_png_carries_the_text_in_a_compiled_in_font() {
+        for c in "0123456789-.,:;()'%°² azAZ".chars() {
+            assert!(glyph(c).is_some(), "{c:?} has a glyph");
+        }
+        assert!(glyph('Δ').is_some() && glyph('−').is_some() && glyph('′').is_some());
+        let raster = RgbImage::from_pixel(100, 80, Rgb([200, 200, 200]));
+        let extent = Extent {
+            min: Vec2::ZERO,
+            max: Vec2::new(10.0, 8.0),
+        };
+        let bare = png_around(&raster, "", ("", ""), None, &[]);
+        let plot = plot_around(
+            raster,
+            "a title long enough to wrap onto a second line of the page, which is 320 wide",
+            ("x (m)", "y (m)"),
+            Some((extent, false)),
+            &[("one".into(), [255, 0, 0])],
+        );
+        assert!(plot.png.height() > bare.height());
+        let dark = |png: &RgbImage| png.pixels().filter(|p| p.0 == [0, 0, 0]).count();
+        // The frame alone is dark in the bare plot; ticks, labels and title add ink.
+        assert!(
+            dark(&plot.png) > dark(&bare) + 500,
+            "{} {}",
+            dark(&plot.png),
+            dark(&bare)
+        );
+    }
 
     #[test]
     fn ticks_are_round() {
