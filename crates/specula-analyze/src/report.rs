@@ -11,6 +11,15 @@ use crate::mirror_view::{Figures, MirrorView};
 use crate::plot::{self, Plot};
 use crate::AnalyzeError;
 
+/// The reports' shared style sheet.
+const STYLE: &str = "
+body { font-family: sans-serif; margin: 2em; background: #fafafa; }
+table { border-collapse: collapse; margin: 1em 0; }
+td, th { border: 1px solid #bbb; padding: 4px 8px; text-align: right; }
+td:first-child, th:first-child { text-align: left; }
+figure { display: inline-block; margin: 0.5em; vertical-align: top; }
+";
+
 fn write_error(path: &Path, e: impl std::fmt::Display) -> AnalyzeError {
     AnalyzeError::Write {
         path: path.display().to_string(),
@@ -99,13 +108,7 @@ pub fn write_mirror_view(
     let html = format!(
         r#"<!DOCTYPE html>
 <html><head><meta charset="utf-8"><title>specula analyze mirror-view: {scene}</title>
-<style>
-body {{ font-family: sans-serif; margin: 2em; background: #fafafa; }}
-table {{ border-collapse: collapse; margin: 1em 0; }}
-td, th {{ border: 1px solid #bbb; padding: 4px 8px; text-align: right; }}
-td:first-child, th:first-child {{ text-align: left; }}
-figure {{ display: inline-block; margin: 0.5em; vertical-align: top; }}
-</style></head><body>
+<style>{style}</style></head><body>
 <h1>What '{mirror}' shows: {scene}</h1>
 <p>Exact rays from each eye point to points of the mirror, reflected about its shading normals and
 followed through the scene (docs/analyses.md). Vehicle frame: forward ({fx:.3}, {fy:.3}, {fz:.3}),
@@ -121,6 +124,7 @@ eye sees it (R46's ambinocular view); grids: ground {ground_cell:.3} m, directio
 <figure><img src="mirror.svg"><figcaption>The mirror from eye 1, with the ground's grid where it shows the ground</figcaption></figure>
 </body></html>
 "#,
+        style = STYLE,
         scene = plot::html_escape(&r.scene),
         mirror = plot::html_escape(&r.mirror),
         fx = r.forward[0],
@@ -178,13 +182,7 @@ pub fn write_glare(
     let html = format!(
         r#"<!DOCTYPE html>
 <html><head><meta charset="utf-8"><title>specula analyze glare: {scene}</title>
-<style>
-body {{ font-family: sans-serif; margin: 2em; background: #fafafa; }}
-table {{ border-collapse: collapse; margin: 1em 0; }}
-td, th {{ border: 1px solid #bbb; padding: 4px 8px; text-align: right; }}
-td:first-child, th:first-child {{ text-align: left; }}
-figure {{ display: inline-block; margin: 0.5em; vertical-align: top; }}
-</style></head><body>
+<style>{style}</style></head><body>
 <h1>Glare of '{source}' in '{surface}': {scene}</h1>
 <p>Each eye point's image ({width}×{height}, aimed at the surface) traced as the reference traces it;
 a pixel's glare is what its paths bring from the source after at least one specular reflection on
@@ -199,6 +197,7 @@ relative luminance of {threshold}. {verdict}</p>
 <figure><img src="worst.svg"><figcaption>Eye {shown_eye}'s view, the glare outlined in magenta</figcaption></figure>
 </body></html>
 "#,
+        style = STYLE,
         scene = plot::html_escape(&r.scene),
         source = plot::html_escape(&r.source),
         surface = plot::html_escape(&r.surface),
@@ -259,13 +258,7 @@ pub fn write_lens(dir: &Path, r: &crate::lens::Report) -> Result<PathBuf, Analyz
     let html = format!(
         r#"<!DOCTYPE html>
 <html><head><meta charset="utf-8"><title>specula analyze lens: {scene}</title>
-<style>
-body {{ font-family: sans-serif; margin: 2em; background: #fafafa; }}
-table {{ border-collapse: collapse; margin: 1em 0; }}
-td, th {{ border: 1px solid #bbb; padding: 4px 8px; text-align: right; }}
-td:first-child, th:first-child {{ text-align: left; }}
-figure {{ display: inline-block; margin: 0.5em; vertical-align: top; }}
-</style></head><body>
+<style>{style}</style></head><body>
 <h1>'{lens}' as worn: {scene}</h1>
 <p>The {eye} eye turns about its centre of rotation ({cx:.4}, {cy:.4}, {cz:.4}) by Listing's law;
 at each gaze the chief ray from the centre is traced through the lens with Snell's law at its own
@@ -291,6 +284,7 @@ changed by at most {fd:.1e} D between the bundle and half of it. {prescription}<
 {figures}<figure><img src="distortion.svg"><figcaption>distortion</figcaption></figure>
 </body></html>
 "#,
+        style = STYLE,
         scene = plot::html_escape(&r.scene),
         lens = plot::html_escape(&r.lens),
         eye = match r.eye {

@@ -245,22 +245,21 @@ pub fn spectacle_lens(
             shape.front(x, y).is_some() && shape.back(x, y).is_some()
         })
     });
-    if !reaches {
-        return Err(bad(format!(
+    let short_of_the_rim = || {
+        bad(format!(
             "a surface of this prescription does not reach a {} mm rim: choose a smaller \
              diameter or a flatter base curve",
             p.diameter * 1e3
-        )));
+        ))
+    };
+    if !reaches {
+        return Err(short_of_the_rim());
     }
     for k in 0..segments * 4 {
         let phi = TAU * f64::from(k) / f64::from(segments * 4);
         let (x, y) = (rim * phi.cos(), rim * phi.sin());
         let (Some((front, _)), Some((back, _))) = (shape.front(x, y), shape.back(x, y)) else {
-            return Err(bad(format!(
-                "a surface of this prescription does not reach a {} mm rim: choose a smaller \
-                 diameter or a flatter base curve",
-                p.diameter * 1e3
-            )));
+            return Err(short_of_the_rim());
         };
         thinnest = thinnest.min(back.z - front.z);
     }

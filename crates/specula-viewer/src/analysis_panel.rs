@@ -167,6 +167,51 @@ fn what_section(
     });
 }
 
+/// How [`point_controls`] presents a point.
+struct PointControls {
+    label: &'static str,
+    /// What the point is (the fields' hover text).
+    what: &'static str,
+    /// Metres per pixel of drag.
+    speed: f64,
+    view_eye: Vec3,
+    view_hover: &'static str,
+    /// The reset button: its label, its hover text and the point it puts back.
+    reset: (&'static str, &'static str, Vec3),
+}
+
+/// A point's x, y, z fields, a button that puts it at the view's eye and one that resets it.
+fn point_controls(ui: &mut egui::Ui, point: &mut Vec3, c: PointControls) {
+    ui.horizontal(|ui| {
+        ui.label(c.label);
+        for (value, name) in [
+            (&mut point.x, "x"),
+            (&mut point.y, "y"),
+            (&mut point.z, "z"),
+        ] {
+            ui.add(
+                egui::DragValue::new(value)
+                    .speed(c.speed)
+                    .prefix(format!("{name} ")),
+            )
+            .on_hover_text(c.what);
+        }
+    });
+    ui.horizontal(|ui| {
+        if ui
+            .button("the view's eye")
+            .on_hover_text(c.view_hover)
+            .clicked()
+        {
+            *point = c.view_eye;
+        }
+        let (label, hover, value) = c.reset;
+        if ui.button(label).on_hover_text(hover).clicked() {
+            *point = value;
+        }
+    });
+}
+
 /// A lens's eye: its centre of rotation (dragged, the view's eye, or the default 27 mm behind
 /// the back vertex), which eye (base in and out), and what the overlay maps.
 fn lens_section(
@@ -178,39 +223,22 @@ fn lens_section(
 ) {
     use specula_analyze::lens::Eye;
     use specula_analyze::lens_plot::Map;
-    ui.horizontal(|ui| {
-        ui.label("centre of rotation");
-        for (value, name) in [
-            (&mut settings.eye.x, "x"),
-            (&mut settings.eye.y, "y"),
-            (&mut settings.eye.z, "z"),
-        ] {
-            ui.add(
-                egui::DragValue::new(value)
-                    .speed(0.0005)
-                    .prefix(format!("{name} ")),
-            )
-            .on_hover_text("the eye's centre of rotation, world metres: drag to move it");
-        }
-    });
-    ui.horizontal(|ui| {
-        if ui
-            .button("the view's eye")
-            .on_hover_text("put the centre of rotation where the view's camera is")
-            .clicked()
-        {
-            settings.eye = view_eye;
-        }
-        if ui
-            .button("27 mm behind the lens")
-            .on_hover_text(
+    point_controls(
+        ui,
+        &mut settings.eye,
+        PointControls {
+            label: "centre of rotation",
+            what: "the eye's centre of rotation, world metres: drag to move it",
+            speed: 0.0005,
+            view_eye,
+            view_hover: "put the centre of rotation where the view's camera is",
+            reset: (
+                "27 mm behind the lens",
                 "the default: 27 mm behind the back vertex on the scene camera's view axis",
-            )
-            .clicked()
-        {
-            settings.eye = default_centre;
-        }
-    });
+                default_centre,
+            ),
+        },
+    );
     ui.horizontal(|ui| {
         ui.label("eye");
         ui.selectable_value(&mut settings.lens_eye, Eye::Right, "right");
@@ -223,37 +251,22 @@ fn lens_section(
 }
 
 fn eye_section(ui: &mut egui::Ui, settings: &mut Settings, camera_eye: Vec3, view_eye: Vec3) {
-    ui.horizontal(|ui| {
-        ui.label("eye");
-        for (value, name) in [
-            (&mut settings.eye.x, "x"),
-            (&mut settings.eye.y, "y"),
-            (&mut settings.eye.z, "z"),
-        ] {
-            ui.add(
-                egui::DragValue::new(value)
-                    .speed(0.002)
-                    .prefix(format!("{name} ")),
-            )
-            .on_hover_text("the centre eye point, world metres: drag to move it");
-        }
-    });
-    ui.horizontal(|ui| {
-        if ui
-            .button("the view's eye")
-            .on_hover_text("put the centre eye point where the view's camera is")
-            .clicked()
-        {
-            settings.eye = view_eye;
-        }
-        if ui
-            .button("the scene's eye")
-            .on_hover_text("put it back at the scene camera's eye")
-            .clicked()
-        {
-            settings.eye = camera_eye;
-        }
-    });
+    point_controls(
+        ui,
+        &mut settings.eye,
+        PointControls {
+            label: "eye",
+            what: "the centre eye point, world metres: drag to move it",
+            speed: 0.002,
+            view_eye,
+            view_hover: "put the centre eye point where the view's camera is",
+            reset: (
+                "the scene's eye",
+                "put it back at the scene camera's eye",
+                camera_eye,
+            ),
+        },
+    );
     let mut choice = match settings.eyes {
         Eyes::Camera | Eyes::Points(_) => 0,
         Eyes::Ocular => 1,
