@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use specula_gpu::util::padded_row_bytes;
 use specula_gpu::{GpuContext, GpuError};
 use specula_scene::Camera;
-use specula_trace::{Ray, SceneAccel};
+use specula_trace::{Hit, Ray, SceneAccel};
 
 /// How the camera maps world points to pixels (the raster pass's pinhole, top-left origin).
 #[derive(Clone, Copy, Debug)]
@@ -64,31 +64,52 @@ impl ScreenView {
 pub struct PixelSurfaces {
     pub ids: Vec<[u32; 2]>,
     pub position: Vec<[f32; 4]>,
+    /// Each pixel's closest hit, where the buffer was traced on the CPU (empty when it was
+    /// read back from a raster pass): shading from it needs no second primary ray.
+    pub hits: Vec<Option<Hit>>,
 }
 
 impl PixelSurfaces {
     /// The ID buffer traced on the CPU: each pixel centre's closest hit from `camera`, as the
-    /// reference's primary rays meet it (what a run without a GPU uses).
+    /// reference's primary rays meet it (the same rays bit for bit: what a run without a GPU
+    /// uses), the hits kept.
     pub fn trace(accel: &SceneAccel, camera: &Camera, width: u32, height: u32) -> PixelSurfaces {
-        let (ids, position) = (0..width * height)
-            .into_par_iter()
-            .map(|k| {
-                let (x, y) = (k % width, k / width);
-                let dir = camera.ray_direction(x as f32 + 0.5, y as f32 + 0.5, width, height);
+        let mut surfaces = PixelSurfaces {
+            ids: Vec::new(),
+            position: Vec::new(),
+            hits: Vec::new(),
+        };
+        surfaces.retrace(accel, camera, width, height);
+        surfaces
+    }
+
+    /// [`PixelSurfaces::trace`] into this buffer's memory (a steady frame allocates nothing).
+    pub fn retrace(&mut self, accel: &SceneAccel, camera: &Camera, width: u32, height: u32) {
+        let rays = camera.pixel_rays(width, height);
+        let count = (width * height) as usize;
+        self.ids.resize(count, [0, 0]);
+        self.position.resize(count, [0.0; 4]);
+        self.hits.resize(count, None);
+        self.hits
+            .par_iter_mut()
+            .zip(self.ids.par_iter_mut())
+            .zip(self.position.par_iter_mut())
+            .enumerate()
+            .for_each(|(k, ((hit, id), position))| {
+                let (x, y) = (k as u32 % width, k as u32 / width);
                 let ray = Ray {
-                    origin: camera.eye,
-                    dir,
+                    origin: rays.eye,
+                    dir: rays.direction(x as f32 + 0.5, y as f32 + 0.5),
                 };
-                match accel.intersect(&ray, f32::INFINITY) {
+                *hit = accel.intersect(&ray, f32::INFINITY);
+                (*id, *position) = match hit {
                     Some(hit) => {
-                        let p = camera.eye + dir * hit.t;
+                        let p = ray.origin + ray.dir * hit.t;
                         ([hit.mesh + 1, hit.triangle], [p.x, p.y, p.z, 1.0])
                     }
                     None => ([0, 0], [0.0; 4]),
-                }
-            })
-            .unzip();
-        PixelSurfaces { ids, position }
+                };
+            });
     }
 
     /// The world position seen through pixel `k` (None where the background shows).
@@ -169,7 +190,11 @@ impl SurfaceReadback {
                 let row = &bytes[start..][..w * 16];
                 position.extend_from_slice(bytemuck::cast_slice::<u8, [f32; 4]>(row));
             }
-            PixelSurfaces { ids, position }
+            PixelSurfaces {
+                ids,
+                position,
+                hits: Vec::new(),
+            }
         })
     }
 }

@@ -9,7 +9,6 @@ use specula_methods::c3rc::phases::{
 use specula_methods::c3rc::points::{PointCloud, TreeLimits};
 use specula_methods::{apply_parameters, by_name, LiveScene, RenderStill};
 use specula_scene::{Background, Camera, Material, Mesh};
-use specula_trace::reference::primary_hits;
 use specula_trace::SceneAccel;
 
 /// The reflector triangle's vertices and the rays wanted there: converging with two of them
@@ -103,29 +102,7 @@ fn a_point_seen_twice_through_one_triangle_is_splatted_where_its_rays_show_it() 
     };
     let (width, height) = (160, 160);
     let accel = SceneAccel::new(&scene);
-    let hits = primary_hits(&scene, &accel, width, height);
-    let surfaces = PixelSurfaces {
-        ids: hits
-            .iter()
-            .map(|h| h.map_or([0, 0], |h| [h.mesh + 1, h.triangle]))
-            .collect(),
-        position: hits
-            .iter()
-            .enumerate()
-            .map(|(k, h)| {
-                h.map_or([0.0; 4], |h| {
-                    let dir = scene.camera.ray_direction(
-                        (k % width as usize) as f32 + 0.5,
-                        (k / width as usize) as f32 + 0.5,
-                        width,
-                        height,
-                    );
-                    let p = eye + dir * h.t;
-                    [p.x, p.y, p.z, 1.0]
-                })
-            })
-            .collect(),
-    };
+    let surfaces = PixelSurfaces::trace(&accel, &scene.camera, width, height);
     let limits = TreeLimits {
         leaf_points: 64,
         max_depth: 8,

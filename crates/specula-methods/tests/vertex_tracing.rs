@@ -1,7 +1,8 @@
 //! Vertex tracing's invariants on the CPU (no GPU needed): the image does not depend on how
 //! the frame is cut into packages (what makes the MPI image equal the single-process one), the
 //! progressive mode starts from the Gouraud preview and ends on the one-call image, a hidden
-//! reflector costs no ray (§3), and the counters add up.
+//! reflector costs no ray (§3), and the counters add up; with `tracing=auto`, a reflector
+//! whose vertices or paths make vertices no cheaper is traced per pixel, the reference's image.
 
 use glam::{Mat4, Vec3};
 use specula_methods::vertex_tracing::INFO;
@@ -11,9 +12,11 @@ use specula_scene::{Camera, Material, Scene};
 const WIDTH: u32 = 192;
 const HEIGHT: u32 = 144;
 
+/// Vertex tracing with CPU visibility, every reflector traced by its vertices (the machinery
+/// these tests are about), then `params`.
 fn technique(params: &[&str]) -> Box<dyn Technique> {
     let mut t = (INFO.create)();
-    let mut all = vec!["visibility=cpu".to_string()];
+    let mut all = vec!["visibility=cpu".to_string(), "tracing=vertices".to_string()];
     all.extend(params.iter().map(|p| p.to_string()));
     apply_parameters(t.as_mut(), &all).unwrap();
     t
@@ -324,4 +327,127 @@ fn the_paper_preset_traces_no_stray_pixel_and_refines_more_with_gpu_visibility()
     // Whole ray trees and texels compared as colours refine and fill more on the dial.
     let samples = |label| counter(&still(label, &[]).frame, "samples");
     assert!(samples("vertex-tracing:paper") > samples("vertex-tracing"));
+}
+
+fn bits(pixels: &[Vec3]) -> Vec<[u32; 3]> {
+    pixels
+        .iter()
+        .map(|p| p.to_array().map(f32::to_bits))
+        .collect()
+}
+
+fn reference_image(live: &LiveScene, camera: &Camera) -> Vec<Vec3> {
+    let mut reference = (specula_methods::exact_method().create)();
+    render(reference.as_mut(), live, camera).1
+}
+
+#[test]
+fn tracing_every_reflector_per_pixel_gives_the_reference_image_bit_for_bit() {
+    for scene in ["truck-cover", "door-mirror"] {
+        let live = LiveScene::new(specula_scene::load(scene).unwrap());
+        let camera = live.scene().camera.clone();
+        let (frame, pixels) = render(technique(&["tracing=pixels"]).as_mut(), &live, &camera);
+        assert_eq!(counter(&frame, "vertex rays"), 0, "{scene}");
+        assert!(
+            counter(&frame, "reflector pixels traced per pixel") > 1000,
+            "{scene}"
+        );
+        let reference = reference_image(&live, &camera);
+        let differing = bits(&pixels)
+            .iter()
+            .zip(bits(&reference))
+            .filter(|(a, b)| **a != *b)
+            .count();
+        assert_eq!(
+            differing, 0,
+            "{scene}: {differing} pixels differ from the reference"
+        );
+    }
+}
+
+/// A glass slab of two faces (few vertices, long paths), a flat mirror of two triangles (one
+/// reflected ray a path) and a 40,000-triangle mirror ball far away (more vertices than
+/// pixels) in a lit room.
+fn choice_scene() -> Scene {
+    let mut scene = Scene::new("choices");
+    scene.materials = vec![
+        Material::glass("glass", 1.5),
+        Material::mirror("mirror", Vec3::splat(0.9)),
+        Material::diffuse("wall", Vec3::new(0.7, 0.5, 0.3)),
+    ];
+    let mut slab = specula_scene::generators::cuboid(Vec3::new(0.8, 0.8, 0.3));
+    slab.transform(Mat4::from_translation(Vec3::new(-0.6, 0.0, 0.0)));
+    slab.name = "slab".into();
+    slab.material = 0;
+    let mut mirror = specula_scene::generators::plane(glam::Vec2::splat(0.8), 1);
+    mirror.transform(Mat4::from_translation(Vec3::new(0.6, 0.0, 0.0)) * Mat4::from_rotation_x(1.3));
+    mirror.name = "flat mirror".into();
+    mirror.material = 1;
+    let mut ball = specula_scene::generators::sphere(0.08, 200, 100);
+    ball.transform(Mat4::from_translation(Vec3::new(0.0, 0.7, -1.0)));
+    ball.name = "dense ball".into();
+    ball.material = 1;
+    let mut room = specula_scene::generators::room(Vec3::splat(6.0));
+    room.transform(Mat4::from_translation(Vec3::new(0.0, -2.0, 0.0)));
+    room.name = "room".into();
+    room.material = 2;
+    scene.meshes = vec![slab, mirror, ball, room];
+    scene.lights = vec![specula_scene::Light::Point {
+        position: Vec3::new(0.5, 2.0, 2.0),
+        intensity: Vec3::splat(8.0),
+    }];
+    scene.camera = Camera {
+        eye: Vec3::new(0.0, 0.3, 3.0),
+        target: Vec3::new(0.0, 0.2, 0.0),
+        up: Vec3::Y,
+        fov_y_deg: 50.0,
+        aspect: None,
+    };
+    scene
+}
+
+#[test]
+fn auto_traces_dense_reflectors_and_short_paths_per_pixel_and_long_coarse_paths_by_vertices() {
+    let live = LiveScene::new(choice_scene());
+    let camera = live.scene().camera.clone();
+    let (frame, pixels) = render(technique(&["tracing=auto"]).as_mut(), &live, &camera);
+    let per_pixel = |name: &str| counter(&frame, &format!("reflector {name}: traced per pixel"));
+    let reflector_counter =
+        |name: &str, what: &str| counter(&frame, &format!("reflector {name}: {what}"));
+    // The ball: more seen vertices than vertex_ratio (0.05) × its pixels.
+    assert!(
+        reflector_counter("dense ball", "vertices") as f64
+            > 0.05 * reflector_counter("dense ball", "pixels") as f64
+    );
+    assert_eq!(per_pixel("dense ball"), 1);
+    // The flat mirror: few vertices, but a path of one reflected ray and one shadow ray.
+    assert!(reflector_counter("flat mirror", "pixels") > 1000);
+    let mirror_rays = reflector_counter("flat mirror", "rays per pixel path");
+    assert!(
+        (100..300).contains(&mirror_rays),
+        "{mirror_rays} / 100 rays"
+    );
+    assert_eq!(per_pixel("flat mirror"), 1);
+    // The slab: eight vertices, paths through two faces with their reflections.
+    assert!(reflector_counter("slab", "rays per pixel path") >= 600);
+    assert_eq!(per_pixel("slab"), 0);
+    assert!(counter(&frame, "vertex rays") > 0);
+    assert_eq!(counter(&frame, "reflectors traced per pixel"), 2);
+    assert_eq!(counter(&frame, "reflectors traced by their vertices"), 1);
+    // What is traced per pixel is the reference's, bit for bit.
+    let reference = reference_image(&live, &camera);
+    let hits = specula_trace::reference::primary_hits(live.scene(), live.accel(), WIDTH, HEIGHT);
+    let mut compared = 0;
+    for (k, hit) in hits.iter().enumerate() {
+        // The flat mirror and the ball.
+        if hit.is_some_and(|hit| hit.mesh == 1 || hit.mesh == 2) {
+            assert_eq!(
+                bits(&pixels[k..k + 1]),
+                bits(&reference[k..k + 1]),
+                "pixel {k}"
+            );
+            compared += 1;
+        }
+    }
+    assert!(compared > 1000, "{compared} pixels compared");
 }

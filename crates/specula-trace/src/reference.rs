@@ -302,14 +302,34 @@ impl Tracer<'_> {
         tree: &mut R,
     ) -> Vec3 {
         count_ray(false);
-        let Some(hit) = self.accel.intersect(ray, f32::INFINITY) else {
+        let hit = self.accel.intersect(ray, f32::INFINITY);
+        self.shade_or_background(ray, hit.as_ref(), step, depth, channel, tree)
+    }
+
+    /// [`Tracer::radiance`] of a primary ray whose closest hit was already found (`None`: it
+    /// meets nothing): the same value bit for bit, the ray counted as traced once here.
+    pub fn radiance_of_primary(&self, ray: &Ray, hit: Option<&Hit>) -> Vec3 {
+        count_ray(false);
+        self.shade_or_background(ray, hit, Step::PRIMARY, 0, None, &mut ())
+    }
+
+    fn shade_or_background<R: TreeRecorder>(
+        &self,
+        ray: &Ray,
+        hit: Option<&Hit>,
+        step: Step,
+        depth: u32,
+        channel: Option<usize>,
+        tree: &mut R,
+    ) -> Vec3 {
+        let Some(hit) = hit else {
             tree.ray(step, None);
             return self
                 .scene
                 .background
                 .radiance(ray.dir, &self.scene.textures);
         };
-        self.shade_recorded(ray, &hit, step, depth, channel, tree)
+        self.shade_recorded(ray, hit, step, depth, channel, tree)
     }
 
     /// The radiance leaving the known first hit `hit` of the primary ray `ray` towards its

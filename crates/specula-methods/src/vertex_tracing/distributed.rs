@@ -317,6 +317,7 @@ impl Master<'_> {
             self.topology.clone(),
             self.options.settings,
             self.options.max_depth,
+            None,
         );
         let visibility_seconds = start.elapsed().as_secs_f64();
         let count = setup.active.len();
@@ -540,6 +541,7 @@ fn worker(
                 height,
                 ..
             } => {
+                let recycled = view.take().map(|(_, setup)| setup.surfaces);
                 let setup = FrameSetup::traced(
                     live,
                     &camera,
@@ -548,6 +550,7 @@ fn worker(
                     topology.clone(),
                     options.settings,
                     options.max_depth,
+                    recycled,
                 );
                 view = Some((camera, setup));
                 traced = OriginalSamples::default();

@@ -45,6 +45,16 @@
 //! the same settings, the paper preset's included, and run the same package code).
 //!
 //! Beyond the paper (each switched off by the `paper` preset; `specula methods` lists it):
+//! - Each reflector is traced by its vertices or per pixel, chosen per frame from measured
+//!   counts (the paper traces vertices always; paper: `tracing=vertices`). Per pixel where the
+//!   vertices of its triangles the ID buffer shows outnumber `vertex_ratio` × its pixels (a
+//!   dense mesh, a small or distant reflector, a low resolution: refinement would trace about
+//!   as many samples as there are pixels), or where every 32nd of its pixels, traced, takes
+//!   fewer than `min_path_rays` closest-hit and shadow rays beyond the primary (a plain mirror:
+//!   owning, locating and interpolating a pixel on the CPU costs about what its one reflected
+//!   ray does). A reflector traced per pixel is shaded from the ID buffer's hit where it was
+//!   traced (no second primary ray): the reference's value bit for bit. The frame's counters
+//!   say, per reflector, its seen vertices, pixels, sampled rays per path and the choice.
 //! - Deferred textures: where a face's corners read the same textures along alike paths (a
 //!   dial seen through the cover), their texture coordinates and coefficients are
 //!   interpolated — perspective-correct for the textured surface's virtual image — and the
@@ -129,8 +139,18 @@
 //!   active triangles in sixteen packages per thread). The original vertices are traced once
 //!   for all packages; a vertex refinement adds on a package border is traced once per
 //!   package: smaller packages balance better and trace a little more.
+//! - `tracing` (auto): per reflector as above; `vertices` for all (the paper); `pixels` for all
+//!   (the reference's image, at the reference's cost).
+//! - `vertex_ratio` (0.05): seen vertices per pixel above which `auto` traces a reflector per
+//!   pixel. Measured on the scene suite (docs/benchmarks.md): at 320 × 240 the suite's
+//!   reflectors show 0.11–0.42 and vertices lost or tied; at 1024 × 768, 0.01–0.04.
+//! - `min_path_rays` (6): rays per sampled pixel path below which `auto` traces per pixel
+//!   (measured on the suite at 1024 × 768: mirrors 1.9–3.6 with their shadow rays, glass
+//!   16–24); sampling costs 1/32 of a candidate reflector's pixel paths.
 //! - `visibility` (auto): `gpu` draws the ID buffer with the scene raster pass, `cpu` traces it,
-//!   `auto` uses the GPU where the run has one.
+//!   `auto` uses a GPU where the run has one that is not a software rasterizer (on lavapipe
+//!   the raster pass took 16 ms where tracing the same buffer took 8, and the traced buffer's
+//!   hits shade the rest of the scene with no second primary ray).
 //! - `max_depth` (8): the reference's bound on specular bounces, for every vertex and pixel.
 //! - `shadow_resolution`: the raster pass's shadow maps (GPU visibility only).
 //! - `show_faces` (false): draws the refined faces' edges over the image (Figure 13).
@@ -151,7 +171,7 @@ use rayon::prelude::*;
 use specula_gpu::{GpuContext, StageTime, TimingSource};
 use specula_scene::Camera;
 use specula_trace::reference::{pixel_radiance, rays_traced_on_this_thread, Tracer};
-use specula_trace::Image;
+use specula_trace::{Image, Ray};
 
 use crate::live_scene::LiveScene;
 use crate::raster::{self, RasterPass, RasterSpec};
@@ -162,7 +182,7 @@ use crate::technique::{
 };
 pub use phases::FramePhases;
 use refine::{FrameInputs, OriginalSamples, Package, PixelOwners, Topology, TriangleId};
-pub use refine::{PackageCounters, RefineSettings};
+pub use refine::{PackageCounters, RefineSettings, ReflectorTracing};
 
 /// Packages per rayon thread when `package_triangles` is 0: enough that a package holding a
 /// reflection's outline does not leave the other threads idle.
@@ -264,6 +284,33 @@ pub const PARAMS: &[ParamSpec] = &[
         invalidates: Invalidates::Uniform,
     },
     ParamSpec {
+        name: "tracing",
+        kind: ParamKind::Choice(&["auto", "vertices", "pixels"]),
+        default: "auto",
+        doc: "per reflector: auto traces its pixels where its seen vertices or its paths make vertices no cheaper (vertex_ratio, min_path_rays); vertices (the paper) or pixels for all",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "vertex_ratio",
+        kind: ParamKind::Number {
+            min: 0.0,
+            max: 1000.0,
+        },
+        default: "0.05",
+        doc: "tracing=auto: seen vertices per pixel above which a reflector is traced per pixel",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "min_path_rays",
+        kind: ParamKind::Number {
+            min: 0.0,
+            max: 1000.0,
+        },
+        default: "6",
+        doc: "tracing=auto: rays per pixel path (beyond the primary, on a sample) below which a reflector is traced per pixel",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
         name: "budget_ms",
         kind: ParamKind::Integer { min: 0, max: 60000 },
         default: "0",
@@ -321,6 +368,7 @@ pub const INFO: MethodInfo = MethodInfo {
             "trace_unseen=false",
             "trace_behind_eye=false",
             "trace_stray=false",
+            "tracing=vertices",
         ],
     }],
     create: || Box::new(VertexTracing::default()),
@@ -365,6 +413,9 @@ impl Default for VertexTracing {
                 trace_unseen: true,
                 trace_behind_eye: true,
                 trace_stray: true,
+                tracing: ReflectorTracing::Auto,
+                vertex_ratio: 0.05,
+                min_path_rays: 6.0,
             },
             budget_ms: 0,
             package_triangles: 0,
@@ -408,7 +459,141 @@ pub(crate) struct FrameSetup {
     pub(crate) owners: PixelOwners,
     /// Built once per scene ([`Topology::new`]): a rigid move does not change it.
     pub(crate) topology: Arc<Topology>,
+    /// Per scene mesh: a reflector traced by its vertices in this frame.
+    by_vertices: Vec<bool>,
     pub(crate) active: Vec<TriangleId>,
+    /// What each reflector in sight was counted and how it is traced, in mesh order.
+    pub(crate) choices: Vec<ReflectorChoice>,
+}
+
+/// One reflector's counts in a frame and the way it was chosen to be traced.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct ReflectorChoice {
+    pub(crate) mesh: u32,
+    /// The distinct vertices of its triangles the ID buffer shows: about the vertex rays its
+    /// preview costs (the active triangles add a border).
+    pub(crate) vertices: usize,
+    /// The pixels its triangles own in the ID buffer.
+    pub(crate) pixels: usize,
+    /// Closest-hit and shadow rays per pixel path beyond the primary ray, on a sample of its
+    /// pixels (None: not sampled, the vertex count alone decided).
+    pub(crate) path_rays: Option<f32>,
+    pub(crate) per_pixel: bool,
+}
+
+/// Every this many of a candidate reflector's pixels, one is traced to measure its paths.
+const PATH_SAMPLE_STRIDE: usize = 32;
+
+impl ReflectorChoice {
+    /// Every reflector the ID buffer `surfaces` shows, counted, and the choice `settings`
+    /// makes: per pixel where its seen vertices outnumber `vertex_ratio` × its pixels (a dense,
+    /// small or distant reflector: the vertices cost about what the pixels do), or where a
+    /// sample of its pixels' paths takes fewer than `min_path_rays` rays beyond the primary
+    /// (a plain mirror: owning, locating and interpolating a pixel costs about what its one
+    /// reflected ray does); by vertices otherwise. In mesh order.
+    fn from_id_buffer(
+        tracer: &Tracer,
+        pixel_rays: &specula_scene::PixelRays,
+        width: u32,
+        surfaces: &PixelSurfaces,
+        topology: &Topology,
+        settings: &RefineSettings,
+    ) -> Vec<ReflectorChoice> {
+        struct Tally {
+            pixels: Vec<u32>,
+            vertices: usize,
+            triangle_seen: Vec<bool>,
+            vertex_seen: Vec<bool>,
+        }
+        let scene = tracer.scene;
+        let mut tallies: Vec<Option<Tally>> = scene.meshes.iter().map(|_| None).collect();
+        for (k, &[mesh, triangle]) in surfaces.ids.iter().enumerate() {
+            let Some(mesh) = mesh.checked_sub(1) else {
+                continue;
+            };
+            if !topology.is_reflector(mesh) {
+                continue;
+            }
+            let scene_mesh = &scene.meshes[mesh as usize];
+            let tally = tallies[mesh as usize].get_or_insert_with(|| Tally {
+                pixels: Vec::new(),
+                vertices: 0,
+                triangle_seen: vec![false; scene_mesh.triangles.len()],
+                vertex_seen: vec![false; scene_mesh.positions.len()],
+            });
+            tally.pixels.push(k as u32);
+            let Some(seen) = tally.triangle_seen.get_mut(triangle as usize) else {
+                continue;
+            };
+            if !std::mem::replace(seen, true) {
+                for &v in &scene_mesh.triangles[triangle as usize] {
+                    if !std::mem::replace(&mut tally.vertex_seen[v as usize], true) {
+                        tally.vertices += 1;
+                    }
+                }
+            }
+        }
+        tallies
+            .into_iter()
+            .enumerate()
+            .filter_map(|(mesh, tally)| {
+                let Tally {
+                    pixels, vertices, ..
+                } = tally?;
+                let dense = vertices as f64 > settings.vertex_ratio as f64 * pixels.len() as f64;
+                let path_rays = (settings.tracing == ReflectorTracing::Auto && !dense)
+                    .then(|| sampled_path_rays(tracer, pixel_rays, width, surfaces, &pixels));
+                let per_pixel = match settings.tracing {
+                    ReflectorTracing::Vertices => false,
+                    ReflectorTracing::Pixels => true,
+                    ReflectorTracing::Auto => {
+                        dense || path_rays.is_some_and(|rays| rays < settings.min_path_rays)
+                    }
+                };
+                Some(ReflectorChoice {
+                    mesh: mesh as u32,
+                    vertices,
+                    pixels: pixels.len(),
+                    path_rays,
+                    per_pixel,
+                })
+            })
+            .collect()
+    }
+}
+
+/// The mean closest-hit and shadow rays beyond the primary of every
+/// [`PATH_SAMPLE_STRIDE`]-th pixel of `pixels`, traced as the reference traces them.
+fn sampled_path_rays(
+    tracer: &Tracer,
+    pixel_rays: &specula_scene::PixelRays,
+    width: u32,
+    surfaces: &PixelSurfaces,
+    pixels: &[u32],
+) -> f32 {
+    let sample: Vec<u32> = pixels.iter().step_by(PATH_SAMPLE_STRIDE).copied().collect();
+    let rays: u64 = sample
+        .par_iter()
+        .map(|&k| {
+            let (x, y) = (k % width, k / width);
+            let ray = Ray {
+                origin: pixel_rays.eye,
+                dir: pixel_rays.direction(x as f32 + 0.5, y as f32 + 0.5),
+            };
+            let hit = match surfaces.hits.get(k as usize) {
+                Some(hit) => *hit,
+                None => tracer.accel.intersect(&ray, f32::INFINITY),
+            };
+            let before = rays_traced_on_this_thread();
+            if let Some(hit) = hit {
+                // The primary ray is not counted: its hit is known.
+                tracer.radiance_at_hit_recorded(&ray, &hit, &mut ());
+            }
+            let after = rays_traced_on_this_thread();
+            (after.0 - before.0) + (after.1 - before.1)
+        })
+        .sum();
+    rays as f32 / sample.len().max(1) as f32
 }
 
 impl FrameSetup {
@@ -426,21 +611,52 @@ impl FrameSetup {
         max_depth: u32,
     ) -> FrameSetup {
         let view = ScreenView::new(camera, width, height);
-        let owners = PixelOwners::new(&surfaces, &topology, live.scene(), &view);
+        let scene = live.scene();
+        let tracer = Tracer {
+            scene,
+            accel: live.accel(),
+            max_depth,
+        };
+        let pixel_rays = camera.pixel_rays(width, height);
+        let choices = ReflectorChoice::from_id_buffer(
+            &tracer,
+            &pixel_rays,
+            width,
+            &surfaces,
+            &topology,
+            &settings,
+        );
+        let mut by_vertices: Vec<bool> = (0..scene.meshes.len() as u32)
+            .map(|mesh| topology.is_reflector(mesh))
+            .collect();
+        for choice in choices.iter().filter(|choice| choice.per_pixel) {
+            by_vertices[choice.mesh as usize] = false;
+        }
+        let owners = PixelOwners::new(&surfaces, &by_vertices, scene, &view);
         let mut setup = FrameSetup {
             view,
             surfaces,
             owners,
             topology,
+            by_vertices,
             active: Vec::new(),
+            choices,
         };
         setup.active = setup
             .inputs(live, camera, settings, max_depth)
-            .active_triangles();
+            .active_triangles(&setup.by_vertices);
         setup
     }
 
-    /// The same from the CPU's ID buffer (what every MPI rank computes for itself).
+    /// Whether the pixels showing mesh `mesh` are traced one by one: not a reflector, or a
+    /// reflector chosen to be traced per pixel.
+    fn traced_per_pixel(&self, mesh: u32) -> bool {
+        !self.by_vertices[mesh as usize]
+    }
+
+    /// The same from the CPU's ID buffer (what every MPI rank computes for itself), traced
+    /// into the memory of a `recycled` earlier frame's where given.
+    #[allow(clippy::too_many_arguments)]
     pub fn traced(
         live: &LiveScene,
         camera: &Camera,
@@ -449,8 +665,15 @@ impl FrameSetup {
         topology: Arc<Topology>,
         settings: RefineSettings,
         max_depth: u32,
+        recycled: Option<PixelSurfaces>,
     ) -> FrameSetup {
-        let surfaces = PixelSurfaces::trace(live.accel(), camera, width, height);
+        let surfaces = match recycled {
+            Some(mut surfaces) => {
+                surfaces.retrace(live.accel(), camera, width, height);
+                surfaces
+            }
+            None => PixelSurfaces::trace(live.accel(), camera, width, height),
+        };
         FrameSetup::new(
             live, camera, width, height, surfaces, topology, settings, max_depth,
         )
@@ -498,45 +721,84 @@ impl FrameSetup {
             .collect()
     }
 
-    /// The image of everything but the reflectors from the reference's shading of each
-    /// pixel's primary ray (the CPU's stand-in for the raster pass's colour), reflector pixels
-    /// left black; with the closest-hit and shadow rays it traced.
+    /// The image of everything but the reflectors traced by vertices, from the reference's
+    /// shading of each pixel's primary ray (the CPU's stand-in for the raster pass's colour),
+    /// those reflectors' pixels left black; with the closest-hit and shadow rays it traced.
     pub fn rest_of_scene(
         &self,
         live: &LiveScene,
         camera: &Camera,
         max_depth: u32,
     ) -> (Image, (u64, u64)) {
-        let (width, height) = (self.view.width, self.view.height);
+        let mut image = Image::new(self.view.width, self.view.height);
+        let rays = self.trace_pixels(live, camera, max_depth, &mut image, |mesh| {
+            mesh.is_none_or(|mesh| self.traced_per_pixel(mesh))
+        });
+        (image, rays)
+    }
+
+    /// Traces into `image` each pixel whose first surface `select` takes (a mesh, or None: the
+    /// background): the reference's value, shaded from the ID buffer's
+    /// hit where it was traced on the CPU. Returns the closest-hit and shadow rays traced.
+    fn trace_pixels(
+        &self,
+        live: &LiveScene,
+        camera: &Camera,
+        max_depth: u32,
+        image: &mut Image,
+        select: impl Fn(Option<u32>) -> bool + Sync,
+    ) -> (u64, u64) {
+        let width = self.view.width;
         let tracer = Tracer {
             scene: live.scene(),
             accel: live.accel(),
             max_depth,
         };
-        let topology = &self.topology;
-        let pixel_rays = camera.pixel_rays(width, height);
-        let (pixels, rays): (Vec<Vec3>, Vec<(u64, u64)>) = (0..width * height)
-            .into_par_iter()
-            .map(|k| {
-                let [mesh, _] = self.surfaces.ids[k as usize];
-                if mesh != 0 && topology.is_reflector(mesh - 1) {
-                    return (Vec3::ZERO, (0, 0));
+        let pixel_rays = camera.pixel_rays(width, self.view.height);
+        let hits = &self.surfaces.hits;
+        let rays = image
+            .pixels
+            .par_iter_mut()
+            .enumerate()
+            .map(|(k, pixel)| {
+                let [mesh, _] = self.surfaces.ids[k];
+                if !select(mesh.checked_sub(1)) {
+                    return (0, 0);
                 }
+                let (x, y) = (k as u32 % width, k as u32 / width);
                 let before = rays_traced_on_this_thread();
-                let color = pixel_radiance(&tracer, &pixel_rays, k % width, k / width, 1);
+                *pixel = match hits.get(k) {
+                    Some(hit) => {
+                        let ray = Ray {
+                            origin: pixel_rays.eye,
+                            dir: pixel_rays.direction(x as f32 + 0.5, y as f32 + 0.5),
+                        };
+                        tracer.radiance_of_primary(&ray, hit.as_ref())
+                    }
+                    None => pixel_radiance(&tracer, &pixel_rays, x, y, 1),
+                };
                 let after = rays_traced_on_this_thread();
-                (color, (after.0 - before.0, after.1 - before.1))
+                (after.0 - before.0, after.1 - before.1)
             })
-            .unzip();
-        let rays = rays
-            .iter()
-            .fold((0, 0), |sum, r| (sum.0 + r.0, sum.1 + r.1));
-        let image = Image {
-            width,
-            height,
-            pixels,
-        };
-        (image, rays)
+            .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+        rays
+    }
+
+    /// On the raster pass's image (the rest of the scene), the pixels of the reflectors chosen
+    /// to be traced per pixel; with the rays traced.
+    fn trace_reflectors_per_pixel(
+        &self,
+        live: &LiveScene,
+        camera: &Camera,
+        max_depth: u32,
+        image: &mut Image,
+    ) -> (u64, u64) {
+        if self.choices.iter().all(|choice| !choice.per_pixel) {
+            return (0, 0);
+        }
+        self.trace_pixels(live, camera, max_depth, image, |mesh| {
+            mesh.is_some_and(|mesh| self.topology.is_reflector(mesh) && self.traced_per_pixel(mesh))
+        })
     }
 }
 
@@ -573,6 +835,14 @@ impl Technique for VertexTracing {
             "trace_unseen" => s.trace_unseen.to_string(),
             "trace_behind_eye" => s.trace_behind_eye.to_string(),
             "trace_stray" => s.trace_stray.to_string(),
+            "tracing" => match s.tracing {
+                ReflectorTracing::Auto => "auto",
+                ReflectorTracing::Vertices => "vertices",
+                ReflectorTracing::Pixels => "pixels",
+            }
+            .into(),
+            "vertex_ratio" => s.vertex_ratio.to_string(),
+            "min_path_rays" => s.min_path_rays.to_string(),
             "budget_ms" => self.budget_ms.to_string(),
             "package_triangles" => self.package_triangles.to_string(),
             "visibility" => match self.visibility {
@@ -604,6 +874,23 @@ impl Technique for VertexTracing {
             "trace_unseen" => s.trace_unseen = value.flag(),
             "trace_behind_eye" => s.trace_behind_eye = value.flag(),
             "trace_stray" => s.trace_stray = value.flag(),
+            "tracing" => {
+                s.tracing = match value.word() {
+                    "auto" => ReflectorTracing::Auto,
+                    "vertices" => ReflectorTracing::Vertices,
+                    "pixels" => ReflectorTracing::Pixels,
+                    _ => {
+                        return Err(bad_value(
+                            INFO.name,
+                            name,
+                            value,
+                            "auto, vertices or pixels",
+                        ))
+                    }
+                }
+            }
+            "vertex_ratio" => s.vertex_ratio = value.number() as f32,
+            "min_path_rays" => s.min_path_rays = value.number() as f32,
             "budget_ms" => self.budget_ms = value.integer() as u32,
             "package_triangles" => self.package_triangles = value.integer() as usize,
             "visibility" => {
@@ -719,10 +1006,27 @@ impl Technique for VertexTracing {
                 milliseconds: ms,
             })
             .collect();
-        let counters = vec![
+        let choices = &progress.setup.choices;
+        let mut counters = vec![
             (
                 "reflector pixels".into(),
-                progress.setup.owners.len() as u64,
+                choices.iter().map(|c| c.pixels as u64).sum(),
+            ),
+            (
+                "reflectors traced by their vertices".into(),
+                choices.iter().filter(|c| !c.per_pixel).count() as u64,
+            ),
+            (
+                "reflectors traced per pixel".into(),
+                choices.iter().filter(|c| c.per_pixel).count() as u64,
+            ),
+            (
+                "reflector pixels traced per pixel".into(),
+                choices.iter().filter(|c| c.per_pixel).map(|c| c.pixels as u64).sum(),
+            ),
+            (
+                "vertices of the reflector triangles seen (every reflector)".into(),
+                choices.iter().map(|c| c.vertices as u64).sum(),
             ),
             (
                 "stray pixels (the ID buffer's triangle cannot be seen there; traced with trace_stray)".into(),
@@ -752,6 +1056,25 @@ impl Technique for VertexTracing {
                 totals.shadow_rays + progress.rest_rays.1,
             ),
         ];
+        let scene = live.scene();
+        for c in choices {
+            let name = &scene.meshes[c.mesh as usize].name;
+            counters.extend([
+                (
+                    format!("reflector {name}: vertices of its triangles seen"),
+                    c.vertices as u64,
+                ),
+                (format!("reflector {name}: pixels"), c.pixels as u64),
+                (
+                    format!("reflector {name}: rays per pixel path x 100 (sampled; 0: not)"),
+                    c.path_rays.map_or(0, |rays| (rays * 100.0).round() as u64),
+                ),
+                (
+                    format!("reflector {name}: traced per pixel (1) or by vertices (0)"),
+                    c.per_pixel as u64,
+                ),
+            ]);
+        }
         // Later calls of a progressive frame report their own time only.
         if budget_ms > 0 {
             progress.stages = [0.0; 4];
@@ -760,7 +1083,12 @@ impl Technique for VertexTracing {
         if progress.setup.owners.is_empty() {
             warnings.push("no reflector pixel is visible: nothing to vertex-trace".into());
         }
-        let mut image = progress.image.clone();
+        // Without a budget the next call starts afresh: the image is not kept.
+        let mut image = if budget_ms > 0 {
+            progress.image.clone()
+        } else {
+            std::mem::replace(&mut progress.image, Image::new(0, 0))
+        };
         if self.show_faces {
             for package in &progress.packages {
                 for (a, b) in package.leaf_edges() {
@@ -786,7 +1114,12 @@ impl VertexTracing {
     ) -> Result<Option<&'c GpuContext>, TechniqueError> {
         match self.visibility {
             VisibilitySource::Cpu => Ok(None),
-            VisibilitySource::Auto => Ok(ctx.gpu.as_ref()),
+            // A software rasterizer draws the ID buffer slower than the CPU traces it, and the
+            // traced buffer's hits shade the rest of the scene with no second primary ray.
+            VisibilitySource::Auto => Ok(ctx
+                .gpu
+                .as_ref()
+                .filter(|gpu| gpu.adapter_info.device_type != wgpu::DeviceType::Cpu)),
             VisibilitySource::Gpu => ctx.gpu(INFO.name).map(Some),
         }
     }
@@ -844,16 +1177,24 @@ impl VertexTracing {
                 }
                 let surfaces = pass.readback.as_ref().expect("made above").read(gpu, &g)?;
                 // The raster colour is the rest of the scene; specular pixels are black in it.
-                let rest = g.read_color(gpu)?;
+                let mut rest = g.read_color(gpu)?;
                 let visibility_ms = clock.elapsed().as_secs_f64() * 1e3;
                 let setup = FrameSetup::new(
                     live, camera, width, height, surfaces, topology, settings, max_depth,
                 );
-                (setup, rest, (0, 0), visibility_ms)
+                let rays = setup.trace_reflectors_per_pixel(live, camera, max_depth, &mut rest);
+                (setup, rest, rays, visibility_ms)
             }
             None => {
-                let setup =
-                    FrameSetup::traced(live, camera, width, height, topology, settings, max_depth);
+                // The last frame's buffers: a steady view allocates (and faults in) no pages.
+                let recycled = self
+                    .progress
+                    .take()
+                    .map(|progress| progress.setup.surfaces)
+                    .filter(|surfaces| !surfaces.hits.is_empty());
+                let setup = FrameSetup::traced(
+                    live, camera, width, height, topology, settings, max_depth, recycled,
+                );
                 let visibility_ms = clock.elapsed().as_secs_f64() * 1e3;
                 let (rest, rays) = setup.rest_of_scene(live, camera, max_depth);
                 (setup, rest, rays, visibility_ms)

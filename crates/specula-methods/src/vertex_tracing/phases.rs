@@ -35,7 +35,9 @@ impl<'a> FramePhases<'a> {
         max_depth: u32,
     ) -> FramePhases<'a> {
         let topology = Arc::new(Topology::new(live.scene()));
-        let setup = FrameSetup::traced(live, camera, width, height, topology, settings, max_depth);
+        let setup = FrameSetup::traced(
+            live, camera, width, height, topology, settings, max_depth, None,
+        );
         FramePhases {
             live,
             camera,

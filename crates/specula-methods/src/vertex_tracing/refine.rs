@@ -68,6 +68,26 @@ pub struct RefineSettings {
     pub trace_behind_eye: bool,
     /// Trace stray pixels (else: interpolate them in the leaf face they fall in or beside).
     pub trace_stray: bool,
+    /// Whether a reflector's pixels are shaded from its vertices or traced one by one.
+    pub tracing: ReflectorTracing,
+    /// With [`ReflectorTracing::Auto`]: a reflector whose vertices to trace number more than
+    /// this times its pixels is traced per pixel.
+    pub vertex_ratio: f32,
+    /// With [`ReflectorTracing::Auto`]: a reflector whose sampled pixel paths take fewer rays
+    /// than this beyond the primary is traced per pixel.
+    pub min_path_rays: f32,
+}
+
+/// How a frame shades a reflector's pixels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ReflectorTracing {
+    /// Per reflector, from the frame's counts: per pixel where its vertices to trace outnumber
+    /// `vertex_ratio` times its pixels (a dense, small or distant reflector), else by vertices.
+    Auto,
+    /// Every reflector by its vertices (the paper).
+    Vertices,
+    /// Every reflector per pixel: the reference's image.
+    Pixels,
 }
 
 /// A reflector triangle of the scene: the unit of work packages are made of.
@@ -81,7 +101,8 @@ pub struct TriangleId {
 /// each edge. A vertex is shaded as a point of its host, so that every package shades it alike.
 #[derive(Debug, Default)]
 pub struct Topology {
-    meshes: HashMap<u32, MeshTopology>,
+    /// Per scene mesh; None for a mesh that is not a reflector.
+    meshes: Vec<Option<MeshTopology>>,
 }
 
 #[derive(Debug, Default)]
@@ -93,41 +114,50 @@ struct MeshTopology {
 impl Topology {
     /// The host triangles of every specular mesh of `scene`.
     pub fn new(scene: &Scene) -> Topology {
-        let mut meshes = HashMap::new();
-        for (index, mesh) in scene.meshes.iter().enumerate() {
-            if !scene.materials[mesh.material].is_specular() {
-                continue;
-            }
-            let mut topology = MeshTopology {
-                vertex_host: vec![u32::MAX; mesh.positions.len()],
-                edge_host: HashMap::new(),
-            };
-            for (t, tri) in mesh.triangles.iter().enumerate() {
-                let t = t as u32;
-                for i in 0..3 {
-                    let host = &mut topology.vertex_host[tri[i] as usize];
-                    *host = (*host).min(t);
-                    topology
-                        .edge_host
-                        .entry(edge_key(tri[i], tri[(i + 1) % 3]))
-                        .or_insert(t);
+        let meshes = scene
+            .meshes
+            .iter()
+            .map(|mesh| {
+                if !scene.materials[mesh.material].is_specular() {
+                    return None;
                 }
-            }
-            meshes.insert(index as u32, topology);
-        }
+                let mut topology = MeshTopology {
+                    vertex_host: vec![u32::MAX; mesh.positions.len()],
+                    edge_host: HashMap::new(),
+                };
+                for (t, tri) in mesh.triangles.iter().enumerate() {
+                    let t = t as u32;
+                    for i in 0..3 {
+                        let host = &mut topology.vertex_host[tri[i] as usize];
+                        *host = (*host).min(t);
+                        topology
+                            .edge_host
+                            .entry(edge_key(tri[i], tri[(i + 1) % 3]))
+                            .or_insert(t);
+                    }
+                }
+                Some(topology)
+            })
+            .collect();
         Topology { meshes }
     }
 
     pub fn is_reflector(&self, mesh: u32) -> bool {
-        self.meshes.contains_key(&mesh)
+        self.meshes.get(mesh as usize).is_some_and(Option::is_some)
+    }
+
+    fn mesh(&self, mesh: u32) -> &MeshTopology {
+        self.meshes[mesh as usize]
+            .as_ref()
+            .expect("a reflector's topology")
     }
 
     fn vertex_host(&self, mesh: u32, vertex: u32) -> u32 {
-        self.meshes[&mesh].vertex_host[vertex as usize]
+        self.mesh(mesh).vertex_host[vertex as usize]
     }
 
     fn edge_host(&self, mesh: u32, edge: (u32, u32)) -> u32 {
-        self.meshes[&mesh].edge_host[&edge]
+        self.mesh(mesh).edge_host[&edge]
     }
 }
 
@@ -182,9 +212,10 @@ fn plausible_owner(scene: &Scene, view: &ScreenView, id: TriangleId, k: u32) -> 
 }
 
 impl PixelOwners {
+    /// The owners of the pixels showing the meshes `by_vertices` marks.
     pub fn new(
         surfaces: &PixelSurfaces,
-        topology: &Topology,
+        by_vertices: &[bool],
         scene: &Scene,
         view: &ScreenView,
     ) -> PixelOwners {
@@ -193,7 +224,7 @@ impl PixelOwners {
             .ids
             .par_iter()
             .enumerate()
-            .filter(|(_, ids)| ids[0] != 0 && topology.is_reflector(ids[0] - 1))
+            .filter(|(_, ids)| ids[0] != 0 && by_vertices[ids[0] as usize - 1])
             .map(|(k, ids)| {
                 let id = TriangleId {
                     mesh: ids[0] - 1,
@@ -235,10 +266,6 @@ impl PixelOwners {
     /// Every pixel some reflector triangle owns.
     pub fn all(&self) -> impl Iterator<Item = u32> + '_ {
         self.owned.iter().map(|(_, pixel)| pixel & !STRAY)
-    }
-
-    pub fn len(&self) -> usize {
-        self.owned.len()
     }
 
     pub fn is_empty(&self) -> bool {
@@ -306,18 +333,18 @@ impl FrameInputs<'_> {
         })
     }
 
-    /// The reflector triangles a frame traces: those with a visible vertex (the paper's rule:
+    /// The reflector triangles a frame traces, of the meshes `by_vertices` marks: those with a visible vertex (the paper's rule:
     /// an edge is traced when one of its ends is seen) and, with `trace_unseen`, those with
     /// pixels of their own (a triangle seen only between its corners, which the paper leaves
     /// out), mesh by mesh, each mesh's along a Morton curve through its box.
-    pub fn active_triangles(&self) -> Vec<TriangleId> {
+    pub fn active_triangles(&self, by_vertices: &[bool]) -> Vec<TriangleId> {
         use rayon::prelude::*;
         let mut active = Vec::new();
         for (index, mesh) in self.scene.meshes.iter().enumerate() {
-            let index = index as u32;
-            if !self.topology.is_reflector(index) {
+            if !by_vertices[index] {
                 continue;
             }
+            let index = index as u32;
             let visible: Vec<bool> = (0..mesh.positions.len() as u32)
                 .into_par_iter()
                 .map(|v| {
