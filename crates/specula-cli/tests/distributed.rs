@@ -55,7 +55,7 @@ fn single_process(dir: &Path) -> Image {
     let status = Command::new(specula())
         .args(["render", "truck-cover", "--method", "vertex-tracing"])
         .args(SIZE)
-        .args(["-p", "visibility=cpu", "-o"])
+        .args(["-p", "visibility=cpu", "-p", "tracing=vertices", "-o"])
         .arg(dir.join("single.png"))
         .arg("--exr")
         .arg(&exr)
@@ -78,6 +78,9 @@ fn distributed(dir: &Path, name: &str, extra: &[&str]) -> Option<(Image, serde_j
     let output = command
         .args(["-np", "3", specula(), "render", "truck-cover"])
         .args(["--method", "vertex-tracing", "--distributed"])
+        // The cover's vertices, in packages: what is distributed (auto traces it per pixel
+        // at this size, on the master).
+        .args(["-p", "tracing=vertices"])
         .args(SIZE)
         .arg("-o")
         .arg(dir.join(format!("{name}.png")))

@@ -25,16 +25,25 @@ fn refined_and_filled_is_close_to_the_reference_with_either_id_buffer() {
     // Mean FLIP on the cover's pixels at 256 × 192, measured 2026-11-30: CPU ID buffer 0.0031,
     // GPU (lavapipe) 0.0023 (0.0031 since the raster's near plane moved), the Gouraud preview alone 0.0490, refinement without filling
     // 0.0202. Bounds at about twice the measured.
-    let refined = flip(&cpu, &["visibility=cpu"]);
+    // The cover traced by its vertices (at this size `tracing=auto` traces it per pixel).
+    let refined = flip(&cpu, &["visibility=cpu", "tracing=vertices"]);
     eprintln!("truck-cover, CPU ID buffer: {refined:.4}");
     assert!(refined < 0.006, "{refined}");
-    let preview = flip(&cpu, &["visibility=cpu", "refine=false", "fill=false"]);
+    let preview = flip(
+        &cpu,
+        &[
+            "visibility=cpu",
+            "tracing=vertices",
+            "refine=false",
+            "fill=false",
+        ],
+    );
     eprintln!("preview: {preview:.4}");
     assert!(
         preview > 0.03 && refined < 0.15 * preview,
         "{preview} vs {refined}"
     );
-    let unfilled = flip(&cpu, &["visibility=cpu", "fill=false"]);
+    let unfilled = flip(&cpu, &["visibility=cpu", "tracing=vertices", "fill=false"]);
     eprintln!("without filling: {unfilled:.4}");
     assert!(
         unfilled < 0.04 && refined < 0.3 * unfilled,
@@ -43,7 +52,7 @@ fn refined_and_filled_is_close_to_the_reference_with_either_id_buffer() {
     let Some(gpu) = specula_methods::test_context("vertex-tracing with the GPU ID buffer") else {
         return;
     };
-    let with_gpu = flip(&gpu, &["visibility=gpu"]);
+    let with_gpu = flip(&gpu, &["visibility=gpu", "tracing=vertices"]);
     eprintln!("truck-cover, GPU ID buffer: {with_gpu:.4}");
     assert!(with_gpu < 0.005, "{with_gpu}");
 }

@@ -473,6 +473,8 @@ mod tests {
             REFERENCE_BUDGET_MS.to_string()
         );
         session.set_param("budget_ms=1").unwrap();
+        // The cover by its vertices (at this size `tracing=auto` traces it per pixel).
+        session.set_param("tracing=vertices").unwrap();
         let counter = |frame: &Frame, name: &str| {
             frame
                 .counters

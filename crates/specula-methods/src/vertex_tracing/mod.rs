@@ -46,7 +46,7 @@
 //!
 //! Beyond the paper (each switched off by the `paper` preset; `specula methods` lists it):
 //! - Each reflector is traced by its vertices or per pixel, chosen per frame from measured
-//!   counts (the paper traces vertices always; paper: `tracing=vertices`). Per pixel where the
+//!   counts; the paper traces vertices always (paper: `tracing=vertices`). Per pixel where the
 //!   vertices of its triangles the ID buffer shows outnumber `vertex_ratio` × its pixels (a
 //!   dense mesh, a small or distant reflector, a low resolution: refinement would trace about
 //!   as many samples as there are pixels), or where every 32nd of its pixels, traced, takes
