@@ -49,7 +49,7 @@
 //!   counts; the paper traces vertices always (paper: `tracing=vertices`). Per pixel where the
 //!   vertices of its triangles the ID buffer shows outnumber `vertex_ratio` × its pixels (a
 //!   dense mesh, a small or distant reflector, a low resolution: refinement would trace about
-//!   as many samples as there are pixels), or where every 32nd of its pixels, traced, takes
+//!   as many samples as there are pixels), or where 256 of its pixels, traced, take
 //!   fewer than `min_path_rays` closest-hit and shadow rays beyond the primary (a plain mirror:
 //!   owning, locating and interpolating a pixel on the CPU costs about what its one reflected
 //!   ray does). A reflector traced per pixel is shaded from the ID buffer's hit where it was
@@ -146,7 +146,7 @@
 //!   reflectors show 0.11–0.42 and vertices lost or tied; at 1024 × 768, 0.01–0.04.
 //! - `min_path_rays` (6): rays per sampled pixel path below which `auto` traces per pixel
 //!   (measured on the suite at 1024 × 768: mirrors 1.9–3.6 with their shadow rays, glass
-//!   16–24); sampling costs 1/32 of a candidate reflector's pixel paths.
+//!   16–24); the sample is 256 of a candidate reflector's pixel paths.
 //! - `visibility` (auto): `gpu` draws the ID buffer with the scene raster pass, `cpu` traces it,
 //!   `auto` uses a GPU where the run has one that is not a software rasterizer (on lavapipe
 //!   the raster pass took 16 ms where tracing the same buffer took 8, and the traced buffer's
@@ -481,8 +481,8 @@ pub(crate) struct ReflectorChoice {
     pub(crate) per_pixel: bool,
 }
 
-/// Every this many of a candidate reflector's pixels, one is traced to measure its paths.
-const PATH_SAMPLE_STRIDE: usize = 32;
+/// Pixels of a candidate reflector traced to measure its paths, spread evenly over its pixels.
+const PATH_SAMPLES: usize = 256;
 
 impl ReflectorChoice {
     /// Every reflector the ID buffer `surfaces` shows, counted, and the choice `settings`
@@ -562,8 +562,8 @@ impl ReflectorChoice {
     }
 }
 
-/// The mean closest-hit and shadow rays beyond the primary of every
-/// [`PATH_SAMPLE_STRIDE`]-th pixel of `pixels`, traced as the reference traces them.
+/// The mean closest-hit and shadow rays beyond the primary of [`PATH_SAMPLES`] pixels spread
+/// evenly over `pixels` (raster order), traced as the reference traces them.
 fn sampled_path_rays(
     tracer: &Tracer,
     pixel_rays: &specula_scene::PixelRays,
@@ -571,7 +571,8 @@ fn sampled_path_rays(
     surfaces: &PixelSurfaces,
     pixels: &[u32],
 ) -> f32 {
-    let sample: Vec<u32> = pixels.iter().step_by(PATH_SAMPLE_STRIDE).copied().collect();
+    let stride = pixels.len().div_ceil(PATH_SAMPLES).max(1);
+    let sample: Vec<u32> = pixels.iter().step_by(stride).copied().collect();
     let rays: u64 = sample
         .par_iter()
         .map(|&k| {

@@ -242,7 +242,7 @@ impl PixelOwners {
                 (owner_key(id), k | if stray { STRAY } else { 0 })
             })
             .collect();
-        owned.sort_unstable();
+        owned.par_sort_unstable();
         PixelOwners { owned }
     }
 
