@@ -1,5 +1,6 @@
-//! `specula bench`: per scene and method, a warm-up then N timed frames; the median and the
-//! spread (min, max) of the frame time and of each stage. A method with a `dynamic` parameter is
+//! `specula bench`: per scene, a warm-up then N timed rounds of one frame of each method (so
+//! that a drift of the machine's speed during the run slows them alike); the median and the
+//! spread (min, max) of each method's frame time and of each stage. A method with a `dynamic` parameter is
 //! timed twice: static (its scene-only maps kept, as in a still scene) and dynamic (redrawn every
 //! frame, as the papers do for moving scenes).
 //!
@@ -162,96 +163,123 @@ pub fn run(
     height: u32,
     frames: u32,
 ) -> Result<Vec<MethodBench>> {
+    /// One method (and mode) being timed.
+    struct Timed {
+        label: Label,
+        mode: &'static str,
+        technique: Box<dyn specula_methods::Technique>,
+        prepare_ms: f64,
+        totals: Vec<f64>,
+        stages: Vec<(String, Vec<f64>)>,
+        timing: String,
+        created: u64,
+        rays: Option<u64>,
+        counters: Vec<(String, u64)>,
+    }
     let scene_name = scene.name.clone();
     let live = LiveScene::new(scene);
     let camera = live.scene().camera.clone();
     let adapter = ctx.describe();
-    let mut results = Vec::new();
+    let mut timed = Vec::new();
     for name in methods {
         let label = Label::parse(name)?;
-        let info = label.info;
-        let modes: &[&str] = if info.param("dynamic").is_some() {
+        let modes: &[&'static str] = if label.info.param("dynamic").is_some() {
             &["static", "dynamic"]
         } else {
             &["-"]
         };
-        for mode in modes {
+        for &mode in modes {
             let mut technique = if asked.contains(name) {
                 label.create_with(parameters)?
             } else {
                 label.create()?
             };
-            if *mode != "-" {
+            if mode != "-" {
                 specula_methods::apply_setting(
                     technique.as_mut(),
-                    &format!("dynamic={}", *mode == "dynamic"),
+                    &format!("dynamic={}", mode == "dynamic"),
                 )?;
             }
             let start = std::time::Instant::now();
             technique.prepare(ctx, &live)?;
             let prepare_ms = start.elapsed().as_secs_f64() * 1e3;
-            let bar = indicatif::ProgressBar::new((WARM_UP_FRAMES + frames) as u64);
-            bar.set_message(format!("{name} {mode}"));
-            let mut totals = Vec::new();
-            let mut stages: Vec<(String, Vec<f64>)> = Vec::new();
-            let mut timing = String::new();
-            let mut created = 0;
-            let mut rays = None;
-            let mut counters = Vec::new();
-            for i in 0..WARM_UP_FRAMES + frames {
-                let frame = technique.render(ctx, &live, &camera, width, height)?;
-                bar.inc(1);
-                if i < WARM_UP_FRAMES {
-                    continue;
-                }
-                let count =
-                    |name: &str| frame.counters.iter().find(|(n, _)| n == name).map(|c| c.1);
-                if let (Some(closest), Some(shadow)) = (
-                    count(specula_methods::COUNTER_RAYS_TRACED),
-                    count(specula_methods::COUNTER_SHADOW_RAYS),
-                ) {
-                    rays = Some(closest + shadow);
-                }
-                created += frame.created().total();
-                counters = frame.counters.clone();
-                timing = format!("{:?}", frame.timing);
-                totals.push(frame.total_milliseconds());
-                for s in &frame.stages {
-                    match stages.iter_mut().find(|(n, _)| *n == s.stage) {
-                        Some((_, v)) => v.push(s.milliseconds),
-                        None => stages.push((s.stage.clone(), vec![s.milliseconds])),
-                    }
+            timed.push(Timed {
+                label: Label::parse(name)?,
+                mode,
+                technique,
+                prepare_ms,
+                totals: Vec::new(),
+                stages: Vec::new(),
+                timing: String::new(),
+                created: 0,
+                rays: None,
+                counters: Vec::new(),
+            });
+        }
+    }
+    let bar =
+        indicatif::ProgressBar::new(((WARM_UP_FRAMES + frames) as usize * timed.len()) as u64);
+    bar.set_message(scene_name.clone());
+    // Round by round, one frame of each method: a machine whose speed drifts during the run
+    // (another tenant, the clock) slows every method alike, so their ratios hold.
+    for round in 0..WARM_UP_FRAMES + frames {
+        for t in &mut timed {
+            let frame = t.technique.render(ctx, &live, &camera, width, height)?;
+            bar.inc(1);
+            if round < WARM_UP_FRAMES {
+                continue;
+            }
+            let count = |name: &str| frame.counters.iter().find(|(n, _)| n == name).map(|c| c.1);
+            if let (Some(closest), Some(shadow)) = (
+                count(specula_methods::COUNTER_RAYS_TRACED),
+                count(specula_methods::COUNTER_SHADOW_RAYS),
+            ) {
+                t.rays = Some(closest + shadow);
+            }
+            t.created += frame.created().total();
+            t.counters = frame.counters.clone();
+            t.timing = format!("{:?}", frame.timing);
+            t.totals.push(frame.total_milliseconds());
+            for s in &frame.stages {
+                match t.stages.iter_mut().find(|(n, _)| *n == s.stage) {
+                    Some((_, v)) => v.push(s.milliseconds),
+                    None => t.stages.push((s.stage.clone(), vec![s.milliseconds])),
                 }
             }
-            bar.finish_and_clear();
-            let frame = spread(totals);
-            let rays_per_second = rays
+        }
+    }
+    bar.finish_and_clear();
+    Ok(timed
+        .into_iter()
+        .map(|t| {
+            let frame = spread(t.totals);
+            let rays_per_second = t
+                .rays
                 .filter(|_| frame.median_ms > 0.0)
                 .map(|r| r as f64 / (frame.median_ms * 1e-3));
-            results.push(MethodBench {
+            MethodBench {
                 scene: scene_name.clone(),
-                label: label.to_string(),
-                method: info.name.to_string(),
-                preset: label.preset.map(|p| p.name.to_string()),
-                mode: mode.to_string(),
-                parameters: technique.parameters(),
+                label: t.label.to_string(),
+                method: t.label.info.name.to_string(),
+                preset: t.label.preset.map(|p| p.name.to_string()),
+                mode: t.mode.to_string(),
+                parameters: t.technique.parameters(),
                 frames,
                 width,
                 height,
                 adapter: adapter.clone(),
-                timing,
-                prepare_ms,
+                timing: t.timing,
+                prepare_ms: t.prepare_ms,
                 frame,
-                stages: stages.into_iter().map(|(n, v)| (n, spread(v))).collect(),
-                created,
-                counters,
+                stages: t.stages.into_iter().map(|(n, v)| (n, spread(v))).collect(),
+                created: t.created,
+                counters: t.counters,
                 speedup_over_reference: None,
                 speedup_over_gpu_trace: None,
                 rays_per_second,
-            });
-        }
-    }
-    Ok(results)
+            }
+        })
+        .collect())
 }
 
 pub fn print(results: &[MethodBench]) {

@@ -50,12 +50,12 @@ fn specula() -> &'static str {
 }
 
 /// The single-process image (CPU visibility, as every rank computes it).
-fn single_process(dir: &Path) -> Image {
+fn single_process(dir: &Path, tracing: &str) -> Image {
     let exr = dir.join("single.exr");
     let status = Command::new(specula())
         .args(["render", "truck-cover", "--method", "vertex-tracing"])
         .args(SIZE)
-        .args(["-p", "visibility=cpu", "-p", "tracing=vertices", "-o"])
+        .args(["-p", "visibility=cpu", "-p", tracing, "-o"])
         .arg(dir.join("single.png"))
         .arg("--exr")
         .arg(&exr)
@@ -115,7 +115,10 @@ fn three_ranks_draw_the_single_process_image_bit_for_bit() {
     let Some((image, report)) = distributed(dir.path(), "three", &["--frames", "2"]) else {
         return;
     };
-    assert!(bitwise_equal(&image, &single_process(dir.path())));
+    assert!(bitwise_equal(
+        &image,
+        &single_process(dir.path(), "tracing=vertices")
+    ));
     let frames = report["frames"].as_array().unwrap();
     assert_eq!(frames.len(), 2);
     for frame in frames {
@@ -134,6 +137,21 @@ fn three_ranks_draw_the_single_process_image_bit_for_bit() {
         assert_eq!(triangles, frame["active_triangles"].as_u64().unwrap());
     }
     assert!(report["lost_ranks"].as_array().unwrap().is_empty());
+}
+
+#[test]
+fn a_reflector_chosen_per_pixel_is_traced_by_the_master_into_the_single_process_image() {
+    let dir = tempfile::tempdir().unwrap();
+    // At this size `tracing=auto` traces the cover per pixel: no package to hand out.
+    let Some((image, report)) = distributed(dir.path(), "auto", &["-p", "tracing=auto"]) else {
+        return;
+    };
+    assert!(bitwise_equal(
+        &image,
+        &single_process(dir.path(), "tracing=auto")
+    ));
+    let frame = &report["frames"].as_array().unwrap()[0];
+    assert_eq!(frame["active_triangles"].as_u64(), Some(0), "{frame}");
 }
 
 #[test]
@@ -196,5 +214,8 @@ fn a_worker_killed_mid_frame_does_not_stop_the_frame() {
     assert_eq!(frames.len(), 2, "both frames complete");
     assert_eq!(frames[0]["lost_ranks"].as_array().unwrap().len(), 1);
     // The frame is whole: the same image as one process draws.
-    assert!(bitwise_equal(&image, &single_process(dir.path())));
+    assert!(bitwise_equal(
+        &image,
+        &single_process(dir.path(), "tracing=vertices")
+    ));
 }

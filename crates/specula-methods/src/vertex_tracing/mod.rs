@@ -184,6 +184,10 @@ pub use phases::FramePhases;
 use refine::{FrameInputs, OriginalSamples, Package, PixelOwners, Topology, TriangleId};
 pub use refine::{PackageCounters, RefineSettings, ReflectorTracing};
 
+/// The side of the square tiles the pixels traced one by one are traced in (the reference
+/// technique's).
+const TILE: u32 = 32;
+
 /// Packages per rayon thread when `package_triangles` is 0: enough that a package holding a
 /// reflection's outline does not leave the other threads idle.
 const PACKAGES_PER_THREAD: usize = 16;
@@ -757,31 +761,47 @@ impl FrameSetup {
         };
         let pixel_rays = camera.pixel_rays(width, self.view.height);
         let hits = &self.surfaces.hits;
-        let rays = image
-            .pixels
-            .par_iter_mut()
-            .enumerate()
-            .map(|(k, pixel)| {
-                let [mesh, _] = self.surfaces.ids[k];
-                if !select(mesh.checked_sub(1)) {
-                    return (0, 0);
-                }
-                let (x, y) = (k as u32 % width, k as u32 / width);
+        // In the reference technique's 32 x 32 tiles: neighbouring secondary rays together
+        // (16-row bands cost a glass dragon 14 % more).
+        let height = self.view.height;
+        let (tiles_x, tiles_y) = (width.div_ceil(TILE), height.div_ceil(TILE));
+        let traced: Vec<(Vec<(u32, Vec3)>, (u64, u64))> = (0..tiles_x * tiles_y)
+            .into_par_iter()
+            .map(|tile| {
+                let (x0, y0) = ((tile % tiles_x) * TILE, (tile / tiles_x) * TILE);
                 let before = rays_traced_on_this_thread();
-                *pixel = match hits.get(k) {
-                    Some(hit) => {
-                        let ray = Ray {
-                            origin: pixel_rays.eye,
-                            dir: pixel_rays.direction(x as f32 + 0.5, y as f32 + 0.5),
+                let mut pixels = Vec::new();
+                for y in y0..(y0 + TILE).min(height) {
+                    for x in x0..(x0 + TILE).min(width) {
+                        let k = y * width + x;
+                        let [mesh, _] = self.surfaces.ids[k as usize];
+                        if !select(mesh.checked_sub(1)) {
+                            continue;
+                        }
+                        let color = match hits.get(k as usize) {
+                            Some(hit) => {
+                                let ray = Ray {
+                                    origin: pixel_rays.eye,
+                                    dir: pixel_rays.direction(x as f32 + 0.5, y as f32 + 0.5),
+                                };
+                                tracer.radiance_of_primary(&ray, hit.as_ref())
+                            }
+                            None => pixel_radiance(&tracer, &pixel_rays, x, y, 1),
                         };
-                        tracer.radiance_of_primary(&ray, hit.as_ref())
+                        pixels.push((k, color));
                     }
-                    None => pixel_radiance(&tracer, &pixel_rays, x, y, 1),
-                };
+                }
                 let after = rays_traced_on_this_thread();
-                (after.0 - before.0, after.1 - before.1)
+                (pixels, (after.0 - before.0, after.1 - before.1))
             })
-            .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+            .collect();
+        let mut rays = (0, 0);
+        for (pixels, (closest, shadow)) in traced {
+            rays = (rays.0 + closest, rays.1 + shadow);
+            for (k, color) in pixels {
+                image.pixels[k as usize] = color;
+            }
+        }
         rays
     }
 
