@@ -96,7 +96,10 @@
 //! Implementation (changes no pixel): the original vertices are traced once per process for all
 //! its packages (a vertex's sample is a function of its position and host triangle alone), and
 //! the active triangles are ordered along a Morton curve, so that a package is a compact patch
-//! with a short border (the paper's future work: "spatial sectors"). A package's pixels do not
+//! with a short border (the paper's future work: "spatial sectors"). With the CPU's ID buffer
+//! a filled pixel is shaded from the buffer's hit of its primary ray (the same ray: no second
+//! intersection), and a package's filled pixels are traced in parallel (a pane of a few large
+//! triangles is a few packages). A package's pixels do not
 //! depend on how the frame was cut (`refine`'s doc says why; the test
 //! `the_image_does_not_depend_on_how_the_frame_is_cut_into_packages` holds it bit for bit), so
 //! the cut, the order, rayon's scheduling and MPI give the same image — with
@@ -1101,7 +1104,7 @@ impl Technique for VertexTracing {
             progress.stages = [0.0; 4];
         }
         let mut warnings = Vec::new();
-        if progress.setup.owners.is_empty() {
+        if progress.setup.choices.is_empty() {
             warnings.push("no reflector pixel is visible: nothing to vertex-trace".into());
         }
         // Without a budget the next call starts afresh: the image is not kept.

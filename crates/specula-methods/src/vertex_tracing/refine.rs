@@ -274,10 +274,6 @@ impl PixelOwners {
     pub fn all(&self) -> impl Iterator<Item = u32> + '_ {
         self.owned.iter().map(|(_, pixel)| pixel & !STRAY)
     }
-
-    pub fn is_empty(&self) -> bool {
-        self.owned.is_empty()
-    }
 }
 
 /// What every package of one frame reads.
