@@ -191,6 +191,9 @@ pub use refine::{PackageCounters, RefineSettings, ReflectorTracing};
 /// technique's).
 const TILE: u32 = 32;
 
+/// A tile's traced pixels (index, radiance) and its (closest-hit, shadow) rays.
+type TracedTile = (Vec<(u32, Vec3)>, (u64, u64));
+
 /// Packages per rayon thread when `package_triangles` is 0: enough that a package holding a
 /// reflection's outline does not leave the other threads idle.
 const PACKAGES_PER_THREAD: usize = 16;
@@ -768,7 +771,7 @@ impl FrameSetup {
         // (16-row bands cost a glass dragon 14 % more).
         let height = self.view.height;
         let (tiles_x, tiles_y) = (width.div_ceil(TILE), height.div_ceil(TILE));
-        let traced: Vec<(Vec<(u32, Vec3)>, (u64, u64))> = (0..tiles_x * tiles_y)
+        let traced: Vec<TracedTile> = (0..tiles_x * tiles_y)
             .into_par_iter()
             .map(|tile| {
                 let (x0, y0) = ((tile % tiles_x) * TILE, (tile / tiles_x) * TILE);
