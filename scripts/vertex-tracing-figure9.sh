@@ -28,7 +28,7 @@ root=()
 for ranks in 1 2 3; do
     mpirun "${root[@]}" --oversubscribe --enable-recovery --mca mpi_yield_when_idle 1 \
         -np "$ranks" -x RAYON_NUM_THREADS=1 \
-        target/release/specula render truck-cover --method vertex-tracing "${size[@]}" \
+        target/release/specula render truck-cover --method vertex-tracing -p tracing=vertices "${size[@]}" \
         --distributed --frames "$frames" -o "$out/ranks-$ranks.png" --report "$out/ranks-$ranks.json"
 done
 cargo bench -p specula-compare --bench vertex_tracing_figure9 -- "$out"
