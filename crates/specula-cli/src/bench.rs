@@ -1,6 +1,7 @@
 //! `specula bench`: per scene, a warm-up then N timed rounds of one frame of each method (so
 //! that a drift of the machine's speed during the run slows them alike); the median and the
-//! spread (min, max) of each method's frame time and of each stage. A method with a `dynamic` parameter is
+//! spread (min, max) of each method's frame time and of each stage. Every method is prepared
+//! before the first round and kept until the last (memory holds them all at once). A method with a `dynamic` parameter is
 //! timed twice: static (its scene-only maps kept, as in a still scene) and dynamic (redrawn every
 //! frame, as the papers do for moving scenes).
 //!

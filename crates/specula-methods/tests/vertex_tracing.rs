@@ -336,9 +336,13 @@ fn bits(pixels: &[Vec3]) -> Vec<[u32; 3]> {
         .collect()
 }
 
-fn reference_image(live: &LiveScene, camera: &Camera) -> Vec<Vec3> {
+fn reference_frame(live: &LiveScene, camera: &Camera) -> (Frame, Vec<Vec3>) {
     let mut reference = (specula_methods::exact_method().create)();
-    render(reference.as_mut(), live, camera).1
+    render(reference.as_mut(), live, camera)
+}
+
+fn reference_image(live: &LiveScene, camera: &Camera) -> Vec<Vec3> {
+    reference_frame(live, camera).1
 }
 
 #[test]
@@ -352,7 +356,18 @@ fn tracing_every_reflector_per_pixel_gives_the_reference_image_bit_for_bit() {
             counter(&frame, "reflector pixels traced per pixel") > 1000,
             "{scene}"
         );
-        let reference = reference_image(&live, &camera);
+        let (reference_counts, reference) = reference_frame(&live, &camera);
+        // The same rays, counted alike.
+        for name in [
+            specula_methods::COUNTER_RAYS_TRACED,
+            specula_methods::COUNTER_SHADOW_RAYS,
+        ] {
+            assert_eq!(
+                counter(&frame, name),
+                counter(&reference_counts, name),
+                "{scene}: {name}"
+            );
+        }
         let differing = bits(&pixels)
             .iter()
             .zip(bits(&reference))

@@ -49,7 +49,7 @@
 //!   counts; the paper traces vertices always (paper: `tracing=vertices`). Per pixel where the
 //!   vertices of its triangles the ID buffer shows outnumber `vertex_ratio` × its pixels (a
 //!   dense mesh, a small or distant reflector, a low resolution: refinement would trace about
-//!   as many samples as there are pixels), or where 256 of its pixels, traced, take
+//!   as many samples as there are pixels), or where up to 256 of its pixels, traced, take
 //!   fewer than `min_path_rays` closest-hit and shadow rays beyond the primary (a plain mirror:
 //!   owning, locating and interpolating a pixel on the CPU costs about what its one reflected
 //!   ray does). A reflector traced per pixel is shaded from the ID buffer's hit where it was
@@ -488,6 +488,8 @@ pub(crate) struct ReflectorChoice {
     /// Closest-hit and shadow rays per pixel path beyond the primary ray, on a sample of its
     /// pixels (None: not sampled, the vertex count alone decided).
     pub(crate) path_rays: Option<f32>,
+    /// The (closest-hit, shadow) rays the sample took.
+    pub(crate) sample_rays: (u64, u64),
     pub(crate) per_pixel: bool,
 }
 
@@ -551,8 +553,9 @@ impl ReflectorChoice {
                     pixels, vertices, ..
                 } = tally?;
                 let dense = vertices as f64 > settings.vertex_ratio as f64 * pixels.len() as f64;
-                let path_rays = (settings.tracing == ReflectorTracing::Auto && !dense)
+                let sampled = (settings.tracing == ReflectorTracing::Auto && !dense)
                     .then(|| sampled_path_rays(tracer, pixel_rays, width, surfaces, &pixels));
+                let path_rays = sampled.map(|(rays, _)| rays);
                 let per_pixel = match settings.tracing {
                     ReflectorTracing::Vertices => false,
                     ReflectorTracing::Pixels => true,
@@ -565,6 +568,7 @@ impl ReflectorChoice {
                     vertices,
                     pixels: pixels.len(),
                     path_rays,
+                    sample_rays: sampled.map_or((0, 0), |(_, traced)| traced),
                     per_pixel,
                 })
             })
@@ -572,18 +576,20 @@ impl ReflectorChoice {
     }
 }
 
-/// The mean closest-hit and shadow rays beyond the primary of [`PATH_SAMPLES`] pixels spread
-/// evenly over `pixels` (raster order), traced as the reference traces them.
+/// The mean closest-hit and shadow rays beyond the primary of up to [`PATH_SAMPLES`] pixels
+/// spread evenly over `pixels` (raster order), traced as the reference traces them; with the
+/// (closest-hit, shadow) rays the sample took. A pixel whose ray
+/// meets nothing here (a raster ID buffer's rounding) is left out of the mean.
 fn sampled_path_rays(
     tracer: &Tracer,
     pixel_rays: &specula_scene::PixelRays,
     width: u32,
     surfaces: &PixelSurfaces,
     pixels: &[u32],
-) -> f32 {
+) -> (f32, (u64, u64)) {
     let stride = pixels.len().div_ceil(PATH_SAMPLES).max(1);
     let sample: Vec<u32> = pixels.iter().step_by(stride).copied().collect();
-    let rays: u64 = sample
+    let paths: Vec<(bool, (u64, u64))> = sample
         .par_iter()
         .map(|&k| {
             let (x, y) = (k % width, k / width);
@@ -591,20 +597,33 @@ fn sampled_path_rays(
                 origin: pixel_rays.eye,
                 dir: pixel_rays.direction(x as f32 + 0.5, y as f32 + 0.5),
             };
+            let before = rays_traced_on_this_thread();
             let hit = match surfaces.hits.get(k as usize) {
                 Some(hit) => *hit,
                 None => tracer.accel.intersect(&ray, f32::INFINITY),
             };
-            let before = rays_traced_on_this_thread();
             if let Some(hit) = hit {
-                // The primary ray is not counted: its hit is known.
                 tracer.radiance_at_hit_recorded(&ray, &hit, &mut ());
             }
             let after = rays_traced_on_this_thread();
-            (after.0 - before.0) + (after.1 - before.1)
+            (hit.is_some(), (after.0 - before.0, after.1 - before.1))
         })
-        .sum();
-    rays as f32 / sample.len().max(1) as f32
+        .collect();
+    let traced = paths.iter().filter(|(hit, _)| *hit).count();
+    let beyond_primary: u64 = paths.iter().map(|(_, (rays, shadow))| rays + shadow).sum();
+    // Without the CPU's hits each sampled pixel's primary ray was traced here too.
+    let primaries = if surfaces.hits.is_empty() {
+        sample.len() as u64
+    } else {
+        0
+    };
+    (
+        beyond_primary as f32 / traced.max(1) as f32,
+        (
+            paths.iter().map(|(_, r)| r.0).sum::<u64>() + primaries,
+            paths.iter().map(|(_, r)| r.1).sum(),
+        ),
+    )
 }
 
 impl FrameSetup {
@@ -659,9 +678,9 @@ impl FrameSetup {
         setup
     }
 
-    /// Whether the pixels showing mesh `mesh` are traced one by one: not a reflector, or a
-    /// reflector chosen to be traced per pixel.
-    fn traced_per_pixel(&self, mesh: u32) -> bool {
+    /// Whether the pixels showing mesh `mesh` are traced one by one: not a reflector (the rest
+    /// of the scene), or a reflector chosen to be traced per pixel.
+    fn traced_one_by_one(&self, mesh: u32) -> bool {
         !self.by_vertices[mesh as usize]
     }
 
@@ -743,7 +762,7 @@ impl FrameSetup {
     ) -> (Image, (u64, u64)) {
         let mut image = Image::new(self.view.width, self.view.height);
         let rays = self.trace_pixels(live, camera, max_depth, &mut image, |mesh| {
-            mesh.is_none_or(|mesh| self.traced_per_pixel(mesh))
+            mesh.is_none_or(|mesh| self.traced_one_by_one(mesh))
         });
         (image, rays)
     }
@@ -824,7 +843,9 @@ impl FrameSetup {
             return (0, 0);
         }
         self.trace_pixels(live, camera, max_depth, image, |mesh| {
-            mesh.is_some_and(|mesh| self.topology.is_reflector(mesh) && self.traced_per_pixel(mesh))
+            mesh.is_some_and(|mesh| {
+                self.topology.is_reflector(mesh) && self.traced_one_by_one(mesh)
+            })
         })
     }
 }
@@ -1076,11 +1097,16 @@ impl Technique for VertexTracing {
             ("deepest level".into(), totals.deepest_level),
             (
                 COUNTER_RAYS_TRACED.into(),
-                totals.rays + totals.vertex_rays + progress.rest_rays.0,
+                totals.rays
+                    + totals.vertex_rays
+                    + progress.rest_rays.0
+                    + choices.iter().map(|c| c.sample_rays.0).sum::<u64>(),
             ),
             (
                 COUNTER_SHADOW_RAYS.into(),
-                totals.shadow_rays + progress.rest_rays.1,
+                totals.shadow_rays
+                    + progress.rest_rays.1
+                    + choices.iter().map(|c| c.sample_rays.1).sum::<u64>(),
             ),
         ];
         let scene = live.scene();

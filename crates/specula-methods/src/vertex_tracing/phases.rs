@@ -1,6 +1,8 @@
 //! One frame of vertex tracing taken apart into the phases the paper's Table 1 times apart
 //! (`specula-compare`'s `vertex_tracing_table1` bench): the ID buffer, the rest of the scene,
-//! and the reflector shaded, which can be run again with other settings on the same ID buffer.
+//! and the reflector shaded, which can be run again with other refinement settings on the same
+//! ID buffer (which reflectors are traced by their vertices is fixed with the ID buffer, by the
+//! settings `visibility` is given: `tracing`, `vertex_ratio`, `min_path_rays`).
 
 use std::sync::Arc;
 
@@ -46,15 +48,16 @@ impl<'a> FramePhases<'a> {
         }
     }
 
-    /// The image of everything but the reflectors (the reference's shading of each pixel's
-    /// primary ray), reflector pixels black.
+    /// The image of everything but the reflectors traced by their vertices (the reference's
+    /// shading of each pixel's primary ray), their pixels black.
     pub fn rest_of_scene(&self) -> Image {
         self.setup
             .rest_of_scene(self.live, self.camera, self.max_depth)
             .0
     }
 
-    /// The pixels the reflectors own in the ID buffer (index y × width + x).
+    /// The pixels the reflectors traced by their vertices own in the ID buffer (index y ×
+    /// width + x).
     pub fn reflector_pixels(&self) -> impl Iterator<Item = u32> + '_ {
         self.setup.owners.all()
     }

@@ -88,8 +88,10 @@ pub struct RefineSettings {
 /// How a frame shades a reflector's pixels.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ReflectorTracing {
-    /// Per reflector, from the frame's counts: per pixel where its vertices to trace outnumber
-    /// `vertex_ratio` times its pixels (a dense, small or distant reflector), else by vertices.
+    /// Per reflector, from the frame's counts: per pixel where its seen vertices outnumber
+    /// `vertex_ratio` times its pixels (a dense, small or distant reflector) or where a sample
+    /// of its pixel paths takes fewer than `min_path_rays` rays beyond the primary (a plain
+    /// mirror), else by vertices.
     Auto,
     /// Every reflector by its vertices (the paper).
     Vertices,
@@ -219,7 +221,8 @@ fn plausible_owner(scene: &Scene, view: &ScreenView, id: TriangleId, k: u32) -> 
 }
 
 impl PixelOwners {
-    /// The owners of the pixels showing the meshes `by_vertices` marks.
+    /// The owners of the pixels showing the meshes `by_vertices` marks (the reflectors traced
+    /// by their vertices in this frame).
     pub fn new(
         surfaces: &PixelSurfaces,
         by_vertices: &[bool],
@@ -231,7 +234,13 @@ impl PixelOwners {
             .ids
             .par_iter()
             .enumerate()
-            .filter(|(_, ids)| ids[0] != 0 && by_vertices[ids[0] as usize - 1])
+            .filter(|(_, ids)| {
+                ids[0] != 0
+                    && by_vertices
+                        .get(ids[0] as usize - 1)
+                        .copied()
+                        .unwrap_or(false)
+            })
             .map(|(k, ids)| {
                 let id = TriangleId {
                     mesh: ids[0] - 1,
@@ -270,7 +279,7 @@ impl PixelOwners {
         self.pixels(id).next().is_some()
     }
 
-    /// Every pixel some reflector triangle owns.
+    /// Every pixel some triangle of a reflector traced by its vertices owns.
     pub fn all(&self) -> impl Iterator<Item = u32> + '_ {
         self.owned.iter().map(|(_, pixel)| pixel & !STRAY)
     }
@@ -631,7 +640,7 @@ impl Leaf {
     /// Whether `q` lies inside this leaf by more than rounding (a pixel centre on or near a
     /// separating line is located from the root instead).
     fn strictly_contains(&self, q: Vec2) -> bool {
-        self.inverse_area != 0.0 && self.weights(q).iter().all(|&l| l >= 1e-4)
+        self.inverse_area != 0.0 && self.weights(q).iter().all(|&l| l >= 1e-3)
     }
 
     /// The weights of `q` if it lies in this leaf.
@@ -677,6 +686,10 @@ pub struct Package {
     dirty: Vec<bool>,
     phase: Phase,
     pub counters: PackageCounters,
+    /// Rays this thread traced during [`Package::fill`]'s parallel tracing (its own share of
+    /// the pixels, and any job it stole meanwhile, which counts itself): `run` leaves them out
+    /// of its own count, the filled pixels being counted where they were traced.
+    rays_counted_apart: (u64, u64),
 }
 
 fn edge_key(a: u32, b: u32) -> (u32, u32) {
@@ -870,6 +883,7 @@ impl Package {
             dirty: vec![false; count],
             phase: Phase::Preview,
             counters: PackageCounters::default(),
+            rays_counted_apart: (0, 0),
         }
     }
 
@@ -914,8 +928,9 @@ impl Package {
             }
         }
         let after = rays_traced_on_this_thread();
-        self.counters.rays += after.0 - before.0;
-        self.counters.shadow_rays += after.1 - before.1;
+        let apart = std::mem::take(&mut self.rays_counted_apart);
+        self.counters.rays += after.0 - before.0 - apart.0;
+        self.counters.shadow_rays += after.1 - before.1 - apart.1;
         self.counters.seconds += start.elapsed().as_secs_f64();
         self.is_done()
     }
@@ -1282,8 +1297,8 @@ impl Package {
             }
             // Traced in parallel: one large triangle can hold most of a frame's filled pixels
             // (a pane of 12 vertices filled 97 % of its 225,660 pixels), and packages are
-            // whole triangles. Each pixel's rays are counted on the thread that traced it; the
-            // calling thread's share is already in `run`'s count.
+            // whole triangles. Each pixel's rays are counted on the thread that traced it;
+            // what this thread traced meanwhile is left out of `run`'s count.
             use rayon::prelude::*;
             let here = rays_traced_on_this_thread();
             let traced: Vec<(u32, Vec3, (u64, u64))> = to_trace
@@ -1312,8 +1327,10 @@ impl Package {
             let (all, shadow) = traced
                 .iter()
                 .fold((0, 0), |sum, t| (sum.0 + t.2 .0, sum.1 + t.2 .1));
-            self.counters.rays += all - (on_this_thread.0 - here.0).min(all);
-            self.counters.shadow_rays += shadow - (on_this_thread.1 - here.1).min(shadow);
+            self.counters.rays += all;
+            self.counters.shadow_rays += shadow;
+            self.rays_counted_apart.0 += on_this_thread.0 - here.0;
+            self.rays_counted_apart.1 += on_this_thread.1 - here.1;
             for (k, color, _) in traced {
                 self.filled.insert(k, color);
                 self.counters.filled_pixels += 1;
