@@ -36,7 +36,9 @@
 //! Gouraud preview (original vertices only); each later call refines for about `budget_ms`
 //! (the paper's `TimeToBreak`) and shows the faces refined so far over the previous image; once
 //! the queue is empty, filling runs, also in budgeted steps; the frame says `converged` at the
-//! end. Any change of camera, size, parameters or scene starts over from the preview. `specula
+//! end. Any change of camera, size, parameters or scene starts over from the preview. A
+//! reflector chosen to be traced per pixel (below) is drawn whole in the first call, with the
+//! rest of the scene: it is chosen where its pixels cost about what its vertices would. `specula
 //! render --sequence DIR` writes each step as a numbered image with its time and rays.
 //!
 //! Work is cut into task packages of reflector triangles (`refine::Package`), refined in
