@@ -152,6 +152,12 @@ impl GpuContext {
         })
     }
 
+    /// Whether the adapter is a software rasterizer running on the CPU (lavapipe): a GPU path
+    /// there shares the cores with the CPU's own.
+    pub fn is_software(&self) -> bool {
+        self.adapter_info.device_type == wgpu::DeviceType::Cpu
+    }
+
     /// A one-line description of the adapter, e.g. "llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan, Cpu)".
     pub fn describe(&self) -> String {
         format!(

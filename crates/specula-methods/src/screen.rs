@@ -6,7 +6,8 @@ use glam::Vec3;
 use rayon::prelude::*;
 use specula_gpu::util::padded_row_bytes;
 use specula_gpu::{GpuContext, GpuError};
-use specula_scene::Camera;
+use specula_scene::{Camera, PixelRays};
+use specula_trace::reference::{pixel_radiance, Tracer};
 use specula_trace::{Hit, Ray, SceneAccel};
 
 /// How the camera maps world points to pixels (the raster pass's pinhole, top-left origin).
@@ -110,6 +111,22 @@ impl PixelSurfaces {
                     None => ([0, 0], [0.0; 4]),
                 };
             });
+    }
+
+    /// The reference's radiance of pixel (`x`, `y`) of a `width`-pixel-wide view whose
+    /// primary rays are `rays`: shaded from this buffer's hit where it was traced on the CPU
+    /// (the same ray: no second intersection), else traced. The primary ray is counted once.
+    pub fn radiance(&self, tracer: &Tracer, rays: &PixelRays, x: u32, y: u32, width: u32) -> Vec3 {
+        match self.hits.get((y * width + x) as usize) {
+            Some(hit) => {
+                let ray = Ray {
+                    origin: rays.eye,
+                    dir: rays.direction(x as f32 + 0.5, y as f32 + 0.5),
+                };
+                tracer.radiance_of_primary(&ray, hit.as_ref())
+            }
+            None => pixel_radiance(tracer, rays, x, y, 1),
+        }
     }
 
     /// The world position seen through pixel `k` (None where the background shows).

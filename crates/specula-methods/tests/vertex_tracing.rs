@@ -438,6 +438,12 @@ fn auto_traces_dense_reflectors_and_short_paths_per_pixel_and_long_coarse_paths_
     // The flat mirror: few vertices, but a path of one reflected ray and one shadow ray.
     assert!(reflector_counter("flat mirror", "pixels") > 1000);
     let mirror_rays = reflector_counter("flat mirror", "rays per pixel path");
+    eprintln!(
+        "rays per path x 100: flat mirror {mirror_rays}, slab {}; seen vertices / pixels: ball {} / {}",
+        reflector_counter("slab", "rays per pixel path"),
+        reflector_counter("dense ball", "vertices"),
+        reflector_counter("dense ball", "pixels")
+    );
     assert!(
         (100..300).contains(&mirror_rays),
         "{mirror_rays} / 100 rays"

@@ -368,10 +368,7 @@ impl Session {
 /// (there it is much faster than the CPU reference, and equal to it), else the CPU reference
 /// (on lavapipe the CPU reference is the faster of the two, and progressive).
 pub fn default_reference(ctx: &Context) -> &'static MethodInfo {
-    let real_gpu = ctx
-        .gpu
-        .as_ref()
-        .is_some_and(|g| g.adapter_info.device_type != wgpu::DeviceType::Cpu);
+    let real_gpu = ctx.gpu.as_ref().is_some_and(|g| !g.is_software());
     if real_gpu {
         &specula_methods::gpu_trace::INFO
     } else {
@@ -592,10 +589,7 @@ mod tests {
         let Some(ctx) = specula_methods::test_context("viewer reference choice") else {
             return;
         };
-        let on_cpu_adapter = ctx
-            .gpu
-            .as_ref()
-            .is_some_and(|g| g.adapter_info.device_type == wgpu::DeviceType::Cpu);
+        let on_cpu_adapter = ctx.gpu.as_ref().is_some_and(|g| g.is_software());
         let expected = if on_cpu_adapter {
             "reference"
         } else {

@@ -774,7 +774,7 @@ impl Technique for C3rcMethod {
             && match self.projection {
                 Projection::Gpu => true,
                 Projection::Cpu => false,
-                Projection::Auto => gpu.adapter_info.device_type != wgpu::DeviceType::Cpu,
+                Projection::Auto => !gpu.is_software(),
             };
         if on_gpu {
             plan.fallback(

@@ -147,8 +147,9 @@
 //! - `tracing` (auto): per reflector as above; `vertices` for all (the paper); `pixels` for all
 //!   (the reference's image, at the reference's cost).
 //! - `vertex_ratio` (0.05): seen vertices per pixel above which `auto` traces a reflector per
-//!   pixel. Measured on the scene suite (docs/benchmarks.md): at 320 × 240 the suite's
-//!   reflectors show 0.11–0.42 and vertices lost or tied; at 1024 × 768, 0.01–0.04.
+//!   pixel. Measured on the scene suite (docs/benchmarks.md): at 320 × 240 its reflectors above
+//!   0.05 show 0.11–0.42 and took 0.96–1.72× the reference's frame by their vertices; at
+//!   1024 × 768 they show 0.01–0.04.
 //! - `min_path_rays` (6): rays per sampled pixel path below which `auto` traces per pixel
 //!   (measured on the suite at 1024 × 768: mirrors 1.9–3.6 with their shadow rays, glass
 //!   16–24); the sample is 256 of a candidate reflector's pixel paths.
@@ -175,7 +176,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 use specula_gpu::{GpuContext, StageTime, TimingSource};
 use specula_scene::Camera;
-use specula_trace::reference::{pixel_radiance, rays_traced_on_this_thread, Tracer};
+use specula_trace::reference::{rays_traced_on_this_thread, Tracer};
 use specula_trace::{Image, Ray};
 
 use crate::live_scene::LiveScene;
@@ -787,9 +788,8 @@ impl FrameSetup {
             max_depth,
         };
         let pixel_rays = camera.pixel_rays(width, self.view.height);
-        let hits = &self.surfaces.hits;
         // In the reference technique's 32 x 32 tiles: neighbouring secondary rays together
-        // (16-row bands cost a glass dragon 14 % more).
+        // (in 16-row bands a glass dragon's frame took 1.20x the reference's, in tiles 1.02x).
         let height = self.view.height;
         let (tiles_x, tiles_y) = (width.div_ceil(TILE), height.div_ceil(TILE));
         let traced: Vec<TracedTile> = (0..tiles_x * tiles_y)
@@ -805,16 +805,7 @@ impl FrameSetup {
                         if !select(mesh.checked_sub(1)) {
                             continue;
                         }
-                        let color = match hits.get(k as usize) {
-                            Some(hit) => {
-                                let ray = Ray {
-                                    origin: pixel_rays.eye,
-                                    dir: pixel_rays.direction(x as f32 + 0.5, y as f32 + 0.5),
-                                };
-                                tracer.radiance_of_primary(&ray, hit.as_ref())
-                            }
-                            None => pixel_radiance(&tracer, &pixel_rays, x, y, 1),
-                        };
+                        let color = self.surfaces.radiance(&tracer, &pixel_rays, x, y, width);
                         pixels.push((k, color));
                     }
                 }
@@ -1171,10 +1162,7 @@ impl VertexTracing {
             VisibilitySource::Cpu => Ok(None),
             // A software rasterizer draws the ID buffer slower than the CPU traces it, and the
             // traced buffer's hits shade the rest of the scene with no second primary ray.
-            VisibilitySource::Auto => Ok(ctx
-                .gpu
-                .as_ref()
-                .filter(|gpu| gpu.adapter_info.device_type != wgpu::DeviceType::Cpu)),
+            VisibilitySource::Auto => Ok(ctx.gpu.as_ref().filter(|gpu| !gpu.is_software())),
             VisibilitySource::Gpu => ctx.gpu(INFO.name).map(Some),
         }
     }

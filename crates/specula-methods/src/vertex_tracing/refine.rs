@@ -26,7 +26,7 @@ use std::time::Instant;
 use glam::{Vec2, Vec3};
 use specula_scene::{Camera, Scene};
 use specula_trace::reference::{
-    pixel_radiance, rays_traced_on_this_thread, RayTree, Step, TextureHit, Tracer, TreeRecorder,
+    rays_traced_on_this_thread, RayTree, Step, TextureHit, Tracer, TreeRecorder,
 };
 use specula_trace::{Hit, Ray, SceneAccel};
 
@@ -77,8 +77,8 @@ pub struct RefineSettings {
     pub trace_stray: bool,
     /// Whether a reflector's pixels are shaded from its vertices or traced one by one.
     pub tracing: ReflectorTracing,
-    /// With [`ReflectorTracing::Auto`]: a reflector whose vertices to trace number more than
-    /// this times its pixels is traced per pixel.
+    /// With [`ReflectorTracing::Auto`]: a reflector whose seen vertices (those of its triangles
+    /// the ID buffer shows) number more than this times its pixels is traced per pixel.
     pub vertex_ratio: f32,
     /// With [`ReflectorTracing::Auto`]: a reflector whose sampled pixel paths take fewer rays
     /// than this beyond the primary is traced per pixel.
@@ -345,10 +345,11 @@ impl FrameInputs<'_> {
         })
     }
 
-    /// The reflector triangles a frame traces, of the meshes `by_vertices` marks: those with a visible vertex (the paper's rule:
-    /// an edge is traced when one of its ends is seen) and, with `trace_unseen`, those with
-    /// pixels of their own (a triangle seen only between its corners, which the paper leaves
-    /// out), mesh by mesh, each mesh's along a Morton curve through its box.
+    /// The reflector triangles a frame traces, of the meshes `by_vertices` marks: those with a
+    /// visible vertex (the paper's rule: an edge is traced when one of its ends is seen) and,
+    /// with `trace_unseen`, those with pixels of their own (a triangle seen only between its
+    /// corners, which the paper leaves out), mesh by mesh, each mesh's along a Morton curve
+    /// through its box.
     pub fn active_triangles(&self, by_vertices: &[bool]) -> Vec<TriangleId> {
         use rayon::prelude::*;
         let mut active = Vec::new();
@@ -1308,17 +1309,7 @@ impl Package {
                 .map(|&k| {
                     let (x, y) = (k % width, k / width);
                     let before = rays_traced_on_this_thread();
-                    // The ID buffer's hit where it was traced: no second primary ray.
-                    let color = match inputs.surfaces.hits.get(k as usize) {
-                        Some(hit) => {
-                            let ray = Ray {
-                                origin: pixel_rays.eye,
-                                dir: pixel_rays.direction(x as f32 + 0.5, y as f32 + 0.5),
-                            };
-                            tracer.radiance_of_primary(&ray, hit.as_ref())
-                        }
-                        None => pixel_radiance(&tracer, &pixel_rays, x, y, 1),
-                    };
+                    let color = inputs.surfaces.radiance(&tracer, &pixel_rays, x, y, width);
                     let after = rays_traced_on_this_thread();
                     (k, color, (after.0 - before.0, after.1 - before.1))
                 })
