@@ -8,12 +8,15 @@
 //! filling and interpolation) against the reference tracing the same pixels at the same
 //! resolution, both with every rayon thread; the ID buffer and the rest of the scene, which
 //! both need, are timed apart. Times are medians of 3 runs. Error: mean FLIP over the
-//! reflector's pixels against the reference.
+//! reflector's pixels against the reference. Each vertex row's composition (the faces'
+//! pixels shaded from their corners) is timed apart too, on the CPU and, where the run has a
+//! GPU adapter (lavapipe included), on its raster (`composition=gpu`), in rows of their own.
 
 use std::time::Instant;
 
 use rayon::prelude::*;
 use specula_compare::metrics::{flip_map, measure};
+use specula_methods::vertex_tracing::compose::RasterComposition;
 use specula_methods::vertex_tracing::{
     FramePhases, PackageCounters, RefineSettings, VertexTracing,
 };
@@ -103,10 +106,22 @@ fn main() {
     );
     println!("ID buffer (CPU primary rays) {visibility_ms:.1} ms and rest of the scene {rest_ms:.1} ms, apart from the times below");
     println!();
-    println!("| rendered image | time (ms) | samples | rays (all kinds) | speed-up | mean FLIP (reflector) |");
-    println!("|---|---|---|---|---|---|");
+    let gpu = match specula_gpu::GpuContext::new() {
+        Ok(gpu) => {
+            println!("GPU for composition on the raster: {}", gpu.describe());
+            Some(gpu)
+        }
+        Err(e) => {
+            println!("no GPU: composition on the CPU only ({e})");
+            None
+        }
+    };
+    let mut composer = gpu.as_ref().map(RasterComposition::new);
+    println!();
+    println!("| rendered image | composition | time (ms) | of which composition (ms) | samples | rays (all kinds) | speed-up | mean FLIP (reflector) |");
+    println!("|---|---|---|---|---|---|---|---|");
     println!(
-        "| reference ray tracing | {reference_ms:.1} | {} | {reference_rays} | 1 | 0 |",
+        "| reference ray tracing | | {reference_ms:.1} | | {} | {reference_rays} | 1 | 0 |",
         pixels.len()
     );
     // The last row is the published algorithm: the `paper` preset's settings (every step
@@ -141,24 +156,41 @@ fn main() {
             fill,
             ..base
         };
-        let mut times = Vec::new();
-        let mut image = rest.clone();
-        let mut totals = PackageCounters::default();
-        for _ in 0..RUNS {
-            let start = Instant::now();
-            // The technique's own cut (package_triangles = 0).
-            totals = phases.shade_reflector(settings, &mut image);
-            times.push(start.elapsed().as_secs_f64() * 1e3);
+        for on_gpu in [false, true] {
+            let mut raster = match (&gpu, &mut composer) {
+                (Some(gpu), Some(composer)) if on_gpu => Some((gpu, composer)),
+                _ if on_gpu => continue,
+                _ => None,
+            };
+            let mut times = Vec::new();
+            let mut composition_times = Vec::new();
+            let mut image = rest.clone();
+            let mut totals = PackageCounters::default();
+            for _ in 0..RUNS {
+                let start = Instant::now();
+                // The technique's own cut (package_triangles = 0).
+                let again = raster
+                    .as_mut()
+                    .map(|(gpu, composer)| (*gpu, &mut **composer));
+                let (counters, composition_ms) = phases
+                    .shade_reflector(settings, &mut image, again)
+                    .expect("the reflector is shaded");
+                totals = counters;
+                times.push(start.elapsed().as_secs_f64() * 1e3);
+                composition_times.push(composition_ms);
+            }
+            let ms = median(times);
+            let flip = flip_map(&reference, &image);
+            let metrics = measure(&reference, &image, &flip, &mask);
+            println!(
+                "| {label} | {} | {ms:.1} | {:.1} | {} | {} | {:.1} | {:.4} |",
+                if on_gpu { "GPU raster" } else { "CPU" },
+                median(composition_times),
+                totals.vertex_rays + totals.filled_pixels,
+                totals.vertex_rays + totals.rays + totals.shadow_rays,
+                reference_ms / ms,
+                metrics.mean_flip
+            );
         }
-        let ms = median(times);
-        let flip = flip_map(&reference, &image);
-        let metrics = measure(&reference, &image, &flip, &mask);
-        println!(
-            "| {label} | {ms:.1} | {} | {} | {:.1} | {:.4} |",
-            totals.vertex_rays + totals.filled_pixels,
-            totals.vertex_rays + totals.rays + totals.shadow_rays,
-            reference_ms / ms,
-            metrics.mean_flip
-        );
     }
 }

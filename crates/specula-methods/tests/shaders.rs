@@ -15,6 +15,7 @@ use specula_methods::gpu_scene::{GpuLight, GpuMaterial, GpuSceneInfo, GpuTexture
 use specula_methods::image_space::{self, GpuPlane, GpuSettings};
 use specula_methods::pvrr::{self, GpuMirrorMaterial};
 use specula_methods::raster::{self, ShadowView};
+use specula_methods::vertex_tracing::compose::ComposeSettings;
 
 fn parse(name: &str, source: &str) -> naga::Module {
     specula_gpu::util::validate_wgsl(name, source).unwrap_or_else(|e| panic!("{e}"))
@@ -77,10 +78,24 @@ fn technique_shaders_validate() {
         "gpu_trace/wavefront.wgsl",
         &specula_methods::gpu_trace::wavefront_source(),
     );
+    parse(
+        "vertex_tracing/compose.wgsl",
+        &specula_methods::vertex_tracing::compose::shader_source(),
+    );
 }
 
 #[test]
 fn host_structs_match_wgsl_layouts() {
+    let module = parse(
+        "vertex_tracing/compose.wgsl",
+        &specula_methods::vertex_tracing::compose::shader_source(),
+    );
+    assert_layout(
+        &module,
+        "ComposeSettings",
+        size_of::<ComposeSettings>(),
+        &[offset_of!(ComposeSettings, perspective_correct)],
+    );
     let module = parse("raster.wgsl", &raster::shader_source());
     assert_layout(
         &module,

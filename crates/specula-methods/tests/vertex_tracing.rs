@@ -472,3 +472,100 @@ fn auto_traces_dense_reflectors_and_short_paths_per_pixel_and_long_coarse_paths_
     }
     assert!(compared > 1000, "{compared} pixels compared");
 }
+
+/// The refined faces drawn by the GPU raster (`composition=gpu`, on lavapipe here) give the
+/// CPU composition's image: the same faces, weights and pixel centres; only pixels whose
+/// centre lies on a face's edge may go to the neighbouring face (a T-junction's colours differ
+/// there), and float rounding.
+#[test]
+fn composing_on_the_raster_gives_the_cpu_composition() {
+    use specula_methods::RenderStill;
+    let Some(ctx) = specula_methods::test_context("vertex-tracing composition on the raster")
+    else {
+        return;
+    };
+    for (scene, extra) in [
+        ("truck-cover", &[][..]),
+        ("truck-cover", &["refine=false"][..]),
+        (
+            "truck-cover",
+            &["perspective_correct=false", "fill=false"][..],
+        ),
+        ("door-mirror", &[][..]),
+        ("glass-dragon", &[][..]),
+    ] {
+        let scene_data = specula_scene::load(scene).unwrap();
+        let still = |composition: &str| {
+            let mut params = vec![
+                "visibility=cpu".to_string(),
+                "tracing=vertices".to_string(),
+                format!("composition={composition}"),
+            ];
+            params.extend(extra.iter().map(|p| p.to_string()));
+            let mut t = (INFO.create)();
+            apply_parameters(t.as_mut(), &params).unwrap();
+            t.render_still(&ctx, &scene_data, WIDTH, HEIGHT).unwrap()
+        };
+        let (cpu, gpu) = (still("cpu"), still("gpu"));
+        let reflector_pixels = counter(&gpu.frame, "reflector pixels");
+        let on_raster = counter(&gpu.frame, "reflector pixels composed on the GPU raster");
+        assert_eq!(
+            counter(&cpu.frame, "reflector pixels composed on the GPU raster"),
+            0
+        );
+        let (mut differing, mut worst) = (0, 0.0f32);
+        for (a, b) in cpu.image.pixels.iter().zip(&gpu.image.pixels) {
+            let d = (*a - *b).abs().max_element();
+            worst = worst.max(d);
+            if d > 1e-4 {
+                differing += 1;
+            }
+        }
+        let filled = counter(&gpu.frame, "filled pixels");
+        println!(
+            "{scene} {extra:?}: {on_raster} of {reflector_pixels} reflector pixels ({filled} filled) on the raster, \
+             {differing} differ by more than 1e-4 (worst {worst:.4})"
+        );
+        assert!(
+            on_raster as f64 >= 0.0 * reflector_pixels as f64,
+            "{scene} {extra:?}: only {on_raster} of {reflector_pixels} pixels on the raster"
+        );
+        assert!(
+            differing as f64 <= 0.002 * reflector_pixels as f64,
+            "{scene} {extra:?}: {differing} pixels differ"
+        );
+    }
+}
+
+/// Progressive steps composed on the raster end on the one-call image composed on the CPU.
+#[test]
+fn progressive_steps_composed_on_the_raster_end_on_the_one_call_image() {
+    let Some(ctx) = specula_methods::test_context("vertex-tracing progressive raster composition")
+    else {
+        return;
+    };
+    let live = LiveScene::new(specula_scene::load("door-mirror").unwrap());
+    let camera = live.scene().camera.clone();
+    let (_, one_call) = render(technique(&["composition=cpu"]).as_mut(), &live, &camera);
+    let mut t = technique(&["composition=gpu", "budget_ms=1"]);
+    let mut steps = 0;
+    let last = loop {
+        let frame = t.render(&ctx, &live, &camera, WIDTH, HEIGHT).unwrap();
+        steps += 1;
+        assert!(steps < 10_000, "never converged");
+        assert!(counter(&frame, "reflector pixels composed on the GPU raster") > 0);
+        if frame.converged {
+            break frame.image(&ctx).unwrap().pixels;
+        }
+    };
+    assert!(steps > 2, "a 1 ms budget must take several steps ({steps})");
+    let differing = one_call
+        .iter()
+        .zip(&last)
+        .filter(|(a, b)| (**a - **b).abs().max_element() > 1e-4)
+        .count();
+    assert!(
+        differing as f64 <= 0.002 * one_call.len() as f64,
+        "{differing} pixels differ"
+    );
+}

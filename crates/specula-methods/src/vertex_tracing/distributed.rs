@@ -429,7 +429,7 @@ impl Master<'_> {
             let mut package = setup.package(range.clone());
             let inputs = setup.inputs(self.live, &self.camera, settings, max_depth);
             package.run(&inputs, None);
-            let pixels = package.take_pixels(&inputs);
+            let pixels = package.take_pixels(&inputs, None);
             let record = PackageRecord::new(0, range, package.counters.seconds, pixels.len());
             gathered.add(record, &package.counters, &pixels);
         }
@@ -611,7 +611,7 @@ fn refine_package(
     let mut inputs = setup.inputs(live, camera, options.settings, options.max_depth);
     inputs.originals = Some(&*traced);
     package.run(&inputs, None);
-    let pixels = package.take_pixels(&inputs);
+    let pixels = package.take_pixels(&inputs, None);
     traced.absorb(&package);
     if let Some((slow_rank, factor)) = options.slow {
         if slow_rank == rank {

@@ -30,7 +30,12 @@
 //!    but it may not be split) is traced exactly.
 //! 5. Display: each reflector pixel belongs to the triangle the ID buffer shows there; it takes
 //!    the leaf face of that triangle's refinement it falls in, Gouraud-interpolated from the
-//!    face's corners, or its traced colour once filled.
+//!    face's corners, or its traced colour once filled. With `composition=gpu` (the paper's way:
+//!    "rendered with Gouraud shading" on graphics hardware) the leaf faces are drawn by the GPU
+//!    raster, each kept only where the ID buffer shows its own triangle ([`compose`]); the CPU
+//!    shades what the raster does not (faces with deferred textures or a corner behind the
+//!    eye, pixels no face covers) and the filled pixels. Without a GPU the CPU locates each
+//!    pixel in its triangle's face tree: the same image (a test holds them equal).
 //!
 //! Progressive display (`budget_ms` > 0, what the viewer sets): the first call returns the
 //! Gouraud preview (original vertices only); each later call refines for about `budget_ms`
@@ -153,6 +158,11 @@
 //! - `min_path_rays` (6): rays per sampled pixel path below which `auto` traces per pixel
 //!   (measured on the suite at 1024 × 768: mirrors 1.9–3.6 with their shadow rays, glass
 //!   16–24); the sample is 256 of a candidate reflector's pixel paths.
+//! - `composition` (auto): `gpu` draws the refined faces with the GPU raster, `cpu` locates and
+//!   interpolates each pixel on the CPU, `auto` uses a GPU where the run has one that is not a
+//!   software rasterizer. On lavapipe the raster took 16.8 ms where the CPU took 6.6 ms
+//!   (truck-cover, 1024 × 768, docs/benchmarks.md): uploading the ID buffer and reading the
+//!   frame back cost more than locating on two cores.
 //! - `visibility` (auto): `gpu` draws the ID buffer with the scene raster pass, `cpu` traces it,
 //!   `auto` uses a GPU where the run has one that is not a software rasterizer (on lavapipe
 //!   the raster pass took 16 ms where tracing the same buffer took 8, and the traced buffer's
@@ -162,6 +172,7 @@
 //! - `show_faces` (false): draws the refined faces' edges over the image (Figure 13).
 
 pub(crate) mod balance;
+pub mod compose;
 #[cfg(feature = "mpi")]
 pub mod distributed;
 mod phases;
@@ -186,6 +197,7 @@ use crate::technique::{
     bad_value, Context, Drawn, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels,
     Technique, TechniqueError, COUNTER_RAYS_TRACED, COUNTER_SHADOW_RAYS,
 };
+use compose::{FaceVertex, RasterComposition};
 pub use phases::FramePhases;
 use refine::{FrameInputs, OriginalSamples, Package, PixelOwners, Topology, TriangleId};
 pub use refine::{PackageCounters, RefineSettings, ReflectorTracing};
@@ -345,6 +357,13 @@ pub const PARAMS: &[ParamSpec] = &[
         invalidates: Invalidates::Uniform,
     },
     ParamSpec {
+        name: "composition",
+        kind: ParamKind::Choice(&["auto", "cpu", "gpu"]),
+        default: "auto",
+        doc: "refined faces Gouraud-shaded by the GPU raster (the paper's display) or each pixel located and interpolated on the CPU; auto: the GPU where the run has one that is not a software rasterizer",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
         name: "max_depth",
         kind: ParamKind::Integer { min: 0, max: 64 },
         default: "8",
@@ -387,7 +406,8 @@ pub const INFO: MethodInfo = MethodInfo {
     create: || Box::new(VertexTracing::default()),
 };
 
-/// Where the ID buffer comes from.
+/// Where the ID buffer comes from, and where the refined faces are composed: the CPU, the GPU,
+/// or (auto) the GPU where the run has one that is not a software rasterizer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum VisibilitySource {
     Auto,
@@ -395,15 +415,49 @@ pub enum VisibilitySource {
     Gpu,
 }
 
+impl VisibilitySource {
+    fn word(self) -> &'static str {
+        match self {
+            VisibilitySource::Auto => "auto",
+            VisibilitySource::Cpu => "cpu",
+            VisibilitySource::Gpu => "gpu",
+        }
+    }
+
+    fn parse(name: &str, value: &ParamValue) -> Result<VisibilitySource, TechniqueError> {
+        match value.word() {
+            "auto" => Ok(VisibilitySource::Auto),
+            "cpu" => Ok(VisibilitySource::Cpu),
+            "gpu" => Ok(VisibilitySource::Gpu),
+            _ => Err(bad_value(INFO.name, name, value, "auto, cpu or gpu")),
+        }
+    }
+
+    /// The GPU this choice uses in a run whose context is `ctx`.
+    fn gpu(self, ctx: &Context) -> Result<Option<&GpuContext>, TechniqueError> {
+        match self {
+            VisibilitySource::Cpu => Ok(None),
+            // A software rasterizer draws slower than the CPU does the same work beside it: on
+            // lavapipe the raster pass drew the ID buffer in 16 ms where tracing it took 8 (and
+            // the traced buffer's hits shade the rest of the scene with no second primary ray),
+            // and composition took 16.8 ms against the CPU's 6.6.
+            VisibilitySource::Auto => Ok(ctx.gpu.as_ref().filter(|gpu| !gpu.is_software())),
+            VisibilitySource::Gpu => ctx.gpu(INFO.name).map(Some),
+        }
+    }
+}
+
 pub struct VertexTracing {
     pub settings: RefineSettings,
     pub budget_ms: u32,
     pub package_triangles: usize,
     pub visibility: VisibilitySource,
+    pub composition: VisibilitySource,
     pub max_depth: u32,
     pub shadow_resolution: u32,
     pub show_faces: bool,
     gpu: Option<GpuPass>,
+    raster_composition: Option<RasterComposition>,
     /// The scene id it was built for, and the topology.
     topology: Option<(u64, Arc<Topology>)>,
     progress: Option<Progress>,
@@ -433,10 +487,12 @@ impl Default for VertexTracing {
             budget_ms: 0,
             package_triangles: 0,
             visibility: VisibilitySource::Auto,
+            composition: VisibilitySource::Auto,
             max_depth: 8,
             shadow_resolution: 1024,
             show_faces: false,
             gpu: None,
+            raster_composition: None,
             topology: None,
             progress: None,
         }
@@ -853,6 +909,8 @@ struct Progress {
     /// filling), composition.
     stages: [f64; 4],
     rest_rays: (u64, u64),
+    /// Whether the ID buffer is on the GPU for composition on the raster.
+    ids_uploaded: bool,
 }
 
 impl Technique for VertexTracing {
@@ -886,12 +944,8 @@ impl Technique for VertexTracing {
             "min_path_rays" => s.min_path_rays.to_string(),
             "budget_ms" => self.budget_ms.to_string(),
             "package_triangles" => self.package_triangles.to_string(),
-            "visibility" => match self.visibility {
-                VisibilitySource::Auto => "auto",
-                VisibilitySource::Cpu => "cpu",
-                VisibilitySource::Gpu => "gpu",
-            }
-            .into(),
+            "visibility" => self.visibility.word().into(),
+            "composition" => self.composition.word().into(),
             "max_depth" => self.max_depth.to_string(),
             "shadow_resolution" => self.shadow_resolution.to_string(),
             "show_faces" => self.show_faces.to_string(),
@@ -934,14 +988,8 @@ impl Technique for VertexTracing {
             "min_path_rays" => s.min_path_rays = value.number() as f32,
             "budget_ms" => self.budget_ms = value.integer() as u32,
             "package_triangles" => self.package_triangles = value.integer() as usize,
-            "visibility" => {
-                self.visibility = match value.word() {
-                    "auto" => VisibilitySource::Auto,
-                    "cpu" => VisibilitySource::Cpu,
-                    "gpu" => VisibilitySource::Gpu,
-                    _ => return Err(bad_value(INFO.name, name, value, "auto, cpu or gpu")),
-                }
-            }
+            "visibility" => self.visibility = VisibilitySource::parse(name, value)?,
+            "composition" => self.composition = VisibilitySource::parse(name, value)?,
             "max_depth" => self.max_depth = value.integer() as u32,
             "shadow_resolution" => self.shadow_resolution = value.integer() as u32,
             "show_faces" => self.show_faces = value.flag(),
@@ -954,12 +1002,13 @@ impl Technique for VertexTracing {
         self.progress = None;
         if what >= Invalidates::Resources {
             self.gpu = None;
+            self.raster_composition = None;
         }
     }
 
     fn prepare(&mut self, ctx: &Context, live: &LiveScene) -> Result<(), TechniqueError> {
         self.topology(live);
-        if let Some(gpu) = self.gpu_for_visibility(ctx)? {
+        if let Some(gpu) = self.visibility.gpu(ctx)? {
             self.ensure_raster(gpu, live)?;
         }
         Ok(())
@@ -974,7 +1023,8 @@ impl Technique for VertexTracing {
         height: u32,
     ) -> Result<Drawn, TechniqueError> {
         let start = Instant::now();
-        let gpu = self.gpu_for_visibility(ctx)?;
+        let gpu = self.visibility.gpu(ctx)?;
+        let composition_gpu = self.composition.gpu(ctx)?;
         let key = ViewKey {
             camera: camera.clone(),
             width,
@@ -1004,25 +1054,51 @@ impl Technique for VertexTracing {
         inputs.originals = Some(&progress.originals);
 
         let preview_only = fresh && budget_ms > 0;
+        progress.packages.par_iter_mut().for_each(|package| {
+            let skip = package.is_done() || (preview_only && package.has_preview());
+            if !skip {
+                // A fresh progressive frame shows its preview before any refinement.
+                let until = if preview_only {
+                    Some(Instant::now())
+                } else {
+                    deadline
+                };
+                package.run(&inputs, until);
+            }
+        });
+        progress.stages[2] += clock.elapsed().as_secs_f64() * 1e3;
+        let clock = Instant::now();
+        let mut warnings = Vec::new();
+        let composed = match composition_gpu {
+            Some(gpu) => {
+                let composer = self
+                    .raster_composition
+                    .get_or_insert_with(|| RasterComposition::new(gpu));
+                let uniform = raster::camera_uniform(camera, &live.scene().bounds(), width, height);
+                let frame = RasterFrame {
+                    ids: &progress.setup.surfaces.ids,
+                    width,
+                    height,
+                    ids_uploaded: &mut progress.ids_uploaded,
+                };
+                let packages = &progress.packages;
+                compose_on_raster(
+                    gpu,
+                    composer,
+                    frame,
+                    packages,
+                    &inputs,
+                    &uniform,
+                    &mut warnings,
+                )?
+            }
+            None => None,
+        };
         let results: Vec<Vec<(u32, Vec3)>> = progress
             .packages
             .par_iter_mut()
-            .map(|package| {
-                let skip = package.is_done() || (preview_only && package.has_preview());
-                if !skip {
-                    // A fresh progressive frame shows its preview before any refinement.
-                    let until = if preview_only {
-                        Some(Instant::now())
-                    } else {
-                        deadline
-                    };
-                    package.run(&inputs, until);
-                }
-                package.take_pixels(&inputs)
-            })
+            .map(|package| package.take_pixels(&inputs, composed.as_deref()))
             .collect();
-        progress.stages[2] += clock.elapsed().as_secs_f64() * 1e3;
-        let clock = Instant::now();
         for (k, color) in results.into_iter().flatten() {
             progress.image.pixels[k as usize] = color;
         }
@@ -1078,6 +1154,10 @@ impl Technique for VertexTracing {
                 progress.setup.active.len() as u64,
             ),
             ("task packages".into(), progress.packages.len() as u64),
+            (
+                "reflector pixels composed on the GPU raster".into(),
+                progress.packages.iter().map(|p| p.pixels_from_raster).sum(),
+            ),
             ("vertex rays".into(), totals.vertex_rays),
             ("filled pixels".into(), totals.filled_pixels),
             (
@@ -1125,7 +1205,6 @@ impl Technique for VertexTracing {
         if budget_ms > 0 {
             progress.stages = [0.0; 4];
         }
-        let mut warnings = Vec::new();
         if progress.setup.choices.is_empty() {
             warnings.push("no reflector pixel is visible: nothing to vertex-trace".into());
         }
@@ -1154,19 +1233,6 @@ impl Technique for VertexTracing {
 }
 
 impl VertexTracing {
-    fn gpu_for_visibility<'c>(
-        &self,
-        ctx: &'c Context,
-    ) -> Result<Option<&'c GpuContext>, TechniqueError> {
-        match self.visibility {
-            VisibilitySource::Cpu => Ok(None),
-            // A software rasterizer draws the ID buffer slower than the CPU traces it, and the
-            // traced buffer's hits shade the rest of the scene with no second primary ray.
-            VisibilitySource::Auto => Ok(ctx.gpu.as_ref().filter(|gpu| !gpu.is_software())),
-            VisibilitySource::Gpu => ctx.gpu(INFO.name).map(Some),
-        }
-    }
-
     /// The scene's topology, built at its first frame.
     fn topology(&mut self, live: &LiveScene) -> Arc<Topology> {
         match &self.topology {
@@ -1253,8 +1319,58 @@ impl VertexTracing {
             image: rest,
             stages: [visibility_ms, rest_ms, 0.0, 0.0],
             rest_rays,
+            ids_uploaded: false,
         })
     }
+}
+
+/// Composes the faces of `packages` changed since the last call on the raster
+/// ([`compose`]): per pixel (colour, 1) where a face drawn on the GPU showed. None, with a
+/// warning, where the faces exceed the device's largest buffer (the CPU composes them).
+/// The frame's ID buffer, for [`compose_on_raster`].
+struct RasterFrame<'a> {
+    ids: &'a [[u32; 2]],
+    width: u32,
+    height: u32,
+    /// Whether the composer holds this frame's ID buffer (set once it does).
+    ids_uploaded: &'a mut bool,
+}
+
+fn compose_on_raster(
+    gpu: &GpuContext,
+    composer: &mut RasterComposition,
+    frame: RasterFrame,
+    packages: &[Package],
+    inputs: &FrameInputs,
+    camera: &specula_gpu::shaders::CameraUniform,
+    warnings: &mut Vec<String>,
+) -> Result<Option<Vec<[f32; 4]>>, TechniqueError> {
+    let corners: Vec<FaceVertex> = packages
+        .par_iter()
+        .fold(Vec::new, |mut corners, package| {
+            package.raster_faces(inputs, &mut corners);
+            corners
+        })
+        .reduce(Vec::new, |mut a, mut b| {
+            a.append(&mut b);
+            a
+        });
+    if corners.len() > RasterComposition::max_corners(gpu) {
+        warnings.push(format!(
+            "{} refined faces exceed the GPU's largest buffer ({} bytes): composed on the CPU",
+            corners.len() / 3,
+            gpu.device.limits().max_buffer_size
+        ));
+        return Ok(None);
+    }
+    if !*frame.ids_uploaded {
+        composer.set_id_buffer(gpu, frame.ids, frame.width, frame.height);
+        *frame.ids_uploaded = true;
+    }
+    let composed = gpu.validated("vertex-tracing composition", || {
+        composer.compose(gpu, camera, inputs.settings.perspective_correct, &corners)
+    })??;
+    Ok(Some(composed))
 }
 
 /// Draws the segment from `a` to `b` (pixel coordinates) in `color`, clipped to the image.

@@ -5,15 +5,20 @@
 //! settings `visibility` is given: `tracing`, `vertex_ratio`, `min_path_rays`).
 
 use std::sync::Arc;
+use std::time::Instant;
 
 use glam::Vec3;
 use rayon::prelude::*;
+use specula_gpu::GpuContext;
 use specula_scene::Camera;
 use specula_trace::Image;
 
+use super::compose::RasterComposition;
 use super::refine::{OriginalSamples, PackageCounters, RefineSettings, Topology};
-use super::FrameSetup;
+use super::{compose_on_raster, FrameSetup, RasterFrame};
 use crate::live_scene::LiveScene;
+use crate::raster;
+use crate::technique::TechniqueError;
 
 /// A frame of `camera`'s view with CPU visibility, its phases run one at a time.
 pub struct FramePhases<'a> {
@@ -64,9 +69,15 @@ impl<'a> FramePhases<'a> {
 
     /// The reflector phase as the technique runs it in one call without a budget: the
     /// original vertices traced once, then the technique's own packages (`package_triangles`
-    /// 0) refined and filled in parallel with `settings`, their pixels written into `image`.
-    /// Returns the work of all of them together.
-    pub fn shade_reflector(&self, settings: RefineSettings, image: &mut Image) -> PackageCounters {
+    /// 0) refined and filled in parallel with `settings`, then composed — on the CPU, or with
+    /// `raster` on that GPU's raster (`composition=gpu`) — their pixels written into `image`.
+    /// Returns the work of all of them together and the milliseconds composition took.
+    pub fn shade_reflector(
+        &self,
+        settings: RefineSettings,
+        image: &mut Image,
+        raster: Option<(&GpuContext, &mut RasterComposition)>,
+    ) -> Result<(PackageCounters, f64), TechniqueError> {
         let (live, camera, max_depth) = (self.live, self.camera, self.max_depth);
         let originals = OriginalSamples::trace(
             &self.setup.inputs(live, camera, settings, max_depth),
@@ -75,20 +86,46 @@ impl<'a> FramePhases<'a> {
         let mut inputs = self.setup.inputs(live, camera, settings, max_depth);
         inputs.originals = Some(&originals);
         let mut packages = self.setup.packages(0);
+        packages.par_iter_mut().for_each(|p| {
+            p.run(&inputs, None);
+        });
+        let clock = Instant::now();
+        let composed = match raster {
+            Some((gpu, composer)) => {
+                let (width, height) = (image.width, image.height);
+                let uniform = raster::camera_uniform(camera, &live.scene().bounds(), width, height);
+                let mut ids_uploaded = false;
+                let frame = RasterFrame {
+                    ids: &self.setup.surfaces.ids,
+                    width,
+                    height,
+                    ids_uploaded: &mut ids_uploaded,
+                };
+                let mut warnings = Vec::new();
+                compose_on_raster(
+                    gpu,
+                    composer,
+                    frame,
+                    &packages,
+                    &inputs,
+                    &uniform,
+                    &mut warnings,
+                )?
+            }
+            None => None,
+        };
         let results: Vec<Vec<(u32, Vec3)>> = packages
             .par_iter_mut()
-            .map(|p| {
-                p.run(&inputs, None);
-                p.take_pixels(&inputs)
-            })
+            .map(|p| p.take_pixels(&inputs, composed.as_deref()))
             .collect();
         for (k, c) in results.into_iter().flatten() {
             image.pixels[k as usize] = c;
         }
+        let composition_ms = clock.elapsed().as_secs_f64() * 1e3;
         let mut totals = originals.counters;
         for p in &packages {
             totals.add(&p.counters);
         }
-        totals
+        Ok((totals, composition_ms))
     }
 }

@@ -30,6 +30,7 @@ use specula_trace::reference::{
 };
 use specula_trace::{Hit, Ray, SceneAccel};
 
+use super::compose::FaceVertex;
 use crate::screen::{PixelSurfaces, ScreenView};
 
 /// Filled pixels per parallel job.
@@ -687,6 +688,8 @@ pub struct Package {
     dirty: Vec<bool>,
     phase: Phase,
     pub counters: PackageCounters,
+    /// Pixels [`Package::take_pixels`] took from the composition on the raster, so far.
+    pub pixels_from_raster: u64,
     /// Rays this thread traced during [`Package::fill`]'s parallel tracing (its own share of
     /// the pixels, and any job it stole meanwhile, which counts itself): `run` leaves them out
     /// of its own count, the filled pixels being counted where they were traced.
@@ -884,6 +887,7 @@ impl Package {
             dirty: vec![false; count],
             phase: Phase::Preview,
             counters: PackageCounters::default(),
+            pixels_from_raster: 0,
             rays_counted_apart: (0, 0),
         }
     }
@@ -1423,7 +1427,15 @@ impl Package {
     /// The pixels of every triangle changed since the last call: (pixel, radiance). Pixels
     /// come in raster order, so the leaf of the last pixel is tried before the face tree is
     /// walked again.
-    pub fn take_pixels(&mut self, inputs: &FrameInputs) -> Vec<(u32, Vec3)> {
+    ///
+    /// `composed`, where given, is the frame's composition on the raster (per pixel: colour
+    /// and 1 where a face drawn there showed, see [`super::compose`]): those pixels take it and
+    /// are not located; the rest are shaded here.
+    pub fn take_pixels(
+        &mut self,
+        inputs: &FrameInputs,
+        composed: Option<&[[f32; 4]]>,
+    ) -> Vec<(u32, Vec3)> {
         let width = inputs.view.width;
         let mut out = Vec::new();
         for index in 0..self.triangles.len() {
@@ -1437,6 +1449,11 @@ impl Package {
                     .flatten();
                 if let Some(&c) = filled {
                     out.push((k, c));
+                    continue;
+                }
+                if let Some([r, g, b, 1.0]) = composed.map(|c| c[k as usize]) {
+                    out.push((k, Vec3::new(r, g, b)));
+                    self.pixels_from_raster += 1;
                     continue;
                 }
                 let q = Vec2::new((k % width) as f32 + 0.5, (k / width) as f32 + 0.5);
@@ -1454,6 +1471,36 @@ impl Package {
             }
         }
         out
+    }
+
+    /// The leaf faces of the triangles changed since the last [`Package::take_pixels`], three
+    /// corners each, for composition on the raster. A face whose pixels are all traced (filled)
+    /// is left out; one the GPU cannot shade as [`Package::take_pixels`] does (deferred
+    /// textures, a corner behind the eye, no screen area) is marked for the CPU.
+    pub fn raster_faces(&self, inputs: &FrameInputs, out: &mut Vec<FaceVertex>) {
+        let settings = &inputs.settings;
+        let filled_all = settings.fill && self.phase == Phase::Done;
+        for (face, f) in self.faces.iter().enumerate() {
+            let face = face as u32;
+            if f.children.is_some()
+                || !self.dirty[f.origin as usize]
+                || (filled_all && self.needs_filling(face, settings))
+            {
+                continue;
+            }
+            let leaf = self.leaf(face, inputs);
+            let cpu_shaded = leaf.alike || leaf.behind_eye || leaf.inverse_area == 0.0;
+            let id = self.triangles[f.origin as usize];
+            for v in f.v {
+                let corner = &self.vertices[v as usize];
+                out.push(FaceVertex {
+                    p_world: corner.p_world.to_array(),
+                    color: corner.color.to_array(),
+                    triangle_id: [id.mesh + 1, id.triangle],
+                    cpu_shaded: cpu_shaded as u32,
+                });
+            }
+        }
     }
 
     /// Leaf faces now (for the picture of the generated triangles, Figure 13).
