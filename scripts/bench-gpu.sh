@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # The GPU benchmark: every method on every built-in scene (methods with scene-only maps timed
 # static and dynamic; each run's speed-up over the CPU reference and over gpu-trace), then
-# gpu-trace's rays per second on the Stanford dragon beside the CPU reference's. Writes one JSON
+# gpu-trace's rays per second on the Stanford dragon beside the CPU reference's, then
+# vertex-tracing's composition on the CPU against the GPU raster (truck-cover, the ID buffer
+# drawn by the GPU, the cover by its vertices). Writes one JSON
 # and one markdown file (adapter, driver, date) into the output folder.
 #
 #   scripts/bench-gpu.sh [--small] [--out DIR]
@@ -87,8 +89,16 @@ echo "every method on ${#scenes[@]} built-in scenes at ${size[1]}x${size[3]}, $f
 echo "gpu-trace rays per second on the dragon ($(grep -c '^f ' "$work/dragon.obj") triangles)" >&2
 "$SPECULA" bench "$work/dragon.toml" --methods gpu-trace --frames "$frames" "${size[@]}" \
   --json "$work/dragon.json" --markdown "$work/dragon.md"
+for composition in cpu gpu; do
+  echo "vertex-tracing composed on the $composition (truck-cover)" >&2
+  "$SPECULA" bench truck-cover --methods vertex-tracing --frames "$frames" "${size[@]}" \
+    -p composition=$composition -p visibility=gpu -p tracing=vertices \
+    --json "$work/composition-$composition.json" --markdown "$work/composition-$composition.md"
+done
 
-printf '{\n"scenes": %s,\n"dragon": %s\n}\n' "$(cat "$work/scenes.json")" "$(cat "$work/dragon.json")" \
+printf '{\n"scenes": %s,\n"dragon": %s,\n"composition_cpu": %s,\n"composition_gpu": %s\n}\n' \
+  "$(cat "$work/scenes.json")" "$(cat "$work/dragon.json")" \
+  "$(cat "$work/composition-cpu.json")" "$(cat "$work/composition-gpu.json")" \
   > "$out/bench-gpu.json"
 {
   echo "# specula bench-gpu ($(date -u +%Y-%m-%d))"
@@ -100,5 +110,11 @@ printf '{\n"scenes": %s,\n"dragon": %s\n}\n' "$(cat "$work/scenes.json")" "$(cat
   echo "## gpu-trace rays per second on the Stanford dragon ($(grep -c '^f ' "$work/dragon.obj") triangles)"
   echo
   cat "$work/dragon.md"
+  echo
+  echo "## vertex-tracing: composition on the CPU, then on the GPU raster (truck-cover)"
+  echo
+  cat "$work/composition-cpu.md"
+  echo
+  cat "$work/composition-gpu.md"
 } > "$out/bench-gpu.md"
 echo "wrote $out/bench-gpu.json and $out/bench-gpu.md" >&2

@@ -63,6 +63,18 @@ fn bench_gpu_script_runs_every_method_on_every_scene_at_a_small_size() {
         .find(|r| r["method"] == "gpu-trace")
         .unwrap();
     assert!(gpu_trace["rays_per_second"].as_f64().unwrap() > 0.0);
+    for composition in ["composition_cpu", "composition_gpu"] {
+        let vertex_tracing = json[composition]["runs"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|r| r["method"] == "vertex-tracing")
+            .unwrap_or_else(|| panic!("{composition}: no vertex-tracing run"));
+        assert!(
+            vertex_tracing["frame"]["median_ms"].as_f64().unwrap() > 0.0,
+            "{composition}"
+        );
+    }
     let markdown = std::fs::read_to_string(out.path().join("bench-gpu.md")).unwrap();
     assert!(markdown.contains("Adapter: ") && markdown.contains("| stanford-dragon | gpu-trace |"));
 }
