@@ -34,7 +34,6 @@ const ROBUST_WIDENING: f32 =
 
 /// Per-ray constants of the watertight test and the slab test.
 struct RayData {
-    origin: Vec3A,
     /// Origin and inverse direction splatted across four lanes, one per child box.
     origin_x: Vec4,
     origin_y: Vec4,
@@ -80,7 +79,6 @@ impl RayData {
         });
         let inv_dir = Vec3A::ONE / Vec3A::from_array(safe);
         RayData {
-            origin: ray.origin.into(),
             origin_x: Vec4::splat(ray.origin.x),
             origin_y: Vec4::splat(ray.origin.y),
             origin_z: Vec4::splat(ray.origin.z),
@@ -115,58 +113,115 @@ impl RayData {
         (t_near.cmple(t_far).bitmask(), t_near)
     }
 
-    /// Watertight ray–triangle test; returns (t, b1, b2) for 0 < t < t_max.
+    /// The watertight ray–triangle test on the (up to) four triangles of `block` at once, each
+    /// lane with the scalar test's operations in its order, so each lane's result is the one
+    /// that test gives bit for bit. Returns, where a lane hits with 0 < t < `t_max`, the lanes
+    /// that do (a bit mask) and per lane the scaled distance, the determinant, t, b1 and b2.
     #[inline(always)]
     /// `KZ` is the ray's `kz` as a constant, so that the permutation compiles to fixed lanes.
-    fn hit_triangle<const KZ: usize>(&self, v: &[Vec3A; 3], t_max: f32) -> Option<(f32, f32, f32)> {
-        // (a[kx], a[ky], a[kz]) for kx = (kz + 1) mod 3, ky = (kz + 2) mod 3.
-        #[inline(always)]
-        fn permute<const KZ: usize>(a: Vec3A) -> (f32, f32, f32) {
-            match KZ {
-                0 => (a.y, a.z, a.x),
-                1 => (a.z, a.x, a.y),
-                _ => (a.x, a.y, a.z),
-            }
-        }
-        let [sx, sy, sz] = self.shear;
-        let a = v[0] - self.origin;
-        let b = v[1] - self.origin;
-        let c = v[2] - self.origin;
-        let (a_x, a_y, a_z) = permute::<KZ>(a);
-        let (b_x, b_y, b_z) = permute::<KZ>(b);
-        let (c_x, c_y, c_z) = permute::<KZ>(c);
+    fn hit_block<const KZ: usize>(&self, block: &TriangleBlock, t_max: f32) -> Option<BlockHits> {
+        // The axes (kx, ky, kz) for kx = (kz + 1) mod 3, ky = (kz + 2) mod 3.
+        let (ix, iy, iz) = match KZ {
+            0 => (1, 2, 0),
+            1 => (2, 0, 1),
+            _ => (0, 1, 2),
+        };
+        let origin = [self.origin_x, self.origin_y, self.origin_z];
+        let relative = |vertex: usize, axis: usize| block.v[vertex][axis] - origin[axis];
+        let (a_x, a_y, a_z) = (relative(0, ix), relative(0, iy), relative(0, iz));
+        let (b_x, b_y, b_z) = (relative(1, ix), relative(1, iy), relative(1, iz));
+        let (c_x, c_y, c_z) = (relative(2, ix), relative(2, iy), relative(2, iz));
+        let [sx, sy, sz] = self.shear.map(Vec4::splat);
         let (ax, ay) = (a_x - sx * a_z, a_y - sy * a_z);
         let (bx, by) = (b_x - sx * b_z, b_y - sy * b_z);
         let (cx, cy) = (c_x - sx * c_z, c_y - sy * c_z);
         let mut u = cx * by - cy * bx;
-        let mut v_ = ax * cy - ay * cx;
+        let mut v = ax * cy - ay * cx;
         let mut w = bx * ay - by * ax;
-        if u == 0.0 || v_ == 0.0 || w == 0.0 {
+        let lanes = (1u32 << block.count) - 1;
+        let on_edge =
+            (u.cmpeq(Vec4::ZERO) | v.cmpeq(Vec4::ZERO) | w.cmpeq(Vec4::ZERO)).bitmask() & lanes;
+        if on_edge != 0 {
             // On an edge in single precision: decide in double, as the paper prescribes.
-            u = (cx as f64 * by as f64 - cy as f64 * bx as f64) as f32;
-            v_ = (ax as f64 * cy as f64 - ay as f64 * cx as f64) as f32;
-            w = (bx as f64 * ay as f64 - by as f64 * ax as f64) as f32;
-        }
-        if (u < 0.0 || v_ < 0.0 || w < 0.0) && (u > 0.0 || v_ > 0.0 || w > 0.0) {
-            return None;
-        }
-        let det = u + v_ + w;
-        if det == 0.0 {
-            return None;
-        }
-        let (az, bz, cz) = (sz * a_z, sz * b_z, sz * c_z);
-        let t_scaled = u * az + v_ * bz + w * cz;
-        // t = t_scaled / det must lie in (0, t_max): compare without dividing, sign-aware.
-        if det > 0.0 {
-            if t_scaled <= 0.0 || t_scaled >= t_max * det {
-                return None;
+            let [ax, ay, bx, by, cx, cy] = [ax, ay, bx, by, cx, cy].map(|x| x.to_array());
+            let [mut us, mut vs, mut ws] = [u, v, w].map(|x| x.to_array());
+            for lane in (0..4).filter(|lane| on_edge & (1 << lane) != 0) {
+                let f = |x: [f32; 4]| x[lane] as f64;
+                us[lane] = (f(cx) * f(by) - f(cy) * f(bx)) as f32;
+                vs[lane] = (f(ax) * f(cy) - f(ay) * f(cx)) as f32;
+                ws[lane] = (f(bx) * f(ay) - f(by) * f(ax)) as f32;
             }
-        } else if t_scaled >= 0.0 || t_scaled <= t_max * det {
+            [u, v, w] = [us, vs, ws].map(Vec4::from_array);
+        }
+        let zero = Vec4::ZERO;
+        let outside = (u.cmplt(zero) | v.cmplt(zero) | w.cmplt(zero))
+            & (u.cmpgt(zero) | v.cmpgt(zero) | w.cmpgt(zero));
+        let det = u + v + w;
+        let (az, bz, cz) = (sz * a_z, sz * b_z, sz * c_z);
+        let t_scaled = u * az + v * bz + w * cz;
+        // t = t_scaled / det must lie in (0, t_max): compare without dividing, sign-aware.
+        let limit = Vec4::splat(t_max) * det;
+        let ahead = (det.cmpgt(zero) & t_scaled.cmpgt(zero) & t_scaled.cmplt(limit))
+            | (det.cmplt(zero) & t_scaled.cmplt(zero) & t_scaled.cmpgt(limit));
+        let mask = (ahead & !outside).bitmask() & lanes;
+        if mask == 0 {
+            // Most blocks a ray reaches it misses: no division for them.
             return None;
         }
-        let inv_det = 1.0 / det;
-        Some((t_scaled * inv_det, v_ * inv_det, w * inv_det))
+        let inv_det = Vec4::ONE / det;
+        Some(BlockHits {
+            mask,
+            t_scaled: t_scaled.to_array(),
+            det: det.to_array(),
+            t: (t_scaled * inv_det).to_array(),
+            b1: (v * inv_det).to_array(),
+            b2: (w * inv_det).to_array(),
+        })
     }
+}
+
+/// What [`RayData::hit_block`] finds in a block, per lane.
+struct BlockHits {
+    mask: u32,
+    t_scaled: [f32; 4],
+    det: [f32; 4],
+    t: [f32; 4],
+    b1: [f32; 4],
+    b2: [f32; 4],
+}
+
+/// The (up to four) triangles of one leaf in structure-of-arrays form, so one SIMD test checks
+/// them all (the layout of Embree's `Triangle4`): `v[vertex][axis]` holds that coordinate of
+/// each lane's triangle. Lanes past `count` repeat the last triangle and are masked off.
+#[repr(C, align(16))]
+#[derive(Clone, Copy, Debug)]
+pub struct TriangleBlock {
+    v: [[Vec4; 3]; 3],
+    /// The leaf's first triangle (in leaf order) and how many it has (1 to 4).
+    first: u32,
+    count: u32,
+}
+
+impl TriangleBlock {
+    fn new(triangles: &[[Vec3A; 3]], first: u32, count: u32) -> TriangleBlock {
+        assert!(
+            (1..=4).contains(&count),
+            "a leaf holds 1 to 4 triangles, not {count}"
+        );
+        let lane = |l: usize| &triangles[first as usize + l.min(count as usize - 1)];
+        let v = std::array::from_fn(|vertex| {
+            std::array::from_fn(|axis| Vec4::from_array(std::array::from_fn(|l| lane(l)[vertex][axis])))
+        });
+        TriangleBlock { v, first, count }
+    }
+}
+
+/// One block per leaf of `wide`, in its leaves' order.
+fn blocks(wide: &WideBvh, triangles: &[[Vec3A; 3]]) -> Vec<TriangleBlock> {
+    wide.leaves
+        .iter()
+        .map(|&(first, count)| TriangleBlock::new(triangles, first, count))
+        .collect()
 }
 
 /// A scene's triangles (world space) in BVH leaf order, with the BVH over them.
@@ -177,6 +232,9 @@ pub struct SceneAccel {
     pub wide: WideBvh,
     /// Triangle vertices in leaf order.
     pub triangles: Vec<[Vec3A; 3]>,
+    /// The same triangles a block per leaf of `wide` (its [`WideBvh::leaves`] order): what
+    /// queries test.
+    blocks: Vec<TriangleBlock>,
     /// (mesh, triangle) of each entry of `triangles`.
     pub ids: Vec<(u32, u32)>,
 }
@@ -204,17 +262,19 @@ impl SceneAccel {
             })
             .collect();
         let bvh = Bvh::build(&bounds);
-        let triangles_ordered = bvh
+        let triangles_ordered: Vec<[Vec3A; 3]> = bvh
             .primitives
             .iter()
             .map(|&p| triangles[p as usize].map(Vec3A::from))
             .collect();
         let ids_ordered = bvh.primitives.iter().map(|&p| ids[p as usize]).collect();
         let wide = WideBvh::from_binary(&bvh);
+        let blocks = blocks(&wide, &triangles_ordered);
         SceneAccel {
             bvh,
             wide,
             triangles: triangles_ordered,
+            blocks,
             ids: ids_ordered,
         }
     }
@@ -233,6 +293,7 @@ impl SceneAccel {
         let bounds = self.primitive_bounds();
         self.bvh.refit(&bounds);
         self.wide = WideBvh::from_binary(&self.bvh);
+        self.blocks = blocks(&self.wide, &self.triangles);
         self.bvh.sah_cost(&bounds)
     }
 
@@ -265,11 +326,27 @@ impl SceneAccel {
     fn intersect_kz<const KZ: usize>(&self, data: &RayData, t_max: f32) -> Option<Hit> {
         let mut best: Option<(f32, f32, f32, usize)> = None;
         let mut t_best = t_max;
-        self.traverse(data, &mut t_best, |leaf_first, leaf_count, t_best| {
-            for i in leaf_first..leaf_first + leaf_count {
-                if let Some((t, b1, b2)) = data.hit_triangle::<KZ>(&self.triangles[i], *t_best) {
-                    *t_best = t;
-                    best = Some((t, b1, b2, i));
+        self.traverse(data, &mut t_best, |leaf, t_best| {
+            let block = &self.blocks[leaf];
+            let Some(hits) = data.hit_block::<KZ>(block, *t_best) else {
+                return false;
+            };
+            let mut mask = hits.mask;
+            while mask != 0 {
+                let lane = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                // The triangles one by one in leaf order, each against the nearest hit so far,
+                // as a scalar loop over them decides.
+                let (t_scaled, det) = (hits.t_scaled[lane], hits.det[lane]);
+                let closer = if det > 0.0 {
+                    t_scaled < *t_best * det
+                } else {
+                    t_scaled > *t_best * det
+                };
+                if closer {
+                    *t_best = hits.t[lane];
+                    let i = block.first as usize + lane;
+                    best = Some((hits.t[lane], hits.b1[lane], hits.b2[lane], i));
                 }
             }
             false
@@ -296,24 +373,21 @@ impl SceneAccel {
     fn occluded_kz<const KZ: usize>(&self, data: &RayData, t_max: f32) -> bool {
         let mut t = t_max;
         let mut found = false;
-        self.traverse(data, &mut t, |first, count, t_max| {
-            found = (first..first + count).any(|i| {
-                data.hit_triangle::<KZ>(&self.triangles[i], *t_max)
-                    .is_some()
-            });
+        self.traverse(data, &mut t, |leaf, t_max| {
+            found = data.hit_block::<KZ>(&self.blocks[leaf], *t_max).is_some();
             found
         });
         found
     }
 
-    /// Front-to-back traversal of the wide tree; `leaf` tests a leaf's triangles (and may
-    /// shrink `t_max`) and returns true to stop.
+    /// Front-to-back traversal of the wide tree; `leaf` tests a leaf's triangles (its block,
+    /// by number; it may shrink `t_max`) and returns true to stop.
     #[inline(always)]
     fn traverse(
         &self,
         data: &RayData,
         t_max: &mut f32,
-        mut leaf: impl FnMut(usize, usize, &mut f32) -> bool,
+        mut leaf: impl FnMut(usize, &mut f32) -> bool,
     ) {
         if self.triangles.is_empty() {
             return;
@@ -328,7 +402,7 @@ impl SceneAccel {
         loop {
             let (index, count) = current;
             if count > 0 {
-                if leaf(index as usize, count as usize, t_max) {
+                if leaf(index as usize, t_max) {
                     return;
                 }
             } else {

@@ -9,8 +9,8 @@ use specula_scene::Aabb;
 use crate::bvh::Bvh;
 
 /// A child slot: an interior node (`count` = 0, `index` = node), a leaf (`count` > 0
-/// primitives from `index` in leaf order), or empty (`count` = 0, `index` = `EMPTY`; its box
-/// is inverted so no ray ever enters it).
+/// primitives; `index` = its entry in [`WideBvh::leaves`]), or empty (`count` = 0, `index` =
+/// `EMPTY`; its box is inverted so no ray ever enters it).
 #[repr(C, align(16))]
 #[derive(Clone, Copy, Debug)]
 pub struct WideNode {
@@ -61,12 +61,17 @@ impl WideNode {
 pub struct WideBvh {
     /// Node 0 is the root.
     pub nodes: Vec<WideNode>,
+    /// Each leaf's primitives: (first, count) in leaf order, numbered in depth-first order so
+    /// that per-leaf data kept beside it (the accelerator's triangle blocks) lies in the order
+    /// traversal meets it.
+    pub leaves: Vec<(u32, u32)>,
 }
 
 impl WideBvh {
     pub fn from_binary(bvh: &Bvh) -> WideBvh {
         let mut wide = WideBvh {
             nodes: vec![WideNode::empty()],
+            leaves: Vec::new(),
         };
         let root = &bvh.nodes[0];
         if bvh.primitives.is_empty() {
@@ -74,8 +79,9 @@ impl WideBvh {
         }
         if root.is_leaf() {
             wide.nodes[0].set_box(0, &root.bounds());
-            wide.nodes[0].index[0] = root.first;
+            wide.nodes[0].index[0] = 0;
             wide.nodes[0].count[0] = root.count;
+            wide.leaves.push((root.first, root.count));
         } else {
             wide.fill(bvh, 0, 0);
         }
@@ -107,8 +113,9 @@ impl WideBvh {
             let node = bvh.nodes[child];
             self.nodes[target].set_box(slot, &node.bounds());
             if node.is_leaf() {
-                self.nodes[target].index[slot] = node.first;
+                self.nodes[target].index[slot] = self.leaves.len() as u32;
                 self.nodes[target].count[slot] = node.count;
+                self.leaves.push((node.first, node.count));
             } else {
                 let index = self.nodes.len();
                 self.nodes.push(WideNode::empty());
@@ -119,11 +126,12 @@ impl WideBvh {
     }
 
     /// Checks that every primitive slot in `0..primitive_count` is covered by exactly one leaf,
-    /// that every node is reached exactly once, and that each child box contains the boxes
-    /// below it and (via `bounds`, indexed in leaf order) its primitives.
+    /// that every node and every leaf entry is reached exactly once, and that each child box
+    /// contains the boxes below it and (via `bounds`, indexed in leaf order) its primitives.
     pub fn validate(&self, bounds_in_leaf_order: &[Aabb]) -> Result<(), String> {
         let mut covered = vec![false; bounds_in_leaf_order.len()];
         let mut reached = vec![false; self.nodes.len()];
+        let mut leaves_reached = vec![false; self.leaves.len()];
         let contains = |outer: &Aabb, inner: &Aabb| {
             inner.is_empty()
                 || (outer.min.cmple(inner.min).all() && outer.max.cmpge(inner.max).all())
@@ -145,7 +153,18 @@ impl WideBvh {
                         return Err(format!("node {n} slot {slot} is empty but has a box"));
                     }
                 } else if count > 0 {
-                    let first = index as usize;
+                    let Some(&(first, leaf_count)) = self.leaves.get(index as usize) else {
+                        return Err(format!("node {n} slot {slot} points to missing leaf {index}"));
+                    };
+                    if leaf_count as usize != count {
+                        return Err(format!(
+                            "node {n} slot {slot} counts {count} primitives, its leaf {leaf_count}"
+                        ));
+                    }
+                    if std::mem::replace(&mut leaves_reached[index as usize], true) {
+                        return Err(format!("leaf {index} reached twice"));
+                    }
+                    let first = first as usize;
                     if first + count > covered.len() {
                         return Err(format!(
                             "node {n} slot {slot} covers primitives past the end"
@@ -184,6 +203,9 @@ impl WideBvh {
         }
         if let Some(n) = reached.iter().position(|r| !r) {
             return Err(format!("node {n} is unreachable"));
+        }
+        if let Some(l) = leaves_reached.iter().position(|r| !r) {
+            return Err(format!("leaf {l} is unreachable"));
         }
         Ok(())
     }
