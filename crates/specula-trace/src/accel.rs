@@ -8,7 +8,7 @@ use glam::{Vec3, Vec3A, Vec4};
 use specula_scene::{Aabb, Scene};
 
 use crate::bvh::Bvh;
-use crate::wide_bvh::{WideBvh, WideNode};
+use crate::wide_bvh::{WideBvh, WideNode, WIDTH};
 
 #[derive(Clone, Copy, Debug)]
 pub struct Ray {
@@ -91,14 +91,25 @@ impl RayData {
         }
     }
 
-    /// Slab test of a wide node's four child boxes at once: a bit mask of the children the ray
-    /// enters before `t_max`, and the entry distances.
+    /// Slab test of a wide node's eight child boxes, four at a time: a bit mask of the
+    /// children the ray enters before `t_max`, and the entry distances.
     #[inline(always)]
-    fn hit_children(&self, node: &WideNode, t_max: f32) -> (u32, Vec4) {
+    fn hit_children(&self, node: &WideNode, t_max: f32) -> (u32, [f32; 8]) {
+        let (low, t_low) = self.hit_group(node, 0, t_max);
+        let (high, t_high) = self.hit_group(node, 1, t_max);
+        let mut t_near = [0.0; 8];
+        t_near[..4].copy_from_slice(&t_low.to_array());
+        t_near[4..].copy_from_slice(&t_high.to_array());
+        (low | high << 4, t_near)
+    }
+
+    /// Slab test of one group of four child boxes of a node.
+    #[inline(always)]
+    fn hit_group(&self, node: &WideNode, group: usize, t_max: f32) -> (u32, Vec4) {
         let pick = |negative: bool, lo: Vec4, hi: Vec4| if negative { (hi, lo) } else { (lo, hi) };
-        let (near_x, far_x) = pick(self.negative[0], node.min_x, node.max_x);
-        let (near_y, far_y) = pick(self.negative[1], node.min_y, node.max_y);
-        let (near_z, far_z) = pick(self.negative[2], node.min_z, node.max_z);
+        let (near_x, far_x) = pick(self.negative[0], node.min_x[group], node.max_x[group]);
+        let (near_y, far_y) = pick(self.negative[1], node.min_y[group], node.max_y[group]);
+        let (near_z, far_z) = pick(self.negative[2], node.min_z[group], node.max_z[group]);
         let t_near = ((near_x - self.origin_x) * self.inv_x)
             .max((near_y - self.origin_y) * self.inv_y)
             .max((near_z - self.origin_z) * self.inv_z)
@@ -210,7 +221,9 @@ impl TriangleBlock {
         );
         let lane = |l: usize| &triangles[first as usize + l.min(count as usize - 1)];
         let v = std::array::from_fn(|vertex| {
-            std::array::from_fn(|axis| Vec4::from_array(std::array::from_fn(|l| lane(l)[vertex][axis])))
+            std::array::from_fn(|axis| {
+                Vec4::from_array(std::array::from_fn(|l| lane(l)[vertex][axis]))
+            })
         });
         TriangleBlock { v, first, count }
     }
@@ -228,7 +241,7 @@ fn blocks(wide: &WideBvh, triangles: &[[Vec3A; 3]]) -> Vec<TriangleBlock> {
 pub struct SceneAccel {
     /// The binary tree (the form a GPU gets).
     pub bvh: Bvh,
-    /// The same tree collapsed to 4-wide nodes, which CPU queries traverse.
+    /// The same tree collapsed to 8-wide nodes, which CPU queries traverse.
     pub wide: WideBvh,
     /// Triangle vertices in leaf order.
     pub triangles: Vec<[Vec3A; 3]>,
@@ -393,8 +406,8 @@ impl SceneAccel {
             return;
         }
         // Entries are (index, count, entry distance): count 0 is a node, > 0 a leaf. Each level
-        // adds at most three entries and the tree is at most MAX_DEPTH deep.
-        const STACK: usize = 4 * crate::bvh::MAX_DEPTH + 4;
+        // adds at most seven entries and the tree is at most MAX_DEPTH deep.
+        const STACK: usize = WIDTH * crate::bvh::MAX_DEPTH + WIDTH;
         // Left uninitialised: zeroing 3 KiB per ray costs more than a primary ray's traversal.
         let mut stack = [const { MaybeUninit::<(u32, u32, f32)>::uninit() }; STACK];
         let mut top = 0;
@@ -418,8 +431,8 @@ impl SceneAccel {
                     }
                     // Several: keep them sorted by entry distance, farthest first, then
                     // descend into the nearest and push the rest.
-                    let t = t_near.to_array();
-                    let mut hits = [(0u32, 0u32, 0.0f32); 4];
+                    let t = t_near;
+                    let mut hits = [(0u32, 0u32, 0.0f32); WIDTH];
                     hits[0] = (node.index[first], node.count[first], t[first]);
                     let mut n = 1;
                     while mask != 0 {

@@ -239,7 +239,7 @@ fn validators_catch_corrupted_trees() {
 
     let mut a = accel(&triangles);
     let leaf_order: Vec<[Vec3; 3]> = a.triangles.iter().map(|t| t.map(Vec3::from)).collect();
-    a.wide.nodes[0].max_x[0] -= 0.5;
+    a.wide.nodes[0].max_x[0][0] -= 0.5;
     assert!(a
         .wide
         .validate(&boxes(&leaf_order))
