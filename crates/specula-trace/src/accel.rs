@@ -103,6 +103,54 @@ impl RayData {
         (low | high << 4, t_near)
     }
 
+    /// [`RayData::hit_children`] with 8-wide AVX instructions: the same operations in the same
+    /// order on all eight boxes at once, so the same mask and distances bit for bit.
+    ///
+    /// # Safety
+    /// The CPU must support AVX.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    #[inline]
+    unsafe fn hit_children_avx(&self, node: &WideNode, t_max: f32) -> (u32, [f32; 8]) {
+        use std::arch::x86_64::*;
+        // Each coordinate's eight bounds are 32 contiguous, 32-byte-aligned bytes (`WideNode`
+        // is aligned to 64 and each field is 32 bytes).
+        let (lo, hi) = (
+            [&node.min_x, &node.min_y, &node.min_z],
+            [&node.max_x, &node.max_y, &node.max_z],
+        );
+        let origin = [self.origin_x.x, self.origin_y.x, self.origin_z.x];
+        let inv = [self.inv_x.x, self.inv_y.x, self.inv_z.x];
+        let mut t_near = [_mm256_setzero_ps(); 3];
+        let mut t_far = [_mm256_setzero_ps(); 3];
+        for axis in 0..3 {
+            let (near, far) = if self.negative[axis] {
+                (hi[axis], lo[axis])
+            } else {
+                (lo[axis], hi[axis])
+            };
+            let o = _mm256_set1_ps(origin[axis]);
+            let i = _mm256_set1_ps(inv[axis]);
+            t_near[axis] = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(near.as_ptr().cast()), o), i);
+            t_far[axis] = _mm256_mul_ps(_mm256_sub_ps(_mm256_load_ps(far.as_ptr().cast()), o), i);
+        }
+        let entry = _mm256_max_ps(
+            _mm256_max_ps(_mm256_max_ps(t_near[0], t_near[1]), t_near[2]),
+            _mm256_setzero_ps(),
+        );
+        let exit = _mm256_mul_ps(
+            _mm256_min_ps(
+                _mm256_min_ps(_mm256_min_ps(t_far[0], t_far[1]), t_far[2]),
+                _mm256_set1_ps(t_max),
+            ),
+            _mm256_set1_ps(ROBUST_WIDENING),
+        );
+        let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OS>(entry, exit)) as u32;
+        let mut distances = [0.0f32; 8];
+        _mm256_storeu_ps(distances.as_mut_ptr(), entry);
+        (mask, distances)
+    }
+
     /// Slab test of one group of four child boxes of a node.
     #[inline(always)]
     fn hit_group(&self, node: &WideNode, group: usize, t_max: f32) -> (u32, Vec4) {
@@ -326,20 +374,44 @@ impl SceneAccel {
         self.bvh.sah_cost(&self.primitive_bounds())
     }
 
-    /// Closest hit with 0 < t < `t_max`.
+    /// Closest hit with 0 < t < `t_max`. Where the CPU has AVX the traversal is compiled for
+    /// it (detected at run time; the same hits bit for bit).
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
         let data = RayData::new(ray);
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx") {
+            // SAFETY: the CPU supports AVX.
+            return unsafe { self.intersect_avx(&data, t_max) };
+        }
+        self.intersect_with::<false>(&data, t_max)
+    }
+
+    /// # Safety
+    /// The CPU must support AVX.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn intersect_avx(&self, data: &RayData, t_max: f32) -> Option<Hit> {
+        self.intersect_with::<true>(data, t_max)
+    }
+
+    #[inline(always)]
+    fn intersect_with<const AVX: bool>(&self, data: &RayData, t_max: f32) -> Option<Hit> {
         match data.kz {
-            0 => self.intersect_kz::<0>(&data, t_max),
-            1 => self.intersect_kz::<1>(&data, t_max),
-            _ => self.intersect_kz::<2>(&data, t_max),
+            0 => self.intersect_kz::<0, AVX>(data, t_max),
+            1 => self.intersect_kz::<1, AVX>(data, t_max),
+            _ => self.intersect_kz::<2, AVX>(data, t_max),
         }
     }
 
-    fn intersect_kz<const KZ: usize>(&self, data: &RayData, t_max: f32) -> Option<Hit> {
+    #[inline(always)]
+    fn intersect_kz<const KZ: usize, const AVX: bool>(
+        &self,
+        data: &RayData,
+        t_max: f32,
+    ) -> Option<Hit> {
         let mut best: Option<(f32, f32, f32, usize)> = None;
         let mut t_best = t_max;
-        self.traverse(data, &mut t_best, |leaf, t_best| {
+        self.traverse::<AVX>(data, &mut t_best, |leaf, t_best| {
             let block = &self.blocks[leaf];
             let Some(hits) = data.hit_block::<KZ>(block, *t_best) else {
                 return false;
@@ -373,20 +445,40 @@ impl SceneAccel {
         })
     }
 
-    /// Whether anything lies on the ray with 0 < t < `t_max`.
+    /// Whether anything lies on the ray with 0 < t < `t_max` (with AVX where the CPU has it,
+    /// as [`SceneAccel::intersect`]).
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
         let data = RayData::new(ray);
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx") {
+            // SAFETY: the CPU supports AVX.
+            return unsafe { self.occluded_avx(&data, t_max) };
+        }
+        self.occluded_with::<false>(&data, t_max)
+    }
+
+    /// # Safety
+    /// The CPU must support AVX.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn occluded_avx(&self, data: &RayData, t_max: f32) -> bool {
+        self.occluded_with::<true>(data, t_max)
+    }
+
+    #[inline(always)]
+    fn occluded_with<const AVX: bool>(&self, data: &RayData, t_max: f32) -> bool {
         match data.kz {
-            0 => self.occluded_kz::<0>(&data, t_max),
-            1 => self.occluded_kz::<1>(&data, t_max),
-            _ => self.occluded_kz::<2>(&data, t_max),
+            0 => self.occluded_kz::<0, AVX>(data, t_max),
+            1 => self.occluded_kz::<1, AVX>(data, t_max),
+            _ => self.occluded_kz::<2, AVX>(data, t_max),
         }
     }
 
-    fn occluded_kz<const KZ: usize>(&self, data: &RayData, t_max: f32) -> bool {
+    #[inline(always)]
+    fn occluded_kz<const KZ: usize, const AVX: bool>(&self, data: &RayData, t_max: f32) -> bool {
         let mut t = t_max;
         let mut found = false;
-        self.traverse(data, &mut t, |leaf, t_max| {
+        self.traverse::<AVX>(data, &mut t, |leaf, t_max| {
             found = data.hit_block::<KZ>(&self.blocks[leaf], *t_max).is_some();
             found
         });
@@ -396,7 +488,7 @@ impl SceneAccel {
     /// Front-to-back traversal of the wide tree; `leaf` tests a leaf's triangles (its block,
     /// by number; it may shrink `t_max`) and returns true to stop.
     #[inline(always)]
-    fn traverse(
+    fn traverse<const AVX: bool>(
         &self,
         data: &RayData,
         t_max: &mut f32,
@@ -420,6 +512,14 @@ impl SceneAccel {
                 }
             } else {
                 let node = &self.wide.nodes[index as usize];
+                #[cfg(target_arch = "x86_64")]
+                let (mut mask, t_near) = if AVX {
+                    // SAFETY: `AVX` is set only in functions compiled for (and entered on) AVX.
+                    unsafe { data.hit_children_avx(node, *t_max) }
+                } else {
+                    data.hit_children(node, *t_max)
+                };
+                #[cfg(not(target_arch = "x86_64"))]
                 let (mut mask, t_near) = data.hit_children(node, *t_max);
                 if mask != 0 {
                     let first = mask.trailing_zeros() as usize;
