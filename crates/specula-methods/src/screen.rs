@@ -91,25 +91,33 @@ impl PixelSurfaces {
         self.ids.resize(count, [0, 0]);
         self.position.resize(count, [0.0; 4]);
         self.hits.resize(count, None);
+        // Row by row, each column's and row's image-plane coordinate computed once (the same
+        // directions as `PixelRays::direction` bit for bit).
+        let columns: Vec<f32> = (0..width).map(|x| rays.column(x as f32 + 0.5)).collect();
+        let line = width as usize;
         self.hits
-            .par_iter_mut()
-            .zip(self.ids.par_iter_mut())
-            .zip(self.position.par_iter_mut())
+            .par_chunks_mut(line)
+            .zip(self.ids.par_chunks_mut(line))
+            .zip(self.position.par_chunks_mut(line))
             .enumerate()
-            .for_each(|(k, ((hit, id), position))| {
-                let (x, y) = (k as u32 % width, k as u32 / width);
-                let ray = Ray {
-                    origin: rays.eye,
-                    dir: rays.direction(x as f32 + 0.5, y as f32 + 0.5),
-                };
-                *hit = accel.intersect(&ray, f32::INFINITY);
-                (*id, *position) = match hit {
-                    Some(hit) => {
-                        let p = ray.origin + ray.dir * hit.t;
-                        ([hit.mesh + 1, hit.triangle], [p.x, p.y, p.z, 1.0])
-                    }
-                    None => ([0, 0], [0.0; 4]),
-                };
+            .for_each(|(y, ((hits, ids), positions))| {
+                let row = rays.row(y as f32 + 0.5);
+                for (((hit, id), position), &column) in
+                    hits.iter_mut().zip(ids).zip(positions).zip(&columns)
+                {
+                    let ray = Ray {
+                        origin: rays.eye,
+                        dir: rays.direction_from(column, row),
+                    };
+                    *hit = accel.intersect(&ray, f32::INFINITY);
+                    (*id, *position) = match hit {
+                        Some(hit) => {
+                            let p = ray.origin + ray.dir * hit.t;
+                            ([hit.mesh + 1, hit.triangle], [p.x, p.y, p.z, 1.0])
+                        }
+                        None => ([0, 0], [0.0; 4]),
+                    };
+                }
             });
     }
 

@@ -38,9 +38,28 @@ impl PixelRays {
     /// from the top-left corner.
     #[inline]
     pub fn direction(&self, x: f32, y: f32) -> Vec3 {
-        let ndc_x = (2.0 * x / self.width - 1.0) * self.tan_half * self.aspect;
-        let ndc_y = (1.0 - 2.0 * y / self.height) * self.tan_half;
-        (self.frame.forward + ndc_x * self.frame.right + ndc_y * self.frame.up).normalize()
+        self.direction_from(self.column(x), self.row(y))
+    }
+
+    /// The horizontal image-plane coordinate of image column `x` (pixels from the left), for
+    /// [`PixelRays::direction_from`]: a caller tracing many rays of one column or row computes
+    /// it once (the same directions bit for bit, two divisions fewer a ray).
+    #[inline]
+    pub fn column(&self, x: f32) -> f32 {
+        (2.0 * x / self.width - 1.0) * self.tan_half * self.aspect
+    }
+
+    /// The vertical image-plane coordinate of image row `y` (pixels from the top).
+    #[inline]
+    pub fn row(&self, y: f32) -> f32 {
+        (1.0 - 2.0 * y / self.height) * self.tan_half
+    }
+
+    /// Unit direction (world space) through image-plane point ([`PixelRays::column`],
+    /// [`PixelRays::row`]).
+    #[inline]
+    pub fn direction_from(&self, column: f32, row: f32) -> Vec3 {
+        (self.frame.forward + column * self.frame.right + row * self.frame.up).normalize()
     }
 }
 

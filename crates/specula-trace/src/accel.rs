@@ -1,6 +1,13 @@
 //! Ray queries against a scene's triangles: closest hit and any hit (shadows), over a [`Bvh`],
 //! with the watertight ray–triangle test of Woop, Benthin and Wald (JCGT 2013, "Watertight
 //! Ray/Triangle Intersection"): no ray slips through a shared edge or vertex.
+//!
+//! Queries walk the tree collapsed to 8-wide nodes ([`WideBvh`]), nearest child first, with
+//! Ize's robust slab test (one AVX pass over the eight boxes where the CPU has AVX, detected
+//! at run time; two SSE passes otherwise), and test a leaf's (up to four) triangles at once
+//! from a structure-of-arrays block (Embree's `Triangle4` layout). Each SIMD lane performs the
+//! scalar test's operations in its order, and the hit lanes are taken in leaf order against
+//! the nearest hit so far, so the hits are those of a scalar loop bit for bit.
 
 use std::mem::MaybeUninit;
 

@@ -625,6 +625,9 @@ pub fn render(
         max_depth,
     };
     let rays = scene.camera.pixel_rays(width, height);
+    // One ray through each pixel centre: each column's and row's image-plane coordinate is
+    // computed once (the same directions as `pixel_radiance`'s, bit for bit).
+    let columns: Vec<f32> = (0..width).map(|x| rays.column(x as f32 + 0.5)).collect();
     // Bands of rows, each written in place: the rays of a band are as coherent as a tile's
     // and nothing is gathered or copied afterwards.
     let band = (BAND_ROWS * width) as usize;
@@ -637,9 +640,22 @@ pub fn render(
         .enumerate()
         .for_each(|(k, pixels)| {
             let y0 = k as u32 * BAND_ROWS;
-            for (i, pixel) in pixels.iter_mut().enumerate() {
-                let (x, y) = (i as u32 % width, y0 + i as u32 / width);
-                *pixel = pixel_radiance(&tracer, &rays, x, y, spp);
+            for (dy, line) in pixels.chunks_mut(width as usize).enumerate() {
+                let y = y0 + dy as u32;
+                if spp <= 1 {
+                    let row = rays.row(y as f32 + 0.5);
+                    for (pixel, &column) in line.iter_mut().zip(&columns) {
+                        let ray = Ray {
+                            origin: rays.eye,
+                            dir: rays.direction_from(column, row),
+                        };
+                        *pixel = tracer.radiance(&ray, 0, None);
+                    }
+                } else {
+                    for (x, pixel) in line.iter_mut().enumerate() {
+                        *pixel = pixel_radiance(&tracer, &rays, x as u32, y, spp);
+                    }
+                }
             }
             progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
         });
