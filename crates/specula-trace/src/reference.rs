@@ -605,8 +605,8 @@ pub fn pixel_radiance(
     sum / samples.len() as f32
 }
 
-/// Renders the scene's camera view. `progress(done, total)` is called as tiles finish (from
-/// worker threads).
+/// Renders the scene's camera view. `progress(done, total)` is called as bands of rows finish
+/// (from worker threads).
 pub fn render(
     scene: &Scene,
     accel: &SceneAccel,
@@ -625,20 +625,36 @@ pub fn render(
         max_depth,
     };
     let rays = scene.camera.pixel_rays(width, height);
+    let mut image = Image::new(width, height);
+    trace_image(&tracer, &rays, spp, &mut image, progress);
+    image
+}
+
+/// Traces every pixel of `image` (its size is the view's) with `spp` samples through `rays`,
+/// in parallel bands of rows written in place, and returns the (closest-hit, shadow) rays
+/// traced. `progress(done, total)` is called as bands finish (from worker threads).
+pub fn trace_image(
+    tracer: &Tracer,
+    rays: &specula_scene::PixelRays,
+    spp: u32,
+    image: &mut Image,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> (u64, u64) {
+    let width = image.width;
     // One ray through each pixel centre: each column's and row's image-plane coordinate is
     // computed once (the same directions as `pixel_radiance`'s, bit for bit).
     let columns: Vec<f32> = (0..width).map(|x| rays.column(x as f32 + 0.5)).collect();
     // Bands of rows, each written in place: the rays of a band are as coherent as a tile's
     // and nothing is gathered or copied afterwards.
     let band = (BAND_ROWS * width) as usize;
-    let total = (height as usize).div_ceil(BAND_ROWS as usize);
+    let total = (image.height as usize).div_ceil(BAND_ROWS as usize);
     let done = AtomicUsize::new(0);
-    let mut image = Image::new(width, height);
     image
         .pixels
         .par_chunks_mut(band)
         .enumerate()
-        .for_each(|(k, pixels)| {
+        .map(|(k, pixels)| {
+            let before = rays_traced_on_this_thread();
             let y0 = k as u32 * BAND_ROWS;
             for (dy, line) in pixels.chunks_mut(width as usize).enumerate() {
                 let y = y0 + dy as u32;
@@ -653,13 +669,15 @@ pub fn render(
                     }
                 } else {
                     for (x, pixel) in line.iter_mut().enumerate() {
-                        *pixel = pixel_radiance(&tracer, &rays, x as u32, y, spp);
+                        *pixel = pixel_radiance(tracer, rays, x as u32, y, spp);
                     }
                 }
             }
+            let after = rays_traced_on_this_thread();
             progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
-        });
-    image
+            (after.0 - before.0, after.1 - before.1)
+        })
+        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
 }
 
 /// The closest hit of the ray through each pixel centre of a `width` × `height` image (row

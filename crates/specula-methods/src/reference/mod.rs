@@ -5,7 +5,9 @@
 //!
 //! Steps: for each pixel, `spp` rays (one through the centre, or stratified jittered samples)
 //! traced through the scene's shared BVH ([`LiveScene::accel`]), both branches at dielectrics,
-//! to `max_depth` bounces.
+//! to `max_depth` bounces. A whole image (no budget) is traced in parallel bands of rows
+//! written in place, each row's and column's image-plane coordinate computed once
+//! ([`specula_trace::reference::trace_image`]).
 //!
 //! Progressive mode (`budget_ms` > 0; the viewer's): each `render` call works for about
 //! `budget_ms` and returns what it has. The image is refined coarse to fine: first every 8th
@@ -30,7 +32,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 use specula_gpu::{StageTime, TimingSource};
 use specula_scene::Camera;
-use specula_trace::reference::{pixel_radiance, rays_traced_on_this_thread, Tracer};
+use specula_trace::reference::{pixel_radiance, rays_traced_on_this_thread, trace_image, Tracer};
 use specula_trace::Image;
 
 use crate::live_scene::LiveScene;
@@ -121,11 +123,11 @@ impl Default for Reference {
     }
 }
 
-/// Whether pixel (x, y) is traced at level `level`, in a run whose first level is `first`:
-/// on the level's grid and not on the previous level's (already traced).
-fn traced_at(x: u32, y: u32, level: usize, first: usize) -> bool {
+/// Whether pixel (x, y) is traced at progressive level `level`: on the level's grid and not on
+/// the previous level's (already traced).
+fn traced_at(x: u32, y: u32, level: usize) -> bool {
     let on = |s: u32| x.is_multiple_of(s) && y.is_multiple_of(s);
-    on(LEVELS[level]) && !(level > first && on(LEVELS[level - 1]))
+    on(LEVELS[level]) && !(level > 0 && on(LEVELS[level - 1]))
 }
 
 impl Technique for Reference {
@@ -171,50 +173,65 @@ impl Technique for Reference {
         height: u32,
     ) -> Result<Drawn, TechniqueError> {
         let start = Instant::now();
-        let key = ViewKey {
-            camera: camera.clone(),
-            width,
-            height,
-            spp: self.spp,
-            max_depth: self.max_depth,
-            scene: (live.id(), live.version()),
-        };
-        // Without a budget the coarse levels would only be overwritten: trace the finest alone.
-        let first_level = if self.budget_ms == 0 {
-            LEVELS.len() - 1
-        } else {
-            0
-        };
-        // Without a budget every call traces the whole image (a fresh render, as bench times).
-        let keep = self.budget_ms > 0 && self.progress.as_ref().is_some_and(|p| p.key == key);
-        if !keep {
-            self.progress = Some(Progress {
-                key,
-                image: Image::new(width, height),
-                level: first_level,
-                next_tile: 0,
-            });
-        }
         let (spp, budget_ms) = (self.spp, self.budget_ms);
-        let progress = self.progress.as_mut().expect("set above");
         let tracer = Tracer {
             scene: live.scene(),
             accel: live.accel(),
             max_depth: self.max_depth,
         };
+        let pixel_rays = camera.pixel_rays(width, height);
+        if budget_ms == 0 {
+            // The whole image at once (a fresh render, as bench times it): traced in place in
+            // bands of rows, nothing kept.
+            self.progress = None;
+            let mut image = Image::new(width, height);
+            let (rays_traced, shadow_rays) =
+                trace_image(&tracer, &pixel_rays, spp, &mut image, &|_, _| {});
+            return Ok(Drawn {
+                pixels: Pixels::Image(image),
+                stages: vec![StageTime {
+                    stage: "ray tracing".into(),
+                    milliseconds: start.elapsed().as_secs_f64() * 1e3,
+                }],
+                counters: vec![
+                    (
+                        "camera rays".into(),
+                        width as u64 * height as u64 * spp as u64,
+                    ),
+                    (COUNTER_RAYS_TRACED.into(), rays_traced),
+                    (COUNTER_SHADOW_RAYS.into(), shadow_rays),
+                    ("pixels per side of a block".into(), 1),
+                ],
+                timing: TimingSource::CpuWallClock,
+                warnings: Vec::new(),
+                converged: true,
+            });
+        }
+        let key = ViewKey {
+            camera: camera.clone(),
+            width,
+            height,
+            spp,
+            max_depth: self.max_depth,
+            scene: (live.id(), live.version()),
+        };
+        if self.progress.as_ref().is_none_or(|p| p.key != key) {
+            self.progress = Some(Progress {
+                key,
+                image: Image::new(width, height),
+                level: 0,
+                next_tile: 0,
+            });
+        }
+        let progress = self.progress.as_mut().expect("set above");
         let (tiles_x, tiles_y) = (width.div_ceil(TILE), height.div_ceil(TILE));
         let tiles = tiles_x * tiles_y;
         let batch = (rayon::current_num_threads() as u32 * 2).max(1);
-        let pixel_rays = camera.pixel_rays(width, height);
         let (mut camera_rays, mut rays_traced, mut shadow_rays) = (0u64, 0u64, 0u64);
         while progress.level < LEVELS.len() {
             let level = progress.level;
             let stride = LEVELS[level];
-            let end = if budget_ms == 0 {
-                tiles
-            } else {
-                (progress.next_tile + batch).min(tiles)
-            };
+            let end = (progress.next_tile + batch).min(tiles);
             let tiles_traced: Vec<(Vec<TracedPixel>, (u64, u64))> = (progress.next_tile..end)
                 .into_par_iter()
                 .map(|tile| {
@@ -223,7 +240,7 @@ impl Technique for Reference {
                     let pixels: Vec<TracedPixel> = (y0..(y0 + TILE).min(height))
                         .flat_map(|y| {
                             (x0..(x0 + TILE).min(width))
-                                .filter(move |&x| traced_at(x, y, level, first_level))
+                                .filter(move |&x| traced_at(x, y, level))
                                 .map(move |x| (x, y))
                         })
                         .map(|(x, y)| (x, y, pixel_radiance(&tracer, &pixel_rays, x, y, spp)))
@@ -251,7 +268,7 @@ impl Technique for Reference {
                 progress.level += 1;
                 progress.next_tile = 0;
             }
-            if budget_ms > 0 && start.elapsed().as_millis() as u32 >= budget_ms {
+            if start.elapsed().as_millis() as u32 >= budget_ms {
                 break;
             }
         }
