@@ -1,8 +1,9 @@
 //! An 8-wide BVH collapsed from the binary [`Bvh`], for CPU traversal: each node stores its
 //! eight children's boxes in structure-of-arrays form, two groups of four, so SIMD slab tests
 //! check them all (the layout of Wald et al. 2008, "Getting rid of packets", and of Embree's
-//! BVH8). Eight children halve the levels a ray descends against a 4-wide tree's two: what a
-//! ray spends traversing is mostly waiting for nodes to arrive from memory. The binary tree
+//! BVH8). A ray descends two thirds of the levels of a 4-wide tree (three binary levels a
+//! node against two), and what a ray spends traversing is mostly waiting for nodes to arrive
+//! from memory: on the dragon's primary rays 8-wide nodes traced 9.4 → 10.4 Mrays/s. The binary tree
 //! stays the canonical one (it is what a GPU gets); this one is derived from it.
 
 use glam::{Vec3A, Vec4};

@@ -16,7 +16,7 @@ fn boxes(triangles: &[[Vec3; 3]]) -> Vec<Aabb> {
         .collect()
 }
 
-/// The accelerator, with both of its trees checked: the binary one and the 4-wide one
+/// The accelerator, with both of its trees checked: the binary one and the 8-wide one
 /// collapsed from it (against the triangles in leaf order).
 fn accel(triangles: &[[Vec3; 3]]) -> SceneAccel {
     let ids = (0..triangles.len() as u32).map(|i| (0, i)).collect();
