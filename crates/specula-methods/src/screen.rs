@@ -7,7 +7,8 @@ use rayon::prelude::*;
 use specula_gpu::util::padded_row_bytes;
 use specula_gpu::{GpuContext, GpuError};
 use specula_scene::{Camera, PixelRays};
-use specula_trace::reference::{pixel_radiance, Tracer};
+use specula_trace::reference::{pixel_radiance, rays_traced_on_this_thread, Tracer};
+use specula_trace::Image;
 use specula_trace::{Hit, Ray, SceneAccel};
 
 /// How the camera maps world points to pixels (the raster pass's pinhole, top-left origin).
@@ -61,6 +62,16 @@ impl ScreenView {
     }
 }
 
+/// The side of the square tiles the CPU ID buffer is traced in (the reference's).
+const TILE: usize = 32;
+
+/// What [`PixelSurfaces::retrace_shading`] shades in the ID buffer's own pass: the pixels
+/// whose first surface (a mesh, or None: the background) `now` takes, with `tracer`.
+pub struct ShadeAtOnce<'a> {
+    pub tracer: &'a Tracer<'a>,
+    pub now: &'a (dyn Fn(Option<u32>) -> bool + Sync),
+}
+
 /// The G-buffer as the CPU sees it: per pixel (mesh + 1, triangle) and the world position.
 pub struct PixelSurfaces {
     pub ids: Vec<[u32; 2]>,
@@ -75,50 +86,131 @@ impl PixelSurfaces {
     /// reference's primary rays meet it (the same rays bit for bit: what a run without a GPU
     /// uses), the hits kept.
     pub fn trace(accel: &SceneAccel, camera: &Camera, width: u32, height: u32) -> PixelSurfaces {
-        let mut surfaces = PixelSurfaces {
-            ids: Vec::new(),
-            position: Vec::new(),
-            hits: Vec::new(),
-        };
+        let mut surfaces = PixelSurfaces::empty();
         surfaces.retrace(accel, camera, width, height);
         surfaces
     }
 
+    /// No pixels (to be traced into).
+    pub fn empty() -> PixelSurfaces {
+        PixelSurfaces {
+            ids: Vec::new(),
+            position: Vec::new(),
+            hits: Vec::new(),
+        }
+    }
+
     /// [`PixelSurfaces::trace`] into this buffer's memory (a steady frame allocates nothing).
     pub fn retrace(&mut self, accel: &SceneAccel, camera: &Camera, width: u32, height: u32) {
+        self.retrace_shading(accel, camera, width, height, None);
+    }
+
+    /// [`PixelSurfaces::retrace`], shading at once the pixels `shading` takes (by their first
+    /// surface), each from its hit as [`PixelSurfaces::radiance`] would: the same value, while
+    /// the hit is at hand, in the same pass. Returns the (closest-hit, shadow) rays the shading
+    /// traced (the primary rays of the pixels shaded included, as `radiance` counts them).
+    pub fn retrace_shading(
+        &mut self,
+        accel: &SceneAccel,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        shading: Option<(&ShadeAtOnce, &mut Image)>,
+    ) -> (u64, u64) {
         let rays = camera.pixel_rays(width, height);
         let count = (width * height) as usize;
         self.ids.resize(count, [0, 0]);
         self.position.resize(count, [0.0; 4]);
         self.hits.resize(count, None);
-        // Row by row, each column's and row's image-plane coordinate computed once (the same
-        // directions as `PixelRays::direction` bit for bit).
+        // Each column's and row's image-plane coordinate computed once (the same directions as
+        // `PixelRays::direction` bit for bit).
         let columns: Vec<f32> = (0..width).map(|x| rays.column(x as f32 + 0.5)).collect();
-        let line = width as usize;
+        // Without shading nothing is written to this image: its zeroed pages are never touched.
+        let mut unshaded;
+        let (shading, image) = match shading {
+            Some((shading, image)) => (Some(shading), image),
+            None => {
+                unshaded = Image::new(width, height);
+                (None, &mut unshaded)
+            }
+        };
+        // In the reference's 32 x 32 tiles (`in_tiles`): the shading's secondary rays together.
+        let (line, side) = (width as usize, TILE);
+        let band = side * line;
         self.hits
-            .par_chunks_mut(line)
-            .zip(self.ids.par_chunks_mut(line))
-            .zip(self.position.par_chunks_mut(line))
+            .par_chunks_mut(band)
+            .zip(self.ids.par_chunks_mut(band))
+            .zip(self.position.par_chunks_mut(band))
+            .zip(image.pixels.par_chunks_mut(band))
             .enumerate()
-            .for_each(|(y, ((hits, ids), positions))| {
-                let row = rays.row(y as f32 + 0.5);
-                for (((hit, id), position), &column) in
-                    hits.iter_mut().zip(ids).zip(positions).zip(&columns)
+            .map(|(band, (((hits, ids), positions), shaded))| {
+                // The band cut into its tiles' row segments.
+                type Segment<'s> = (
+                    &'s mut [Option<Hit>],
+                    &'s mut [[u32; 2]],
+                    &'s mut [[f32; 4]],
+                    &'s mut [Vec3],
+                );
+                let mut tiles: Vec<Vec<Segment>> =
+                    (0..line.div_ceil(side)).map(|_| Vec::new()).collect();
+                for (((h, i), p), c) in hits
+                    .chunks_mut(line)
+                    .zip(ids.chunks_mut(line))
+                    .zip(positions.chunks_mut(line))
+                    .zip(shaded.chunks_mut(line))
                 {
-                    let ray = Ray {
-                        origin: rays.eye,
-                        dir: rays.direction_from(column, row),
-                    };
-                    *hit = accel.intersect(&ray, f32::INFINITY);
-                    (*id, *position) = match hit {
-                        Some(hit) => {
-                            let p = ray.origin + ray.dir * hit.t;
-                            ([hit.mesh + 1, hit.triangle], [p.x, p.y, p.z, 1.0])
-                        }
-                        None => ([0, 0], [0.0; 4]),
-                    };
+                    for (tile, (((h, i), p), c)) in h
+                        .chunks_mut(side)
+                        .zip(i.chunks_mut(side))
+                        .zip(p.chunks_mut(side))
+                        .zip(c.chunks_mut(side))
+                        .enumerate()
+                    {
+                        tiles[tile].push((h, i, p, c));
+                    }
                 }
-            });
+                tiles
+                    .into_par_iter()
+                    .enumerate()
+                    .map(|(tile, segments)| {
+                        let before = rays_traced_on_this_thread();
+                        let x0 = tile * side;
+                        for (dy, (hits, ids, positions, shaded)) in segments.into_iter().enumerate()
+                        {
+                            let row = rays.row((band * side + dy) as f32 + 0.5);
+                            for ((((hit, id), position), pixel), &column) in hits
+                                .iter_mut()
+                                .zip(ids)
+                                .zip(positions)
+                                .zip(shaded)
+                                .zip(&columns[x0..])
+                            {
+                                let ray = Ray {
+                                    origin: rays.eye,
+                                    dir: rays.direction_from(column, row),
+                                };
+                                *hit = accel.intersect(&ray, f32::INFINITY);
+                                (*id, *position) = match hit {
+                                    Some(hit) => {
+                                        let p = ray.origin + ray.dir * hit.t;
+                                        ([hit.mesh + 1, hit.triangle], [p.x, p.y, p.z, 1.0])
+                                    }
+                                    None => ([0, 0], [0.0; 4]),
+                                };
+                                if let Some(shading) = shading {
+                                    if (shading.now)(hit.map(|hit| hit.mesh)) {
+                                        *pixel =
+                                            shading.tracer.radiance_of_primary(&ray, hit.as_ref());
+                                    }
+                                }
+                            }
+                        }
+                        let after = rays_traced_on_this_thread();
+                        (after.0 - before.0, after.1 - before.1)
+                    })
+                    .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
+            })
+            .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1))
     }
 
     /// The reference's radiance of pixel (`x`, `y`) of a `width`-pixel-wide view whose

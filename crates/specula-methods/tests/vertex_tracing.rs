@@ -350,7 +350,22 @@ fn tracing_every_reflector_per_pixel_gives_the_reference_image_bit_for_bit() {
     for scene in ["truck-cover", "door-mirror"] {
         let live = LiveScene::new(specula_scene::load(scene).unwrap());
         let camera = live.scene().camera.clone();
-        let (frame, pixels) = render(technique(&["tracing=pixels"]).as_mut(), &live, &camera);
+        let mut t = technique(&["tracing=pixels"]);
+        // The second frame shades its reflectors in the ID buffer's pass (the first frame's
+        // choice, guessed): the same image and rays.
+        let (first_frame, first) = render(t.as_mut(), &live, &camera);
+        let (frame, pixels) = render(t.as_mut(), &live, &camera);
+        assert!(bits(&first) == bits(&pixels), "{scene}: the frames differ");
+        for name in [
+            specula_methods::COUNTER_RAYS_TRACED,
+            specula_methods::COUNTER_SHADOW_RAYS,
+        ] {
+            assert_eq!(
+                counter(&first_frame, name),
+                counter(&frame, name),
+                "{scene}"
+            );
+        }
         assert_eq!(counter(&frame, "vertex rays"), 0, "{scene}");
         assert!(
             counter(&frame, "reflector pixels traced per pixel") > 1000,
@@ -567,5 +582,25 @@ fn progressive_steps_composed_on_the_raster_end_on_the_one_call_image() {
     assert!(
         differing as f64 <= 0.002 * one_call.len() as f64,
         "{differing} pixels differ"
+    );
+}
+
+/// A reflector the last frame traced per pixel is shaded in the next frame's ID buffer pass;
+/// chosen by its vertices after all, it is composed over: the image is a fresh technique's.
+#[test]
+fn a_wrong_guess_of_the_per_pixel_reflectors_changes_no_pixel() {
+    let live = LiveScene::new(specula_scene::load("truck-cover").unwrap());
+    let camera = live.scene().camera.clone();
+    let mut t = technique(&["tracing=pixels"]);
+    render(t.as_mut(), &live, &camera);
+    apply_parameters(t.as_mut(), &["tracing=vertices".to_string()]).unwrap();
+    let (guessed_frame, guessed) = render(t.as_mut(), &live, &camera);
+    let (fresh_frame, fresh) = render(technique(&[]).as_mut(), &live, &camera);
+    assert!(counter(&fresh_frame, "vertex rays") > 0);
+    assert!(bits(&guessed) == bits(&fresh), "the guessed frame differs");
+    // The guessed reflector's pixels were traced too, and counted.
+    assert!(
+        counter(&guessed_frame, specula_methods::COUNTER_RAYS_TRACED)
+            > counter(&fresh_frame, specula_methods::COUNTER_RAYS_TRACED)
     );
 }

@@ -192,7 +192,7 @@ use specula_trace::{Image, Ray};
 
 use crate::live_scene::LiveScene;
 use crate::raster::{self, RasterPass, RasterSpec};
-use crate::screen::{PixelSurfaces, ScreenView, SurfaceReadback};
+use crate::screen::{PixelSurfaces, ScreenView, ShadeAtOnce, SurfaceReadback};
 use crate::technique::{
     bad_value, Context, Drawn, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels,
     Technique, TechniqueError, COUNTER_RAYS_TRACED, COUNTER_SHADOW_RAYS,
@@ -453,6 +453,9 @@ pub struct VertexTracing {
     raster_composition: Option<RasterComposition>,
     /// The scene id it was built for, and the topology.
     topology: Option<(u64, Arc<Topology>)>,
+    /// The scene id and, per mesh, the reflectors the last CPU frame traced per pixel: the
+    /// next frame shades them in its ID buffer's pass (see `FrameSetup::traced_shading_the_rest`).
+    per_pixel_guess: Option<(u64, Vec<bool>)>,
     progress: Option<Progress>,
 }
 
@@ -487,6 +490,7 @@ impl Default for VertexTracing {
             gpu: None,
             raster_composition: None,
             topology: None,
+            per_pixel_guess: None,
             progress: None,
         }
     }
@@ -761,6 +765,56 @@ impl FrameSetup {
         )
     }
 
+    /// [`FrameSetup::traced`] with most of the rest of the scene: every pixel whose first
+    /// surface is not a reflector (or is the background), or is a reflector `guess_per_pixel`
+    /// marks (the last frame's choice: most likely this frame's), shaded in the ID buffer's own
+    /// pass from its fresh hit: one pass over the image instead of two, as the reference makes.
+    /// [`FrameSetup::trace_reflectors_per_pixel_but`] the guessed meshes then completes
+    /// [`FrameSetup::rest_of_scene`]'s image (the same pixels bit for bit: a pixel's shading
+    /// does not depend on when it is done; a guessed reflector chosen by its vertices after all
+    /// has its pixels composed over, its rays spent and counted). Returns the setup, the image
+    /// and the rays its shading traced.
+    #[allow(clippy::too_many_arguments)]
+    pub fn traced_shading_the_rest(
+        live: &LiveScene,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+        topology: Arc<Topology>,
+        settings: RefineSettings,
+        max_depth: u32,
+        recycled: Option<PixelSurfaces>,
+        guess_per_pixel: &[bool],
+    ) -> (FrameSetup, Image, (u64, u64)) {
+        let mut surfaces = recycled.unwrap_or_else(PixelSurfaces::empty);
+        let tracer = Tracer {
+            scene: live.scene(),
+            accel: live.accel(),
+            max_depth,
+        };
+        let now = |mesh: Option<u32>| {
+            mesh.is_none_or(|mesh| {
+                !topology.is_reflector(mesh) || guess_per_pixel.get(mesh as usize) == Some(&true)
+            })
+        };
+        let shading = ShadeAtOnce {
+            tracer: &tracer,
+            now: &now,
+        };
+        let mut image = Image::new(width, height);
+        let early = surfaces.retrace_shading(
+            live.accel(),
+            camera,
+            width,
+            height,
+            Some((&shading, &mut image)),
+        );
+        let setup = FrameSetup::new(
+            live, camera, width, height, surfaces, topology, settings, max_depth,
+        );
+        (setup, image, early)
+    }
+
     pub fn inputs<'a>(
         &'a self,
         live: &'a LiveScene,
@@ -858,14 +912,40 @@ impl FrameSetup {
         max_depth: u32,
         image: &mut Image,
     ) -> (u64, u64) {
-        if self.choices.iter().all(|choice| !choice.per_pixel) {
+        self.trace_reflectors_per_pixel_but(live, camera, max_depth, image, &[])
+    }
+
+    /// [`FrameSetup::trace_reflectors_per_pixel`], leaving out the meshes `shaded` marks (their
+    /// pixels shaded already).
+    fn trace_reflectors_per_pixel_but(
+        &self,
+        live: &LiveScene,
+        camera: &Camera,
+        max_depth: u32,
+        image: &mut Image,
+        shaded: &[bool],
+    ) -> (u64, u64) {
+        let take = |mesh: u32| {
+            self.topology.is_reflector(mesh)
+                && self.traced_one_by_one(mesh)
+                && !shaded.get(mesh as usize).copied().unwrap_or(false)
+        };
+        if !self.choices.iter().any(|choice| take(choice.mesh)) {
             return (0, 0);
         }
         self.trace_pixels(live, camera, max_depth, image, |mesh| {
-            mesh.is_some_and(|mesh| {
-                self.topology.is_reflector(mesh) && self.traced_one_by_one(mesh)
-            })
+            mesh.is_some_and(take)
         })
+    }
+
+    /// Per scene mesh: a reflector in sight traced per pixel in this frame (the next frame's
+    /// guess, [`FrameSetup::traced_shading_the_rest`]'s `guess_per_pixel`).
+    pub(crate) fn per_pixel_meshes(&self) -> Vec<bool> {
+        let mut per_pixel = vec![false; self.by_vertices.len()];
+        for choice in self.choices.iter().filter(|c| c.per_pixel) {
+            per_pixel[choice.mesh as usize] = true;
+        }
+        per_pixel
     }
 }
 
@@ -1271,11 +1351,21 @@ impl VertexTracing {
                     .take()
                     .map(|progress| progress.setup.surfaces)
                     .filter(|surfaces| !surfaces.hits.is_empty());
-                let setup = FrameSetup::traced(
-                    live, camera, width, height, topology, settings, max_depth, recycled,
+                // The scene's other surfaces (and the reflectors the last frame traced per
+                // pixel) are shaded in the ID buffer's pass: the first stage's time holds them;
+                // the second, the other reflectors traced per pixel.
+                let guess = match &self.per_pixel_guess {
+                    Some((scene, guess)) if *scene == live.id() => guess.clone(),
+                    _ => Vec::new(),
+                };
+                let (setup, mut rest, early) = FrameSetup::traced_shading_the_rest(
+                    live, camera, width, height, topology, settings, max_depth, recycled, &guess,
                 );
                 let visibility_ms = clock.elapsed().as_secs_f64() * 1e3;
-                let (rest, rays) = setup.rest_of_scene(live, camera, max_depth);
+                let late = setup
+                    .trace_reflectors_per_pixel_but(live, camera, max_depth, &mut rest, &guess);
+                self.per_pixel_guess = Some((live.id(), setup.per_pixel_meshes()));
+                let rays = (early.0 + late.0, early.1 + late.1);
                 (setup, rest, rays, visibility_ms)
             }
         };
@@ -1294,9 +1384,6 @@ impl VertexTracing {
     }
 }
 
-/// Composes the faces of `packages` changed since the last call on the raster
-/// ([`compose`]): per pixel (colour, 1) where a face drawn on the GPU showed. None, with a
-/// warning, where the faces exceed the device's largest buffer (the CPU composes them).
 /// The frame's ID buffer, for [`compose_on_raster`].
 struct RasterFrame<'a> {
     ids: &'a [[u32; 2]],
@@ -1306,6 +1393,9 @@ struct RasterFrame<'a> {
     ids_uploaded: &'a mut bool,
 }
 
+/// Composes the faces of `packages` changed since the last call on the raster
+/// ([`compose`]): per pixel (colour, 1) where a face drawn on the GPU showed. None, with a
+/// warning, where the faces exceed the device's largest buffer (the CPU composes them).
 fn compose_on_raster(
     gpu: &GpuContext,
     composer: &mut RasterComposition,
