@@ -106,7 +106,12 @@
 //! with a short border (the paper's future work: "spatial sectors"). With the CPU's ID buffer
 //! a filled pixel is shaded from the buffer's hit of its primary ray (the same ray: no second
 //! intersection), and a package's filled pixels are traced in parallel (a pane of a few large
-//! triangles is a few packages). A package's pixels do not
+//! triangles is a few packages). The CPU's ID buffer is traced in the reference's 32 × 32
+//! tiles, and the same pass shades, from each fresh hit, the pixels of the rest of the scene
+//! and of the reflectors the last frame traced per pixel (its choice is most often this
+//! frame's): one pass over the image, as the reference makes. A reflector so shaded but chosen
+//! by its vertices in this frame is composed over (its rays spent and counted, no pixel
+//! changed; `a_wrong_guess_of_the_per_pixel_reflectors_changes_no_pixel`). A package's pixels do not
 //! depend on how the frame was cut (`refine`'s doc says why; the test
 //! `the_image_does_not_depend_on_how_the_frame_is_cut_into_packages` holds it bit for bit), so
 //! the cut, the order, rayon's scheduling and MPI give the same image — with
@@ -797,9 +802,13 @@ impl FrameSetup {
                 !topology.is_reflector(mesh) || guess_per_pixel.get(mesh as usize) == Some(&true)
             })
         };
+        // Only reflector pixels' hits and positions are read again (vertex visibility, filling,
+        // the per-pixel choice's sample, reflectors traced per pixel).
+        let keep = |mesh: Option<u32>| mesh.is_some_and(|mesh| topology.is_reflector(mesh));
         let shading = ShadeAtOnce {
             tracer: &tracer,
             now: &now,
+            keep: &keep,
         };
         let mut image = Image::new(width, height);
         let early = surfaces.retrace_shading(
