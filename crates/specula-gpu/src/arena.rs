@@ -5,8 +5,14 @@
 //!
 //! Reserve before pushing: growing replaces the buffer, so offsets handed out earlier in the
 //! same pass would point into the old one. Passes already submitted keep the old buffer alive.
+//! A pass whose data is spent once it is submitted can give its room back
+//! ([`Arena::used`] before, [`Arena::rewind`] after): wgpu writes a buffer for the next
+//! submission only after the earlier ones have read it.
+//!
+//! A buffer never grows past the device's largest (`max_buffer_size`): a reservation that does
+//! not fit there is an error naming the arena and both sizes.
 
-use crate::GpuContext;
+use crate::{GpuContext, GpuError};
 
 pub struct Arena {
     label: &'static str,
@@ -40,14 +46,27 @@ impl Arena {
     }
 
     /// Makes room for `sizes` (each pushed at an aligned offset) after what is used; returns
-    /// whether the buffer was replaced.
-    pub fn reserve(&mut self, ctx: &GpuContext, sizes: impl IntoIterator<Item = u64>) -> bool {
+    /// whether the buffer was replaced, or an error where the room exceeds the device's largest
+    /// buffer.
+    pub fn reserve(
+        &mut self,
+        ctx: &GpuContext,
+        sizes: impl IntoIterator<Item = u64>,
+    ) -> Result<bool, GpuError> {
         let needed = self.used + sizes.into_iter().map(|s| self.aligned(s)).sum::<u64>();
         let capacity = self.buffer.as_ref().map_or(0, |b| b.size());
         if needed <= capacity {
-            return false;
+            return Ok(false);
         }
-        let size = needed.max(2 * capacity).max(4096);
+        let limit = ctx.device.limits().max_buffer_size;
+        if needed > limit {
+            return Err(GpuError::TooLarge {
+                what: self.label.to_string(),
+                bytes: needed,
+                limit,
+            });
+        }
+        let size = needed.max(2 * capacity).max(4096).min(limit);
         self.buffer = Some(ctx.create_buffer(&wgpu::BufferDescriptor {
             label: Some(self.label),
             size,
@@ -55,7 +74,23 @@ impl Arena {
             mapped_at_creation: false,
         }));
         self.generation += 1;
-        true
+        Ok(true)
+    }
+
+    /// The bytes pushed so far this frame: a mark to [`Arena::rewind`] to.
+    pub fn used(&self) -> u64 {
+        self.used
+    }
+
+    /// Gives back the room pushed after `mark` (from [`Arena::used`]), once the passes that
+    /// read it are submitted.
+    pub fn rewind(&mut self, mark: u64) {
+        assert!(
+            mark <= self.used,
+            "{}: rewind past what is used",
+            self.label
+        );
+        self.used = mark;
     }
 
     /// Writes `bytes` at the next aligned offset and returns that offset. Room must have been

@@ -16,6 +16,14 @@ pub enum GpuError {
     Validation { stage: String, message: String },
     #[error("GPU readback failed: {0}")]
     Readback(String),
+    #[error(
+        "{what} needs {bytes} bytes in one buffer, more than this device's largest ({limit} bytes)"
+    )]
+    TooLarge {
+        what: String,
+        bytes: u64,
+        limit: u64,
+    },
 }
 
 /// Where a technique's per-stage timings come from.

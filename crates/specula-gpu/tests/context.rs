@@ -101,3 +101,31 @@ fn errors_outside_scopes_come_back_from_wait_instead_of_panicking() {
     assert!(matches!(ctx.wait(), Err(GpuError::Validation { .. })));
     assert!(ctx.wait().is_ok(), "reported once");
 }
+
+/// An arena never asks the device for a buffer past its largest: such a reservation is an error
+/// naming the arena and both sizes, and the arena stays usable; room given back is reused.
+#[test]
+fn an_arena_refuses_room_past_the_device_s_largest_buffer() {
+    let Some(ctx) = test_context("arena limits") else {
+        return;
+    };
+    let limit = ctx.device.limits().max_buffer_size;
+    let mut arena = specula_gpu::arena::Arena::new("test vertices", wgpu::BufferUsages::VERTEX, 4);
+    match arena.reserve(&ctx, [limit + 4]) {
+        Err(error @ GpuError::TooLarge { .. }) => {
+            let message = error.to_string();
+            assert!(
+                message.contains("test vertices") && message.contains(&limit.to_string()),
+                "{message}"
+            );
+        }
+        other => panic!("expected TooLarge, got {other:?}"),
+    }
+    assert!(arena.reserve(&ctx, [1024]).unwrap());
+    let mark = arena.used();
+    arena.push(&ctx, &[0u8; 1024]);
+    arena.rewind(mark);
+    assert_eq!(arena.used(), mark);
+    // The room given back takes the next push without growing.
+    assert!(!arena.reserve(&ctx, [1024]).unwrap());
+}

@@ -819,3 +819,75 @@ fn the_paper_preset_is_exact_across_a_flat_mirror() {
     // mirror's rim); bound 0.002.
     assert!(at_centroids < 0.002, "at centroids {at_centroids}");
 }
+
+/// A glass sphere and a lens merged into one mesh in a room, finely tessellated, at depth 2:
+/// the frame renders within its budget, and no buffer it asks for exceeds the device's
+/// largest (a scene of this class once asked for 2.9 GB of 2nd-pass vertices).
+#[test]
+fn a_merged_glass_sphere_and_lens_render_within_the_frame_budget_and_the_device_limits() {
+    let Some(ctx) = specula_methods::test_context("pvrr frame budget") else {
+        return;
+    };
+    let toml = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../../scenes/suite/glass-merged.toml"),
+    )
+    .unwrap()
+    .replace("segments = 64, rings = 48", "segments = 128, rings = 96")
+    .replace("rings = 24, segments = 64", "rings = 48, segments = 128");
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("dense-glass-merged.toml");
+    std::fs::write(&path, toml).unwrap();
+    let scene = specula_scene::load(path.to_str().unwrap()).unwrap();
+    let mut pvrr = by_name("pvrr").unwrap();
+    specula_methods::apply_setting(pvrr.as_mut(), "depth=2").unwrap();
+    let still = pvrr.render_still(&ctx, &scene, 96, 72).unwrap();
+    assert!(still.image.pixels.iter().all(|p| p.is_finite()));
+    let frame = &still.frame;
+    let limit = ctx.gpu("test").unwrap().device.limits().max_buffer_size;
+    let largest = counter(frame, "largest 2nd-pass vertex buffer (bytes)");
+    let (patches, nested) = (
+        counter(frame, "patches"),
+        counter(frame, "patches in levels below the top"),
+    );
+    let (texels, nested_texels) = (
+        counter(frame, "reflection map texels"),
+        counter(frame, "map texels in levels below the top"),
+    );
+    eprintln!(
+        "merged glass at depth 2: {patches} patches ({nested} nested), {texels} texels ({nested_texels} nested), largest vertex buffer {largest} of {limit} bytes, {} maps left without a nested level",
+        counter(frame, "maps whose nested level the frame budget left out")
+    );
+    assert!(largest > 0 && largest <= limit);
+    assert!(patches <= 1024, "frame_patches");
+    assert!(nested <= 8 * (patches - nested), "nested_share");
+    assert!(
+        nested_texels <= 8 * (texels - nested_texels),
+        "nested_share"
+    );
+    assert!(texels <= 1 << 24, "frame_texels");
+}
+
+/// With no share for nested levels the frame is depth 1's, with a warning that says so.
+#[test]
+fn a_frame_budget_without_room_for_nested_levels_draws_depth_one() {
+    let Some(ctx) = specula_methods::test_context("pvrr frame budget") else {
+        return;
+    };
+    let scene = two_mirror_scene();
+    let none = pvrr_frame(&ctx, &scene, &[("depth", "2"), ("nested_share", "0")]);
+    let shallow = pvrr_frame(&ctx, &scene, &[("depth", "1")]);
+    assert_eq!(counter(&none.frame, "patches in levels below the top"), 0);
+    assert!(
+        counter(
+            &none.frame,
+            "maps whose nested level the frame budget left out"
+        ) > 0
+    );
+    assert!(none
+        .frame
+        .warnings
+        .iter()
+        .any(|w| w.contains("frame budget")));
+    assert!(none.image.pixels == shallow.image.pixels);
+}

@@ -231,6 +231,36 @@ pub const PARAMS: &[ParamSpec] = &[
         invalidates: Invalidates::Uniform,
     },
     ParamSpec {
+        name: "nested_share",
+        kind: ParamKind::Number {
+            min: 0.0,
+            max: 1000.0,
+        },
+        default: "8",
+        doc: "the levels below the top may draw up to this many times the top level's 1st passes and map texels, and trace as many times its per-vertex rays (0: none)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "frame_patches",
+        kind: ParamKind::Integer {
+            min: 1,
+            max: 1 << 20,
+        },
+        default: "1024",
+        doc: "the most 1st passes a frame draws, all levels together (nested levels are left out first)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
+        name: "frame_texels",
+        kind: ParamKind::Integer {
+            min: 1,
+            max: 1 << 32,
+        },
+        default: "16777216",
+        doc: "the most reflection-map texels a frame draws, all levels together (nested levels are left out first)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
         name: "ior",
         kind: ParamKind::Text {
             expected: "`material`, one index of refraction or three (red,green,blue), each above 1 and at most 4",
@@ -420,6 +450,11 @@ struct Tally {
     rays: u64,
     patches: u64,
     map_texels: u64,
+    /// Of those, in levels below the top.
+    nested_patches: u64,
+    nested_texels: u64,
+    /// Outer patches whose nested level the frame budget left out.
+    budget_cuts: u64,
     unresolved: u64,
     cache_hits: u64,
     principal_up: u64,
@@ -475,6 +510,9 @@ pub struct Pvrr {
     pub max_fov_deg: f32,
     pub max_patches: usize,
     pub depth: u32,
+    pub nested_share: f32,
+    pub frame_patches: u64,
+    pub frame_texels: u64,
     pub trace_zooming: bool,
     pub surface_reflection: bool,
     pub internal_reflection: bool,
@@ -495,6 +533,9 @@ impl Default for Pvrr {
             max_fov_deg: 90.0,
             max_patches: 256,
             depth: 2,
+            nested_share: 8.0,
+            frame_patches: 1024,
+            frame_texels: 1 << 24,
             trace_zooming: true,
             surface_reflection: true,
             internal_reflection: true,
@@ -626,6 +667,99 @@ impl CachedReflector {
 struct LevelPlan {
     reflectors: Vec<ReflectorDraw>,
     balls: Vec<Ball>,
+}
+
+impl LevelPlan {
+    /// Its 1st passes.
+    fn patches(&self) -> u64 {
+        self.reflectors.iter().map(|r| r.patches.len() as u64).sum()
+    }
+
+    /// Its maps' texels.
+    fn texels(&self) -> u64 {
+        self.reflectors
+            .iter()
+            .flat_map(|r| &r.patches)
+            .map(|patch| (patch.camera.width * patch.camera.height) as u64)
+            .sum()
+    }
+
+    /// The bytes its 2nd pass writes into the vertex arena.
+    fn vertex_bytes(&self) -> u64 {
+        self.reflectors
+            .iter()
+            .flat_map(|r| &r.patches)
+            .flat_map(|patch| &patch.channels)
+            .map(|v| std::mem::size_of_val(v.as_slice()).next_multiple_of(4) as u64)
+            .sum()
+    }
+}
+
+/// A level's plan and, per reflector and patch, the plan of the level that patch's map shows
+/// (None: other reflectors appear there as the scene raster draws them).
+struct PlanTree {
+    level: LevelPlan,
+    inner: Vec<Vec<Option<PlanTree>>>,
+}
+
+impl PlanTree {
+    /// The most vertex-arena bytes in use at once while it is drawn: a level's 2nd pass comes
+    /// after its maps, whose nested passes give their room back once submitted.
+    fn peak_vertex_bytes(&self) -> u64 {
+        let nested = self
+            .inner
+            .iter()
+            .flatten()
+            .flatten()
+            .map(PlanTree::peak_vertex_bytes)
+            .max()
+            .unwrap_or(0);
+        nested.max(self.level.vertex_bytes())
+    }
+}
+
+/// What the levels below the top may still spend in one frame: 1st passes, map texels and
+/// per-vertex rays, across all reflectors and levels. Planned in full, and checked, before
+/// any map is drawn or buffer written.
+#[derive(Clone, Copy, Debug)]
+struct FrameBudget {
+    patches: u64,
+    texels: u64,
+    rays: u64,
+}
+
+impl FrameBudget {
+    /// The nested levels' budget for a frame whose top level is `top` (its per-vertex rays
+    /// `top_rays`): `nested_share` times the top level's 1st passes, texels and rays, and in
+    /// all no more than `frame_patches` 1st passes and `frame_texels` texels.
+    fn after_top(top: &LevelPlan, top_rays: u64, limits: &FrameLimits) -> FrameBudget {
+        let share = |top: u64, frame: u64, total_left: u64| {
+            ((top as f64 * limits.nested_share as f64) as u64).min(frame.saturating_sub(total_left))
+        };
+        FrameBudget {
+            patches: share(top.patches(), limits.frame_patches, top.patches()),
+            texels: share(top.texels(), limits.frame_texels, top.texels()),
+            rays: (top_rays as f64 * limits.nested_share as f64) as u64,
+        }
+    }
+
+    fn covers(&self, patches: u64, texels: u64, rays: u64) -> bool {
+        patches <= self.patches && texels <= self.texels && rays <= self.rays
+    }
+
+    fn spend(&mut self, patches: u64, texels: u64, rays: u64) {
+        self.patches -= patches;
+        self.texels -= texels;
+        self.rays -= rays;
+    }
+}
+
+/// The frame's limits on nested levels ([`FrameBudget`]).
+#[derive(Clone, Copy, Debug)]
+struct FrameLimits {
+    nested_share: f32,
+    frame_patches: u64,
+    frame_texels: u64,
 }
 
 /// The settings steps 1–3 and 5 need.
@@ -1188,61 +1322,130 @@ fn scene_extent(scene: &Scene) -> (Vec<Vec3>, f32) {
     (corners, (bounds.radius() * 4.0).max(1.0))
 }
 
-/// Step 4: the reflection map of every patch in `plan`; below `depth` 2 the scene raster
-/// without the patch's reflector, otherwise that raster with the other reflectors drawn by
-/// pvrr from the patch's virtual viewpoint (§4.4).
+/// The levels below `level` (planned with `settings`), `depth` levels deep,
+/// within `budget`: each outer patch in turn, largest map first, gets a level of its own if
+/// what is left covers it (its per-vertex rays estimated before they are traced), else none
+/// (and `tally` counts the cut). Nested levels share one `max_patches` per reflector across the outer level's patches
+/// (three mirrors seeing each other took 143,053 patches, 264 s at 96 × 72, without it).
 #[allow(clippy::too_many_arguments)]
-fn render_maps(
-    ctx: &GpuContext,
+fn plan_tree(
     p: &Shared,
     settings: &PlanSettings,
     scene: &Scene,
-    plan: &LevelPlan,
+    level: LevelPlan,
     depth: u32,
-    markers: Option<(&wgpu::Buffer, u64, u32)>,
+    budget: &mut FrameBudget,
     tally: &mut Tally,
-) -> Result<Vec<Vec<GBuffer>>, GpuError> {
-    // The level below shares one `max_patches` budget per reflector across all this level's
-    // patches: otherwise every patch here plans up to `max_patches` per inner reflector, and
-    // three mirrors that see each other took 143,053 patches (264 s at 96 x 72) at depth 2.
-    let patches_here = plan
-        .reflectors
-        .iter()
-        .map(|r| r.patches.len())
-        .sum::<usize>();
+) -> PlanTree {
+    if depth <= 1 {
+        return PlanTree {
+            level,
+            inner: Vec::new(),
+        };
+    }
+    let outer_patches = level.patches().max(1);
     let inner_settings = PlanSettings {
         limits: PatchLimits {
-            max_patches: (settings.limits.max_patches / patches_here.max(1)).max(1),
+            max_patches: (settings.limits.max_patches / outer_patches as usize).max(1),
             ..settings.limits
         },
         ..*settings
     };
-    plan.reflectors
+    // The largest maps first: where the budget runs out, the reflections seen in the largest
+    // parts of the picture are kept.
+    let mut order: Vec<(usize, usize, u64)> =
+        level
+            .reflectors
+            .iter()
+            .enumerate()
+            .flat_map(|(r, reflector)| {
+                reflector.patches.iter().enumerate().map(move |(i, patch)| {
+                    (r, i, (patch.camera.width * patch.camera.height) as u64)
+                })
+            })
+            .collect();
+    order.sort_by_key(|&(r, i, texels)| (std::cmp::Reverse(texels), r, i));
+    let mut inner: Vec<Vec<Option<PlanTree>>> = level
+        .reflectors
         .iter()
-        .map(|reflector| {
+        .map(|reflector| reflector.patches.iter().map(|_| None).collect())
+        .collect();
+    for (r, i, _) in order {
+        let (reflector, patch) = (&level.reflectors[r], &level.reflectors[r].patches[i]);
+        let eye = Vec3::from_array(patch.camera.eye_world);
+        let hidden = Some(reflector.mesh);
+        // The rays a level from here would trace: every other reflector's vertices, once per
+        // path (a lower bound: lenses trace a path per colour).
+        let rays: u64 = p
+            .reflectors
+            .iter()
+            .filter(|other| Some(other.mesh) != hidden && !other.additive)
+            .map(|other| scene.meshes[other.mesh].positions.len() as u64)
+            .sum();
+        if !budget.covers(1, (MIN_MAP_TEXELS * MIN_MAP_TEXELS) as u64, rays) {
+            tally.budget_cuts += 1;
+            continue;
+        }
+        // What the outer map shows of a reflector needs no finer map than the outer one.
+        let here = PlanSettings {
+            resolution: (patch.camera.height as u32).clamp(MIN_MAP_TEXELS, settings.resolution),
+            ..inner_settings
+        };
+        let rays_before = tally.rays;
+        let planned = plan_level(p, &here, scene, eye, hidden, None, tally, false);
+        let rays = tally.rays - rays_before;
+        if !budget.covers(planned.patches(), planned.texels(), rays) {
+            // Planned, not drawn: its rays were traced, its passes are not made.
+            tally.patches -= planned.patches();
+            tally.map_texels -= planned.texels();
+            tally.budget_cuts += 1;
+            continue;
+        }
+        budget.spend(planned.patches(), planned.texels(), rays);
+        tally.nested_patches += planned.patches();
+        tally.nested_texels += planned.texels();
+        inner[r][i] = Some(plan_tree(
+            p,
+            &here,
+            scene,
+            planned,
+            depth - 1,
+            budget,
+            tally,
+        ));
+    }
+    PlanTree { level, inner }
+}
+
+/// Step 4: the reflection map of every patch of `tree`'s level: the scene raster without the
+/// patch's reflector, with the other reflectors drawn over it by pvrr from the patch's virtual
+/// viewpoint where the tree plans a level there (§4.4).
+fn render_maps(
+    ctx: &GpuContext,
+    p: &Shared,
+    tree: &PlanTree,
+    markers: Option<(&wgpu::Buffer, u64, u32)>,
+) -> Result<Vec<Vec<GBuffer>>, GpuError> {
+    tree.level
+        .reflectors
+        .iter()
+        .enumerate()
+        .map(|(r, reflector)| {
             reflector
                 .patches
                 .iter()
-                .map(|patch| {
+                .enumerate()
+                .map(|(i, patch)| {
                     let hidden = Some(reflector.mesh);
                     let g =
                         p.raster
                             .render_with(ctx, p.gpu_scene, &patch.camera, hidden, markers)?;
-                    if depth > 1 {
-                        let eye = Vec3::from_array(patch.camera.eye_world);
-                        let inner =
-                            plan_level(p, &inner_settings, scene, eye, hidden, None, tally, false);
-                        let maps = render_maps(
-                            ctx,
-                            p,
-                            &inner_settings,
-                            scene,
-                            &inner,
-                            depth - 1,
-                            markers,
-                            tally,
-                        )?;
-                        second_pass(ctx, p, &patch.camera, &g, &inner, &maps)?;
+                    if let Some(inner) = tree.inner.get(r).and_then(|patches| patches[i].as_ref()) {
+                        let maps = render_maps(ctx, p, inner, markers)?;
+                        // The nested 2nd pass's vertices are spent once it is submitted.
+                        let mark = p.arenas.borrow().vertices.used();
+                        second_pass(ctx, p, &patch.camera, &g, &inner.level, &maps)?;
+                        p.arenas.borrow_mut().vertices.rewind(mark);
                         maps.iter().flatten().for_each(|m| p.raster.release(m));
                     }
                     Ok(g)
@@ -1264,7 +1467,7 @@ fn second_pass(
     if plan.reflectors.is_empty() {
         return Ok(());
     }
-    ctx.validated("pvrr 2nd pass", || {
+    ctx.validated("pvrr 2nd pass", || -> Result<(), GpuError> {
         let mut arenas = p.arenas.borrow_mut();
         let arenas = &mut *arenas;
         // Room first (see Arena): one camera, one material per reflector, the vertices.
@@ -1280,8 +1483,8 @@ fn second_pass(
                 .iter()
                 .map(|_| size_of::<GpuMirrorMaterial>() as u64),
         );
-        arenas.vertices.reserve(ctx, vertex_sizes);
-        if arenas.uniforms.reserve(ctx, uniform_sizes) {
+        arenas.vertices.reserve(ctx, vertex_sizes)?;
+        if arenas.uniforms.reserve(ctx, uniform_sizes)? {
             arenas.bind_groups.clear();
         }
         let camera_offset = arenas.uniforms.push(ctx, bytemuck::bytes_of(camera)) as u32;
@@ -1369,7 +1572,8 @@ fn second_pass(
             }
         }
         ctx.queue.submit([encoder.finish()]);
-    })
+        Ok(())
+    })?
 }
 
 impl Technique for Pvrr {
@@ -1384,6 +1588,9 @@ impl Technique for Pvrr {
             "max_fov" => self.max_fov_deg.to_string(),
             "max_patches" => self.max_patches.to_string(),
             "depth" => self.depth.to_string(),
+            "nested_share" => self.nested_share.to_string(),
+            "frame_patches" => self.frame_patches.to_string(),
+            "frame_texels" => self.frame_texels.to_string(),
             "trace_zooming" => self.trace_zooming.to_string(),
             "surface_reflection" => self.surface_reflection.to_string(),
             "internal_reflection" => self.internal_reflection.to_string(),
@@ -1408,6 +1615,9 @@ impl Technique for Pvrr {
             "max_fov" => self.max_fov_deg = value.number() as f32,
             "max_patches" => self.max_patches = value.integer() as usize,
             "depth" => self.depth = value.integer() as u32,
+            "nested_share" => self.nested_share = value.number() as f32,
+            "frame_patches" => self.frame_patches = value.integer() as u64,
+            "frame_texels" => self.frame_texels = value.integer() as u64,
             "trace_zooming" => self.trace_zooming = value.flag(),
             "surface_reflection" => self.surface_reflection = value.flag(),
             "internal_reflection" => self.internal_reflection = value.flag(),
@@ -1461,11 +1671,16 @@ impl Technique for Pvrr {
         }
         self.timer.start(gpu);
         let camera_uniform = raster::camera_uniform(camera, &scene.bounds(), width, height);
+        // The top level fits the frame budget by itself: each reflector's patches and map
+        // (at most 4 times as wide as high) within its share of it.
+        let reflectors = prepared.reflectors.len().max(1) as u64;
+        let top_patches = (self.frame_patches / reflectors).max(1) as usize;
+        let top_resolution = ((self.frame_texels / reflectors / 4) as f64).sqrt() as u32;
         let settings = PlanSettings {
-            resolution: self.resolution,
+            resolution: self.resolution.min(top_resolution.max(MIN_MAP_TEXELS)),
             limits: PatchLimits {
                 max_fov_deg: self.max_fov_deg,
-                max_patches: self.max_patches,
+                max_patches: self.max_patches.min(top_patches),
             },
             markers: self.markers.then_some(self.marker_size),
             trace_zooming: self.trace_zooming,
@@ -1481,18 +1696,62 @@ impl Technique for Pvrr {
         };
         let mut tally = Tally::default();
         let cache = self.cached.then_some((&mut self.cache, &eye_frame));
-        let plan = plan_level(
+        let top = plan_level(
             &p, &settings, scene, camera.eye, None, cache, &mut tally, true,
         );
+        let limits = FrameLimits {
+            nested_share: self.nested_share,
+            frame_patches: self.frame_patches,
+            frame_texels: self.frame_texels,
+        };
+        let mut budget = FrameBudget::after_top(&top, tally.rays, &limits);
+        let tree = plan_tree(
+            &p,
+            &settings,
+            scene,
+            top,
+            self.depth,
+            &mut budget,
+            &mut tally,
+        );
+        if tally.budget_cuts > 0 {
+            tally.warnings.push(format!(
+                "pvrr: the frame budget (nested_share = {}, frame_patches = {}, frame_texels = {}) left out the reflections seen in reflectors of {} map(s): other reflectors show there as the scene raster draws them",
+                self.nested_share, self.frame_patches, self.frame_texels, tally.budget_cuts
+            ));
+        }
         self.timer.lap(gpu, "per-vertex rays")?;
-        let markers = self.markers.then(|| {
-            let vertices = marker_vertices(p.gpu_scene.marker_mesh(0), &plan.balls);
-            let mut arenas = p.arenas.borrow_mut();
-            let bytes: &[u8] = bytemuck::cast_slice(&vertices);
-            arenas.vertices.reserve(gpu, [bytes.len() as u64]);
-            let offset = arenas.vertices.push(gpu, bytes);
-            (offset, vertices.len() as u32)
-        });
+        let markers = self
+            .markers
+            .then(|| marker_vertices(p.gpu_scene.marker_mesh(0), &tree.level.balls));
+        // Every buffer the frame writes is sized from the plan and checked before any is.
+        let marker_bytes = markers
+            .as_ref()
+            .map_or(0, |m| std::mem::size_of_val(m.as_slice()) as u64);
+        let peak = tree.peak_vertex_bytes() + marker_bytes;
+        let limit = gpu.device.limits().max_buffer_size;
+        if peak > limit {
+            return Err(GpuError::TooLarge {
+                what: format!(
+                    "pvrr's 2nd-pass vertices for this view ({} patches, {} reflectors)",
+                    tally.patches,
+                    tree.level.reflectors.len()
+                ),
+                bytes: peak,
+                limit,
+            }
+            .into());
+        }
+        let markers = match markers {
+            Some(vertices) => {
+                let mut arenas = p.arenas.borrow_mut();
+                let bytes: &[u8] = bytemuck::cast_slice(&vertices);
+                arenas.vertices.reserve(gpu, [bytes.len() as u64])?;
+                let offset = arenas.vertices.push(gpu, bytes);
+                Some((offset, vertices.len() as u32))
+            }
+            None => None,
+        };
         // Marker vertices sit at `offset` in the vertex arena; the raster pass draws them from a
         // buffer of their own, so the arena's buffer is passed with a slice there.
         let arena_buffer = markers.map(|_| p.arenas.borrow().vertices.buffer().clone());
@@ -1500,29 +1759,20 @@ impl Technique for Pvrr {
             .as_ref()
             .zip(markers)
             .map(|(buffer, (offset, count))| (buffer, offset, count));
-        let maps = render_maps(
-            gpu,
-            &p,
-            &settings,
-            scene,
-            &plan,
-            self.depth,
-            marker_slice,
-            &mut tally,
-        )?;
+        let maps = render_maps(gpu, &p, &tree, marker_slice)?;
         self.timer.lap(gpu, "reflection maps (1st pass)")?;
         let g = p
             .raster
             .render_with(gpu, p.gpu_scene, &camera_uniform, None, marker_slice)?;
         self.timer.lap(gpu, "g-buffer")?;
-        second_pass(gpu, &p, &camera_uniform, &g, &plan, &maps)?;
+        second_pass(gpu, &p, &camera_uniform, &g, &tree.level, &maps)?;
         self.timer.lap(gpu, "mirror (2nd pass)")?;
         let (stages, timing) = self.timer.finish(gpu)?;
         Ok(Drawn {
             pixels: Pixels::Texture(g.color.clone()),
             stages,
             counters: vec![
-                ("mirrors".into(), plan.reflectors.len() as u64),
+                ("mirrors".into(), tree.level.reflectors.len() as u64),
                 ("per-vertex rays".into(), tally.rays),
                 ("patches".into(), tally.patches),
                 (
@@ -1530,6 +1780,19 @@ impl Technique for Pvrr {
                     tally.principal_up,
                 ),
                 ("reflection map texels".into(), tally.map_texels),
+                (
+                    "patches in levels below the top".into(),
+                    tally.nested_patches,
+                ),
+                (
+                    "map texels in levels below the top".into(),
+                    tally.nested_texels,
+                ),
+                (
+                    "maps whose nested level the frame budget left out".into(),
+                    tally.budget_cuts,
+                ),
+                ("largest 2nd-pass vertex buffer (bytes)".into(), peak),
                 ("unresolved vertices".into(), tally.unresolved),
                 ("reflectors from the cache".into(), tally.cache_hits),
             ],
