@@ -57,6 +57,19 @@
 //!   the surface reflection is (on the suite's glass sphere the two took pvrr's mean FLIP from
 //!   0.343 to 0.252). Inside another reflector's map (depth ≥ 2) a dielectric shows its
 //!   transmitted light only (paper: `internal_reflection=false`).
+//! - a bounded frame: the levels of a frame are planned in full before anything is drawn, within
+//!   a budget across all reflectors and levels — the top level within `frame_patches` 1st passes
+//!   and `frame_texels` map texels (each reflector its share: fewer patches, a coarser map),
+//!   the levels below within `nested_share` times the top level's passes and texels and a
+//!   quarter of that times its per-vertex rays, given to the outer patches largest map first,
+//!   each nested map no finer than its outer map. An outer patch the budget does not cover
+//!   shows the other reflectors as the scene raster draws them (counted, with a warning). The
+//!   2nd pass's vertices are sized from the plan and checked against the device's largest
+//!   buffer before any is written: a view that cannot fit is a clear error, not a device
+//!   validation error. The paper renders every level in full (§4.4), whatever it costs: three
+//!   mirrors seeing each other took 264 s at 96 × 72, and a glass sphere and lens merged into
+//!   one mesh asked for a 2.9 GB buffer (paper: `nested_share=1000`, `frame_patches=1048576`,
+//!   `frame_texels=4294967296`).
 //!
 //! Where the paper is silent, this implementation chooses (the `paper` preset keeps these):
 //! the vertices that shape a view are those the eye sees (the paper's lens rays start at its
@@ -126,7 +139,17 @@
 //!   background in the car's side windows in the door mirror): reflectors seen in reflectors,
 //!   levels deep (1: other reflectors appear in maps as the scene raster draws them). Each
 //!   level adds at most `max_patches` 1st passes per reflector it shows; inner reflections get
-//!   coarser patches as outer ones get finer.
+//!   coarser patches as outer ones get finer; the frame budget bounds them all (below).
+//! - `nested_share` (default 8): the levels below the top may draw this many times the top
+//!   level's 1st passes and map texels and trace a quarter of that times its per-vertex rays
+//!   (0: depth 1's frame). Higher shows reflections in reflectors in more of the picture; on
+//!   the scene suite at 160 × 120 a depth-2 frame took 0.88–1.19 times depth 1's with 8
+//!   (docs/benchmarks.md), where unbounded it took up to 24 times (the lit room).
+//! - `frame_patches` (default 2048), `frame_texels` (default 16,777,216): the most 1st passes
+//!   and map texels of a frame, all levels together; the top level's reflectors share them
+//!   first (each at most `frame_patches` / reflectors patches and a map of `frame_texels` /
+//!   (4 × reflectors) texels), the nested levels take what is left. They bound a frame's
+//!   passes and its maps' memory (60 bytes a texel).
 //! - `trace_zooming` (default true): the zooming region ray traced (above); costs a traced
 //!   path per unresolved vertex.
 //! - `surface_reflection`, `internal_reflection` (default true): a dielectric's reflections
@@ -237,7 +260,7 @@ pub const PARAMS: &[ParamSpec] = &[
             max: 1000.0,
         },
         default: "8",
-        doc: "the levels below the top may draw up to this many times the top level's 1st passes and map texels, and trace as many times its per-vertex rays (0: none)",
+        doc: "the levels below the top may draw up to this many times the top level's 1st passes and map texels, and trace a quarter of that times its per-vertex rays (0: none)",
         invalidates: Invalidates::Uniform,
     },
     ParamSpec {
@@ -246,7 +269,7 @@ pub const PARAMS: &[ParamSpec] = &[
             min: 1,
             max: 1 << 20,
         },
-        default: "1024",
+        default: "2048",
         doc: "the most 1st passes a frame draws, all levels together (nested levels are left out first)",
         invalidates: Invalidates::Uniform,
     },
@@ -309,6 +332,9 @@ pub const INFO: MethodInfo = MethodInfo {
             "trace_zooming=false",
             "surface_reflection=false",
             "internal_reflection=false",
+            "nested_share=1000",
+            "frame_patches=1048576",
+            "frame_texels=4294967296",
         ],
     }],
     create: || Box::new(Pvrr::default()),
@@ -534,7 +560,7 @@ impl Default for Pvrr {
             max_patches: 256,
             depth: 2,
             nested_share: 8.0,
-            frame_patches: 1024,
+            frame_patches: 2048,
             frame_texels: 1 << 24,
             trace_zooming: true,
             surface_reflection: true,
@@ -730,8 +756,10 @@ struct FrameBudget {
 
 impl FrameBudget {
     /// The nested levels' budget for a frame whose top level is `top` (its per-vertex rays
-    /// `top_rays`): `nested_share` times the top level's 1st passes, texels and rays, and in
-    /// all no more than `frame_patches` 1st passes and `frame_texels` texels.
+    /// `top_rays`): `nested_share` times the top level's 1st passes and texels, a quarter of
+    /// that times its per-vertex rays (traced on the CPU, they cost more than passes: at 8
+    /// times the glass scenes' rays a depth-2 frame took 4.4 times depth 1's), and in all no
+    /// more than `frame_patches` 1st passes and `frame_texels` texels.
     fn after_top(top: &LevelPlan, top_rays: u64, limits: &FrameLimits) -> FrameBudget {
         let share = |top: u64, frame: u64, total_left: u64| {
             ((top as f64 * limits.nested_share as f64) as u64).min(frame.saturating_sub(total_left))
@@ -739,7 +767,7 @@ impl FrameBudget {
         FrameBudget {
             patches: share(top.patches(), limits.frame_patches, top.patches()),
             texels: share(top.texels(), limits.frame_texels, top.texels()),
-            rays: (top_rays as f64 * limits.nested_share as f64) as u64,
+            rays: (top_rays as f64 * limits.nested_share as f64 / 4.0) as u64,
         }
     }
 
@@ -1395,10 +1423,17 @@ fn plan_tree(
         let planned = plan_level(p, &here, scene, eye, hidden, None, tally, false);
         let rays = tally.rays - rays_before;
         if !budget.covers(planned.patches(), planned.texels(), rays) {
-            // Planned, not drawn: its rays were traced, its passes are not made.
+            // Planned, not drawn: its rays were traced (and count), its passes are not made.
+            // What is left cannot be trusted to cover the next one either (the zooming
+            // region's traced vertices are known only once traced): the budget is spent.
             tally.patches -= planned.patches();
             tally.map_texels -= planned.texels();
             tally.budget_cuts += 1;
+            *budget = FrameBudget {
+                patches: 0,
+                texels: 0,
+                rays: 0,
+            };
             continue;
         }
         budget.spend(planned.patches(), planned.texels(), rays);
