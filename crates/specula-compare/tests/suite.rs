@@ -48,8 +48,9 @@ const PAPER_METHODS: [&str; 5] = [
 /// pixel of the scene to another: c3rc on the glass scenes, all of whose specular pixels are
 /// glass), measured 2026-12-01 on lavapipe (llvmpipe) with `cargo test -p specula-compare
 /// --test suite -- --nocapture`, which prints these rows, each cell's bound and a black image's
-/// figure (pvrr with depth=1: nested reflections take ~18 s a frame on the merged scenes here
-/// and measure the same or worse, see docs/benchmarks.md). No suite scene shows mirror and
+/// figure (pvrr with depth=1, as these figures were measured: before its frame budget nested
+/// reflections took ~18 s a frame on the merged scenes here; bounded, depth 2 takes 0.88–1.19×
+/// depth 1's time at the same or better FLIP, docs/benchmarks.md). No suite scene shows mirror and
 /// glass pixels both (the mirror in mirror-in-glass is seen only through the glass), so every
 /// figure a method keeps is what it was over the whole mask (the same as on 2026-11-30).
 #[rustfmt::skip]
