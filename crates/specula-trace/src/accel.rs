@@ -578,3 +578,86 @@ impl SceneAccel {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A few thousand triangles of a wavy sheet and rays through it from many sides.
+    fn sheet_and_rays() -> (SceneAccel, Vec<Ray>) {
+        let n = 40;
+        let height = |x: f32, z: f32| 0.2 * (3.0 * x).sin() * (2.0 * z).cos();
+        let point = |i: usize, j: usize| {
+            let (x, z) = (
+                i as f32 / n as f32 * 2.0 - 1.0,
+                j as f32 / n as f32 * 2.0 - 1.0,
+            );
+            Vec3::new(x, height(x, z), z)
+        };
+        let mut triangles = Vec::new();
+        for i in 0..n {
+            for j in 0..n {
+                let (a, b, c, d) = (
+                    point(i, j),
+                    point(i + 1, j),
+                    point(i, j + 1),
+                    point(i + 1, j + 1),
+                );
+                triangles.push([a, b, c]);
+                triangles.push([b, d, c]);
+            }
+        }
+        let ids = (0..triangles.len() as u32).map(|t| (0, t)).collect();
+        let accel = SceneAccel::from_triangles(triangles, ids);
+        let mut rays = Vec::new();
+        for k in 0..4000u32 {
+            // A low-discrepancy spread of origins around the sheet, aimed at points on it.
+            let u = (k as f32 * 0.618_034).fract();
+            let v = (k as f32 * 0.754_877_7).fract();
+            let w = (k as f32 * 0.569_840_3).fract();
+            let origin = Vec3::new(3.0 * u - 1.5, 2.0 * v - 1.0, 3.0 * w - 1.5) * 1.5;
+            let target = Vec3::new(2.0 * v - 1.0, 0.0, 2.0 * w - 1.0);
+            let dir = (target - origin).normalize();
+            rays.push(Ray { origin, dir });
+        }
+        (accel, rays)
+    }
+
+    /// The AVX traversal (where this CPU has AVX) and the SSE one find the same hits bit for
+    /// bit, closest and any: whichever a machine takes, its images are the same.
+    #[test]
+    fn the_avx_and_sse_traversals_agree_bit_for_bit() {
+        let (accel, rays) = sheet_and_rays();
+        let mut hits = 0;
+        for ray in &rays {
+            let data = RayData::new(ray);
+            let sse = accel.intersect_with::<false>(&data, f32::INFINITY);
+            hits += sse.is_some() as usize;
+            let sse_occluded = accel.occluded_with::<false>(&data, 10.0);
+            #[cfg(target_arch = "x86_64")]
+            if std::arch::is_x86_feature_detected!("avx") {
+                // SAFETY: the CPU supports AVX.
+                let avx = unsafe { accel.intersect_avx(&data, f32::INFINITY) };
+                let bits = |h: Option<Hit>| {
+                    h.map(|h| {
+                        (
+                            h.t.to_bits(),
+                            h.b1.to_bits(),
+                            h.b2.to_bits(),
+                            h.mesh,
+                            h.triangle,
+                        )
+                    })
+                };
+                assert_eq!(bits(sse), bits(avx), "{ray:?}");
+                // SAFETY: as above.
+                assert_eq!(sse_occluded, unsafe { accel.occluded_avx(&data, 10.0) });
+            }
+            assert_eq!(
+                sse.is_some(),
+                sse_occluded || sse.is_some_and(|h| h.t >= 10.0)
+            );
+        }
+        assert!(hits > 1000, "the rays must hit the sheet ({hits})");
+    }
+}
