@@ -21,6 +21,8 @@ pub struct Arena {
     alignment: u64,
     buffer: Option<wgpu::Buffer>,
     used: u64,
+    /// The most bytes in use at once since the frame began.
+    peak: u64,
     /// Bumped whenever the buffer is replaced: bind groups made for it must be made again.
     generation: u64,
 }
@@ -33,12 +35,14 @@ impl Arena {
             alignment: alignment.max(4),
             buffer: None,
             used: 0,
+            peak: 0,
             generation: 0,
         }
     }
 
     pub fn begin_frame(&mut self) {
         self.used = 0;
+        self.peak = 0;
     }
 
     fn aligned(&self, size: u64) -> u64 {
@@ -82,6 +86,11 @@ impl Arena {
         self.used
     }
 
+    /// The most bytes in use at once since [`Arena::begin_frame`] (what the frame needed).
+    pub fn peak(&self) -> u64 {
+        self.peak
+    }
+
     /// Gives back the room pushed after `mark` (from [`Arena::used`]), once the passes that
     /// read it are submitted.
     pub fn rewind(&mut self, mark: u64) {
@@ -107,6 +116,7 @@ impl Arena {
             ctx.queue.write_buffer(buffer, offset, bytes);
         }
         self.used = offset + self.aligned(bytes.len() as u64);
+        self.peak = self.peak.max(self.used);
         offset
     }
 

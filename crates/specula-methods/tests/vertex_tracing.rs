@@ -356,6 +356,13 @@ fn tracing_every_reflector_per_pixel_gives_the_reference_image_bit_for_bit() {
         let (first_frame, first) = render(t.as_mut(), &live, &camera);
         let (frame, pixels) = render(t.as_mut(), &live, &camera);
         assert!(bits(&first) == bits(&pixels), "{scene}: the frames differ");
+        assert_eq!(counter(&frame, "vertex rays"), 0, "{scene}");
+        assert!(
+            counter(&frame, "reflector pixels traced per pixel") > 1000,
+            "{scene}"
+        );
+        let (reference_counts, reference) = reference_frame(&live, &camera);
+        // The same rays in both frames, counted as the reference counts them.
         for name in [
             specula_methods::COUNTER_RAYS_TRACED,
             specula_methods::COUNTER_SHADOW_RAYS,
@@ -365,18 +372,6 @@ fn tracing_every_reflector_per_pixel_gives_the_reference_image_bit_for_bit() {
                 counter(&frame, name),
                 "{scene}"
             );
-        }
-        assert_eq!(counter(&frame, "vertex rays"), 0, "{scene}");
-        assert!(
-            counter(&frame, "reflector pixels traced per pixel") > 1000,
-            "{scene}"
-        );
-        let (reference_counts, reference) = reference_frame(&live, &camera);
-        // The same rays, counted alike.
-        for name in [
-            specula_methods::COUNTER_RAYS_TRACED,
-            specula_methods::COUNTER_SHADOW_RAYS,
-        ] {
             assert_eq!(
                 counter(&frame, name),
                 counter(&reference_counts, name),
@@ -499,15 +494,20 @@ fn composing_on_the_raster_gives_the_cpu_composition() {
     else {
         return;
     };
-    for (scene, extra) in [
-        ("truck-cover", &[][..]),
-        ("truck-cover", &["refine=false"][..]),
+    // The least share of the reflector pixels the raster must compose: half the share measured
+    // at this size (truck-cover 0.164, its preview 0.412, screen-linear unfilled 0.375: the
+    // rest show the dial through deferred textures or are filled; door-mirror 0.772;
+    // glass-dragon 0.025, nearly all filled).
+    for (scene, extra, least_share) in [
+        ("truck-cover", &[][..], 0.08),
+        ("truck-cover", &["refine=false"][..], 0.2),
         (
             "truck-cover",
             &["perspective_correct=false", "fill=false"][..],
+            0.18,
         ),
-        ("door-mirror", &[][..]),
-        ("glass-dragon", &[][..]),
+        ("door-mirror", &[][..], 0.38),
+        ("glass-dragon", &[][..], 0.012),
     ] {
         let scene_data = specula_scene::load(scene).unwrap();
         let still = |composition: &str| {
@@ -542,7 +542,7 @@ fn composing_on_the_raster_gives_the_cpu_composition() {
              {differing} differ by more than 1e-4 (worst {worst:.4})"
         );
         assert!(
-            on_raster as f64 >= 0.0 * reflector_pixels as f64,
+            on_raster as f64 >= least_share * reflector_pixels as f64,
             "{scene} {extra:?}: only {on_raster} of {reflector_pixels} pixels on the raster"
         );
         assert!(

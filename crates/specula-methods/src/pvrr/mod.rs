@@ -1801,6 +1801,7 @@ impl Technique for Pvrr {
             .render_with(gpu, p.gpu_scene, &camera_uniform, None, marker_slice)?;
         self.timer.lap(gpu, "g-buffer")?;
         second_pass(gpu, &p, &camera_uniform, &g, &tree.level, &maps)?;
+        let vertex_peak = p.arenas.borrow().vertices.peak();
         self.timer.lap(gpu, "mirror (2nd pass)")?;
         let (stages, timing) = self.timer.finish(gpu)?;
         Ok(Drawn {
@@ -1827,7 +1828,7 @@ impl Technique for Pvrr {
                     "maps whose nested level the frame budget left out".into(),
                     tally.budget_cuts,
                 ),
-                ("largest 2nd-pass vertex buffer (bytes)".into(), peak),
+                ("largest 2nd-pass vertex buffer (bytes)".into(), vertex_peak),
                 ("unresolved vertices".into(), tally.unresolved),
                 ("reflectors from the cache".into(), tally.cache_hits),
             ],

@@ -54,8 +54,6 @@ pub struct ComposeSettings {
 
 /// Per view size: the uploaded ID buffer, the composition target and their bind group.
 struct SizedTargets {
-    width: u32,
-    height: u32,
     ids: wgpu::Texture,
     target: wgpu::Texture,
     bind_group: wgpu::BindGroup,
@@ -153,7 +151,7 @@ impl RasterComposition {
         if self
             .sized
             .as_ref()
-            .is_none_or(|s| (s.width, s.height) != (width, height))
+            .is_none_or(|s| (s.ids.width(), s.ids.height()) != (width, height))
         {
             let ids = texture_2d(
                 gpu,
@@ -182,8 +180,6 @@ impl RasterComposition {
                 ],
             );
             self.sized = Some(SizedTargets {
-                width,
-                height,
                 ids,
                 target,
                 bind_group,

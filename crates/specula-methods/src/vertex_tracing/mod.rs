@@ -407,26 +407,26 @@ pub const INFO: MethodInfo = MethodInfo {
 /// Where the ID buffer comes from, and where the refined faces are composed: the CPU, the GPU,
 /// or (auto) the GPU where the run has one that is not a software rasterizer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum VisibilitySource {
+pub enum GpuChoice {
     Auto,
     Cpu,
     Gpu,
 }
 
-impl VisibilitySource {
+impl GpuChoice {
     fn word(self) -> &'static str {
         match self {
-            VisibilitySource::Auto => "auto",
-            VisibilitySource::Cpu => "cpu",
-            VisibilitySource::Gpu => "gpu",
+            GpuChoice::Auto => "auto",
+            GpuChoice::Cpu => "cpu",
+            GpuChoice::Gpu => "gpu",
         }
     }
 
-    fn parse(name: &str, value: &ParamValue) -> Result<VisibilitySource, TechniqueError> {
+    fn parse(name: &str, value: &ParamValue) -> Result<GpuChoice, TechniqueError> {
         match value.word() {
-            "auto" => Ok(VisibilitySource::Auto),
-            "cpu" => Ok(VisibilitySource::Cpu),
-            "gpu" => Ok(VisibilitySource::Gpu),
+            "auto" => Ok(GpuChoice::Auto),
+            "cpu" => Ok(GpuChoice::Cpu),
+            "gpu" => Ok(GpuChoice::Gpu),
             _ => Err(bad_value(INFO.name, name, value, "auto, cpu or gpu")),
         }
     }
@@ -434,13 +434,13 @@ impl VisibilitySource {
     /// The GPU this choice uses in a run whose context is `ctx`.
     fn gpu(self, ctx: &Context) -> Result<Option<&GpuContext>, TechniqueError> {
         match self {
-            VisibilitySource::Cpu => Ok(None),
+            GpuChoice::Cpu => Ok(None),
             // A software rasterizer draws slower than the CPU does the same work beside it: on
             // lavapipe the raster pass drew the ID buffer in 16 ms where tracing it took 8 (and
             // the traced buffer's hits shade the rest of the scene with no second primary ray),
             // and composition took 16.8 ms against the CPU's 6.6.
-            VisibilitySource::Auto => Ok(ctx.gpu.as_ref().filter(|gpu| !gpu.is_software())),
-            VisibilitySource::Gpu => ctx.gpu(INFO.name).map(Some),
+            GpuChoice::Auto => Ok(ctx.gpu.as_ref().filter(|gpu| !gpu.is_software())),
+            GpuChoice::Gpu => ctx.gpu(INFO.name).map(Some),
         }
     }
 }
@@ -449,8 +449,8 @@ pub struct VertexTracing {
     pub settings: RefineSettings,
     pub budget_ms: u32,
     pub package_triangles: usize,
-    pub visibility: VisibilitySource,
-    pub composition: VisibilitySource,
+    pub visibility: GpuChoice,
+    pub composition: GpuChoice,
     pub max_depth: u32,
     pub shadow_resolution: u32,
     pub show_faces: bool,
@@ -487,8 +487,8 @@ impl Default for VertexTracing {
             },
             budget_ms: 0,
             package_triangles: 0,
-            visibility: VisibilitySource::Auto,
-            composition: VisibilitySource::Auto,
+            visibility: GpuChoice::Auto,
+            composition: GpuChoice::Auto,
             max_depth: 8,
             shadow_resolution: 1024,
             show_faces: false,
@@ -758,13 +758,8 @@ impl FrameSetup {
         max_depth: u32,
         recycled: Option<PixelSurfaces>,
     ) -> FrameSetup {
-        let surfaces = match recycled {
-            Some(mut surfaces) => {
-                surfaces.retrace(live.accel(), camera, width, height);
-                surfaces
-            }
-            None => PixelSurfaces::trace(live.accel(), camera, width, height),
-        };
+        let mut surfaces = recycled.unwrap_or_else(PixelSurfaces::empty);
+        surfaces.retrace(live.accel(), camera, width, height);
         FrameSetup::new(
             live, camera, width, height, surfaces, topology, settings, max_depth,
         )
@@ -1047,8 +1042,8 @@ impl Technique for VertexTracing {
             "min_path_rays" => s.min_path_rays = value.number() as f32,
             "budget_ms" => self.budget_ms = value.integer() as u32,
             "package_triangles" => self.package_triangles = value.integer() as usize,
-            "visibility" => self.visibility = VisibilitySource::parse(name, value)?,
-            "composition" => self.composition = VisibilitySource::parse(name, value)?,
+            "visibility" => self.visibility = GpuChoice::parse(name, value)?,
+            "composition" => self.composition = GpuChoice::parse(name, value)?,
             "max_depth" => self.max_depth = value.integer() as u32,
             "shadow_resolution" => self.shadow_resolution = value.integer() as u32,
             "show_faces" => self.show_faces = value.flag(),
