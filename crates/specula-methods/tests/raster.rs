@@ -188,3 +188,106 @@ fn the_pool_keeps_one_frames_g_buffers_and_drops_other_sizes() {
     assert_eq!(frame(&[(32, 24)]), 0);
     assert_eq!(pass.pooled(), 1);
 }
+
+/// A camera at the origin looking down −z, 32 × 32, 60° wide, depth from 0.1 to `far`.
+fn looking_down_z(far: f32) -> specula_gpu::shaders::CameraUniform {
+    specula_gpu::shaders::CameraUniform::new(
+        glam::Vec3::ZERO,
+        glam::Vec3::X,
+        glam::Vec3::Y,
+        glam::Vec3::NEG_Z,
+        60.0,
+        32,
+        32,
+        0.1,
+        far,
+    )
+}
+
+/// Two planes facing the eye down −z: an unlit red one 1 away, a diffuse grey one 2 away, a
+/// light beside the eye.
+fn two_planes() -> LiveScene {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("two-planes.toml");
+    std::fs::write(
+        &path,
+        r#"
+name = "two planes"
+ambient = 0.1
+[camera]
+eye = [0.0, 0.0, 0.0]
+target = [0.0, 0.0, -1.0]
+[materials.red]
+type = "unlit"
+color = [1.0, 0.0, 0.0]
+[materials.grey]
+type = "diffuse"
+color = 0.8
+[[lights]]
+type = "point"
+position = [0.0, 0.3, 0.5]
+intensity = 2.0
+[[objects]]
+name = "near"
+material = "red"
+translate = [0.0, 0.0, -1.0]
+rotate_deg = [90, 0, 0]
+shape = { type = "plane", size = [0.4, 0.4] }
+[[objects]]
+name = "far"
+material = "grey"
+translate = [0.0, 0.0, -2.0]
+rotate_deg = [90, 0, 0]
+shape = { type = "plane", size = [4.0, 4.0] }
+"#,
+    )
+    .unwrap();
+    LiveScene::new(specula_scene::load(path.to_str().unwrap()).unwrap())
+}
+
+/// The reversed depth test of pvrr's zooming view: the farthest surface between the near and
+/// far planes is kept, lit on its side away from the camera; where none lies in that range
+/// the G-buffer keeps what it held.
+#[test]
+fn the_farthest_draw_keeps_the_farthest_surface_in_range_lit_from_behind() {
+    let Some(ctx) = specula_gpu::test_context("farthest surface") else {
+        return;
+    };
+    let live = two_planes();
+    let pass = RasterPass::new(&ctx, &live, RasterSpec::scene(64)).unwrap();
+    pass.begin_frame(&ctx, &live).unwrap();
+    let gpu = live.gpu(&ctx);
+    let centre = |g: &raster::GBuffer| g.read_color(&ctx).unwrap().get(16, 16);
+    let corner = |g: &raster::GBuffer| g.read_color(&ctx).unwrap().get(1, 1);
+    let nearest = pass.render(&ctx, gpu, &looking_down_z(3.0), None).unwrap();
+    let (red, lit_grey) = (centre(&nearest), corner(&nearest));
+    assert!(red.x > 0.99 && red.y < 0.01, "{red}");
+    assert!(lit_grey.x > 0.1, "{lit_grey}");
+    // Both planes in range: the far one, lit from behind (ambient only: 0.8 × 0.1).
+    let g = pass.render(&ctx, gpu, &looking_down_z(3.0), None).unwrap();
+    pass.draw_farthest_into(&ctx, gpu, &looking_down_z(3.0), &[], None, &g)
+        .unwrap();
+    let (far_centre, far_corner) = (centre(&g), corner(&g));
+    assert!(
+        (far_centre - glam::Vec3::splat(0.08)).abs().max_element() < 1e-3,
+        "{far_centre}"
+    );
+    assert!(
+        (far_corner - glam::Vec3::splat(0.08)).abs().max_element() < 1e-3,
+        "{far_corner}"
+    );
+    // The far plane before the grey one: the red one is the farthest in range.
+    let g = pass.render(&ctx, gpu, &looking_down_z(3.0), None).unwrap();
+    pass.draw_farthest_into(&ctx, gpu, &looking_down_z(1.5), &[], None, &g)
+        .unwrap();
+    assert_eq!(centre(&g), red);
+    assert_eq!(corner(&g), lit_grey, "nothing in range: kept");
+    // Nothing in range: everything kept.
+    let g = pass.render(&ctx, gpu, &looking_down_z(3.0), None).unwrap();
+    pass.draw_farthest_into(&ctx, gpu, &looking_down_z(0.5), &[], None, &g)
+        .unwrap();
+    assert_eq!(
+        g.read_color(&ctx).unwrap().pixels,
+        nearest.read_color(&ctx).unwrap().pixels
+    );
+}

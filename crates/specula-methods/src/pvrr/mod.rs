@@ -47,15 +47,32 @@
 //!   map's texels: on the suite's glass sphere at 320 × 240 the mean FLIP went from 0.242 to
 //!   0.029, on the lens from 0.154 to 0.100, on the concave mirror from 0.071 to 0.010
 //!   (paper: `fit_hits=false`);
-//! - the zooming region ray traced (§4.2): a vertex whose P lies behind its patch's viewpoint
-//!   (between a concave mirror and its rays' convergence, or between a magnifier and the point
-//!   its rays converge on) takes the radiance ray traced along its exit segment (up to 8
-//!   bounces, as the reference), blended across its triangles by the share of such corners.
-//!   The paper "simply ignore[s]" that region: such a vertex keeps the texture coordinate of
-//!   step 5, where its line through the viewpoint meets the map on the far side of the map's
-//!   centre, and shows what the map holds there (paper: `trace_zooming=false`). Either way
-//!   these vertices are counted (`unresolved vertices`), named in a warning, and striped
-//!   magenta with `markers=true`;
+//! - the zooming region drawn as §7 proposes (`zooming=view`). A P behind its patch's
+//!   viewpoint lies between a concave mirror and its rays' convergence (or between a magnifier
+//!   and the point its rays converge on), where no forward view shows it. A patch with at least
+//!   8 such hits, a quarter of its hits or more, on surfaces the raster draws, gets a zooming
+//!   view instead (no wider than `max_fov`): from its viewpoint back toward the mirror, its far
+//!   plane just before the mirror, keeping the farthest surface (the reversed depth test §7
+//!   names), lit on its side away from the viewpoint, so each texel holds what the line from
+//!   the mirror through the viewpoint meets first before the viewpoint. It is drawn over the
+//!   forward view from the same viewpoint turned upside down (the same texels, the opposite
+//!   directions), so where nothing lies before the viewpoint the texel holds what the line
+//!   meets beyond it. Every vertex of the patch then reads this one map: a P before the
+//!   viewpoint where it projects, a P beyond it through the viewpoint, so a triangle that
+//!   straddles the caustic (one corner before the convergence, one beyond) interpolates
+//!   within one picture. The rest, counted as `unresolved vertices`, named in a warning and
+//!   striped magenta with `markers=true`, take the radiance ray traced along their exit
+//!   segment (up to 8 bounces, as the reference), blended across their triangles by the share
+//!   of such corners (`zooming=traced` does this for every P behind its viewpoint): a patch
+//!   with fewer hits behind its viewpoint (near a ball's caustic, where the patches that split
+//!   off hold one or two, a zooming view each doubled the suite's glass sphere's frame for the
+//!   same mean FLIP), a P too near the zooming view's viewpoint plane to project, and a P on a
+//!   mirror or lens, which the zooming view leaves black (it draws no nested level). The
+//!   paper "simply ignore[s]" the region: such a vertex keeps the texture coordinate of step
+//!   5, where its line through the viewpoint meets the forward map on the far side of the
+//!   map's centre, and shows what the map holds there (paper: `zooming=map`). On the concave
+//!   magnifier of `scenes/zooming` at 320 × 240 the mean FLIP is 0.017 (traced: 0.204), on the
+//!   suite's lens, a magnifier, 0.078 (0.100);
 //! - a dielectric's surface reflection: a mirror drawn over its transmitted light (float
 //!   blending; on a device without it, left out) whose per-vertex weight is the exact Fresnel
 //!   reflectance (a thin sheet's 2R / (1 + R)), with patches and 1st passes of its own. The
@@ -114,9 +131,13 @@
 //! Concave mirrors (§4.2) go through the same construction: the viewpoint lands near the
 //! convergence point with the mirror behind it and the map comes out reversed (Figure 8).
 //! The "zooming region" — P between the mirror and the convergence point, so behind the
-//! viewpoint — cannot be shown by any forward view: subdivision first tries smaller patches,
-//! then `trace_zooming` (above). A converging lens before a near wall (a magnifier) is the
-//! same case: its rays converge behind the wall.
+//! viewpoint — cannot be shown by any forward view: a zooming view shows it (above), or
+//! subdivision tries smaller patches and the rest is ray traced. A converging lens before a
+//! near wall (a magnifier) is the same case: its rays converge behind the wall. A zooming view
+//! is one map through its viewpoint, the forward picture's approximation: lines that miss the
+//! viewpoint (spherical aberration) meet the scene elsewhere than their texel shows, exactly
+//! at the vertices only; an object nearer the mirror than the patch's nearest vertex (inside
+//! a deep cap, within its sagitta) lies beyond the far plane and is missing from it.
 //!
 //! Cached mode (§5): with `cached=true` a reflector's exit segments, patches and viewpoints are
 //! kept in the eye's frame and reused while the reflector's vertices do not move relative to
@@ -160,8 +181,9 @@
 //!   passes and its maps' memory (60 bytes a texel).
 //! - `fit_hits` (default true): view volumes fitted to the hits (above); false: to the whole
 //!   reflection lines, as §3.3, with coarser maps where the lines spread.
-//! - `trace_zooming` (default true): the zooming region ray traced (above); costs a traced
-//!   path per unresolved vertex.
+//! - `zooming` (default `view`): the zooming region (above). `view` costs two 1st passes per
+//!   zooming patch and a traced path per unresolved vertex; `traced` a traced path per vertex
+//!   whose P lies behind its viewpoint (and more patches, split for them); `map` nothing.
 //! - `surface_reflection`, `internal_reflection` (default true): a dielectric's reflections
 //!   (above); each costs its own per-vertex rays, patches and 1st passes.
 //! - `ior` (default `material`): the dielectric's indices; one value, or three (red, green,
@@ -209,6 +231,31 @@ const SHADER: &str = include_str!("pvrr.wgsl");
 /// reference's default).
 const TRACED_DEPTH: u32 = 8;
 
+/// How a patch shows the vertices whose P lies behind its viewpoint: between a concave mirror
+/// (or a magnifier) and the point where their rays converge, the zooming region (§4.2, §7).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Zooming {
+    /// The zooming view §7 proposes: the patch's map is drawn from its viewpoint back toward
+    /// the mirror, keeping the farthest surface, over the forward view turned through the
+    /// viewpoint.
+    View,
+    /// Each such vertex's radiance ray traced along its exit segment, blended across its
+    /// triangles.
+    Traced,
+    /// The paper's algorithm: the map where the vertex's line through the viewpoint meets it.
+    Map,
+}
+
+impl Zooming {
+    fn word(self) -> &'static str {
+        match self {
+            Zooming::View => "view",
+            Zooming::Traced => "traced",
+            Zooming::Map => "map",
+        }
+    }
+}
+
 pub use crate::gpu_scene::MARKER_RADIANCE;
 
 pub const PARAMS: &[ParamSpec] = &[
@@ -243,11 +290,11 @@ pub const PARAMS: &[ParamSpec] = &[
         invalidates: Invalidates::Resources,
     },
     ParamSpec {
-        name: "trace_zooming",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "ray trace the vertices whose hit lies behind their patch's viewpoint (zooming region); false: the map where their line through the viewpoint meets it, as the paper's algorithm",
-        invalidates: Invalidates::Uniform,
+        name: "zooming",
+        kind: ParamKind::Choice(&["view", "traced", "map"]),
+        default: "view",
+        doc: "the vertices whose hit lies between the mirror and their rays' convergence (zooming region): view = the zooming view of §7 (from the viewpoint back toward the mirror, farthest surface kept); traced = their ray-traced radiance blended across their triangles; map = the map where their line through the viewpoint meets it, as the paper's algorithm",
+        invalidates: Invalidates::Resources,
     },
     ParamSpec {
         name: "surface_reflection",
@@ -347,7 +394,7 @@ pub const INFO: MethodInfo = MethodInfo {
         settings: &[
             "max_patches=1",
             "fit_hits=false",
-            "trace_zooming=false",
+            "zooming=map",
             "surface_reflection=false",
             "internal_reflection=false",
             "nested_share=1000",
@@ -375,7 +422,7 @@ pub struct GpuMirrorMaterial {
     pub f0: [f32; 3],
     pub fresnel: u32,
     pub stripes: u32,
-    /// 1: blend in the ray-traced radiance of the zooming region's vertices (`trace_zooming`).
+    /// 1: blend in the ray-traced radiance of the unresolved vertices (not `zooming=map`).
     pub blend_traced: u32,
     pub pad: [u32; 2],
 }
@@ -392,7 +439,7 @@ struct MirrorVertex {
     /// 1 where the vertex's P could not be placed in its patch's map (zooming region).
     unresolved: f32,
     /// An unresolved vertex's radiance, ray traced along its exit segment (0 elsewhere, and
-    /// everywhere without `trace_zooming`).
+    /// everywhere with `zooming=map`).
     traced: [f32; 3],
 }
 
@@ -400,7 +447,7 @@ struct MirrorVertex {
 /// line from the map's viewpoint through `p` meets the map's plane (§3.1, step 3.3). A `p`
 /// behind the viewpoint (the zooming region) meets it beyond the viewpoint, on the far side of
 /// the map's centre; with `mirror_behind` such a `p` is first mirrored to the front of the
-/// viewpoint's plane instead, which is where `trace_zooming` looks the map up for its blend
+/// viewpoint's plane instead, which is where a traced vertex looks the map up for its blend
 /// between a resolved and an unresolved corner.
 pub fn map_uv(view: &CameraUniform, p: Vec3, mirror_behind: bool) -> [f32; 2] {
     let clip = glam::Mat4::from_cols_array_2d(&view.clip_from_world) * Vec4::from((p, 1.0));
@@ -417,7 +464,36 @@ pub fn map_uv(view: &CameraUniform, p: Vec3, mirror_behind: bool) -> [f32; 2] {
 /// corners with texture coordinates into that map.
 struct PatchDraw {
     camera: CameraUniform,
+    /// A zooming view's (`camera` looks back toward the mirror): the forward view from the
+    /// same viewpoint, drawn upside down first, so that each texel of the map holds what lies
+    /// beyond the viewpoint on its line where nothing lies between the mirror and the
+    /// viewpoint.
+    fill: Option<CameraUniform>,
     channels: Vec<Vec<MirrorVertex>>,
+}
+
+impl PatchDraw {
+    /// Its 1st passes.
+    fn passes(&self) -> u64 {
+        1 + self.fill.is_some() as u64
+    }
+
+    /// The texels its 1st passes draw.
+    fn texels(&self) -> u64 {
+        (self.camera.width * self.camera.height) as u64 * self.passes()
+    }
+}
+
+/// `camera` drawing its image upside down, with the directions its pixels stand for turned
+/// with it: texel (x, y) of it shows the scene in the direction opposite to texel
+/// (x, y) of the view from the same viewpoint looking back with `right` reversed
+/// ([`view::ViewBasis::reversed`]), the same line through the viewpoint.
+fn upside_down(mut camera: CameraUniform) -> CameraUniform {
+    let flip = glam::Mat4::from_scale(Vec3::new(1.0, -1.0, 1.0));
+    camera.clip_from_world =
+        (flip * glam::Mat4::from_cols_array_2d(&camera.clip_from_world)).to_cols_array_2d();
+    camera.up_world = (-Vec3::from_array(camera.up_world)).to_array();
+    camera
 }
 
 /// One reflector seen from one eye, ready for both passes.
@@ -499,6 +575,8 @@ struct Tally {
     nested_texels: u64,
     /// Outer patches whose nested level the frame budget left out.
     budget_cuts: u64,
+    /// Patches drawn from a zooming view.
+    zooming_views: u64,
     unresolved: u64,
     cache_hits: u64,
     principal_up: u64,
@@ -558,7 +636,7 @@ pub struct Pvrr {
     pub nested_share: f32,
     pub frame_patches: u64,
     pub frame_texels: u64,
-    pub trace_zooming: bool,
+    pub zooming: Zooming,
     pub surface_reflection: bool,
     pub internal_reflection: bool,
     pub ior: Option<Vec3>,
@@ -582,7 +660,7 @@ impl Default for Pvrr {
             nested_share: 8.0,
             frame_patches: 2048,
             frame_texels: 1 << 24,
-            trace_zooming: true,
+            zooming: Zooming::View,
             surface_reflection: true,
             internal_reflection: true,
             ior: None,
@@ -718,7 +796,11 @@ struct LevelPlan {
 impl LevelPlan {
     /// Its 1st passes.
     fn patches(&self) -> u64 {
-        self.reflectors.iter().map(|r| r.patches.len() as u64).sum()
+        self.reflectors
+            .iter()
+            .flat_map(|r| &r.patches)
+            .map(PatchDraw::passes)
+            .sum()
     }
 
     /// Its maps' texels.
@@ -726,7 +808,7 @@ impl LevelPlan {
         self.reflectors
             .iter()
             .flat_map(|r| &r.patches)
-            .map(|patch| (patch.camera.width * patch.camera.height) as u64)
+            .map(PatchDraw::texels)
             .sum()
     }
 
@@ -817,7 +899,7 @@ struct PlanSettings {
     /// Marker radius as a fraction of its distance from the reflector; None: no markers.
     markers: Option<f32>,
     fit_hits: bool,
-    trace_zooming: bool,
+    zooming: Zooming,
     surface_reflection: bool,
     internal_reflection: bool,
 }
@@ -915,11 +997,11 @@ fn plan_reflector(
     });
     let (paths, reused_patches) =
         reflector_paths(p, scene, reflector, eye, slot.as_ref(), key.as_ref(), tally);
-    let hits: Vec<Vec<Vec3>> = paths
+    let (hits, drawn): (Vec<Vec<Vec3>>, Vec<Vec<bool>>) = paths
         .channels
         .iter()
-        .map(|c| trace_hits(p.accel, &c.exits, p.far_distance))
-        .collect();
+        .map(|c| trace_hits(scene, p.accel, &c.exits, p.far_distance))
+        .unzip();
     tally.rays += (hits.len() * m.positions.len()) as u64;
     let input = PatchInput {
         mesh: m,
@@ -931,16 +1013,14 @@ fn plan_reflector(
             .zip(&hits)
             .map(|(c, h)| c.exits.iter().zip(h).map(|(s, &p)| (s.origin, p)).collect())
             .collect(),
+        drawn: &drawn,
         scene_corners: &p.scene_corners,
         whole_lines: !settings.fit_hits,
     };
     let patches: Vec<Patch> = match reused_patches {
         Some(patches) => patches
-            .into_iter()
-            .map(|patch| Patch {
-                extents: input.extents_for(&patch),
-                ..patch
-            })
+            .iter()
+            .map(|patch| input.refit(patch, &settings.limits))
             .collect(),
         None => {
             let patches = input.patches(&settings.limits);
@@ -950,9 +1030,8 @@ fn plan_reflector(
             patches
         }
     };
-    let unresolved = unresolved_vertices(m, &paths.visible, &hits, &patches);
-    let traced = settings
-        .trace_zooming
+    let unresolved = unresolved_vertices(m, &paths.visible, &hits, &drawn, &patches);
+    let traced = (settings.zooming != Zooming::Map)
         .then(|| trace_unresolved(p, scene, m, &paths, &unresolved));
     if let Some(traced) = &traced {
         tally.rays += unresolved.iter().filter(|&&u| u).count() as u64 * traced.len() as u64;
@@ -966,7 +1045,8 @@ fn plan_reflector(
     };
     let draws = patch_draws(&vertices, &patches, settings.resolution, eye, tally);
     let unresolved = unresolved.iter().filter(|&&u| u).count();
-    tally.patches += patches.len() as u64;
+    tally.patches += draws.iter().map(PatchDraw::passes).sum::<u64>();
+    tally.zooming_views += patches.iter().filter(|p| p.zooming.is_some()).count() as u64;
     tally.principal_up += patches.iter().filter(|p| p.principal_up).count() as u64;
     tally.unresolved += unresolved as u64;
     if top {
@@ -989,7 +1069,7 @@ fn plan_reflector(
         mesh,
         material: GpuMirrorMaterial {
             stripes: settings.markers.is_some() as u32,
-            blend_traced: settings.trace_zooming as u32,
+            blend_traced: (settings.zooming != Zooming::Map) as u32,
             ..reflector.material
         },
         additive: reflector.additive,
@@ -1050,22 +1130,35 @@ fn cache_entry(
     }
 }
 
-/// The vertices whose P lies behind some patch's viewpoint (the zooming region): with
-/// `trace_zooming` they take the radiance ray traced along their exit segment instead of the
-/// map's, per channel.
+/// The vertices whose P some patch's map cannot show: behind a forward view's viewpoint (the
+/// zooming region, where no zooming view is drawn); in a zooming view, too near its
+/// viewpoint's plane for its map to hold (at the rays' convergence), or on a surface the
+/// raster leaves black (a mirror or lens: a zooming view draws no nested level). Unless `zooming=map` they take the radiance ray traced along their exit segment
+/// instead of the map's, per channel.
 fn unresolved_vertices(
     m: &specula_scene::Mesh,
     visible: &[bool],
     hits: &[Vec<Vec3>],
+    drawn: &[Vec<bool>],
     patches: &[Patch],
 ) -> Vec<bool> {
     let mut unresolved = vec![false; m.positions.len()];
     for patch in patches {
+        let reversed = patch.basis.reversed();
+        let unshown = |p: Vec3, drawn: bool| match &patch.zooming {
+            None => patch.basis.local(p).z <= 0.0,
+            Some(zooming) => {
+                let q = reversed.local(p);
+                let (x, y) = (q.x.abs() / q.z.abs(), q.y.abs() / q.z.abs());
+                let shown = x <= zooming.tan_x && y <= zooming.tan_y && drawn;
+                !shown
+            }
+        };
         for &t in &patch.triangles {
             for i in m.triangles[t as usize] {
                 let i = i as usize;
                 unresolved[i] |=
-                    visible[i] && hits.iter().any(|h| patch.basis.local(h[i]).z <= 0.0);
+                    visible[i] && hits.iter().zip(drawn).any(|(h, d)| unshown(h[i], d[i]));
             }
         }
     }
@@ -1116,7 +1209,7 @@ struct ReflectorVertices<'a> {
     paths: &'a MeshPaths,
     /// Per channel, where each vertex's exit segment hits the scene (P).
     hits: &'a [Vec<Vec3>],
-    /// Per channel, the radiance traced for each unresolved vertex (`trace_zooming`).
+    /// Per channel, the radiance traced for each unresolved vertex (not `zooming=map`).
     traced: Option<&'a [Vec<Vec3>]>,
     unresolved: &'a [bool],
 }
@@ -1144,8 +1237,25 @@ fn patch_draws(
             let share = (solid_angle / total_solid_angle).clamp(0.0, 1.0);
             let height = ((resolution as f32 * share.sqrt()).round() as u32)
                 .clamp(MIN_MAP_TEXELS.min(resolution), resolution);
-            let camera = patch.extents.camera(&patch.basis, height);
-            tally.map_texels += (camera.width * camera.height) as u64;
+            let (camera, fill) = match &patch.zooming {
+                None => (patch.extents.camera(&patch.basis, height), None),
+                Some(zooming) => {
+                    // The forward view through the same texels: the zooming view's field.
+                    let forward = Extents {
+                        tan_x: zooming.tan_x,
+                        tan_y: zooming.tan_y,
+                        ..patch.extents.clone()
+                    };
+                    (
+                        zooming.camera(&patch.basis.reversed(), height),
+                        Some(upside_down(forward.camera(&patch.basis, height))),
+                    )
+                }
+            };
+            // A zooming view's P beyond its viewpoint projects through it, where the map holds
+            // the forward view; elsewhere an unresolved vertex's P is mirrored to the front
+            // for the blend with its traced radiance.
+            let mirror_behind = vertices.traced.is_some() && patch.zooming.is_none();
             let channels = vertices
                 .paths
                 .channels
@@ -1163,7 +1273,7 @@ fn patch_draws(
                             MirrorVertex {
                                 position: m.positions[i].to_array(),
                                 normal: m.normals[i].to_array(),
-                                uv: map_uv(&camera, h[i], vertices.traced.is_some()),
+                                uv: map_uv(&camera, h[i], mirror_behind),
                                 weight: channel.weights[i],
                                 unresolved: vertices.unresolved[i] as u32 as f32,
                                 traced: traced.to_array(),
@@ -1172,7 +1282,13 @@ fn patch_draws(
                         .collect()
                 })
                 .collect();
-            PatchDraw { camera, channels }
+            let draw = PatchDraw {
+                camera,
+                fill,
+                channels,
+            };
+            tally.map_texels += draw.texels();
+            draw
         })
         .collect()
 }
@@ -1197,13 +1313,19 @@ fn report(
         ));
     }
     if unresolved > 0 {
-        let shown = if settings.trace_zooming {
-            "they show their ray-traced radiance instead"
-        } else {
-            "they show the map where their line through the viewpoint meets it, as the paper's algorithm does (trace_zooming=false)"
+        let message = match settings.zooming {
+            Zooming::View => format!(
+                "{unresolved} vertices see a point their patch's map cannot show (behind its viewpoint where too few are for a zooming view, at their rays' convergence, or a mirror or lens seen from a zooming view); they show their ray-traced radiance instead"
+            ),
+            Zooming::Traced => format!(
+                "{unresolved} vertices see a point between the surface and their rays' convergence (a concave mirror's zooming region), which no forward view shows; they show their ray-traced radiance instead (zooming=traced)"
+            ),
+            Zooming::Map => format!(
+                "{unresolved} vertices see a point between the surface and their rays' convergence (a concave mirror's zooming region), which no forward view shows; they show the map where their line through the viewpoint meets it, as the paper's algorithm does (zooming=map)"
+            ),
         };
         tally.warnings.push(format!(
-            "pvrr: mirror '{}': {unresolved} vertices see a point between the surface and their rays' convergence (a concave mirror's zooming region), which no forward view shows; {shown} (striped magenta with markers=true)",
+            "pvrr: mirror '{}': {message} (striped magenta with markers=true)",
             mesh.name
         ));
     }
@@ -1422,6 +1544,11 @@ fn plan_tree(
         .collect();
     for (r, i, _) in order {
         let (reflector, patch) = (&level.reflectors[r], &level.reflectors[r].patches[i]);
+        // A zooming view shows other reflectors as the scene raster draws them: a nested level
+        // drawn into it would need the reversed depth test in its 2nd pass too.
+        if patch.fill.is_some() {
+            continue;
+        }
         let eye = Vec3::from_array(patch.camera.eye_world);
         let hidden = Some(reflector.mesh);
         // The rays a level from here would trace: every other reflector's vertices, once per
@@ -1494,9 +1621,29 @@ fn render_maps(
                 .enumerate()
                 .map(|(i, patch)| {
                     let hidden = Some(reflector.mesh);
-                    let g =
-                        p.raster
-                            .render_with(ctx, p.gpu_scene, &patch.camera, hidden, markers)?;
+                    let g = match &patch.fill {
+                        None => p.raster.render_with(
+                            ctx,
+                            p.gpu_scene,
+                            &patch.camera,
+                            hidden,
+                            markers,
+                        )?,
+                        Some(fill) => {
+                            let g =
+                                p.raster
+                                    .render_with(ctx, p.gpu_scene, fill, hidden, markers)?;
+                            p.raster.draw_farthest_into(
+                                ctx,
+                                p.gpu_scene,
+                                &patch.camera,
+                                hidden.as_slice(),
+                                markers,
+                                &g,
+                            )?;
+                            g
+                        }
+                    };
                     if let Some(inner) = tree.inner.get(r).and_then(|patches| patches[i].as_ref()) {
                         let maps = render_maps(ctx, p, inner, markers)?;
                         // The nested 2nd pass's vertices are spent once it is submitted.
@@ -1649,7 +1796,7 @@ impl Technique for Pvrr {
             "nested_share" => self.nested_share.to_string(),
             "frame_patches" => self.frame_patches.to_string(),
             "frame_texels" => self.frame_texels.to_string(),
-            "trace_zooming" => self.trace_zooming.to_string(),
+            "zooming" => self.zooming.word().to_string(),
             "surface_reflection" => self.surface_reflection.to_string(),
             "internal_reflection" => self.internal_reflection.to_string(),
             "ior" => match self.ior {
@@ -1677,7 +1824,13 @@ impl Technique for Pvrr {
             "nested_share" => self.nested_share = value.number() as f32,
             "frame_patches" => self.frame_patches = value.integer() as u64,
             "frame_texels" => self.frame_texels = value.integer() as u64,
-            "trace_zooming" => self.trace_zooming = value.flag(),
+            "zooming" => {
+                self.zooming = match value.word() {
+                    "traced" => Zooming::Traced,
+                    "map" => Zooming::Map,
+                    _ => Zooming::View,
+                }
+            }
             "surface_reflection" => self.surface_reflection = value.flag(),
             "internal_reflection" => self.internal_reflection = value.flag(),
             "ior" => {
@@ -1740,10 +1893,11 @@ impl Technique for Pvrr {
             limits: PatchLimits {
                 max_fov_deg: self.max_fov_deg,
                 max_patches: self.max_patches.min(top_patches),
+                zooming_view: self.zooming == Zooming::View,
             },
             markers: self.markers.then_some(self.marker_size),
             fit_hits: self.fit_hits,
-            trace_zooming: self.trace_zooming,
+            zooming: self.zooming,
             surface_reflection: self.surface_reflection,
             internal_reflection: self.internal_reflection,
         };
@@ -1854,6 +2008,10 @@ impl Technique for Pvrr {
                     tally.budget_cuts,
                 ),
                 ("largest 2nd-pass vertex buffer (bytes)".into(), vertex_peak),
+                (
+                    "patches drawn from a zooming view".into(),
+                    tally.zooming_views,
+                ),
                 ("unresolved vertices".into(), tally.unresolved),
                 ("reflectors from the cache".into(), tally.cache_hits),
             ],

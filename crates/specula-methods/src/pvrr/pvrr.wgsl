@@ -7,7 +7,7 @@ struct MirrorMaterial {
     fresnel: u32,
     // 1: stripe the pixels of unresolved vertices magenta (the markers overlay).
     stripes: u32,
-    // 1: blend in the unresolved vertices' ray-traced radiance (trace_zooming); 0: they show
+    // 1: blend in the unresolved vertices' ray-traced radiance (not zooming=map); 0: they show
     // the map where their texture coordinates put them, as the paper's algorithm does.
     blend_traced: u32,
 };
@@ -78,7 +78,7 @@ fn fs_mirror(in: VertexOut) -> @location(0) vec4<f32> {
         f = fresnel_schlick(mirror.f0, -dot(d, n));
     }
     // Where a vertex's hit is one the map cannot show (zooming region), its ray-traced
-    // radiance is blended in (trace_zooming), by the interpolated share of such vertices; the
+    // radiance is blended in (not zooming=map), by the interpolated share of such vertices; the
     // markers overlay stripes those pixels magenta.
     if (in.unresolved > 0.0 && mirror.stripes != 0u) {
         let stripe = (i32(floor((in.clip.x + in.clip.y) / 6.0)) & 1) == 0;

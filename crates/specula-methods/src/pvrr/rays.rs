@@ -311,8 +311,14 @@ fn refract_through(
 }
 
 /// The second half of step 1: every exit segment traced to its nearest hit P (or a point
-/// `far_distance` along it when it leaves the scene).
-pub fn trace_hits(accel: &SceneAccel, exits: &[Segment], far_distance: f32) -> Vec<Vec3> {
+/// `far_distance` along it when it leaves the scene), and whether the scene raster draws what
+/// lies there (not a mirror or dielectric, which it leaves black; a miss is the background).
+pub fn trace_hits(
+    scene: &Scene,
+    accel: &SceneAccel,
+    exits: &[Segment],
+    far_distance: f32,
+) -> (Vec<Vec3>, Vec<bool>) {
     exits
         .par_iter()
         .map(|s| {
@@ -321,11 +327,15 @@ pub fn trace_hits(accel: &SceneAccel, exits: &[Segment], far_distance: f32) -> V
                 dir: s.dir,
             };
             match accel.intersect(&ray, f32::INFINITY) {
-                Some(hit) => s.origin + s.dir * hit.t,
-                None => s.origin + s.dir * far_distance,
+                Some(hit) => {
+                    let mesh = &scene.meshes[hit.mesh as usize];
+                    let drawn = !scene.materials[mesh.material].is_specular();
+                    (s.origin + s.dir * hit.t, drawn)
+                }
+                None => (s.origin + s.dir * far_distance, true),
             }
         })
-        .collect()
+        .unzip()
 }
 
 /// A rigid frame (the eye's) for expressing paths relative to it, so that a lens fixed to the

@@ -216,6 +216,13 @@ impl OutputTexture {
     }
 }
 
+/// Which surface a scene draw keeps at each pixel.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Keep {
+    Nearest,
+    Farthest,
+}
+
 /// A depth attachment cleared to the far plane and kept.
 fn cleared_depth(view: &wgpu::TextureView) -> wgpu::RenderPassDepthStencilAttachment<'_> {
     wgpu::RenderPassDepthStencilAttachment {
@@ -391,6 +398,11 @@ struct PoolEntry {
 pub struct RasterPass {
     spec: RasterSpec,
     scene_pipeline: wgpu::RenderPipeline,
+    /// The scene pipeline keeping the farthest surface ([`RasterPass::draw_farthest_into`]),
+    /// made on first use, from the module and layout kept for it.
+    farthest_pipeline: std::cell::OnceCell<wgpu::RenderPipeline>,
+    module: wgpu::ShaderModule,
+    scene_pipeline_layout: wgpu::PipelineLayout,
     background_pipeline: wgpu::RenderPipeline,
     scene_bind_group: wgpu::BindGroup,
     shadow_layout: wgpu::BindGroupLayout,
@@ -502,14 +514,57 @@ impl Layouts {
     }
 }
 
-/// The pass's pipelines from `module`: the scene (the fragment stage `spec` targets, its
-/// faces culled as `spec` asks), the background, and the shadow map.
+fn depth_state(write: bool, compare: wgpu::CompareFunction) -> Option<wgpu::DepthStencilState> {
+    Some(wgpu::DepthStencilState {
+        format: DEPTH_FORMAT,
+        depth_write_enabled: Some(write),
+        depth_compare: Some(compare),
+        stencil: Default::default(),
+        bias: Default::default(),
+    })
+}
+
+/// The scene pipeline: the fragment stage `spec` targets, its faces culled as `spec` asks,
+/// each fragment kept by `compare` against the depth there; with `Greater` (the farthest kept:
+/// a view looking back along the rays) lit from the far side.
+fn scene_pipeline(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    layout: &wgpu::PipelineLayout,
+    spec: &RasterSpec,
+    compare: wgpu::CompareFunction,
+) -> wgpu::RenderPipeline {
+    render_pipeline(
+        device,
+        &PipelineSpec {
+            label: "scene raster",
+            layout,
+            module,
+            vertex_entry: "vs_scene",
+            fragment_entry: match (spec.targets, compare == wgpu::CompareFunction::Greater) {
+                (Targets::Shaded, false) => "fs_scene",
+                (Targets::Geometry, false) => "fs_geometry",
+                (Targets::Shaded, true) => "fs_scene_from_behind",
+                (Targets::Geometry, true) => "fs_geometry_from_behind",
+            },
+            vertex_buffers: &[Some(vertex_layout())],
+            depth: depth_state(true, compare),
+            targets: &G_BUFFER_FORMATS,
+            write_mask: wgpu::ColorWrites::ALL,
+            blend: None,
+            cull_mode: spec.cull_mode,
+        },
+    )
+}
+
+/// The pass's pipelines from `module`: the scene (nearest surface kept), the background, and
+/// the shadow map; and the scene pipeline's layout.
 fn pipelines(
     device: &wgpu::Device,
     module: &wgpu::ShaderModule,
     layouts: &Layouts,
     spec: &RasterSpec,
-) -> [wgpu::RenderPipeline; 3] {
+) -> ([wgpu::RenderPipeline; 3], wgpu::PipelineLayout) {
     let layout = |layouts: &[Option<&wgpu::BindGroupLayout>]| {
         device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: None,
@@ -522,33 +577,13 @@ fn pipelines(
         Some(&layouts.scene),
         Some(&layouts.shadows),
     ]);
-    let depth = |write: bool, compare| {
-        Some(wgpu::DepthStencilState {
-            format: DEPTH_FORMAT,
-            depth_write_enabled: Some(write),
-            depth_compare: Some(compare),
-            stencil: Default::default(),
-            bias: Default::default(),
-        })
-    };
-    let scene_pipeline = render_pipeline(
+    let depth = depth_state;
+    let scene_pipeline = scene_pipeline(
         device,
-        &PipelineSpec {
-            label: "scene raster",
-            layout: &scene_pipeline_layout,
-            module,
-            vertex_entry: "vs_scene",
-            fragment_entry: match spec.targets {
-                Targets::Shaded => "fs_scene",
-                Targets::Geometry => "fs_geometry",
-            },
-            vertex_buffers: &[Some(vertex_layout())],
-            depth: depth(true, wgpu::CompareFunction::Less),
-            targets: &G_BUFFER_FORMATS,
-            write_mask: wgpu::ColorWrites::ALL,
-            blend: None,
-            cull_mode: spec.cull_mode,
-        },
+        module,
+        &scene_pipeline_layout,
+        spec,
+        wgpu::CompareFunction::Less,
     );
     let background_pipeline_layout = layout(&[Some(&layouts.camera), Some(&layouts.scene)]);
     let background_pipeline = render_pipeline(
@@ -584,7 +619,10 @@ fn pipelines(
             cull_mode: None,
         },
     );
-    [scene_pipeline, background_pipeline, shadow_pipeline]
+    (
+        [scene_pipeline, background_pipeline, shadow_pipeline],
+        scene_pipeline_layout,
+    )
 }
 
 impl Shadows {
@@ -744,7 +782,7 @@ impl RasterPass {
             source: wgpu::ShaderSource::Wgsl(shader_source().into()),
         });
         let layouts = Layouts::new(device);
-        let [scene_pipeline, background_pipeline, shadow_pipeline] =
+        let ([scene_pipeline, background_pipeline, shadow_pipeline], scene_pipeline_layout) =
             pipelines(device, &module, &layouts, &spec);
         let (shadows, shadow_bind_group) = Shadows::new(
             ctx,
@@ -758,6 +796,9 @@ impl RasterPass {
             spec,
             scene_bind_group: gpu_scene.bind_group(ctx, &layouts.scene),
             scene_pipeline,
+            farthest_pipeline: Default::default(),
+            module,
+            scene_pipeline_layout,
             background_pipeline,
             shadow_layout: layouts.shadows,
             shadow_bind_group,
@@ -969,10 +1010,39 @@ impl RasterPass {
         g: &GBuffer,
     ) -> Result<(), GpuError> {
         ctx.validated("scene raster", || {
-            self.draw(ctx, gpu_scene, camera, hidden, extra, g)
+            self.draw(ctx, gpu_scene, camera, hidden, extra, g, Keep::Nearest)
         })
     }
 
+    /// Draws over `g` (of the camera's size), leaving out the meshes in `hidden`, keeping at
+    /// each pixel the surface farthest from the camera between its near and far planes (what
+    /// was in `g` stays where none lies there), without the background, each surface lit on
+    /// its side away from the camera: the reversed depth test of pvrr's zooming region (seed
+    /// 000 §7), whose rays come from the mirror beyond.
+    pub fn draw_farthest_into(
+        &self,
+        ctx: &GpuContext,
+        gpu_scene: &GpuScene,
+        camera: &CameraUniform,
+        hidden: &[usize],
+        extra: Option<(&wgpu::Buffer, u64, u32)>,
+        g: &GBuffer,
+    ) -> Result<(), GpuError> {
+        ctx.validated("scene raster, farthest surface", || {
+            self.farthest_pipeline.get_or_init(|| {
+                scene_pipeline(
+                    &ctx.device,
+                    &self.module,
+                    &self.scene_pipeline_layout,
+                    &self.spec,
+                    wgpu::CompareFunction::Greater,
+                )
+            });
+            self.draw(ctx, gpu_scene, camera, hidden, extra, g, Keep::Farthest)
+        })
+    }
+
+    #[allow(clippy::too_many_arguments)]
     fn draw(
         &self,
         ctx: &GpuContext,
@@ -981,35 +1051,52 @@ impl RasterPass {
         hidden: &[usize],
         extra: Option<(&wgpu::Buffer, u64, u32)>,
         g: &GBuffer,
+        keep: Keep,
     ) {
         ctx.queue
             .write_buffer(&self.camera_buffer, 0, bytemuck::bytes_of(camera));
         let views = g.views();
         let depth_view = g.depth.create_view(&Default::default());
+        let (load, clear_depth, pipeline) = match keep {
+            Keep::Nearest => (
+                wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                1.0,
+                &self.scene_pipeline,
+            ),
+            Keep::Farthest => (
+                wgpu::LoadOp::Load,
+                0.0,
+                self.farthest_pipeline
+                    .get()
+                    .expect("made by draw_farthest_into"),
+            ),
+        };
         let attachments: Vec<Option<wgpu::RenderPassColorAttachment>> = views
             .iter()
-            .map(|view| {
-                specula_gpu::util::color_attachment(
-                    view,
-                    wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                )
-            })
+            .map(|view| specula_gpu::util::color_attachment(view, load))
             .collect();
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("scene raster"),
                 color_attachments: &attachments,
-                depth_stencil_attachment: Some(cleared_depth(&depth_view)),
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &depth_view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(clear_depth),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
                 ..Default::default()
             });
             pass.set_bind_group(0, &self.camera_bind_group, &[]);
             pass.set_bind_group(1, &self.scene_bind_group, &[]);
-            if self.spec.background {
+            if self.spec.background && keep == Keep::Nearest {
                 pass.set_pipeline(&self.background_pipeline);
                 pass.draw(0..3, 0..1);
             }
-            pass.set_pipeline(&self.scene_pipeline);
+            pass.set_pipeline(pipeline);
             pass.set_bind_group(2, &self.shadow_bind_group, &[]);
             pass.set_vertex_buffer(0, gpu_scene.vertices.slice(..));
             for range in

@@ -36,15 +36,21 @@ fn vs_scene(v: SceneVertex) -> VertexOut {
     return out;
 }
 
-@fragment
-fn fs_scene(in: VertexOut, @builtin(front_facing) front: bool) -> GBuffer {
-    let material = materials[mesh_materials[in.mesh]];
-    var n = normalize(in.normal);
-    // Face the eye, as the CPU flips normals to face the incoming ray.
-    if (dot(n, camera.eye_world - in.position) < 0.0) {
-        n = -n;
+// The shading normal facing the side rays come from: the eye's, or with `from_behind` the far
+// side (a view looking back along the rays, pvrr's zooming view: rays reach the surface from
+// the mirror beyond it), as the CPU flips normals to face the incoming ray.
+fn facing_normal(normal: vec3<f32>, position: vec3<f32>, from_behind: bool) -> vec3<f32> {
+    let n = normalize(normal);
+    let toward_eye = dot(n, camera.eye_world - position) >= 0.0;
+    return select(-n, n, toward_eye != from_behind);
+}
+
+fn g_buffer(in: VertexOut, from_behind: bool, shaded: bool) -> GBuffer {
+    let n = facing_normal(in.normal, in.position, from_behind);
+    var color = vec3<f32>(0.0);
+    if (shaded) {
+        color = surface_radiance(materials[mesh_materials[in.mesh]], in.position, n, in.uv);
     }
-    let color = surface_radiance(material, in.position, n, in.uv);
     var out: GBuffer;
     out.color = vec4<f32>(color, 1.0);
     out.position = vec4<f32>(in.position, 1.0);
@@ -53,19 +59,26 @@ fn fs_scene(in: VertexOut, @builtin(front_facing) front: bool) -> GBuffer {
     return out;
 }
 
+@fragment
+fn fs_scene(in: VertexOut) -> GBuffer {
+    return g_buffer(in, false, true);
+}
+
 // The geometry targets only (RasterSpec targets = Geometry): no lighting, colour black.
 @fragment
 fn fs_geometry(in: VertexOut) -> GBuffer {
-    var n = normalize(in.normal);
-    if (dot(n, camera.eye_world - in.position) < 0.0) {
-        n = -n;
-    }
-    var out: GBuffer;
-    out.color = vec4<f32>(0.0, 0.0, 0.0, 1.0);
-    out.position = vec4<f32>(in.position, 1.0);
-    out.normal = vec4<f32>(n, 0.0);
-    out.ids = vec2<u32>(in.mesh + 1u, in.triangle);
-    return out;
+    return g_buffer(in, false, false);
+}
+
+// As fs_scene and fs_geometry, lit from the far side (the reversed depth test's pass).
+@fragment
+fn fs_scene_from_behind(in: VertexOut) -> GBuffer {
+    return g_buffer(in, true, true);
+}
+
+@fragment
+fn fs_geometry_from_behind(in: VertexOut) -> GBuffer {
+    return g_buffer(in, true, false);
 }
 
 @fragment
