@@ -469,8 +469,8 @@ fn subdivided_patches_meet_at_their_shared_vertices() {
     let scene = specula_scene::load("door-mirror").unwrap();
     let (reference, whole) = reference_and_pvrr(&ctx, &scene);
     let split = pvrr_frame(&ctx, &scene, &[("max_fov", "12")]);
-    assert_eq!(counter(&whole, "patches"), 1);
-    assert!(counter(&split, "patches") >= 4, "{:?}", split.counters);
+    assert_eq!(counter(&whole, "1st passes"), 1);
+    assert!(counter(&split, "1st passes") >= 4, "{:?}", split.counters);
     let (whole_error, _) = vertex_and_centroid_errors(&scene, &reference, &whole.image);
     let (split_error, split_centroids) =
         vertex_and_centroid_errors(&scene, &reference, &split.image);
@@ -485,7 +485,7 @@ fn subdivided_patches_meet_at_their_shared_vertices() {
     };
     eprintln!(
         "pvrr door-mirror in {} patches: vertex error {split_error:.4} (one patch {whole_error:.4}), centroids {split_centroids:.4}; image RMSE {:.4} (one patch {:.4})",
-        counter(&split, "patches"),
+        counter(&split, "1st passes"),
         rmse(&split.image),
         rmse(&whole.image)
     );
@@ -518,10 +518,10 @@ fn a_sphere_is_subdivided_until_every_patch_fits_the_field_of_view() {
     let (one_patch, _) = vertex_and_centroid_errors(&scene, &reference, &one.image);
     eprintln!(
         "pvrr sphere: {} patches, vertex error {at_vertices:.4}; one patch: {one_patch:.4}, warnings {:?}",
-        counter(&frame, "patches"),
+        counter(&frame, "1st passes"),
         one.warnings
     );
-    assert!(counter(&frame, "patches") > 4);
+    assert!(counter(&frame, "1st passes") > 4);
     assert!(
         !frame.warnings.iter().any(|w| w.contains("max_fov")),
         "{:?}",
@@ -744,13 +744,13 @@ fn the_paper_preset_shows_a_solid_lens_s_transmitted_light_from_one_view() {
     let paper = paper_frame(&ctx, &scene, &[], SMALL);
     // One reflector drawn (the transmitted light), from one patch.
     assert_eq!(counter(&paper, "mirrors"), 1);
-    assert_eq!(counter(&paper, "patches"), 1);
+    assert_eq!(counter(&paper, "1st passes"), 1);
     let mut default = by_name("pvrr").unwrap();
     let default = default
         .render_still(&ctx, &scene, SMALL.0, SMALL.1)
         .unwrap();
     assert_eq!(counter(&default, "mirrors"), 3);
-    assert!(counter(&default, "patches") > 3);
+    assert!(counter(&default, "1st passes") > 3);
     // The surface reflection is added over the same transmitted light: never darker, and
     // brighter where the sphere reflects.
     let reflecting = paper_frame(&ctx, &scene, &["surface_reflection=true"], SMALL);
@@ -816,7 +816,7 @@ fn the_paper_preset_is_exact_across_a_flat_mirror() {
     let frame = paper_frame(&ctx, &scene, &[], (SIZE, SIZE));
     let (at_vertices, at_centroids) = vertex_and_centroid_errors(&scene, &reference, &frame.image);
     eprintln!("pvrr:paper flat mirror {SIZE}²: mean error at vertex pixels {at_vertices:.4}, at centroid pixels {at_centroids:.4}");
-    assert_eq!(counter(&frame, "patches"), 1);
+    assert_eq!(counter(&frame, "1st passes"), 1);
     // Measured: 0.0000 at the centroids (0.0069 at the vertices, whose pixels touch the
     // mirror's rim); bound 0.002.
     assert!(at_centroids < 0.002, "at centroids {at_centroids}");
@@ -849,8 +849,8 @@ fn a_merged_glass_sphere_and_lens_render_within_the_frame_budget_and_the_device_
     let limit = ctx.gpu("test").unwrap().device.limits().max_buffer_size;
     let largest = counter(frame, "largest 2nd-pass vertex buffer (bytes)");
     let (patches, nested) = (
-        counter(frame, "patches"),
-        counter(frame, "patches in levels below the top"),
+        counter(frame, "1st passes"),
+        counter(frame, "1st passes in levels below the top"),
     );
     let (texels, nested_texels) = (
         counter(frame, "reflection map texels"),
@@ -879,7 +879,10 @@ fn a_frame_budget_without_room_for_nested_levels_draws_depth_one() {
     let scene = two_mirror_scene();
     let none = pvrr_frame(&ctx, &scene, &[("depth", "2"), ("nested_share", "0")]);
     let shallow = pvrr_frame(&ctx, &scene, &[("depth", "1")]);
-    assert_eq!(counter(&none.frame, "patches in levels below the top"), 0);
+    assert_eq!(
+        counter(&none.frame, "1st passes in levels below the top"),
+        0
+    );
     assert!(
         counter(
             &none.frame,
@@ -919,7 +922,7 @@ fn a_concave_magnifier_is_drawn_from_a_zooming_view() {
     eprintln!(
         "pvrr concave magnifier {SIZE}²: zooming view: error at vertices {view_vertices:.4}, centroids {view_centroids:.4} ({} views, {} patches); traced: {traced_vertices:.4}, {traced_centroids:.4} ({} unresolved)",
         counter(&view, "patches drawn from a zooming view"),
-        counter(&view, "patches"),
+        counter(&view, "1st passes"),
         counter(&traced, "unresolved vertices"),
     );
     assert!(counter(&view, "patches drawn from a zooming view") >= 1);

@@ -568,10 +568,11 @@ impl Reflector {
 #[derive(Default)]
 struct Tally {
     rays: u64,
-    patches: u64,
+    /// 1st passes: one per patch, two per zooming view.
+    passes: u64,
     map_texels: u64,
     /// Of those, in levels below the top.
-    nested_patches: u64,
+    nested_passes: u64,
     nested_texels: u64,
     /// Outer patches whose nested level the frame budget left out.
     budget_cuts: u64,
@@ -795,7 +796,7 @@ struct LevelPlan {
 
 impl LevelPlan {
     /// Its 1st passes.
-    fn patches(&self) -> u64 {
+    fn passes(&self) -> u64 {
         self.reflectors
             .iter()
             .flat_map(|r| &r.patches)
@@ -867,7 +868,7 @@ impl FrameBudget {
             ((top as f64 * limits.nested_share as f64) as u64).min(frame.saturating_sub(total_left))
         };
         FrameBudget {
-            patches: share(top.patches(), limits.frame_patches, top.patches()),
+            patches: share(top.passes(), limits.frame_patches, top.passes()),
             texels: share(top.texels(), limits.frame_texels, top.texels()),
             rays: (top_rays as f64 * limits.nested_share as f64 / 4.0) as u64,
         }
@@ -1045,7 +1046,7 @@ fn plan_reflector(
     };
     let draws = patch_draws(&vertices, &patches, settings.resolution, eye, tally);
     let unresolved = unresolved.iter().filter(|&&u| u).count();
-    tally.patches += draws.iter().map(PatchDraw::passes).sum::<u64>();
+    tally.passes += draws.iter().map(PatchDraw::passes).sum::<u64>();
     tally.zooming_views += patches.iter().filter(|p| p.zooming.is_some()).count() as u64;
     tally.principal_up += patches.iter().filter(|p| p.principal_up).count() as u64;
     tally.unresolved += unresolved as u64;
@@ -1515,7 +1516,7 @@ fn plan_tree(
             inner: Vec::new(),
         };
     }
-    let outer_patches = level.patches().max(1);
+    let outer_patches = level.passes().max(1);
     let inner_settings = PlanSettings {
         limits: PatchLimits {
             max_patches: (settings.limits.max_patches / outer_patches as usize).max(1),
@@ -1571,11 +1572,11 @@ fn plan_tree(
         let rays_before = tally.rays;
         let planned = plan_level(p, &here, scene, eye, hidden, None, tally, false);
         let rays = tally.rays - rays_before;
-        if !budget.covers(planned.patches(), planned.texels(), rays) {
+        if !budget.covers(planned.passes(), planned.texels(), rays) {
             // Planned, not drawn: its rays were traced (and count), its passes are not made.
             // What is left cannot be trusted to cover the next one either (the zooming
             // region's traced vertices are known only once traced): the budget is spent.
-            tally.patches -= planned.patches();
+            tally.passes -= planned.passes();
             tally.map_texels -= planned.texels();
             tally.budget_cuts += 1;
             *budget = FrameBudget {
@@ -1585,8 +1586,8 @@ fn plan_tree(
             };
             continue;
         }
-        budget.spend(planned.patches(), planned.texels(), rays);
-        tally.nested_patches += planned.patches();
+        budget.spend(planned.passes(), planned.texels(), rays);
+        tally.nested_passes += planned.passes();
         tally.nested_texels += planned.texels();
         inner[r][i] = Some(plan_tree(
             p,
@@ -1947,8 +1948,8 @@ impl Technique for Pvrr {
         if peak > limit {
             return Err(GpuError::TooLarge {
                 what: format!(
-                    "pvrr's 2nd-pass vertices for this view ({} patches, {} reflectors)",
-                    tally.patches,
+                    "pvrr's 2nd-pass vertices for this view ({} 1st passes, {} reflectors)",
+                    tally.passes,
                     tree.level.reflectors.len()
                 ),
                 bytes: peak,
@@ -1989,15 +1990,15 @@ impl Technique for Pvrr {
             counters: vec![
                 ("mirrors".into(), tree.level.reflectors.len() as u64),
                 ("per-vertex rays".into(), tally.rays),
-                ("patches".into(), tally.patches),
+                ("1st passes".into(), tally.passes),
                 (
                     "patches with a principal up vector".into(),
                     tally.principal_up,
                 ),
                 ("reflection map texels".into(), tally.map_texels),
                 (
-                    "patches in levels below the top".into(),
-                    tally.nested_patches,
+                    "1st passes in levels below the top".into(),
+                    tally.nested_passes,
                 ),
                 (
                     "map texels in levels below the top".into(),
