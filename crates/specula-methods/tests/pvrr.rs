@@ -920,7 +920,7 @@ fn a_concave_magnifier_is_drawn_from_a_zooming_view() {
     let (traced_vertices, traced_centroids) =
         reflector_errors(&scene, mirror, &reference, &traced.image);
     eprintln!(
-        "pvrr concave magnifier {SIZE}²: zooming view: error at vertices {view_vertices:.4}, centroids {view_centroids:.4} ({} views, {} patches); traced: {traced_vertices:.4}, {traced_centroids:.4} ({} unresolved)",
+        "pvrr concave magnifier {SIZE}²: zooming view: error at vertices {view_vertices:.4}, centroids {view_centroids:.4} ({} zooming views, {} 1st passes); traced: {traced_vertices:.4}, {traced_centroids:.4} ({} unresolved)",
         counter(&view, "patches drawn from a zooming view"),
         counter(&view, "1st passes"),
         counter(&traced, "unresolved vertices"),

@@ -276,12 +276,15 @@ fn the_farthest_draw_keeps_the_farthest_surface_in_range_lit_from_behind() {
         (far_corner - glam::Vec3::splat(0.08)).abs().max_element() < 1e-3,
         "{far_corner}"
     );
-    // The far plane before the grey one: the red one is the farthest in range.
-    let g = pass.render(&ctx, gpu, &looking_down_z(3.0), None).unwrap();
+    // The far plane before the grey one: the red one is the farthest in range, drawn over a
+    // G-buffer that holds the background only (a view whose far plane is before both).
+    let g = pass.render(&ctx, gpu, &looking_down_z(0.5), None).unwrap();
+    let background = corner(&g);
+    assert_ne!(centre(&g), red);
     pass.draw_farthest_into(&ctx, gpu, &looking_down_z(1.5), &[], None, &g)
         .unwrap();
     assert_eq!(centre(&g), red);
-    assert_eq!(corner(&g), lit_grey, "nothing in range: kept");
+    assert_eq!(corner(&g), background, "nothing in range: kept");
     // Nothing in range: everything kept.
     let g = pass.render(&ctx, gpu, &looking_down_z(3.0), None).unwrap();
     pass.draw_farthest_into(&ctx, gpu, &looking_down_z(0.5), &[], None, &g)

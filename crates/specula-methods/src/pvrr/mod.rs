@@ -143,7 +143,7 @@
 //! kept in the eye's frame and reused while the reflector's vertices do not move relative to
 //! the eye (a spectacle lens worn, a door mirror seen by the driver), also across `prepare`
 //! of a moved scene; only the exit segments' hits P, the view volumes and the two passes are
-//! redone. Changing `max_fov`, `max_patches` or `fit_hits` empties the cache.
+//! redone. Changing `max_fov`, `max_patches`, `fit_hits` or `zooming` empties the cache.
 //!
 //! Implementation (changes no pixel): the per-vertex rays run in parallel; nothing is allocated
 //! per frame once the frame's shape is known: maps come from the raster pass's G-buffer pool,
@@ -160,7 +160,7 @@
 //! - `max_fov` (default 90, degrees): the widest view volume a patch may keep (subdivision
 //!   only). Lower gives more, less distorted maps (more 1st passes).
 //! - `max_patches` (default 256; 1 is the paper's one view per reflector): the most patches
-//!   per reflector; each costs a 1st pass. A level below the top shares this budget across all
+//!   per reflector; each costs a 1st pass (a zooming view two). A level below the top shares this budget across all
 //!   the patches of the level above (each of N outer patches plans at most
 //!   max(1, `max_patches` / N) per inner reflector), so the 1st passes of a frame stay within
 //!   `max_patches` × reflectors per level.
@@ -172,12 +172,13 @@
 //! - `nested_share` (default 8): the levels below the top may draw this many times the top
 //!   level's 1st passes and map texels and trace a quarter of that times its per-vertex rays
 //!   (0: depth 1's frame). Higher shows reflections in reflectors in more of the picture; on
-//!   the scene suite at 160 × 120 a depth-2 frame took 0.88–1.19 times depth 1's with 8
+//!   the scene suite at 160 × 120 a depth-2 frame took 0.67–1.13 times depth 1's with 8
 //!   (docs/benchmarks.md), where unbounded it took up to 24 times (the lit room).
 //! - `frame_patches` (default 2048), `frame_texels` (default 16,777,216): the most 1st passes
 //!   and map texels of a frame, all levels together; the top level's reflectors share them
-//!   first (each at most `frame_patches` / reflectors patches and a map of `frame_texels` /
-//!   (4 × reflectors) texels), the nested levels take what is left. They bound a frame's
+//!   first (each at most `frame_patches` / (2 × reflectors) patches and a map of
+//!   `frame_texels` / (8 × reflectors) texels: a zooming view draws two maps), the nested
+//!   levels take what is left. They bound a frame's
 //!   passes and its maps' memory (60 bytes a texel).
 //! - `fit_hits` (default true): view volumes fitted to the hits (above); false: to the whole
 //!   reflection lines, as §3.3, with coarser maps where the lines spread.
@@ -481,6 +482,26 @@ impl PatchDraw {
     /// The texels its 1st passes draw.
     fn texels(&self) -> u64 {
         (self.camera.width * self.camera.height) as u64 * self.passes()
+    }
+}
+
+/// A patch's 1st pass camera, `height` texels high, and with a zooming view the camera of the
+/// forward view drawn first into the same map ([`PatchDraw::fill`]).
+fn patch_cameras(patch: &Patch, height: u32) -> (CameraUniform, Option<CameraUniform>) {
+    match &patch.zooming {
+        None => (patch.extents.camera(&patch.basis, height), None),
+        Some(zooming) => {
+            // The forward view through the same texels: the zooming view's field.
+            let forward = Extents {
+                tan_x: zooming.tan_x,
+                tan_y: zooming.tan_y,
+                ..patch.extents.clone()
+            };
+            (
+                zooming.camera(&patch.basis.reversed(), height),
+                Some(upside_down(forward.camera(&patch.basis, height))),
+            )
+        }
     }
 }
 
@@ -802,6 +823,15 @@ impl LevelPlan {
             .flat_map(|r| &r.patches)
             .map(PatchDraw::passes)
             .sum()
+    }
+
+    /// Its patches drawn from a zooming view.
+    fn zooming_views(&self) -> u64 {
+        self.reflectors
+            .iter()
+            .flat_map(|r| &r.patches)
+            .filter(|patch| patch.fill.is_some())
+            .count() as u64
     }
 
     /// Its maps' texels.
@@ -1151,7 +1181,8 @@ fn unresolved_vertices(
             Some(zooming) => {
                 let q = reversed.local(p);
                 let (x, y) = (q.x.abs() / q.z.abs(), q.y.abs() / q.z.abs());
-                let shown = x <= zooming.tan_x && y <= zooming.tan_y && drawn;
+                let before_near = q.z > 0.0 && q.z < zooming.near;
+                let shown = x <= zooming.tan_x && y <= zooming.tan_y && drawn && !before_near;
                 !shown
             }
         };
@@ -1238,21 +1269,7 @@ fn patch_draws(
             let share = (solid_angle / total_solid_angle).clamp(0.0, 1.0);
             let height = ((resolution as f32 * share.sqrt()).round() as u32)
                 .clamp(MIN_MAP_TEXELS.min(resolution), resolution);
-            let (camera, fill) = match &patch.zooming {
-                None => (patch.extents.camera(&patch.basis, height), None),
-                Some(zooming) => {
-                    // The forward view through the same texels: the zooming view's field.
-                    let forward = Extents {
-                        tan_x: zooming.tan_x,
-                        tan_y: zooming.tan_y,
-                        ..patch.extents.clone()
-                    };
-                    (
-                        zooming.camera(&patch.basis.reversed(), height),
-                        Some(upside_down(forward.camera(&patch.basis, height))),
-                    )
-                }
-            };
+            let (camera, fill) = patch_cameras(patch, height);
             // A zooming view's P beyond its viewpoint projects through it, where the map holds
             // the forward view; elsewhere an unresolved vertex's P is mirrored to the front
             // for the blend with its traced radiance.
@@ -1274,7 +1291,13 @@ fn patch_draws(
                             MirrorVertex {
                                 position: m.positions[i].to_array(),
                                 normal: m.normals[i].to_array(),
-                                uv: map_uv(&camera, h[i], mirror_behind),
+                                uv: if patch.zooming.is_some() && vertices.unresolved[i] {
+                                    // Its P may lie on the viewpoint's plane: its line's
+                                    // direction, through its exit point, stays in the map.
+                                    map_uv(&camera, channel.exits[i].origin, false)
+                                } else {
+                                    map_uv(&camera, h[i], mirror_behind)
+                                },
                                 weight: channel.weights[i],
                                 unresolved: vertices.unresolved[i] as u32 as f32,
                                 traced: traced.to_array(),
@@ -1577,6 +1600,7 @@ fn plan_tree(
             // What is left cannot be trusted to cover the next one either (the zooming
             // region's traced vertices are known only once traced): the budget is spent.
             tally.passes -= planned.passes();
+            tally.zooming_views -= planned.zooming_views();
             tally.map_texels -= planned.texels();
             tally.budget_cuts += 1;
             *budget = FrameBudget {
@@ -1885,10 +1909,11 @@ impl Technique for Pvrr {
         self.timer.start(gpu);
         let camera_uniform = raster::camera_uniform(camera, &scene.bounds(), width, height);
         // The top level fits the frame budget by itself: each reflector's patches and map
-        // (at most 4 times as wide as high) within its share of it.
+        // (at most 4 times as wide as high) within its share of it, each patch perhaps a
+        // zooming view (two 1st passes, twice the texels).
         let reflectors = prepared.reflectors.len().max(1) as u64;
-        let top_patches = (self.frame_patches / reflectors).max(1) as usize;
-        let top_resolution = ((self.frame_texels / reflectors / 4) as f64).sqrt() as u32;
+        let top_patches = (self.frame_patches / reflectors / 2).max(1) as usize;
+        let top_resolution = ((self.frame_texels / reflectors / 8) as f64).sqrt() as u32;
         let settings = PlanSettings {
             resolution: self.resolution.min(top_resolution.max(MIN_MAP_TEXELS)),
             limits: PatchLimits {
@@ -2037,5 +2062,77 @@ fn parse_ior(value: &str) -> Result<Option<Vec3>, &'static str> {
         [i] => Ok(Some(Vec3::splat(i))),
         [r, g, b] => Ok(Some(Vec3::new(r, g, b))),
         _ => Err("expected one index of refraction or three (red,green,blue)"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A zooming view and the forward view drawn upside down into the same map agree on every
+    /// line through the viewpoint: a point before the viewpoint (the zooming side) and a point
+    /// beyond it land on the same texel in both, the one projected, the other through the
+    /// viewpoint (w < 0), so the map's forward content sits where the 2nd pass looks it up.
+    #[test]
+    fn a_zooming_view_and_its_upside_down_forward_view_share_their_texels() {
+        let basis = ViewBasis {
+            viewpoint: Vec3::new(0.3, 1.2, 2.0),
+            right: Vec3::new(0.0, 0.0, -1.0),
+            up: Vec3::Y,
+            forward: Vec3::X,
+        };
+        // Hits on both sides of the viewpoint, spread over a 40 × 30° field.
+        let segments: Vec<(Vec3, Vec3)> = (0..12)
+            .map(|k| {
+                let (a, b) = ((k % 4) as f32 / 3.0 - 0.5, (k / 4) as f32 / 2.0 - 0.5);
+                let direction = basis.forward + basis.right * 0.7 * a + basis.up * 0.5 * b;
+                let side = if k % 2 == 0 { 1.5 } else { -0.8 };
+                (
+                    basis.viewpoint - direction * 2.0,
+                    basis.viewpoint + direction * side,
+                )
+            })
+            .collect();
+        let patch = Patch {
+            triangles: vec![0],
+            basis,
+            extents: Extents::new(
+                &basis,
+                &segments,
+                &[basis.viewpoint + basis.forward * 9.0],
+                false,
+            ),
+            zooming: Some(Extents::zooming(&basis.reversed(), &segments)),
+            principal_up: false,
+            fallback: None,
+        };
+        let (zooming, fill) = patch_cameras(&patch, 64);
+        let fill = fill.expect("a zooming patch has a forward view to draw first");
+        assert_eq!((zooming.width, zooming.height), (fill.width, fill.height));
+        for &(_, p) in &segments {
+            let (z, f) = (map_uv(&zooming, p, false), map_uv(&fill, p, false));
+            assert!(
+                (z[0] - f[0]).abs() < 1e-4 && (z[1] - f[1]).abs() < 1e-4,
+                "{z:?} {f:?}"
+            );
+            assert!(
+                z.iter().all(|c| (0.0..=1.0).contains(c)),
+                "{z:?} outside the map"
+            );
+        }
+        // And the direction each texel of the upside-down view shows is the opposite of the
+        // zooming view's, as its background is drawn (camera_ray_direction).
+        let direction = |c: &CameraUniform, u: f32, v: f32| {
+            let x = (2.0 * u - 1.0) * c.tan_half_fov_y * c.aspect;
+            let y = (1.0 - 2.0 * v) * c.tan_half_fov_y;
+            (Vec3::from(c.forward_world)
+                + x * Vec3::from(c.right_world)
+                + y * Vec3::from(c.up_world))
+            .normalize()
+        };
+        for (u, v) in [(0.1, 0.2), (0.5, 0.5), (0.9, 0.7)] {
+            let sum = direction(&zooming, u, v) + direction(&fill, u, v);
+            assert!(sum.length() < 1e-5, "{sum}");
+        }
     }
 }

@@ -137,7 +137,8 @@ impl Extents {
     /// content, drawn first). The far plane lies just before the nearest exit point (the
     /// mirror), so that the reversed depth test (farthest kept) finds the surface nearest the
     /// mirror; where a P lies beyond that, the far plane moves past it. Its `behind` counts
-    /// the hits too close to the viewpoint's plane to show (beyond `MAX_TAN`).
+    /// the hits too close to the viewpoint's plane to show (beyond `MAX_TAN`, or before the
+    /// near plane).
     pub fn zooming(basis: &ViewBasis, segments: &[(Vec3, Vec3)]) -> Extents {
         let mirror_depth = segments
             .iter()
@@ -155,13 +156,16 @@ impl Extents {
             farthest * 1.001
         }
         .max(1e-3);
-        let near = (far * 1e-3).min(0.5 * nearest);
+        // The reversed depth test decides at the far end, where depth is least precise: the
+        // near plane stays within 10⁴ of the far one, and a P nearer than that is not shown.
+        let near = (0.5 * nearest).clamp(far * 1e-4, far * 1e-3);
         let (mut tan_x, mut tan_y) = (1e-3f32, 1e-3f32);
         let mut behind = 0;
         for &(_, p) in segments {
             let q = basis.local(p);
             let (x, y) = (q.x.abs() / q.z.abs(), q.y.abs() / q.z.abs());
-            if x.max(y) > MAX_TAN || !x.is_finite() || !y.is_finite() {
+            let clipped = q.z > 0.0 && q.z < near;
+            if x.max(y) > MAX_TAN || !x.is_finite() || !y.is_finite() || clipped {
                 behind += 1;
                 continue;
             }
@@ -285,6 +289,16 @@ fn candidate_bases(viewpoint: Vec3, forward: Vec3, principal: Option<[Vec3; 2]>)
 }
 
 impl Patch {
+    /// Itself without its zooming view if that is wider than `max_fov_deg`: a wider one is a
+    /// worse map than ray tracing those hits (on the suite's lit room, a teapot patch's 173°
+    /// zooming view took the mean FLIP from 0.131 to 0.133).
+    fn zooming_within(self, max_fov_deg: f32) -> Patch {
+        Patch {
+            zooming: self.zooming.filter(|z| z.fov_deg() <= max_fov_deg),
+            ..self
+        }
+    }
+
     /// The view volume its 2nd pass reads: the zooming one where it has one.
     pub fn map_extents(&self) -> &Extents {
         self.zooming.as_ref().unwrap_or(&self.extents)
@@ -420,7 +434,8 @@ impl PatchInput<'_> {
             .into_iter()
             .enumerate()
             .map(|(k, basis)| {
-                let (extents, zooming) = self.extents_in(&basis, &segments, &drawn, limits);
+                let (extents, zooming) =
+                    self.extents_in(&basis, &segments, &drawn, limits.zooming_view);
                 Patch {
                     triangles: triangles.to_vec(),
                     basis,
@@ -430,24 +445,25 @@ impl PatchInput<'_> {
                     fallback: fallback.clone(),
                 }
             })
+            // Whether a zooming view is wanted does not depend on the up vector (depth runs
+            // along `forward`), so every candidate compares the same kind of volume.
             .min_by(|a, b| {
                 let area = |p: &Patch| p.map_extents().tan_x * p.map_extents().tan_y;
                 area(a).total_cmp(&area(b))
             })
             .expect("the world-up basis always exists")
+            .zooming_within(limits.max_fov_deg)
     }
 
     /// The forward view volume of `basis` around `segments` and, with `zooming_view` where
     /// enough hits lie behind the viewpoint (`MIN_ZOOMING_HITS`) on surfaces the raster draws
-    /// (`drawn`), the zooming one if it is no wider than `max_fov` (a wider one is a worse
-    /// map than ray tracing those hits: on the suite's lit room, a teapot patch's 173° view
-    /// took its mean FLIP from 0.131 to 0.133).
+    /// (`drawn`), the zooming one.
     fn extents_in(
         &self,
         basis: &ViewBasis,
         segments: &[(Vec3, Vec3)],
         drawn: &[bool],
-        limits: &PatchLimits,
+        zooming_view: bool,
     ) -> (Extents, Option<Extents>) {
         let extents = Extents::new(basis, segments, self.scene_corners, self.whole_lines);
         let shown_behind = segments
@@ -455,11 +471,9 @@ impl PatchInput<'_> {
             .zip(drawn)
             .filter(|&(&(_, p), &drawn)| drawn && basis.local(p).z <= 0.0)
             .count();
-        let zooming = (limits.zooming_view
-            && shown_behind >= MIN_ZOOMING_HITS
-            && 4 * shown_behind >= extents.hits)
-            .then(|| Extents::zooming(&basis.reversed(), segments))
-            .filter(|zooming| zooming.fov_deg() <= limits.max_fov_deg);
+        let zooming =
+            (zooming_view && shown_behind >= MIN_ZOOMING_HITS && 4 * shown_behind >= extents.hits)
+                .then(|| Extents::zooming(&basis.reversed(), segments));
         (extents, zooming)
     }
 
@@ -470,13 +484,14 @@ impl PatchInput<'_> {
             &patch.basis,
             &self.segments_of(&vertices),
             &self.drawn_of(&vertices),
-            limits,
+            limits.zooming_view,
         );
         Patch {
             extents,
             zooming,
             ..patch.clone()
         }
+        .zooming_within(limits.max_fov_deg)
     }
 
     /// The adaptive subdivision §4.1 sketches: the reflector's triangles that the eye can see
@@ -575,5 +590,51 @@ mod tests {
             "fitted {fitted:?}, whole lines {whole:?}"
         );
         assert_eq!((fitted.near, fitted.far), (whole.near, whole.far));
+    }
+
+    /// A concave mirror's zooming view: from the viewpoint back toward the mirror, its far
+    /// plane just before the nearest exit point, every hit inside it (those beyond the
+    /// viewpoint through it), a hit on the viewpoint's plane counted as not shown.
+    #[test]
+    fn a_zooming_volume_ends_before_the_mirror_and_holds_every_hit() {
+        let basis = ViewBasis {
+            viewpoint: Vec3::new(0.0, 0.0, 3.0),
+            right: Vec3::NEG_X,
+            up: Vec3::Y,
+            forward: Vec3::NEG_Z,
+        };
+        // Exit points on the mirror 2.6–3 before the viewpoint; hits 1–2 before it, and
+        // beyond it; one on its plane.
+        let mut segments: Vec<(Vec3, Vec3)> = (0..8)
+            .map(|k| {
+                let x = k as f32 * 0.1 - 0.35;
+                let mirror = Vec3::new(x, 0.2 * x, 0.4 * x * x);
+                let toward = basis.viewpoint - mirror;
+                let t = if k % 3 == 0 {
+                    1.5
+                } else {
+                    0.3 + 0.05 * k as f32
+                };
+                (mirror, mirror + toward * t)
+            })
+            .collect();
+        segments.push((Vec3::new(0.5, 0.0, 0.1), basis.viewpoint + Vec3::X * 0.4));
+        let zooming = Extents::zooming(&basis, &segments);
+        assert!(0.0 < zooming.near && zooming.near < zooming.far);
+        let nearest_mirror = segments
+            .iter()
+            .map(|&(o, _)| basis.local(o).z)
+            .fold(f32::INFINITY, f32::min);
+        assert!(zooming.far < nearest_mirror, "{zooming:?}");
+        assert!(zooming.far > nearest_mirror * 0.99, "{zooming:?}");
+        assert_eq!(zooming.behind, 1, "the hit on the viewpoint's plane");
+        for &(_, p) in &segments[..8] {
+            let q = basis.local(p);
+            assert!(q.x.abs() / q.z.abs() <= zooming.tan_x, "{q}");
+            assert!(q.y.abs() / q.z.abs() <= zooming.tan_y, "{q}");
+            if q.z > 0.0 {
+                assert!(zooming.near < q.z && q.z < zooming.far, "{q} {zooming:?}");
+            }
+        }
     }
 }
