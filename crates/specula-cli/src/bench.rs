@@ -15,8 +15,9 @@ use serde::Serialize;
 use specula_methods::{Context, Label, LiveScene};
 
 /// The version of [`BenchReport`]'s JSON. 3: runs are keyed by `label` (`c3rc`,
-/// `c3rc:paper`), with the method and the preset it ran.
-pub const SCHEMA_VERSION: u32 = 3;
+/// `c3rc:paper`), with the method and the preset it ran. 4: `failed` lists the runs that
+/// failed, with their errors.
+pub const SCHEMA_VERSION: u32 = 4;
 use specula_scene::Scene;
 
 /// The exact methods every run is compared with: the CPU reference and gpu-trace.
@@ -70,6 +71,17 @@ pub struct MethodBench {
     pub rays_per_second: Option<f64>,
 }
 
+/// A method that failed on a scene (to prepare, or to render a frame): its row holds the
+/// error; the other methods are timed without it.
+#[derive(Debug, Serialize)]
+pub struct BenchFailure {
+    pub scene: String,
+    pub label: String,
+    pub mode: String,
+    /// The error and its causes, outermost first.
+    pub error: String,
+}
+
 /// A whole `specula bench` run: where and when, and every run of every scene.
 #[derive(Debug, Serialize)]
 pub struct BenchReport {
@@ -81,6 +93,8 @@ pub struct BenchReport {
     /// Whether the adapter offers hardware ray queries (gpu-trace does not use them).
     pub ray_queries: bool,
     pub runs: Vec<MethodBench>,
+    /// The runs that failed, each with its error (version 4).
+    pub failed: Vec<BenchFailure>,
 }
 
 /// Today's UTC date as YYYY-MM-DD.
@@ -149,7 +163,8 @@ fn spread(mut values: Vec<f64>) -> Spread {
     }
 }
 
-/// Times the labels `methods` on `scene`. The `parameters` (checked beforehand with
+/// Times the labels `methods` on `scene`; a method that fails to prepare or to render a frame
+/// is a failure with its error, and the others are timed on. The `parameters` (checked beforehand with
 /// `specula_methods::check_settings`) go to the labels in `asked` they reach, after their
 /// presets; the exact bases added to the list without being asked for keep their defaults (so
 /// that, say, image-space's `-p mode=ray-plane` is not handed to gpu-trace's own `mode`).
@@ -163,7 +178,7 @@ pub fn run(
     width: u32,
     height: u32,
     frames: u32,
-) -> Result<Vec<MethodBench>> {
+) -> Result<(Vec<MethodBench>, Vec<BenchFailure>)> {
     /// One method (and mode) being timed.
     struct Timed {
         label: Label,
@@ -182,6 +197,14 @@ pub fn run(
     let camera = live.scene().camera.clone();
     let adapter = ctx.describe();
     let mut timed = Vec::new();
+    let mut failed = Vec::new();
+    let failure =
+        |label: &Label, mode: &str, error: specula_methods::TechniqueError| BenchFailure {
+            scene: scene_name.clone(),
+            label: label.to_string(),
+            mode: mode.to_string(),
+            error: specula_compare::error_chain(&error),
+        };
     for name in methods {
         let label = Label::parse(name)?;
         let modes: &[&'static str] = if label.info.param("dynamic").is_some() {
@@ -202,7 +225,10 @@ pub fn run(
                 )?;
             }
             let start = std::time::Instant::now();
-            technique.prepare(ctx, &live)?;
+            if let Err(error) = technique.prepare(ctx, &live) {
+                failed.push(failure(&label, mode, error));
+                continue;
+            }
             let prepare_ms = start.elapsed().as_secs_f64() * 1e3;
             timed.push(Timed {
                 label: Label::parse(name)?,
@@ -224,8 +250,16 @@ pub fn run(
     // Round by round, one frame of each method: a machine whose speed drifts during the run
     // (another tenant, the clock) slows every method alike, so their ratios hold.
     for round in 0..WARM_UP_FRAMES + frames {
-        for t in &mut timed {
-            let frame = t.technique.render(ctx, &live, &camera, width, height)?;
+        let mut failed_now = Vec::new();
+        for (k, t) in timed.iter_mut().enumerate() {
+            let frame = match t.technique.render(ctx, &live, &camera, width, height) {
+                Ok(frame) => frame,
+                Err(error) => {
+                    failed.push(failure(&t.label, t.mode, error));
+                    failed_now.push(k);
+                    continue;
+                }
+            };
             bar.inc(1);
             if round < WARM_UP_FRAMES {
                 continue;
@@ -248,9 +282,12 @@ pub fn run(
                 }
             }
         }
+        for k in failed_now.into_iter().rev() {
+            timed.remove(k);
+        }
     }
     bar.finish_and_clear();
-    Ok(timed
+    let runs = timed
         .into_iter()
         .map(|t| {
             let frame = spread(t.totals);
@@ -280,10 +317,11 @@ pub fn run(
                 rays_per_second,
             }
         })
-        .collect())
+        .collect();
+    Ok((runs, failed))
 }
 
-pub fn print(results: &[MethodBench]) {
+pub fn print(results: &[MethodBench], failed: &[BenchFailure]) {
     for r in results {
         let mode = if r.mode == "-" {
             String::new()
@@ -300,6 +338,14 @@ pub fn print(results: &[MethodBench]) {
                 s.median_ms, s.min_ms, s.max_ms
             );
         }
+    }
+    for f in failed {
+        let mode = if f.mode == "-" {
+            String::new()
+        } else {
+            format!(" [{}]", f.mode)
+        };
+        println!("{}: {}{mode} failed: {}", f.scene, f.label, f.error);
     }
 }
 
@@ -355,6 +401,15 @@ pub fn markdown(report: &BenchReport) -> String {
             r.rays_per_second
                 .map(|v| format!("{:.2}", v / 1e6))
                 .unwrap_or_else(|| "-".into())
+        ));
+    }
+    for f in &report.failed {
+        out.push_str(&format!(
+            "| {} | {} | {} | failed: {} | | | | | |\n",
+            f.scene,
+            f.label,
+            f.mode,
+            f.error.replace('|', "\\|")
         ));
     }
     out
@@ -422,5 +477,30 @@ mod tests {
         assert_eq!((odd.min_ms, odd.median_ms, odd.max_ms), (1.0, 5.0, 9.0));
         let even = spread(vec![10.0, 3.0, 1.0, 2.0]);
         assert_eq!((even.min_ms, even.median_ms, even.max_ms), (1.0, 2.5, 10.0));
+    }
+
+    /// A method that fails is a row with its error; the others are timed on.
+    #[test]
+    fn a_failing_method_is_a_row_with_its_error_and_the_others_are_timed() {
+        let ctx = Context { gpu: None };
+        let scene = specula_scene::load("door-mirror").unwrap();
+        let methods = vec!["pvrr".to_string(), cpu_reference().to_string()];
+        let (runs, failed) = super::run(scene, &ctx, &methods, &methods, &[], 32, 24, 1).unwrap();
+        assert_eq!(failed.len(), 1);
+        assert_eq!(failed[0].label, "pvrr");
+        assert!(failed[0].error.contains("GPU"), "{}", failed[0].error);
+        assert_eq!(runs.len(), 1);
+        assert_eq!(runs[0].label, cpu_reference());
+        assert!(runs[0].frame.median_ms > 0.0);
+        let report = BenchReport {
+            schema_version: SCHEMA_VERSION,
+            adapter: String::new(),
+            driver: String::new(),
+            date: utc_date(),
+            ray_queries: false,
+            runs,
+            failed,
+        };
+        assert!(markdown(&report).contains("| door-mirror | pvrr | - | failed: "));
     }
 }

@@ -423,6 +423,9 @@ fn print_comparison(r: &specula_compare::Report) {
             );
         }
     }
+    for f in &r.failed {
+        println!("{:<16}failed: {}", f.label, f.error);
+    }
 }
 
 /// The methods × scenes table: mean FLIP (frame ms) per cell.
@@ -448,10 +451,14 @@ fn print_suite(summary: &specula_compare::suite::SuiteReport) {
         for m in &summary.methods {
             match row.methods.iter().find(|c| &c.label == m) {
                 Some(c) => print!("{:>22}", format!("{} ({:.1})", c.flip_text(), c.total_ms)),
+                None if row.failure(m).is_some() => print!("{:>22}", "failed"),
                 None => print!("{:>22}", "-"),
             }
         }
         println!();
+        for f in &row.failed {
+            println!("{:<width$}  {} failed: {}", "", f.label, f.error);
+        }
     }
 }
 
@@ -667,6 +674,14 @@ fn compare(args: CompareArgs) -> Result<()> {
     }
     print_comparison(&comparison.report);
     println!("report: {}", html.display());
+    let failed = &comparison.report.failed;
+    if !failed.is_empty() {
+        let labels: Vec<&str> = failed.iter().map(|f| f.label.as_str()).collect();
+        anyhow::bail!(
+            "{} failed (see above); the other methods' figures are in the report",
+            labels.join(", ")
+        );
+    }
     Ok(())
 }
 
@@ -711,6 +726,12 @@ fn compare_suite(args: &CompareArgs, methods: &[String], infos: &[&MethodInfo]) 
         anyhow::bail!(
             "{failed} of {} scenes failed (see above)",
             summary.scenes.len()
+        );
+    }
+    let failed_methods: usize = summary.scenes.iter().map(|r| r.failed.len()).sum();
+    if failed_methods > 0 {
+        anyhow::bail!(
+            "{failed_methods} method runs failed (see above); the others' figures are in the report"
         );
     }
     Ok(())
@@ -762,6 +783,7 @@ fn compare_each_scene(
                 row.methods
                     .iter()
                     .map(|c| format!("{} {}", c.label, c.flip_text()))
+                    .chain(row.failed.iter().map(|f| format!("{} failed", f.label)))
                     .collect::<Vec<_>>()
                     .join(", ")
             ),
@@ -794,10 +816,11 @@ fn bench(args: BenchArgs) -> Result<()> {
     let ctx = context_for(&asked)?;
     let timed = bench::with_bases(&methods, ctx.gpu.is_some());
     let mut runs = Vec::new();
+    let mut failed = Vec::new();
     for source in &args.scenes {
         let scene = load_scene(source)?;
         let height = height_for(&scene, args.width, args.height);
-        runs.extend(bench::run(
+        let (scene_runs, scene_failed) = bench::run(
             scene,
             &ctx,
             &timed,
@@ -806,11 +829,13 @@ fn bench(args: BenchArgs) -> Result<()> {
             args.width,
             height,
             args.frames,
-        )?);
+        )?;
+        runs.extend(scene_runs);
+        failed.extend(scene_failed);
     }
     bench::add_ratios(&mut runs);
-    bench::print(&runs);
-    let report = bench_report(&ctx, runs);
+    bench::print(&runs, &failed);
+    let report = bench_report(&ctx, runs, failed);
     if let Some(json) = &args.json {
         std::fs::write(json, serde_json::to_string_pretty(&report)?)
             .with_context(|| format!("writing {}", json.display()))?;
@@ -819,12 +844,22 @@ fn bench(args: BenchArgs) -> Result<()> {
         std::fs::write(markdown, bench::markdown(&report))
             .with_context(|| format!("writing {}", markdown.display()))?;
     }
+    if !report.failed.is_empty() {
+        anyhow::bail!(
+            "{} runs failed (see above); the others were timed",
+            report.failed.len()
+        );
+    }
     Ok(())
 }
 
 /// The bench report of `runs`: the adapter and driver of `ctx`, today's date, and whether the
 /// adapter offers hardware ray queries.
-fn bench_report(ctx: &Devices, runs: Vec<bench::MethodBench>) -> bench::BenchReport {
+fn bench_report(
+    ctx: &Devices,
+    runs: Vec<bench::MethodBench>,
+    failed: Vec<bench::BenchFailure>,
+) -> bench::BenchReport {
     bench::BenchReport {
         schema_version: bench::SCHEMA_VERSION,
         adapter: ctx.describe(),
@@ -843,6 +878,7 @@ fn bench_report(ctx: &Devices, runs: Vec<bench::MethodBench>) -> bench::BenchRep
             .as_ref()
             .is_some_and(specula_methods::gpu_trace::ray_queries_supported),
         runs,
+        failed,
     }
 }
 

@@ -552,7 +552,8 @@ fn bench_paper_times_each_method_beside_its_published_algorithm() {
     );
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("b.json")).unwrap()).unwrap();
-    assert_eq!(json["schema_version"], 3);
+    assert_eq!(json["schema_version"], 4);
+    assert_eq!(json["failed"], serde_json::json!([]));
     let runs = json["runs"].as_array().unwrap();
     let run = |label: &str| {
         runs.iter()

@@ -8,7 +8,8 @@
 //! docs/compare.schema.json). A technique's time is that of its second frame (the first pays
 //! for shader compilation); the reference's is its CPU render time, BVH build included. Where
 //! there is a GPU, each technique's time is also put beside `gpu-trace`'s (the exact answer on
-//! the same GPU; timed even when not among the methods compared).
+//! the same GPU; timed even when not among the methods compared). A method that fails to
+//! prepare or render is a row holding its error (`failed`); the others still run and report.
 
 pub mod metrics;
 pub mod suite;
@@ -33,8 +34,9 @@ pub use metrics::Metrics;
 /// The version of [`Report`]'s JSON (docs/compare.schema.json). 2: a method's `metrics` is
 /// over the surfaces it shades itself (null when none) and `delegated` holds the others;
 /// `mirror_pixels` and `refractor_pixels` split the mask. 3: methods are keyed by `label`
-/// (`c3rc`, `c3rc:paper`), with the `preset` it runs (null for the defaults).
-pub const SCHEMA_VERSION: u32 = 3;
+/// (`c3rc`, `c3rc:paper`), with the `preset` it runs (null for the defaults). 4: `failed`
+/// lists the methods that could not be measured, each with its error.
+pub const SCHEMA_VERSION: u32 = 4;
 
 #[derive(Debug, thiserror::Error)]
 pub enum CompareError {
@@ -130,6 +132,30 @@ pub struct DelegatedReport {
     pub metrics: Metrics,
 }
 
+/// A method that failed to prepare or render: its row holds the error instead of figures.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct FailedMethod {
+    pub label: String,
+    pub method: String,
+    /// The error and its causes, outermost first.
+    pub error: String,
+}
+
+/// `error` with its causes, as `anyhow` writes `{:#}`: "outer: inner: innermost".
+pub fn error_chain(error: &(dyn std::error::Error + 'static)) -> String {
+    let mut text = error.to_string();
+    let mut source = error.source();
+    while let Some(cause) = source {
+        let cause_text = cause.to_string();
+        if !text.ends_with(&cause_text) {
+            text.push_str(": ");
+            text.push_str(&cause_text);
+        }
+        source = cause.source();
+    }
+    text
+}
+
 #[derive(Clone, Debug, Serialize)]
 pub struct Report {
     pub schema_version: u32,
@@ -146,6 +172,9 @@ pub struct Report {
     /// gpu-trace's frame time on this run's GPU (null without a GPU).
     pub gpu_trace_ms: Option<f64>,
     pub methods: Vec<MethodReport>,
+    /// The methods asked for that failed (and gpu-trace where its timing, the second
+    /// speed-up's base, failed), in the order asked.
+    pub failed: Vec<FailedMethod>,
 }
 
 /// The report plus the images it refers to.
@@ -261,13 +290,29 @@ pub fn compare(
 
     let mut methods = Vec::new();
     let mut method_images = Vec::new();
+    let mut failed = Vec::new();
     for (label, technique) in techniques.iter_mut() {
         progress(&label.to_string());
-        technique.prepare(ctx, &live)?;
-        // One untimed frame first: the first frame pays for shader compilation and first use.
-        technique.render(ctx, &live, &scene.camera, width, height)?;
-        let frame = technique.render(ctx, &live, &scene.camera, width, height)?;
-        let image = frame.image(ctx)?;
+        let measured = (|| {
+            technique.prepare(ctx, &live)?;
+            // One untimed frame first: the first frame pays for shader compilation and first
+            // use.
+            technique.render(ctx, &live, &scene.camera, width, height)?;
+            let frame = technique.render(ctx, &live, &scene.camera, width, height)?;
+            let image = frame.image(ctx)?;
+            Ok::<_, TechniqueError>((frame, image))
+        })();
+        let (frame, image) = match measured {
+            Ok(measured) => measured,
+            Err(error) => {
+                failed.push(FailedMethod {
+                    label: label.to_string(),
+                    method: technique.name().to_string(),
+                    error: error_chain(&error),
+                });
+                continue;
+            }
+        };
         let flip = metrics::flip_map(&reference, &image);
         let (metrics, delegated) =
             method_figures(technique.info(), &reference, &image, &flip, &classes);
@@ -315,10 +360,26 @@ pub fn compare(
                 gpu_trace.as_mut(),
                 &[format!("max_depth={}", options.max_depth)],
             )?;
-            gpu_trace.prepare(ctx, &live)?;
-            gpu_trace.render(ctx, &live, &scene.camera, width, height)?;
-            let frame = gpu_trace.render(ctx, &live, &scene.camera, width, height)?;
-            Some(frame.total_milliseconds())
+            let timed = (|| {
+                gpu_trace.prepare(ctx, &live)?;
+                gpu_trace.render(ctx, &live, &scene.camera, width, height)?;
+                let frame = gpu_trace.render(ctx, &live, &scene.camera, width, height)?;
+                Ok::<_, TechniqueError>(frame.total_milliseconds())
+            })();
+            match timed {
+                Ok(ms) => Some(ms),
+                Err(error) => {
+                    failed.push(FailedMethod {
+                        label: specula_methods::gpu_trace::INFO.name.to_string(),
+                        method: specula_methods::gpu_trace::INFO.name.to_string(),
+                        error: format!(
+                            "timing the second speed-up's base: {}",
+                            error_chain(&error)
+                        ),
+                    });
+                    None
+                }
+            }
         }
         None => None,
     };
@@ -343,6 +404,7 @@ pub fn compare(
             },
             gpu_trace_ms,
             methods,
+            failed,
         },
         reference,
         method_images,
@@ -460,6 +522,13 @@ impl Comparison {
                 ));
             }
         }
+        for f in &r.failed {
+            rows.push_str(&format!(
+                "<tr class=\"failed\"><td>{}</td><td colspan=\"9\">failed: {}</td></tr>\n",
+                escape(&f.label),
+                escape(&f.error)
+            ));
+        }
         let mut figures = format!(
             "<figure><img src=\"{}\"><figcaption>reference ({} spp, depth {}, {:.1} ms)</figcaption></figure>\n",
             data_uri(&self.reference.to_srgb8()),
@@ -491,6 +560,7 @@ table {{ border-collapse: collapse; margin: 1em 0; }}
 td, th {{ border: 1px solid #bbb; padding: 4px 8px; text-align: right; vertical-align: top; }}
 td:first-child, th:first-child {{ text-align: left; }}
 tr.delegated td {{ color: #666; font-style: italic; }}
+tr.failed td {{ color: #a00; text-align: left; }}
 figure {{ display: inline-block; margin: 0.5em; }}
 img {{ image-rendering: pixelated; width: {display_width}px; }}
 </style></head><body>
@@ -499,7 +569,7 @@ img {{ image-rendering: pixelated; width: {display_width}px; }}
 dielectric ({mirrors} mirror, {refractors} refractor; from the primary hits, as the G-buffer's IDs): RMSE and PSNR on
 linear radiance clamped to [0, 1]; FLIP on the sRGB images. A method's row counts the surfaces it shades itself; the
 surfaces it hands to another method (c3rc's refractors are envmap's) are on a row of their own below it, naming that
-method: that figure is the other method's.
+method: that figure is the other method's. A method that failed is a row with its error.
 Speed-up is the CPU reference's render time over the technique's frame time; the next column is gpu-trace's frame
 time on the same GPU over the technique's ({gpu_trace}).</p>
 <table>

@@ -10,13 +10,14 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 use specula_methods::SurfaceClass;
 
-use crate::{escape, write_error, CompareError, Comparison};
+use crate::{escape, write_error, CompareError, Comparison, FailedMethod};
 
 /// The version of [`SuiteReport`]'s JSON (docs/compare-suite.schema.json). 2: a cell's figures
 /// are over the surfaces the method shades itself (null when none), `pixels` counts those, and
 /// `delegated` lists the others. 3: cells and columns are keyed by `label` (`c3rc`,
-/// `c3rc:paper`).
-pub const SCHEMA_VERSION: u32 = 3;
+/// `c3rc:paper`). 4: a row's `failed` lists the methods that failed on its scene, with their
+/// errors (the others are in `methods`).
+pub const SCHEMA_VERSION: u32 = 4;
 
 /// One method's figures on one scene, under one label.
 #[derive(Clone, Debug, Serialize)]
@@ -79,8 +80,20 @@ pub struct SuiteRow {
     /// gpu-trace's frame time on the same GPU (None without a GPU, or when the scene failed).
     pub gpu_trace_ms: Option<f64>,
     pub methods: Vec<SuiteCell>,
+    /// The methods that failed on this scene, each with its error.
+    pub failed: Vec<FailedMethod>,
     /// Why the scene has no figures; null when it has them.
     pub error: Option<String>,
+}
+
+impl SuiteRow {
+    /// The error of the method `label` on this scene, if it failed.
+    pub fn failure(&self, label: &str) -> Option<&str> {
+        self.failed
+            .iter()
+            .find(|f| f.label == label)
+            .map(|f| f.error.as_str())
+    }
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -165,6 +178,7 @@ pub fn scene_row(
                 reference_ms: 0.0,
                 gpu_trace_ms: None,
                 methods: Vec::new(),
+                failed: Vec::new(),
                 error: Some(message.to_string()),
             })
         }
@@ -206,6 +220,7 @@ pub fn scene_row(
                     .collect(),
             })
             .collect(),
+        failed: r.failed.clone(),
         error: None,
     })
 }
@@ -295,7 +310,13 @@ fn suite_html(report: &SuiteReport) -> String {
                         .collect::<String>(),
                     c.total_ms
                 )),
-                None => rows.push_str("<td>–</td><td>–</td>"),
+                None => match row.failure(method) {
+                    Some(error) => rows.push_str(&format!(
+                        "<td colspan=\"2\" class=\"error\">failed: {}</td>",
+                        escape(error)
+                    )),
+                    None => rows.push_str("<td>–</td><td>–</td>"),
+                },
             }
         }
         rows.push_str("</tr>\n");

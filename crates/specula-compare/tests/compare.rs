@@ -236,3 +236,46 @@ fn one_method_runs_under_several_labels_keyed_in_rows_images_and_json() {
     let elsewhere = error(&["c3rc"], &["c3rc:paper.points=5000"]);
     assert!(elsewhere.contains("not in this run (c3rc)"), "{elsewhere}");
 }
+
+/// One failing method does not stop the scene: without a GPU, pvrr fails (it needs one) and
+/// its row holds the error, while vertex tracing (a CPU method) is measured and reported; the
+/// JSON (schema version 4) and the page both carry the failure.
+#[test]
+fn a_failing_method_gets_its_error_in_its_row_and_the_others_still_report() {
+    let ctx = specula_methods::Context { gpu: None };
+    let scene = specula_scene::load("door-mirror").unwrap();
+    let options = Options {
+        width: 48,
+        height: 36,
+        methods: vec!["pvrr".into(), "vertex-tracing".into()],
+        spp: 1,
+        max_depth: 8,
+        parameters: vec![],
+    };
+    let comparison = compare(&scene, &ctx, &options, &|_| {}).unwrap();
+    let r = &comparison.report;
+    assert_eq!(r.failed.len(), 1, "{:?}", r.failed);
+    let failure = &r.failed[0];
+    assert_eq!(
+        (failure.label.as_str(), failure.method.as_str()),
+        ("pvrr", "pvrr")
+    );
+    eprintln!("pvrr without a GPU: {}", failure.error);
+    assert!(failure.error.contains("GPU"), "{}", failure.error);
+    assert_eq!(r.methods.len(), 1);
+    assert_eq!(r.methods[0].label, "vertex-tracing");
+    let metrics = r.methods[0].metrics.as_ref().unwrap();
+    assert!(
+        metrics.mask_pixels > 50 && metrics.mean_flip < 0.05,
+        "{metrics:?}"
+    );
+    assert_eq!(comparison.method_images.len(), 1);
+    let dir = tempfile::tempdir().unwrap();
+    let html = std::fs::read_to_string(comparison.write_report(dir.path()).unwrap()).unwrap();
+    assert!(
+        html.contains("<tr class=\"failed\"><td>pvrr</td>"),
+        "{html}"
+    );
+    assert!(!dir.path().join("pvrr.png").exists());
+    assert_matches_schema(&dir.path().join("report.json"));
+}

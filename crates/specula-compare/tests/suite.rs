@@ -170,11 +170,17 @@ fn runs() -> Option<&'static [SceneRun]> {
                     parameters: vec!["pvrr.depth=1".into()],
                 };
                 let scene = specula_scene::load(file.to_str().unwrap()).unwrap();
+                let comparison = compare(&scene, &ctx, &options, &|_| {}).unwrap();
+                assert!(
+                    comparison.report.failed.is_empty(),
+                    "{name}: {:?}",
+                    comparison.report.failed
+                );
                 SceneRun {
                     name: name.to_string(),
                     labels,
                     measured,
-                    comparison: compare(&scene, &ctx, &options, &|_| {}).unwrap(),
+                    comparison,
                 }
             })
             .collect();
