@@ -14,16 +14,22 @@
 //!    transmitted one by exact Fresnel, per colour channel (so dispersion shows); thin sheets
 //!    look straight through.
 //!
+//! Beyond the classic technique: other specular objects in a reflector's cube map are shaded
+//! from their own cube maps (one level of envmap shading: each face is drawn twice, first with
+//! specular objects black, then with them shaded from those first faces), not left black.
+//!
 //! Approximations and artifacts: every lookup pretends the environment is infinitely far, so
 //! nearby objects appear in the wrong place and at the wrong size (exact only for a distant
-//! environment, or at the centre of the cube map); other specular objects appear black in a
-//! reflector's cube map (no inter-reflection); the two-interface variants leave the refractor
+//! environment, or at the centre of the cube map); specular objects in a reflector's cube map
+//! show one bounce of envmap shading, and in theirs the others are black (two levels deep
+//! they are); the two-interface variants leave the refractor
 //! through a bounding sphere or a parallel face instead of its real back surface, and ignore
 //! internal reflection.
 //!
 //! Parameters:
 //! - `resolution` (default 256): texels per cube-map face side. Higher sharpens reflections;
-//!   cost is 6 × resolution² rasterised texels per reflector per frame.
+//!   cost is 6 × resolution² rasterised texels per reflector per redraw, twice (and a shading
+//!   pass per face) when the scene has two specular meshes or more.
 //! - `exit` (default `slab`): the naive second interface of solid refractors. `none` looks the
 //!   environment up right after the first refraction (single interface); `sphere` refracts
 //!   again where the ray leaves the bounding sphere (exact for a sphere); `slab` refracts again
@@ -134,6 +140,9 @@ pub struct CubeMaps {
     reflector_buffer: wgpu::Buffer,
     mesh_reflector: wgpu::Buffer,
     faces: Option<Faces>,
+    /// The pass shading specular objects in the faces from their own first faces, made when a
+    /// scene with two reflectors or more first draws its faces.
+    second_level: Option<SecondLevel>,
     generation: u64,
     /// (reflector mesh, meshes its faces leave out besides itself): what a technique draws
     /// by other means (c3rc's near objects).
@@ -144,6 +153,10 @@ pub struct CubeMaps {
 struct Faces {
     texture: wgpu::Texture,
     view: wgpu::TextureView,
+    /// With two reflectors or more: the faces with specular objects black, which the final
+    /// ones (`texture`) shade them from, and a view of each final face to draw it into.
+    first: Option<(wgpu::Texture, wgpu::TextureView)>,
+    layer_views: Vec<wgpu::TextureView>,
     resolution: u32,
     /// Counts the textures made, so that bind groups know when theirs is gone.
     generation: u64,
@@ -175,6 +188,7 @@ impl CubeMaps {
             reflector_buffer: storage("reflectors", count * size_of::<GpuReflector>()),
             mesh_reflector: mesh_reflector_buffer,
             faces: None,
+            second_level: None,
             generation: 0,
             hidden: Vec::new(),
         }
@@ -239,71 +253,153 @@ impl CubeMaps {
             }
             self.placed = Some((live.version(), exit));
         }
+        let two_levels = self.reflectors.len() >= 2;
         if self.faces.as_ref().map(|f| f.resolution) != Some(resolution) {
             self.generation += 1;
-            let texture = gpu.create_texture(&wgpu::TextureDescriptor {
-                label: Some("environment faces"),
-                size: wgpu::Extent3d {
-                    width: resolution,
-                    height: resolution,
-                    depth_or_array_layers: (6 * self.reflectors.len() as u32).max(1),
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: raster::COLOR_FORMAT,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
-                view_formats: &[],
-            });
-            let view = texture.create_view(&wgpu::TextureViewDescriptor {
-                dimension: Some(wgpu::TextureViewDimension::D2Array),
-                ..Default::default()
-            });
+            let layers = (6 * self.reflectors.len() as u32).max(1);
+            let (texture, view) = faces_texture(gpu, "environment faces", resolution, layers);
+            let layer_views = (0..layers)
+                .filter(|_| two_levels)
+                .map(|layer| {
+                    texture.create_view(&wgpu::TextureViewDescriptor {
+                        dimension: Some(wgpu::TextureViewDimension::D2),
+                        base_array_layer: layer,
+                        array_layer_count: Some(1),
+                        ..Default::default()
+                    })
+                })
+                .collect();
             self.faces = Some(Faces {
                 texture,
                 view,
+                layer_views,
+                first: two_levels.then(|| {
+                    faces_texture(gpu, "environment faces, first level", resolution, layers)
+                }),
                 resolution,
                 generation: self.generation,
                 drawn_at: None,
             });
         }
-        let faces = self.faces.as_mut().expect("made above");
+        let faces = self.faces.as_ref().expect("made above");
         if !redraw_always && faces.drawn_at == Some(live.version()) {
             return Ok(0);
         }
         let face_g = raster.acquire(gpu, resolution, resolution);
+        let first_level = faces.first.as_ref().map_or(&faces.texture, |(t, _)| t);
+        for (k, face, face_camera, hidden) in self.face_draws(scene, resolution) {
+            raster.draw_into(gpu, gpu_scene, &face_camera, &hidden, None, &face_g)?;
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            encoder.copy_texture_to_texture(
+                face_g.color.as_image_copy(),
+                wgpu::TexelCopyTextureInfo {
+                    texture: first_level,
+                    mip_level: 0,
+                    origin: wgpu::Origin3d {
+                        x: 0,
+                        y: 0,
+                        z: (6 * k + face) as u32,
+                    },
+                    aspect: wgpu::TextureAspect::All,
+                },
+                wgpu::Extent3d {
+                    width: resolution,
+                    height: resolution,
+                    depth_or_array_layers: 1,
+                },
+            );
+            gpu.queue.submit([encoder.finish()]);
+        }
+        if two_levels {
+            self.shade_second_level(gpu, raster, live, resolution, &face_g)?;
+        }
+        raster.release(&face_g);
+        self.faces.as_mut().expect("made above").drawn_at = Some(live.version());
+        Ok(6 * self.reflectors.len() as u64 * (1 + two_levels as u64))
+    }
+
+    /// Every face to draw: (reflector, face, camera, the meshes it leaves out).
+    fn face_draws(
+        &self,
+        scene: &Scene,
+        resolution: u32,
+    ) -> Vec<(usize, usize, CameraUniform, Vec<usize>)> {
+        let mut draws = Vec::new();
         for (k, &(mesh, center, _)) in self.reflectors.iter().enumerate() {
             let mut hidden = vec![mesh];
             if let Some((_, more)) = self.hidden.iter().find(|(m, _)| *m == mesh) {
                 hidden.extend(more);
             }
-            for (face, face_camera) in face_cameras(scene, center, resolution).iter().enumerate() {
-                raster.draw_into(gpu, gpu_scene, face_camera, &hidden, None, &face_g)?;
-                let mut encoder = gpu.device.create_command_encoder(&Default::default());
-                encoder.copy_texture_to_texture(
-                    face_g.color.as_image_copy(),
-                    wgpu::TexelCopyTextureInfo {
-                        texture: &faces.texture,
-                        mip_level: 0,
-                        origin: wgpu::Origin3d {
-                            x: 0,
-                            y: 0,
-                            z: (6 * k + face) as u32,
-                        },
-                        aspect: wgpu::TextureAspect::All,
-                    },
-                    wgpu::Extent3d {
-                        width: resolution,
-                        height: resolution,
-                        depth_or_array_layers: 1,
-                    },
-                );
-                gpu.queue.submit([encoder.finish()]);
+            for (face, camera) in face_cameras(scene, center, resolution)
+                .into_iter()
+                .enumerate()
+            {
+                draws.push((k, face, camera, hidden.clone()));
             }
         }
-        raster.release(&face_g);
-        faces.drawn_at = Some(live.version());
-        Ok(6 * self.reflectors.len() as u64)
+        draws
+    }
+
+    /// The final faces: each face drawn again, its specular pixels shaded as envmap shades
+    /// them (`shade.wgsl`) from the first-level faces, so that a specular object in a
+    /// reflector's map shows what its own map holds instead of black.
+    fn shade_second_level(
+        &mut self,
+        gpu: &GpuContext,
+        raster: &RasterPass,
+        live: &LiveScene,
+        resolution: u32,
+        face_g: &raster::GBuffer,
+    ) -> Result<(), GpuError> {
+        if self.second_level.is_none() {
+            self.second_level = Some(SecondLevel::new(gpu, live)?);
+        }
+        let draws = self.face_draws(live.scene(), resolution);
+        let faces = self.faces.as_ref().expect("made by update");
+        let (_, first_view) = faces.first.as_ref().expect("two levels have a first");
+        let level = self.second_level.as_mut().expect("made above");
+        // Made again only for another face G-buffer or another faces texture.
+        let key = (face_g.slot, faces.generation);
+        if level.bind_group.as_ref().map(|(k, _)| *k) != Some(key) {
+            let views = face_g.views();
+            let mut entries = vec![level.camera.as_entire_binding()];
+            entries.extend(views.iter().map(wgpu::BindingResource::TextureView));
+            entries.extend([
+                wgpu::BindingResource::TextureView(first_view),
+                self.env_views.as_entire_binding(),
+                self.reflector_buffer.as_entire_binding(),
+                self.mesh_reflector.as_entire_binding(),
+            ]);
+            let group = bind_group(gpu, "cube maps, second level", &level.layout, &entries);
+            level.bind_group = Some((key, group));
+        }
+        let level = &*level;
+        let (_, group) = level.bind_group.as_ref().expect("made above");
+        gpu.validated("cube maps, second level", || -> Result<(), GpuError> {
+            for (k, face, face_camera, hidden) in &draws {
+                raster.draw_into(gpu, live.gpu(gpu), face_camera, hidden, None, face_g)?;
+                gpu.queue
+                    .write_buffer(&level.camera, 0, bytemuck::bytes_of(face_camera));
+                let layer = &faces.layer_views[6 * k + face];
+                let mut encoder = gpu.device.create_command_encoder(&Default::default());
+                {
+                    let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                        label: Some("cube maps, second level"),
+                        color_attachments: &[specula_gpu::util::color_attachment(
+                            layer,
+                            wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                        )],
+                        ..Default::default()
+                    });
+                    pass.set_pipeline(&level.pipeline);
+                    pass.set_bind_group(0, group, &[]);
+                    pass.set_bind_group(1, &level.scene_bind_group, &[]);
+                    pass.draw(0..3, 0..1);
+                }
+                gpu.queue.submit([encoder.finish()]);
+            }
+            Ok(())
+        })?
     }
 
     /// The bind group layout entries `lookup.wgsl` reads, from `first` on: the faces, their
@@ -338,6 +434,83 @@ impl CubeMaps {
     /// that must follow them.
     pub fn faces_generation(&self) -> Option<u64> {
         self.faces.as_ref().map(|f| f.generation)
+    }
+}
+
+/// A 2D array of `layers` cube-map faces, `resolution` texels a side, that can be copied and
+/// drawn into and read, and its array view.
+fn faces_texture(
+    gpu: &GpuContext,
+    label: &str,
+    resolution: u32,
+    layers: u32,
+) -> (wgpu::Texture, wgpu::TextureView) {
+    let texture = gpu.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: resolution,
+            height: resolution,
+            depth_or_array_layers: layers,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: raster::COLOR_FORMAT,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_DST
+            | wgpu::TextureUsages::RENDER_ATTACHMENT,
+        view_formats: &[],
+    });
+    let view = texture.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        ..Default::default()
+    });
+    (texture, view)
+}
+
+/// The pipeline, bindings and camera of [`CubeMaps`]' second level: envmap's own shading pass
+/// run on each face's G-buffer from the face's camera.
+struct SecondLevel {
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+    scene_bind_group: wgpu::BindGroup,
+    camera: wgpu::Buffer,
+    /// For the face G-buffer (pool slot) and faces texture (generation) it binds.
+    bind_group: Option<((usize, u64), wgpu::BindGroup)>,
+}
+
+impl SecondLevel {
+    fn new(gpu: &GpuContext, live: &LiveScene) -> Result<SecondLevel, GpuError> {
+        let device = &gpu.device;
+        gpu.validated("cube maps, second level set-up", || {
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("envmap.wgsl"),
+                source: wgpu::ShaderSource::Wgsl(shader_source().into()),
+            });
+            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("cube maps, second level"),
+                entries: &shading_layout_entries(),
+            });
+            let scene_layout = GpuScene::bind_group_layout(device);
+            SecondLevel {
+                pipeline: raster::shading_pipeline(
+                    device,
+                    "cube maps, second level",
+                    &module,
+                    &layout,
+                    &scene_layout,
+                ),
+                scene_bind_group: live.gpu(gpu).bind_group(gpu, &scene_layout),
+                layout,
+                camera: writable_buffer(
+                    gpu,
+                    "face camera",
+                    size_of::<CameraUniform>() as u64,
+                    wgpu::BufferUsages::UNIFORM,
+                ),
+                bind_group: None,
+            }
+        })
     }
 }
 

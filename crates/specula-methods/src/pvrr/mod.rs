@@ -86,9 +86,14 @@
 //!   a budget across all reflectors and levels — the top level within `frame_patches` 1st passes
 //!   and `frame_texels` map texels (each reflector its share: fewer patches, a coarser map),
 //!   the levels below within `nested_share` times the top level's passes and texels and a
-//!   quarter of that times its per-vertex rays, given to the outer patches largest map first,
-//!   each nested map no finer than its outer map. An outer patch the budget does not cover
-//!   shows the other reflectors as the scene raster draws them (counted, with a warning). The
+//!   quarter of that times its per-vertex rays, given to the outer patches largest map first
+//!   (only those with a vertex whose P lies on another reflector: the others' maps show none
+//!   at their vertices), each nested map no finer than its outer map. An outer patch the
+//!   budget does not cover (counted, with a warning), like every patch of the deepest level
+//!   and of `depth=1`, shows the other reflectors as the scene raster draws them, black,
+//!   except at its corners whose P lies on one: those take the radiance ray traced along
+//!   their exit segment, blended across their triangles as the unresolved vertices' (not
+//!   black: issue 29; with `zooming=map`, the paper's, they stay black). The
 //!   2nd pass's vertices are sized from the plan and checked against the device's largest
 //!   buffer before any is written: a view that cannot fit is a clear error, not a device
 //!   validation error. The paper renders every level in full (§4.4), whatever it costs: three
@@ -166,7 +171,8 @@
 //!   `max_patches` × reflectors per level.
 //! - `depth` (default 2, the paper's multiple reflection: §4.4's Figure 11 shows the
 //!   background in the car's side windows in the door mirror): reflectors seen in reflectors,
-//!   levels deep (1: other reflectors appear in maps as the scene raster draws them). Each
+//!   levels deep (1: other reflectors appear in maps as the scene raster draws them, their
+//!   vertices' ray-traced radiance blended in, above). Each
 //!   level adds at most `max_patches` 1st passes per reflector it shows; inner reflections get
 //!   coarser patches as outer ones get finer; the frame budget bounds them all (below).
 //! - `nested_share` (default 8): the levels below the top may draw this many times the top
@@ -471,9 +477,31 @@ struct PatchDraw {
     /// viewpoint.
     fill: Option<CameraUniform>,
     channels: Vec<Vec<MirrorVertex>>,
+    /// Per corner (the channels share their order), whether its P lies on another mirror or
+    /// lens: a nested level (`depth` ≥ 2) shows it in the map, else its traced radiance does.
+    reflector_corners: Vec<bool>,
 }
 
 impl PatchDraw {
+    /// Whether some vertex's P lies on another mirror or lens: only then does a nested level
+    /// show anything in its map.
+    fn sees_reflectors(&self) -> bool {
+        self.reflector_corners.contains(&true)
+    }
+
+    /// Its corners whose P lies on another reflector take their traced radiance (a patch
+    /// without a nested level, whose map shows that reflector black). Returns how many.
+    fn trace_reflector_corners(&mut self) -> u64 {
+        for channel in &mut self.channels {
+            for (corner, &on) in channel.iter_mut().zip(&self.reflector_corners) {
+                if on {
+                    corner.unresolved = 1.0;
+                }
+            }
+        }
+        self.reflector_corners.iter().filter(|&&on| on).count() as u64
+    }
+
     /// Its 1st passes.
     fn passes(&self) -> u64 {
         1 + self.fill.is_some() as u64
@@ -855,7 +883,8 @@ impl LevelPlan {
 }
 
 /// A level's plan and, per reflector and patch, the plan of the level that patch's map shows
-/// (None: other reflectors appear there as the scene raster draws them).
+/// (None: other reflectors appear there as the scene raster draws them, and the patch's corners
+/// on them take their traced radiance: [`trace_where_no_nested_level`]).
 struct PlanTree {
     level: LevelPlan,
     inner: Vec<Vec<Option<PlanTree>>>,
@@ -1062,10 +1091,20 @@ fn plan_reflector(
         }
     };
     let unresolved = unresolved_vertices(m, &paths.visible, &hits, &drawn, &patches);
+    // A vertex seeing another mirror or lens is traced too: its colour stands in where its
+    // patch's map gets no nested level (`trace_where_no_nested_level`).
+    let on_reflector: Vec<bool> = (0..m.positions.len())
+        .map(|i| paths.visible[i] && drawn.iter().any(|d| !d[i]))
+        .collect();
+    let to_trace: Vec<bool> = unresolved
+        .iter()
+        .zip(&on_reflector)
+        .map(|(&u, &r)| u || r)
+        .collect();
     let traced = (settings.zooming != Zooming::Map)
-        .then(|| trace_unresolved(p, scene, m, &paths, &unresolved));
+        .then(|| trace_unresolved(p, scene, m, &paths, &to_trace));
     if let Some(traced) = &traced {
-        tally.rays += unresolved.iter().filter(|&&u| u).count() as u64 * traced.len() as u64;
+        tally.rays += to_trace.iter().filter(|&&u| u).count() as u64 * traced.len() as u64;
     }
     let vertices = ReflectorVertices {
         mesh: m,
@@ -1073,6 +1112,7 @@ fn plan_reflector(
         hits: &hits,
         traced: traced.as_deref(),
         unresolved: &unresolved,
+        on_reflector: &on_reflector,
     };
     let draws = patch_draws(&vertices, &patches, settings.resolution, eye, tally);
     let unresolved = unresolved.iter().filter(|&&u| u).count();
@@ -1241,9 +1281,12 @@ struct ReflectorVertices<'a> {
     paths: &'a MeshPaths,
     /// Per channel, where each vertex's exit segment hits the scene (P).
     hits: &'a [Vec<Vec3>],
-    /// Per channel, the radiance traced for each unresolved vertex (not `zooming=map`).
+    /// Per channel, the radiance traced for each unresolved vertex and each vertex on
+    /// another reflector (not `zooming=map`).
     traced: Option<&'a [Vec<Vec3>]>,
     unresolved: &'a [bool],
+    /// Whether each vertex's P lies on another mirror or lens.
+    on_reflector: &'a [bool],
 }
 
 /// Each patch's map camera and mirror vertices per channel. The reflector's map budget
@@ -1306,10 +1349,17 @@ fn patch_draws(
                         .collect()
                 })
                 .collect();
+            let reflector_corners = patch
+                .triangles
+                .iter()
+                .flat_map(|&t| m.triangles[t as usize])
+                .map(|i| vertices.on_reflector[i as usize])
+                .collect();
             let draw = PatchDraw {
                 camera,
                 fill,
                 channels,
+                reflector_corners,
             };
             tally.map_texels += draw.texels();
             draw
@@ -1569,8 +1619,11 @@ fn plan_tree(
     for (r, i, _) in order {
         let (reflector, patch) = (&level.reflectors[r], &level.reflectors[r].patches[i]);
         // A zooming view shows other reflectors as the scene raster draws them: a nested level
-        // drawn into it would need the reversed depth test in its 2nd pass too.
-        if patch.fill.is_some() {
+        // drawn into it would need the reversed depth test in its 2nd pass too. A patch none
+        // of whose hits lies on another reflector needs none: its map shows no reflector at
+        // its vertices (on the pair of a mirror and a glass sphere, the budget went to such
+        // patches and the glass seen in the mirror stayed black).
+        if patch.fill.is_some() || !patch.sees_reflectors() {
             continue;
         }
         let eye = Vec3::from_array(patch.camera.eye_world);
@@ -1624,6 +1677,26 @@ fn plan_tree(
         ));
     }
     PlanTree { level, inner }
+}
+
+/// Where `tree` plans no nested level under a patch (the frame budget, the deepest level, or
+/// `depth=1`), the patch's corners whose P lies on another reflector take their traced
+/// radiance, not the black the map holds there. Returns how many corners.
+fn trace_where_no_nested_level(tree: &mut PlanTree) -> u64 {
+    let mut corners = 0;
+    for (r, reflector) in tree.level.reflectors.iter_mut().enumerate() {
+        for (i, patch) in reflector.patches.iter_mut().enumerate() {
+            match tree
+                .inner
+                .get_mut(r)
+                .and_then(|patches| patches[i].as_mut())
+            {
+                Some(inner) => corners += trace_where_no_nested_level(inner),
+                None => corners += patch.trace_reflector_corners(),
+            }
+        }
+    }
+    corners
 }
 
 /// Step 4: the reflection map of every patch of `tree`'s level: the scene raster without the
@@ -1945,7 +2018,7 @@ impl Technique for Pvrr {
             frame_texels: self.frame_texels,
         };
         let mut budget = FrameBudget::after_top(&top, tally.rays, &limits);
-        let tree = plan_tree(
+        let mut tree = plan_tree(
             &p,
             &settings,
             scene,
@@ -1954,9 +2027,10 @@ impl Technique for Pvrr {
             &mut budget,
             &mut tally,
         );
+        let traced_corners = trace_where_no_nested_level(&mut tree);
         if tally.budget_cuts > 0 {
             tally.warnings.push(format!(
-                "pvrr: the frame budget (nested_share = {}, frame_patches = {}, frame_texels = {}) left out the reflections seen in reflectors of {} map(s): other reflectors show there as the scene raster draws them",
+                "pvrr: the frame budget (nested_share = {}, frame_patches = {}, frame_texels = {}) left out the reflections seen in reflectors of {} map(s): other reflectors show there as the scene raster draws them, their vertices' ray-traced radiance blended in",
                 self.nested_share, self.frame_patches, self.frame_texels, tally.budget_cuts
             ));
         }
@@ -2037,6 +2111,10 @@ impl Technique for Pvrr {
                 (
                     "patches drawn from a zooming view".into(),
                     tally.zooming_views,
+                ),
+                (
+                    "corners on another reflector traced for want of a nested level".into(),
+                    traced_corners,
                 ),
                 ("unresolved vertices".into(), tally.unresolved),
                 ("reflectors from the cache".into(), tally.cache_hits),
