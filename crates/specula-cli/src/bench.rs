@@ -323,11 +323,7 @@ pub fn run(
 
 pub fn print(results: &[MethodBench], failed: &[BenchFailure]) {
     for r in results {
-        let mode = if r.mode == "-" {
-            String::new()
-        } else {
-            format!(" [{}]", r.mode)
-        };
+        let mode = mode_suffix(&r.mode);
         println!(
             "{}: {}{mode} ({}x{}, {} frames on {}, {}): prepare {:.1} ms; frame median {:.2} ms (min {:.2}, max {:.2}); {}; GPU objects created {}",
             r.scene, r.label, r.width, r.height, r.frames, r.adapter, r.timing, r.prepare_ms, r.frame.median_ms, r.frame.min_ms, r.frame.max_ms, ratios(r), r.created
@@ -340,12 +336,17 @@ pub fn print(results: &[MethodBench], failed: &[BenchFailure]) {
         }
     }
     for f in failed {
-        let mode = if f.mode == "-" {
-            String::new()
-        } else {
-            format!(" [{}]", f.mode)
-        };
+        let mode = mode_suffix(&f.mode);
         println!("{}: {}{mode} failed: {}", f.scene, f.label, f.error);
+    }
+}
+
+/// " [static]" or " [dynamic]" after a label; nothing for a method without modes ("-").
+fn mode_suffix(mode: &str) -> String {
+    if mode == "-" {
+        String::new()
+    } else {
+        format!(" [{mode}]")
     }
 }
 

@@ -55,7 +55,9 @@ const PAPER_METHODS: [&str; 5] = [
 /// show from those objects' own maps and pvrr traced its corners on other reflectors where no
 /// nested level shows them (issue 29): lower on the scenes with two reflectors (lit-room
 /// 0.2197 -> 0.2165, 0.1293 -> 0.1144, 0.0958 -> 0.0833; mirrors-merged 0.1822 -> 0.1751,
-/// 0.0608 -> 0.0569, 0.0380 -> 0.0307), within 0.0001 elsewhere. pvrr runs with depth=1, as these figures were first measured
+/// 0.0608 -> 0.0569, 0.0380 -> 0.0307; pvrr on mirror-bunny 0.0813 -> 0.0663 and
+/// mirror-sphere-nearby 0.0254 -> 0.0245), within 0.0004 elsewhere (image-space on the glass
+/// pairs 0.1093 -> 0.1089). pvrr runs with depth=1, as these figures were first measured
 /// (before its frame budget, nested reflections took ~18 s a frame on the merged scenes here;
 /// bounded, depth 2 takes 0.67–1.13× depth 1's time at the same or better FLIP,
 /// docs/benchmarks.md). No suite scene shows mirror and

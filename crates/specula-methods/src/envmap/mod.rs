@@ -287,8 +287,9 @@ impl CubeMaps {
         }
         let face_g = raster.acquire(gpu, resolution, resolution);
         let first_level = faces.first.as_ref().map_or(&faces.texture, |(t, _)| t);
-        for (k, face, face_camera, hidden) in self.face_draws(scene, resolution) {
-            raster.draw_into(gpu, gpu_scene, &face_camera, &hidden, None, &face_g)?;
+        let draws = self.face_draws(scene, resolution);
+        for (k, face, face_camera, hidden) in &draws {
+            raster.draw_into(gpu, gpu_scene, face_camera, hidden, None, &face_g)?;
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
             encoder.copy_texture_to_texture(
                 face_g.color.as_image_copy(),
@@ -311,7 +312,7 @@ impl CubeMaps {
             gpu.queue.submit([encoder.finish()]);
         }
         if two_levels {
-            self.shade_second_level(gpu, raster, live, resolution, &face_g)?;
+            self.shade_second_level(gpu, raster, live, &draws, &face_g)?;
         }
         raster.release(&face_g);
         self.faces.as_mut().expect("made above").drawn_at = Some(live.version());
@@ -319,11 +320,7 @@ impl CubeMaps {
     }
 
     /// Every face to draw: (reflector, face, camera, the meshes it leaves out).
-    fn face_draws(
-        &self,
-        scene: &Scene,
-        resolution: u32,
-    ) -> Vec<(usize, usize, CameraUniform, Vec<usize>)> {
+    fn face_draws(&self, scene: &Scene, resolution: u32) -> Vec<FaceDraw> {
         let mut draws = Vec::new();
         for (k, &(mesh, center, _)) in self.reflectors.iter().enumerate() {
             let mut hidden = vec![mesh];
@@ -348,13 +345,12 @@ impl CubeMaps {
         gpu: &GpuContext,
         raster: &RasterPass,
         live: &LiveScene,
-        resolution: u32,
+        draws: &[FaceDraw],
         face_g: &raster::GBuffer,
     ) -> Result<(), GpuError> {
         if self.second_level.is_none() {
             self.second_level = Some(SecondLevel::new(gpu, live)?);
         }
-        let draws = self.face_draws(live.scene(), resolution);
         let faces = self.faces.as_ref().expect("made by update");
         let (_, first_view) = faces.first.as_ref().expect("two levels have a first");
         let level = self.second_level.as_mut().expect("made above");
@@ -376,7 +372,7 @@ impl CubeMaps {
         let level = &*level;
         let (_, group) = level.bind_group.as_ref().expect("made above");
         gpu.validated("cube maps, second level", || -> Result<(), GpuError> {
-            for (k, face, face_camera, hidden) in &draws {
+            for (k, face, face_camera, hidden) in draws {
                 raster.draw_into(gpu, live.gpu(gpu), face_camera, hidden, None, face_g)?;
                 gpu.queue
                     .write_buffer(&level.camera, 0, bytemuck::bytes_of(face_camera));
@@ -436,6 +432,9 @@ impl CubeMaps {
         self.faces.as_ref().map(|f| f.generation)
     }
 }
+
+/// One cube-map face to draw: (reflector, face, camera, the meshes it leaves out).
+type FaceDraw = (usize, usize, CameraUniform, Vec<usize>);
 
 /// A 2D array of `layers` cube-map faces, `resolution` texels a side, that can be copied and
 /// drawn into and read, and its array view.
