@@ -133,6 +133,7 @@ fn a_point_seen_twice_through_one_triangle_is_splatted_where_its_rays_show_it() 
             fixed_splat: 0.0,
             depth_band: true,
             fill_holes: true,
+            exact_hits: false,
             splat_scale: 1.0,
             max_splat: 3.0,
             max_depth: 4,

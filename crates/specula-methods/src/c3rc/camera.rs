@@ -290,6 +290,19 @@ impl C3rc {
         (out, count)
     }
 
+    /// The barycentrics on the base where `q` projects at the root of `cubic` (its projection
+    /// cubic) nearest `lambda`, inside the base or not: for the footprint of a point's
+    /// neighbourhood, whose edge may project just outside the triangle.
+    pub fn bary_near(&self, cubic: [f64; 4], q: DVec3, lambda: f64) -> Option<[f64; 3]> {
+        let (roots, n) = real_roots(cubic);
+        let nearest = roots[..n]
+            .iter()
+            .copied()
+            .filter(|&l| l >= -LAMBDA_EPS)
+            .min_by(|a, b| (a - lambda).abs().total_cmp(&(b - lambda).abs()))?;
+        self.sweep_bary(q, nearest.max(0.0))
+    }
+
     /// Whether `q` lies in the view volume (has a valid projection).
     pub fn contains(&self, q: DVec3) -> bool {
         self.project(q, true).1 > 0

@@ -209,14 +209,14 @@ pub const PARAMS: &[ParamSpec] = &[
     ParamSpec {
         name: "splat_scale",
         kind: ParamKind::Number { min: 0.01, max: 100.0 },
-        default: "1.5",
-        doc: "splat radius over the radius of the disc a point stands for: closes holes, blurs",
+        default: "2.5",
+        doc: "splat radius over the radius of the disc a point stands for: closes holes (with exact_hits at the cost of time only; else it blurs)",
         invalidates: Invalidates::Uniform,
     },
     ParamSpec {
         name: "max_splat",
         kind: ParamKind::Number { min: 0.5, max: 64.0 },
-        default: "6",
+        default: "16",
         doc: "largest splat half-size in pixels (where reflected rays converge)",
         invalidates: Invalidates::Uniform,
     },
@@ -291,6 +291,13 @@ pub const PARAMS: &[ParamSpec] = &[
         invalidates: Invalidates::Uniform,
     },
     ParamSpec {
+        name: "exact_hits",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "splats nominate surfaces: each mirror pixel's exact reflected ray meets their triangles, the albedo is looked up where it hits, lit by the points (false: each pixel takes a splat's colour, as the paper; runs on the CPU)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
         name: "resolution",
         kind: ParamKind::Integer { min: 1, max: 8192 },
         default: "256",
@@ -339,6 +346,7 @@ pub const INFO: MethodInfo = MethodInfo {
             "fixed_splat=2",
             "depth_band=false",
             "fill_holes=false",
+            "exact_hits=false",
             "trace_self=false",
             "min_pixels=0",
             "level_of_detail=false",
@@ -380,6 +388,7 @@ pub struct C3rcMethod {
     pub fixed_splat: f32,
     pub depth_band: bool,
     pub fill_holes: bool,
+    pub exact_hits: bool,
     pub resolution: u32,
     pub dynamic: bool,
     pub shadow_resolution: u32,
@@ -398,8 +407,8 @@ impl Default for C3rcMethod {
                 leaf_points: 256,
                 max_depth: 12,
             },
-            splat_scale: 1.5,
-            max_splat: 6.0,
+            splat_scale: 2.5,
+            max_splat: 16.0,
             min_pixels: 2,
             split_pixels: 0,
             trace_self: true,
@@ -410,6 +419,7 @@ impl Default for C3rcMethod {
             fixed_splat: 0.0,
             depth_band: true,
             fill_holes: true,
+            exact_hits: true,
             resolution: 256,
             dynamic: false,
             shadow_resolution: 1024,
@@ -615,6 +625,7 @@ impl Technique for C3rcMethod {
             "fixed_splat" => self.fixed_splat.to_string(),
             "depth_band" => self.depth_band.to_string(),
             "fill_holes" => self.fill_holes.to_string(),
+            "exact_hits" => self.exact_hits.to_string(),
             "resolution" => self.resolution.to_string(),
             "dynamic" => self.dynamic.to_string(),
             "shadow_resolution" => self.shadow_resolution.to_string(),
@@ -642,6 +653,7 @@ impl Technique for C3rcMethod {
             "fixed_splat" => self.fixed_splat = value.number() as f32,
             "depth_band" => self.depth_band = value.flag(),
             "fill_holes" => self.fill_holes = value.flag(),
+            "exact_hits" => self.exact_hits = value.flag(),
             "resolution" => self.resolution = value.integer() as u32,
             "dynamic" => self.dynamic = value.flag(),
             "shadow_resolution" => self.shadow_resolution = value.integer() as u32,
@@ -747,6 +759,7 @@ impl Technique for C3rcMethod {
             fixed_splat: self.fixed_splat,
             depth_band: self.depth_band,
             fill_holes: self.fill_holes,
+            exact_hits: self.exact_hits,
             splat_scale: self.splat_scale,
             max_splat: self.max_splat,
             max_depth: FALLBACK_MAX_DEPTH,
@@ -770,12 +783,19 @@ impl Technique for C3rcMethod {
             wgpu::BufferUsages::STORAGE,
         );
         let points: usize = field.clouds.iter().map(|c| c.len()).sum();
+        // The exact hits' resolve runs on the CPU only: `auto` keeps it there.
         let on_gpu = points <= gpu::MAX_POINTS
             && match self.projection {
                 Projection::Gpu => true,
                 Projection::Cpu => false,
-                Projection::Auto => !gpu.is_software(),
+                Projection::Auto => !gpu.is_software() && !self.exact_hits,
             };
+        let mut warnings = Vec::new();
+        if on_gpu && self.exact_hits {
+            warnings.push(
+                "c3rc: projection=gpu splats colours (exact_hits runs on the CPU only)".into(),
+            );
+        }
         if on_gpu {
             plan.fallback(
                 scene,
@@ -859,7 +879,6 @@ impl Technique for C3rcMethod {
 
         let counters = counters(&field, &report, rebuilt, faces_drawn);
         p.near_field = Some(field);
-        let mut warnings = Vec::new();
         let visible = report.cameras + report.small_triangles + report.self_seeing_triangles;
         if visible == 0 && !mirror_meshes.is_empty() {
             warnings.push("c3rc: no mirror triangle is visible; only the far field shows".into());

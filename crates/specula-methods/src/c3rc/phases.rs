@@ -45,6 +45,11 @@ pub struct FrameSettings {
     pub depth_band: bool,
     /// Fill one-pixel holes between splats.
     pub fill_holes: bool,
+    /// Splats only nominate surfaces: each pixel's exact reflected ray is met with the
+    /// triangles of the points whose splats cover it, the nearest hit wins, and its colour is
+    /// the albedo there times the light its points carry ([`resolve_exact`]); else each pixel
+    /// takes a splat's colour.
+    pub exact_hits: bool,
     pub splat_scale: f32,
     pub max_splat: f32,
     pub max_depth: u32,
@@ -124,6 +129,14 @@ struct Splat {
     p_world: Vec3,
     color: Vec3,
     mesh: u32,
+    /// The point's object (scene mesh), the triangle it lies on, where it lies in the world,
+    /// the radius in metres of the disc it stands for, and the light it carries (for
+    /// `exact_hits`).
+    object: u32,
+    triangle: u32,
+    q_world: Vec3,
+    disc: f32,
+    light: Vec3,
 }
 
 /// What a frame found and how long its phases took (the paper's Table 2).
@@ -567,6 +580,7 @@ pub fn forward(
         .map(|&(i, seen)| {
             let camera = &plan.cameras[i];
             let cloud = clouds[seen.cloud].cloud;
+            let world_from_object = clouds[seen.cloud].object_from_world.inverse();
             let InCloud {
                 camera: local,
                 bound,
@@ -610,6 +624,22 @@ pub fn forward(
                     let r = (radius * (camera.screen_area / area).sqrt()) as f32;
                     let radius_px = if settings.fixed_splat > 0.0 {
                         0.5 * settings.fixed_splat
+                    } else if settings.exact_hits {
+                        // The disc's edge projected with the same camera: its actual
+                        // footprint, which the cross-section's area underestimates where the
+                        // surface is oblique to it or the rays converge.
+                        let footprint = disc_footprint(
+                            local,
+                            projector,
+                            q,
+                            n,
+                            radius,
+                            projection.lambda,
+                            &camera.world,
+                            view,
+                            (x, y),
+                        );
+                        r.max(footprint).clamp(0.5, settings.max_splat)
                     } else {
                         r.clamp(0.5, settings.max_splat)
                     };
@@ -628,6 +658,11 @@ pub fn forward(
                         p_world,
                         color: cloud.color[i],
                         mesh: camera.mesh as u32,
+                        object: cloud.mesh as u32,
+                        triangle: cloud.triangle[i],
+                        q_world: world_from_object.transform_point3(q).as_vec3(),
+                        disc: radius as f32,
+                        light: cloud.light[i],
                     });
                 }
             }
@@ -647,7 +682,20 @@ pub fn forward(
         report.points_projected_more_than_once += twice;
         report.valid_projections += valid;
     }
-    resolve(&per_node, view, surfaces, plan.mirror_rows, &mut depth, out);
+    if settings.exact_hits {
+        let splats: Vec<&Splat> = per_node.iter().flat_map(|(s, _)| s).collect();
+        resolve_exact(
+            scene,
+            &splats,
+            view,
+            surfaces,
+            plan.mirror_rows,
+            &mut depth,
+            out,
+        );
+    } else {
+        resolve(&per_node, view, surfaces, plan.mirror_rows, &mut depth, out);
+    }
     let w = view.width as usize;
     let (first, last) = plan.mirror_rows;
     if first < last {
@@ -673,6 +721,35 @@ pub fn forward(
         out,
     );
     report.fallback_ms = ms(start);
+}
+
+/// Pixels from `centre` (the screen position of point `q`'s projection at `lambda`) to where
+/// the edge of its disc (radius `radius` about `q`, normal `n`, in the cloud's space) projects
+/// with the same camera (`local` there, `world` in the world), the largest of two tangent
+/// directions; 0 where neither projects.
+#[allow(clippy::too_many_arguments)]
+fn disc_footprint(
+    local: &C3rc,
+    projector: &Projector,
+    q: DVec3,
+    n: DVec3,
+    radius: f64,
+    lambda: f64,
+    world: &C3rc,
+    view: &ScreenView,
+    centre: (f32, f32),
+) -> f32 {
+    let (t1, t2) = n.normalize_or_zero().any_orthonormal_pair();
+    [t1, t2]
+        .into_iter()
+        .filter_map(|t| {
+            let edge = q + t * radius;
+            let bary = local.bary_near(projector.cubic(edge), edge, lambda)?;
+            let p_world = world.v[0] * bary[0] + world.v[1] * bary[1] + world.v[2] * bary[2];
+            let (x, y, _) = view.project(p_world.as_vec3())?;
+            Some(((x - centre.0).powi(2) + (y - centre.1).powi(2)).sqrt())
+        })
+        .fold(0.0, f32::max)
 }
 
 /// A node whose strided points number at most this is projected whole (not descended).
@@ -815,6 +892,197 @@ fn resolve(
         });
 }
 
+/// How a pixel's exact reflected ray meets the triangle of a point whose splat covers it.
+#[derive(Clone, Copy, PartialEq, PartialOrd)]
+enum Meeting {
+    /// Within the triangle: the surface the ray hits, if nothing nearer is nominated.
+    Inside,
+    /// On the triangle's plane, outside it but within the point's disc: the surface
+    /// extrapolated (its true triangle nominated by no splat here).
+    OnDisc,
+}
+
+/// The best hit per pixel so far: how it met, its distance along the ray, the object, the
+/// triangle and the barycentrics there.
+#[derive(Clone, Copy)]
+struct NominatedHit {
+    meeting: Meeting,
+    t: f32,
+    object: u32,
+    triangle: u32,
+    b1: f32,
+    b2: f32,
+}
+
+/// Where `ray` meets the plane of `object`'s `triangle` (t > 0): distance and barycentrics
+/// (b1, b2), with b0 = 1 − b1 − b2; any of them may be negative (outside the triangle).
+fn meet_plane(scene: &Scene, ray: &Ray, object: u32, triangle: u32) -> Option<(f32, f32, f32)> {
+    let m = &scene.meshes[object as usize];
+    let [a, b, c] = m.triangles[triangle as usize].map(|i| m.positions[i as usize]);
+    let (e1, e2) = (b - a, c - a);
+    let pvec = ray.dir.cross(e2);
+    let det = e1.dot(pvec);
+    if det.abs() < 1e-12 {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let tvec = ray.origin - a;
+    let b1 = tvec.dot(pvec) * inv;
+    let qvec = tvec.cross(e1);
+    let b2 = ray.dir.dot(qvec) * inv;
+    let t = e2.dot(qvec) * inv;
+    (t > 0.0 && t.is_finite()).then_some((t, b1, b2))
+}
+
+/// Resolves the splats with the pixels' exact rays (`exact_hits`): every splat covering a
+/// mirror pixel nominates its point's triangle; the pixel's reflected ray (the reference's,
+/// about the interpolated normal) is met with it, and the nearest meeting inside a triangle
+/// wins (else the nearest within a point's disc on its plane). The colour is the surface's
+/// albedo where the ray meets it (its texture at the exact UV) times the light of the points
+/// whose discs hold that spot, weighted by a kernel falling to 0 at the disc's edge. A splat
+/// thus only has to reach a pixel, not to stand for its colour: magnified points leave no
+/// blocks, and the edges of large triangles (a room's walls) are exact.
+fn resolve_exact(
+    scene: &Scene,
+    splats: &[&Splat],
+    view: &ScreenView,
+    surfaces: &PixelSurfaces,
+    rows: (usize, usize),
+    depth: &mut [f32],
+    out: &mut [[f32; 4]],
+) {
+    let w = view.width as usize;
+    let (first, last) = rows;
+    if first >= last {
+        return;
+    }
+    let band = (last - first)
+        .div_ceil(rayon::current_num_threads().max(1))
+        .max(1);
+    depth[first * w..last * w]
+        .par_chunks_mut(band * w)
+        .zip(out[first * w..last * w].par_chunks_mut(band * w))
+        .enumerate()
+        .for_each(|(b, (depth, out))| {
+            let top = first + b * band;
+            let range = (top as i64, (top + depth.len() / w) as i64);
+            let offset = top * w;
+            let mut rays: Vec<Option<Ray>> = vec![None; depth.len()];
+            let mut best: Vec<Option<NominatedHit>> = vec![None; depth.len()];
+            for s in splats {
+                splat_pixels(s, view, surfaces, range, |k, _| {
+                    let k = k - offset;
+                    let ray = *rays[k].get_or_insert_with(|| {
+                        pixel_reflected_ray(scene, view, surfaces, k + offset)
+                    });
+                    let Some((t, b1, b2)) = meet_plane(scene, &ray, s.object, s.triangle) else {
+                        return;
+                    };
+                    let meeting =
+                        if b1 >= -BARY_SLACK && b2 >= -BARY_SLACK && b1 + b2 <= 1.0 + BARY_SLACK {
+                            Meeting::Inside
+                        } else if (ray.origin + ray.dir * t - s.q_world).length_squared()
+                            <= s.disc * s.disc
+                        {
+                            Meeting::OnDisc
+                        } else {
+                            return;
+                        };
+                    let better = best[k].is_none_or(|h| (meeting, t) < (h.meeting, h.t));
+                    if better {
+                        best[k] = Some(NominatedHit {
+                            meeting,
+                            t,
+                            object: s.object,
+                            triangle: s.triangle,
+                            b1,
+                            b2,
+                        });
+                    }
+                });
+            }
+            // The light at each winning hit: the points of its object whose discs hold it.
+            let mut light = vec![(Vec3::ZERO, f32::NEG_INFINITY); depth.len()];
+            for s in splats {
+                splat_pixels(s, view, surfaces, range, |k, _| {
+                    let k = k - offset;
+                    let (Some(hit), Some(ray)) = (best[k], rays[k]) else {
+                        return;
+                    };
+                    if hit.object != s.object {
+                        return;
+                    }
+                    // (sum of weighted lights, sum of weights) once a disc holds the hit;
+                    // before that, (the nearest point's light, minus its squared distance).
+                    // The winner's own splat covers the pixel, so one of the two is found.
+                    let d2 = (ray.origin + ray.dir * hit.t - s.q_world).length_squared();
+                    let weight = 1.0 - d2 / (s.disc * s.disc);
+                    let (sum, weights) = &mut light[k];
+                    if weight > 0.0 {
+                        if *weights <= 0.0 {
+                            (*sum, *weights) = (Vec3::ZERO, 0.0);
+                        }
+                        *sum += s.light * weight;
+                        *weights += weight;
+                    } else if *weights <= 0.0 && -d2 > *weights {
+                        (*sum, *weights) = (s.light, -d2);
+                    }
+                });
+            }
+            for (k, hit) in best.iter().enumerate() {
+                let Some(hit) = hit else { continue };
+                let (sum, weight) = light[k];
+                let l = if weight > 0.0 { sum / weight } else { sum };
+                let albedo = albedo_at(scene, hit);
+                let c = albedo * l;
+                depth[k] = hit.t;
+                out[k] = [c.x, c.y, c.z, 1.0];
+            }
+        });
+}
+
+/// Barycentric slack within which a ray meets a triangle (its edges shared with neighbours).
+const BARY_SLACK: f32 = 1e-4;
+
+/// The surface's albedo (colour × texture) where `hit` meets it; outside its triangle (within a
+/// point's disc), with its UVs extrapolated: on the neighbouring triangle of the same plane
+/// and mapping, exact.
+fn albedo_at(scene: &Scene, hit: &NominatedHit) -> Vec3 {
+    let m = &scene.meshes[hit.object as usize];
+    let material = &scene.materials[m.material];
+    let Some(texture) = material.texture else {
+        return material.color;
+    };
+    let [w0, w1, w2] = [1.0 - hit.b1 - hit.b2, hit.b1, hit.b2];
+    let [i0, i1, i2] = m.triangles[hit.triangle as usize].map(|i| i as usize);
+    let uv = if m.uvs.is_empty() {
+        glam::Vec2::ZERO
+    } else {
+        m.uvs[i0] * w0 + m.uvs[i1] * w1 + m.uvs[i2] * w2
+    };
+    material.color * scene.textures[texture].sample(uv)
+}
+
+/// The exact reflected ray of mirror pixel `k` (as the reference reflects it: about the
+/// normal interpolated at the pixel's surface point).
+fn pixel_reflected_ray(
+    scene: &Scene,
+    view: &ScreenView,
+    surfaces: &PixelSurfaces,
+    k: usize,
+) -> Ray {
+    let [mesh1, t] = surfaces.ids[k];
+    let m = &scene.meshes[(mesh1 - 1) as usize];
+    let tri = m.triangles[t as usize];
+    let [a, b, c] = tri.map(|i| m.positions[i as usize]);
+    let p = Vec3::from_slice(&surfaces.position[k][..3]);
+    let bary = barycentric(p, a, b, c);
+    let [na, nb, nc] = tri.map(|i| m.normals[i as usize]);
+    let n = (na * bary[0] + nb * bary[1] + nc * bary[2]).normalize_or_zero();
+    let face = (b - a).cross(c - a).normalize_or_zero();
+    reflected_ray(p, n, face, view.eye)
+}
+
 /// Fills one-pixel holes between splats: an uncovered mirror pixel with at least five of its
 /// eight neighbours covered (on the same mesh) takes the front-most neighbour's colour.
 /// Returns the pixels filled.
@@ -935,7 +1203,8 @@ fn fallback_pixels(
     out.par_iter_mut()
         .zip(&surfaces.ids)
         .zip(&surfaces.position)
-        .for_each(|((out, [mesh1, t]), position)| {
+        .enumerate()
+        .for_each(|(k, ((out, [mesh1, t]), position))| {
             if *mesh1 == 0 {
                 return;
             }
@@ -954,10 +1223,7 @@ fn fallback_pixels(
                     + color_of(mesh, tri[1]) * bary[1]
                     + color_of(mesh, tri[2]) * bary[2]
             } else {
-                let [na, nb, nc] = tri.map(|i| m.normals[i as usize]);
-                let n = (na * bary[0] + nb * bary[1] + nc * bary[2]).normalize_or_zero();
-                let face = (b - a).cross(c - a).normalize_or_zero();
-                tracer.radiance(&reflected_ray(p, n, face, view.eye), 1, None)
+                tracer.radiance(&pixel_reflected_ray(scene, view, surfaces, k), 1, None)
             };
             *out = [color.x, color.y, color.z, 1.0];
         });

@@ -47,8 +47,14 @@ pub struct PointCloud {
     pub p_object: Vec<Vec3>,
     pub n_object: Vec<Vec3>,
     uv: Vec<Vec2>,
+    /// The mesh triangle each point lies on.
+    pub triangle: Vec<u32>,
     /// Radiance each point leaves towards the side its normal faces.
     pub color: Vec<Vec3>,
+    /// What the surface's albedo is multiplied by there (`color` = albedo × `light`): the
+    /// light a point carries to a pixel whose albedo is looked up where its ray meets the
+    /// surface (`exact_hits`).
+    pub light: Vec<Vec3>,
     /// Splat radius in metres: the disc one point stands for, times the splat scale.
     pub radius: f32,
     pub nodes: Vec<Node>,
@@ -135,6 +141,7 @@ impl PointCloud {
         let mut p_object = Vec::new();
         let mut n_object = Vec::new();
         let mut uv = Vec::new();
+        let mut triangle = Vec::new();
         for (t, tri) in mesh.triangles.iter().enumerate() {
             let [i0, i1, i2] = tri.map(|i| i as usize);
             let (a, b, c) = (mesh.positions[i0], mesh.positions[i1], mesh.positions[i2]);
@@ -150,6 +157,7 @@ impl PointCloud {
                     .try_normalize()
                     .or_else(|| face.try_normalize())
                     .unwrap_or(Vec3::Y);
+                triangle.push(t as u32);
                 p_object.push(loaded_from_world.transform_point3(p));
                 n_object.push(loaded_from_world.transform_vector3(n));
                 uv.push(if mesh.uvs.is_empty() {
@@ -163,6 +171,8 @@ impl PointCloud {
         let mut cloud = PointCloud {
             mesh: mesh_index,
             color: vec![Vec3::ZERO; p_object.len()],
+            light: vec![Vec3::ZERO; p_object.len()],
+            triangle,
             p_object,
             n_object,
             uv,
@@ -278,6 +288,8 @@ impl PointCloud {
         permute(&mut self.p_object);
         permute(&mut self.n_object);
         permute(&mut self.color);
+        permute(&mut self.light);
+        self.triangle = order.iter().map(|&i| self.triangle[i as usize]).collect();
         self.uv = order.iter().map(|&i| self.uv[i as usize]).collect();
         self.nodes = nodes;
         self.stats = TreeStats {
@@ -301,8 +313,9 @@ impl PointCloud {
         let (p, n, uv) = (&self.p_object, &self.n_object, &self.uv);
         self.color
             .par_iter_mut()
+            .zip(&mut self.light)
             .enumerate()
-            .for_each(|(i, color)| {
+            .for_each(|(i, (color, light))| {
                 let ns = world_from_loaded.transform_vector3(n[i]).normalize();
                 let sp = SurfacePoint {
                     p: world_from_loaded.transform_point3(p[i]),
@@ -316,11 +329,13 @@ impl PointCloud {
                     .texture
                     .map(|t| scene.textures[t].sample(uv[i]))
                     .unwrap_or(Vec3::ONE);
-                let albedo = material.color * texture;
-                *color = match material.kind {
-                    MaterialKind::Unlit => albedo,
-                    _ => tracer.diffuse(&sp, albedo),
+                // The reference's Lambertian shading is albedo × a light term: shaded with a
+                // unit albedo it gives that term.
+                *light = match material.kind {
+                    MaterialKind::Unlit => Vec3::ONE,
+                    _ => tracer.diffuse(&sp, Vec3::ONE),
                 };
+                *color = material.color * texture * *light;
             });
     }
 
