@@ -169,7 +169,7 @@ fn a_point_seen_twice_through_one_triangle_is_splatted_where_its_rays_show_it() 
             t > 0.0 && (origin + dir * t - q).length() < size as f64
         })
         .collect();
-    let splatted: Vec<bool> = out.iter().map(|p| p[3] > 0.0).collect();
+    let splatted: Vec<bool> = out.iter().map(|p| p[3] != 0.0).collect();
     let pixels = |mask: &[bool]| -> Vec<(i64, i64)> {
         mask.iter()
             .enumerate()

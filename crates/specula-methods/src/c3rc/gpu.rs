@@ -221,7 +221,8 @@ impl GpuProjection {
     }
 
     /// Runs the forward phase of `plan` into `near` (a storage buffer of one vec4 per pixel
-    /// that already holds the per-vertex colour, alpha 1, where the plan gives it).
+    /// that already holds the per-vertex colour, alpha [`phases::TAKEN_AS_IT_IS`], where the
+    /// plan gives it).
     #[allow(clippy::too_many_arguments)]
     pub fn forward(
         &mut self,

@@ -148,7 +148,9 @@ pub mod points;
 
 use glam::{DMat4, Vec3};
 use specula_gpu::shaders::CameraUniform;
-use specula_gpu::util::{bind_group, buffer_binding, layout_entry, writable_buffer};
+use specula_gpu::util::{
+    bind_group, buffer_binding, layout_entry, texture_binding, writable_buffer,
+};
 use specula_gpu::{GpuContext, GpuError, TimingSource};
 use specula_scene::{Camera, MaterialKind, Scene};
 
@@ -507,6 +509,14 @@ impl C3rcMethod {
                 wgpu::ShaderStages::FRAGMENT,
                 buffer_binding(wgpu::BufferBindingType::Storage { read_only: true }),
             ));
+            entries.push(layout_entry(
+                10,
+                wgpu::ShaderStages::FRAGMENT,
+                texture_binding(
+                    wgpu::TextureSampleType::Float { filterable: false },
+                    wgpu::TextureViewDimension::D2Array,
+                ),
+            ));
             let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("c3rc"),
                 entries: &entries,
@@ -517,7 +527,11 @@ impl C3rcMethod {
             Prepared {
                 scene_id: live.id(),
                 scene_bind_group: gpu_scene.bind_group(ctx, &scene_layout),
-                maps: CubeMaps::new(ctx, live.scene()),
+                maps: {
+                    let mut maps = CubeMaps::new(ctx, live.scene());
+                    maps.keep_positions();
+                    maps
+                },
                 camera_buffer: writable_buffer(
                     ctx,
                     "camera",
@@ -865,6 +879,9 @@ impl Technique for C3rcMethod {
                 let views = g.views();
                 let mut entries = envmap::shading_bindings(&p.camera_buffer, &views, &p.maps);
                 entries.push(p.near_buffer.get().as_entire_binding());
+                entries.push(wgpu::BindingResource::TextureView(
+                    p.maps.positions_view().expect("kept since build"),
+                ));
                 bind_group(gpu, "c3rc", &p.layout, &entries)
             });
             raster::fullscreen_pass(

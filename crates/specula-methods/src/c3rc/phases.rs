@@ -173,7 +173,8 @@ pub struct PhaseReport {
 }
 
 /// Radiance arriving along each mirror pixel's reflected ray from the nearby objects
-/// (alpha 1 where something was found, 0 where the far field shows), for the pixels of the
+/// (alpha non-zero where something was found: [`TAKEN_AS_IT_IS`] or the distance to it; 0 where
+/// the far field shows), for the pixels of the
 /// reflectors `mirrors`: [`plan`] then [`forward`] on the CPU.
 #[allow(clippy::too_many_arguments)]
 pub fn reflect_near(
@@ -520,7 +521,8 @@ fn cull_cloud(
 
 impl Plan {
     /// Clears `out` to the frame's size and writes the pixels of the triangles without a
-    /// camera (alpha 1): the per-vertex colour of small ones, traced colour of self-seeing ones.
+    /// camera (alpha [`TAKEN_AS_IT_IS`]): the per-vertex colour of small ones, traced colour of
+    /// self-seeing ones.
     pub fn fallback(
         &self,
         scene: &Scene,
@@ -752,6 +754,11 @@ fn disc_footprint(
         .fold(0.0, f32::max)
 }
 
+/// The alpha of a pixel's colour that the shading pass takes as it is (a traced, per-vertex or
+/// splatted colour); a positive alpha is the distance along the pixel's reflected ray to the
+/// nearby surface, which the shading pass tests against the far field (`c3rc.wgsl`); 0: none.
+pub const TAKEN_AS_IT_IS: f32 = -1.0;
+
 /// A node whose strided points number at most this is projected whole (not descended).
 const LOD_WHOLE_NODE_POINTS: usize = 128;
 
@@ -885,7 +892,7 @@ fn resolve(
                     let k = k - offset;
                     if s.depth <= depth[k] + s.band && d2 < nearest[k] {
                         nearest[k] = d2;
-                        out[k] = [s.color.x, s.color.y, s.color.z, 1.0];
+                        out[k] = [s.color.x, s.color.y, s.color.z, TAKEN_AS_IT_IS];
                     }
                 });
             }
@@ -1036,7 +1043,8 @@ fn resolve_exact(
                 let albedo = albedo_at(scene, hit);
                 let c = albedo * l;
                 depth[k] = hit.t;
-                out[k] = [c.x, c.y, c.z, 1.0];
+                // The distance, for the shading pass's test against the far field.
+                out[k] = [c.x, c.y, c.z, hit.t];
             }
         });
 }
@@ -1102,7 +1110,7 @@ fn fill_holes(
             (0..w).filter_map(move |x| {
                 let k = (y * w + x) as usize;
                 let mesh1 = surfaces.ids[k][0];
-                if covered_out[k][3] > 0.0
+                if covered_out[k][3] != 0.0
                     || mesh1 == 0
                     || !mirrors.contains(&((mesh1 - 1) as usize))
                 {
@@ -1225,7 +1233,7 @@ fn fallback_pixels(
             } else {
                 tracer.radiance(&pixel_reflected_ray(scene, view, surfaces, k), 1, None)
             };
-            *out = [color.x, color.y, color.z, 1.0];
+            *out = [color.x, color.y, color.z, TAKEN_AS_IT_IS];
         });
 }
 

@@ -340,14 +340,15 @@ fn splat_nearest(@builtin(workgroup_id) group: vec3<u32>, @builtin(local_invocat
     }
 }
 
+// A splat's colour, taken as it is by the shading pass (alpha < 0; see c3rc.wgsl).
 fn key_color(key: u32) -> vec4<f32> {
-    return vec4<f32>(points[key & 0xffffffu].color.xyz, 1.0);
+    return vec4<f32>(points[key & 0xffffffu].color.xyz, -1.0);
 }
 
 @compute @workgroup_size(64)
 fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
     let k = id.x;
-    if (k >= settings.width * settings.height || near[k].w > 0.0) {
+    if (k >= settings.width * settings.height || near[k].w != 0.0) {
         return;
     }
     let key = atomicLoad(&nearest[k]);
@@ -359,7 +360,7 @@ fn resolve(@builtin(global_invocation_id) id: vec3<u32>) {
 @compute @workgroup_size(64)
 fn fill_holes(@builtin(global_invocation_id) id: vec3<u32>) {
     let k = id.x;
-    if (k >= settings.width * settings.height || near[k].w > 0.0) {
+    if (k >= settings.width * settings.height || near[k].w != 0.0) {
         return;
     }
     let x = i32(k % settings.width);

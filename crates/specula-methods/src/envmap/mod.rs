@@ -147,6 +147,9 @@ pub struct CubeMaps {
     /// (reflector mesh, meshes its faces leave out besides itself): what a technique draws
     /// by other means (c3rc's near objects).
     hidden: Vec<(usize, Vec<usize>)>,
+    /// Keep each face's world positions too (`positions_view`): c3rc depth-tests its splats
+    /// against the far field with them.
+    keep_positions: bool,
 }
 
 /// The cube-map faces at one resolution.
@@ -157,6 +160,8 @@ struct Faces {
     /// ones (`texture`) shade them from, and a view of each final face to draw it into.
     first: Option<(wgpu::Texture, wgpu::TextureView)>,
     layer_views: Vec<wgpu::TextureView>,
+    /// Each face's world positions (w = 1 on geometry, 0 where nothing was drawn), when kept.
+    positions: Option<(wgpu::Texture, wgpu::TextureView)>,
     resolution: u32,
     /// Counts the textures made, so that bind groups know when theirs is gone.
     generation: u64,
@@ -191,7 +196,22 @@ impl CubeMaps {
             second_level: None,
             generation: 0,
             hidden: Vec::new(),
+            keep_positions: false,
         }
+    }
+
+    /// Keeps each face's world positions from now on (made with the next faces).
+    pub fn keep_positions(&mut self) {
+        if !self.keep_positions {
+            self.keep_positions = true;
+            self.faces = None;
+        }
+    }
+
+    /// The faces' world positions, kept since [`CubeMaps::keep_positions`] (after `update`).
+    pub fn positions_view(&self) -> Option<&wgpu::TextureView> {
+        let faces = self.faces.as_ref()?;
+        faces.positions.as_ref().map(|(_, view)| view)
     }
 
     /// Leaves `hidden` meshes out of the faces of the reflectors they are given for
@@ -276,6 +296,9 @@ impl CubeMaps {
                 first: two_levels.then(|| {
                     faces_texture(gpu, "environment faces, first level", resolution, layers)
                 }),
+                positions: self.keep_positions.then(|| {
+                    faces_texture(gpu, "environment faces, positions", resolution, layers)
+                }),
                 resolution,
                 generation: self.generation,
                 drawn_at: None,
@@ -288,27 +311,34 @@ impl CubeMaps {
         let face_g = raster.acquire(gpu, resolution, resolution);
         let first_level = faces.first.as_ref().map_or(&faces.texture, |(t, _)| t);
         let draws = self.face_draws(scene, resolution);
+        let positions = faces.positions.as_ref().map(|(t, _)| t);
         for (k, face, face_camera, hidden) in &draws {
-            raster.draw_into(gpu, gpu_scene, face_camera, hidden, None, &face_g)?;
+            // The first level of two shades the specular objects the final faces show: it
+            // leaves out only its own reflector, so that a specular object shows what a
+            // technique hides from the final faces (c3rc's nearby objects) instead of black.
+            let first_hidden = if two_levels {
+                &hidden[..1]
+            } else {
+                &hidden[..]
+            };
+            raster.draw_into(gpu, gpu_scene, face_camera, first_hidden, None, &face_g)?;
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
-            encoder.copy_texture_to_texture(
-                face_g.color.as_image_copy(),
-                wgpu::TexelCopyTextureInfo {
-                    texture: first_level,
-                    mip_level: 0,
-                    origin: wgpu::Origin3d {
-                        x: 0,
-                        y: 0,
-                        z: (6 * k + face) as u32,
-                    },
-                    aspect: wgpu::TextureAspect::All,
-                },
-                wgpu::Extent3d {
-                    width: resolution,
-                    height: resolution,
-                    depth_or_array_layers: 1,
-                },
+            copy_to_layer(
+                &mut encoder,
+                &face_g.color,
+                first_level,
+                6 * k + face,
+                resolution,
             );
+            if let (Some(positions), false) = (positions, two_levels) {
+                copy_to_layer(
+                    &mut encoder,
+                    &face_g.position,
+                    positions,
+                    6 * k + face,
+                    resolution,
+                );
+            }
             gpu.queue.submit([encoder.finish()]);
         }
         if two_levels {
@@ -378,6 +408,16 @@ impl CubeMaps {
                     .write_buffer(&level.camera, 0, bytemuck::bytes_of(face_camera));
                 let layer = &faces.layer_views[6 * k + face];
                 let mut encoder = gpu.device.create_command_encoder(&Default::default());
+                if let Some((positions, _)) = &faces.positions {
+                    let resolution = faces.resolution;
+                    copy_to_layer(
+                        &mut encoder,
+                        &face_g.position,
+                        positions,
+                        6 * k + face,
+                        resolution,
+                    );
+                }
                 {
                     let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                         label: Some("cube maps, second level"),
@@ -433,7 +473,36 @@ impl CubeMaps {
     }
 }
 
-/// One cube-map face to draw: (reflector, face, camera, the meshes it leaves out).
+/// Copies a face's `resolution`² texture into `layer` of `to`.
+fn copy_to_layer(
+    encoder: &mut wgpu::CommandEncoder,
+    from: &wgpu::Texture,
+    to: &wgpu::Texture,
+    layer: usize,
+    resolution: u32,
+) {
+    encoder.copy_texture_to_texture(
+        from.as_image_copy(),
+        wgpu::TexelCopyTextureInfo {
+            texture: to,
+            mip_level: 0,
+            origin: wgpu::Origin3d {
+                x: 0,
+                y: 0,
+                z: layer as u32,
+            },
+            aspect: wgpu::TextureAspect::All,
+        },
+        wgpu::Extent3d {
+            width: resolution,
+            height: resolution,
+            depth_or_array_layers: 1,
+        },
+    );
+}
+
+/// One cube-map face to draw: (reflector, face, camera, the meshes it leaves out; its own
+/// reflector first).
 type FaceDraw = (usize, usize, CameraUniform, Vec<usize>);
 
 /// A 2D array of `layers` cube-map faces, `resolution` texels a side, that can be copied and
