@@ -342,9 +342,10 @@ fn a_moved_object_keeps_its_tree_and_renders_as_a_fresh_preparation() {
     );
     eprintln!("after the move: RMSE {against_fresh:.2e} against a fresh preparation; the move changed the image by {change:.4}");
     assert!(change > 0.005, "the move shows");
-    // Measured 4.4e-10 (rounding of the points through the moved transform); stale colours or
-    // points left behind would differ by more than 1e-3.
-    assert!(against_fresh < 1e-6, "{against_fresh}");
+    // Measured 1.05e-5 (rounding of the points through the moved transform, which with exact
+    // hits moves a few pixels' light kernels and plane meetings; 4.4e-10 with splatted
+    // colours); stale colours or points left behind would differ by more than 1e-3.
+    assert!(against_fresh < 2.1e-5, "{against_fresh}");
 }
 
 #[test]
@@ -396,8 +397,10 @@ fn the_gpu_forward_phase_draws_what_the_cpu_draws() {
             let mut technique = by_name("c3rc").unwrap();
             apply_parameters(
                 technique.as_mut(),
+                // The GPU splats colours: the CPU's exact hits are off to compare them.
                 &[
                     "points=30000".to_string(),
+                    "exact_hits=false".to_string(),
                     format!("projection={projection}"),
                 ],
             )
