@@ -47,11 +47,9 @@ fn no_method_draws_a_specular_object_black_where_the_reference_does_not() {
             m.label,
             lit.len()
         );
-        // c3rc: 1 pixel, measured 2026-12-02, on the mirror sphere's lower rim, not on an
-        // object in a cube map; its cause is not established (a gap between c3rc's splats, the
-        // holes of issue 29's Deliver 2, is the likely one). Every other method: none.
-        let allowed = if m.label == "c3rc" { 1 } else { 0 };
-        if black > allowed {
+        // None, every method (c3rc drew 1, on the mirror sphere's lower rim, before its exact
+        // hits closed the gaps between its splats).
+        if black > 0 {
             failures.push(format!("{}: {black} pixels", m.label));
         }
     }

@@ -37,6 +37,14 @@
 //! 6. Shading: envmap's shading pass, taking a mirror pixel's reflected radiance from the
 //!    splats where they cover it and from the far-field cube map where they do not.
 //!
+//! With `exact_hits` (the default) steps 5 and 6 go further ([`phases`]'s `resolve_exact`):
+//! a splat only nominates its point's triangle for the pixels it covers; each mirror pixel's
+//! exact reflected ray is met with the nominated triangles, the nearest meeting inside one
+//! wins, its colour is the albedo where the ray meets it (texture at the exact UV) times the
+//! light its points carry; and the shading pass searches the ray's segment up to that hit in
+//! the far field's world positions (16 steps, as distance maps search), showing a far surface
+//! it finds in front.
+//!
 //! Beyond the paper (each switched off by the `paper` preset; `specula methods` lists it):
 //! - Conservative box test: boxes are also kept where the base triangle's inside meets them
 //!   with the tested corner behind the base (objects touching the mirror), and where a
@@ -54,6 +62,13 @@
 //!   sweeping triangle's cross-section there, mapped to the triangle's screen area, times
 //!   `splat_scale`, at most `max_splat`; the paper's squares have a fixed side of 1 or 2 pixels,
 //!   the preset takes 2 (fewer holes at the same density) (paper: `fixed_splat=2`).
+//! - Exact hits (`exact_hits`, above): the paper's pixel takes the colour of the splat that wins
+//!   the z-buffer; here splats nominate surfaces and each pixel's own reflected ray picks among
+//!   them, so a magnified point leaves no block of one colour, a room's walls meet at sharp
+//!   edges, and a splat too large costs time but does not blur. Each splat is at least as large
+//!   as its point's disc edge projected with the same camera (the actual footprint). The far
+//!   field has depth: a far object in front of a nearby one shows (paper: `exact_hits=false`,
+//!   its z-buffer of colours with the far field behind every splat).
 //! - Splats resolve in two steps: the nearest push-back depth finds the front surface, then
 //!   within a depth band the splat whose centre is nearest the pixel's gives the colour; the
 //!   paper's z-buffer keeps the nearest depth alone (paper: `depth_band=false`).
@@ -74,9 +89,9 @@
 //!   a node whose strided points number at most 128 is projected whole, not descended
 //!   (paper: `level_of_detail=false`).
 //!
-//! Every switch acts on both projection paths (`projection=cpu` and `gpu`): the culling, the
-//! cameras and the per-vertex and traced pixels are the CPU's on both; the GPU's passes read the
-//! splat switches from each camera and skip the hole filling. docs/benchmarks.md has what
+//! Every switch but `exact_hits` acts on both projection paths (`projection=cpu` and `gpu`):
+//! the culling, the cameras and the per-vertex and traced pixels are the CPU's on both; the
+//! GPU's passes read the splat switches from each camera and skip the hole filling. docs/benchmarks.md has what
 //! `trace_self` and `level_of_detail` bought.
 //!
 //! Implementation (changes no pixel): four planes bounding each camera's volume cull boxes and
@@ -90,11 +105,18 @@
 //!
 //! Approximations and artifacts:
 //! - Point-based: the nearby objects are points, not surfaces. Too few points or too small
-//!   splats leave holes (the far field shows through as speckles); too large splats blur and
-//!   fatten edges (an object's silhouette grows by about a splat). Where reflected rays
-//!   converge (concave mirrors) a point's footprint grows past `max_splat` and holes appear.
-//!   With the paper's fixed 2-pixel splats, holes appear wherever a mirror magnifies the
-//!   points' spacing past 2 pixels.
+//!   splats leave holes (the far field shows through as speckles); with splatted colours too
+//!   large splats blur and fatten edges (an object's silhouette grows by about a splat; with
+//!   exact hits only by what a point's disc extrapolates). Where reflected rays converge
+//!   (concave mirrors) a point's footprint grows past `max_splat` and holes appear: a small
+//!   ball at a concave mirror's focal point, magnified many times, shows only in part. With the
+//!   paper's fixed 2-pixel splats, holes appear wherever a mirror magnifies the points' spacing
+//!   past 2 pixels.
+//! - Exact hits: a surface whose triangles no splat nominates at a pixel is not there (a thin
+//!   gap at a silhouette whose triangles are smaller than the points' spacing); lighting comes
+//!   from the points, so a shadow edge is as soft as a point's disc. The reflected ray comes
+//!   from the raster G-buffer: it differs from the reference's by rounding, which shows where the
+//!   reflected texture is far below a pixel (the 1-sample reference aliases there).
 //! - Rays inside a camera are interpolated linearly between the vertices' reflected rays, not
 //!   reflected about the interpolated normal: large curved triangles bend the reflection
 //!   slightly (continuous across edges, exact at vertices).
@@ -102,10 +124,13 @@
 //!   in envmap (and itself only where `trace_self` traces).
 //! - The near/far split is per object: a far object is exactly as wrong as in envmap, a near one is
 //!   right. On scenes whose objects are all far (door-mirror) c3rc is envmap but for the small
-//!   triangles' per-vertex colour. Splats win over the far field wherever they cover a pixel, with
-//!   no depth comparison: a far object in front of a near one is hidden by it (the suite's concave
-//!   mirror, inside a room that is near: the yellow box 1.5 m away, beyond 3 mirror radii, does not
-//!   show in the mirror).
+//!   triangles' per-vertex colour. With splatted colours (`exact_hits=false`) splats win over
+//!   the far field wherever they cover a pixel, with no depth comparison: a far object in front
+//!   of a near one is hidden by it (the suite's concave mirror, inside a room that is near: the
+//!   yellow box 1.5 m away, beyond 3 mirror radii, does not show). With exact hits the far field
+//!   is searched along the ray in 16 steps: a far surface thinner than a step may be missed,
+//!   and where the search finds a far surface the far field's colour there is the cube map's
+//!   (parallax-free beyond that surface).
 //! - Dielectric objects are shaded as envmap shades them, with the nearby objects in their
 //!   cube maps.
 //!
@@ -122,9 +147,14 @@
 //!   100k dragon points at 640×480, culling + projection + splatting took 23.3 ms at 128, 23.0
 //!   at 256 and 21.9 at 384 (within run-to-run noise; 256 holds 76 points a leaf there). The
 //!   paper states no limits, only the outcome (about 121 points a leaf, Table 1).
-//! - `splat_scale` (1.5): splat radius over the radius of the disc a point stands for. Larger
-//!   closes holes and blurs.
-//! - `max_splat` (6): largest splat half-size in pixels (where reflected rays converge).
+//! - `splat_scale` (2.5): splat radius over the radius of the disc a point stands for. Larger
+//!   closes holes (random sampling leaves about e^(−scale²) of a surface uncovered: 10 % at
+//!   1.5, 0.2 % at 2.5) at more cost; with splatted colours it also blurs (1.5 was the default
+//!   before exact hits).
+//! - `max_splat` (16): largest splat half-size in pixels (where reflected rays converge); the
+//!   cost of a splat grows with its area (6 before exact hits).
+//! - `exact_hits` (true): above; runs on the CPU (`projection=auto` keeps the forward phase
+//!   there; `projection=gpu` splats colours, with a warning).
 //! - `fixed_splat` (0 = footprint-sized): above; a fixed side overrides `splat_scale`,
 //!   `max_splat` and the level of detail's growth.
 //! - `min_pixels` (2): triangles covering fewer visible pixels take the per-vertex colour;
@@ -134,10 +164,11 @@
 //!   part's camera interpolates over less (mean FLIP 0.0793 -> 0.0777 on mirror-teapot-bunny
 //!   at 8), at more cameras.
 //! - `trace_self` (true), `level_of_detail` (true), `conservative_culling` (true), `one_sided`
-//!   (true), `multiple_projections` (true), `depth_band` (true), `fill_holes` (true): above.
+//!   (true), `multiple_projections` (true), `depth_band` (true, splatted colours only),
+//!   `fill_holes` (true): above.
 //! - `projection` (auto): where the forward phase runs: `cpu` (rayon), `gpu` (compute
-//!   passes, f32), `auto` (the CPU on a software GPU such as lavapipe, where it measured 2.3 to
-//!   3.9 times faster, the GPU otherwise).
+//!   passes, f32), `auto` (the CPU with exact hits, and on a software GPU such as lavapipe,
+//!   where it measured 2.3 to 3.9 times faster; the GPU otherwise).
 //! - `resolution` (256), `dynamic` (false), `shadow_resolution` (1024): the far-field cube maps
 //!   and the scene raster, as in envmap.
 

@@ -14,7 +14,7 @@ use specula_trace::reference::{offset_origin, Tracer};
 use specula_trace::{Ray, SceneAccel};
 
 use super::camera::{C3rc, PlaneBound, Projector};
-use super::points::{Node, PointCloud};
+use super::points::{Node, OneRing, PointCloud};
 
 pub use crate::screen::{PixelSurfaces, ScreenView};
 
@@ -686,8 +686,13 @@ pub fn forward(
     }
     if settings.exact_hits {
         let splats: Vec<&Splat> = per_node.iter().flat_map(|(s, _)| s).collect();
+        let mut rings: Vec<Option<&OneRing>> = vec![None; scene.meshes.len()];
+        for placed in clouds {
+            rings[placed.cloud.mesh] = Some(&placed.cloud.one_ring);
+        }
         resolve_exact(
             scene,
+            &rings,
             &splats,
             view,
             surfaces,
@@ -949,8 +954,10 @@ fn meet_plane(scene: &Scene, ray: &Ray, object: u32, triangle: u32) -> Option<(f
 /// whose discs hold that spot, weighted by a kernel falling to 0 at the disc's edge. A splat
 /// thus only has to reach a pixel, not to stand for its colour: magnified points leave no
 /// blocks, and the edges of large triangles (a room's walls) are exact.
+#[allow(clippy::too_many_arguments)]
 fn resolve_exact(
     scene: &Scene,
+    rings: &[Option<&OneRing>],
     splats: &[&Splat],
     view: &ScreenView,
     surfaces: &PixelSurfaces,
@@ -985,26 +992,38 @@ fn resolve_exact(
                     let Some((t, b1, b2)) = meet_plane(scene, &ray, s.object, s.triangle) else {
                         return;
                     };
-                    let meeting =
-                        if b1 >= -BARY_SLACK && b2 >= -BARY_SLACK && b1 + b2 <= 1.0 + BARY_SLACK {
-                            Meeting::Inside
-                        } else if (ray.origin + ray.dir * t - s.q_world).length_squared()
-                            <= s.disc * s.disc
-                        {
-                            Meeting::OnDisc
-                        } else {
-                            return;
-                        };
-                    let better = best[k].is_none_or(|h| (meeting, t) < (h.meeting, h.t));
-                    if better {
-                        best[k] = Some(NominatedHit {
-                            meeting,
+                    let on_disc = |t: f32| {
+                        (ray.origin + ray.dir * t - s.q_world).length_squared() <= s.disc * s.disc
+                    };
+                    let hit = if inside(b1, b2) {
+                        NominatedHit {
+                            meeting: Meeting::Inside,
                             t,
                             object: s.object,
                             triangle: s.triangle,
                             b1,
                             b2,
-                        });
+                        }
+                    } else if on_disc(t) {
+                        // The ray misses the point's triangle near the point: its true
+                        // triangle is likely a neighbour (triangles smaller than the points'
+                        // spacing, a curved surface whose plane here is another).
+                        let ring = rings[s.object as usize].expect("a nominating point's cloud");
+                        meet_one_ring(scene, ring, &ray, s.object, s.triangle).unwrap_or(
+                            NominatedHit {
+                                meeting: Meeting::OnDisc,
+                                t,
+                                object: s.object,
+                                triangle: s.triangle,
+                                b1,
+                                b2,
+                            },
+                        )
+                    } else {
+                        return;
+                    };
+                    if best[k].is_none_or(|h| (hit.meeting, hit.t) < (h.meeting, h.t)) {
+                        best[k] = Some(hit);
                     }
                 });
             }
@@ -1051,6 +1070,45 @@ fn resolve_exact(
 
 /// Barycentric slack within which a ray meets a triangle (its edges shared with neighbours).
 const BARY_SLACK: f32 = 1e-4;
+
+/// Whether barycentrics (b1, b2) lie within a triangle (with [`BARY_SLACK`]).
+fn inside(b1: f32, b2: f32) -> bool {
+    b1 >= -BARY_SLACK && b2 >= -BARY_SLACK && b1 + b2 <= 1.0 + BARY_SLACK
+}
+
+/// The nearest meeting of `ray` inside a triangle sharing a vertex with `object`'s `triangle`
+/// (not itself).
+fn meet_one_ring(
+    scene: &Scene,
+    ring: &OneRing,
+    ray: &Ray,
+    object: u32,
+    triangle: u32,
+) -> Option<NominatedHit> {
+    let m = &scene.meshes[object as usize];
+    let mut best: Option<NominatedHit> = None;
+    for &v in &m.triangles[triangle as usize] {
+        for &other in ring.around(v) {
+            if other == triangle {
+                continue;
+            }
+            let Some((t, b1, b2)) = meet_plane(scene, ray, object, other) else {
+                continue;
+            };
+            if inside(b1, b2) && best.is_none_or(|h| t < h.t) {
+                best = Some(NominatedHit {
+                    meeting: Meeting::Inside,
+                    t,
+                    object,
+                    triangle: other,
+                    b1,
+                    b2,
+                });
+            }
+        }
+    }
+    best
+}
 
 /// The surface's albedo (colour × texture) where `hit` meets it; outside its triangle (within a
 /// point's disc), with its UVs extrapolated: on the neighbouring triangle of the same plane

@@ -59,6 +59,46 @@ pub struct PointCloud {
     pub radius: f32,
     pub nodes: Vec<Node>,
     pub stats: TreeStats,
+    /// The triangles around each vertex of the mesh (for `exact_hits`: a ray that misses a
+    /// point's triangle is tried on its neighbours).
+    pub one_ring: OneRing,
+}
+
+/// The triangles sharing each vertex of a mesh, packed: vertex v's are
+/// `triangles[offsets[v]..offsets[v + 1]]`.
+#[derive(Clone, Debug, Default)]
+pub struct OneRing {
+    offsets: Vec<u32>,
+    triangles: Vec<u32>,
+}
+
+impl OneRing {
+    pub fn new(mesh: &Mesh) -> OneRing {
+        let mut offsets = vec![0u32; mesh.positions.len() + 1];
+        for tri in &mesh.triangles {
+            for &v in tri {
+                offsets[v as usize + 1] += 1;
+            }
+        }
+        for v in 0..mesh.positions.len() {
+            offsets[v + 1] += offsets[v];
+        }
+        let mut filled = offsets.clone();
+        let mut triangles = vec![0u32; mesh.triangles.len() * 3];
+        for (t, tri) in mesh.triangles.iter().enumerate() {
+            for &v in tri {
+                triangles[filled[v as usize] as usize] = t as u32;
+                filled[v as usize] += 1;
+            }
+        }
+        OneRing { offsets, triangles }
+    }
+
+    /// The triangles sharing vertex `v`.
+    pub fn around(&self, v: u32) -> &[u32] {
+        let v = v as usize;
+        &self.triangles[self.offsets[v] as usize..self.offsets[v + 1] as usize]
+    }
 }
 
 /// Table 1 of the paper, for one tree.
@@ -179,6 +219,7 @@ impl PointCloud {
             radius,
             nodes: Vec::new(),
             stats: TreeStats::default(),
+            one_ring: OneRing::new(mesh),
         };
         cloud.build_tree(limits);
         cloud
