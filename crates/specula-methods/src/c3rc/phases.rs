@@ -690,6 +690,7 @@ pub fn forward(
         for placed in clouds {
             rings[placed.cloud.mesh] = Some(&placed.cloud.one_ring);
         }
+        let mut found = vec![None; pixel_count];
         resolve_exact(
             scene,
             &rings,
@@ -697,19 +698,32 @@ pub fn forward(
             view,
             surfaces,
             plan.mirror_rows,
-            &mut depth,
-            out,
+            &mut found,
         );
+        report.covered_pixels = found.iter().filter(|f| f.is_some()).count() as u64;
+        if settings.fill_holes {
+            report.holes_filled =
+                fill_exact(scene, view, surfaces, mirrors, plan.mirror_rows, &mut found);
+        }
+        for (k, f) in found.iter().enumerate() {
+            if let Some(Found { hit, light }) = f {
+                let c = albedo_at(scene, hit) * *light;
+                depth[k] = hit.t;
+                // The distance, for the shading pass's test against the far field.
+                out[k] = [c.x, c.y, c.z, hit.t];
+            }
+        }
     } else {
         resolve(&per_node, view, surfaces, plan.mirror_rows, &mut depth, out);
-    }
-    let w = view.width as usize;
-    let (first, last) = plan.mirror_rows;
-    if first < last {
-        let rows = first * w..last * w;
-        report.covered_pixels = depth[rows].iter().filter(|d| d.is_finite()).count() as u64;
-        if settings.fill_holes {
-            report.holes_filled = fill_holes(view, surfaces, mirrors, (first, last), &depth, out);
+        let w = view.width as usize;
+        let (first, last) = plan.mirror_rows;
+        if first < last {
+            let rows = first * w..last * w;
+            report.covered_pixels = depth[rows].iter().filter(|d| d.is_finite()).count() as u64;
+            if settings.fill_holes {
+                report.holes_filled =
+                    fill_holes(view, surfaces, mirrors, (first, last), &depth, out);
+            }
         }
     }
     report.splatting_ms = ms(start);
@@ -962,8 +976,7 @@ fn resolve_exact(
     view: &ScreenView,
     surfaces: &PixelSurfaces,
     rows: (usize, usize),
-    depth: &mut [f32],
-    out: &mut [[f32; 4]],
+    found: &mut [Option<Found>],
 ) {
     let w = view.width as usize;
     let (first, last) = rows;
@@ -973,16 +986,15 @@ fn resolve_exact(
     let band = (last - first)
         .div_ceil(rayon::current_num_threads().max(1))
         .max(1);
-    depth[first * w..last * w]
+    found[first * w..last * w]
         .par_chunks_mut(band * w)
-        .zip(out[first * w..last * w].par_chunks_mut(band * w))
         .enumerate()
-        .for_each(|(b, (depth, out))| {
+        .for_each(|(b, found)| {
             let top = first + b * band;
-            let range = (top as i64, (top + depth.len() / w) as i64);
+            let range = (top as i64, (top + found.len() / w) as i64);
             let offset = top * w;
-            let mut rays: Vec<Option<Ray>> = vec![None; depth.len()];
-            let mut best: Vec<Option<NominatedHit>> = vec![None; depth.len()];
+            let mut rays: Vec<Option<Ray>> = vec![None; found.len()];
+            let mut best: Vec<Option<NominatedHit>> = vec![None; found.len()];
             for s in splats {
                 splat_pixels(s, view, surfaces, range, |k, _| {
                     let k = k - offset;
@@ -1028,7 +1040,7 @@ fn resolve_exact(
                 });
             }
             // The light at each winning hit: the points of its object whose discs hold it.
-            let mut light = vec![(Vec3::ZERO, f32::NEG_INFINITY); depth.len()];
+            let mut light = vec![(Vec3::ZERO, f32::NEG_INFINITY); found.len()];
             for s in splats {
                 splat_pixels(s, view, surfaces, range, |k, _| {
                     let k = k - offset;
@@ -1056,16 +1068,111 @@ fn resolve_exact(
                 });
             }
             for (k, hit) in best.iter().enumerate() {
-                let Some(hit) = hit else { continue };
+                let Some(hit) = *hit else { continue };
                 let (sum, weight) = light[k];
-                let l = if weight > 0.0 { sum / weight } else { sum };
-                let albedo = albedo_at(scene, hit);
-                let c = albedo * l;
-                depth[k] = hit.t;
-                // The distance, for the shading pass's test against the far field.
-                out[k] = [c.x, c.y, c.z, hit.t];
+                let light = if weight > 0.0 { sum / weight } else { sum };
+                found[k] = Some(Found { hit, light });
             }
         });
+}
+
+/// What a mirror pixel's exact ray met: the hit and the light the points carry there.
+#[derive(Clone, Copy)]
+struct Found {
+    hit: NominatedHit,
+    light: Vec3,
+}
+
+/// Passes of [`fill_exact`], and how far (pixels) each looks for neighbours.
+const FILL_PASSES: usize = 4;
+const FILL_RADIUS: i64 = 2;
+
+/// Fills mirror pixels no splat reached, and mends those whose splats missed the surface in
+/// front (exact hits): each is tried with the triangles its neighbours' rays met (within
+/// [`FILL_RADIUS`]); its own ray's nearest meeting inside one wins, with that neighbour's
+/// light, where it is nearer than what the pixel has (or the pixel has nothing, or only a
+/// point's disc); [`FILL_PASSES`] times, so a hole fills inwards from its edge. Where a surface
+/// lies behind a gap between splats (random sampling leaves some, most where a mirror
+/// magnifies), or a small object's triangles were nominated only around a pixel, its triangles
+/// are the neighbours'. Returns the pixels changed.
+fn fill_exact(
+    scene: &Scene,
+    view: &ScreenView,
+    surfaces: &PixelSurfaces,
+    mirrors: &[usize],
+    rows: (usize, usize),
+    found: &mut [Option<Found>],
+) -> u64 {
+    let (w, h) = (view.width as i64, view.height as i64);
+    let mut filled_total = 0u64;
+    for _ in 0..FILL_PASSES {
+        let now: &[Option<Found>] = found;
+        let filled: Vec<(usize, Found)> = (rows.0 as i64..rows.1 as i64)
+            .into_par_iter()
+            .flat_map_iter(|y| {
+                (0..w).filter_map(move |x| {
+                    let k = (y * w + x) as usize;
+                    let mesh1 = surfaces.ids[k][0];
+                    if mesh1 == 0 || !mirrors.contains(&((mesh1 - 1) as usize)) {
+                        return None;
+                    }
+                    let mut tried: Vec<(u32, u32)> = Vec::new();
+                    if let Some(own) = now[k] {
+                        tried.push((own.hit.object, own.hit.triangle));
+                    }
+                    let mut ray = None;
+                    let mut best: Option<Found> = None;
+                    for dy in -FILL_RADIUS..=FILL_RADIUS {
+                        for dx in -FILL_RADIUS..=FILL_RADIUS {
+                            let (nx, ny) = (x + dx, y + dy);
+                            if nx < 0 || ny < 0 || nx >= w || ny >= h {
+                                continue;
+                            }
+                            let Some(neighbour) = now[(ny * w + nx) as usize] else {
+                                continue;
+                            };
+                            let key = (neighbour.hit.object, neighbour.hit.triangle);
+                            if tried.contains(&key) {
+                                continue;
+                            }
+                            tried.push(key);
+                            let ray = *ray.get_or_insert_with(|| {
+                                pixel_reflected_ray(scene, view, surfaces, k)
+                            });
+                            let Some((t, b1, b2)) = meet_plane(scene, &ray, key.0, key.1) else {
+                                continue;
+                            };
+                            let nearer = |b: Option<Found>| {
+                                b.is_none_or(|b| (Meeting::Inside, t) < (b.hit.meeting, b.hit.t))
+                            };
+                            if inside(b1, b2) && nearer(best) && nearer(now[k]) {
+                                let hit = NominatedHit {
+                                    meeting: Meeting::Inside,
+                                    t,
+                                    b1,
+                                    b2,
+                                    ..neighbour.hit
+                                };
+                                best = Some(Found {
+                                    hit,
+                                    light: neighbour.light,
+                                });
+                            }
+                        }
+                    }
+                    best.map(|f| (k, f))
+                })
+            })
+            .collect();
+        if filled.is_empty() {
+            break;
+        }
+        filled_total += filled.len() as u64;
+        for (k, f) in filled {
+            found[k] = Some(f);
+        }
+    }
+    filled_total
 }
 
 /// Barycentric slack within which a ray meets a triangle (its edges shared with neighbours).
