@@ -543,6 +543,7 @@ impl Plan {
             &self.vertices,
             &self.traced,
             max_depth,
+            false,
             out,
         );
     }
@@ -626,7 +627,7 @@ pub fn forward(
                     let r = (radius * (camera.screen_area / area).sqrt()) as f32;
                     let radius_px = if settings.fixed_splat > 0.0 {
                         0.5 * settings.fixed_splat
-                    } else if settings.exact_hits {
+                    } else if settings.exact_hits && r < settings.max_splat {
                         // The disc's edge projected with the same camera: its actual
                         // footprint, which the cross-section's area underestimates where the
                         // surface is oblique to it or the rays converge.
@@ -642,6 +643,8 @@ pub fn forward(
                             (x, y),
                         );
                         r.max(footprint).clamp(0.5, settings.max_splat)
+                    } else if settings.exact_hits {
+                        settings.max_splat
                     } else {
                         r.clamp(0.5, settings.max_splat)
                     };
@@ -739,6 +742,7 @@ pub fn forward(
         &plan.vertices,
         &plan.traced,
         settings.max_depth,
+        settings.exact_hits,
         out,
     );
     report.fallback_ms = ms(start);
@@ -998,6 +1002,11 @@ fn resolve_exact(
             for s in splats {
                 splat_pixels(s, view, surfaces, range, |k, _| {
                     let k = k - offset;
+                    // Another point of the winning triangle meets it where the winner did
+                    // (the many points of a room's wall over one pixel).
+                    if best[k].is_some_and(|h| (h.object, h.triangle) == (s.object, s.triangle)) {
+                        return;
+                    }
                     let ray = *rays[k].get_or_insert_with(|| {
                         pixel_reflected_ray(scene, view, surfaces, k + offset)
                     });
@@ -1016,6 +1025,12 @@ fn resolve_exact(
                             b1,
                             b2,
                         }
+                    } else if best[k]
+                        .is_some_and(|h| h.meeting == Meeting::Inside && h.t < t - s.disc)
+                    {
+                        // Clearly behind a surface the ray meets: neither this point's plane
+                        // nor its neighbours' (within its disc) can win.
+                        return;
                     } else if on_disc(t) {
                         // The ray misses the point's triangle near the point: its true
                         // triangle is likely a neighbour (triangles smaller than the points'
@@ -1350,8 +1365,11 @@ fn trace_vertices(
 }
 
 /// The pixels of the triangles that have no camera: small ones take their vertices' traced
-/// colours, interpolated; those that see their own mirror are traced, one exact reflected ray
-/// per pixel (with the normal interpolated as the reference interpolates it).
+/// colours, interpolated (with `keep_found`, only where the exact hits found nothing: their
+/// neighbours' splats and surfaces usually reach them, and interpolating across a triangle that
+/// spans many reflected checker squares would give their blur); those that see their own
+/// mirror are traced, one exact reflected ray per pixel (with the normal interpolated as the
+/// reference interpolates it).
 #[allow(clippy::too_many_arguments)]
 fn fallback_pixels(
     scene: &Scene,
@@ -1362,6 +1380,7 @@ fn fallback_pixels(
     vertices: &[(usize, u32)],
     traced: &[(Vec3, bool)],
     max_depth: u32,
+    keep_found: bool,
     out: &mut [[f32; 4]],
 ) {
     let tracer = Tracer {
@@ -1384,6 +1403,9 @@ fn fallback_pixels(
             let mesh = (mesh1 - 1) as usize;
             let source = sources.get(mesh).and_then(|f| f.get(*t as usize)).copied();
             if !matches!(source, Some(PixelSource::PerVertex | PixelSource::Traced)) {
+                return;
+            }
+            if keep_found && source == Some(PixelSource::PerVertex) && out[3] != 0.0 {
                 return;
             }
             let m = &scene.meshes[mesh];
