@@ -88,14 +88,18 @@ const SIZE: (u32, u32) = (200, 150);
 /// 200 × 150 PNGs that differ in any 8-bit channel, largest per-pixel FLIP, mean FLIP).
 /// Measured 2026-12-01 on lavapipe under Xvfb, five runs alike: pvrr, envmap, distance-maps
 /// (door-mirror) and image-space (glass-dragon) byte-identical; c3rc (mirror-teapot-bunny) one
-/// pixel differs, FLIP 0.0096 there, mean FLIP 0.000004 (the moved dragon keeps its kd-tree and
+/// pixel differed, FLIP 0.0096 there, mean FLIP 0.000004 (the moved dragon keeps its kd-tree and
 /// maps its points through the move, where the renderer builds them at the moved pose: a
-/// rounding moves one splat). Bounds: 2× those, and identical where they were identical. Both
+/// rounding moves one splat). c3rc measured again 2026-12-02, after its exact hits and a
+/// camera for every triangle (issue 29), three runs alike: 8 pixels, largest FLIP 0.2138, mean
+/// 0.000177 (the rounding now decides some projections of tiny triangles' cameras, and with
+/// exact hits another nominated triangle changes a pixel wholly; a dragon left unmoved gives a
+/// mean of 0.13). Bounds: 2× those, and identical where they were identical. Both
 /// images must come from the same adapter (the viewer takes one that can present to Xvfb's
 /// window; on lavapipe it is the renderer's).
 fn bounds(method: &str) -> (usize, f64, f64) {
     match method {
-        "c3rc" => (2, 0.02, 1e-5),
+        "c3rc" => (16, 0.43, 3.6e-4),
         _ => (0, 0.0, 0.0),
     }
 }

@@ -221,7 +221,7 @@ impl GpuProjection {
     }
 
     /// Runs the forward phase of `plan` into `near` (a storage buffer of one vec4 per pixel
-    /// that already holds the per-vertex colour, alpha [`phases::TAKEN_AS_IT_IS`], where the
+    /// that already holds the per-vertex colour, alpha [`super::phases::TAKEN_AS_IT_IS`], where the
     /// plan gives it).
     #[allow(clippy::too_many_arguments)]
     pub fn forward(

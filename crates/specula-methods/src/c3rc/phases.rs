@@ -1,8 +1,10 @@
 //! One frame of c3rc on the CPU (Mei, Popescu and Sacks 2007, §3.2, §5.2, §6): a camera per
 //! visible reflector triangle, the backward phase (each camera's view volume against the point
 //! trees), the forward phase (the points of the leaves it sees projected with it), and the
-//! splats resolved per pixel, nearest to the reflector first. Triangles too small to pay for a
-//! camera take the per-vertex reflected colour instead.
+//! splats resolved per pixel: nearest to the reflector first (the paper), or, with exact hits,
+//! each pixel's own reflected ray met with the triangles the splats covering it nominate
+//! (`resolve_exact`, `fill_exact`). Triangles too small to pay for a camera take the
+//! per-vertex reflected colour instead.
 
 use std::time::Instant;
 
@@ -47,7 +49,7 @@ pub struct FrameSettings {
     pub fill_holes: bool,
     /// Splats only nominate surfaces: each pixel's exact reflected ray is met with the
     /// triangles of the points whose splats cover it, the nearest hit wins, and its colour is
-    /// the albedo there times the light its points carry ([`resolve_exact`]); else each pixel
+    /// the albedo there times the light its points carry (`resolve_exact`); else each pixel
     /// takes a splat's colour.
     pub exact_hits: bool,
     pub splat_scale: f32,
