@@ -45,7 +45,8 @@ pub struct FrameSettings {
     /// Resolve in two steps (nearest depth, then the nearest centre within a depth band); else
     /// the nearest push-back depth alone.
     pub depth_band: bool,
-    /// Fill one-pixel holes between splats.
+    /// Fill one-pixel holes between splats (with exact hits, [`fill_exact`]'s neighbours'
+    /// surfaces instead).
     pub fill_holes: bool,
     /// Splats only nominate surfaces: each pixel's exact reflected ray is met with the
     /// triangles of the points whose splats cover it, the nearest hit wins, and its colour is
@@ -132,7 +133,8 @@ struct Splat {
     color: Vec3,
     mesh: u32,
     /// The point's object (scene mesh), the triangle it lies on, where it lies in the world,
-    /// the radius in metres of the disc it stands for, and the light it carries (for
+    /// the splat's radius in metres (the point's disc times `splat_scale`, and √stride: how far
+    /// its plane is extrapolated and its light reaches), and the light it carries (for
     /// `exact_hits`).
     object: u32,
     triangle: u32,
@@ -552,8 +554,9 @@ impl Plan {
 }
 
 /// The forward phase on the CPU (§5.1, §6): every leaf's points projected with the camera
-/// that sees it, splatted and resolved per pixel; one-pixel holes filled (`fill_holes`); then
-/// the pixels of the triangles without a camera.
+/// that sees it, splatted and resolved per pixel; one-pixel holes filled (`fill_holes`; with
+/// exact hits, pixels filled and mended from their neighbours' surfaces); then the pixels of
+/// the triangles without a camera.
 #[allow(clippy::too_many_arguments)]
 pub fn forward(
     plan: &mut Plan,
@@ -713,7 +716,6 @@ pub fn forward(
         for (k, f) in found.iter().enumerate() {
             if let Some(Found { hit, light }) = f {
                 let c = albedo_at(scene, hit) * *light;
-                depth[k] = hit.t;
                 // The distance, for the shading pass's test against the far field.
                 out[k] = [c.x, c.y, c.z, hit.t];
             }

@@ -3,7 +3,8 @@
 // splatted as on the CPU (phases.rs): nearest push-back depth first, then within a depth band
 // the splat whose centre is nearest the pixel's; one-pixel holes filled (each step as the
 // camera's switches and the host's dispatches say, as on the CPU). The per-vertex colour
-// of small and self-seeing triangles is the CPU's, already in `near` (alpha 1): kept.
+// of small and self-seeing triangles is the CPU's, already in `near` (alpha -1, taken as it
+// is by the shading pass): kept.
 //
 // Arithmetic is f32, in each camera's own frame: origin at its first vertex, scaled by its
 // longest edge, so the cubic's coefficients stay near 1 for the points it can see.

@@ -144,8 +144,9 @@ pub struct CubeMaps {
     /// scene with two reflectors or more first draws its faces.
     second_level: Option<SecondLevel>,
     generation: u64,
-    /// (reflector mesh, meshes its faces leave out besides itself): what a technique draws
-    /// by other means (c3rc's near objects).
+    /// (reflector mesh, meshes its final faces leave out besides itself): what a technique
+    /// draws by other means (c3rc's near objects). The first level of two keeps them, so that
+    /// a specular object in the final faces shows them.
     hidden: Vec<(usize, Vec<usize>)>,
     /// Keep each face's world positions too (`positions_view`): c3rc depth-tests its splats
     /// against the far field with them.
@@ -214,8 +215,9 @@ impl CubeMaps {
         faces.positions.as_ref().map(|(_, view)| view)
     }
 
-    /// Leaves `hidden` meshes out of the faces of the reflectors they are given for
-    /// ((reflector mesh, meshes) pairs); a change marks the faces stale.
+    /// Leaves `hidden` meshes out of the final faces of the reflectors they are given for
+    /// ((reflector mesh, meshes) pairs; with two levels the first keeps them); a change marks
+    /// the faces stale.
     pub fn set_hidden(&mut self, hidden: Vec<(usize, Vec<usize>)>) {
         if hidden != self.hidden {
             self.hidden = hidden;
