@@ -116,10 +116,7 @@ fn a_point_seen_twice_through_one_triangle_is_splatted_where_its_rays_show_it() 
         &scene,
         &accel,
         &[0],
-        &[PlacedCloud {
-            cloud: &cloud,
-            object_from_world: glam::DMat4::IDENTITY,
-        }],
+        &[PlacedCloud::new(&cloud, glam::DMat4::IDENTITY)],
         &view,
         &surfaces,
         FrameSettings {

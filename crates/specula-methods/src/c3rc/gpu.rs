@@ -272,7 +272,7 @@ impl GpuProjection {
         }
         let matrices: Vec<[f32; 16]> = placed
             .iter()
-            .map(|p| p.object_from_world.inverse().as_mat4().to_cols_array())
+            .map(|p| p.world_from_object.as_mat4().to_cols_array())
             .collect();
         made |= self
             .clouds

@@ -786,15 +786,17 @@ impl Technique for C3rcMethod {
         let placed: Vec<PlacedCloud> = field
             .clouds
             .iter()
-            .map(|cloud| PlacedCloud {
-                cloud,
-                object_from_world: DMat4::from_cols_array(
-                    &live
-                        .world_from_loaded(cloud.mesh)
-                        .inverse()
-                        .to_cols_array()
-                        .map(f64::from),
-                ),
+            .map(|cloud| {
+                PlacedCloud::new(
+                    cloud,
+                    DMat4::from_cols_array(
+                        &live
+                            .world_from_loaded(cloud.mesh)
+                            .inverse()
+                            .to_cols_array()
+                            .map(f64::from),
+                    ),
+                )
             })
             .collect();
         let mirror_meshes: Vec<usize> = field.near.iter().map(|(m, _)| *m).collect();

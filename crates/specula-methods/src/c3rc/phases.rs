@@ -62,6 +62,17 @@ pub struct FrameSettings {
 pub struct PlacedCloud<'a> {
     pub cloud: &'a PointCloud,
     pub object_from_world: DMat4,
+    pub world_from_object: DMat4,
+}
+
+impl<'a> PlacedCloud<'a> {
+    pub fn new(cloud: &'a PointCloud, object_from_world: DMat4) -> PlacedCloud<'a> {
+        PlacedCloud {
+            cloud,
+            object_from_world,
+            world_from_object: object_from_world.inverse(),
+        }
+    }
 }
 
 /// One reflector triangle's camera.
@@ -588,7 +599,7 @@ pub fn forward(
         .map(|&(i, seen)| {
             let camera = &plan.cameras[i];
             let cloud = clouds[seen.cloud].cloud;
-            let world_from_object = clouds[seen.cloud].object_from_world.inverse();
+            let world_from_object = clouds[seen.cloud].world_from_object;
             let InCloud {
                 camera: local,
                 bound,
@@ -698,6 +709,7 @@ pub fn forward(
         for placed in clouds {
             rings[placed.cloud.mesh] = Some(&placed.cloud.one_ring);
         }
+        let rays = mirror_rays(scene, view, surfaces, mirrors, plan.mirror_rows);
         let mut found = vec![None; pixel_count];
         resolve_exact(
             scene,
@@ -706,12 +718,12 @@ pub fn forward(
             view,
             surfaces,
             plan.mirror_rows,
+            &rays,
             &mut found,
         );
         report.covered_pixels = found.iter().filter(|f| f.is_some()).count() as u64;
         if settings.fill_holes {
-            report.holes_filled =
-                fill_exact(scene, view, surfaces, mirrors, plan.mirror_rows, &mut found);
+            report.holes_filled = fill_exact(scene, view, plan.mirror_rows, &rays, &mut found);
         }
         for (k, f) in found.iter().enumerate() {
             if let Some(Found { hit, light }) = f {
@@ -889,16 +901,12 @@ fn resolve(
     depth: &mut [f32],
     out: &mut [[f32; 4]],
 ) {
-    // One band of the mirror's rows per thread: every thread reads all splats and writes its
-    // own rows.
     let w = view.width as usize;
     let (first, last) = rows;
     if first >= last {
         return;
     }
-    let band = (last - first)
-        .div_ceil(rayon::current_num_threads().max(1))
-        .max(1);
+    let band = rows_per_thread(rows);
     depth[first * w..last * w]
         .par_chunks_mut(band * w)
         .zip(out[first * w..last * w].par_chunks_mut(band * w))
@@ -984,6 +992,7 @@ fn resolve_exact(
     view: &ScreenView,
     surfaces: &PixelSurfaces,
     rows: (usize, usize),
+    rays: &[Option<Ray>],
     found: &mut [Option<Found>],
 ) {
     let w = view.width as usize;
@@ -991,9 +1000,7 @@ fn resolve_exact(
     if first >= last {
         return;
     }
-    let band = (last - first)
-        .div_ceil(rayon::current_num_threads().max(1))
-        .max(1);
+    let band = rows_per_thread(rows);
     found[first * w..last * w]
         .par_chunks_mut(band * w)
         .enumerate()
@@ -1001,7 +1008,7 @@ fn resolve_exact(
             let top = first + b * band;
             let range = (top as i64, (top + found.len() / w) as i64);
             let offset = top * w;
-            let mut rays: Vec<Option<Ray>> = vec![None; found.len()];
+            let rays = &rays[offset..offset + found.len()];
             let mut best: Vec<Option<NominatedHit>> = vec![None; found.len()];
             for s in splats {
                 splat_pixels(s, view, surfaces, range, |k, _| {
@@ -1011,9 +1018,7 @@ fn resolve_exact(
                     if best[k].is_some_and(|h| (h.object, h.triangle) == (s.object, s.triangle)) {
                         return;
                     }
-                    let ray = *rays[k].get_or_insert_with(|| {
-                        pixel_reflected_ray(scene, view, surfaces, k + offset)
-                    });
+                    let ray = rays[k].expect("a splat lands on mirror pixels only");
                     let Some((t, b1, b2)) = meet_plane(scene, &ray, s.object, s.triangle) else {
                         return;
                     };
@@ -1117,9 +1122,8 @@ const FILL_RADIUS: i64 = 2;
 fn fill_exact(
     scene: &Scene,
     view: &ScreenView,
-    surfaces: &PixelSurfaces,
-    mirrors: &[usize],
     rows: (usize, usize),
+    rays: &[Option<Ray>],
     found: &mut [Option<Found>],
 ) -> u64 {
     let (w, h) = (view.width as i64, view.height as i64);
@@ -1131,15 +1135,12 @@ fn fill_exact(
             .flat_map_iter(|y| {
                 (0..w).filter_map(move |x| {
                     let k = (y * w + x) as usize;
-                    let mesh1 = surfaces.ids[k][0];
-                    if mesh1 == 0 || !mirrors.contains(&((mesh1 - 1) as usize)) {
-                        return None;
-                    }
+                    // Mirror pixels only.
+                    let ray = rays[k]?;
                     let mut tried: Vec<(u32, u32)> = Vec::new();
                     if let Some(own) = now[k] {
                         tried.push((own.hit.object, own.hit.triangle));
                     }
-                    let mut ray = None;
                     let mut best: Option<Found> = None;
                     for dy in -FILL_RADIUS..=FILL_RADIUS {
                         for dx in -FILL_RADIUS..=FILL_RADIUS {
@@ -1155,9 +1156,6 @@ fn fill_exact(
                                 continue;
                             }
                             tried.push(key);
-                            let ray = *ray.get_or_insert_with(|| {
-                                pixel_reflected_ray(scene, view, surfaces, k)
-                            });
                             let Some((t, b1, b2)) = meet_plane(scene, &ray, key.0, key.1) else {
                                 continue;
                             };
@@ -1192,6 +1190,38 @@ fn fill_exact(
         }
     }
     filled_total
+}
+
+/// Rows of each band when `rows` (first, past-last) are split among the threads: every thread
+/// reads all splats and writes its own rows.
+fn rows_per_thread((first, last): (usize, usize)) -> usize {
+    (last - first)
+        .div_ceil(rayon::current_num_threads().max(1))
+        .max(1)
+}
+
+/// The exact reflected ray of every pixel of `mirrors` in `rows` (others: None), for
+/// `resolve_exact` and `fill_exact`.
+fn mirror_rays(
+    scene: &Scene,
+    view: &ScreenView,
+    surfaces: &PixelSurfaces,
+    mirrors: &[usize],
+    rows: (usize, usize),
+) -> Vec<Option<Ray>> {
+    let w = view.width as usize;
+    let mut rays = vec![None; (view.width * view.height) as usize];
+    rays[rows.0 * w..rows.1.max(rows.0) * w]
+        .par_iter_mut()
+        .enumerate()
+        .for_each(|(i, ray)| {
+            let k = rows.0 * w + i;
+            let mesh1 = surfaces.ids[k][0];
+            if mesh1 > 0 && mirrors.contains(&((mesh1 - 1) as usize)) {
+                *ray = Some(pixel_reflected_ray(scene, view, surfaces, k));
+            }
+        });
+    rays
 }
 
 /// Barycentric slack within which a ray meets a triangle (its edges shared with neighbours).

@@ -553,23 +553,9 @@ impl SecondLevel {
     fn new(gpu: &GpuContext, live: &LiveScene) -> Result<SecondLevel, GpuError> {
         let device = &gpu.device;
         gpu.validated("cube maps, second level set-up", || {
-            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("envmap.wgsl"),
-                source: wgpu::ShaderSource::Wgsl(shader_source().into()),
-            });
-            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("cube maps, second level"),
-                entries: &shading_layout_entries(),
-            });
-            let scene_layout = GpuScene::bind_group_layout(device);
+            let (layout, scene_layout, pipeline) = shading_pass(device, "cube maps, second level");
             SecondLevel {
-                pipeline: raster::shading_pipeline(
-                    device,
-                    "cube maps, second level",
-                    &module,
-                    &layout,
-                    &scene_layout,
-                ),
+                pipeline,
                 scene_bind_group: live.gpu(gpu).bind_group(gpu, &scene_layout),
                 layout,
                 camera: writable_buffer(
@@ -582,6 +568,29 @@ impl SecondLevel {
             }
         })
     }
+}
+
+/// envmap's shading pass (`shade.wgsl` over a G-buffer): its bind group layout, the scene's,
+/// and its pipeline; envmap's own and its cube maps' second level.
+fn shading_pass(
+    device: &wgpu::Device,
+    label: &str,
+) -> (
+    wgpu::BindGroupLayout,
+    wgpu::BindGroupLayout,
+    wgpu::RenderPipeline,
+) {
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("envmap.wgsl"),
+        source: wgpu::ShaderSource::Wgsl(shader_source().into()),
+    });
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(label),
+        entries: &shading_layout_entries(),
+    });
+    let scene_layout = GpuScene::bind_group_layout(device);
+    let pipeline = raster::shading_pipeline(device, label, &module, &layout, &scene_layout);
+    (layout, scene_layout, pipeline)
 }
 
 /// What depends on the scene (not on `resolution`).
@@ -727,17 +736,7 @@ impl EnvMap {
         let gpu_scene = live.gpu(ctx);
         let raster = RasterPass::new(ctx, live, RasterSpec::scene(self.shadow_resolution))?;
         ctx.validated("envmap set-up", || {
-            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("envmap.wgsl"),
-                source: wgpu::ShaderSource::Wgsl(shader_source().into()),
-            });
-            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("envmap"),
-                entries: &shading_layout_entries(),
-            });
-            let scene_layout = GpuScene::bind_group_layout(device);
-            let pipeline =
-                raster::shading_pipeline(device, "envmap shade", &module, &layout, &scene_layout);
+            let (layout, scene_layout, pipeline) = shading_pass(device, "envmap shade");
             Prepared {
                 scene_id: live.id(),
                 scene_bind_group: gpu_scene.bind_group(ctx, &scene_layout),
