@@ -13,9 +13,12 @@
 #                        bindings: distributed vertex tracing (specula-cli's `mpi` feature)
 #
 # A requirement that SPECULA_ALLOW_SKIP names (gpu, xvfb, mpi, corpus) is not installed: the
-# tests that need it are skipped, and counted, instead (scripts/test.sh).
+# tests that need it are skipped, and counted, instead (scripts/test.sh). The list is read by
+# the testkit's rule (scripts/allow-skip.sh).
 set -euo pipefail
-allowed() { [[ ",${SPECULA_ALLOW_SKIP:-}," == *",$1,"* ]]; }
+# shellcheck source=allow-skip.sh
+source "$(dirname "$0")/allow-skip.sh"
+allowed() { specula_allowed "$1"; }
 packages=(g++)
 allowed gpu || packages+=(mesa-vulkan-drivers libvulkan1)
 allowed xvfb || packages+=(xvfb xauth libxkbcommon-x11-0 libxcursor1 libxrandr2 libxi6 libx11-xcb1)

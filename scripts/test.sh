@@ -7,6 +7,8 @@
 # and the run ends by saying how many tests were skipped, for which requirement.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# shellcheck source=allow-skip.sh
+source scripts/allow-skip.sh
 scripts/setup.sh
 # Mesa prints a harmless "XDG_RUNTIME_DIR is invalid" line per device without this.
 export NODEVICE_SELECT=1
@@ -17,7 +19,7 @@ trap 'rm -f "$SPECULA_SKIP_LOG" "$log"' EXIT
 # With MPI: the distributed vertex-tracing tests run mpirun on loopback. Without OpenMPI they
 # cannot even be built; where the runner allowed that, they are left out and counted as skipped.
 features=(--features specula-cli/mpi)
-if [[ ",${SPECULA_ALLOW_SKIP:-}," == *",mpi,"* ]] && ! command -v mpicc >/dev/null; then
+if specula_allowed mpi && ! command -v mpicc >/dev/null; then
   features=()
   printf 'mpi\tdistributed tests (crates/specula-cli/tests/distributed.rs)\tnot built: no OpenMPI (mpicc)\n' >> "$SPECULA_SKIP_LOG"
 fi

@@ -32,12 +32,7 @@ fn gpu_trace() -> &'static str {
 /// Frames rendered and thrown away before timing (pipeline creation, first-use costs).
 const WARM_UP_FRAMES: u32 = 2;
 
-#[derive(Debug, Serialize)]
-pub struct Spread {
-    pub median_ms: f64,
-    pub min_ms: f64,
-    pub max_ms: f64,
-}
+pub use specula_compare::Spread;
 
 #[derive(Debug, Serialize)]
 pub struct MethodBench {
@@ -148,19 +143,8 @@ pub fn add_ratios(runs: &mut [MethodBench]) {
     }
 }
 
-fn spread(mut values: Vec<f64>) -> Spread {
-    values.sort_by(f64::total_cmp);
-    let n = values.len();
-    let median = if n % 2 == 1 {
-        values[n / 2]
-    } else {
-        0.5 * (values[n / 2 - 1] + values[n / 2])
-    };
-    Spread {
-        median_ms: median,
-        min_ms: values[0],
-        max_ms: values[n - 1],
-    }
+fn spread(values: Vec<f64>) -> Spread {
+    Spread::of(values)
 }
 
 /// Times the labels `methods` on `scene`; a method that fails to prepare or to render a frame
@@ -470,14 +454,6 @@ mod tests {
             runs[3].speedup_over_gpu_trace, None,
             "no gpu-trace run on b"
         );
-    }
-
-    #[test]
-    fn spread_is_the_median_and_the_extremes() {
-        let odd = spread(vec![5.0, 1.0, 9.0]);
-        assert_eq!((odd.min_ms, odd.median_ms, odd.max_ms), (1.0, 5.0, 9.0));
-        let even = spread(vec![10.0, 3.0, 1.0, 2.0]);
-        assert_eq!((even.min_ms, even.median_ms, even.max_ms), (1.0, 2.5, 10.0));
     }
 
     /// A method that fails is a row with its error; the others are timed on.

@@ -141,6 +141,11 @@ struct CompareArgs {
     spp: u32,
     #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(0..=64))]
     max_depth: u32,
+    /// Warm frames timed per method, the reference's included, after a first frame timed apart:
+    /// each time is their median (with the spread), each speed-up a warm median over a warm
+    /// median.
+    #[arg(long, default_value_t = specula_compare::DEFAULT_FRAMES, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    frames: u32,
 }
 
 #[derive(clap::Args)]
@@ -370,8 +375,21 @@ fn print_methods() {
 
 fn print_comparison(r: &specula_compare::Report) {
     println!(
-        "{} at {}x{}, {} reflector/refractor pixels; reference {:.1} ms",
-        r.scene, r.width, r.height, r.mask_pixels, r.reference.total_ms
+        "{} at {}x{}, {} reflector/refractor pixels; reference warm frame {:.1} ms (median of {}, {:.1}-{:.1}; BVH build {:.1} ms, first frame {:.1} ms apart)",
+        r.scene,
+        r.width,
+        r.height,
+        r.mask_pixels,
+        r.reference.total_ms,
+        r.frames,
+        r.reference.frame.min_ms,
+        r.reference.frame.max_ms,
+        r.reference.build_ms,
+        r.reference.first_frame_ms
+    );
+    println!(
+        "frame ms: the median of {} warm frames; speed-ups divide warm medians",
+        r.frames
     );
     println!(
         "{:<16}{:>9}{:>11}{:>11}{:>11}{:>12}{:>10}{:>14}",
@@ -400,7 +418,7 @@ fn print_comparison(r: &specula_compare::Report) {
     };
     for m in &r.methods {
         println!(
-            "{:<16}{:>42}{:>12.2}{:>9.1}x{:>14}",
+            "{:<16}{:>42}{:>12.2}{:>9.2}x{:>14}",
             m.label,
             m.metrics
                 .as_ref()
@@ -428,8 +446,9 @@ fn print_comparison(r: &specula_compare::Report) {
     }
 }
 
-/// The methods × scenes table: mean FLIP (frame ms) per cell.
+/// The methods × scenes table: mean FLIP (warm median frame ms) per cell.
 fn print_suite(summary: &specula_compare::suite::SuiteReport) {
+    println!("Each cell: mean FLIP (the median of the warm frames' times, ms); the reference is timed warm alike");
     let width = summary
         .scenes
         .iter()
@@ -437,7 +456,7 @@ fn print_suite(summary: &specula_compare::suite::SuiteReport) {
         .max()
         .unwrap_or(5)
         .max(5);
-    print!("{:<width$}", "scene");
+    print!("{:<width$}{:>16}", "scene", "reference (ms)");
     for m in &summary.methods {
         print!("{:>22}", format!("{m} FLIP (ms)"));
     }
@@ -447,7 +466,7 @@ fn print_suite(summary: &specula_compare::suite::SuiteReport) {
             println!("{:<width$}  error: {error}", row.source);
             continue;
         }
-        print!("{:<width$}", row.scene);
+        print!("{:<width$}{:>16.1}", row.scene, row.reference_ms);
         for m in &summary.methods {
             match row.methods.iter().find(|c| &c.label == m) {
                 Some(c) => print!("{:>22}", format!("{} ({:.1})", c.flip_text(), c.total_ms)),
@@ -698,6 +717,7 @@ fn compare_options(
         methods: methods.to_vec(),
         spp: args.spp,
         max_depth: args.max_depth,
+        frames: args.frames,
     }
 }
 

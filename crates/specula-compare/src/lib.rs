@@ -5,14 +5,20 @@
 //! ([`MethodInfo::delegates`]: c3rc's refractors are envmap's) are reported apart, naming that
 //! method, since their figure is the delegate's; an error heat-map, its time per stage and its
 //! speed-up over the reference; written as a self-contained HTML page and as JSON (schema:
-//! docs/compare.schema.json). A technique's time is that of its second frame (the first pays
-//! for shader compilation); the reference's is its CPU render time, BVH build included. Where
-//! there is a GPU, each technique's time is also put beside `gpu-trace`'s (the exact answer on
-//! the same GPU; timed even when not among the methods compared). A method that fails to
-//! prepare or render is a row holding its error (`failed`); the others still run and report.
+//! docs/compare.schema.json).
+//!
+//! Like with like: every method, the reference included, is timed the same way. It is prepared
+//! (the reference's BVH is built: `build_ms`), renders a first frame that is timed apart (it
+//! pays for shader compilation and first use: `first_frame_ms`), then `frames` warm frames;
+//! a method's `total_ms` is their median (with the spread), and each speed-up is a warm median
+//! over a warm median. Where there is a GPU, each technique's time is also put beside
+//! `gpu-trace`'s (the exact answer on the same GPU; timed the same way even when not among the
+//! methods compared). A method that fails to prepare or render is a row holding its error
+//! (`failed`); the others still run and report.
 
 pub mod metrics;
 pub mod suite;
+pub mod timing;
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -22,12 +28,13 @@ use base64::Engine;
 use serde::Serialize;
 use specula_gpu::TimingSource;
 use specula_methods::{
-    apply_parameters, apply_setting, by_name, check_settings, Context, Label, LiveScene,
-    MethodInfo, SurfaceClass, TechniqueError,
+    apply_parameters, apply_setting, by_name, check_settings, Context, Frame, Label, LiveScene,
+    MethodInfo, SurfaceClass, Technique, TechniqueError,
 };
 use specula_scene::Scene;
 use specula_trace::reference::primary_hits;
 use specula_trace::Image;
+pub use timing::Spread;
 
 pub use metrics::Metrics;
 
@@ -35,8 +42,12 @@ pub use metrics::Metrics;
 /// over the surfaces it shades itself (null when none) and `delegated` holds the others;
 /// `mirror_pixels` and `refractor_pixels` split the mask. 3: methods are keyed by `label`
 /// (`c3rc`, `c3rc:paper`), with the `preset` it runs (null for the defaults). 4: `failed`
-/// lists the methods that could not be measured, each with its error.
-pub const SCHEMA_VERSION: u32 = 4;
+/// lists the methods that could not be measured, each with its error. 5: the reference is timed
+/// as the methods are, warm (`total_ms` the median of `frames` warm frames, its BVH build and
+/// first frame apart, `build_ms` and `first_frame_ms`); every time has its spread (`frame`),
+/// every method its `prepare_ms` and `first_frame_ms`, and gpu-trace, the second base, its own
+/// (`gpu_trace`).
+pub const SCHEMA_VERSION: u32 = 5;
 
 #[derive(Debug, thiserror::Error)]
 pub enum CompareError {
@@ -64,7 +75,13 @@ pub struct Options {
     /// `NAME=VALUE` technique parameters, applied after the presets to every method that has
     /// them; `LABEL.NAME=VALUE` to that label's only.
     pub parameters: Vec<String>,
+    /// Warm frames timed per method, the reference's included (at least 1; the CLI's default
+    /// is [`DEFAULT_FRAMES`]).
+    pub frames: u32,
 }
+
+/// `compare --frames`' default.
+pub const DEFAULT_FRAMES: u32 = 3;
 
 /// GPU objects a frame created.
 #[derive(Clone, Debug, Serialize)]
@@ -84,8 +101,22 @@ pub struct StageReport {
 pub struct ReferenceReport {
     pub spp: u32,
     pub max_depth: u32,
+    /// The median of its warm frames (BVH kept), as every method's `total_ms`.
     pub total_ms: f64,
+    pub frame: Spread,
+    /// The scene's BVH build, which every CPU ray query of the run then shares.
+    pub build_ms: f64,
+    /// Its first frame after the build (wall clock).
+    pub first_frame_ms: f64,
     pub image: String,
+}
+
+/// How gpu-trace, the second speed-up's base, was timed where it was not among the methods.
+#[derive(Clone, Debug, Serialize)]
+pub struct BaseReport {
+    pub prepare_ms: f64,
+    pub first_frame_ms: f64,
+    pub frame: Spread,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -99,8 +130,16 @@ pub struct MethodReport {
     pub parameters: BTreeMap<String, String>,
     /// "gpu-timestamps" or "cpu-wall-clock".
     pub timing: String,
+    /// Each stage's median over the warm frames.
     pub stages: Vec<StageReport>,
+    /// The median of its warm frames.
     pub total_ms: f64,
+    pub frame: Spread,
+    /// `prepare` (scene-only work, wall clock) and its first frame (wall clock: shader
+    /// compilation and first use), apart from the warm frames.
+    pub prepare_ms: f64,
+    pub first_frame_ms: f64,
+    /// The reference's warm median over this method's.
     pub speedup_over_reference: f64,
     /// gpu-trace's frame time over this method's (null without a GPU).
     pub speedup_over_gpu_trace: Option<f64>,
@@ -169,8 +208,13 @@ pub struct Report {
     pub mirror_pixels: usize,
     pub refractor_pixels: usize,
     pub reference: ReferenceReport,
-    /// gpu-trace's frame time on this run's GPU (null without a GPU).
+    /// Warm frames timed per method.
+    pub frames: u32,
+    /// gpu-trace's warm median frame time on this run's GPU (null without a GPU).
     pub gpu_trace_ms: Option<f64>,
+    /// How gpu-trace was timed, where it was timed as the base only (null where it is among
+    /// the methods, whose row says it, or without a GPU).
+    pub gpu_trace: Option<BaseReport>,
     pub methods: Vec<MethodReport>,
     /// The methods asked for that failed (and gpu-trace where its timing, the second
     /// speed-up's base, failed), in the order asked.
@@ -254,8 +298,9 @@ pub fn compare(
         .collect::<Result<Vec<_>, TechniqueError>>()?;
 
     progress("reference");
-    let start = Instant::now();
+    let build_start = Instant::now();
     let live = LiveScene::new(scene.clone());
+    let build_ms = build_start.elapsed().as_secs_f64() * 1e3;
     let mut reference_method = (specula_methods::exact_method().create)();
     apply_parameters(
         reference_method.as_mut(),
@@ -264,10 +309,9 @@ pub fn compare(
             format!("max_depth={}", options.max_depth),
         ],
     )?;
-    let reference = reference_method
-        .render(ctx, &live, &scene.camera, width, height)?
-        .image(ctx)?;
-    let reference_ms = start.elapsed().as_secs_f64() * 1e3;
+    let timed_reference = time_frames(reference_method.as_mut(), ctx, &live, options)?;
+    let reference = timed_reference.frame.image(ctx)?;
+    let reference_ms = timed_reference.frame_times.median_ms;
 
     progress("mask");
     // The class of the mirror or dielectric each pixel's primary ray (through the pixel
@@ -294,15 +338,11 @@ pub fn compare(
     for (label, technique) in techniques.iter_mut() {
         progress(&label.to_string());
         let measured = (|| {
-            technique.prepare(ctx, &live)?;
-            // One untimed frame first: the first frame pays for shader compilation and first
-            // use.
-            technique.render(ctx, &live, &scene.camera, width, height)?;
-            let frame = technique.render(ctx, &live, &scene.camera, width, height)?;
-            let image = frame.image(ctx)?;
-            Ok::<_, TechniqueError>((frame, image))
+            let timed = time_frames(technique.as_mut(), ctx, &live, options)?;
+            let image = timed.frame.image(ctx)?;
+            Ok::<_, TechniqueError>((timed, image))
         })();
-        let (frame, image) = match measured {
+        let (timed, image) = match measured {
             Ok(measured) => measured,
             Err(error) => {
                 failed.push(FailedMethod {
@@ -313,26 +353,23 @@ pub fn compare(
                 continue;
             }
         };
+        let frame = &timed.frame;
         let flip = metrics::flip_map(&reference, &image);
         let (metrics, delegated) =
             method_figures(technique.info(), &reference, &image, &flip, &classes);
-        let total_ms = frame.total_milliseconds();
+        let total_ms = timed.frame_times.median_ms;
         methods.push(MethodReport {
             label: label.to_string(),
             method: technique.name().to_string(),
             preset: label.preset.map(|p| p.name.to_string()),
             parameters: technique.parameters().into_iter().collect(),
             timing: timing_name(frame.timing).to_string(),
-            stages: frame
-                .stages
-                .iter()
-                .map(|s| StageReport {
-                    stage: s.stage.clone(),
-                    ms: s.milliseconds,
-                })
-                .collect(),
+            stages: timed.stages.clone(),
             total_ms,
-            speedup_over_reference: reference_ms / total_ms.max(1e-9),
+            frame: timed.frame_times,
+            prepare_ms: timed.prepare_ms,
+            first_frame_ms: timed.first_frame_ms,
+            speedup_over_reference: timing::speedup(reference_ms, total_ms),
             speedup_over_gpu_trace: None,
             counters: frame.counters.iter().cloned().collect(),
             metrics,
@@ -348,6 +385,7 @@ pub fn compare(
         });
         method_images.push((image, metrics::heat_map(&flip, width, height)));
     }
+    let mut gpu_trace = None;
     let gpu_trace_ms = match methods
         .iter()
         .find(|m| m.label == specula_methods::gpu_trace::INFO.name)
@@ -355,19 +393,17 @@ pub fn compare(
         Some(m) => Some(m.total_ms),
         None if ctx.gpu.is_some() => {
             progress(specula_methods::gpu_trace::INFO.name);
-            let mut gpu_trace = by_name(specula_methods::gpu_trace::INFO.name)?;
-            apply_parameters(
-                gpu_trace.as_mut(),
-                &[format!("max_depth={}", options.max_depth)],
-            )?;
-            let timed = (|| {
-                gpu_trace.prepare(ctx, &live)?;
-                gpu_trace.render(ctx, &live, &scene.camera, width, height)?;
-                let frame = gpu_trace.render(ctx, &live, &scene.camera, width, height)?;
-                Ok::<_, TechniqueError>(frame.total_milliseconds())
-            })();
-            match timed {
-                Ok(ms) => Some(ms),
+            let mut base = by_name(specula_methods::gpu_trace::INFO.name)?;
+            apply_parameters(base.as_mut(), &[format!("max_depth={}", options.max_depth)])?;
+            match time_frames(base.as_mut(), ctx, &live, options) {
+                Ok(timed) => {
+                    gpu_trace = Some(BaseReport {
+                        prepare_ms: timed.prepare_ms,
+                        first_frame_ms: timed.first_frame_ms,
+                        frame: timed.frame_times,
+                    });
+                    Some(timed.frame_times.median_ms)
+                }
                 Err(error) => {
                     failed.push(FailedMethod {
                         label: specula_methods::gpu_trace::INFO.name.to_string(),
@@ -384,7 +420,7 @@ pub fn compare(
         None => None,
     };
     for m in &mut methods {
-        m.speedup_over_gpu_trace = gpu_trace_ms.map(|g| g / m.total_ms.max(1e-9));
+        m.speedup_over_gpu_trace = gpu_trace_ms.map(|g| timing::speedup(g, m.total_ms));
     }
     Ok(Comparison {
         report: Report {
@@ -400,15 +436,78 @@ pub fn compare(
                 spp: options.spp,
                 max_depth: options.max_depth,
                 total_ms: reference_ms,
+                frame: timed_reference.frame_times,
+                build_ms,
+                first_frame_ms: timed_reference.first_frame_ms,
                 image: "reference.png".into(),
             },
+            frames: options.frames,
             gpu_trace_ms,
+            gpu_trace,
             methods,
             failed,
         },
         reference,
         method_images,
         classes,
+    })
+}
+
+/// A method timed as [`compare`] times every method: prepared, a first frame, then
+/// `options.frames` warm frames.
+struct Timed {
+    prepare_ms: f64,
+    first_frame_ms: f64,
+    frame_times: Spread,
+    /// Each stage's median over the warm frames, in the frames' order.
+    stages: Vec<StageReport>,
+    /// The last warm frame: its image, counters and warnings are reported.
+    frame: Frame,
+}
+
+fn time_frames(
+    technique: &mut dyn Technique,
+    ctx: &Context,
+    live: &LiveScene,
+    options: &Options,
+) -> Result<Timed, TechniqueError> {
+    let camera = &live.scene().camera;
+    let (width, height) = (options.width, options.height);
+    let wall_ms = |start: Instant| start.elapsed().as_secs_f64() * 1e3;
+    let start = Instant::now();
+    technique.prepare(ctx, live)?;
+    let prepare_ms = wall_ms(start);
+    let start = Instant::now();
+    let first = technique.render(ctx, live, camera, width, height)?;
+    // A GPU frame is done once its pixels can be read: wait for them, as a warm frame's
+    // timestamps do.
+    first.image(ctx)?;
+    let first_frame_ms = wall_ms(start);
+    let mut totals = Vec::new();
+    let mut stages: Vec<(String, Vec<f64>)> = Vec::new();
+    let mut last = first;
+    for _ in 0..options.frames.max(1) {
+        last = technique.render(ctx, live, camera, width, height)?;
+        totals.push(last.total_milliseconds());
+        for s in &last.stages {
+            match stages.iter_mut().find(|(name, _)| *name == s.stage) {
+                Some((_, times)) => times.push(s.milliseconds),
+                None => stages.push((s.stage.clone(), vec![s.milliseconds])),
+            }
+        }
+    }
+    Ok(Timed {
+        prepare_ms,
+        first_frame_ms,
+        frame_times: Spread::of(totals),
+        stages: stages
+            .into_iter()
+            .map(|(stage, times)| StageReport {
+                stage,
+                ms: Spread::of(times).median_ms,
+            })
+            .collect(),
+        frame: last,
     })
 }
 
@@ -493,7 +592,7 @@ impl Comparison {
                 .collect();
             for warning in &m.warnings {
                 rows.push_str(&format!(
-                    "<tr><td colspan=\"10\">⚠ {}</td></tr>\n",
+                    "<tr><td colspan=\"11\">⚠ {}</td></tr>\n",
                     escape(warning)
                 ));
             }
@@ -503,9 +602,13 @@ impl Comparison {
                     .to_string(),
             };
             rows.push_str(&format!(
-                "<tr><td>{}</td>{own}<td>{:.2}</td><td>{:.1}×</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
+                "<tr><td>{}</td>{own}<td>{:.2}<br><small>{:.2}–{:.2}</small></td><td>{:.2}<br><small>first {:.1}</small></td><td>{:.2}×</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
                 escape(&m.label),
                 m.total_ms,
+                m.frame.min_ms,
+                m.frame.max_ms,
+                m.prepare_ms,
+                m.first_frame_ms,
                 m.speedup_over_reference,
                 m.speedup_over_gpu_trace.map(|v| format!("{v:.2}×")).unwrap_or_else(|| "–".into()),
                 stages.join("<br>"),
@@ -513,7 +616,7 @@ impl Comparison {
             ));
             for d in &m.delegated {
                 rows.push_str(&format!(
-                    "<tr class=\"delegated\"><td>↳ {} {} pixels</td>{}<td colspan=\"5\">shaded by {}: its figure, not {}'s own</td></tr>\n",
+                    "<tr class=\"delegated\"><td>↳ {} {} pixels</td>{}<td colspan=\"6\">shaded by {}: its figure, not {}'s own</td></tr>\n",
                     d.metrics.mask_pixels,
                     d.material,
                     metric_cells(&d.metrics),
@@ -524,17 +627,19 @@ impl Comparison {
         }
         for f in &r.failed {
             rows.push_str(&format!(
-                "<tr class=\"failed\"><td>{}</td><td colspan=\"9\">failed: {}</td></tr>\n",
+                "<tr class=\"failed\"><td>{}</td><td colspan=\"10\">failed: {}</td></tr>\n",
                 escape(&f.label),
                 escape(&f.error)
             ));
         }
         let mut figures = format!(
-            "<figure><img src=\"{}\"><figcaption>reference ({} spp, depth {}, {:.1} ms)</figcaption></figure>\n",
+            "<figure><img src=\"{}\"><figcaption>reference ({} spp, depth {}; warm frame {:.1} ms, BVH build {:.1} ms, first frame {:.1} ms)</figcaption></figure>\n",
             data_uri(&self.reference.to_srgb8()),
             r.reference.spp,
             r.reference.max_depth,
-            r.reference.total_ms
+            r.reference.total_ms,
+            r.reference.build_ms,
+            r.reference.first_frame_ms
         );
         for (m, (img, heat)) in r.methods.iter().zip(&self.method_images) {
             let params: Vec<String> = m
@@ -570,10 +675,13 @@ dielectric ({mirrors} mirror, {refractors} refractor; from the primary hits, as 
 linear radiance clamped to [0, 1]; FLIP on the sRGB images. A method's row counts the surfaces it shades itself; the
 surfaces it hands to another method (c3rc's refractors are envmap's) are on a row of their own below it, naming that
 method: that figure is the other method's. A method that failed is a row with its error.
-Speed-up is the CPU reference's render time over the technique's frame time; the next column is gpu-trace's frame
-time on the same GPU over the technique's ({gpu_trace}).</p>
+Times compare like with like: every method, the CPU reference included, is prepared and renders a first frame
+(timed apart), then {frames} warm frames; "frame" is their median (min–max below it), and each stage its median.
+Speed-up is the reference's warm median ({reference:.1} ms; its BVH build, {build:.1} ms, and first frame,
+{first:.1} ms, are not in it) over the method's; the next column is gpu-trace's warm median on the same GPU over
+the method's ({gpu_trace}).</p>
 <table>
-<tr><th>method</th><th>RMSE</th><th>PSNR (dB)</th><th>mean FLIP</th><th>FLIP &gt; 0.1</th><th>frame (ms)</th><th>speed-up</th><th>vs gpu-trace</th><th>stages (ms)</th><th>timing</th></tr>
+<tr><th>method</th><th>RMSE</th><th>PSNR (dB)</th><th>mean FLIP</th><th>FLIP &gt; 0.1</th><th>frame (ms)</th><th>prepare (ms)</th><th>speed-up over reference (warm / warm)</th><th>vs gpu-trace (warm / warm)</th><th>stages (ms)</th><th>timing</th></tr>
 {rows}</table>
 {figures}
 </body></html>
@@ -586,9 +694,13 @@ time on the same GPU over the technique's ({gpu_trace}).</p>
             mirrors = r.mirror_pixels,
             refractors = r.refractor_pixels,
             display_width = r.width.clamp(256, 512),
+            frames = r.frames,
+            reference = r.reference.total_ms,
+            build = r.reference.build_ms,
+            first = r.reference.first_frame_ms,
             gpu_trace = r
                 .gpu_trace_ms
-                .map(|g| format!("gpu-trace {g:.1} ms"))
+                .map(|g| format!("gpu-trace {g:.1} ms warm"))
                 .unwrap_or_else(|| "no GPU in this run".into()),
         )
     }

@@ -16,8 +16,10 @@ use crate::{escape, write_error, CompareError, Comparison, FailedMethod};
 /// are over the surfaces the method shades itself (null when none), `pixels` counts those, and
 /// `delegated` lists the others. 3: cells and columns are keyed by `label` (`c3rc`,
 /// `c3rc:paper`). 4: a row's `failed` lists the methods that failed on its scene, with their
-/// errors (the others are in `methods`).
-pub const SCHEMA_VERSION: u32 = 4;
+/// errors (the others are in `methods`). 5: every time is a warm median (`reference_ms` too:
+/// compare times the reference as it times every method), with the reference's BVH build
+/// apart (`reference_build_ms`) and the number of warm frames (`frames`).
+pub const SCHEMA_VERSION: u32 = 5;
 
 /// One method's figures on one scene, under one label.
 #[derive(Clone, Debug, Serialize)]
@@ -32,6 +34,8 @@ pub struct SuiteCell {
     pub share_flip_over_0_1: Option<f64>,
     pub rmse: Option<f64>,
     pub total_ms: f64,
+    /// The reference's warm median over this one's.
+    pub speedup_over_reference: f64,
     pub warnings: usize,
     /// The surfaces in view it hands to another method, with the figure there (the
     /// delegate's).
@@ -76,7 +80,12 @@ pub struct SuiteRow {
     pub width: u32,
     pub height: u32,
     pub mask_pixels: usize,
+    /// Warm frames timed per method.
+    pub frames: u32,
+    /// The reference's warm median frame time, as every cell's `total_ms`.
     pub reference_ms: f64,
+    /// Its BVH build, not in `reference_ms`.
+    pub reference_build_ms: f64,
     /// gpu-trace's frame time on the same GPU (None without a GPU, or when the scene failed).
     pub gpu_trace_ms: Option<f64>,
     pub methods: Vec<SuiteCell>,
@@ -175,7 +184,9 @@ pub fn scene_row(
                 width: 0,
                 height: 0,
                 mask_pixels: 0,
+                frames: 0,
                 reference_ms: 0.0,
+                reference_build_ms: 0.0,
                 gpu_trace_ms: None,
                 methods: Vec::new(),
                 failed: Vec::new(),
@@ -194,7 +205,9 @@ pub fn scene_row(
         width: r.width,
         height: r.height,
         mask_pixels: r.mask_pixels,
+        frames: r.frames,
         reference_ms: r.reference.total_ms,
+        reference_build_ms: r.reference.build_ms,
         gpu_trace_ms: r.gpu_trace_ms,
         methods: r
             .methods
@@ -207,6 +220,7 @@ pub fn scene_row(
                 share_flip_over_0_1: m.metrics.as_ref().map(|x| x.share_flip_over_0_1),
                 rmse: m.metrics.as_ref().map(|x| x.rmse),
                 total_ms: m.total_ms,
+                speedup_over_reference: m.speedup_over_reference,
                 warnings: m.warnings.len(),
                 delegated: m
                     .delegated
@@ -250,7 +264,7 @@ fn flip_colour(flip: f64) -> String {
 
 fn suite_html(report: &SuiteReport) -> String {
     let mut head =
-        String::from("<tr><th>scene</th><th>pixels</th><th>reference ms</th><th>gpu-trace ms</th>");
+        String::from("<tr><th>scene</th><th>pixels</th><th>reference ms (warm; BVH build)</th><th>gpu-trace ms</th>");
     for m in &report.methods {
         head.push_str(&format!(
             "<th>{} FLIP</th><th>{} ms</th>",
@@ -271,11 +285,12 @@ fn suite_html(report: &SuiteReport) -> String {
             continue;
         }
         rows.push_str(&format!(
-            "<tr><td><a href=\"{}/report.html\">{}</a></td><td>{}</td><td>{:.1}</td><td>{}</td>",
+            "<tr><td><a href=\"{}/report.html\">{}</a></td><td>{}</td><td>{:.1}<br><small>{:.1}</small></td><td>{}</td>",
             escape(&row.folder),
             escape(&row.scene),
             row.mask_pixels,
             row.reference_ms,
+            row.reference_build_ms,
             row.gpu_trace_ms
                 .map(|g| format!("{g:.1}"))
                 .unwrap_or_else(|| "–".into())
@@ -283,7 +298,7 @@ fn suite_html(report: &SuiteReport) -> String {
         for method in &report.methods {
             match row.methods.iter().find(|c| &c.label == method) {
                 Some(c) => rows.push_str(&format!(
-                    "<td{}>{}{}</td><td>{:.1}</td>",
+                    "<td{}>{}{}</td><td>{:.1}<br><small>{:.2}×</small></td>",
                     match (c.mean_flip, c.share_flip_over_0_1, c.rmse) {
                         (Some(flip), Some(share), Some(rmse)) => format!(
                             " style=\"background:{}\" title=\"{} pixels of its own; FLIP &gt; 0.1 on {:.1} % of them; RMSE {:.4}; {} warnings\"",
@@ -308,7 +323,8 @@ fn suite_html(report: &SuiteReport) -> String {
                             d.mean_flip
                         ))
                         .collect::<String>(),
-                    c.total_ms
+                    c.total_ms,
+                    c.speedup_over_reference
                 )),
                 None => match row.failure(method) {
                     Some(error) => rows.push_str(&format!(
@@ -335,7 +351,9 @@ td.delegated, small {{ color: #666; font-style: italic; }}
 <h1>specula compare: {count} scenes</h1>
 <p>On {adapter}. Mean FLIP over each scene's mirror and dielectric pixels against the exact
 reference (green 0, red ≥ 0.3; hover for the share over 0.1 and the RMSE), and each method's frame
-time in milliseconds. A column <code>METHOD:paper</code> runs the method's published algorithm (its
+time in milliseconds with its speed-up over the reference below it: every time, the reference's included, is the
+median of warm frames (each method prepared and its first frame rendered before them; the reference's BVH build
+is listed apart under its time), so each speed-up divides a warm time by a warm time. A column <code>METHOD:paper</code> runs the method's published algorithm (its
 <code>paper</code> preset: every step beyond the paper off), beside the column of specula's version. A cell's figure is over the surfaces the method shades itself; surfaces it
 hands to another method are listed under it in small type ("N refractor: envmap 0.36": those N
 pixels are envmap's shading, and the figure is envmap's). A scene's name links to its own report

@@ -14,6 +14,7 @@ fn flips(scene: &specula_scene::Scene, ctx: &specula_methods::Context) -> (f64, 
         spp: 1,
         max_depth: 8,
         parameters: Vec::new(),
+        frames: 1,
     };
     let c = compare(scene, ctx, &options, &|_| {}).unwrap();
     let flip = |name: &str| {

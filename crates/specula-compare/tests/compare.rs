@@ -28,6 +28,7 @@ fn compare_writes_a_report_and_json_that_matches_the_schema() {
         spp: 1,
         max_depth: 8,
         parameters: vec![],
+        frames: 3,
     };
     let comparison = compare(&scene, &ctx, &options, &|_| {}).unwrap();
     let dir = tempfile::tempdir().unwrap();
@@ -57,17 +58,40 @@ fn compare_writes_a_report_and_json_that_matches_the_schema() {
         metrics.mean_flip
     );
     let r = &comparison.report;
+    // Like with like: the reference's time is the median of its warm frames, its BVH build and
+    // first frame apart; a method's likewise, and the speed-up divides the two medians.
+    assert_eq!(r.frames, 3);
+    for (what, spread, total) in [
+        ("reference", r.reference.frame, r.reference.total_ms),
+        ("envmap", m.frame, m.total_ms),
+    ] {
+        assert_eq!(spread.median_ms, total, "{what}");
+        assert!(
+            0.0 < spread.min_ms
+                && spread.min_ms <= spread.median_ms
+                && spread.median_ms <= spread.max_ms,
+            "{what}: {spread:?}"
+        );
+    }
+    assert!(r.reference.build_ms > 0.0 && r.reference.first_frame_ms > 0.0);
+    assert!(m.prepare_ms > 0.0 && m.first_frame_ms > 0.0);
     let expected = r.reference.total_ms / m.total_ms;
     assert!(
         (m.speedup_over_reference - expected).abs() <= 1e-9 * expected,
         "speed-up {} is not reference time / method time {expected}",
         m.speedup_over_reference
     );
+    let base = r
+        .gpu_trace
+        .as_ref()
+        .expect("gpu-trace timed as the base only");
+    assert_eq!(Some(base.frame.median_ms), r.gpu_trace_ms);
+    assert!(base.prepare_ms > 0.0 && base.first_frame_ms > 0.0);
     // gpu-trace was timed as the second base although not compared.
     let gpu_trace_ms = r.gpu_trace_ms.expect("a GPU run times gpu-trace");
     let ratio = m.speedup_over_gpu_trace.unwrap();
     assert!((ratio - gpu_trace_ms / m.total_ms).abs() <= 1e-9 * ratio);
-    assert!(text.contains("vs gpu-trace"));
+    assert!(text.contains("vs gpu-trace") && text.contains("warm / warm"));
 }
 
 #[test]
@@ -87,6 +111,7 @@ fn delegated_surfaces_are_reported_apart_with_their_delegate() {
         spp: 1,
         max_depth: 8,
         parameters: vec![],
+        frames: 1,
     };
     let comparison = compare(&scene, &ctx, &options, &|_| {}).unwrap();
     let r = &comparison.report;
@@ -126,6 +151,7 @@ fn unknown_methods_are_named_with_the_valid_ones() {
         spp: 1,
         max_depth: 8,
         parameters: vec![],
+        frames: 1,
     };
     let message = compare(&scene, &ctx, &options, &|_| {})
         .err()
@@ -150,6 +176,7 @@ fn parameters_reach_the_methods_that_have_them_and_unknown_ones_are_errors() {
         spp: 1,
         max_depth: 8,
         parameters,
+        frames: 1,
     };
     let comparison = compare(
         &scene,
@@ -184,6 +211,7 @@ fn one_method_runs_under_several_labels_keyed_in_rows_images_and_json() {
         spp: 1,
         max_depth: 8,
         parameters: parameters.iter().map(|p| p.to_string()).collect(),
+        frames: 1,
     };
     let comparison = compare(
         &scene,
@@ -251,6 +279,7 @@ fn a_failing_method_gets_its_error_in_its_row_and_the_others_still_report() {
         spp: 1,
         max_depth: 8,
         parameters: vec![],
+        frames: 1,
     };
     let comparison = compare(&scene, &ctx, &options, &|_| {}).unwrap();
     let r = &comparison.report;

@@ -26,6 +26,7 @@ fn run(
         spp: 1,
         max_depth: 8,
         parameters: parameters.iter().map(|p| p.to_string()).collect(),
+        frames: 1,
     };
     compare(scene, ctx, &options, &|_| {}).unwrap()
 }

@@ -28,6 +28,7 @@ fn no_method_draws_a_specular_object_black_where_the_reference_does_not() {
         spp: 1,
         max_depth: 8,
         parameters: vec![],
+        frames: 1,
     };
     let c = compare(&scene, &ctx, &options, &|_| {}).unwrap();
     assert!(c.report.failed.is_empty(), "{:?}", c.report.failed);

@@ -179,6 +179,7 @@ fn runs() -> Option<&'static [SceneRun]> {
                     spp: 1,
                     max_depth: 8,
                     parameters: vec!["pvrr.depth=1".into()],
+                    frames: 1,
                 };
                 let scene = specula_scene::load(file.to_str().unwrap()).unwrap();
                 let comparison = compare(&scene, &ctx, &options, &|_| {}).unwrap();
@@ -422,6 +423,7 @@ fn pvrr_meets_its_zooming_region_goals() {
             spp: 1,
             max_depth: 8,
             parameters: Vec::new(),
+            frames: 1,
         };
         let c = compare(&scene, &ctx, &options, &|_| {}).unwrap();
         let figure = |m: usize| c.report.methods[m].metrics.as_ref().unwrap().mean_flip;
@@ -495,6 +497,7 @@ fn c3rc_meets_its_closed_room_and_magnifier_goals() {
             spp: 1,
             max_depth: 8,
             parameters: Vec::new(),
+            frames: 1,
         };
         let c = compare(&scene, &ctx, &options, &|_| {}).unwrap();
         let figure = |m: usize| c.report.methods[m].metrics.as_ref().unwrap().mean_flip;

@@ -14,6 +14,7 @@ fn flip(ctx: &specula_methods::Context, parameters: &[&str]) -> f64 {
         spp: 1,
         max_depth: 8,
         parameters: parameters.iter().map(|p| p.to_string()).collect(),
+        frames: 1,
     };
     let c = compare(&scene, ctx, &options, &|_| {}).unwrap();
     c.report.methods[0].metrics.as_ref().unwrap().mean_flip

@@ -3,7 +3,8 @@
 //! does not matter.
 //!
 //! A developer on a machine without one of the requirements opts out explicitly, naming it:
-//! `SPECULA_ALLOW_SKIP=gpu,xvfb,mpi,corpus` (any subset, comma-separated). A test skipped that way
+//! `SPECULA_ALLOW_SKIP=gpu,xvfb,mpi,corpus,avx` (any subset, comma-separated; each word trimmed,
+//! case ignored: [`allowed`], the rule scripts/allow-skip.sh applies too). A test skipped that way
 //! returns early and appends one line, `requirement<TAB>test<TAB>why`, to the file named by
 //! `SPECULA_SKIP_LOG` (scripts/test.sh names one and prints how many tests were skipped, per
 //! requirement, at the end), so a skip is never silent.
@@ -26,14 +27,17 @@ pub enum Requirement {
     Mpi,
     /// Debian's `assimp-testmodels` corpus of real and malformed model files.
     Corpus,
+    /// A CPU with AVX, for the ray kernel's AVX traversal.
+    Avx,
 }
 
 impl Requirement {
-    pub const ALL: [Requirement; 4] = [
+    pub const ALL: [Requirement; 5] = [
         Requirement::Gpu,
         Requirement::Xvfb,
         Requirement::Mpi,
         Requirement::Corpus,
+        Requirement::Avx,
     ];
 
     /// The word `SPECULA_ALLOW_SKIP` and the skip log use.
@@ -43,6 +47,7 @@ impl Requirement {
             Requirement::Xvfb => "xvfb",
             Requirement::Mpi => "mpi",
             Requirement::Corpus => "corpus",
+            Requirement::Avx => "avx",
         }
     }
 
@@ -53,6 +58,7 @@ impl Requirement {
             Requirement::Xvfb => "apt-get install xvfb xauth",
             Requirement::Mpi => "apt-get install openmpi-bin libopenmpi-dev libclang-dev",
             Requirement::Corpus => "apt-get install assimp-testmodels",
+            Requirement::Avx => "an x86-64 CPU with AVX (no package brings it)",
         }
     }
 }
@@ -132,7 +138,55 @@ mod tests {
         assert!(allowed(Some("xvfb, GPU"), Requirement::Gpu));
         assert!(!allowed(Some("gpus"), Requirement::Gpu));
         for requirement in Requirement::ALL {
-            assert!(allowed(Some("gpu,xvfb,mpi,corpus"), requirement));
+            assert!(allowed(Some("gpu,xvfb,mpi,corpus,avx"), requirement));
+        }
+    }
+
+    /// scripts/allow-skip.sh (what setup.sh and test.sh decide by) reads SPECULA_ALLOW_SKIP
+    /// exactly as [`allowed`] does: one rule, whichever side reads it.
+    #[test]
+    fn the_scripts_read_the_skip_list_by_the_same_rule() {
+        let script =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scripts/allow-skip.sh");
+        let lists = [
+            "",
+            ",",
+            "gpu",
+            "GPU",
+            " gpu ",
+            "gpus",
+            "xgpu",
+            "gpu,",
+            ",gpu",
+            "xvfb,mpi",
+            "xvfb, Mpi",
+            "corpus\t,avx",
+            "\tcorpus",
+            "gpu xvfb",
+            "gpu;mpi",
+            "*",
+            "gpu,*,mpi",
+            "mpi,,avx",
+        ];
+        for list in lists {
+            for requirement in Requirement::ALL {
+                let status = std::process::Command::new("bash")
+                    .arg("-c")
+                    .arg(format!(
+                        "source '{}' && specula_allowed {}",
+                        script.display(),
+                        requirement.key()
+                    ))
+                    .env(ALLOW_SKIP, list)
+                    .status()
+                    .expect("bash runs");
+                assert_eq!(
+                    status.success(),
+                    allowed(Some(list), requirement),
+                    "SPECULA_ALLOW_SKIP={list:?}, {}",
+                    requirement.key()
+                );
+            }
         }
     }
 
