@@ -135,12 +135,12 @@ struct SceneRun {
     comparison: Comparison,
 }
 
-/// Every suite scene compared once, shared by the tests of this file (None where the run may
-/// skip GPU tests and has no GPU: the skip is logged).
-fn runs() -> Option<&'static [SceneRun]> {
-    static RUNS: OnceLock<Option<Vec<SceneRun>>> = OnceLock::new();
+/// Every suite scene compared once, shared by the tests of this file. Each test asks for its
+/// GPU context itself first (`specula_methods::test_context`), so that every test without one
+/// fails or logs its own skip: none passes quietly on another's.
+fn runs(ctx: &specula_methods::Context) -> &'static [SceneRun] {
+    static RUNS: OnceLock<Vec<SceneRun>> = OnceLock::new();
     RUNS.get_or_init(|| {
-        let ctx = specula_methods::test_context("scene suite")?;
         let mut files: Vec<_> = std::fs::read_dir(suite_dir())
             .unwrap()
             .map(|e| e.unwrap().path())
@@ -182,7 +182,7 @@ fn runs() -> Option<&'static [SceneRun]> {
                     frames: 1,
                 };
                 let scene = specula_scene::load(file.to_str().unwrap()).unwrap();
-                let comparison = compare(&scene, &ctx, &options, &|_| {}).unwrap();
+                let comparison = compare(&scene, ctx, &options, &|_| {}).unwrap();
                 assert!(
                     comparison.report.failed.is_empty(),
                     "{name}: {:?}",
@@ -196,9 +196,8 @@ fn runs() -> Option<&'static [SceneRun]> {
                 }
             })
             .collect();
-        Some(runs)
+        runs
     })
-    .as_deref()
 }
 
 /// Mean FLIP of `image` against the scene's reference on the pixels `mask` holds.
@@ -276,9 +275,10 @@ fn black(run: &SceneRun) -> Image {
 
 #[test]
 fn every_technique_holds_its_figures_on_every_suite_scene() {
-    let Some(runs) = runs() else {
+    let Some(ctx) = specula_methods::test_context("scene suite figures") else {
         return;
     };
+    let runs = runs(&ctx);
     let mut failures = Vec::new();
     for run in runs {
         let report = &run.comparison.report;
@@ -352,9 +352,10 @@ fn every_technique_holds_its_figures_on_every_suite_scene() {
 
 #[test]
 fn black_output_fails_the_check_on_every_scene() {
-    let Some(runs) = runs() else {
+    let Some(ctx) = specula_methods::test_context("scene suite black output") else {
         return;
     };
+    let runs = runs(&ctx);
     let mut passed = Vec::new();
     for run in runs {
         for (m, method) in run.labels.iter().enumerate() {
