@@ -85,6 +85,10 @@
 //!   more than four into a pixel, every k-th point is projected with its splat grown to match;
 //!   a node whose strided points number at most 128 is projected whole, not descended
 //!   (paper: `level_of_detail=false`).
+//! - `two_level_maps`: with two reflectors or more, the far field's cube maps shade the other
+//!   specular objects they show from those objects' own maps, and their first level keeps the
+//!   nearby objects, so that another mirror in the far field shows them; the paper's far field
+//!   shows other specular objects black (paper: `two_level_maps=false`).
 //!
 //! Every switch but `exact_hits` acts on both projection paths (`projection=cpu` and `gpu`):
 //! the culling, the cameras and the per-vertex and traced pixels are the CPU's on both; the
@@ -352,6 +356,13 @@ pub const PARAMS: &[ParamSpec] = &[
         invalidates: Invalidates::Uniform,
     },
     ParamSpec {
+        name: "two_level_maps",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "with two reflectors or more, shade the other specular objects a cube map shows from their own maps (two levels; else black)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
         name: "projection",
         kind: ParamKind::Choice(&["auto", "cpu", "gpu"]),
         default: "auto",
@@ -390,6 +401,7 @@ pub const INFO: MethodInfo = MethodInfo {
             "trace_self=false",
             "min_pixels=0",
             "level_of_detail=false",
+            "two_level_maps=false",
         ],
     }],
     create: || Box::new(C3rcMethod::default()),
@@ -431,6 +443,7 @@ pub struct C3rcMethod {
     pub exact_hits: bool,
     pub resolution: u32,
     pub dynamic: bool,
+    pub two_level_maps: bool,
     pub shadow_resolution: u32,
     pub projection: Projection,
     prepared: Option<Prepared>,
@@ -462,6 +475,7 @@ impl Default for C3rcMethod {
             exact_hits: true,
             resolution: 256,
             dynamic: false,
+            two_level_maps: true,
             shadow_resolution: 1024,
             projection: Projection::Auto,
             prepared: None,
@@ -680,6 +694,7 @@ impl Technique for C3rcMethod {
             "exact_hits" => self.exact_hits.to_string(),
             "resolution" => self.resolution.to_string(),
             "dynamic" => self.dynamic.to_string(),
+            "two_level_maps" => self.two_level_maps.to_string(),
             "shadow_resolution" => self.shadow_resolution.to_string(),
             "projection" => format!("{:?}", self.projection).to_lowercase(),
             _ => String::new(),
@@ -708,6 +723,7 @@ impl Technique for C3rcMethod {
             "exact_hits" => self.exact_hits = value.flag(),
             "resolution" => self.resolution = value.integer() as u32,
             "dynamic" => self.dynamic = value.flag(),
+            "two_level_maps" => self.two_level_maps = value.flag(),
             "shadow_resolution" => self.shadow_resolution = value.integer() as u32,
             "projection" => {
                 self.projection = match value.word() {
@@ -768,6 +784,7 @@ impl Technique for C3rcMethod {
         stages.lap(gpu, "g-buffer")?;
 
         p.maps.set_hidden(field.near.clone());
+        p.maps.set_two_levels(self.two_level_maps);
         let faces_drawn = p.maps.update(
             gpu,
             &p.raster,

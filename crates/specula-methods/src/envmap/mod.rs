@@ -14,9 +14,10 @@
 //!    transmitted one by exact Fresnel, per colour channel (so dispersion shows); thin sheets
 //!    look straight through.
 //!
-//! Beyond the classic technique: other specular objects in a reflector's cube map are shaded
-//! from their own cube maps (one level of envmap shading: each face is drawn twice, first with
-//! specular objects black, then with them shaded from those first faces), not left black.
+//! Beyond the classic technique (`two_level_maps`, default true; false leaves them black, as the
+//! classic maps do): other specular objects in a reflector's cube map are shaded from their own
+//! cube maps (one level of envmap shading: each face is drawn twice, first with specular
+//! objects black, then with them shaded from those first faces), not left black.
 //!
 //! Approximations and artifacts: every lookup pretends the environment is infinitely far, so
 //! nearby objects appear in the wrong place and at the wrong size (exact only for a distant
@@ -29,7 +30,9 @@
 //! Parameters:
 //! - `resolution` (default 256): texels per cube-map face side. Higher sharpens reflections;
 //!   cost is 6 × resolution² rasterised texels per reflector per redraw, twice (and a shading
-//!   pass per face) when the scene has two specular meshes or more.
+//!   pass per face) when the scene has two specular meshes or more and `two_level_maps` is on.
+//! - `two_level_maps` (default true): with two reflectors or more, shade the specular objects a
+//!   cube map shows from their own maps (see above); false draws them black, at half the cost.
 //! - `exit` (default `slab`): the naive second interface of solid refractors. `none` looks the
 //!   environment up right after the first refraction (single interface); `sphere` refracts
 //!   again where the ray leaves the bounding sphere (exact for a sphere); `slab` refracts again
@@ -99,6 +102,13 @@ pub const PARAMS: &[ParamSpec] = &[
         doc: "redraw the cube maps every frame (else only after a move)",
         invalidates: Invalidates::Uniform,
     },
+    ParamSpec {
+        name: "two_level_maps",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "with two reflectors or more, shade the other specular objects a cube map shows from their own maps (two levels; else black)",
+        invalidates: Invalidates::Uniform,
+    },
     raster::SHADOW_RESOLUTION,
 ];
 
@@ -151,6 +161,9 @@ pub struct CubeMaps {
     /// Keep each face's world positions too (`positions_view`): c3rc depth-tests its splats
     /// against the far field with them.
     keep_positions: bool,
+    /// Two levels where the scene has two reflectors or more (the technique's `two_level_maps`;
+    /// a step beyond every paper that uses cube maps).
+    two_levels: bool,
 }
 
 /// The cube-map faces at one resolution.
@@ -198,7 +211,15 @@ impl CubeMaps {
             generation: 0,
             hidden: Vec::new(),
             keep_positions: false,
+            two_levels: true,
         }
+    }
+
+    /// Whether specular objects in the faces are shaded from their own first faces (two
+    /// levels, where the scene has two reflectors or more) or left black (one level, as the
+    /// papers' maps). A change makes the faces again at the next update.
+    pub fn set_two_levels(&mut self, two_levels: bool) {
+        self.two_levels = two_levels;
     }
 
     /// Keeps each face's world positions from now on (made with the next faces).
@@ -275,8 +296,13 @@ impl CubeMaps {
             }
             self.placed = Some((live.version(), exit));
         }
-        let two_levels = self.reflectors.len() >= 2;
-        if self.faces.as_ref().map(|f| f.resolution) != Some(resolution) {
+        let two_levels = self.two_levels && self.reflectors.len() >= 2;
+        if self
+            .faces
+            .as_ref()
+            .map(|f| (f.resolution, f.first.is_some()))
+            != Some((resolution, two_levels))
+        {
             self.generation += 1;
             let layers = (6 * self.reflectors.len() as u32).max(1);
             let (texture, view) = faces_texture(gpu, "environment faces", resolution, layers);
@@ -622,6 +648,7 @@ pub struct EnvMap {
     pub resolution: u32,
     pub exit: Exit,
     pub dynamic: bool,
+    pub two_level_maps: bool,
     pub shadow_resolution: u32,
     prepared: Option<Prepared>,
     timer: StageTimer,
@@ -644,6 +671,7 @@ impl Default for EnvMap {
             resolution: 256,
             exit: Exit::Slab,
             dynamic: false,
+            two_level_maps: true,
             shadow_resolution: 1024,
             prepared: None,
             timer: StageTimer::default(),
@@ -775,6 +803,7 @@ impl Technique for EnvMap {
             "resolution" => self.resolution.to_string(),
             "exit" => format!("{:?}", self.exit).to_lowercase(),
             "dynamic" => self.dynamic.to_string(),
+            "two_level_maps" => self.two_level_maps.to_string(),
             "shadow_resolution" => self.shadow_resolution.to_string(),
             _ => String::new(),
         }
@@ -785,6 +814,7 @@ impl Technique for EnvMap {
             "resolution" => self.resolution = value.integer() as u32,
             "shadow_resolution" => self.shadow_resolution = value.integer() as u32,
             "dynamic" => self.dynamic = value.flag(),
+            "two_level_maps" => self.two_level_maps = value.flag(),
             "exit" => {
                 self.exit = match value.word() {
                     "none" => Exit::None,
@@ -826,6 +856,7 @@ impl Technique for EnvMap {
         let scene = live.scene();
         let gpu_scene = live.gpu(gpu);
         let (resolution, exit, dynamic) = (self.resolution, self.exit, self.dynamic);
+        let two_level_maps = self.two_level_maps;
         let p = self.prepared.as_mut().expect("prepared above");
         p.raster.begin_frame(gpu, live)?;
         p.bind_groups.keep_pooled(&p.raster);
@@ -833,6 +864,7 @@ impl Technique for EnvMap {
         let camera_uniform = raster::camera_uniform(camera, &scene.bounds(), width, height);
         let g = p.raster.render(gpu, gpu_scene, &camera_uniform, None)?;
         self.timer.lap(gpu, "g-buffer")?;
+        p.maps.set_two_levels(two_level_maps);
         let faces_drawn = p
             .maps
             .update(gpu, &p.raster, live, resolution, exit, dynamic)?;

@@ -79,6 +79,9 @@
 //! - `dispersion`: a dispersive material refracts once per colour channel; the paper's
 //!   refractors have one index, and the preset refracts one path at the green (d-line) index
 //!   (paper: `dispersion=false`).
+//! - `two_level_maps`: with two reflectors or more, the cube maps shade the other specular
+//!   objects they show from those objects' own maps (one level of envmap shading) instead of
+//!   black (paper: `two_level_maps=false`).
 //!
 //! Where the paper is silent, what this implementation does (the preset keeps it):
 //! - An exit point P̃2 that projects where the back-face texture holds nothing takes the
@@ -336,6 +339,13 @@ pub const PARAMS: &[ParamSpec] = &[
         invalidates: Invalidates::Uniform,
     },
     ParamSpec {
+        name: "two_level_maps",
+        kind: ParamKind::Flag,
+        default: "true",
+        doc: "with two reflectors or more, shade the other specular objects a cube map shows from their own maps (two levels; else black)",
+        invalidates: Invalidates::Uniform,
+    },
+    ParamSpec {
         name: "layers",
         kind: ParamKind::Integer { min: 1, max: 4 },
         default: "1",
@@ -379,6 +389,7 @@ pub const INFO: MethodInfo = MethodInfo {
             "fallback=background",
             "parallax=false",
             "dispersion=false",
+            "two_level_maps=false",
         ],
     }],
     create: || Box::new(ImageSpace::default()),
@@ -495,6 +506,7 @@ pub struct ImageSpace {
     pub exit_iterations: u32,
     pub resolution: u32,
     pub dynamic: bool,
+    pub two_level_maps: bool,
     pub parallax: bool,
     pub internal_reflection: bool,
     pub reflection: bool,
@@ -522,6 +534,7 @@ impl Default for ImageSpace {
             exit_iterations: 2,
             resolution: 256,
             dynamic: false,
+            two_level_maps: true,
             parallax: true,
             internal_reflection: true,
             reflection: true,
@@ -1011,6 +1024,7 @@ impl Technique for ImageSpace {
             "exit_iterations" => self.exit_iterations.to_string(),
             "resolution" => self.resolution.to_string(),
             "dynamic" => self.dynamic.to_string(),
+            "two_level_maps" => self.two_level_maps.to_string(),
             "parallax" => self.parallax.to_string(),
             "internal_reflection" => self.internal_reflection.to_string(),
             "reflection" => self.reflection.to_string(),
@@ -1042,6 +1056,7 @@ impl Technique for ImageSpace {
             "exit_iterations" => self.exit_iterations = value.integer() as u32,
             "resolution" => self.resolution = value.integer() as u32,
             "dynamic" => self.dynamic = value.flag(),
+            "two_level_maps" => self.two_level_maps = value.flag(),
             "parallax" => self.parallax = value.flag(),
             "internal_reflection" => self.internal_reflection = value.flag(),
             "reflection" => self.reflection = value.flag(),
@@ -1109,6 +1124,7 @@ impl Technique for ImageSpace {
         self.timer.lap(gpu, "back faces")?;
         let nearby = p.nearby.render(gpu, gpu_scene, &texture_camera, None)?;
         self.timer.lap(gpu, "nearby geometry")?;
+        p.maps.set_two_levels(self.two_level_maps);
         let faces_drawn = p.maps.update(
             gpu,
             &p.raster,
