@@ -24,7 +24,7 @@ if specula_allowed mpi && ! command -v mpicc >/dev/null; then
   printf 'mpi\tdistributed tests (crates/specula-cli/tests/distributed.rs)\tnot built: no OpenMPI (mpicc)\n' >> "$SPECULA_SKIP_LOG"
 fi
 status=0
-cargo test --workspace "${features[@]}" "$@" 2>&1 | tee "$log" || status=$?
+cargo test --workspace --no-fail-fast "${features[@]}" "$@" 2>&1 | tee "$log" || status=$?
 # A skipped test returns early and counts as passed for cargo: count it apart.
 # One line per skipped test and requirement (a test may check a requirement more than once).
 skips="$(cut -f1,2 "$SPECULA_SKIP_LOG" | sort -u)"

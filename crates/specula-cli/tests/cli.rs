@@ -135,7 +135,7 @@ fn bad_input_is_a_clear_error_not_a_panic() {
                 "-p".into(),
                 "colour=1".into(),
             ],
-            "parameters are resolution, exit, dynamic, shadow_resolution",
+            "parameters are resolution, exit, dynamic, two_level_maps, shadow_resolution",
         ),
         (
             vec![

@@ -48,24 +48,27 @@ pub struct GpuContext {
     /// wgpu errors raised outside any error scope. wgpu's default is to panic on them; here
     /// they are collected and returned as an error by the next [`GpuContext::wait`].
     uncaptured: Arc<Mutex<Vec<String>>>,
-    created: [AtomicU64; 3],
+    created: [AtomicU64; KINDS],
     /// The staging buffer texture readbacks copy into, kept and grown to the largest readback
     /// so far: a warm readback creates nothing.
     readback: Mutex<Option<wgpu::Buffer>>,
 }
 
-/// How many GPU textures, buffers and bind groups were created (through [`GpuContext`]'s
-/// `create_*` methods, the only way the project creates them: clippy.toml forbids wgpu's own).
+/// How many GPU textures, buffers, bind groups, samplers and query sets were created (through
+/// [`GpuContext`]'s `create_*` methods, the only way the project creates them: clippy.toml
+/// forbids wgpu's own).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct ResourceCounts {
     pub textures: u64,
     pub buffers: u64,
     pub bind_groups: u64,
+    pub samplers: u64,
+    pub query_sets: u64,
 }
 
 impl ResourceCounts {
     pub fn total(&self) -> u64 {
-        self.textures + self.buffers + self.bind_groups
+        self.textures + self.buffers + self.bind_groups + self.samplers + self.query_sets
     }
 }
 
@@ -76,6 +79,8 @@ impl std::ops::Sub for ResourceCounts {
             textures: self.textures - earlier.textures,
             buffers: self.buffers - earlier.buffers,
             bind_groups: self.bind_groups - earlier.bind_groups,
+            samplers: self.samplers - earlier.samplers,
+            query_sets: self.query_sets - earlier.query_sets,
         }
     }
 }
@@ -83,6 +88,25 @@ impl std::ops::Sub for ResourceCounts {
 const TEXTURES: usize = 0;
 const BUFFERS: usize = 1;
 const BIND_GROUPS: usize = 2;
+const SAMPLERS: usize = 3;
+const QUERY_SETS: usize = 4;
+const KINDS: usize = 5;
+
+/// The GPU objects alive on the device, as wgpu-hal counts them (its `counters` feature):
+/// a second source beside [`ResourceCounts`], which sees only what went through
+/// [`GpuContext`]'s wrappers. Objects wgpu creates and frees on its own (command encoders,
+/// fences) are left out.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LiveObjects {
+    pub buffers: isize,
+    pub textures: isize,
+    pub texture_views: isize,
+    pub bind_groups: isize,
+    pub samplers: isize,
+    pub render_pipelines: isize,
+    pub compute_pipelines: isize,
+    pub query_sets: isize,
+}
 
 impl GpuContext {
     /// A Vulkan-only wgpu instance. The GL backend is never used (it lacks float render
@@ -174,14 +198,33 @@ impl GpuContext {
         )
     }
 
-    /// Textures, buffers and bind groups created so far.
+    /// Textures, buffers, bind groups, samplers and query sets created so far.
     pub fn resource_counts(&self) -> ResourceCounts {
         let count = |i: usize| self.created[i].load(Ordering::Relaxed);
         ResourceCounts {
             textures: count(TEXTURES),
             buffers: count(BUFFERS),
             bind_groups: count(BIND_GROUPS),
+            samplers: count(SAMPLERS),
+            query_sets: count(QUERY_SETS),
         }
+    }
+
+    /// The objects alive on the device once the work submitted so far is done (waits for it,
+    /// so that objects dropped since are freed and not counted).
+    pub fn live_objects(&self) -> Result<LiveObjects, GpuError> {
+        self.wait()?;
+        let hal = self.device.get_internal_counters().hal;
+        Ok(LiveObjects {
+            buffers: hal.buffers.read(),
+            textures: hal.textures.read(),
+            texture_views: hal.texture_views.read(),
+            bind_groups: hal.bind_groups.read(),
+            samplers: hal.samplers.read(),
+            render_pipelines: hal.render_pipelines.read(),
+            compute_pipelines: hal.compute_pipelines.read(),
+            query_sets: hal.query_sets.read(),
+        })
     }
 
     fn count(&self, kind: usize) {
@@ -213,6 +256,18 @@ impl GpuContext {
     pub fn create_bind_group(&self, descriptor: &wgpu::BindGroupDescriptor) -> wgpu::BindGroup {
         self.count(BIND_GROUPS);
         self.device.create_bind_group(descriptor)
+    }
+
+    #[allow(clippy::disallowed_methods)]
+    pub fn create_sampler(&self, descriptor: &wgpu::SamplerDescriptor) -> wgpu::Sampler {
+        self.count(SAMPLERS);
+        self.device.create_sampler(descriptor)
+    }
+
+    #[allow(clippy::disallowed_methods)]
+    pub fn create_query_set(&self, descriptor: &wgpu::QuerySetDescriptor) -> wgpu::QuerySet {
+        self.count(QUERY_SETS);
+        self.device.create_query_set(descriptor)
     }
 
     /// Runs `work` inside a validation error scope: any wgpu validation error it causes comes

@@ -9,7 +9,7 @@ pub mod shaders;
 mod timer;
 pub mod util;
 
-pub use context::{GpuContext, GpuError, ResourceCounts, TimingSource};
+pub use context::{GpuContext, GpuError, LiveObjects, ResourceCounts, TimingSource};
 pub use timer::{StageTime, StageTimer};
 
 /// The context for GPU tests. A machine without a Vulkan adapter fails the test, naming what to

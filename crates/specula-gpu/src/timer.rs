@@ -48,7 +48,7 @@ impl StageTimer {
                 })
             };
             self.gpu = Some(Timestamps {
-                set: ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
+                set: ctx.create_query_set(&wgpu::QuerySetDescriptor {
                     label: Some("stage timestamps"),
                     ty: wgpu::QueryType::Timestamp,
                     count: MAX_MARKS,
