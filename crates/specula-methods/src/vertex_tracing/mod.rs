@@ -185,6 +185,7 @@ pub(crate) mod refine;
 pub mod simulate;
 pub(crate) mod wire;
 
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -535,6 +536,10 @@ pub(crate) struct FrameSetup {
     pub(crate) active: Vec<TriangleId>,
     /// What each reflector in sight was counted and how it is traced, in mesh order.
     pub(crate) choices: Vec<ReflectorChoice>,
+    /// Milliseconds [`FrameSetup::new`] took to choose ([`ReflectorChoice::from_id_buffer`])
+    /// and to find the pixel owners and active triangles of the reflectors traced by vertices.
+    pub(crate) choice_ms: f64,
+    pub(crate) owners_ms: f64,
 }
 
 /// One reflector's counts in a frame and the way it was chosen to be traced.
@@ -557,6 +562,47 @@ pub(crate) struct ReflectorChoice {
 /// Pixels of a candidate reflector traced to measure its paths, spread evenly over its pixels.
 const PATH_SAMPLES: usize = 256;
 
+/// A set of indices below a bound, set from many threads at once.
+struct Bits(Vec<AtomicU64>);
+
+impl Bits {
+    fn new(len: usize) -> Bits {
+        Bits((0..len.div_ceil(64)).map(|_| AtomicU64::new(0)).collect())
+    }
+
+    /// Adds `i`; an index past the bound (a raster ID buffer's stale triangle) is left out.
+    fn set(&self, i: usize) {
+        if let Some(word) = self.0.get(i / 64) {
+            let bit = 1 << (i % 64);
+            // Neighbouring pixels show the same triangle: read before writing.
+            if word.load(Ordering::Relaxed) & bit == 0 {
+                word.fetch_or(bit, Ordering::Relaxed);
+            }
+        }
+    }
+
+    fn count(&self) -> usize {
+        self.0
+            .iter()
+            .map(|w| w.load(Ordering::Relaxed).count_ones() as usize)
+            .sum()
+    }
+
+    /// The indices held, in order.
+    fn ones(&self) -> impl Iterator<Item = usize> + '_ {
+        self.0.iter().enumerate().flat_map(|(k, word)| {
+            let mut w = word.load(Ordering::Relaxed);
+            std::iter::from_fn(move || {
+                (w != 0).then(|| {
+                    let bit = w.trailing_zeros() as usize;
+                    w &= w - 1;
+                    64 * k + bit
+                })
+            })
+        })
+    }
+}
+
 impl ReflectorChoice {
     /// Every reflector the ID buffer `surfaces` shows, counted, and the choice `settings`
     /// makes: per pixel where its seen vertices outnumber `vertex_ratio` × its pixels (a dense,
@@ -572,50 +618,73 @@ impl ReflectorChoice {
         topology: &Topology,
         settings: &RefineSettings,
     ) -> Vec<ReflectorChoice> {
-        struct Tally {
-            pixels: Vec<u32>,
-            vertices: usize,
-            triangle_seen: Vec<bool>,
-            vertex_seen: Vec<bool>,
-        }
         let scene = tracer.scene;
-        let mut tallies: Vec<Option<Tally>> = scene.meshes.iter().map(|_| None).collect();
-        for (k, &[mesh, triangle]) in surfaces.ids.iter().enumerate() {
-            let Some(mesh) = mesh.checked_sub(1) else {
-                continue;
-            };
-            if !topology.is_reflector(mesh) {
-                continue;
-            }
-            let scene_mesh = &scene.meshes[mesh as usize];
-            let tally = tallies[mesh as usize].get_or_insert_with(|| Tally {
-                pixels: Vec::new(),
-                vertices: 0,
-                triangle_seen: vec![false; scene_mesh.triangles.len()],
-                vertex_seen: vec![false; scene_mesh.positions.len()],
-            });
-            tally.pixels.push(k as u32);
-            let Some(seen) = tally.triangle_seen.get_mut(triangle as usize) else {
-                continue;
-            };
-            if !std::mem::replace(seen, true) {
-                for &v in &scene_mesh.triangles[triangle as usize] {
-                    if !std::mem::replace(&mut tally.vertex_seen[v as usize], true) {
-                        tally.vertices += 1;
+        // In parallel over the pixels: each reflector's pixel count, and the triangles its
+        // pixels show as bits (a 75k-triangle mesh: 1,200 words).
+        let seen_triangles: Vec<Option<Bits>> = scene
+            .meshes
+            .iter()
+            .enumerate()
+            .map(|(mesh, m)| {
+                topology
+                    .is_reflector(mesh as u32)
+                    .then(|| Bits::new(m.triangles.len()))
+            })
+            .collect();
+        let pixel_counts = surfaces
+            .ids
+            .par_chunks(4096)
+            .fold(
+                || vec![0usize; scene.meshes.len()],
+                |mut counts, ids| {
+                    for &[mesh, triangle] in ids {
+                        let Some(mesh) = mesh.checked_sub(1) else {
+                            continue;
+                        };
+                        if let Some(Some(seen)) = seen_triangles.get(mesh as usize) {
+                            counts[mesh as usize] += 1;
+                            seen.set(triangle as usize);
+                        }
                     }
+                    counts
+                },
+            )
+            .reduce(
+                || vec![0usize; scene.meshes.len()],
+                |mut a, b| {
+                    a.iter_mut().zip(b).for_each(|(a, b)| *a += b);
+                    a
+                },
+            );
+        let tallies = seen_triangles.into_iter().enumerate().map(|(mesh, seen)| {
+            let seen = seen.filter(|_| pixel_counts[mesh] > 0)?;
+            let scene_mesh = &scene.meshes[mesh];
+            let seen_vertices = Bits::new(scene_mesh.positions.len());
+            for t in seen.ones() {
+                for &v in &scene_mesh.triangles[t] {
+                    seen_vertices.set(v as usize);
                 }
             }
-        }
+            Some((pixel_counts[mesh], seen_vertices.count()))
+        });
+        // A candidate's pixels, for its path sample (raster order).
+        let pixels_of = |mesh: usize| -> Vec<u32> {
+            surfaces
+                .ids
+                .par_iter()
+                .enumerate()
+                .filter(|(_, ids)| ids[0] == mesh as u32 + 1)
+                .map(|(k, _)| k as u32)
+                .collect()
+        };
         tallies
-            .into_iter()
             .enumerate()
             .filter_map(|(mesh, tally)| {
-                let Tally {
-                    pixels, vertices, ..
-                } = tally?;
-                let dense = vertices as f64 > settings.vertex_ratio as f64 * pixels.len() as f64;
-                let sampled = (settings.tracing == ReflectorTracing::Auto && !dense)
-                    .then(|| sampled_path_rays(tracer, pixel_rays, width, surfaces, &pixels));
+                let (pixels, vertices) = tally?;
+                let dense = vertices as f64 > settings.vertex_ratio as f64 * pixels as f64;
+                let sampled = (settings.tracing == ReflectorTracing::Auto && !dense).then(|| {
+                    sampled_path_rays(tracer, pixel_rays, width, surfaces, &pixels_of(mesh))
+                });
                 let path_rays = sampled.map(|(rays, _)| rays);
                 let per_pixel = match settings.tracing {
                     ReflectorTracing::Vertices => false,
@@ -627,7 +696,7 @@ impl ReflectorChoice {
                 Some(ReflectorChoice {
                     mesh: mesh as u32,
                     vertices,
-                    pixels: pixels.len(),
+                    pixels,
                     path_rays,
                     sample_rays: sampled.map_or((0, 0), |(_, traced)| traced),
                     per_pixel,
@@ -709,6 +778,7 @@ impl FrameSetup {
             max_depth,
         };
         let pixel_rays = camera.pixel_rays(width, height);
+        let clock = Instant::now();
         let choices = ReflectorChoice::from_id_buffer(
             &tracer,
             &pixel_rays,
@@ -723,7 +793,16 @@ impl FrameSetup {
         for choice in choices.iter().filter(|choice| choice.per_pixel) {
             by_vertices[choice.mesh as usize] = false;
         }
-        let owners = PixelOwners::new(&surfaces, &by_vertices, scene, &view);
+        let choice_ms = clock.elapsed().as_secs_f64() * 1e3;
+        let clock = Instant::now();
+        // Every reflector in sight traced per pixel: no pixel has an owner to find, no
+        // triangle is traced by its vertices.
+        let any_by_vertices = choices.iter().any(|choice| !choice.per_pixel);
+        let owners = if any_by_vertices {
+            PixelOwners::new(&surfaces, &by_vertices, scene, &view)
+        } else {
+            PixelOwners::default()
+        };
         let mut setup = FrameSetup {
             view,
             surfaces,
@@ -732,10 +811,15 @@ impl FrameSetup {
             by_vertices,
             active: Vec::new(),
             choices,
+            choice_ms,
+            owners_ms: 0.0,
         };
-        setup.active = setup
-            .inputs(live, camera, settings, max_depth)
-            .active_triangles(&setup.by_vertices);
+        if any_by_vertices {
+            setup.active = setup
+                .inputs(live, camera, settings, max_depth)
+                .active_triangles(&setup.by_vertices);
+        }
+        setup.owners_ms = clock.elapsed().as_secs_f64() * 1e3;
         setup
     }
 
@@ -953,15 +1037,30 @@ impl FrameSetup {
     }
 }
 
+/// A frame's stages, as `bench` and `compare` itemise them. Without a GPU the first holds the
+/// ID buffer's pass, which shades at once every pixel whose first surface is not a reflector
+/// traced by vertices (as guessed from the last frame); the fourth, the reflectors traced per
+/// pixel that the guess missed. With a GPU the first is the raster pass and its readback, the
+/// fourth every reflector traced per pixel.
+const STAGES: [&str; 6] = [
+    "visibility (ID buffer) and the rest of the scene",
+    "reflector choice",
+    "pixel owners and active triangles",
+    "reflectors traced per pixel",
+    "reflector: vertex rays, refinement, filling",
+    "reflector: composition",
+];
+const VERTICES_STAGE: usize = 4;
+const COMPOSITION_STAGE: usize = 5;
+
 struct Progress {
     key: ViewKey,
     setup: FrameSetup,
     packages: Vec<Package>,
     originals: OriginalSamples,
     image: Image,
-    /// Milliseconds so far: visibility, rest of scene, reflector (vertex rays, refinement,
-    /// filling), composition.
-    stages: [f64; 4],
+    /// Milliseconds so far, as [`STAGES`] names them.
+    stages: [f64; STAGES.len()],
     rest_rays: (u64, u64),
     /// Whether the ID buffer is on the GPU for composition on the raster.
     ids_uploaded: bool,
@@ -1100,7 +1199,7 @@ impl Technique for VertexTracing {
         let progress = self.progress.as_mut().expect("set above");
         let deadline = (budget_ms > 0).then(|| start + Duration::from_millis(budget_ms as u64));
         let clock = Instant::now();
-        if fresh {
+        if fresh && !progress.setup.active.is_empty() {
             let inputs = progress.setup.inputs(live, camera, settings, max_depth);
             progress.originals = OriginalSamples::trace(&inputs, &progress.setup.active);
         }
@@ -1120,11 +1219,11 @@ impl Technique for VertexTracing {
                 package.run(&inputs, until);
             }
         });
-        progress.stages[2] += clock.elapsed().as_secs_f64() * 1e3;
+        progress.stages[VERTICES_STAGE] += clock.elapsed().as_secs_f64() * 1e3;
         let clock = Instant::now();
         let mut warnings = Vec::new();
         let composed = match composition_gpu {
-            Some(gpu) => {
+            Some(gpu) if !progress.packages.is_empty() => {
                 let composer = self
                     .raster_composition
                     .get_or_insert_with(|| RasterComposition::new(gpu));
@@ -1146,7 +1245,7 @@ impl Technique for VertexTracing {
                     &mut warnings,
                 )?
             }
-            None => None,
+            _ => None,
         };
         let results: Vec<Vec<(u32, Vec3)>> = progress
             .packages
@@ -1156,20 +1255,14 @@ impl Technique for VertexTracing {
         for (k, color) in results.into_iter().flatten() {
             progress.image.pixels[k as usize] = color;
         }
-        progress.stages[3] += clock.elapsed().as_secs_f64() * 1e3;
+        progress.stages[COMPOSITION_STAGE] += clock.elapsed().as_secs_f64() * 1e3;
 
         let converged = progress.packages.iter().all(Package::is_done);
         let mut totals = progress.originals.counters;
         for package in &progress.packages {
             totals.add(&package.counters);
         }
-        let names = [
-            "visibility (ID buffer)",
-            "rest of scene",
-            "reflector: vertex rays, refinement, filling",
-            "reflector: composition",
-        ];
-        let stages = names
+        let stages = STAGES
             .iter()
             .zip(progress.stages)
             .map(|(name, ms)| StageTime {
@@ -1257,7 +1350,7 @@ impl Technique for VertexTracing {
         }
         // Later calls of a progressive frame report their own time only.
         if budget_ms > 0 {
-            progress.stages = [0.0; 4];
+            progress.stages = [0.0; STAGES.len()];
         }
         if progress.setup.choices.is_empty() {
             warnings.push("no reflector pixel is visible: nothing to vertex-trace".into());
@@ -1357,7 +1450,7 @@ impl VertexTracing {
                     .filter(|surfaces| !surfaces.hits.is_empty());
                 // The scene's other surfaces (and the reflectors the last frame traced per
                 // pixel) are shaded in the ID buffer's pass: the first stage's time holds them;
-                // the second, the other reflectors traced per pixel.
+                // the fourth, the other reflectors traced per pixel.
                 let guess = match &self.per_pixel_guess {
                     Some((scene, guess)) if *scene == live.id() => guess.clone(),
                     _ => Vec::new(),
@@ -1365,7 +1458,9 @@ impl VertexTracing {
                 let (setup, mut rest, early) = FrameSetup::traced_shading_the_rest(
                     live, camera, width, height, topology, settings, max_depth, recycled, &guess,
                 );
-                let visibility_ms = clock.elapsed().as_secs_f64() * 1e3;
+                // The choice and the owners were made inside: their stages hold them.
+                let visibility_ms =
+                    clock.elapsed().as_secs_f64() * 1e3 - setup.choice_ms - setup.owners_ms;
                 let late = setup
                     .trace_reflectors_per_pixel_but(live, camera, max_depth, &mut rest, &guess);
                 self.per_pixel_guess = Some((live.id(), setup.per_pixel_meshes()));
@@ -1373,7 +1468,16 @@ impl VertexTracing {
                 (setup, rest, rays, visibility_ms)
             }
         };
-        let rest_ms = clock.elapsed().as_secs_f64() * 1e3 - visibility_ms;
+        let per_pixel_ms =
+            clock.elapsed().as_secs_f64() * 1e3 - visibility_ms - setup.choice_ms - setup.owners_ms;
+        let stages = [
+            visibility_ms,
+            setup.choice_ms,
+            setup.owners_ms,
+            per_pixel_ms,
+            0.0,
+            0.0,
+        ];
         let packages = setup.packages(self.package_triangles);
         Ok(Progress {
             key,
@@ -1381,7 +1485,7 @@ impl VertexTracing {
             packages,
             originals: OriginalSamples::default(),
             image: rest,
-            stages: [visibility_ms, rest_ms, 0.0, 0.0],
+            stages,
             rest_rays,
             ids_uploaded: false,
         })
