@@ -355,13 +355,7 @@ pub const PARAMS: &[ParamSpec] = &[
         doc: "redraw the far-field cube maps every frame (else only after a move)",
         invalidates: Invalidates::Uniform,
     },
-    ParamSpec {
-        name: "two_level_maps",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "with two reflectors or more, shade the other specular objects a cube map shows from their own maps (two levels; else black)",
-        invalidates: Invalidates::Uniform,
-    },
+    envmap::TWO_LEVEL_MAPS,
     ParamSpec {
         name: "projection",
         kind: ParamKind::Choice(&["auto", "cpu", "gpu"]),

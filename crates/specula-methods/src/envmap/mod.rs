@@ -102,13 +102,7 @@ pub const PARAMS: &[ParamSpec] = &[
         doc: "redraw the cube maps every frame (else only after a move)",
         invalidates: Invalidates::Uniform,
     },
-    ParamSpec {
-        name: "two_level_maps",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "with two reflectors or more, shade the other specular objects a cube map shows from their own maps (two levels; else black)",
-        invalidates: Invalidates::Uniform,
-    },
+    TWO_LEVEL_MAPS,
     raster::SHADOW_RESOLUTION,
 ];
 
@@ -135,6 +129,15 @@ pub struct GpuReflector {
     pub exit_model: u32,
     pub pad: [u32; 2],
 }
+
+/// `two_level_maps`, declared once for every technique that draws [`CubeMaps`].
+pub const TWO_LEVEL_MAPS: ParamSpec = ParamSpec {
+    name: "two_level_maps",
+    kind: ParamKind::Flag,
+    default: "true",
+    doc: "with two reflectors or more, shade the other specular objects a cube map shows from their own maps (two levels; else black)",
+    invalidates: Invalidates::Uniform,
+};
 
 /// Each specular mesh's ("reflector's") environment cube map, drawn from the centre of its
 /// bounding box with the reflector left out: six 90° faces per reflector in one 2D array,

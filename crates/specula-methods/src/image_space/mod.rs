@@ -338,13 +338,7 @@ pub const PARAMS: &[ParamSpec] = &[
         doc: "redraw the fallback cube maps every frame (else only after a move)",
         invalidates: Invalidates::Uniform,
     },
-    ParamSpec {
-        name: "two_level_maps",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "with two reflectors or more, shade the other specular objects a cube map shows from their own maps (two levels; else black)",
-        invalidates: Invalidates::Uniform,
-    },
+    envmap::TWO_LEVEL_MAPS,
     ParamSpec {
         name: "layers",
         kind: ParamKind::Integer { min: 1, max: 4 },

@@ -1066,6 +1066,95 @@ struct Progress {
     ids_uploaded: bool,
 }
 
+impl Progress {
+    /// The frame's counters, as `bench` and `compare` report them: measured where they happen
+    /// (the packages' and the original samples' counts, the choice's tallies).
+    fn counters(&self, scene: &specula_scene::Scene) -> Vec<(String, u64)> {
+        let mut totals = self.originals.counters;
+        for package in &self.packages {
+            totals.add(&package.counters);
+        }
+        let choices = &self.setup.choices;
+        let mut counters = vec![
+        (
+            "reflector pixels".into(),
+            choices.iter().map(|c| c.pixels as u64).sum(),
+        ),
+        (
+            "reflectors traced by their vertices".into(),
+            choices.iter().filter(|c| !c.per_pixel).count() as u64,
+        ),
+        (
+            "reflectors traced per pixel".into(),
+            choices.iter().filter(|c| c.per_pixel).count() as u64,
+        ),
+        (
+            "reflector pixels traced per pixel".into(),
+            choices.iter().filter(|c| c.per_pixel).map(|c| c.pixels as u64).sum(),
+        ),
+        (
+            "vertices of the reflector triangles seen (every reflector)".into(),
+            choices.iter().map(|c| c.vertices as u64).sum(),
+        ),
+        (
+            "stray pixels (the ID buffer's triangle cannot be seen there; traced with trace_stray)".into(),
+            self.setup.owners.stray() as u64,
+        ),
+        (
+            "reflector triangles traced".into(),
+            self.setup.active.len() as u64,
+        ),
+        ("task packages".into(), self.packages.len() as u64),
+        (
+            "reflector pixels composed on the GPU raster".into(),
+            self.packages.iter().map(|p| p.pixels_from_raster).sum(),
+        ),
+        ("vertex rays".into(), totals.vertex_rays),
+        ("filled pixels".into(), totals.filled_pixels),
+        (
+            "samples (vertex rays + filled pixels)".into(),
+            totals.vertex_rays + totals.filled_pixels,
+        ),
+        ("edges split".into(), totals.edges_split),
+        ("of which for flatness".into(), totals.flat_splits),
+        ("unresolved edges".into(), totals.unresolved_edges),
+        ("deepest level".into(), totals.deepest_level),
+        (
+            COUNTER_RAYS_TRACED.into(),
+            totals.rays
+                + totals.vertex_rays
+                + self.rest_rays.0
+                + choices.iter().map(|c| c.sample_rays.0).sum::<u64>(),
+        ),
+        (
+            COUNTER_SHADOW_RAYS.into(),
+            totals.shadow_rays
+                + self.rest_rays.1
+                + choices.iter().map(|c| c.sample_rays.1).sum::<u64>(),
+        ),
+    ];
+        for c in choices {
+            let name = &scene.meshes[c.mesh as usize].name;
+            counters.extend([
+                (
+                    format!("reflector {name}: vertices of its triangles seen"),
+                    c.vertices as u64,
+                ),
+                (format!("reflector {name}: pixels"), c.pixels as u64),
+                (
+                    format!("reflector {name}: rays per pixel path x 100 (sampled; 0: not)"),
+                    c.path_rays.map_or(0, |rays| (rays * 100.0).round() as u64),
+                ),
+                (
+                    format!("reflector {name}: traced per pixel (1) or by vertices (0)"),
+                    c.per_pixel as u64,
+                ),
+            ]);
+        }
+        counters
+    }
+}
+
 impl Technique for VertexTracing {
     fn info(&self) -> &'static MethodInfo {
         &INFO
@@ -1258,10 +1347,6 @@ impl Technique for VertexTracing {
         progress.stages[COMPOSITION_STAGE] += clock.elapsed().as_secs_f64() * 1e3;
 
         let converged = progress.packages.iter().all(Package::is_done);
-        let mut totals = progress.originals.counters;
-        for package in &progress.packages {
-            totals.add(&package.counters);
-        }
         let stages = STAGES
             .iter()
             .zip(progress.stages)
@@ -1270,84 +1355,7 @@ impl Technique for VertexTracing {
                 milliseconds: ms,
             })
             .collect();
-        let choices = &progress.setup.choices;
-        let mut counters = vec![
-            (
-                "reflector pixels".into(),
-                choices.iter().map(|c| c.pixels as u64).sum(),
-            ),
-            (
-                "reflectors traced by their vertices".into(),
-                choices.iter().filter(|c| !c.per_pixel).count() as u64,
-            ),
-            (
-                "reflectors traced per pixel".into(),
-                choices.iter().filter(|c| c.per_pixel).count() as u64,
-            ),
-            (
-                "reflector pixels traced per pixel".into(),
-                choices.iter().filter(|c| c.per_pixel).map(|c| c.pixels as u64).sum(),
-            ),
-            (
-                "vertices of the reflector triangles seen (every reflector)".into(),
-                choices.iter().map(|c| c.vertices as u64).sum(),
-            ),
-            (
-                "stray pixels (the ID buffer's triangle cannot be seen there; traced with trace_stray)".into(),
-                progress.setup.owners.stray() as u64,
-            ),
-            (
-                "reflector triangles traced".into(),
-                progress.setup.active.len() as u64,
-            ),
-            ("task packages".into(), progress.packages.len() as u64),
-            (
-                "reflector pixels composed on the GPU raster".into(),
-                progress.packages.iter().map(|p| p.pixels_from_raster).sum(),
-            ),
-            ("vertex rays".into(), totals.vertex_rays),
-            ("filled pixels".into(), totals.filled_pixels),
-            (
-                "samples (vertex rays + filled pixels)".into(),
-                totals.vertex_rays + totals.filled_pixels,
-            ),
-            ("edges split".into(), totals.edges_split),
-            ("of which for flatness".into(), totals.flat_splits),
-            ("unresolved edges".into(), totals.unresolved_edges),
-            ("deepest level".into(), totals.deepest_level),
-            (
-                COUNTER_RAYS_TRACED.into(),
-                totals.rays
-                    + totals.vertex_rays
-                    + progress.rest_rays.0
-                    + choices.iter().map(|c| c.sample_rays.0).sum::<u64>(),
-            ),
-            (
-                COUNTER_SHADOW_RAYS.into(),
-                totals.shadow_rays
-                    + progress.rest_rays.1
-                    + choices.iter().map(|c| c.sample_rays.1).sum::<u64>(),
-            ),
-        ];
-        let scene = live.scene();
-        for c in choices {
-            let name = &scene.meshes[c.mesh as usize].name;
-            counters.extend([
-                (
-                    format!("reflector {name}: vertices of its triangles seen"),
-                    c.vertices as u64,
-                ),
-                (format!("reflector {name}: pixels"), c.pixels as u64),
-                (
-                    format!("reflector {name}: rays per pixel path x 100 (sampled; 0: not)"),
-                    c.path_rays.map_or(0, |rays| (rays * 100.0).round() as u64),
-                ),
-                (
-                    format!("reflector {name}: traced per pixel (1) or by vertices (0)"),
-                    c.per_pixel as u64,
-                ),
-            ]);
-        }
+        let counters = progress.counters(live.scene());
         // Later calls of a progressive frame report their own time only.
         if budget_ms > 0 {
             progress.stages = [0.0; STAGES.len()];
