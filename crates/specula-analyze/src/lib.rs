@@ -21,6 +21,7 @@ pub mod frame;
 pub mod glare;
 pub mod lens;
 pub mod lens_plot;
+pub mod mirror_surface;
 pub mod mirror_view;
 pub mod plot;
 pub mod report;

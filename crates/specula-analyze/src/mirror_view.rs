@@ -36,10 +36,11 @@ use rayon::prelude::*;
 use serde::Serialize;
 use specula_scene::{MaterialKind, Scene};
 use specula_trace::optics::reflect;
-use specula_trace::reference::{offset_origin, surface_point};
+use specula_trace::reference::offset_origin;
 use specula_trace::{Ray, SceneAccel};
 
 use crate::frame::VehicleFrame;
+use crate::mirror_surface::{MirrorSurface, SurfaceModel};
 use crate::AnalyzeError;
 
 /// The version of [`Report`]'s JSON (docs/analyze-mirror-view.schema.json).
@@ -103,6 +104,35 @@ pub struct Options {
     pub tolerance_deg: f64,
     /// The most ray samples one eye point may take.
     pub max_samples: usize,
+    /// The surface the samples lie on (default: the mirror's exact surface where it has one).
+    pub surface: SurfaceModel,
+    /// What hides the mirror and the ground.
+    pub obstacles: Obstacles,
+}
+
+/// What may stand between the eye, the mirror and the ground.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Obstacles {
+    /// Every opaque object of the scene (thin-walled glass passes light).
+    Scene,
+    /// Only these meshes, the vehicle's own body and fittings: the rest of the scene is not
+    /// there (a regulation's field lies on an empty, flat road). What they hide is counted
+    /// apart ([`MirrorView::clear_footprints`]).
+    Vehicle(Vec<usize>),
+}
+
+impl Obstacles {
+    /// Whether mesh `mesh` may hide anything.
+    fn hides(&self, mesh: usize) -> bool {
+        match self {
+            Obstacles::Scene => true,
+            Obstacles::Vehicle(parts) => parts.contains(&mesh),
+        }
+    }
+
+    fn is_vehicle(&self, mesh: usize) -> bool {
+        matches!(self, Obstacles::Vehicle(parts) if parts.contains(&mesh))
+    }
 }
 
 impl Options {
@@ -135,6 +165,24 @@ impl Options {
                 });
             }
         }
+        if self.surface == SurfaceModel::Exact && mesh.exact.is_none() {
+            return Err(AnalyzeError::BadOption {
+                option: "--surface",
+                reason: format!(
+                    "'{}' has no exact surface (only generated patches, spheres and caps do); \
+                     use --surface mesh or smooth",
+                    mesh.name
+                ),
+            });
+        }
+        if let Obstacles::Vehicle(parts) = &self.obstacles {
+            if parts.contains(&self.mirror) {
+                return Err(AnalyzeError::BadOption {
+                    option: "--vehicle",
+                    reason: format!("'{}' is the mirror, not a part of the body", mesh.name),
+                });
+            }
+        }
         if !self.ground_y.is_finite() {
             return Err(AnalyzeError::BadOption {
                 option: "--ground",
@@ -157,6 +205,9 @@ struct Sample {
     reflected: Option<Vec3>,
     /// Where the reflected ray meets the ground before any object (x, z).
     ground: Option<Vec2>,
+    /// Where it would meet the ground with the vehicle's body taken away (the mirror seen
+    /// through it too); with [`Obstacles::Scene`], `ground`.
+    clear_ground: Option<Vec2>,
 }
 
 /// What one eye sees at one subdivision.
@@ -167,6 +218,8 @@ struct Sampled {
     directions: Vec<[Vec3; 3]>,
     /// Ground triangles (x, z) whose three corners meet the ground.
     ground: Vec<[Vec2; 3]>,
+    /// ... and those that would with the vehicle's body taken away.
+    clear_ground: Vec<[Vec2; 3]>,
     solid_angle_sr: f64,
 }
 
@@ -194,26 +247,15 @@ fn sample_eye(
     scene: &Scene,
     accel: &SceneAccel,
     eye: Vec3,
+    surface: &MirrorSurface,
     options: &Options,
     n: usize,
     depth: u32,
 ) -> Sampled {
-    let mesh = &scene.meshes[options.mirror];
-    let parts: Vec<Sampled> = mesh
-        .triangles
-        .par_iter()
-        .enumerate()
-        .map(|(triangle, corners)| {
-            let [p0, p1, p2] = corners.map(|i| mesh.positions[i as usize]);
-            let sample = |b: Vec2| {
-                let at = MirrorPoint {
-                    p: p0 * (1.0 - b.x - b.y) + p1 * b.x + p2 * b.y,
-                    triangle: triangle as u32,
-                    b1: b.x,
-                    b2: b.y,
-                };
-                sample_point(scene, accel, eye, at, options)
-            };
+    let parts: Vec<Sampled> = (0..surface.cells())
+        .into_par_iter()
+        .map(|cell| {
+            let sample = |b: Vec2| sample_point(scene, accel, eye, surface, cell, b, options);
             let bary = |i: usize, j: usize| Vec2::new(i as f32 / n as f32, j as f32 / n as f32);
             let mut grid = Vec::with_capacity((n + 1) * (n + 2) / 2);
             for i in 0..=n {
@@ -249,6 +291,7 @@ fn sample_eye(
         sampled.solid_angle_sr += part.solid_angle_sr;
         sampled.directions.extend(part.directions);
         sampled.ground.extend(part.ground);
+        sampled.clear_ground.extend(part.clear_ground);
     }
     sampled
 }
@@ -260,6 +303,7 @@ impl Sampled {
             seen: 0,
             directions: Vec::new(),
             ground: Vec::new(),
+            clear_ground: Vec::new(),
             solid_angle_sr: 0.0,
         }
     }
@@ -273,7 +317,13 @@ fn descend(
     depth: u32,
     part: &mut Sampled,
 ) {
-    let status = |s: &Sample| (s.reflected.is_some(), s.ground.is_some());
+    let status = |s: &Sample| {
+        (
+            s.reflected.is_some(),
+            s.ground.is_some(),
+            s.clear_ground.is_some(),
+        )
+    };
     let agree = status(&corners[0].1) == status(&corners[1].1)
         && status(&corners[1].1) == status(&corners[2].1);
     if depth == 0 || agree {
@@ -284,6 +334,9 @@ fn descend(
         }
         if let [Some(a), Some(b), Some(c)] = samples.map(|s| s.ground) {
             part.ground.push([a, b, c]);
+        }
+        if let [Some(a), Some(b), Some(c)] = samples.map(|s| s.clear_ground) {
+            part.clear_ground.push([a, b, c]);
         }
         return;
     }
@@ -314,6 +367,17 @@ pub fn first_opaque_hit(
     ray: &Ray,
     t_max: f32,
 ) -> Option<specula_trace::Hit> {
+    first_hit_where(scene, accel, ray, t_max, &|_| true)
+}
+
+/// As [`first_opaque_hit`], among the meshes `may_hide` accepts (the others are passed).
+fn first_hit_where(
+    scene: &Scene,
+    accel: &SceneAccel,
+    ray: &Ray,
+    t_max: f32,
+    may_hide: &dyn Fn(usize) -> bool,
+) -> Option<specula_trace::Hit> {
     let mut origin = ray.origin;
     let mut travelled = 0.0;
     for _ in 0..64 {
@@ -325,13 +389,14 @@ pub fn first_opaque_hit(
             t_max - travelled,
         )?;
         let material = &scene.materials[scene.meshes[hit.mesh as usize].material];
-        if !matches!(
+        let thin_glass = matches!(
             material.kind,
             MaterialKind::Dielectric {
                 thin_walled: true,
                 ..
             }
-        ) {
+        );
+        if !thin_glass && may_hide(hit.mesh as usize) {
             return Some(specula_trace::Hit {
                 t: travelled + hit.t,
                 ..hit
@@ -348,57 +413,97 @@ pub fn first_opaque_hit(
     None
 }
 
-/// A point of the mirror: on triangle `triangle` at barycentric (1 − b1 − b2, b1, b2).
-#[derive(Clone, Copy)]
-struct MirrorPoint {
-    p: Vec3,
-    triangle: u32,
-    b1: f32,
-    b2: f32,
-}
-
-/// The eye's ray towards mirror point `at`: whether nothing hides it, and where its reflection
-/// goes. The point is on the mirror by construction, so only what lies before it is looked for
-/// (a ray aimed exactly at a mirror's outer edge could otherwise slip past it).
+/// The eye's ray towards the mirror's point at barycentric `b` of `cell`: whether nothing
+/// hides it, and where its reflection goes. The point is on the mirror by construction, so only
+/// what lies before it is looked for (a ray aimed exactly at a mirror's outer edge could
+/// otherwise slip past it); a model other than the mesh replaces the mirror's own triangles,
+/// which then hide nothing.
 fn sample_point(
     scene: &Scene,
     accel: &SceneAccel,
     eye: Vec3,
-    at: MirrorPoint,
+    surface: &MirrorSurface,
+    cell: usize,
+    b: Vec2,
     options: &Options,
 ) -> Sample {
     let unseen = Sample {
         reflected: None,
         ground: None,
+        clear_ground: None,
+    };
+    let Some(at) = surface.seen_from(eye, cell, b) else {
+        return unseen;
     };
     let to_point = at.p - eye;
     let distance = to_point.length();
     let Some(dir) = to_point.try_normalize() else {
         return unseen;
     };
+    let obstacles = &options.obstacles;
+    let mirror = options.mirror;
+    let hides = |m: usize| {
+        if m == mirror {
+            surface.is_the_mesh()
+        } else {
+            obstacles.hides(m)
+        }
+    };
     let ray = Ray { origin: eye, dir };
     let slack = 1e-3 * distance + 1e-4;
-    if first_opaque_hit(scene, accel, &ray, distance - slack).is_some() {
-        return unseen;
+    if !surface.is_the_mesh() {
+        // The triangles stand in for the surface: a crossing of them well before the point
+        // (beyond their sag) asks the surface itself.
+        let sag = 0.01 * scene.meshes[mirror].bounds().extent().length();
+        let only_mirror = |m: usize| m == mirror;
+        let before = first_hit_where(scene, accel, &ray, distance - sag, &only_mirror);
+        if before.is_some() && surface.crosses_before(eye, at.p, true) {
+            return unseen;
+        }
     }
-    let hit = specula_trace::Hit {
-        t: distance,
-        b1: at.b1,
-        b2: at.b2,
-        mesh: options.mirror as u32,
-        triangle: at.triangle,
-    };
-    let sp = surface_point(scene, &ray, &hit);
-    let reflected = reflect(dir, sp.ns).normalize();
+    let mut behind_vehicle = false;
+    if let Some(hit) = first_hit_where(scene, accel, &ray, distance - slack, &hides) {
+        if !obstacles.is_vehicle(hit.mesh as usize) {
+            return unseen;
+        }
+        // Hidden by the body: only what nothing but the body hides counts as its share.
+        let not_vehicle = |m: usize| hides(m) && !obstacles.is_vehicle(m);
+        if first_hit_where(scene, accel, &ray, distance - slack, &not_vehicle).is_some() {
+            return unseen;
+        }
+        behind_vehicle = true;
+    }
+    let reflected = reflect(dir, at.ns).normalize();
     // Interpolated normals can send a grazing reflection into the mirror: not a view.
-    if reflected.dot(sp.ng) <= 0.0 {
+    if reflected.dot(at.ng) <= 0.0 {
         return unseen;
     }
-    let origin = offset_origin(sp.p, sp.ng, reflected);
-    let ground = ground_seen(scene, accel, origin, reflected, options.ground_y);
+    let origin = offset_origin(at.p, at.ng, reflected);
+    let (ground, clear_ground) = match obstacles {
+        Obstacles::Scene => {
+            let g = ground_where(scene, accel, origin, reflected, options.ground_y, &hides);
+            (g, g)
+        }
+        Obstacles::Vehicle(_) => {
+            let not_vehicle = |m: usize| hides(m) && !obstacles.is_vehicle(m);
+            let clear = ground_where(
+                scene,
+                accel,
+                origin,
+                reflected,
+                options.ground_y,
+                &not_vehicle,
+            );
+            let ground = clear.filter(|_| !behind_vehicle).and_then(|_| {
+                ground_where(scene, accel, origin, reflected, options.ground_y, &hides)
+            });
+            (ground, clear)
+        }
+    };
     Sample {
-        reflected: Some(reflected),
+        reflected: (!behind_vehicle).then_some(reflected),
         ground,
+        clear_ground,
     }
 }
 
@@ -411,10 +516,28 @@ pub(crate) fn ground_seen(
     dir: Vec3,
     ground_y: f32,
 ) -> Option<Vec2> {
+    ground_where(scene, accel, origin, dir, ground_y, &|_| true)
+}
+
+/// As [`ground_seen`], among the meshes `may_hide` accepts.
+fn ground_where(
+    scene: &Scene,
+    accel: &SceneAccel,
+    origin: Vec3,
+    dir: Vec3,
+    ground_y: f32,
+    may_hide: &dyn Fn(usize) -> bool,
+) -> Option<Vec2> {
     let t = (dir.y < 0.0)
         .then(|| (ground_y - origin.y) / dir.y)
         .filter(|t| *t > 0.0)?;
-    let blocked = first_opaque_hit(scene, accel, &Ray { origin, dir }, t * (1.0 - 1e-4) - 1e-4);
+    let blocked = first_hit_where(
+        scene,
+        accel,
+        &Ray { origin, dir },
+        t * (1.0 - 1e-4) - 1e-4,
+        may_hide,
+    );
     blocked.is_none().then(|| {
         let g = origin + dir * t;
         Vec2::new(g.x, g.z)
@@ -547,6 +670,13 @@ pub struct MirrorView {
     pub report: Report,
     /// Per eye point, its ground triangles (x, z), unclipped.
     pub footprints: Vec<Vec<[Vec2; 3]>>,
+    /// ... those it would see with the vehicle's body taken away ([`Obstacles::Vehicle`]; else
+    /// the footprints again).
+    pub clear_footprints: Vec<Vec<[Vec2; 3]>>,
+    /// ... its footprint at the refinement before the last (how much the last one moved it).
+    pub previous_footprints: Vec<Vec<[Vec2; 3]>>,
+    /// ... its spherical triangles of reflected directions.
+    pub directions: Vec<Vec<[Vec3; 3]>>,
 }
 
 impl MirrorView {
@@ -575,6 +705,8 @@ impl MirrorView {
 /// One eye's sampling, refined until its figures hold.
 struct Refined {
     sampled: Sampled,
+    /// The ground triangles of the refinement before the last (None: there was none).
+    previous: Option<Vec<[Vec2; 3]>>,
     /// Levels of cutting on the edges of what is seen, beyond the grid.
     depth: u32,
     /// The ground seen within range, m² ([`clipped_area`]).
@@ -632,8 +764,14 @@ fn clipped_area(ground: &[[Vec2; 3]], eye: Vec2, range: f32) -> f64 {
 /// then the grid is doubled once more at that depth, and the figures must hold there too (else
 /// refinement goes on from that grid), so that a curvature the straight sub-triangles cannot
 /// follow is measured, not assumed away.
-fn refine(scene: &Scene, accel: &SceneAccel, eye: Vec3, options: &Options) -> Refined {
-    let triangles = scene.meshes[options.mirror].triangles.len().max(1);
+fn refine(
+    scene: &Scene,
+    accel: &SceneAccel,
+    eye: Vec3,
+    surface: &MirrorSurface,
+    options: &Options,
+) -> Refined {
+    let triangles = surface.cells().max(1);
     let samples_at = |n: usize| triangles * (n + 1) * (n + 2) / 2;
     let eye_xz = Vec2::new(eye.x, eye.z);
     let area = |s: &Sampled| clipped_area(&s.ground, eye_xz, options.range_m);
@@ -641,16 +779,18 @@ fn refine(scene: &Scene, accel: &SceneAccel, eye: Vec3, options: &Options) -> Re
     while samples_at(n * 2) <= 1000 {
         n *= 2;
     }
-    let mut current = sample_eye(scene, accel, eye, options, n, depth);
+    let mut current = sample_eye(scene, accel, eye, surface, options, n, depth);
     let mut current_area = area(&current);
     let mut extents_hold = false;
-    let done = |sampled, ground_area_m2, n, depth, converged| Refined {
+    let done = |sampled, previous, ground_area_m2, n, depth, converged| Refined {
         sampled,
+        previous,
         ground_area_m2,
         subdivision: n,
         depth,
         converged,
     };
+    let mut previous = None;
     // Whether `b`'s figures are within tolerance of `a`'s: (extents, all of them).
     let compare = |a: &Sampled, a_area: f64, b: &Sampled, b_area: f64| {
         let reference = reference_of(&options.frame, b.directions.iter());
@@ -680,35 +820,35 @@ fn refine(scene: &Scene, accel: &SceneAccel, eye: Vec3, options: &Options) -> Re
             4 * current.samples
         };
         if estimate > options.max_samples || next_depth > MAX_DEPTH {
-            return done(current, current_area, n, depth, false);
+            return done(current, previous, current_area, n, depth, false);
         }
-        let next = sample_eye(scene, accel, eye, options, next_n, next_depth);
+        let next = sample_eye(scene, accel, eye, surface, options, next_n, next_depth);
         let next_area = area(&next);
         let (extents_close, converged) = compare(&current, current_area, &next, next_area);
         let deepened = extents_hold;
         extents_hold |= extents_close;
         (n, depth) = (next_n, next_depth);
-        current = next;
+        previous = Some(std::mem::replace(&mut current, next).ground);
         current_area = next_area;
         if !converged {
             continue;
         }
         if !deepened {
             // Converged as the grid doubled: the grid has been checked.
-            return done(current, current_area, n, depth, true);
+            return done(current, previous, current_area, n, depth, true);
         }
         // Converged as the edges were cut further: check a finer grid at this depth.
         if 4 * current.samples > options.max_samples {
-            return done(current, current_area, n, depth, false);
+            return done(current, previous, current_area, n, depth, false);
         }
-        let finer = sample_eye(scene, accel, eye, options, n * 2, depth);
+        let finer = sample_eye(scene, accel, eye, surface, options, n * 2, depth);
         let finer_area = area(&finer);
         let (_, holds) = compare(&current, current_area, &finer, finer_area);
         n *= 2;
-        current = finer;
+        previous = Some(std::mem::replace(&mut current, finer).ground);
         current_area = finer_area;
         if holds {
-            return done(current, current_area, n, depth, true);
+            return done(current, previous, current_area, n, depth, true);
         }
         extents_hold = false;
     }
@@ -723,6 +863,8 @@ pub fn analyze(
     progress: &(dyn Fn(usize) + Sync),
 ) -> Result<MirrorView, AnalyzeError> {
     options.validate(scene)?;
+    let surface = MirrorSurface::new(scene, options.mirror, options.surface)
+        .expect("validate checked the mirror has the surface asked for");
     let mirror = &scene.meshes[options.mirror];
     let mirror_area: f64 = (0..mirror.triangles.len())
         .map(|t| 0.5 * f64::from(mirror.face_normal_scaled(t).length()))
@@ -732,7 +874,7 @@ pub fn analyze(
     let refined: Vec<Refined> = eyes
         .par_iter()
         .map(|eye| {
-            let r = refine(scene, accel, *eye, options);
+            let r = refine(scene, accel, *eye, &surface, options);
             progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
             r
         })
@@ -921,8 +1063,19 @@ pub fn analyze(
         },
         eyes: eye_reports,
     };
-    Ok(MirrorView {
+    let mut view = MirrorView {
         report,
-        footprints: refined.into_iter().map(|r| r.sampled.ground).collect(),
-    })
+        footprints: Vec::new(),
+        clear_footprints: Vec::new(),
+        previous_footprints: Vec::new(),
+        directions: Vec::new(),
+    };
+    for r in refined {
+        view.previous_footprints
+            .push(r.previous.unwrap_or_else(|| r.sampled.ground.clone()));
+        view.footprints.push(r.sampled.ground);
+        view.clear_footprints.push(r.sampled.clear_ground);
+        view.directions.push(r.sampled.directions);
+    }
+    Ok(view)
 }

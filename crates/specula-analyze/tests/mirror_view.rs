@@ -6,7 +6,8 @@
 
 use glam::{Vec2, Vec3};
 use specula_analyze::frame::VehicleFrame;
-use specula_analyze::mirror_view::{analyze, Options, Region};
+use specula_analyze::mirror_surface::SurfaceModel;
+use specula_analyze::mirror_view::{analyze, Obstacles, Options, Region};
 use specula_scene::{Camera, Material, Mesh, Scene};
 use specula_trace::SceneAccel;
 
@@ -66,6 +67,7 @@ impl Rectangle {
     fn mesh(&self) -> Mesh {
         let c = self.corners();
         Mesh {
+            exact: None,
             name: "mirror".into(),
             positions: c.to_vec(),
             normals: vec![self.normal; 4],
@@ -424,6 +426,8 @@ fn options_unchecked(eye: Vec3) -> Options {
         tolerance: 0.002,
         tolerance_deg: 0.02,
         max_samples: 400_000,
+        surface: SurfaceModel::Mesh,
+        obstacles: Obstacles::Scene,
     }
 }
 

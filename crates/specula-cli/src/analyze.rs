@@ -8,6 +8,7 @@ use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
 use specula_analyze::frame::{Eyes, VehicleFrame};
 use specula_analyze::glare;
+use specula_analyze::mirror_surface::SurfaceModel;
 use specula_analyze::mirror_view::{self, Region};
 use specula_scene::builtin::DEFAULT_SCENE;
 use specula_trace::SceneAccel;
@@ -176,6 +177,11 @@ pub struct MirrorViewArgs {
     /// ... and the extents by less than this many degrees.
     #[arg(long, default_value_t = 0.05)]
     tolerance_deg: f64,
+    /// The surface the samples lie on: the mirror's exact one (a generated patch, sphere or
+    /// cap; the default where there is one), its triangles as the renderer shades them, or a
+    /// smooth surface fitted to them.
+    #[arg(long, value_enum)]
+    surface: Option<SurfaceArg>,
     /// Write the report as JSON here (schema: docs/analyze-mirror-view.schema.json).
     #[arg(long)]
     json: Option<PathBuf>,
@@ -183,6 +189,23 @@ pub struct MirrorViewArgs {
     /// ground map and the mirror seen from the first eye point as PNG and SVG.
     #[arg(long)]
     report: Option<PathBuf>,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum SurfaceArg {
+    Exact,
+    Mesh,
+    Smooth,
+}
+
+impl SurfaceArg {
+    fn model(self) -> SurfaceModel {
+        match self {
+            SurfaceArg::Exact => SurfaceModel::Exact,
+            SurfaceArg::Mesh => SurfaceModel::Mesh,
+            SurfaceArg::Smooth => SurfaceModel::Smooth,
+        }
+    }
 }
 
 fn numbers<const N: usize>(text: &str, what: &str) -> Result<[f32; N], String> {
@@ -407,6 +430,11 @@ fn mirror_view(args: MirrorViewArgs) -> Result<()> {
         tolerance: args.tolerance,
         tolerance_deg: args.tolerance_deg,
         max_samples: 4_000_000,
+        surface: args
+            .surface
+            .map(SurfaceArg::model)
+            .unwrap_or_else(|| SurfaceModel::best_for(&scene.meshes[mirror])),
+        obstacles: mirror_view::Obstacles::Scene,
     };
     options.validate(&scene)?;
     let accel = SceneAccel::new(&scene);

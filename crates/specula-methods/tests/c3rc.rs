@@ -42,6 +42,7 @@ fn a_point_seen_twice_through_one_triangle_is_splatted_where_its_rays_show_it() 
     // Vertex normals that reflect the view rays into the wanted rays.
     let normals: [Vec3; 3] = std::array::from_fn(|i| (d[i] - (v[i] - eye).normalize()).normalize());
     let mirror = Mesh {
+        exact: None,
         name: "mirror".into(),
         positions: v.to_vec(),
         normals: normals.to_vec(),
@@ -75,6 +76,7 @@ fn a_point_seen_twice_through_one_triangle_is_splatted_where_its_rays_show_it() 
     let size = 0.004f32;
     let centre = q.as_vec3();
     let patch = Mesh {
+        exact: None,
         name: "patch".into(),
         positions: vec![
             centre + Vec3::new(-size, -size, 0.0),

@@ -4,8 +4,9 @@
 
 use std::f32::consts::{PI, TAU};
 
-use glam::{Vec2, Vec3};
+use glam::{DVec3, Vec2, Vec3};
 
+use crate::exact::{self, ExactShape, ExactSurface};
 use crate::{Mesh, SceneError};
 
 /// One tessellated vertex: position, unit normal, texture coordinate.
@@ -98,6 +99,9 @@ pub fn sphere(radius: f32, segments: u32, rings: u32) -> Mesh {
             uv: Vec2::new(u, v),
         }
     });
+    mesh.exact = Some(ExactSurface::new(ExactShape::Sphere {
+        radius: f64::from(radius),
+    }));
     finish(mesh)
 }
 
@@ -140,62 +144,38 @@ pub fn spherical_cap(
             uv: Vec2::new(0.5 + p.x / aperture, 0.5 - p.y / aperture),
         }
     });
+    mesh.exact = Some(ExactSurface::new(ExactShape::SphericalCap {
+        radius_of_curvature: f64::from(r),
+        aperture: f64::from(aperture),
+        concave,
+    }));
     Ok(finish(mesh))
 }
 
-fn bernstein3(t: f32) -> [f32; 4] {
-    let s = 1.0 - t;
-    [s * s * s, 3.0 * s * s * t, 3.0 * s * t * t, t * t * t]
-}
-
-fn bernstein3_derivative(t: f32) -> [f32; 4] {
-    let s = 1.0 - t;
-    [
-        -3.0 * s * s,
-        3.0 * s * s - 6.0 * s * t,
-        6.0 * s * t - 3.0 * t * t,
-        3.0 * t * t,
-    ]
-}
-
-/// Point and partial derivatives of a bicubic Bézier patch (`control[row][column]`, u along a
-/// row, v down the columns).
-fn bezier_patch_eval(control: &[[Vec3; 4]; 4], u: f32, v: f32) -> (Vec3, Vec3, Vec3) {
-    let (bu, bv) = (bernstein3(u), bernstein3(v));
-    let (du, dv) = (bernstein3_derivative(u), bernstein3_derivative(v));
-    let (mut p, mut pu, mut pv) = (Vec3::ZERO, Vec3::ZERO, Vec3::ZERO);
-    for (j, row) in control.iter().enumerate() {
-        for (i, &c) in row.iter().enumerate() {
-            p += c * bu[i] * bv[j];
-            pu += c * du[i] * bv[j];
-            pv += c * bu[i] * dv[j];
-        }
-    }
-    (p, pu, pv)
-}
-
-/// Exact patch normal, Pu × Pv; where the patch collapses (Pu or Pv vanishes, as at the
-/// teapot's poles) the limit is taken by stepping a little inside the parameter square.
-fn bezier_patch_normal(control: &[[Vec3; 4]; 4], u: f32, v: f32) -> Vec3 {
-    let (_, pu, pv) = bezier_patch_eval(control, u, v);
-    let n = pu.cross(pv);
-    if n.length_squared() > 1e-20 {
-        return n.normalize();
-    }
-    let eps = 1e-3;
-    let (_, pu, pv) = bezier_patch_eval(control, u.clamp(eps, 1.0 - eps), v.clamp(eps, 1.0 - eps));
-    pu.cross(pv).try_normalize().unwrap_or(Vec3::Z)
+/// Point and exact normal of a bicubic Bézier patch, from [`crate::exact`]'s evaluation.
+fn bezier_patch_sample(control: &[[DVec3; 4]; 4], u: f32, v: f32) -> (Vec3, Vec3) {
+    let (u, v) = (f64::from(u), f64::from(v));
+    let (p, _, _) = exact::bezier_patch(control, u, v);
+    (
+        p.as_vec3(),
+        exact::bezier_patch_normal(control, u, v).as_vec3(),
+    )
 }
 
 /// A bicubic Bézier patch tessellated into `n` × `n` quads ((n+1)² vertices); the normal is
 /// Pu × Pv.
 pub fn bicubic_patch(control: &[[Vec3; 4]; 4], n: u32) -> Mesh {
     let mut mesh = empty("bicubic patch");
-    append_grid(&mut mesh, n.max(1), n.max(1), |u, v| Sample {
-        p: bezier_patch_eval(control, u, v).0,
-        n: bezier_patch_normal(control, u, v),
-        uv: Vec2::new(u, v),
+    let control = exact::control_points(control);
+    append_grid(&mut mesh, n.max(1), n.max(1), |u, v| {
+        let (p, n) = bezier_patch_sample(&control, u, v);
+        Sample {
+            p,
+            n,
+            uv: Vec2::new(u, v),
+        }
     });
+    mesh.exact = Some(ExactSurface::new(ExactShape::BicubicPatch { control }));
     finish(mesh)
 }
 
@@ -403,10 +383,14 @@ pub fn teapot_patches() -> Vec<[[Vec3; 4]; 4]> {
 pub fn teapot(n: u32) -> Mesh {
     let mut mesh = empty("teapot");
     for control in teapot_patches() {
-        append_grid(&mut mesh, n.max(1), n.max(1), |u, v| Sample {
-            p: bezier_patch_eval(&control, u, v).0,
-            n: bezier_patch_normal(&control, u, v),
-            uv: Vec2::new(u, v),
+        let control = exact::control_points(&control);
+        append_grid(&mut mesh, n.max(1), n.max(1), |u, v| {
+            let (p, n) = bezier_patch_sample(&control, u, v);
+            Sample {
+                p,
+                n,
+                uv: Vec2::new(u, v),
+            }
         });
     }
     finish(mesh)

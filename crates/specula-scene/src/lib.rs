@@ -9,6 +9,7 @@
 pub mod builtin;
 pub mod camera;
 pub mod error;
+pub mod exact;
 pub mod generators;
 pub mod light;
 pub mod loaders;
@@ -20,6 +21,7 @@ pub mod texture;
 
 pub use camera::{Camera, PixelRays};
 pub use error::SceneError;
+pub use exact::{ExactShape, ExactSurface};
 pub use light::Light;
 pub use material::{Material, MaterialKind};
 pub use mesh::{Aabb, Mesh};

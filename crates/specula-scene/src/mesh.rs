@@ -76,6 +76,10 @@ pub struct Mesh {
     pub triangles: Vec<[u32; 3]>,
     /// Index into `Scene::materials`.
     pub material: usize,
+    /// The analytic surface these triangles tessellate, where a generator made them from one
+    /// (a bicubic patch, a sphere, a spherical cap): what analyses sample instead of the
+    /// triangles. Moves with the mesh; gone once its triangles are changed otherwise.
+    pub exact: Option<crate::exact::ExactSurface>,
 }
 
 impl Mesh {
@@ -111,6 +115,8 @@ impl Mesh {
     /// Flat shading as glTF requires when NORMAL is absent: every triangle gets its own three
     /// vertices carrying the face normal.
     pub fn make_flat(&mut self) {
+        // Faceted on purpose: the triangles are the surface now.
+        self.exact = None;
         let mut positions = Vec::with_capacity(self.triangles.len() * 3);
         let mut normals = Vec::with_capacity(self.triangles.len() * 3);
         let mut uvs = Vec::new();
@@ -160,6 +166,9 @@ impl Mesh {
     /// Applies an affine transform; normals go through the inverse transpose. A transform that
     /// mirrors (negative determinant) also flips the winding so faces stay counter-clockwise.
     pub fn transform(&mut self, world_from_object: Mat4) {
+        if let Some(exact) = &mut self.exact {
+            exact.transform(world_from_object);
+        }
         let normal_matrix = Mat3::from_mat4(world_from_object).inverse().transpose();
         for p in &mut self.positions {
             *p = world_from_object.transform_point3(*p);

@@ -36,6 +36,7 @@ use rayon::prelude::*;
 use specula_analyze::frame::{Eyes, VehicleFrame};
 use specula_analyze::glare::{self, Glare};
 use specula_analyze::lens;
+use specula_analyze::mirror_surface;
 use specula_analyze::mirror_view::{self, MirrorView, Region};
 use specula_analyze::AnalyzeError;
 use specula_methods::LiveScene;
@@ -180,7 +181,7 @@ impl Settings {
         }
     }
 
-    fn mirror_options(&self, frame: VehicleFrame) -> mirror_view::Options {
+    fn mirror_options(&self, scene: &Scene, frame: VehicleFrame) -> mirror_view::Options {
         mirror_view::Options {
             mirror: self.object,
             frame,
@@ -190,6 +191,8 @@ impl Settings {
             tolerance: self.tolerance,
             tolerance_deg: self.tolerance_deg,
             max_samples: 1_000_000,
+            surface: mirror_surface::SurfaceModel::best_for(&scene.meshes[self.object]),
+            obstacles: mirror_view::Obstacles::Scene,
         }
     }
 
@@ -215,7 +218,7 @@ impl Settings {
         let frame = self.frame(scene)?;
         self.eyes.points(self.eye, &frame)?;
         match self.kind {
-            Kind::MirrorView => self.mirror_options(frame).validate(scene),
+            Kind::MirrorView => self.mirror_options(scene, frame).validate(scene),
             Kind::Glare => self.glare_options()?.validate(scene),
             Kind::Lens => self.lens_options(scene).map(|_| ()),
         }
@@ -893,7 +896,7 @@ fn run(
                     scene,
                     &accel,
                     eyes,
-                    &settings.mirror_options(frame),
+                    &settings.mirror_options(scene, frame),
                     &|_| {},
                 )?;
                 let ground = ground_grid(&view);
@@ -1217,7 +1220,7 @@ mod tests {
             live.scene(),
             live.accel(),
             &eyes,
-            &settings.mirror_options(frame),
+            &settings.mirror_options(live.scene(), frame),
             &|_| {},
         )
         .unwrap();

@@ -84,6 +84,7 @@ pub fn prism() -> Mesh {
         }
     }
     let mut mesh = Mesh {
+        exact: None,
         name: "prism".into(),
         positions,
         normals: Vec::new(),

@@ -283,6 +283,7 @@ impl Loader<'_> {
             }
             let material = self.material(primitive.material())?;
             let mut m = Mesh {
+                exact: None,
                 name: mesh
                     .name()
                     .map(str::to_string)

@@ -151,6 +151,7 @@ fn mesh_from_model(model: tobj::Model, material: Option<usize>) -> Mesh {
         .map(|t| [t[0], t[1], t[2]])
         .collect();
     let mut mesh = Mesh {
+        exact: None,
         name: model.name,
         positions,
         normals,

@@ -273,6 +273,7 @@ pub fn parse(shown: &str, bytes: &[u8], warnings: &mut Vec<String>) -> Result<Me
         }
     }
     let mut mesh = Mesh {
+        exact: None,
         name: shown.to_string(),
         normals: if normals.len() == positions.len() {
             normals

@@ -48,6 +48,7 @@ pub fn parse(shown: &str, bytes: &[u8]) -> Result<Mesh, SceneError> {
         .map(|f| f.vertices.map(|i| i as u32))
         .collect();
     let mut mesh = Mesh {
+        exact: None,
         name: shown.to_string(),
         positions,
         normals: vec![],
