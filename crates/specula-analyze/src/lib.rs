@@ -24,6 +24,7 @@ pub mod lens_plot;
 pub mod mirror_surface;
 pub mod mirror_view;
 pub mod plot;
+pub mod regulation;
 pub mod report;
 
 use specula_scene::Scene;

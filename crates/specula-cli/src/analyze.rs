@@ -177,6 +177,44 @@ pub struct MirrorViewArgs {
     /// ... and the extents by less than this many degrees.
     #[arg(long, default_value_t = 0.05)]
     tolerance_deg: f64,
+    /// Judge the mirror against a regulation's prescribed fields and mirror rules: r46-i,
+    /// r46-ii, r46-iii, r46-iv, r46-v or fmvss111 (see docs/analyses.md).
+    #[arg(long)]
+    regulation: Option<String>,
+    /// The driver's R point X,Y,Z: R46's ocular points lie 635 mm above it, 65 mm apart across
+    /// the vehicle.
+    #[arg(long, value_parser = parse_point, allow_hyphen_values = true, requires = "regulation")]
+    r_point: Option<Vec3>,
+    /// The vehicle's outermost point X,Y,Z on the mirror's side: the fields' inner boundary
+    /// plane passes through it, parallel to the median plane (default: the outermost point of
+    /// the --vehicle parts).
+    #[arg(long, value_parser = parse_point, allow_hyphen_values = true, requires = "regulation")]
+    outermost: Option<Vec3>,
+    /// A point X,Y,Z of the vehicle's median longitudinal plane (class I's field is centred on
+    /// it; default: the plane through the ocular points).
+    #[arg(long, value_parser = parse_point, allow_hyphen_values = true, requires = "regulation")]
+    median: Option<Vec3>,
+    /// The side of the vehicle the mirror serves (default: the side it lies on).
+    #[arg(long, value_enum, requires = "regulation")]
+    side: Option<SideArg>,
+    /// An eyellipse CX,CY,CZ,AX,AY,AZ[,N]: centre and semi-axes along the vehicle's forward,
+    /// lateral and up axes (metres), N points on its surface (default 26), each judged alone.
+    #[arg(long, value_parser = parse_eyellipse, allow_hyphen_values = true, requires = "regulation", conflicts_with = "r_point")]
+    eyellipse: Option<(Vec3, Vec3, usize)>,
+    /// The eyellipse's side-view tilt, degrees (its forward axis turned up).
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    eyellipse_tilt: f32,
+    /// A part of the vehicle's own body or fittings (repeatable): with --regulation only these
+    /// hide the mirror and the road, and what they hide is reported apart.
+    #[arg(long = "vehicle", requires = "regulation")]
+    vehicle: Vec<String>,
+    /// Turn the mirror about this pivot X,Y,Z (yaw and pitch within ±20°) and report the poses
+    /// that pass, the widest-margin one and, failing all, the most seen.
+    #[arg(long, value_parser = parse_point, allow_hyphen_values = true, requires = "regulation")]
+    adjust: Option<Vec3>,
+    /// The pose grid's step, degrees.
+    #[arg(long, default_value_t = 5.0)]
+    adjust_step: f32,
     /// The surface the samples lie on: the mirror's exact one (a generated patch, sphere or
     /// cap; the default where there is one), its triangles as the renderer shades them, or a
     /// smooth surface fitted to them.
@@ -189,6 +227,31 @@ pub struct MirrorViewArgs {
     /// ground map and the mirror seen from the first eye point as PNG and SVG.
     #[arg(long)]
     report: Option<PathBuf>,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum SideArg {
+    Left,
+    Right,
+}
+
+fn parse_eyellipse(text: &str) -> Result<(Vec3, Vec3, usize), String> {
+    let what = "CX,CY,CZ,AX,AY,AZ[,N]";
+    let (values, count) = match numbers::<7>(text, what) {
+        Ok(v) => {
+            let n = v[6];
+            if !(n.fract() == 0.0 && n >= 0.0) {
+                return Err(format!("N must be a whole number of points, got '{text}'"));
+            }
+            ([v[0], v[1], v[2], v[3], v[4], v[5]], n as usize)
+        }
+        Err(_) => (numbers::<6>(text, what)?, 26),
+    };
+    Ok((
+        Vec3::new(values[0], values[1], values[2]),
+        Vec3::new(values[3], values[4], values[5]),
+        count,
+    ))
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -437,6 +500,9 @@ fn mirror_view(args: MirrorViewArgs) -> Result<()> {
         obstacles: mirror_view::Obstacles::Scene,
     };
     options.validate(&scene)?;
+    if let Some(name) = &args.regulation {
+        return regulation(&args, name, &scene, options, eyes);
+    }
     let accel = SceneAccel::new(&scene);
     let bar = eye_bar(eyes.len());
     let view = mirror_view::analyze(&scene, &accel, &eyes, &options, &|done| {
@@ -582,4 +648,261 @@ fn print_mirror_view(r: &mirror_view::Report) {
             share(r.figures.region_seen_by_all)
         );
     }
+}
+
+/// `mirror-view --regulation NAME`: the vehicle and the eyes from the options, the verdict
+/// printed and written, and with `--adjust` the pose search.
+fn regulation(
+    args: &MirrorViewArgs,
+    name: &str,
+    scene: &specula_scene::Scene,
+    mut options: mirror_view::Options,
+    camera_eyes: Vec<Vec3>,
+) -> Result<()> {
+    use specula_analyze::mirror_surface::MirrorSurface;
+    use specula_analyze::regulation::{self as reg, EyeRule, EyeSets, Side, Vehicle};
+    let regulation = reg::by_name(name)?;
+    let frame = options.frame;
+    let vehicle_parts = args
+        .vehicle
+        .iter()
+        .map(|n| specula_analyze::object(scene, "--vehicle", n))
+        .collect::<Result<Vec<_>, _>>()?;
+    options.obstacles = mirror_view::Obstacles::Vehicle(vehicle_parts.clone());
+    options.validate(scene)?;
+    if regulation.eyes == EyeRule::DriversEyes && args.r_point.is_some() {
+        anyhow::bail!(
+            "--r-point: {} judges from the driver's eyes (--eye or --eyellipse), not from R46's \
+             ocular points",
+            regulation.name
+        );
+    }
+    let (eyes, eye_sets, eyes_option, reference) =
+        if let Some((centre, axes, count)) = args.eyellipse {
+            let points = reg::eyellipse_points(&frame, centre, axes, args.eyellipse_tilt, count)?;
+            (points, EyeSets::EachAlone, "--eyellipse", centre)
+        } else if let Some(r) = args.r_point {
+            let ocular = reg::ocular_points(&frame, r);
+            (
+                ocular.to_vec(),
+                EyeSets::Together,
+                "--r-point",
+                r + frame.up * reg::OCULAR_HEIGHT_M,
+            )
+        } else {
+            let centre = camera_eyes.iter().copied().sum::<Vec3>() / camera_eyes.len() as f32;
+            (camera_eyes, EyeSets::Together, "--eye", centre)
+        };
+    let surface =
+        MirrorSurface::new(scene, options.mirror, options.surface).expect("options were validated");
+    let (mirror_centre, _) = reg::mirror_centre_and_normal(&surface);
+    let side = match args.side {
+        Some(SideArg::Left) => Side::Left,
+        Some(SideArg::Right) => Side::Right,
+        None => Vehicle::side_of(&frame, reference, mirror_centre),
+    };
+    let outward = match side {
+        Side::Right => frame.right,
+        Side::Left => -frame.right,
+    };
+    let outermost = args.outermost.or_else(|| {
+        vehicle_parts
+            .iter()
+            .flat_map(|&m| scene.meshes[m].positions.iter().copied())
+            .max_by(|a, b| a.dot(outward).total_cmp(&b.dot(outward)))
+    });
+    let vehicle = Vehicle {
+        frame,
+        reference,
+        side,
+        outermost,
+        median: args.median.unwrap_or(reference),
+        ground_y: options.ground_y,
+    };
+    vehicle.validate()?;
+    let request = reg::Request {
+        regulation,
+        vehicle: vehicle.clone(),
+        eyes: eyes.clone(),
+        eye_sets,
+        eyes_option,
+        view: options,
+    };
+    let accel = SceneAccel::new(scene);
+    let bar = eye_bar(eyes.len());
+    let judged = reg::evaluate(scene, &accel, &request, &|done| {
+        bar.set_position(done as u64)
+    })?;
+    bar.finish_and_clear();
+    let adjustment = match args.adjust {
+        Some(pivot) => {
+            reg::check_pivot(scene, request.view.mirror, pivot)?;
+            let bar = ProgressBar::new(1);
+            bar.set_style(
+                ProgressStyle::with_template("{bar:30} {pos}/{len} mirror poses ({elapsed})")
+                    .expect("valid template"),
+            );
+            let adjust = reg::AdjustRequest {
+                pivot,
+                step_deg: args.adjust_step,
+                limit_deg: 20.0,
+            };
+            let a = reg::adjust(scene, &request, &adjust, &|done, total| {
+                bar.set_length(total as u64);
+                bar.set_position(done as u64)
+            })?;
+            bar.finish_and_clear();
+            Some(a)
+        }
+        None => None,
+    };
+    print_verdict(&judged.verdict, &vehicle, args.median.is_none());
+    if let Some(a) = &adjustment {
+        print_adjustment(a);
+    }
+    let report = RegulationReport {
+        view: &judged.view.report,
+        vehicle: VehicleReport {
+            reference: vehicle.reference.to_array(),
+            side: vehicle.side,
+            outermost: vehicle.outermost.map(|p| p.to_array()),
+            median: vehicle.median.to_array(),
+            eyes_from: eyes_option,
+            vehicle_parts: args.vehicle.clone(),
+        },
+        regulation: &judged.verdict,
+        adjustment: adjustment.as_ref(),
+    };
+    write_json(args.json.as_deref(), &report)?;
+    if let Some(dir) = &args.report {
+        let mirror = request.view.mirror;
+        let html =
+            specula_analyze::report::write_mirror_view(dir, &judged.view, scene, &accel, mirror)?;
+        println!("report: {}", html.display());
+    }
+    Ok(())
+}
+
+#[derive(serde::Serialize)]
+struct RegulationReport<'a> {
+    #[serde(flatten)]
+    view: &'a mirror_view::Report,
+    vehicle: VehicleReport,
+    regulation: &'a specula_analyze::regulation::Verdict,
+    adjustment: Option<&'a specula_analyze::regulation::Adjustment>,
+}
+
+#[derive(serde::Serialize)]
+struct VehicleReport {
+    /// The fields' longitudinal origin: the ocular points' middle (or the eyes').
+    reference: [f32; 3],
+    side: specula_analyze::regulation::Side,
+    outermost: Option<[f32; 3]>,
+    median: [f32; 3],
+    eyes_from: &'static str,
+    vehicle_parts: Vec<String>,
+}
+
+fn print_verdict(
+    v: &specula_analyze::regulation::Verdict,
+    vehicle: &specula_analyze::regulation::Vehicle,
+    median_assumed: bool,
+) {
+    println!(
+        "{} ({}): {}",
+        v.title,
+        v.edition,
+        if v.passed { "PASSES" } else { "FAILS" }
+    );
+    let [x, y, z] = vehicle.reference.to_array();
+    println!(
+        "fields from ({x:.3}, {y:.3}, {z:.3}), {} side{}; the body may hide {:.0} % unexcused",
+        match vehicle.side {
+            specula_analyze::regulation::Side::Left => "left",
+            specula_analyze::regulation::Side::Right => "right",
+        },
+        if median_assumed {
+            ", median plane through the ocular points (give --median)"
+        } else {
+            ""
+        },
+        v.allowance_share * 100.0
+    );
+    println!(
+        "{:<46}{:>9}{:>9}{:>9}{:>10}{:>9}{:>9}{:>9}  verdict",
+        "field", "seen", "±", "body", "blind m²", "beyond", "horizon", "margin"
+    );
+    for f in &v.fields {
+        let g = &f.figures;
+        println!(
+            "{:<46}{:>9}{:>9}{:>9}{:>10.2}{:>9}{:>9}{:>9}  {}",
+            f.name,
+            format!("{:.2} %", g.seen_share * 100.0),
+            format!(
+                "{:.2} %",
+                (g.seen_share_uncertainty + f.surface_uncertainty.unwrap_or(0.0)) * 100.0
+            ),
+            format!("{:.2} %", g.hidden_by_vehicle_share * 100.0),
+            g.blind_area_m2,
+            g.beyond_range_seen_share
+                .map(|s| format!("{:.1} %", s * 100.0))
+                .unwrap_or_else(|| "-".into()),
+            g.horizon_seen
+                .map(|h| if h { "seen" } else { "NOT" }.to_string())
+                .unwrap_or_else(|| "-".into()),
+            format!("{:.2} m", g.outer_margin_m.min(g.near_margin_m)),
+            if g.passed { "pass" } else { "FAIL" }
+        );
+        if let Some(w) = &f.worst_eye {
+            let [x, y, z] = w.position;
+            println!(
+                "    worst eye point ({x:.3}, {y:.3}, {z:.3}): {:.2} % seen",
+                w.seen_share * 100.0
+            );
+        }
+    }
+    for c in &v.mirror_checks {
+        println!(
+            "mirror: {} ({}): required {}; measured {}: {}",
+            c.name,
+            c.source,
+            c.required,
+            c.measured,
+            if c.passed { "pass" } else { "FAIL" }
+        );
+    }
+}
+
+fn print_adjustment(a: &specula_analyze::regulation::Adjustment) {
+    let range = |r: Option<[f32; 2]>| {
+        r.map(|[lo, hi]| format!("{lo:+.1}° to {hi:+.1}°"))
+            .unwrap_or_else(|| "none".into())
+    };
+    println!(
+        "adjustment about ({:.3}, {:.3}, {:.3}), ±{}° in steps of {}°: {} of {} poses pass the fields; yaw {}, pitch {}",
+        a.pivot[0],
+        a.pivot[1],
+        a.pivot[2],
+        a.limit_deg,
+        a.step_deg,
+        a.passing_poses,
+        a.poses.len(),
+        range(a.passing_yaw_deg),
+        range(a.passing_pitch_deg)
+    );
+    let b = &a.best;
+    println!(
+        "{} pose: yaw {:+.1}°, pitch {:+.1}°: least share {:.2} % ('{}'), least margin {:.2} m; at the command's tolerance its fields {}",
+        if a.passing_poses > 0 { "widest-margin" } else { "most-seen" },
+        b.yaw_deg,
+        b.pitch_deg,
+        b.least_share * 100.0,
+        b.least_share_field,
+        b.least_margin_m,
+        if a.best_verdict.fields.iter().all(|f| f.figures.passed) {
+            "pass"
+        } else {
+            "fail"
+        }
+    );
 }

@@ -1,0 +1,1542 @@
+//! `specula analyze mirror-view --regulation NAME`: the fields a regulation prescribes for a
+//! mirror, laid on the ground in the vehicle frame and judged from the driver's eye points, with
+//! the vehicle's own body in the way, and the mirror's own surface against the regulation's
+//! rules for it.
+//!
+//! Steps:
+//! 1. The vehicle ([`Vehicle`]): its frame, the fields' longitudinal origin (the ocular points'
+//!    transverse plane), the side the mirror serves, the plane through the vehicle's outermost
+//!    point on that side (the fields' inner boundary) and the median plane (class I's centre).
+//! 2. The eyes ([`EyeSets`]): R46's two ocular points, judged together (ambinocular: a point
+//!    counts when either sees it); or each point of an eyellipse alone, the worst reported.
+//! 3. Each prescribed field ([`FieldSpec`], one table [`REGULATIONS`]) is rasterised in its own
+//!    frame (lateral × longitudinal) within `range_m` behind the ocular points; the eyes'
+//!    footprints ([`crate::mirror_view::MirrorView`]) mark what is seen, the footprints with the
+//!    vehicle's body taken away mark what the body hides. The part beyond the range, and the
+//!    horizon, are judged in direction space: a ground point far behind is seen when its
+//!    direction from the mirror lies in an eye's cone of reflected directions (the mirror's size
+//!    over the range is the angle this neglects).
+//! 4. The verdict ([`FieldVerdict`]): a field passes when its seen share, with the body's share
+//!    added where the allowance excuses it (together under 10 % of an exterior mirror's field,
+//!    15 % of an interior mirror's: Directive 71/127/EEC, Annex III), is 1 within its stated
+//!    uncertainty, its part beyond the range likewise, and, running to the horizon, its
+//!    vanishing direction is seen. The mirror's edge is never excused.
+//! 5. The mirror ([`MirrorCheck`]): its radius of curvature from the surface's principal
+//!    curvatures, and for classes II and III the rectangle and segment its reflecting surface must
+//!    hold (R46 §6.1.2), measured on the surface projected onto its tangent plane at the centre.
+//!
+//! Uncertainty of a share: the cells of the field's grid on the edge of what is seen (each may
+//! be either), plus the change of the share between the last two refinements of the sampling.
+//! A mesh's surface uncertainty (its change from the mesh to a smooth fit) is added by the
+//! caller, which runs both.
+
+use glam::{DVec3, Mat4, Vec2, Vec3};
+use serde::Serialize;
+use specula_scene::Scene;
+use specula_trace::SceneAccel;
+
+use crate::frame::VehicleFrame;
+use crate::mirror_surface::{MirrorSurface, SurfaceModel};
+use crate::mirror_view::{self, MirrorView};
+use crate::AnalyzeError;
+
+/// How a field's lateral extent is measured.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Lateral {
+    /// Outwards from the plane through the vehicle's outermost point on the mirror's side,
+    /// parallel to the median plane, metres.
+    FromSide { inner: f64, outer: f64 },
+    /// Centred on the vehicle's median plane, this wide, metres.
+    AboutMedian { width: f64 },
+}
+
+/// One prescribed field on the ground.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FieldSpec {
+    pub name: &'static str,
+    pub lateral: Lateral,
+    /// Metres behind the ocular points' transverse vertical plane where the field starts
+    /// (negative: ahead of it) and where it ends (None: the horizon).
+    pub from_m: f64,
+    pub to_m: Option<f64>,
+    /// The paragraph that prescribes it.
+    pub source: &'static str,
+}
+
+/// What a regulation asks of the mirror's own surface.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceRule {
+    /// The least radius of curvature, metres (None: no rule here).
+    pub min_radius_m: Option<f64>,
+    /// The surface must be flat (unit magnification).
+    pub flat: bool,
+    /// A rectangle 40 mm high and a = `a_numerator_mm` / (1 + 1000 / r) mm long, and a segment
+    /// `segment_mm` long parallel to its height, must fit in the reflecting surface.
+    pub rectangle: Option<(f64, f64)>,
+    pub source: &'static str,
+}
+
+/// Whose eyes the fields are judged from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EyeRule {
+    /// R46's two ocular points (from `--r-point`), or an eyellipse.
+    OcularPoints,
+    /// The driver's eye points (`--eye`, `--eyellipse`): FMVSS 111.
+    DriversEyes,
+}
+
+/// A regulation's requirements for one mirror class.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Regulation {
+    pub name: &'static str,
+    pub title: &'static str,
+    pub edition: &'static str,
+    pub eyes: EyeRule,
+    /// An interior mirror (the 15 % allowance) rather than an exterior one (10 %).
+    pub interior: bool,
+    pub fields: &'static [FieldSpec],
+    pub surface: SurfaceRule,
+}
+
+impl Regulation {
+    /// The share of a field the vehicle's body may hide and still be disregarded.
+    pub fn allowance(&self) -> f64 {
+        if self.interior {
+            0.15
+        } else {
+            0.10
+        }
+    }
+}
+
+const R46: &str = "UN Regulation No. 46, 04 series of amendments";
+
+/// The regulations `--regulation` knows. Every figure is the one the cited paragraph states as
+/// we read it; docs/analyses.md says which were checked against the text and which not.
+pub const REGULATIONS: &[Regulation] = &[
+    Regulation {
+        name: "r46-i",
+        title: "UN R46 class I: interior rear-view mirror",
+        edition: R46,
+        eyes: EyeRule::OcularPoints,
+        interior: true,
+        fields: &[FieldSpec {
+            name: "20 m wide from 60 m behind to the horizon",
+            lateral: Lateral::AboutMedian { width: 20.0 },
+            from_m: 60.0,
+            to_m: None,
+            source: "R46 §15.2.4.1; 71/127/EEC Annex III §5.2",
+        }],
+        surface: SurfaceRule {
+            min_radius_m: Some(1.2),
+            flat: false,
+            rectangle: None,
+            source: "R46 §6.1.2.2",
+        },
+    },
+    Regulation {
+        name: "r46-ii",
+        title: "UN R46 class II: main exterior rear-view mirror, large",
+        edition: R46,
+        eyes: EyeRule::OcularPoints,
+        interior: false,
+        fields: &[
+            FieldSpec {
+                name: "5 m wide from 30 m behind to the horizon",
+                lateral: Lateral::FromSide {
+                    inner: 0.0,
+                    outer: 5.0,
+                },
+                from_m: 30.0,
+                to_m: None,
+                source: "R46 §15.2.4.2",
+            },
+            FieldSpec {
+                name: "1 m wide from 4 m behind to the horizon",
+                lateral: Lateral::FromSide {
+                    inner: 0.0,
+                    outer: 1.0,
+                },
+                from_m: 4.0,
+                to_m: None,
+                source: "R46 §15.2.4.2",
+            },
+        ],
+        surface: SurfaceRule {
+            min_radius_m: Some(1.2),
+            flat: false,
+            rectangle: Some((170.0, 200.0)),
+            source: "R46 §6.1.2.1.2.1, §6.1.2.2",
+        },
+    },
+    Regulation {
+        name: "r46-iii",
+        title: "UN R46 class III: main exterior rear-view mirror, small",
+        edition: R46,
+        eyes: EyeRule::OcularPoints,
+        interior: false,
+        fields: &[
+            FieldSpec {
+                name: "4 m wide from 20 m behind to the horizon",
+                lateral: Lateral::FromSide {
+                    inner: 0.0,
+                    outer: 4.0,
+                },
+                from_m: 20.0,
+                to_m: None,
+                source: "R46 §15.2.4.3",
+            },
+            FieldSpec {
+                name: "1 m wide from 4 m behind to the horizon",
+                lateral: Lateral::FromSide {
+                    inner: 0.0,
+                    outer: 1.0,
+                },
+                from_m: 4.0,
+                to_m: None,
+                source: "R46 §15.2.4.3",
+            },
+        ],
+        surface: SurfaceRule {
+            min_radius_m: Some(1.2),
+            flat: false,
+            rectangle: Some((130.0, 70.0)),
+            source: "R46 §6.1.2.1.2.2, §6.1.2.2",
+        },
+    },
+    Regulation {
+        name: "r46-iv",
+        title: "UN R46 class IV: wide-angle exterior mirror",
+        edition: R46,
+        eyes: EyeRule::OcularPoints,
+        interior: false,
+        fields: &[
+            FieldSpec {
+                name: "15 m wide from 10 m to 25 m behind",
+                lateral: Lateral::FromSide {
+                    inner: 0.0,
+                    outer: 15.0,
+                },
+                from_m: 10.0,
+                to_m: Some(25.0),
+                source: "R46 §15.2.4.4",
+            },
+            FieldSpec {
+                name: "4.5 m wide from 1.5 m to 10 m behind",
+                lateral: Lateral::FromSide {
+                    inner: 0.0,
+                    outer: 4.5,
+                },
+                from_m: 1.5,
+                to_m: Some(10.0),
+                source: "R46 §15.2.4.4",
+            },
+        ],
+        surface: SurfaceRule {
+            min_radius_m: Some(0.3),
+            flat: false,
+            rectangle: None,
+            source: "R46 §6.1.2.2",
+        },
+    },
+    Regulation {
+        name: "r46-v",
+        title: "UN R46 class V: close-proximity exterior mirror",
+        edition: R46,
+        eyes: EyeRule::OcularPoints,
+        interior: false,
+        fields: &[FieldSpec {
+            name: "2 m out from 1.75 m behind to 1 m ahead",
+            lateral: Lateral::FromSide {
+                inner: 0.0,
+                outer: 2.0,
+            },
+            from_m: -1.0,
+            to_m: Some(1.75),
+            source: "R46 §15.2.4.5",
+        }],
+        surface: SurfaceRule {
+            min_radius_m: Some(0.3),
+            flat: false,
+            rectangle: None,
+            source: "R46 §6.1.2.2",
+        },
+    },
+    Regulation {
+        name: "fmvss111",
+        title: "FMVSS No. 111, passenger car, driver's side outside mirror",
+        edition: "49 CFR 571.111 (FMVSS No. 111)",
+        eyes: EyeRule::DriversEyes,
+        interior: false,
+        fields: &[FieldSpec {
+            name: "2.4 m wide from 10.7 m behind the eyes to the horizon",
+            lateral: Lateral::FromSide {
+                inner: 0.0,
+                outer: 2.4,
+            },
+            from_m: 10.7,
+            to_m: None,
+            source: "FMVSS 111 S5.2.1 (read as a field: the 2.4 m line at 10.7 m, to the horizon)",
+        }],
+        surface: SurfaceRule {
+            min_radius_m: None,
+            flat: true,
+            rectangle: None,
+            source: "FMVSS 111 S5.2.1 (unit magnification)",
+        },
+    },
+];
+
+/// The regulation named `name`; an unknown name lists the valid ones.
+pub fn by_name(name: &str) -> Result<&'static Regulation, AnalyzeError> {
+    REGULATIONS
+        .iter()
+        .find(|r| r.name == name)
+        .ok_or_else(|| AnalyzeError::BadOption {
+            option: "--regulation",
+            reason: format!(
+                "unknown regulation '{name}'; valid: {}",
+                REGULATIONS
+                    .iter()
+                    .map(|r| r.name)
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        })
+}
+
+/// R46's ocular points are this far above the R point, metres.
+pub const OCULAR_HEIGHT_M: f32 = 0.635;
+
+/// Which side of the vehicle the mirror serves.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Side {
+    Left,
+    Right,
+}
+
+/// The vehicle as the fields are laid out in it.
+#[derive(Clone, Debug)]
+pub struct Vehicle {
+    pub frame: VehicleFrame,
+    /// The fields' longitudinal origin: the middle of the ocular points (or of the eye points).
+    pub reference: Vec3,
+    pub side: Side,
+    /// A point of the plane through the vehicle's outermost point on the mirror's side.
+    pub outermost: Option<Vec3>,
+    /// A point of the vehicle's median longitudinal plane.
+    pub median: Vec3,
+    pub ground_y: f32,
+}
+
+impl Vehicle {
+    /// The unit horizontal direction out of the vehicle on the mirror's side.
+    pub fn outward(&self) -> Vec3 {
+        match self.side {
+            Side::Right => self.frame.right,
+            Side::Left => -self.frame.right,
+        }
+    }
+
+    /// The side `p` lies on, seen from the reference.
+    pub fn side_of(frame: &VehicleFrame, reference: Vec3, p: Vec3) -> Side {
+        if (p - reference).dot(frame.right) >= 0.0 {
+            Side::Right
+        } else {
+            Side::Left
+        }
+    }
+
+    /// Checks the outermost point against the side: it must lie on the mirror's side of the
+    /// eyes.
+    pub fn validate(&self) -> Result<(), AnalyzeError> {
+        if let Some(o) = self.outermost {
+            let out = (o - self.reference).dot(self.outward());
+            if out <= 0.0 {
+                return Err(AnalyzeError::BadOption {
+                    option: "--outermost",
+                    reason: format!(
+                        "{o} lies {:.3} m towards the other side of the ocular points, not on the \
+                         {} side the mirror serves: the outermost point is the vehicle's widest \
+                         point on the mirror's side",
+                        -out,
+                        match self.side {
+                            Side::Left => "left",
+                            Side::Right => "right",
+                        }
+                    ),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// The ground point of field coordinates (lateral `s` from the field's lateral origin,
+    /// `d` metres behind the reference), x and z.
+    fn origin_and_axes(&self, spec: &FieldSpec) -> Result<(Vec2, Vec2, Vec2), AnalyzeError> {
+        let back = Vec2::new(-self.frame.forward.x, -self.frame.forward.z);
+        let out = Vec2::new(self.outward().x, self.outward().z);
+        let r = Vec2::new(self.reference.x, self.reference.z);
+        let lateral_origin = match spec.lateral {
+            Lateral::FromSide { .. } => {
+                let o = self.outermost.ok_or_else(|| AnalyzeError::BadOption {
+                    option: "--outermost",
+                    reason: format!(
+                        "the field '{}' is bounded by the plane through the vehicle's outermost \
+                         point on the mirror's side: give it (--outermost X,Y,Z) or name the \
+                         vehicle's parts (--vehicle)",
+                        spec.name
+                    ),
+                })?;
+                (Vec2::new(o.x, o.z) - r).dot(out)
+            }
+            Lateral::AboutMedian { .. } => (Vec2::new(self.median.x, self.median.z) - r).dot(out),
+        };
+        Ok((r + out * lateral_origin, out, back))
+    }
+}
+
+/// Which eye points are judged together.
+#[derive(Clone, Debug, PartialEq)]
+pub enum EyeSets {
+    /// All together (ambinocular): a point counts when any of them sees it.
+    Together,
+    /// Each alone (an eyellipse's points): the worst is the verdict's.
+    EachAlone,
+}
+
+/// The lateral range of a field, metres from its lateral origin.
+fn lateral_range(spec: &FieldSpec) -> (f64, f64) {
+    match spec.lateral {
+        Lateral::FromSide { inner, outer } => (inner, outer),
+        Lateral::AboutMedian { width } => (-0.5 * width, 0.5 * width),
+    }
+}
+
+/// How far beyond a field's outer edge and before its near end the grid reaches, metres (the
+/// margins are measured within it).
+const MARGIN_REACH_M: f64 = 5.0;
+
+/// A field's figures from one set of eyes.
+#[derive(Clone, Debug, Serialize)]
+pub struct FieldFigures {
+    pub seen_share: f64,
+    pub seen_share_uncertainty: f64,
+    pub blind_area_m2: f64,
+    pub hidden_by_vehicle_share: f64,
+    /// The share of the part beyond the range seen, by its directions (None: nothing lies
+    /// beyond the range).
+    pub beyond_range_seen_share: Option<f64>,
+    pub beyond_range_uncertainty: Option<f64>,
+    /// Whether the field's vanishing direction is seen (None: the field ends before the horizon).
+    pub horizon_seen: Option<bool>,
+    /// How much farther out, and how much nearer the eyes, the field could reach and still be
+    /// seen whole (0 where it is not), metres, up to 5 m.
+    pub outer_margin_m: f64,
+    pub near_margin_m: f64,
+    pub passed: bool,
+}
+
+/// A field and its verdict.
+#[derive(Clone, Debug, Serialize)]
+pub struct FieldVerdict {
+    pub name: String,
+    pub source: String,
+    /// Metres out from the field's lateral origin (the outermost plane, or the median plane).
+    pub lateral_m: [f64; 2],
+    pub from_m: f64,
+    pub to_m: Option<f64>,
+    /// The field's area within range, m².
+    pub area_m2: f64,
+    #[serde(flatten)]
+    pub figures: FieldFigures,
+    /// With eye points judged alone: the worst one and its seen share.
+    pub worst_eye: Option<WorstEye>,
+    /// The change of the seen share from the mesh to a smooth fit of it (mesh mirrors only).
+    pub surface_uncertainty: Option<f64>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct WorstEye {
+    pub position: [f32; 3],
+    pub seen_share: f64,
+}
+
+/// A rule for the mirror's own surface and how it fares.
+#[derive(Clone, Debug, Serialize)]
+pub struct MirrorCheck {
+    pub name: String,
+    pub source: String,
+    pub required: String,
+    pub measured: String,
+    pub passed: bool,
+}
+
+/// The regulation's part of the report.
+#[derive(Clone, Debug, Serialize)]
+pub struct Verdict {
+    pub name: String,
+    pub title: String,
+    pub edition: String,
+    pub passed: bool,
+    /// Whether every field that runs to the horizon shows its vanishing direction.
+    pub horizon_seen: bool,
+    pub side: Side,
+    pub allowance_share: f64,
+    pub mirror_checks: Vec<MirrorCheck>,
+    pub fields: Vec<FieldVerdict>,
+}
+
+/// A grid over a field's own frame: lateral s (columns) × longitudinal d (rows).
+struct FieldGrid {
+    s0: f64,
+    d0: f64,
+    ds: f64,
+    dd: f64,
+    columns: usize,
+    rows: usize,
+}
+
+impl FieldGrid {
+    fn cell(&self, column: usize, row: usize) -> (f64, f64) {
+        (
+            self.s0 + (column as f64 + 0.5) * self.ds,
+            self.d0 + (row as f64 + 0.5) * self.dd,
+        )
+    }
+
+    /// Marks the cells whose centres lie in the footprint triangles (world x, z), mapped into the
+    /// field's frame.
+    fn fill(
+        &self,
+        covered: &mut [bool],
+        triangles: &[[Vec2; 3]],
+        to_field: &impl Fn(Vec2) -> (f64, f64),
+    ) {
+        for t in triangles {
+            let q = t.map(|p| to_field(p));
+            let (lo_s, hi_s) = (
+                q[0].0.min(q[1].0).min(q[2].0),
+                q[0].0.max(q[1].0).max(q[2].0),
+            );
+            let (lo_d, hi_d) = (
+                q[0].1.min(q[1].1).min(q[2].1),
+                q[0].1.max(q[1].1).max(q[2].1),
+            );
+            let c0 = ((lo_s - self.s0) / self.ds).floor().max(0.0) as usize;
+            let c1 = (((hi_s - self.s0) / self.ds).ceil().max(0.0) as usize).min(self.columns);
+            let r0 = ((lo_d - self.d0) / self.dd).floor().max(0.0) as usize;
+            let r1 = (((hi_d - self.d0) / self.dd).ceil().max(0.0) as usize).min(self.rows);
+            let edge = |a: (f64, f64), b: (f64, f64), p: (f64, f64)| {
+                (b.0 - a.0) * (p.1 - a.1) - (b.1 - a.1) * (p.0 - a.0)
+            };
+            let area = edge(q[0], q[1], q[2]);
+            if area == 0.0 || !area.is_finite() {
+                continue;
+            }
+            for row in r0..r1 {
+                for column in c0..c1 {
+                    let p = self.cell(column, row);
+                    let inside = [
+                        edge(q[1], q[2], p),
+                        edge(q[2], q[0], p),
+                        edge(q[0], q[1], p),
+                    ]
+                    .iter()
+                    .all(|w| w * area >= 0.0);
+                    if inside {
+                        covered[row * self.columns + column] = true;
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// One eye's cone of reflected directions, rasterised over (horizontal angle from straight
+/// back, elevation), degrees.
+struct Cone {
+    lo: Vec2,
+    cell: Vec2,
+    size: usize,
+    covered: Vec<bool>,
+}
+
+const CONE_GRID: usize = 1024;
+
+impl Cone {
+    fn new(frame: &VehicleFrame, directions: &[[Vec3; 3]]) -> Cone {
+        let back = -frame.forward;
+        let angles = |d: Vec3| {
+            Vec2::new(
+                frame.horizontal_deg(d, back) as f32,
+                frame.elevation_deg(d) as f32,
+            )
+        };
+        let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
+        for d in directions.iter().flatten() {
+            lo = lo.min(angles(*d));
+            hi = hi.max(angles(*d));
+        }
+        if lo.x > hi.x {
+            return Cone {
+                lo: Vec2::ZERO,
+                cell: Vec2::ONE,
+                size: 0,
+                covered: Vec::new(),
+            };
+        }
+        let cell = ((hi - lo) / CONE_GRID as f32).max(Vec2::splat(1e-6));
+        let mut cone = Cone {
+            lo,
+            cell,
+            size: CONE_GRID,
+            covered: vec![false; CONE_GRID * CONE_GRID],
+        };
+        for t in directions {
+            let q = t.map(angles);
+            // Triangles across the straight-back seam (±180°) are not behind the vehicle.
+            if (q[0].x - q[1].x).abs() > 180.0 || (q[1].x - q[2].x).abs() > 180.0 {
+                continue;
+            }
+            let lo_t = q[0].min(q[1]).min(q[2]);
+            let hi_t = q[0].max(q[1]).max(q[2]);
+            let first = ((lo_t - cone.lo) / cone.cell).floor().max(Vec2::ZERO);
+            let last = ((hi_t - cone.lo) / cone.cell).ceil();
+            let edge = |a: Vec2, b: Vec2, p: Vec2| (b - a).perp_dot(p - a);
+            let area = edge(q[0], q[1], q[2]);
+            if area == 0.0 {
+                continue;
+            }
+            for row in first.y as usize..(last.y.max(0.0) as usize).min(cone.size) {
+                for column in first.x as usize..(last.x.max(0.0) as usize).min(cone.size) {
+                    let p = cone.lo + cone.cell * Vec2::new(column as f32 + 0.5, row as f32 + 0.5);
+                    let w = [
+                        edge(q[1], q[2], p),
+                        edge(q[2], q[0], p),
+                        edge(q[0], q[1], p),
+                    ];
+                    if w.iter().all(|w| w * area >= 0.0) {
+                        cone.covered[row * cone.size + column] = true;
+                    }
+                }
+            }
+        }
+        cone
+    }
+
+    /// Whether direction `angles` (horizontal from straight back, elevation; degrees) is in the
+    /// cone: its cell, or (`strict` false) any of its 8 neighbours.
+    fn contains(&self, angles: Vec2, strict: bool) -> bool {
+        if self.size == 0 {
+            return false;
+        }
+        let c = ((angles - self.lo) / self.cell).floor();
+        let reach = if strict { 0 } else { 1 };
+        let mut any = false;
+        for dy in -reach..=reach {
+            for dx in -reach..=reach {
+                let (x, y) = (c.x as i64 + dx, c.y as i64 + dy);
+                if x >= 0 && y >= 0 && (x as usize) < self.size && (y as usize) < self.size {
+                    any |= self.covered[y as usize * self.size + x as usize];
+                }
+            }
+        }
+        any
+    }
+}
+
+/// Judges every field of `regulation` from the eye points of `view`, and the mirror's surface.
+pub fn judge(
+    regulation: &Regulation,
+    vehicle: &Vehicle,
+    view: &MirrorView,
+    eye_sets: &EyeSets,
+    surface: &MirrorSurface,
+    mirror_centre: Vec3,
+) -> Result<Verdict, AnalyzeError> {
+    vehicle.validate()?;
+    let range = f64::from(view.report.range_m);
+    let sets: Vec<Vec<usize>> = match eye_sets {
+        EyeSets::Together => vec![(0..view.footprints.len()).collect()],
+        EyeSets::EachAlone => (0..view.footprints.len()).map(|k| vec![k]).collect(),
+    };
+    let cones: Vec<Cone> = view
+        .directions
+        .iter()
+        .map(|d| Cone::new(&vehicle.frame, d))
+        .collect();
+    let mut fields = Vec::new();
+    for spec in regulation.fields {
+        let (origin, out, back) = vehicle.origin_and_axes(spec)?;
+        let to_field = |p: Vec2| {
+            let rel = p - origin;
+            (f64::from(rel.dot(out)), f64::from(rel.dot(back)))
+        };
+        let per_set: Vec<FieldFigures> = sets
+            .iter()
+            .map(|set| {
+                field_figures(
+                    spec,
+                    regulation,
+                    vehicle,
+                    view,
+                    &cones,
+                    set,
+                    range,
+                    &to_field,
+                    origin,
+                    out,
+                    back,
+                    mirror_centre,
+                )
+            })
+            .collect();
+        let worst = (0..per_set.len())
+            .min_by(|&a, &b| {
+                let key = |f: &FieldFigures| (f.passed, f.seen_share + f.hidden_by_vehicle_share);
+                let (ka, kb) = (key(&per_set[a]), key(&per_set[b]));
+                ka.0.cmp(&kb.0).then(ka.1.total_cmp(&kb.1))
+            })
+            .expect("at least one eye point");
+        let (s_lo, s_hi) = lateral_range(spec);
+        let near = spec.from_m;
+        let far = spec.to_m.unwrap_or(f64::INFINITY).min(range);
+        fields.push(FieldVerdict {
+            name: spec.name.to_string(),
+            source: spec.source.to_string(),
+            lateral_m: [s_lo, s_hi],
+            from_m: spec.from_m,
+            to_m: spec.to_m,
+            area_m2: (s_hi - s_lo) * (far - near).max(0.0),
+            figures: per_set[worst].clone(),
+            worst_eye: matches!(eye_sets, EyeSets::EachAlone).then(|| WorstEye {
+                position: view.report.eyes[worst].position,
+                seen_share: per_set[worst].seen_share,
+            }),
+            surface_uncertainty: None,
+        });
+    }
+    let mirror_checks = mirror_checks(regulation, surface, &vehicle.frame);
+    let horizon_seen = fields
+        .iter()
+        .all(|f| f.figures.horizon_seen.unwrap_or(true));
+    let passed = fields.iter().all(|f| f.figures.passed)
+        && horizon_seen
+        && mirror_checks.iter().all(|c| c.passed);
+    Ok(Verdict {
+        name: regulation.name.to_string(),
+        title: regulation.title.to_string(),
+        edition: regulation.edition.to_string(),
+        passed,
+        horizon_seen,
+        side: vehicle.side,
+        allowance_share: regulation.allowance(),
+        mirror_checks,
+        fields,
+    })
+}
+
+#[allow(clippy::too_many_arguments)]
+fn field_figures(
+    spec: &FieldSpec,
+    regulation: &Regulation,
+    vehicle: &Vehicle,
+    view: &MirrorView,
+    cones: &[Cone],
+    set: &[usize],
+    range: f64,
+    to_field: &impl Fn(Vec2) -> (f64, f64),
+    origin: Vec2,
+    out: Vec2,
+    back: Vec2,
+    mirror_centre: Vec3,
+) -> FieldFigures {
+    let (s_lo, s_hi) = lateral_range(spec);
+    let near = spec.from_m;
+    let far = spec.to_m.unwrap_or(f64::INFINITY).min(range);
+    let mut figures = FieldFigures {
+        seen_share: 1.0,
+        seen_share_uncertainty: 0.0,
+        blind_area_m2: 0.0,
+        hidden_by_vehicle_share: 0.0,
+        beyond_range_seen_share: None,
+        beyond_range_uncertainty: None,
+        horizon_seen: None,
+        outer_margin_m: 0.0,
+        near_margin_m: 0.0,
+        passed: true,
+    };
+    let within = far > near;
+    if within {
+        // The field, and beyond its outer edge and before its near end, the margins' reach.
+        let grid = FieldGrid {
+            s0: s_lo,
+            d0: near - MARGIN_REACH_M,
+            ds: (s_hi - s_lo + MARGIN_REACH_M) / 600.0,
+            dd: (far - near + MARGIN_REACH_M) / 1200.0,
+            columns: 600,
+            rows: 1200,
+        };
+        let cells = grid.columns * grid.rows;
+        let (mut seen, mut clear, mut before) =
+            (vec![false; cells], vec![false; cells], vec![false; cells]);
+        for &k in set {
+            grid.fill(&mut seen, &view.footprints[k], to_field);
+            grid.fill(&mut clear, &view.clear_footprints[k], to_field);
+            grid.fill(&mut before, &view.previous_footprints[k], to_field);
+        }
+        let in_field = |column: usize, row: usize| {
+            let (s, d) = grid.cell(column, row);
+            s <= s_hi && d >= near && d <= far
+        };
+        let (mut total, mut n_seen, mut n_hidden, mut n_before, mut n_edge) = (0, 0, 0, 0, 0);
+        for row in 0..grid.rows {
+            for column in 0..grid.columns {
+                if !in_field(column, row) {
+                    continue;
+                }
+                let k = row * grid.columns + column;
+                total += 1;
+                n_seen += usize::from(seen[k]);
+                n_hidden += usize::from(clear[k] && !seen[k]);
+                n_before += usize::from(before[k]);
+                let neighbours = [
+                    (column > 0).then(|| k - 1),
+                    (column + 1 < grid.columns).then(|| k + 1),
+                    (row > 0).then(|| k - grid.columns),
+                    (row + 1 < grid.rows).then(|| k + grid.columns),
+                ];
+                if neighbours.iter().flatten().any(|&j| seen[j] != seen[k]) {
+                    n_edge += 1;
+                }
+            }
+        }
+        let total = total.max(1) as f64;
+        figures.seen_share = n_seen as f64 / total;
+        figures.hidden_by_vehicle_share = n_hidden as f64 / total;
+        figures.seen_share_uncertainty =
+            n_edge as f64 / total + (n_seen as f64 - n_before as f64).abs() / total;
+        let area = (s_hi - s_lo) * (far - near);
+        figures.blind_area_m2 = area * (1.0 - figures.seen_share);
+        // Margins: whole columns beyond the outer edge, whole rows before the near end.
+        let column_whole = |column: usize| {
+            (0..grid.rows).all(|row| {
+                let (_, d) = grid.cell(column, row);
+                !(d >= near && d <= far) || seen[row * grid.columns + column]
+            })
+        };
+        let first_out = (0..grid.columns)
+            .find(|&c| grid.cell(c, 0).0 > s_hi)
+            .unwrap_or(grid.columns);
+        figures.outer_margin_m = (first_out..grid.columns)
+            .take_while(|&c| column_whole(c))
+            .count() as f64
+            * grid.ds;
+        let row_whole = |row: usize| {
+            (0..grid.columns).all(|column| {
+                let (s, _) = grid.cell(column, row);
+                s > s_hi || seen[row * grid.columns + column]
+            })
+        };
+        let last_before = (0..grid.rows)
+            .rev()
+            .find(|&r| grid.cell(0, r).1 < near)
+            .map(|r| r + 1)
+            .unwrap_or(0);
+        figures.near_margin_m =
+            (0..last_before).rev().take_while(|&r| row_whole(r)).count() as f64 * grid.dd;
+    }
+    // Beyond the range: directions from the mirror's centre to the field's far ground.
+    let beyond_from = near.max(range);
+    let beyond_to = spec.to_m.unwrap_or(f64::INFINITY);
+    let angles_of = |d: Vec3| {
+        Vec2::new(
+            vehicle.frame.horizontal_deg(d, -vehicle.frame.forward) as f32,
+            vehicle.frame.elevation_deg(d) as f32,
+        )
+    };
+    let seen_direction =
+        |d: Vec3, strict: bool| set.iter().any(|&k| cones[k].contains(angles_of(d), strict));
+    if beyond_to > beyond_from {
+        let (n, mut covered, mut loose) = (48usize, 0usize, 0usize);
+        let w_far = if beyond_to.is_finite() {
+            1.0 / beyond_to
+        } else {
+            0.0
+        };
+        let w_near = 1.0 / beyond_from;
+        for i in 0..n {
+            for j in 0..n {
+                let s = s_lo + (s_hi - s_lo) * (i as f64 + 0.5) / n as f64;
+                let w = w_far + (w_near - w_far) * (j as f64 + 0.5) / n as f64;
+                let g = origin + out * s as f32 + back * (1.0 / w) as f32;
+                let p = Vec3::new(g.x, vehicle.ground_y, g.y);
+                let d = (p - mirror_centre).normalize();
+                covered += usize::from(seen_direction(d, true));
+                loose += usize::from(seen_direction(d, false));
+            }
+        }
+        let total = (n * n) as f64;
+        figures.beyond_range_seen_share = Some(covered as f64 / total);
+        figures.beyond_range_uncertainty = Some((loose - covered) as f64 / total);
+    }
+    if spec.to_m.is_none() {
+        figures.horizon_seen = Some(seen_direction(-vehicle.frame.forward, true));
+    }
+    let excused = if figures.hidden_by_vehicle_share < regulation.allowance() {
+        figures.hidden_by_vehicle_share
+    } else {
+        0.0
+    };
+    let whole = |share: f64, uncertainty: f64| 1.0 - share <= uncertainty + 1e-12;
+    figures.passed = (!within
+        || whole(figures.seen_share + excused, figures.seen_share_uncertainty))
+        && figures
+            .beyond_range_seen_share
+            .zip(figures.beyond_range_uncertainty)
+            .is_none_or(|(s, u)| whole(s, u))
+        && figures.horizon_seen.unwrap_or(true);
+    figures
+}
+
+/// The mirror's radius of curvature and size against the regulation's rules.
+fn mirror_checks(
+    regulation: &Regulation,
+    surface: &MirrorSurface,
+    frame: &VehicleFrame,
+) -> Vec<MirrorCheck> {
+    let rule = &regulation.surface;
+    let mut checks = Vec::new();
+    let radii = radii(surface);
+    let r_min = radii.iter().map(|[r, _]| *r).fold(f64::INFINITY, f64::min);
+    // R46's r is an average over the surface of the mean of two perpendicular radii (r_p =
+    // (r_i + r'_i) / 2): here, of the two principal radii at each sample point.
+    let r_mean = {
+        let finite: Vec<f64> = radii
+            .iter()
+            .map(|[a, b]| 0.5 * (a + b))
+            .filter(|r| r.is_finite())
+            .collect();
+        if finite.len() < radii.len() / 2 || finite.is_empty() {
+            f64::INFINITY
+        } else {
+            finite.iter().sum::<f64>() / finite.len() as f64
+        }
+    };
+    let mm = |r: f64| {
+        if r.is_finite() {
+            format!("{:.0} mm", r * 1e3)
+        } else {
+            "flat".to_string()
+        }
+    };
+    if let Some(min) = rule.min_radius_m {
+        checks.push(MirrorCheck {
+            name: "radius of curvature".into(),
+            source: rule.source.into(),
+            required: format!("at least {:.0} mm (or flat) everywhere", min * 1e3),
+            measured: format!(
+                "smallest principal radius {}, mean {}",
+                mm(r_min),
+                mm(r_mean)
+            ),
+            passed: r_min >= min,
+        });
+    }
+    if rule.flat {
+        checks.push(MirrorCheck {
+            name: "flat (unit magnification)".into(),
+            source: rule.source.into(),
+            required: "flat: radius of curvature over 1000 m everywhere".into(),
+            measured: format!("smallest principal radius {}", mm(r_min)),
+            passed: r_min > 1000.0,
+        });
+    }
+    if let Some((numerator, segment_mm)) = rule.rectangle {
+        let r_mm = r_mean * 1e3;
+        let a = if r_mm.is_finite() {
+            numerator / (1.0 + 1000.0 / r_mm)
+        } else {
+            numerator
+        };
+        let outline = Outline::of(surface, frame);
+        let longest = outline.longest_rectangle_mm(40.0);
+        checks.push(MirrorCheck {
+            name: "rectangle 40 mm high".into(),
+            source: rule.source.into(),
+            required: format!(
+                "a = {numerator:.0} / (1 + 1000 / r) = {a:.1} mm long (r = {})",
+                mm(r_mean)
+            ),
+            measured: format!(
+                "at most {longest:.1} mm long fits (±{:.1} mm)",
+                outline.cell_mm
+            ),
+            passed: longest >= a,
+        });
+        let segment = outline.longest_vertical_mm();
+        checks.push(MirrorCheck {
+            name: "segment parallel to the height".into(),
+            source: rule.source.into(),
+            required: format!("{segment_mm:.0} mm"),
+            measured: format!("{segment:.1} mm (±{:.1} mm)", outline.cell_mm),
+            passed: segment >= segment_mm,
+        });
+    }
+    checks
+}
+
+/// The principal radii at a few points of every cell.
+fn radii(surface: &MirrorSurface) -> Vec<[f64; 2]> {
+    let points = [
+        Vec2::new(1.0 / 3.0, 1.0 / 3.0),
+        Vec2::new(0.1, 0.1),
+        Vec2::new(0.8, 0.1),
+        Vec2::new(0.1, 0.8),
+    ];
+    (0..surface.cells())
+        .flat_map(|cell| {
+            points
+                .iter()
+                .filter_map(move |b| surface.principal_radii(cell, *b))
+        })
+        .collect()
+}
+
+/// The reflecting surface projected onto the plane through its centre, perpendicular to its
+/// mean normal, on a grid of 0.5 mm: columns along the horizontal, rows up.
+struct Outline {
+    columns: usize,
+    rows: usize,
+    covered: Vec<bool>,
+    cell_mm: f64,
+}
+
+impl Outline {
+    fn of(surface: &MirrorSurface, frame: &VehicleFrame) -> Outline {
+        let cell_mm = 0.5;
+        let mut triangles = Vec::new();
+        let mut normal = DVec3::ZERO;
+        for cell in 0..surface.cells() {
+            let corners = [Vec2::ZERO, Vec2::X, Vec2::Y];
+            let p = corners.map(|b| surface.position(cell, b).as_dvec3());
+            normal += (p[1] - p[0]).cross(p[2] - p[0]);
+            triangles.push(p);
+        }
+        let n = normal.normalize_or_zero();
+        let h = frame
+            .up
+            .as_dvec3()
+            .cross(n)
+            .try_normalize()
+            .unwrap_or(frame.right.as_dvec3());
+        let v = n.cross(h);
+        let flat: Vec<[Vec2; 3]> = triangles
+            .iter()
+            .map(|t| t.map(|p| Vec2::new((p.dot(h) * 1e3) as f32, (p.dot(v) * 1e3) as f32)))
+            .collect();
+        let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
+        for p in flat.iter().flatten() {
+            lo = lo.min(*p);
+            hi = hi.max(*p);
+        }
+        let size = ((hi - lo) / cell_mm as f32).ceil();
+        let (columns, rows) = (
+            size.x.clamp(1.0, 4000.0) as usize,
+            size.y.clamp(1.0, 4000.0) as usize,
+        );
+        let mut covered = vec![false; columns * rows];
+        let edge = |a: Vec2, b: Vec2, p: Vec2| (b - a).perp_dot(p - a);
+        for t in &flat {
+            let area = edge(t[0], t[1], t[2]);
+            if area == 0.0 {
+                continue;
+            }
+            let tlo = ((t[0].min(t[1]).min(t[2]) - lo) / cell_mm as f32)
+                .floor()
+                .max(Vec2::ZERO);
+            let thi = ((t[0].max(t[1]).max(t[2]) - lo) / cell_mm as f32).ceil();
+            for row in tlo.y as usize..(thi.y as usize).min(rows) {
+                for column in tlo.x as usize..(thi.x as usize).min(columns) {
+                    let p = lo + Vec2::new(column as f32 + 0.5, row as f32 + 0.5) * cell_mm as f32;
+                    let w = [
+                        edge(t[1], t[2], p),
+                        edge(t[2], t[0], p),
+                        edge(t[0], t[1], p),
+                    ];
+                    if w.iter().all(|w| w * area >= 0.0) {
+                        covered[row * columns + column] = true;
+                    }
+                }
+            }
+        }
+        Outline {
+            columns,
+            rows,
+            covered,
+            cell_mm,
+        }
+    }
+
+    /// The longest rectangle `height_mm` high (sides horizontal and vertical) that fits, mm.
+    fn longest_rectangle_mm(&self, height_mm: f64) -> f64 {
+        let tall = (height_mm / self.cell_mm).ceil() as usize;
+        if tall > self.rows {
+            return 0.0;
+        }
+        // Per column, the run of covered cells ending at each row.
+        let mut run = vec![0usize; self.columns];
+        let mut best = 0usize;
+        for row in 0..self.rows {
+            for (column, r) in run.iter_mut().enumerate() {
+                *r = if self.covered[row * self.columns + column] {
+                    *r + 1
+                } else {
+                    0
+                };
+            }
+            let mut length = 0;
+            for r in &run {
+                length = if *r >= tall { length + 1 } else { 0 };
+                best = best.max(length);
+            }
+        }
+        best as f64 * self.cell_mm
+    }
+
+    /// The longest vertical segment that fits, mm.
+    fn longest_vertical_mm(&self) -> f64 {
+        let mut best = 0usize;
+        for column in 0..self.columns {
+            let mut run = 0;
+            for row in 0..self.rows {
+                run = if self.covered[row * self.columns + column] {
+                    run + 1
+                } else {
+                    0
+                };
+                best = best.max(run);
+            }
+        }
+        best as f64 * self.cell_mm
+    }
+}
+
+/// Eye points on an eyellipse: centre, semi-axes along forward, lateral (right) and up, a
+/// side-view tilt (degrees, turning forward towards up about the lateral axis), `count` points
+/// on its surface: the 26 directions to a cube's faces, edges and corners for 26, else a
+/// Fibonacci lattice.
+pub fn eyellipse_points(
+    frame: &VehicleFrame,
+    centre: Vec3,
+    semi_axes: Vec3,
+    tilt_deg: f32,
+    count: usize,
+) -> Result<Vec<Vec3>, AnalyzeError> {
+    let bad = |reason: String| AnalyzeError::BadOption {
+        option: "--eyellipse",
+        reason,
+    };
+    if !(semi_axes.is_finite() && semi_axes.min_element() > 0.0) {
+        return Err(bad(format!(
+            "semi-axes {semi_axes} m: each must be a positive length (a flat or empty eyellipse \
+             has no surface to put eye points on)"
+        )));
+    }
+    if !centre.is_finite() || !tilt_deg.is_finite() {
+        return Err(bad(format!(
+            "centre {centre} and tilt {tilt_deg}° must be finite"
+        )));
+    }
+    if !(2..=1000).contains(&count) {
+        return Err(bad(format!("{count} points: between 2 and 1000")));
+    }
+    let directions: Vec<Vec3> = if count == 26 {
+        let mut d = Vec::new();
+        for i in -1..=1 {
+            for j in -1..=1 {
+                for k in -1..=1 {
+                    if (i, j, k) != (0, 0, 0) {
+                        d.push(Vec3::new(i as f32, j as f32, k as f32).normalize());
+                    }
+                }
+            }
+        }
+        d
+    } else {
+        let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
+        (0..count)
+            .map(|k| {
+                let z = 1.0 - 2.0 * (k as f32 + 0.5) / count as f32;
+                let r = (1.0 - z * z).sqrt();
+                let phi = golden * k as f32;
+                Vec3::new(r * phi.cos(), r * phi.sin(), z)
+            })
+            .collect()
+    };
+    let (c, s) = (tilt_deg.to_radians().cos(), tilt_deg.to_radians().sin());
+    let forward = frame.forward * c + frame.up * s;
+    let up = frame.up * c - frame.forward * s;
+    Ok(directions
+        .iter()
+        .map(|d| {
+            centre
+                + forward * (d.x * semi_axes.x)
+                + frame.right * (d.y * semi_axes.y)
+                + up * (d.z * semi_axes.z)
+        })
+        .collect())
+}
+
+/// R46's ocular points from the R point: 635 mm above it, 65 mm apart across the vehicle.
+pub fn ocular_points(frame: &VehicleFrame, r_point: Vec3) -> [Vec3; 2] {
+    let middle = r_point + frame.up * OCULAR_HEIGHT_M;
+    let half = frame.right * (0.5 * crate::frame::OCULAR_SEPARATION_M);
+    [middle - half, middle + half]
+}
+
+/// The mirror's centre and mean unit normal (area-weighted over its cells).
+pub fn mirror_centre_and_normal(surface: &MirrorSurface) -> (Vec3, Vec3) {
+    let (mut centre, mut normal, mut area) = (DVec3::ZERO, DVec3::ZERO, 0.0);
+    for cell in 0..surface.cells() {
+        let p = [Vec2::ZERO, Vec2::X, Vec2::Y].map(|b| surface.position(cell, b).as_dvec3());
+        let n = (p[1] - p[0]).cross(p[2] - p[0]);
+        let a = 0.5 * n.length();
+        centre += (p[0] + p[1] + p[2]) / 3.0 * a;
+        normal += n;
+        area += a;
+    }
+    (
+        (centre / area.max(1e-30)).as_vec3(),
+        normal.normalize_or_zero().as_vec3(),
+    )
+}
+
+/// Checks that every eye point lies in front of the mirror's reflecting side, away from it.
+pub fn check_eyes(
+    scene: &Scene,
+    mirror: usize,
+    surface: &MirrorSurface,
+    eyes: &[Vec3],
+    option: &'static str,
+) -> Result<(), AnalyzeError> {
+    let (centre, normal) = mirror_centre_and_normal(surface);
+    let bounds = scene.meshes[mirror].bounds();
+    for eye in eyes {
+        let inside = (bounds.min - 0.01).cmple(*eye).all() && eye.cmple(bounds.max + 0.01).all();
+        let front = (*eye - centre).dot(normal);
+        if inside || front <= 0.01 {
+            return Err(AnalyzeError::BadOption {
+                option,
+                reason: format!(
+                    "it puts an eye point at {eye}, {}: the eyes must be in front of the \
+                     mirror's reflecting side (its normal {normal} from its centre {centre})",
+                    if inside {
+                        "inside the mirror's bounds".to_string()
+                    } else {
+                        format!("{:.3} m behind the mirror's plane", -front)
+                    }
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// What `--regulation` asks.
+#[derive(Clone, Debug)]
+pub struct Request {
+    pub regulation: &'static Regulation,
+    pub vehicle: Vehicle,
+    pub eyes: Vec<Vec3>,
+    pub eye_sets: EyeSets,
+    /// The option the eyes came from (for errors).
+    pub eyes_option: &'static str,
+    pub view: mirror_view::Options,
+}
+
+/// The figures and the verdict from one pose of the mirror.
+pub struct Judged {
+    pub verdict: Verdict,
+    pub view: MirrorView,
+}
+
+/// Analyses the mirror from the eyes and judges it; for a mirror without an exact surface,
+/// also on a smooth fit of its mesh, each field's share's change being its surface uncertainty.
+pub fn evaluate(
+    scene: &Scene,
+    accel: &SceneAccel,
+    request: &Request,
+    progress: &(dyn Fn(usize) + Sync),
+) -> Result<Judged, AnalyzeError> {
+    request.view.validate(scene)?;
+    let surface =
+        MirrorSurface::new(scene, request.view.mirror, request.view.surface).expect("validated");
+    check_eyes(
+        scene,
+        request.view.mirror,
+        &surface,
+        &request.eyes,
+        request.eyes_option,
+    )?;
+    let (centre, _) = mirror_centre_and_normal(&surface);
+    let view = mirror_view::analyze(scene, accel, &request.eyes, &request.view, progress)?;
+    let mut verdict = judge(
+        request.regulation,
+        &request.vehicle,
+        &view,
+        &request.eye_sets,
+        &surface,
+        centre,
+    )?;
+    if request.view.surface == SurfaceModel::Mesh {
+        let smooth_options = mirror_view::Options {
+            surface: SurfaceModel::Smooth,
+            ..request.view.clone()
+        };
+        let smooth_surface =
+            MirrorSurface::new(scene, request.view.mirror, SurfaceModel::Smooth).expect("a mesh");
+        let smooth_view =
+            mirror_view::analyze(scene, accel, &request.eyes, &smooth_options, &|_| {})?;
+        let smooth = judge(
+            request.regulation,
+            &request.vehicle,
+            &smooth_view,
+            &request.eye_sets,
+            &smooth_surface,
+            centre,
+        )?;
+        for (field, other) in verdict.fields.iter_mut().zip(&smooth.fields) {
+            field.surface_uncertainty =
+                Some((field.figures.seen_share - other.figures.seen_share).abs());
+        }
+    }
+    Ok(Judged { verdict, view })
+}
+
+/// `--adjust`: the mirror turned about a pivot.
+#[derive(Clone, Copy, Debug)]
+pub struct AdjustRequest {
+    pub pivot: Vec3,
+    pub step_deg: f32,
+    pub limit_deg: f32,
+}
+
+/// One pose of the mirror and how its fields fare.
+#[derive(Clone, Debug, Serialize)]
+pub struct Pose {
+    pub yaw_deg: f32,
+    pub pitch_deg: f32,
+    /// Every field passes (the mirror's own checks do not change with its pose).
+    pub fields_passed: bool,
+    /// The least, over the fields, of the share seen or excused.
+    pub least_share: f64,
+    pub least_share_field: String,
+    /// The least, over the fields, of the outer and near margins, metres.
+    pub least_margin_m: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Adjustment {
+    pub pivot: [f32; 3],
+    /// Yaw turns about the vehicle's up axis (positive: right-hand rule), pitch about the
+    /// horizontal axis in the mirror's plane, both through the pivot.
+    pub yaw_axis: [f32; 3],
+    pub pitch_axis: [f32; 3],
+    pub step_deg: f32,
+    pub limit_deg: f32,
+    /// The tolerances the search ran at (the chosen pose is judged again at the command's).
+    pub search_tolerance: f64,
+    pub poses: Vec<Pose>,
+    /// The yaw and pitch ranges of the poses that pass (None: none passes).
+    pub passing_yaw_deg: Option<[f32; 2]>,
+    pub passing_pitch_deg: Option<[f32; 2]>,
+    pub passing_poses: usize,
+    /// The pose with the widest margin among those that pass; else the one that sees most.
+    pub best: Pose,
+    /// The best pose judged at the command's tolerances.
+    pub best_verdict: Verdict,
+}
+
+/// The pivot must be near the mirror (a mirror turns about its own mounting).
+pub fn check_pivot(scene: &Scene, mirror: usize, pivot: Vec3) -> Result<(), AnalyzeError> {
+    let bounds = scene.meshes[mirror].bounds();
+    let nearest = pivot.clamp(bounds.min, bounds.max);
+    let distance = pivot.distance(nearest);
+    if !pivot.is_finite() || distance > 0.5 {
+        return Err(AnalyzeError::BadOption {
+            option: "--adjust",
+            reason: format!(
+                "the pivot {pivot} is {distance:.2} m from the mirror's bounds ({} to {}): a \
+                 mirror turns about its own mounting, within 0.5 m of it",
+                bounds.min, bounds.max
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// The rigid turn of the mirror about `pivot`: yaw about `up`, then pitch about `pitch_axis`.
+pub fn pose_transform(
+    pivot: Vec3,
+    up: Vec3,
+    pitch_axis: Vec3,
+    yaw_deg: f32,
+    pitch_deg: f32,
+) -> Mat4 {
+    Mat4::from_translation(pivot)
+        * Mat4::from_axis_angle(up, yaw_deg.to_radians())
+        * Mat4::from_axis_angle(pitch_axis, pitch_deg.to_radians())
+        * Mat4::from_translation(-pivot)
+}
+
+/// Turns the mirror over a grid of yaw × pitch within ±`limit_deg`, judging each pose at the
+/// viewer's tolerances (2 %, 0.1°), and the chosen one again at the request's.
+pub fn adjust(
+    scene: &Scene,
+    request: &Request,
+    adjust: &AdjustRequest,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Adjustment, AnalyzeError> {
+    let mirror = request.view.mirror;
+    check_pivot(scene, mirror, adjust.pivot)?;
+    if !(adjust.step_deg.is_finite() && adjust.step_deg > 0.0) {
+        return Err(AnalyzeError::BadOption {
+            option: "--adjust-step",
+            reason: format!("{}°: the step must be a positive angle", adjust.step_deg),
+        });
+    }
+    let surface = MirrorSurface::new(scene, mirror, request.view.surface).expect("validated");
+    let (_, normal) = mirror_centre_and_normal(&surface);
+    let up = request.vehicle.frame.up;
+    let pitch_axis = up
+        .cross(normal)
+        .try_normalize()
+        .unwrap_or(request.vehicle.frame.right);
+    let steps = (adjust.limit_deg / adjust.step_deg).floor() as i32;
+    let angles: Vec<f32> = (-steps..=steps)
+        .map(|k| k as f32 * adjust.step_deg)
+        .collect();
+    let grid: Vec<(f32, f32)> = angles
+        .iter()
+        .flat_map(|&yaw| angles.iter().map(move |&pitch| (yaw, pitch)))
+        .collect();
+    let search = Request {
+        view: mirror_view::Options {
+            tolerance: request.view.tolerance.max(0.02),
+            tolerance_deg: request.view.tolerance_deg.max(0.1),
+            max_samples: request.view.max_samples.min(1_000_000),
+            ..request.view.clone()
+        },
+        ..request.clone()
+    };
+    let posed = |yaw: f32, pitch: f32| {
+        let mut scene = scene.clone();
+        scene.meshes[mirror].transform(pose_transform(adjust.pivot, up, pitch_axis, yaw, pitch));
+        scene
+    };
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let mut poses = Vec::with_capacity(grid.len());
+    for &(yaw, pitch) in &grid {
+        let scene = posed(yaw, pitch);
+        let accel = SceneAccel::new(&scene);
+        let judged = evaluate_quietly(&scene, &accel, &search)?;
+        poses.push(pose_of(yaw, pitch, &judged.verdict, request.regulation));
+        progress(
+            done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1,
+            grid.len(),
+        );
+    }
+    let passing: Vec<&Pose> = poses.iter().filter(|p| p.fields_passed).collect();
+    let range = |f: fn(&Pose) -> f32| {
+        (!passing.is_empty()).then(|| {
+            let v = passing.iter().map(|p| f(p));
+            [
+                v.clone().fold(f32::INFINITY, f32::min),
+                v.fold(f32::NEG_INFINITY, f32::max),
+            ]
+        })
+    };
+    let best = if passing.is_empty() {
+        poses
+            .iter()
+            .max_by(|a, b| a.least_share.total_cmp(&b.least_share))
+    } else {
+        passing
+            .iter()
+            .copied()
+            .max_by(|a, b| a.least_margin_m.total_cmp(&b.least_margin_m))
+    }
+    .expect("at least one pose")
+    .clone();
+    let best_scene = posed(best.yaw_deg, best.pitch_deg);
+    let best_accel = SceneAccel::new(&best_scene);
+    let best_verdict = evaluate_quietly(&best_scene, &best_accel, request)?.verdict;
+    Ok(Adjustment {
+        pivot: adjust.pivot.to_array(),
+        yaw_axis: up.to_array(),
+        pitch_axis: pitch_axis.to_array(),
+        step_deg: adjust.step_deg,
+        limit_deg: adjust.limit_deg,
+        search_tolerance: search.view.tolerance,
+        passing_yaw_deg: range(|p| p.yaw_deg),
+        passing_pitch_deg: range(|p| p.pitch_deg),
+        passing_poses: passing.len(),
+        poses,
+        best,
+        best_verdict,
+    })
+}
+
+/// One pose judged, without the smooth-fit rerun (the pose search compares poses on one surface).
+fn evaluate_quietly(
+    scene: &Scene,
+    accel: &SceneAccel,
+    request: &Request,
+) -> Result<Judged, AnalyzeError> {
+    let surface =
+        MirrorSurface::new(scene, request.view.mirror, request.view.surface).expect("validated");
+    let (centre, _) = mirror_centre_and_normal(&surface);
+    let view = mirror_view::analyze(scene, accel, &request.eyes, &request.view, &|_| {})?;
+    let verdict = judge(
+        request.regulation,
+        &request.vehicle,
+        &view,
+        &request.eye_sets,
+        &surface,
+        centre,
+    )?;
+    Ok(Judged { verdict, view })
+}
+
+fn pose_of(yaw: f32, pitch: f32, verdict: &Verdict, regulation: &Regulation) -> Pose {
+    let share = |f: &FieldVerdict| {
+        let excused = if f.figures.hidden_by_vehicle_share < regulation.allowance() {
+            f.figures.hidden_by_vehicle_share
+        } else {
+            0.0
+        };
+        let beyond = f.figures.beyond_range_seen_share.unwrap_or(1.0);
+        (f.figures.seen_share + excused).min(beyond)
+    };
+    let least = verdict
+        .fields
+        .iter()
+        .min_by(|a, b| share(a).total_cmp(&share(b)))
+        .expect("a regulation has fields");
+    Pose {
+        yaw_deg: yaw,
+        pitch_deg: pitch,
+        fields_passed: verdict.fields.iter().all(|f| f.figures.passed),
+        least_share: share(least),
+        least_share_field: least.name.clone(),
+        least_margin_m: verdict
+            .fields
+            .iter()
+            .map(|f| f.figures.outer_margin_m.min(f.figures.near_margin_m))
+            .fold(f64::INFINITY, f64::min),
+    }
+}
