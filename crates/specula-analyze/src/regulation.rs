@@ -433,7 +433,8 @@ pub struct FieldFigures {
     /// Whether the field's vanishing direction is seen (None: the field ends before the horizon).
     pub horizon_seen: Option<bool>,
     /// How much farther out, and how much nearer the eyes, the field could reach and still be
-    /// seen whole (0 where it is not), metres, up to 5 m.
+    /// seen whole (0 where it is not), metres, up to 5 m, exact to 1/2000 of the field's size
+    /// plus 5 m.
     pub outer_margin_m: f64,
     pub near_margin_m: f64,
     pub passed: bool,
@@ -771,12 +772,13 @@ fn field_figures(
     };
     let within = far > near;
     if within {
-        // The field, and beyond its outer edge and before its near end, the margins' reach.
+        // The share on a grid over the field alone; the margins on one that reaches beyond its
+        // outer edge and before its near end.
         let grid = FieldGrid {
             s0: s_lo,
-            d0: near - MARGIN_REACH_M,
-            ds: (s_hi - s_lo + MARGIN_REACH_M) / 600.0,
-            dd: (far - near + MARGIN_REACH_M) / 1200.0,
+            d0: near,
+            ds: (s_hi - s_lo) / 600.0,
+            dd: (far - near) / 1200.0,
             columns: 600,
             rows: 1200,
         };
@@ -788,21 +790,13 @@ fn field_figures(
             grid.fill(&mut clear, &view.clear_footprints[k], to_field);
             grid.fill(&mut before, &view.previous_footprints[k], to_field);
         }
-        let in_field = |column: usize, row: usize| {
-            let (s, d) = grid.cell(column, row);
-            s <= s_hi && d >= near && d <= far
-        };
-        let (mut total, mut n_seen, mut n_hidden, mut n_before, mut n_edge) = (0, 0, 0, 0, 0);
+        let count = |cells: &[bool]| cells.iter().filter(|c| **c).count() as f64;
+        let hidden = seen.iter().zip(&clear).filter(|(s, c)| **c && !**s).count() as f64;
+        // A cell on the edge of what is seen (a neighbour differs) may be either.
+        let mut edge = 0usize;
         for row in 0..grid.rows {
             for column in 0..grid.columns {
-                if !in_field(column, row) {
-                    continue;
-                }
                 let k = row * grid.columns + column;
-                total += 1;
-                n_seen += usize::from(seen[k]);
-                n_hidden += usize::from(clear[k] && !seen[k]);
-                n_before += usize::from(before[k]);
                 let neighbours = [
                     (column > 0).then(|| k - 1),
                     (column + 1 < grid.columns).then(|| k + 1),
@@ -810,44 +804,18 @@ fn field_figures(
                     (row + 1 < grid.rows).then(|| k + grid.columns),
                 ];
                 if neighbours.iter().flatten().any(|&j| seen[j] != seen[k]) {
-                    n_edge += 1;
+                    edge += 1;
                 }
             }
         }
-        let total = total.max(1) as f64;
-        figures.seen_share = n_seen as f64 / total;
-        figures.hidden_by_vehicle_share = n_hidden as f64 / total;
+        let total = cells as f64;
+        figures.seen_share = count(&seen) / total;
+        figures.hidden_by_vehicle_share = hidden / total;
         figures.seen_share_uncertainty =
-            n_edge as f64 / total + (n_seen as f64 - n_before as f64).abs() / total;
-        let area = (s_hi - s_lo) * (far - near);
-        figures.blind_area_m2 = area * (1.0 - figures.seen_share);
-        // Margins: whole columns beyond the outer edge, whole rows before the near end.
-        let column_whole = |column: usize| {
-            (0..grid.rows).all(|row| {
-                let (_, d) = grid.cell(column, row);
-                !(d >= near && d <= far) || seen[row * grid.columns + column]
-            })
-        };
-        let first_out = (0..grid.columns)
-            .find(|&c| grid.cell(c, 0).0 > s_hi)
-            .unwrap_or(grid.columns);
-        figures.outer_margin_m = (first_out..grid.columns)
-            .take_while(|&c| column_whole(c))
-            .count() as f64
-            * grid.ds;
-        let row_whole = |row: usize| {
-            (0..grid.columns).all(|column| {
-                let (s, _) = grid.cell(column, row);
-                s > s_hi || seen[row * grid.columns + column]
-            })
-        };
-        let last_before = (0..grid.rows)
-            .rev()
-            .find(|&r| grid.cell(0, r).1 < near)
-            .map(|r| r + 1)
-            .unwrap_or(0);
-        figures.near_margin_m =
-            (0..last_before).rev().take_while(|&r| row_whole(r)).count() as f64 * grid.dd;
+            edge as f64 / total + (count(&seen) - count(&before)).abs() / total;
+        figures.blind_area_m2 = (s_hi - s_lo) * (far - near) * (1.0 - figures.seen_share);
+        (figures.outer_margin_m, figures.near_margin_m) =
+            margins(&view.footprints, set, to_field, (s_lo, s_hi), (near, far));
     }
     // Beyond the range: directions from the mirror's centre to the field's far ground.
     let beyond_from = near.max(range);
@@ -900,6 +868,61 @@ fn field_figures(
             .is_none_or(|(s, u)| whole(s, u))
         && figures.horizon_seen.unwrap_or(true);
     figures
+}
+
+/// How much farther out, and how much nearer the eyes, the field (lateral `s`, longitudinal
+/// `d`) could reach and still be seen whole, up to [`MARGIN_REACH_M`]: on a 2000 × 2000 grid
+/// whose cell centres fall on the field's outer edge and near end, the whole columns beyond
+/// the edge and the whole rows before the end (each exact to a cell).
+fn margins(
+    footprints: &[Vec<[Vec2; 3]>],
+    set: &[usize],
+    to_field: &impl Fn(Vec2) -> (f64, f64),
+    (s_lo, s_hi): (f64, f64),
+    (near, far): (f64, f64),
+) -> (f64, f64) {
+    let n = 2000usize;
+    let ds = (s_hi - s_lo + MARGIN_REACH_M) / n as f64;
+    let dd = (far - near + MARGIN_REACH_M) / n as f64;
+    // Column k's centre is at s_hi + (k − k_edge) ds, row j's at near + (j − j_edge) dd.
+    let k_edge = ((s_hi - s_lo) / ds).round() as usize;
+    let j_edge = (MARGIN_REACH_M / dd).round() as usize;
+    let grid = FieldGrid {
+        s0: s_hi - (k_edge as f64 + 0.5) * ds,
+        d0: near - (j_edge as f64 + 0.5) * dd,
+        ds,
+        dd,
+        columns: n,
+        rows: n,
+    };
+    let mut seen = vec![false; n * n];
+    for &k in set {
+        grid.fill(&mut seen, &footprints[k], to_field);
+    }
+    let eps = 1e-9;
+    let column_whole = |column: usize| {
+        (0..n).all(|row| {
+            let (_, d) = grid.cell(column, row);
+            !(near - eps..=far + eps).contains(&d) || seen[row * n + column]
+        })
+    };
+    let row_whole = |row: usize| {
+        (0..n).all(|column| {
+            let (s, _) = grid.cell(column, row);
+            !(s_lo - eps..=s_hi + eps).contains(&s) || seen[row * n + column]
+        })
+    };
+    let outer = if column_whole(k_edge) {
+        (k_edge + 1..n).take_while(|&c| column_whole(c)).count() as f64 * ds
+    } else {
+        0.0
+    };
+    let nearer = if row_whole(j_edge) {
+        (0..j_edge).rev().take_while(|&r| row_whole(r)).count() as f64 * dd
+    } else {
+        0.0
+    };
+    (outer, nearer)
 }
 
 /// The mirror's radius of curvature and size against the regulation's rules.
