@@ -25,8 +25,8 @@
 //!    curvatures, and for classes II and III the rectangle and segment its reflecting surface must
 //!    hold (R46 §6.1.2), measured on the surface projected onto its tangent plane at the centre.
 //!
-//! Uncertainty of a share: the cells of the field's grid on the edge of what is seen (each may
-//! be either), plus the change of the share between the last two refinements of the sampling.
+//! Uncertainty of a share: its change when the field's grid (600 × 1200 cells) is halved in
+//! resolution, plus its change between the last two refinements of the sampling.
 //! A mesh's surface uncertainty (its change from the mesh to a smooth fit) is added by the
 //! caller, which runs both.
 
@@ -491,6 +491,7 @@ pub struct Verdict {
 }
 
 /// A grid over a field's own frame: lateral s (columns) × longitudinal d (rows).
+#[derive(Clone, Copy)]
 struct FieldGrid {
     s0: f64,
     d0: f64,
@@ -792,27 +793,26 @@ fn field_figures(
         }
         let count = |cells: &[bool]| cells.iter().filter(|c| **c).count() as f64;
         let hidden = seen.iter().zip(&clear).filter(|(s, c)| **c && !**s).count() as f64;
-        // A cell on the edge of what is seen (a neighbour differs) may be either.
-        let mut edge = 0usize;
-        for row in 0..grid.rows {
-            for column in 0..grid.columns {
-                let k = row * grid.columns + column;
-                let neighbours = [
-                    (column > 0).then(|| k - 1),
-                    (column + 1 < grid.columns).then(|| k + 1),
-                    (row > 0).then(|| k - grid.columns),
-                    (row + 1 < grid.rows).then(|| k + grid.columns),
-                ];
-                if neighbours.iter().flatten().any(|&j| seen[j] != seen[k]) {
-                    edge += 1;
-                }
-            }
+        // The grid's own error: twice the share's change on a grid of half the resolution
+        // (a centre-sampled grid's error halves with its cells, so the change is about the
+        // coarse grid's error, twice the fine one's: the factor 2 is a safety margin).
+        let coarse = FieldGrid {
+            ds: grid.ds * 2.0,
+            dd: grid.dd * 2.0,
+            columns: grid.columns / 2,
+            rows: grid.rows / 2,
+            ..grid
+        };
+        let mut coarse_seen = vec![false; coarse.columns * coarse.rows];
+        for &k in set {
+            coarse.fill(&mut coarse_seen, &view.footprints[k], to_field);
         }
         let total = cells as f64;
         figures.seen_share = count(&seen) / total;
         figures.hidden_by_vehicle_share = hidden / total;
-        figures.seen_share_uncertainty =
-            edge as f64 / total + (count(&seen) - count(&before)).abs() / total;
+        figures.seen_share_uncertainty = 2.0
+            * (figures.seen_share - count(&coarse_seen) / coarse_seen.len() as f64).abs()
+            + (count(&seen) - count(&before)).abs() / total;
         figures.blind_area_m2 = (s_hi - s_lo) * (far - near) * (1.0 - figures.seen_share);
         (figures.outer_margin_m, figures.near_margin_m) =
             margins(&view.footprints, set, to_field, (s_lo, s_hi), (near, far));
