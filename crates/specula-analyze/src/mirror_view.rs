@@ -44,7 +44,7 @@ use crate::mirror_surface::{MirrorSurface, SurfaceModel};
 use crate::AnalyzeError;
 
 /// The version of [`Report`]'s JSON (docs/analyze-mirror-view.schema.json).
-pub const SCHEMA_VERSION: u32 = 1;
+pub const SCHEMA_VERSION: u32 = 2;
 
 /// The most levels a sub-triangle on an edge of what is seen is cut in four.
 const MAX_DEPTH: u32 = 16;
@@ -647,6 +647,8 @@ pub struct Report {
     pub schema_version: u32,
     pub scene: String,
     pub mirror: String,
+    /// The surface the samples lay on.
+    pub surface: SurfaceModel,
     pub forward: [f32; 3],
     pub up: [f32; 3],
     pub ground_y: f32,
@@ -1032,6 +1034,7 @@ pub fn analyze(
         schema_version: SCHEMA_VERSION,
         scene: scene.name.clone(),
         mirror: mirror.name.clone(),
+        surface: options.surface,
         forward: frame.forward.to_array(),
         up: frame.up.to_array(),
         ground_y: options.ground_y,

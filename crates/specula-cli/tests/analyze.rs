@@ -143,6 +143,236 @@ fn bad_mirror_view_input_is_a_clear_error() {
     assert_each_fails_naming(&["analyze", "mirror-view", "door-mirror"], &cases);
 }
 
+/// The car example's options: R46 class III from the R point, the body's parts named.
+const CAR: &[&str] = &[
+    "analyze",
+    "mirror-view",
+    "../../scenes/car-door-mirror.toml",
+    "--mirror",
+    "door mirror",
+    "--regulation",
+    "r46-iii",
+    "--forward",
+    "0,0,-1",
+    "--r-point",
+    "-0.37,0.55,0",
+    "--outermost",
+    "-0.95,0.6,1.5",
+    "--vehicle",
+    "car body",
+    "--vehicle",
+    "roof",
+    "--vehicle",
+    "A-pillar",
+    "--vehicle",
+    "door handle",
+    "--vehicle",
+    "rear wing",
+    "--vehicle",
+    "mirror housing",
+];
+
+#[test]
+fn the_car_example_s_a_pillar_takes_a_share_of_the_fields_and_the_allowance_decides() {
+    let dir = tempfile::tempdir().unwrap();
+    let json_path = dir.path().join("car.json");
+    let out = specula()
+        .args(CAR)
+        .arg("--json")
+        .arg(&json_path)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json_path).unwrap()).unwrap();
+    assert_matches_schema(
+        &json,
+        include_str!("../../../docs/analyze-mirror-view.schema.json"),
+    );
+    assert_eq!(json["surface"], "exact");
+    let verdict = &json["regulation"];
+    let fields = verdict["fields"].as_array().unwrap();
+    assert_eq!(fields.len(), 2);
+    let number = |f: &serde_json::Value, k: &str| f[k].as_f64().unwrap();
+    for f in fields {
+        let (seen, hidden, u) = (
+            number(f, "seen_share"),
+            number(f, "hidden_by_vehicle_share"),
+            number(f, "seen_share_uncertainty"),
+        );
+        // What the pillar hides, the mirror's edge does not: together they are the field.
+        assert!(hidden > 0.01, "{f}");
+        assert!((seen + hidden - 1.0).abs() <= u + 1e-3, "{f}");
+        // The allowance (71/127/EEC Annex III): under 10 % excused, over it not.
+        let excused = hidden < 0.10;
+        assert_eq!(f["passed"].as_bool().unwrap(), excused, "{f}");
+        assert_eq!(f["horizon_seen"], true);
+    }
+    // One field each way, so both branches of the allowance are shown.
+    let excused: Vec<bool> = fields
+        .iter()
+        .map(|f| number(f, "hidden_by_vehicle_share") < 0.10)
+        .collect();
+    assert!(
+        excused.contains(&true) && excused.contains(&false),
+        "{excused:?}"
+    );
+    assert_eq!(verdict["passed"], false);
+    // r = 1.6 m by construction (the control points' parabola): the exact patch says so.
+    let radius = &verdict["mirror_checks"][0];
+    assert_eq!(radius["passed"], true);
+    assert!(
+        radius["measured"].as_str().unwrap().contains("1600 mm"),
+        "{radius}"
+    );
+}
+
+#[test]
+fn the_door_mirror_s_pose_search_finds_poses_whose_fields_pass() {
+    let out = specula()
+        .args([
+            "analyze",
+            "mirror-view",
+            "door-mirror",
+            "--mirror",
+            "door mirror",
+            "--regulation",
+            "r46-iii",
+            "--forward",
+            "0,0,-1",
+            "--r-point",
+            "0.28,-0.575,0.75",
+            "--outermost",
+            "0.08,-0.5,0.3",
+            "--adjust",
+            "0,0,-0.03",
+            "--adjust-step",
+            "10",
+            "--json",
+            "/dev/stdout",
+        ])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let text = String::from_utf8_lossy(&out.stdout);
+    let json: serde_json::Value = serde_json::from_str(&text[text.find('{').unwrap()..]).unwrap();
+    let a = &json["adjustment"];
+    assert_eq!(a["poses"].as_array().unwrap().len(), 25);
+    let passing = a["passing_poses"].as_u64().unwrap();
+    assert!(passing > 0 && passing < 25, "{passing}");
+    let best = &a["best"];
+    assert_eq!(best["fields_passed"], true);
+    for (key, range) in [
+        ("yaw_deg", "passing_yaw_deg"),
+        ("pitch_deg", "passing_pitch_deg"),
+    ] {
+        let v = best[key].as_f64().unwrap();
+        let r = a[range].as_array().unwrap();
+        assert!(r[0].as_f64().unwrap() <= v && v <= r[1].as_f64().unwrap());
+    }
+    // Its radius (about 0.4 m) is below class III's 1.2 m: no pose makes the mirror pass.
+    assert_eq!(json["regulation"]["passed"], false);
+    assert_eq!(json["regulation"]["mirror_checks"][0]["passed"], false);
+}
+
+#[test]
+fn bad_regulation_input_is_a_clear_error() {
+    let base = [
+        "--mirror",
+        "door mirror",
+        "--forward",
+        "0,0,-1",
+        "--regulation",
+    ];
+    let with = |rest: &[&'static str]| {
+        let mut v: Vec<&str> = base.to_vec();
+        v.extend_from_slice(rest);
+        v
+    };
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            with(&["r46-vii", "--r-point", "0.28,-0.575,0.75"]),
+            "unknown regulation 'r46-vii'; valid: r46-i, r46-ii, r46-iii, r46-iv, r46-v, fmvss111",
+        ),
+        // Eyes behind the mirror (it faces +Z).
+        (
+            with(&[
+                "r46-iii",
+                "--r-point",
+                "0.2,-0.6,-0.5",
+                "--outermost",
+                "0.08,0,0",
+            ]),
+            "--r-point: it puts an eye point at",
+        ),
+        // ... and inside it.
+        (
+            with(&[
+                "r46-iii",
+                "--r-point",
+                "0.0,-0.635,0.0",
+                "--outermost",
+                "0.08,0,0",
+            ]),
+            "inside the mirror's bounds",
+        ),
+        (
+            with(&[
+                "r46-iii",
+                "--eyellipse",
+                "0.28,0.06,0.75,0.1,0,0.05",
+                "--outermost",
+                "0.08,0,0",
+            ]),
+            "--eyellipse: semi-axes",
+        ),
+        // The mirror is on the left: an outermost point to the right of the eyes is wrong.
+        (
+            with(&[
+                "r46-iii",
+                "--r-point",
+                "0.28,-0.575,0.75",
+                "--outermost",
+                "0.6,0,0",
+            ]),
+            "--outermost: [0.6, 0, 0] lies",
+        ),
+        (
+            with(&[
+                "r46-iii",
+                "--r-point",
+                "0.28,-0.575,0.75",
+                "--outermost",
+                "0.08,0,0",
+                "--adjust",
+                "3,0,0",
+            ]),
+            "--adjust: the pivot [3, 0, 0] is",
+        ),
+        (
+            with(&["r46-iii", "--r-point", "0.28,-0.575,0.75"]),
+            "--outermost: the field '4 m wide from 20 m behind to the horizon'",
+        ),
+        (
+            with(&["fmvss111", "--r-point", "0.28,-0.575,0.75"]),
+            "--r-point: fmvss111 judges from the driver's eyes",
+        ),
+        (
+            with(&[
+                "r46-iii",
+                "--r-point",
+                "0.28,-0.575,0.75",
+                "--vehicle",
+                "door mirror",
+            ]),
+            "--vehicle: 'door mirror' is the mirror",
+        ),
+    ];
+    assert_each_fails_naming(&["analyze", "mirror-view", "door-mirror"], &cases);
+}
+
 #[test]
 fn glare_over_an_eyebox_writes_json_that_matches_the_schema() {
     let dir = tempfile::tempdir().unwrap();
