@@ -398,6 +398,23 @@ impl Vehicle {
     }
 }
 
+impl Vehicle {
+    /// The corners of field `spec` on the ground (x, z), its far end at the range where it runs
+    /// farther: for drawing it.
+    pub fn field_corners(&self, spec: &FieldSpec, range_m: f32) -> Result<[Vec2; 4], AnalyzeError> {
+        let (origin, out, back) = self.origin_and_axes(spec)?;
+        let (s0, s1) = lateral_range(spec);
+        let far = spec.to_m.unwrap_or(f64::INFINITY).min(f64::from(range_m));
+        let at = |s: f64, d: f64| origin + out * s as f32 + back * d as f32;
+        Ok([
+            at(s0, spec.from_m),
+            at(s1, spec.from_m),
+            at(s1, far),
+            at(s0, far),
+        ])
+    }
+}
+
 /// Which eye points are judged together.
 #[derive(Clone, Debug, PartialEq)]
 pub enum EyeSets {

@@ -38,6 +38,7 @@ use specula_analyze::glare::{self, Glare};
 use specula_analyze::lens;
 use specula_analyze::mirror_surface;
 use specula_analyze::mirror_view::{self, MirrorView, Region};
+use specula_analyze::regulation::{self, Regulation, Side, Vehicle, Verdict};
 use specula_analyze::AnalyzeError;
 use specula_methods::LiveScene;
 use specula_scene::{Camera, MaterialKind, Scene};
@@ -86,6 +87,101 @@ pub struct Settings {
     pub threshold: f64,
     /// The eye behind a lens (base in and out).
     pub lens_eye: lens::Eye,
+    /// A mirror view judged against a regulation, in the vehicle frame (its eyes are then
+    /// the R46 ocular points above its R point, and only its vehicle parts hide anything).
+    pub regulation: Option<RegulationSettings>,
+}
+
+/// The regulation a mirror view is judged against, and the vehicle it is laid out in.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RegulationSettings {
+    pub regulation: &'static Regulation,
+    /// The vehicle's forward axis (default: the scene camera's view, on the ground).
+    pub forward: Vec3,
+    pub r_point: Vec3,
+    pub outermost: Vec3,
+    pub side: Side,
+    /// The meshes of the vehicle's own body and fittings.
+    pub vehicle: Vec<usize>,
+}
+
+impl RegulationSettings {
+    /// A first layout to edit: the R point 635 mm below the centre eye point (so that the
+    /// ocular points are about it), the side the mirror lies on, the outermost plane through
+    /// the mirror's edge nearest the eye.
+    pub fn first(
+        scene: &Scene,
+        settings: &Settings,
+        regulation: &'static Regulation,
+    ) -> Option<RegulationSettings> {
+        let frame = VehicleFrame::new(&scene.camera, None).ok()?;
+        let bounds = scene.meshes[settings.object].bounds();
+        let side = Vehicle::side_of(&frame, settings.eye, bounds.center());
+        let outward = match side {
+            Side::Right => frame.right,
+            Side::Left => -frame.right,
+        };
+        let corners = (0..8).map(|k| {
+            Vec3::new(
+                if k & 1 == 0 {
+                    bounds.min.x
+                } else {
+                    bounds.max.x
+                },
+                if k & 2 == 0 {
+                    bounds.min.y
+                } else {
+                    bounds.max.y
+                },
+                if k & 4 == 0 {
+                    bounds.min.z
+                } else {
+                    bounds.max.z
+                },
+            )
+        });
+        let inner = corners.min_by(|a, b| a.dot(outward).total_cmp(&b.dot(outward)))?;
+        Some(RegulationSettings {
+            regulation,
+            forward: frame.forward,
+            r_point: settings.eye - frame.up * regulation::OCULAR_HEIGHT_M,
+            outermost: inner,
+            side,
+            vehicle: Vec::new(),
+        })
+    }
+
+    /// The vehicle frame along `forward`.
+    pub fn frame(&self, scene: &Scene) -> Result<VehicleFrame, AnalyzeError> {
+        VehicleFrame::new(&scene.camera, Some(self.forward))
+    }
+
+    /// What the analysis asks of the regulation module for this layout.
+    fn request(
+        &self,
+        scene: &Scene,
+        settings: &Settings,
+    ) -> Result<regulation::Request, AnalyzeError> {
+        let frame = self.frame(scene)?;
+        let mut view = settings.mirror_options(scene, frame);
+        view.obstacles = mirror_view::Obstacles::Vehicle(self.vehicle.clone());
+        let vehicle = Vehicle {
+            frame,
+            reference: self.r_point + frame.up * regulation::OCULAR_HEIGHT_M,
+            side: self.side,
+            outermost: Some(self.outermost),
+            median: self.r_point + frame.up * regulation::OCULAR_HEIGHT_M,
+            ground_y: settings.ground_y,
+        };
+        Ok(regulation::Request {
+            regulation: self.regulation,
+            vehicle,
+            eyes: regulation::ocular_points(&frame, self.r_point).to_vec(),
+            eye_sets: regulation::EyeSets::Together,
+            eyes_option: "R point",
+            view,
+        })
+    }
 }
 
 impl Settings {
@@ -106,6 +202,7 @@ impl Settings {
             glare_size: (320, 240),
             threshold: 1e-3,
             lens_eye: lens::Eye::Right,
+            regulation: None,
         }
     }
 
@@ -218,7 +315,14 @@ impl Settings {
         let frame = self.frame(scene)?;
         self.eyes.points(self.eye, &frame)?;
         match self.kind {
-            Kind::MirrorView => self.mirror_options(scene, frame).validate(scene),
+            Kind::MirrorView => match &self.regulation {
+                Some(r) => {
+                    let request = r.request(scene, self)?;
+                    request.view.validate(scene)?;
+                    request.vehicle.validate()
+                }
+                None => self.mirror_options(scene, frame).validate(scene),
+            },
             Kind::Glare => self.glare_options()?.validate(scene),
             Kind::Lens => self.lens_options(scene).map(|_| ()),
         }
@@ -241,6 +345,22 @@ pub struct Request {
     pub tolerance: Option<f64>,
     /// What a lens overlay maps (default mean power).
     pub lens_map: Option<LensMap>,
+    pub regulation: Option<RegulationRequest>,
+}
+
+/// A regulation to judge a mirror view against, objects by name.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RegulationRequest {
+    pub name: String,
+    /// Default: the scene camera's view direction.
+    pub forward: Option<Vec3>,
+    /// Default: 635 mm below the centre eye point.
+    pub r_point: Option<Vec3>,
+    /// Default: the mirror's edge nearest the eyes.
+    pub outermost: Option<Vec3>,
+    /// Default: the side the mirror lies on.
+    pub side: Option<Side>,
+    pub vehicle: Vec<String>,
 }
 
 impl Request {
@@ -281,6 +401,39 @@ impl Request {
         settings.range_m = self.range_m.unwrap_or(settings.range_m);
         settings.ground_y = self.ground_y.unwrap_or(settings.ground_y);
         settings.tolerance = self.tolerance.unwrap_or(settings.tolerance);
+        if let Some(r) = &self.regulation {
+            if self.kind != Kind::MirrorView {
+                return Err(AnalyzeError::BadOption {
+                    option: "regulation",
+                    reason: "only a mirror view is judged against a regulation".into(),
+                });
+            }
+            let regulation = regulation::by_name(&r.name)?;
+            let mut layout = RegulationSettings::first(scene, &settings, regulation).ok_or(
+                AnalyzeError::BadOption {
+                    option: "regulation",
+                    reason: "the scene camera gives no vehicle frame".into(),
+                },
+            )?;
+            layout.forward = r.forward.unwrap_or(layout.forward);
+            let frame = layout.frame(scene)?;
+            layout.r_point = r
+                .r_point
+                .unwrap_or(settings.eye - frame.up * regulation::OCULAR_HEIGHT_M);
+            // The side the mirror lies on, seen from the ocular points.
+            let ocular_middle = layout.r_point + frame.up * regulation::OCULAR_HEIGHT_M;
+            let centre = scene.meshes[settings.object].bounds().center();
+            layout.side = r
+                .side
+                .unwrap_or_else(|| Vehicle::side_of(&frame, ocular_middle, centre));
+            layout.outermost = r.outermost.unwrap_or(layout.outermost);
+            layout.vehicle = r
+                .vehicle
+                .iter()
+                .map(|name| specula_analyze::object(scene, "vehicle", name))
+                .collect::<Result<_, _>>()?;
+            settings.regulation = Some(layout);
+        }
         settings.check(scene)?;
         Ok(settings)
     }
@@ -316,6 +469,8 @@ pub enum Analysed {
     MirrorView {
         view: MirrorView,
         ground: GroundGrid,
+        /// Judged against a regulation: the verdict and its fields' corners on the ground.
+        judged: Option<Box<(Verdict, Vec<[Vec2; 4]>)>>,
     },
     Glare(Glare),
     Lens(Box<lens::Report>),
@@ -544,10 +699,18 @@ impl Analysis {
     pub fn overview(&self, fov_y_deg: f32) -> Option<Camera> {
         let outcome = self.shown.as_ref()?;
         match &outcome.result {
-            Analysed::MirrorView { view, ground } => {
-                let (min, max) = match view.report.region {
-                    Some(r) => (Vec2::new(r.x0, r.z0), Vec2::new(r.x1, r.z1)),
-                    None => (ground.min, ground.max),
+            Analysed::MirrorView {
+                view,
+                ground,
+                judged,
+            } => {
+                let (min, max) = match (judged, view.report.region) {
+                    (Some(j), _) => j.1.iter().flatten().fold(
+                        (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY)),
+                        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+                    ),
+                    (None, Some(r)) => (Vec2::new(r.x0, r.z0), Vec2::new(r.x1, r.z1)),
+                    (None, None) => (ground.min, ground.max),
                 };
                 let centre = (min + max) * 0.5;
                 let target = Vec3::new(centre.x, self.settings.ground_y, centre.y);
@@ -610,11 +773,16 @@ impl Analysis {
         let glare_eye = self.glare_eye();
         let colour_of = |ray: &Ray| -> [u8; 4] {
             match &outcome.result {
-                Analysed::MirrorView { view, ground } => ground_colour(
+                Analysed::MirrorView {
+                    view,
+                    ground,
+                    judged,
+                } => ground_colour(
                     accel,
                     ray,
                     ground_y,
                     view.report.region,
+                    judged.as_ref().map(|j| j.1.as_slice()).unwrap_or(&[]),
                     ground,
                     outcome.eyes.len(),
                 ),
@@ -664,6 +832,7 @@ fn ground_colour(
     ray: &Ray,
     ground_y: f32,
     region: Option<Region>,
+    fields: &[[Vec2; 4]],
     ground: &GroundGrid,
     eyes: usize,
 ) -> [u8; 4] {
@@ -682,8 +851,14 @@ fn ground_colour(
     let p = ray.origin + ray.dir * t;
     let p = Vec2::new(p.x, p.z);
     let seen = ground.count(p);
-    let in_region =
-        region.is_some_and(|r| p.x >= r.x0 && p.x <= r.x1 && p.y >= r.z0 && p.y <= r.z1);
+    let in_field = |q: &[Vec2; 4]| {
+        let sides = (0..4).map(|k| (q[(k + 1) % 4] - q[k]).perp_dot(p - q[k]));
+        let signs: Vec<f32> = sides.collect();
+        signs.iter().all(|s| *s >= 0.0) || signs.iter().all(|s| *s <= 0.0)
+    };
+    let in_region = region
+        .is_some_and(|r| p.x >= r.x0 && p.x <= r.x1 && p.y >= r.z0 && p.y <= r.z1)
+        || fields.iter().any(in_field);
     match (in_region, seen) {
         (true, 0) => [214, 39, 40, 150],
         (true, n) if usize::from(n) == eyes => [44, 190, 44, 130],
@@ -886,22 +1061,52 @@ fn run(
 ) -> Result<(), AnalyzeError> {
     let accel = SceneAccel::new(scene);
     let frame = settings.frame(scene)?;
-    let all = settings.eyes.points(settings.eye, &frame)?;
-    let centre = vec![settings.eye];
+    let all = match &settings.regulation {
+        Some(layout) => regulation::ocular_points(&layout.frame(scene)?, layout.r_point).to_vec(),
+        None => settings.eyes.points(settings.eye, &frame)?,
+    };
+    // A regulation's verdict is of both ocular points together: one stage.
+    let centre = if settings.regulation.is_some() {
+        all.clone()
+    } else {
+        vec![settings.eye]
+    };
     let only_centre = all == centre;
     let analyse = |eyes: &[Vec3]| -> Result<Analysed, AnalyzeError> {
         Ok(match settings.kind {
-            Kind::MirrorView => {
-                let view = mirror_view::analyze(
-                    scene,
-                    &accel,
-                    eyes,
-                    &settings.mirror_options(scene, frame),
-                    &|_| {},
-                )?;
-                let ground = ground_grid(&view);
-                Analysed::MirrorView { view, ground }
-            }
+            Kind::MirrorView => match &settings.regulation {
+                Some(layout) => {
+                    let request = layout.request(scene, settings)?;
+                    let judged = regulation::evaluate(scene, &accel, &request, &|_| {})?;
+                    let fields = request
+                        .regulation
+                        .fields
+                        .iter()
+                        .map(|f| request.vehicle.field_corners(f, settings.range_m))
+                        .collect::<Result<Vec<_>, _>>()?;
+                    let ground = ground_grid(&judged.view);
+                    Analysed::MirrorView {
+                        view: judged.view,
+                        ground,
+                        judged: Some(Box::new((judged.verdict, fields))),
+                    }
+                }
+                None => {
+                    let view = mirror_view::analyze(
+                        scene,
+                        &accel,
+                        eyes,
+                        &settings.mirror_options(scene, frame),
+                        &|_| {},
+                    )?;
+                    let ground = ground_grid(&view);
+                    Analysed::MirrorView {
+                        view,
+                        ground,
+                        judged: None,
+                    }
+                }
+            },
             Kind::Glare => Analysed::Glare(glare::analyze(
                 scene,
                 &accel,
@@ -956,6 +1161,39 @@ pub fn summary(analysis: &Analysis, scene: &Scene) -> String {
         outcome.milliseconds
     );
     match &outcome.result {
+        Analysed::MirrorView {
+            judged: Some(judged),
+            ..
+        } => {
+            let v = &judged.0;
+            let fields: Vec<String> = v
+                .fields
+                .iter()
+                .map(|f| {
+                    format!(
+                        "'{}' {:.2} % ± {:.2} % seen, body {:.2} %, margin {:.2} m: {}",
+                        f.name,
+                        f.figures.seen_share * 100.0,
+                        f.figures.seen_share_uncertainty * 100.0,
+                        f.figures.hidden_by_vehicle_share * 100.0,
+                        f.figures.outer_margin_m.min(f.figures.near_margin_m),
+                        if f.figures.passed { "pass" } else { "FAIL" }
+                    )
+                })
+                .collect();
+            format!(
+                "{} of '{}': {}; {}; mirror checks {}; {timing}",
+                v.name,
+                scene.meshes[analysis.settings.object].name,
+                if v.passed { "PASSES" } else { "FAILS" },
+                fields.join("; "),
+                if v.mirror_checks.iter().all(|c| c.passed) {
+                    "pass"
+                } else {
+                    "FAIL"
+                }
+            )
+        }
         Analysed::MirrorView { view, .. } => {
             let f = &view.report.figures;
             let region = match (f.region_seen_by_any, f.blind_area_m2) {
@@ -1128,6 +1366,7 @@ mod tests {
             ground_y: Some(0.0),
             tolerance: None,
             lens_map: None,
+            regulation: None,
         };
         let settings = request.settings(live.scene()).unwrap();
         let range = settings.range_m;
@@ -1196,6 +1435,92 @@ mod tests {
         );
         assert!(checked > 10_000, "{checked}");
         assert!(counts.iter().all(|c| *c > 100), "{counts:?}");
+    }
+
+    #[test]
+    fn a_regulation_s_fields_follow_the_dragged_mirror_with_the_command_s_verdict() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../scenes/car-door-mirror.toml"
+        );
+        let mut live = LiveScene::new(specula_scene::load(path).unwrap());
+        let request = Request {
+            kind: Kind::MirrorView,
+            object: "door mirror".into(),
+            source: None,
+            eye: None,
+            eyes: Eyes::Camera,
+            region: None,
+            range_m: None,
+            ground_y: Some(0.0),
+            tolerance: None,
+            lens_map: None,
+            regulation: Some(RegulationRequest {
+                name: "r46-iii".into(),
+                forward: Some(Vec3::NEG_Z),
+                r_point: Some(Vec3::new(-0.37, 0.55, 0.0)),
+                outermost: Some(Vec3::new(-0.95, 0.6, 1.5)),
+                side: None,
+                vehicle: [
+                    "car body",
+                    "roof",
+                    "A-pillar",
+                    "door handle",
+                    "rear wing",
+                    "mirror housing",
+                ]
+                .map(String::from)
+                .to_vec(),
+            }),
+        };
+        let settings = request.settings(live.scene()).unwrap();
+        let layout = settings.regulation.clone().unwrap();
+        assert_eq!(layout.side, Side::Left, "the mirror lies left of the eyes");
+        let mut analysis = Analysis::new(settings.clone());
+        analysis.finish(&live);
+        let verdict = |a: &Analysis| match &a.outcome().unwrap().result {
+            Analysed::MirrorView {
+                judged: Some(j), ..
+            } => j.0.clone(),
+            _ => panic!("a judged mirror view"),
+        };
+        let shown = verdict(&analysis);
+        // The command's verdict on the same layout.
+        let direct = regulation::evaluate(
+            live.scene(),
+            live.accel(),
+            &layout.request(live.scene(), &settings).unwrap(),
+            &|_| {},
+        )
+        .unwrap()
+        .verdict;
+        for (a, b) in shown.fields.iter().zip(&direct.fields) {
+            assert_eq!(a.figures.seen_share, b.figures.seen_share);
+            assert_eq!(
+                a.figures.hidden_by_vehicle_share,
+                b.figures.hidden_by_vehicle_share
+            );
+        }
+        assert!(shown.fields.iter().any(|f| f.figures.seen_share < 1.0));
+        // The fields on the ground: red where blind, green where seen, seen from above.
+        let view = analysis.overview(50.0).unwrap();
+        let overlay = analysis.overlay(&live, &view, 160, 120).unwrap();
+        let count = |c: [u8; 4]| overlay.pixels.iter().filter(|p| **p == c).count();
+        // Green by both ocular points or by one (fainter): either is seen, ambinocularly.
+        let green = count([44, 190, 44, 130]) + count([44, 190, 44, 80]);
+        let red = count([214, 39, 40, 150]);
+        eprintln!("field pixels: {green} seen, {red} blind");
+        assert!(green > 100 && red > 20, "{green} seen, {red} blind");
+        // Turning the mirror outwards, away from behind the A-pillar's shadow: a new verdict.
+        let mirror = live.object("door mirror").unwrap();
+        live.rotate_object(None, mirror, Vec3::Y, 6.0).unwrap();
+        analysis.update(&live);
+        analysis.finish(&live);
+        let turned = verdict(&analysis);
+        assert_ne!(
+            turned.fields[0].figures.seen_share,
+            shown.fields[0].figures.seen_share
+        );
     }
 
     #[test]
@@ -1298,6 +1623,7 @@ mod tests {
             ground_y: None,
             tolerance: None,
             lens_map: None,
+            regulation: None,
         };
         let mut analysis = Analysis::new(request.settings(live.scene()).unwrap());
         analysis.finish(&live);
@@ -1378,6 +1704,7 @@ mod tests {
             ground_y: None,
             tolerance: None,
             lens_map: None,
+            regulation: None,
         };
         let cases = [
             (
@@ -1455,6 +1782,7 @@ mod tests {
             ground_y: None,
             tolerance: None,
             lens_map: Some(LensMap::Cylinder),
+            regulation: None,
         };
         let mut analysis = Analysis::new(request.settings(live.scene()).unwrap());
         assert_eq!(analysis.settings.eye, Vec3::new(0.0, 0.0, -0.038));

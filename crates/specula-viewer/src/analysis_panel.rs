@@ -5,9 +5,9 @@
 use egui::{Color32, RichText};
 use glam::Vec3;
 use specula_analyze::frame::Eyes;
-use specula_analyze::mirror_view::Region;
+use specula_analyze::regulation::{Side, Verdict, REGULATIONS};
 
-use crate::analysis::{Analysed, Analysis, Kind, Settings};
+use crate::analysis::{Analysed, Analysis, Kind, RegulationSettings, Settings};
 use crate::app::UiState;
 use crate::session::Session;
 
@@ -75,12 +75,13 @@ fn contents(ui: &mut egui::Ui, session: &mut Session, state: &mut UiState) {
     let settings = &session.analysis.as_ref().expect("checked above").settings;
     let objects = Settings::objects(scene, settings.kind);
     let sources = Settings::sources(scene);
-    let mirror_side = {
-        let centre = scene.meshes[settings.object].bounds().center();
-        specula_analyze::frame::VehicleFrame::new(&scene.camera, None)
-            .map(|f| (f, (centre - settings.eye).dot(f.right).signum()))
-            .ok()
-    };
+    let first_layouts: Vec<Option<RegulationSettings>> = REGULATIONS
+        .iter()
+        .map(|r| RegulationSettings::first(scene, settings, r))
+        .collect();
+    let parts: Vec<usize> = (0..scene.meshes.len())
+        .filter(|&m| m != settings.object)
+        .collect();
     let default_centre = (settings.kind == Kind::Lens).then(|| {
         specula_analyze::lens::default_options(scene, settings.object)
             .map(|o| o.rotation_centre.as_vec3())
@@ -94,7 +95,8 @@ fn contents(ui: &mut egui::Ui, session: &mut Session, state: &mut UiState) {
         None => eye_section(ui, &mut edited, camera_eye, view_eye),
     }
     if edited.kind == Kind::MirrorView {
-        ground_section(ui, &mut edited, mirror_side);
+        ground_section(ui, &mut edited);
+        regulation_section(ui, &mut edited, &first_layouts, &names, &parts);
     }
     if edited != analysis.settings {
         analysis.settings = edited;
@@ -104,7 +106,7 @@ fn contents(ui: &mut egui::Ui, session: &mut Session, state: &mut UiState) {
     let (label, hover) = match analysis.settings.kind {
         Kind::MirrorView => (
             "look at the ground",
-            "the view from above the required region (else the ground seen)",
+            "the view from above the regulation's fields (else the ground seen)",
         ),
         Kind::Glare => (
             "look from the eye point",
@@ -320,11 +322,7 @@ fn eye_section(ui: &mut egui::Ui, settings: &mut Settings, camera_eye: Vec3, vie
     }
 }
 
-fn ground_section(
-    ui: &mut egui::Ui,
-    settings: &mut Settings,
-    mirror_side: Option<(specula_analyze::frame::VehicleFrame, f32)>,
-) {
+fn ground_section(ui: &mut egui::Ui, settings: &mut Settings) {
     egui::Grid::new("ground").num_columns(2).show(ui, |ui| {
         ui.label("ground y");
         ui.add(
@@ -350,46 +348,100 @@ fn ground_section(
         .on_hover_text("refinement stops when the figures change by less than this share");
         ui.end_row();
     });
-    let mut has_region = settings.region.is_some();
-    ui.checkbox(&mut has_region, "required region")
-        .on_hover_text("a rectangle on the ground, x and z bounds in metres");
-    match (has_region, settings.region) {
-        (false, _) => settings.region = None,
-        (true, None) => settings.region = default_region(settings.eye, mirror_side),
-        (true, Some(mut region)) => {
-            ui.horizontal(|ui| {
-                ui.label("x");
-                ui.add(egui::DragValue::new(&mut region.x0).speed(0.05));
-                ui.add(egui::DragValue::new(&mut region.x1).speed(0.05));
-                ui.label("z");
-                ui.add(egui::DragValue::new(&mut region.z0).speed(0.05));
-                ui.add(egui::DragValue::new(&mut region.z1).speed(0.05));
-            });
-            // A region dragged flat keeps its last area.
-            if let Ok(region) = Region::new(region.x0, region.z0, region.x1, region.z1) {
-                settings.region = Some(region);
-            }
-        }
-    }
 }
 
-/// A first region to edit: 4 m wide from 1 m beside the eye on the mirror's side, from 4 m to
-/// 20 m behind it (the shape of R46's field of vision for a main exterior mirror), as x and z
-/// bounds.
-fn default_region(
-    eye: Vec3,
-    mirror_side: Option<(specula_analyze::frame::VehicleFrame, f32)>,
-) -> Option<Region> {
-    let (frame, side) = mirror_side?;
-    let corner =
-        |lateral: f32, behind: f32| eye + frame.right * side * lateral - frame.forward * behind;
-    let (a, b) = (corner(1.0, 4.0), corner(5.0, 20.0));
-    let (c, d) = (corner(1.0, 20.0), corner(5.0, 4.0));
-    let xs = [a.x, b.x, c.x, d.x];
-    let zs = [a.z, b.z, c.z, d.z];
-    let min = |v: [f32; 4]| v.into_iter().fold(f32::INFINITY, f32::min);
-    let max = |v: [f32; 4]| v.into_iter().fold(f32::NEG_INFINITY, f32::max);
-    Region::new(min(xs), min(zs), max(xs), max(zs)).ok()
+/// The regulation the mirror is judged against and the vehicle's layout: its R point (the
+/// ocular points are 635 mm above it), the outermost point on the mirror's side, the side, and
+/// the parts of the body that may hide the mirror and the road.
+fn regulation_section(
+    ui: &mut egui::Ui,
+    settings: &mut Settings,
+    first_layouts: &[Option<RegulationSettings>],
+    names: &[String],
+    parts: &[usize],
+) {
+    let mut chosen = settings
+        .regulation
+        .as_ref()
+        .and_then(|r| REGULATIONS.iter().position(|x| x.name == r.regulation.name));
+    ui.horizontal(|ui| {
+        ui.label("regulation");
+        egui::ComboBox::from_id_salt("regulation")
+            .selected_text(chosen.map(|k| REGULATIONS[k].name).unwrap_or("none"))
+            .show_ui(ui, |ui| {
+                ui.selectable_value(&mut chosen, None, "none");
+                for (k, r) in REGULATIONS.iter().enumerate() {
+                    ui.selectable_value(&mut chosen, Some(k), r.name)
+                        .on_hover_text(r.title);
+                }
+            });
+    });
+    match (chosen, &mut settings.regulation) {
+        (None, _) => settings.regulation = None,
+        (Some(k), Some(layout)) if layout.regulation.name == REGULATIONS[k].name => {}
+        (Some(k), Some(layout)) => layout.regulation = &REGULATIONS[k],
+        (Some(k), None) => settings.regulation = first_layouts[k].clone(),
+    }
+    let Some(layout) = &mut settings.regulation else {
+        ui.small("a regulation lays its fields on the ground in the vehicle frame and judges them");
+        return;
+    };
+    let xyz = |ui: &mut egui::Ui, label: &str, p: &mut Vec3, hover: &str| {
+        ui.horizontal(|ui| {
+            ui.label(label);
+            for v in [&mut p.x, &mut p.y, &mut p.z] {
+                ui.add(egui::DragValue::new(v).speed(0.005).suffix(" m"));
+            }
+        })
+        .response
+        .on_hover_text(hover);
+    };
+    xyz(
+        ui,
+        "forward",
+        &mut layout.forward,
+        "the vehicle's forward axis (made horizontal); up is +Y",
+    );
+    xyz(
+        ui,
+        "R point",
+        &mut layout.r_point,
+        "the driver's R point: the ocular points are 635 mm above it, 65 mm apart",
+    );
+    xyz(
+        ui,
+        "outermost",
+        &mut layout.outermost,
+        "the vehicle's outermost point on the mirror's side: the fields' inner boundary",
+    );
+    ui.horizontal(|ui| {
+        ui.label("side");
+        ui.selectable_value(&mut layout.side, Side::Left, "left");
+        ui.selectable_value(&mut layout.side, Side::Right, "right");
+    });
+    egui::CollapsingHeader::new(format!("vehicle parts ({})", layout.vehicle.len()))
+        .id_salt("vehicle parts")
+        .show(ui, |ui| {
+            let mut shown: Vec<&str> = Vec::new();
+            for &m in parts {
+                if shown.contains(&names[m].as_str()) {
+                    continue;
+                }
+                shown.push(&names[m]);
+                let same: Vec<usize> = parts
+                    .iter()
+                    .copied()
+                    .filter(|&k| names[k] == names[m])
+                    .collect();
+                let mut on = same.iter().all(|k| layout.vehicle.contains(k));
+                if ui.checkbox(&mut on, &names[m]).changed() {
+                    layout.vehicle.retain(|k| !same.contains(k));
+                    if on {
+                        layout.vehicle.extend(&same);
+                    }
+                }
+            }
+        });
 }
 
 fn figures_section(ui: &mut egui::Ui, analysis: &mut Analysis) {
@@ -418,6 +470,10 @@ fn figures_section(ui: &mut egui::Ui, analysis: &mut Analysis) {
     }
     let mut select = None;
     match &outcome.result {
+        Analysed::MirrorView {
+            judged: Some(judged),
+            ..
+        } => verdict_section(ui, &judged.0),
         Analysed::MirrorView { view, .. } => {
             let f = &view.report.figures;
             egui::Grid::new("mirror figures")
@@ -647,4 +703,55 @@ fn eyebox_map(
         .then(|| response.interact_pointer_pos())
         .flatten()?;
     (0..count).find(|&k| cell_rect(k).expand(1.0).contains(clicked))
+}
+
+/// The verdict: each field's seen share with its uncertainty, the body's share, the margin and
+/// whether it passes; the mirror's own checks.
+fn verdict_section(ui: &mut egui::Ui, v: &Verdict) {
+    let colour = |passed: bool| {
+        if passed {
+            Color32::LIGHT_GREEN
+        } else {
+            Color32::LIGHT_RED
+        }
+    };
+    ui.label(
+        RichText::new(format!(
+            "{}: {}",
+            v.title,
+            if v.passed { "passes" } else { "fails" }
+        ))
+        .color(colour(v.passed)),
+    );
+    egui::Grid::new("fields").num_columns(5).show(ui, |ui| {
+        for h in ["field", "seen", "body", "margin", ""] {
+            ui.small(h);
+        }
+        ui.end_row();
+        for f in &v.fields {
+            let g = &f.figures;
+            ui.label(&f.name).on_hover_text(&f.source);
+            ui.label(format!(
+                "{:.2} ± {:.2} %",
+                g.seen_share * 100.0,
+                (g.seen_share_uncertainty + f.surface_uncertainty.unwrap_or(0.0)) * 100.0
+            ));
+            ui.label(format!("{:.2} %", g.hidden_by_vehicle_share * 100.0));
+            ui.label(format!("{:.2} m", g.outer_margin_m.min(g.near_margin_m)));
+            ui.label(RichText::new(if g.passed { "pass" } else { "fail" }).color(colour(g.passed)));
+            ui.end_row();
+        }
+    });
+    for c in &v.mirror_checks {
+        ui.label(
+            RichText::new(format!("{}: {} ({})", c.name, c.measured, c.required))
+                .color(colour(c.passed)),
+        )
+        .on_hover_text(&c.source);
+    }
+    ui.small(format!(
+        "the body's parts may hide {:.0} % of a field unexcused; on the ground: green seen, red \
+         blind",
+        v.allowance_share * 100.0
+    ));
 }

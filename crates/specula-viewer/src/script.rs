@@ -38,7 +38,9 @@
 //! An `analysis` step also takes `eye = [x, y, z]` (the centre eye point; a lens's centre of
 //! rotation), `range`, `ground` and `tolerance`; `eyes` is "centre" or "ocular", `eyebox` is
 //! [W, H, NX, NY], `region` is [X0, Z0, X1, Z1]; `kind = "lens"` takes `map = "mean-power"` or
-//! `"cylinder"`. The step waits for the analysis and prints its figures; so does each
+//! `"cylinder"`. A mirror view takes `regulation = "r46-iii"` (any of `specula analyze
+//! mirror-view --regulation`'s) with `forward`, `r_point`, `outermost` ([x, y, z]), `side` ("left" or
+//! "right") and `vehicle` (the body's parts by name), as the command's options. The step waits for the analysis and prints its figures; so does each
 //! screenshot taken while one is on (the screenshot shows its overlay).
 
 use std::path::{Path, PathBuf};
@@ -49,8 +51,9 @@ use serde::Deserialize;
 use specula_analyze::frame::Eyes;
 use specula_analyze::mirror_view::Region;
 
-use crate::analysis::{Kind, LensMap, Request};
+use crate::analysis::{Kind, LensMap, RegulationRequest, Request};
 use crate::session::ViewMode;
+use specula_analyze::regulation::Side;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Step {
@@ -149,6 +152,12 @@ struct RawAnalysis {
     ground: Option<f32>,
     tolerance: Option<f64>,
     map: Option<String>,
+    regulation: Option<String>,
+    forward: Option<[f32; 3]>,
+    r_point: Option<[f32; 3]>,
+    outermost: Option<[f32; 3]>,
+    side: Option<String>,
+    vehicle: Option<Vec<String>>,
 }
 
 #[derive(Deserialize)]
@@ -335,7 +344,13 @@ fn analysis(a: RawAnalysis) -> Result<Option<Request>, String> {
                 || a.range.is_some()
                 || a.ground.is_some()
                 || a.tolerance.is_some()
-                || a.map.is_some();
+                || a.map.is_some()
+                || a.regulation.is_some()
+                || a.forward.is_some()
+                || a.r_point.is_some()
+                || a.outermost.is_some()
+                || a.side.is_some()
+                || a.vehicle.is_some();
             if others {
                 return Err("analysis: kind = \"off\" takes no other key".into());
             }
@@ -399,7 +414,51 @@ fn analysis(a: RawAnalysis) -> Result<Option<Request>, String> {
         }
         (Some(_), _) => return Err("analysis.map: only a lens analysis draws a map".into()),
     };
+    let vehicle_keys = a.forward.is_some()
+        || a.r_point.is_some()
+        || a.outermost.is_some()
+        || a.side.is_some()
+        || a.vehicle.is_some();
+    let regulation =
+        match a.regulation {
+            None if vehicle_keys => return Err(
+                "analysis: forward, r_point, outermost, side and vehicle lay out a regulation's fields: \
+                 give regulation = \"NAME\" too"
+                    .into(),
+            ),
+            None => None,
+            Some(name) => {
+                for (key, p) in [
+                    ("analysis.forward", &a.forward),
+                    ("analysis.r_point", &a.r_point),
+                    ("analysis.outermost", &a.outermost),
+                ] {
+                    if let Some(p) = p {
+                        finite(p, key)?;
+                    }
+                }
+                let side = match a.side.as_deref() {
+                    None => None,
+                    Some("left") => Some(Side::Left),
+                    Some("right") => Some(Side::Right),
+                    Some(other) => {
+                        return Err(format!(
+                            "analysis.side = \"{other}\": expected left or right"
+                        ))
+                    }
+                };
+                Some(RegulationRequest {
+                    name,
+                    forward: a.forward.map(Vec3::from_array),
+                    r_point: a.r_point.map(Vec3::from_array),
+                    outermost: a.outermost.map(Vec3::from_array),
+                    side,
+                    vehicle: a.vehicle.unwrap_or_default(),
+                })
+            }
+        };
     Ok(Some(Request {
+        regulation,
         kind,
         lens_map,
         object,
