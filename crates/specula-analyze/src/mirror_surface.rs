@@ -105,7 +105,7 @@ impl<'a> MirrorSurface<'a> {
     fn exact_uv(cell: usize, b: Vec2) -> DVec2 {
         let square = cell / 2;
         let (i, j) = ((square % EXACT_CELLS) as f64, (square / EXACT_CELLS) as f64);
-        let corners = if cell % 2 == 0 {
+        let corners = if cell.is_multiple_of(2) {
             [
                 DVec2::new(0.0, 0.0),
                 DVec2::new(1.0, 0.0),
@@ -385,10 +385,11 @@ fn least_squares(rows: &[([f64; 6], f64)], scale: f64) -> [f64; 6] {
         if m[col][col].abs() < 1e-300 {
             continue;
         }
+        let pivot_row = m[col];
         for r in col + 1..6 {
-            let f = m[r][col] / m[col][col];
-            for k in col..6 {
-                m[r][k] -= f * m[col][k];
+            let f = m[r][col] / pivot_row[col];
+            for (entry, p) in m[r].iter_mut().zip(&pivot_row).skip(col) {
+                *entry -= f * p;
             }
             y[r] -= f * y[col];
         }

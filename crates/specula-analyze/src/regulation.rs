@@ -535,7 +535,7 @@ impl FieldGrid {
         to_field: &impl Fn(Vec2) -> (f64, f64),
     ) {
         for t in triangles {
-            let q = t.map(|p| to_field(p));
+            let q = t.map(to_field);
             let (lo_s, hi_s) = (
                 q[0].0.min(q[1].0).min(q[2].0),
                 q[0].0.max(q[1].0).max(q[2].0),

@@ -23,7 +23,7 @@ use std::f64::consts::{PI, TAU};
 pub enum ExactShape {
     /// A bicubic Bézier patch, `control[row][column]`: u along a row, v down the columns; its
     /// normal is Pu × Pv.
-    BicubicPatch { control: [[DVec3; 4]; 4] },
+    BicubicPatch { control: Box<[[DVec3; 4]; 4]> },
     /// A sphere of `radius` about the origin: u turns about +Y from +Z towards +X, v runs from
     /// the +Y pole (0) to the −Y pole (1); the normal points out.
     Sphere { radius: f64 },
@@ -268,7 +268,9 @@ mod tests {
     #[test]
     fn a_ray_aimed_at_a_sample_meets_the_surface_there() {
         let control = control_points(&crate::generators::door_mirror_control_points());
-        let mut patch = ExactSurface::new(ExactShape::BicubicPatch { control });
+        let mut patch = ExactSurface::new(ExactShape::BicubicPatch {
+            control: Box::new(control),
+        });
         patch.transform(Mat4::from_translation(Vec3::new(0.3, -0.2, 0.1)));
         let eye = Vec3::new(0.28, 0.1, 0.9);
         for uv in [

@@ -175,7 +175,9 @@ pub fn bicubic_patch(control: &[[Vec3; 4]; 4], n: u32) -> Mesh {
             uv: Vec2::new(u, v),
         }
     });
-    mesh.exact = Some(ExactSurface::new(ExactShape::BicubicPatch { control }));
+    mesh.exact = Some(ExactSurface::new(ExactShape::BicubicPatch {
+        control: Box::new(control),
+    }));
     finish(mesh)
 }
 

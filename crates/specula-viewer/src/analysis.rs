@@ -467,7 +467,7 @@ impl GroundGrid {
 /// An analysis's result, as the overlay and the panel read it.
 pub enum Analysed {
     MirrorView {
-        view: MirrorView,
+        view: Box<MirrorView>,
         ground: GroundGrid,
         /// Judged against a regulation: the verdict and its fields' corners on the ground.
         judged: Option<Box<(Verdict, Vec<[Vec2; 4]>)>>,
@@ -1086,7 +1086,7 @@ fn run(
                         .collect::<Result<Vec<_>, _>>()?;
                     let ground = ground_grid(&judged.view);
                     Analysed::MirrorView {
-                        view: judged.view,
+                        view: Box::new(judged.view),
                         ground,
                         judged: Some(Box::new((judged.verdict, fields))),
                     }
@@ -1101,7 +1101,7 @@ fn run(
                     )?;
                     let ground = ground_grid(&view);
                     Analysed::MirrorView {
-                        view,
+                        view: Box::new(view),
                         ground,
                         judged: None,
                     }

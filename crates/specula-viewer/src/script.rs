@@ -82,7 +82,7 @@ pub enum Step {
     Screenshot(PathBuf),
     View(ViewMode),
     /// Turns the analysis on (or off: None).
-    Analysis(Option<Request>),
+    Analysis(Option<Box<Request>>),
     /// Puts the view's camera here.
     Camera {
         eye: Vec3,
@@ -305,7 +305,7 @@ fn step(table: toml::Table) -> Result<Step, String> {
         }
         Step::WindowScreenshot(path)
     } else if let Some(a) = raw.analysis {
-        Step::Analysis(analysis(a)?)
+        Step::Analysis(analysis(a)?.map(Box::new))
     } else if let Some(c) = raw.camera {
         if c.as_str() == Some("analysis") {
             Step::AnalysisCamera
