@@ -439,3 +439,39 @@ fn the_mirror_rules_flip_at_their_edges() {
         );
     }
 }
+
+#[test]
+fn eyellipse_points_lie_on_the_tilted_ellipsoid() {
+    let frame = frame(Vec3::NEG_Z);
+    let (centre, axes) = (Vec3::new(0.3, 1.2, 0.5), Vec3::new(0.1, 0.03, 0.05));
+    for (count, tilt) in [(26usize, 0.0f32), (26, 12.0), (40, 12.0)] {
+        let points =
+            specula_analyze::regulation::eyellipse_points(&frame, centre, axes, tilt, count)
+                .unwrap();
+        assert_eq!(points.len(), count);
+        let (c, s) = (tilt.to_radians().cos(), tilt.to_radians().sin());
+        let forward = frame.forward * c + frame.up * s;
+        let up = frame.up * c - frame.forward * s;
+        for p in &points {
+            let d = *p - centre;
+            let r = (d.dot(forward) / axes.x).powi(2)
+                + (d.dot(frame.right) / axes.y).powi(2)
+                + (d.dot(up) / axes.z).powi(2);
+            assert!((r - 1.0).abs() < 1e-4, "{p}: {r}");
+        }
+        // Both ends of every axis are among the 26.
+        if count == 26 {
+            assert!(points
+                .iter()
+                .any(|p| (*p - centre - forward * axes.x).length() < 1e-5));
+            assert!(points
+                .iter()
+                .any(|p| (*p - centre + up * axes.z).length() < 1e-5));
+        }
+    }
+    for bad in [Vec3::new(0.1, 0.0, 0.05), Vec3::new(0.1, f32::NAN, 0.05)] {
+        let e = specula_analyze::regulation::eyellipse_points(&frame, centre, bad, 0.0, 26)
+            .unwrap_err();
+        assert!(e.to_string().contains("--eyellipse"), "{e}");
+    }
+}
