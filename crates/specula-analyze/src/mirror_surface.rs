@@ -41,14 +41,20 @@ impl SurfaceModel {
         }
     }
 
-    /// The best model `mesh` has: its exact surface, else its triangles.
+    /// The best model `mesh` has as a mirror: its exact surface, else its triangles (a lens's
+    /// exact surfaces are the lens analysis's: as a mirror it is its triangles).
     pub fn best_for(mesh: &Mesh) -> SurfaceModel {
-        if mesh.exact.is_some() {
+        if mirror_exact(mesh).is_some() {
             SurfaceModel::Exact
         } else {
             SurfaceModel::Mesh
         }
     }
+}
+
+/// The exact surface a mirror analysis can sample: a patch's, a sphere's or a cap's.
+pub fn mirror_exact(mesh: &Mesh) -> Option<&ExactSurface> {
+    mesh.exact.as_ref().filter(|exact| exact.lens().is_none())
 }
 
 /// The exact surface's parameter square is cut into this many squares per side, each into two
@@ -85,7 +91,7 @@ impl<'a> MirrorSurface<'a> {
         let m = &scene.meshes[mesh];
         Some(match model {
             SurfaceModel::Mesh => MirrorSurface::Mesh { scene, mesh },
-            SurfaceModel::Exact => MirrorSurface::Exact(m.exact.as_ref()?),
+            SurfaceModel::Exact => MirrorSurface::Exact(mirror_exact(m)?),
             SurfaceModel::Smooth => MirrorSurface::Smooth {
                 mesh: m,
                 fits: LocalQuadric::fit_mesh(m),

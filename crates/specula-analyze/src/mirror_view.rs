@@ -165,7 +165,9 @@ impl Options {
                 });
             }
         }
-        if self.surface == SurfaceModel::Exact && mesh.exact.is_none() {
+        if self.surface == SurfaceModel::Exact
+            && crate::mirror_surface::mirror_exact(mesh).is_none()
+        {
             return Err(AnalyzeError::BadOption {
                 option: "--surface",
                 reason: format!(

@@ -211,6 +211,98 @@ relative luminance of {threshold}. {verdict}</p>
     Ok(path)
 }
 
+/// The lens report's tables of its surface, wear, magnification, focimeter readings, ordered
+/// prescription and verdict.
+fn lens_sections(r: &crate::lens::Report) -> String {
+    let mut html = String::from("<table>\n");
+    let row = |html: &mut String, name: &str, value: String| {
+        html.push_str(&format!("<tr><td>{name}</td><td>{value}</td></tr>\n"));
+    };
+    row(
+        &mut html,
+        "surface",
+        match r.surface_uncertainty_d {
+            Some(u) => format!("{} (surface uncertainty {u:.4} D)", r.surface.name()),
+            None => r.surface.name().into(),
+        },
+    );
+    row(
+        &mut html,
+        "as worn",
+        format!(
+            "pantoscopic tilt {}°, wrap {}°, vertex distance {:.2} mm, centre of rotation \
+             {:.1} mm behind the cornea",
+            r.wear.pantoscopic_deg,
+            r.wear.wrap_deg,
+            r.vertex_distance_mm,
+            r.rotation_behind_cornea_mm
+        ),
+    );
+    let [sh, sv] = r.spectacle_magnification;
+    let [rh, rv] = r.rotating_eye_magnification;
+    row(
+        &mut html,
+        "spectacle magnification (h, v)",
+        format!("{sh:.4}, {sv:.4} (the rotating eye's field: {rh:.4}, {rv:.4})"),
+    );
+    if let Some(b) = r.base_curve {
+        row(
+            &mut html,
+            "base curve",
+            format!(
+                "{:.2} D in the lens's index, {:.2} D in the 1.53 tooling index",
+                b.lens_index_d, b.tooling_index_d
+            ),
+        );
+    }
+    if let Some(c) = r.compensated {
+        row(
+            &mut html,
+            "compensated (to order)",
+            format!(
+                "{:.3} / {:.3} × {:.1} ({} iterations, residual {:.1e} D)",
+                c.ordered.sphere_d,
+                c.ordered.cylinder_d,
+                c.ordered.axis_deg,
+                c.iterations,
+                c.residual_d
+            ),
+        );
+    }
+    html.push_str("</table>\n<table>\n<tr><th>focimeter</th><th>at (mm)</th><th>sphere D</th><th>cylinder D</th><th>axis °</th><th>prism Δ (out, up)</th><th>± D</th></tr>\n");
+    for f in &r.focimeter {
+        html.push_str(&format!(
+            "<tr><td>{}</td><td>{:.1}, {:.1}</td><td>{:.3}</td><td>{:.3}</td><td>{:.1}</td><td>{:.3}, {:.3}</td><td>{:.1e}</td></tr>\n",
+            f.point, f.at_mm[0], f.at_mm[1], f.sphere_d, f.cylinder_d, f.axis_deg,
+            f.prism_d[0], f.prism_d[1], f.uncertainty_d
+        ));
+    }
+    html.push_str("</table>\n");
+    if let Some(v) = &r.verdict {
+        html.push_str(&format!(
+            "<p>{}: <b>{}</b></p>\n<table>\n<tr><th>check</th><th>measured</th><th>ordered</th><th>tolerance</th><th>margin</th><th></th></tr>\n",
+            plot::html_escape(v.edition),
+            if v.passed { "PASS" } else { "FAIL" }
+        ));
+        for c in &v.checks {
+            let name = match c.meridian {
+                Some(m) => format!("{} (meridian {m:.0}°)", c.quantity),
+                None => c.quantity.into(),
+            };
+            html.push_str(&format!(
+                "<tr><td>{name}</td><td>{:.3}</td><td>{:.3}</td><td>±{:.3}</td><td>{:.3}</td><td>{}</td></tr>\n",
+                c.measured,
+                c.ordered,
+                c.tolerance,
+                c.margin,
+                if c.passed { "pass" } else { "fail" }
+            ));
+        }
+        html.push_str("</table>\n");
+    }
+    html
+}
+
 /// The largest |value| of a cell quantity over the lens, and where (gaze h, v).
 fn extreme(
     report: &crate::lens::Report,
@@ -243,14 +335,15 @@ pub fn write_lens(dir: &Path, r: &crate::lens::Report) -> Result<PathBuf, Analyz
     write_plot(dir, "distortion", &lens_plot::distortion(r))?;
     let c = &r.centre;
     let number = |v: Option<f64>| v.map(|v| format!("{v:.3}")).unwrap_or_else(|| "–".into());
-    let prescription = match &r.prescription {
-        Some(p) => format!(
-            "Prescription: {:.2} / {:.2} × {:.0} (n_d {}, V {}); the power error and unwanted \
-             cylinder are against it.",
-            p.sphere_d, p.cylinder_d, p.axis_deg, p.index, p.abbe
+    let prescription = match (&r.prescription, &r.target) {
+        (Some(p), Some(t)) => format!(
+            "Prescription: {:.2} / {:.2} × {:.0}; as worn the wearer should get {:.3} / {:.3} \
+             × {:.1}, which the power error and unwanted cylinder are against.",
+            p.sphere_d, p.cylinder_d, p.axis_deg, t.sphere_d, t.cylinder_d, t.axis_deg
         ),
-        None => "No prescription given: no power error or unwanted cylinder.".into(),
+        _ => "No prescription given: no power error or unwanted cylinder.".into(),
     };
+    let sections = lens_sections(r);
     let centre_prism = c
         .prism_d
         .map(|[h, v]| format!("{h:.3} Δ horizontal (base out +), {v:.3} Δ vertical (base up +)"))
@@ -281,10 +374,12 @@ changed by at most {fd:.1e} D between the bundle and half of it. {prescription}<
 <tr><td>unwanted cylinder</td><td>{max_unwanted} D</td></tr>
 <tr><td>power error</td><td>{max_error} D</td></tr>
 </table>
+{sections}
 {figures}<figure><img src="distortion.svg"><figcaption>distortion</figcaption></figure>
 </body></html>
 "#,
         style = STYLE,
+        sections = sections,
         scene = plot::html_escape(&r.scene),
         lens = plot::html_escape(&r.lens),
         eye = match r.eye {

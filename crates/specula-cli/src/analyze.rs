@@ -41,10 +41,25 @@ pub struct LensArgs {
     /// The eye behind the lens: it decides which way is base in and base out.
     #[arg(long, value_enum, default_value = "right")]
     eye: EyeSide,
-    /// The eye's centre of rotation X,Y,Z (default: 27 mm behind the lens's back vertex along
-    /// the camera's view axis: 12 mm vertex distance and 15 mm).
-    #[arg(long, value_parser = parse_point, allow_hyphen_values = true)]
+    /// The eye's centre of rotation X,Y,Z (default: --vertex-distance and
+    /// --rotation-behind-cornea behind the lens's back vertex along the camera's view axis).
+    #[arg(long, value_parser = parse_point, allow_hyphen_values = true, conflicts_with = "vertex_distance")]
     rotation_centre: Option<Vec3>,
+    /// From the cornea to the lens's back surface along the primary line of sight, mm.
+    #[arg(long)]
+    vertex_distance: Option<f64>,
+    /// From the cornea to the eye's centre of rotation, mm (the entrance pupil, for spectacle
+    /// magnification, is 3 mm behind the cornea).
+    #[arg(long, default_value_t = 15.0)]
+    rotation_behind_cornea: f64,
+    /// Pantoscopic tilt, degrees: the lens turned about the horizontal through the fitting
+    /// point, its lower edge towards the face (at most 30).
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pantoscopic: f64,
+    /// Face-form wrap, degrees: the lens turned about the vertical through the fitting point,
+    /// its temporal edge towards the face (at most 30).
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    wrap: f64,
     /// The gaze grid H_MAX,V_MAX,STEP in degrees (cells at 0 included).
     #[arg(long, default_value = "30,30,2.5", value_parser = parse_gaze)]
     gaze: [f64; 3],
@@ -52,10 +67,36 @@ pub struct LensArgs {
     /// e.g. 0.4 for near vision).
     #[arg(long)]
     object_distance: Option<f64>,
-    /// The prescription SPHERE,CYLINDER,AXIS the power error and unwanted cylinder are taken
-    /// against (default: the one a spectacle-lens shape was made from, if any).
-    #[arg(long, value_parser = parse_point, allow_hyphen_values = true)]
-    prescription: Option<Vec3>,
+    /// The prescription SPHERE[,CYLINDER,AXIS][,PRISM...] (prisms such as 1.5BO, 0.5BU): what
+    /// the power error and unwanted cylinder are taken against and what --standard checks
+    /// (default: the one a spectacle-lens shape was made from, if any).
+    #[arg(long, value_parser = parse_rx, allow_hyphen_values = true)]
+    prescription: Option<specula_analyze::lens::Rx>,
+    /// The vertex distance the prescription was refracted at, mm: it is re-referenced to the
+    /// lens's by F / (1 − d F) per meridian, d the distance the lens moved towards the eye.
+    #[arg(long)]
+    refraction_vertex: Option<f64>,
+    /// Solve the prescription to order (sphere, cylinder, axis) whose lens, on the same blank
+    /// and worn the same way, gives the prescription at the fitting point; --standard then
+    /// checks against it.
+    #[arg(long)]
+    compensate: bool,
+    /// Check the focimeter reading against a standard's tolerances: ansi-z80.1 or iso-8980-1.
+    #[arg(long, value_parser = parse_standard)]
+    standard: Option<&'static specula_analyze::lens::standard::Table>,
+    /// Print the focimeter's readings (they are always in the JSON).
+    #[arg(long)]
+    focimeter: bool,
+    /// The distance reference point X,Y, mm from the back vertex (the lens's right and up).
+    #[arg(long, value_parser = parse_pair, allow_hyphen_values = true, default_value = "0,0")]
+    distance_reference: [f64; 2],
+    /// The prism reference point X,Y, mm from the back vertex.
+    #[arg(long, value_parser = parse_pair, allow_hyphen_values = true, default_value = "0,0")]
+    prism_reference: [f64; 2],
+    /// The lens's surface: its exact one (the default where the scene made it from a `lens` or
+    /// `spectacle-lens` shape), its triangles (mesh) or a smooth fit to them.
+    #[arg(long, value_enum)]
+    surface: Option<SurfaceArg>,
     /// The bundle's half-width at the lens, millimetres (each figure is also taken at half of
     /// it, and the change reported).
     #[arg(long, default_value_t = 0.5)]
@@ -73,6 +114,25 @@ pub struct LensArgs {
 enum EyeSide {
     Right,
     Left,
+}
+
+fn parse_rx(text: &str) -> Result<specula_analyze::lens::Rx, String> {
+    specula_analyze::lens::Rx::parse(text)
+}
+
+fn parse_standard(text: &str) -> Result<&'static specula_analyze::lens::standard::Table, String> {
+    specula_analyze::lens::standard::find(text)
+}
+
+fn parse_pair(text: &str) -> Result<[f64; 2], String> {
+    let values: Vec<f64> = text
+        .split(',')
+        .map(|v| v.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("expected X,Y in millimetres, got '{text}'"))?;
+    values
+        .try_into()
+        .map_err(|_| format!("expected X,Y (2 numbers), got '{text}'"))
 }
 
 /// In double precision: a step of 0.1 as a float would end the grid at 29.9°.
@@ -341,10 +401,18 @@ fn lens(args: LensArgs) -> Result<()> {
     use specula_analyze::lens;
     let scene = crate::load_scene(&args.scene)?;
     let mesh = lens::find_lens(&scene, &args.lens)?;
-    let mut options = lens::default_options_with(&scene, mesh, args.rotation_centre.is_none())?;
-    if let Some(centre) = args.rotation_centre {
-        options.rotation_centre = centre.as_dvec3();
-    }
+    let mut options = lens::default_options_with(&scene, mesh, false)?;
+    options.rotation_behind_cornea_m = args.rotation_behind_cornea * 1e-3;
+    options.rotation_centre = match args.rotation_centre {
+        Some(centre) => centre.as_dvec3(),
+        None => lens::rotation_centre_behind(
+            &scene,
+            mesh,
+            args.vertex_distance
+                .map_or(lens::DEFAULT_VERTEX_DISTANCE_M, |d| d * 1e-3),
+            options.rotation_behind_cornea_m,
+        )?,
+    };
     options.eye = match args.eye {
         EyeSide::Right => lens::Eye::Right,
         EyeSide::Left => lens::Eye::Left,
@@ -363,24 +431,20 @@ fn lens(args: LensArgs) -> Result<()> {
         );
     }
     options.step_m = args.step_mm * 1e-3;
-    if let Some(rx) = args.prescription {
-        let base = options.prescription.unwrap_or(specula_scene::Prescription {
-            sphere: 0.0,
-            cylinder: 0.0,
-            axis_deg: 0.0,
-            index: 1.5,
-            abbe: 58.0,
-            center_thickness: 0.002,
-            base_curve: 0.0,
-            diameter: 0.05,
-        });
-        options.prescription = Some(specula_scene::Prescription {
-            sphere: f64::from(rx.x),
-            cylinder: f64::from(rx.y),
-            axis_deg: f64::from(rx.z),
-            ..base
-        });
+    if let Some(surface) = args.surface {
+        options.surface = surface.model();
     }
+    options.wear = lens::Wear {
+        pantoscopic_deg: args.pantoscopic,
+        wrap_deg: args.wrap,
+    };
+    if args.prescription.is_some() {
+        options.prescription = args.prescription;
+    }
+    options.refraction_vertex_m = args.refraction_vertex.map(|d| d * 1e-3);
+    options.compensate = args.compensate;
+    options.standard = args.standard;
+    options.reference_points_mm = [args.distance_reference, args.prism_reference];
     let rows = options.gaze.vertical().len();
     let bar = ProgressBar::new(rows as u64);
     bar.set_style(
@@ -390,6 +454,7 @@ fn lens(args: LensArgs) -> Result<()> {
     let report = lens::analyze(&scene, &options, &|done| bar.set_position(done as u64))?;
     bar.finish_and_clear();
     print_lens(&report);
+    print_lens_checks(&report, args.focimeter);
     write_json(args.json.as_deref(), &report)?;
     if let Some(dir) = &args.report {
         let html = specula_analyze::report::write_lens(dir, &report)?;
@@ -475,6 +540,79 @@ fn print_lens(r: &specula_analyze::lens::Report) {
         r.grid.len(),
         r.finite_difference_change_d
     );
+}
+
+/// The lens's magnification, base curve, focimeter readings (with `focimeter`), ordered
+/// prescription and verdict.
+fn print_lens_checks(r: &specula_analyze::lens::Report, focimeter: bool) {
+    let [sh, sv] = r.spectacle_magnification;
+    println!(
+        "surface {}{}; vertex distance {:.2} mm, pantoscopic {}°, wrap {}°; spectacle \
+         magnification {sh:.4} (h), {sv:.4} (v)",
+        r.surface.name(),
+        r.surface_uncertainty_d
+            .map(|u| format!(" (surface uncertainty {u:.4} D)"))
+            .unwrap_or_default(),
+        r.vertex_distance_mm,
+        r.wear.pantoscopic_deg,
+        r.wear.wrap_deg
+    );
+    if let Some(b) = r.base_curve {
+        println!(
+            "base curve {:.2} D in the lens's index, {:.2} D in the 1.53 tooling index",
+            b.lens_index_d, b.tooling_index_d
+        );
+    }
+    if focimeter {
+        for f in &r.focimeter {
+            println!(
+                "focimeter at the {} ({:.1}, {:.1} mm): {:.3} / {:.3} × {:.1}, prism {:.3} \
+                 out, {:.3} up (± {:.1e} D)",
+                f.point,
+                f.at_mm[0],
+                f.at_mm[1],
+                f.sphere_d,
+                f.cylinder_d,
+                f.axis_deg,
+                f.prism_d[0],
+                f.prism_d[1],
+                f.uncertainty_d
+            );
+        }
+    }
+    if let Some(t) = r.target {
+        println!(
+            "as worn the wearer should get {:.3} / {:.3} × {:.1}",
+            t.sphere_d, t.cylinder_d, t.axis_deg
+        );
+    }
+    if let Some(c) = r.compensated {
+        println!(
+            "compensated, to order: {:.3} / {:.3} × {:.1} (residual {:.1e} D)",
+            c.ordered.sphere_d, c.ordered.cylinder_d, c.ordered.axis_deg, c.residual_d
+        );
+    }
+    if let Some(v) = &r.verdict {
+        println!("{}: {}", v.edition, if v.passed { "PASS" } else { "FAIL" });
+        for c in &v.checks {
+            println!(
+                "  {:<10}{:>12}  measured {:>8.3}  ordered {:>8.3}  ± {:.3}  margin {:>7.3}  {}{}",
+                c.quantity,
+                c.meridian
+                    .map(|m| format!("at {m:.0}°"))
+                    .unwrap_or_default(),
+                c.measured,
+                c.ordered,
+                c.tolerance,
+                c.margin,
+                if c.passed { "pass" } else { "FAIL" },
+                c.note
+                    .as_deref()
+                    .map(|n| format!(" ({n})"))
+                    .unwrap_or_default()
+            );
+        }
+    }
 }
 
 fn mirror_view(args: MirrorViewArgs) -> Result<()> {

@@ -4,7 +4,8 @@
 //!
 //! Each shape is a map from a parameter square (u, v) ∈ [0, 1]² onto the surface, the same
 //! parameters its generator's grid used: a bicubic Bézier patch's own (u, v); a sphere's and a
-//! spherical cap's azimuth (u) and polar angle (v). Sampling the square samples the whole
+//! spherical cap's azimuth (u) and polar angle (v); a solid lens ([`crate::exact_lens`]), which
+//! the lens analysis traces through, is its front surface's azimuth (u) and radius (v). Sampling the square samples the whole
 //! surface, its rim included (a tessellation's rim is a polygon inside the true one). A sample
 //! at (u, v) is where the ray from any eye towards that point meets the surface, so no
 //! intersection has to be searched for; [`ExactSurface::intersect`] is there for rays that
@@ -17,6 +18,8 @@
 
 use glam::{DMat3, DMat4, DVec2, DVec3, Mat4, Vec3};
 use std::f64::consts::{PI, TAU};
+
+use crate::exact_lens::{ExactLens, Face};
 
 /// An analytic shape in object space.
 #[derive(Clone, Debug, PartialEq)]
@@ -34,6 +37,10 @@ pub enum ExactShape {
         aperture: f64,
         concave: bool,
     },
+    /// A solid lens ([`crate::exact_lens`]): what the lens analysis traces. As a parameter
+    /// square it is its front surface (u turns about Z from +X, v runs from the axis to the
+    /// rim); the mirror analyses take a lens's triangles.
+    Lens(Box<ExactLens>),
 }
 
 /// A point of an exact surface, world space.
@@ -99,6 +106,11 @@ impl ExactSurface {
                     (p, (p - centre) / *r)
                 }
             }
+            ExactShape::Lens(lens) => {
+                let (phi, rho) = (TAU * uv.x, uv.y * lens.rim());
+                lens.surface_point(Face::Front, rho * phi.cos(), rho * phi.sin())
+                    .unwrap_or((DVec3::ZERO, -DVec3::Z))
+            }
         };
         let normal_from_object = DMat3::from_mat4(self.world_from_object)
             .inverse()
@@ -111,9 +123,17 @@ impl ExactSurface {
         }
     }
 
+    /// The lens this surface is, if it is one.
+    pub fn lens(&self) -> Option<&ExactLens> {
+        match &self.shape {
+            ExactShape::Lens(lens) => Some(lens),
+            _ => None,
+        }
+    }
+
     /// The first point along the ray `origin + t dir` (t > 0) where it meets the surface, with
     /// its parameters: closed form on a sphere or cap (in object space, where it is a sphere),
-    /// Newton's method on a patch, started from each cell of a coarse grid of (u, v) so that a
+    /// Newton's method on a patch or a lens's surfaces, started from each cell of a coarse grid of (u, v) so that a
     /// wavy patch's nearer crossing is not missed.
     pub fn intersect(&self, origin: Vec3, dir: Vec3) -> Option<(f64, DVec2)> {
         let object_from_world = self.world_from_object.inverse();
@@ -156,6 +176,12 @@ impl ExactSurface {
                             (t, DVec2::new(phi / TAU, v.min(1.0)))
                         })
                     })
+            }
+            ExactShape::Lens(lens) => {
+                let hit = lens.next_hit(o, d, 1e-12)?;
+                let phi = hit.p.y.atan2(hit.p.x).rem_euclid(TAU);
+                let v = (hit.p.truncate().length() / lens.rim()).min(1.0);
+                Some((hit.t, DVec2::new(phi / TAU, v)))
             }
         }
     }

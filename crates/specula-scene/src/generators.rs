@@ -7,6 +7,7 @@ use std::f32::consts::{PI, TAU};
 use glam::{DVec3, Vec2, Vec3};
 
 use crate::exact::{self, ExactShape, ExactSurface};
+use crate::exact_lens::{ExactLens, LensSurface};
 use crate::{Mesh, SceneError};
 
 /// One tessellated vertex: position, unit normal, texture coordinate.
@@ -292,7 +293,14 @@ pub fn lens(spec: &LensSpec) -> Result<Mesh, SceneError> {
             uv: Vec2::new(u, v),
         }
     });
-    Ok(finish(mesh))
+    let mut mesh = finish(mesh);
+    let curvature = |r: f32| 1.0 / f64::from(r);
+    mesh.exact = Some(ExactSurface::new(ExactShape::Lens(Box::new(ExactLens {
+        front: LensSurface::sphere(curvature(r1), 0.0),
+        back: LensSurface::sphere(curvature(r2), f64::from(t)),
+        diameter: f64::from(diameter),
+    }))));
+    Ok(mesh)
 }
 
 /// Axis-aligned box centred at the origin with flat faces.

@@ -32,7 +32,9 @@ use std::f64::consts::TAU;
 
 use glam::{DVec3, Vec2, Vec3};
 
+use crate::exact_lens::{ExactLens, Face, LensSurface};
 use crate::generators::{append_grid, empty, finish, Sample};
+use crate::{ExactShape, ExactSurface};
 use crate::{Mesh, SceneError};
 
 /// A spectacle lens's prescription and blank. Lengths in metres, powers in dioptres.
@@ -130,87 +132,20 @@ impl Prescription {
     }
 }
 
-/// Sag of a circular arc of curvature `c` at distance `r` from its vertex (None beyond the
-/// arc's reach).
-fn arc_sag(c: f64, r: f64) -> Option<f64> {
-    let k = 1.0 - c * c * r * r;
-    // Short of the arc's end, where its slope is infinite.
-    (k > 1e-12).then(|| c * r * r / (1.0 + k.sqrt()))
-}
-
-/// d(sag)/dr of the arc.
-fn arc_slope(c: f64, r: f64) -> f64 {
-    c * r / (1.0 - c * c * r * r).max(1e-300).sqrt()
-}
-
-/// A toric surface with curvature `cu` along u and `cv` along v at its vertex: its sag and its
-/// gradient (∂z/∂u, ∂z/∂v) at (u, v); None where (u, v) lies beyond the surface.
-fn toric(cu: f64, cv: f64, u: f64, v: f64) -> Option<(f64, f64, f64)> {
-    let zv = arc_sag(cv, v)?;
-    let dzv = arc_slope(cv, v);
-    if cu == 0.0 {
-        return Some((zv, 0.0, dzv));
-    }
-    let radius = 1.0 / cu;
-    let d = radius - zv;
-    let k = d * d - u * u;
-    if k <= 1e-12 * d * d || d * radius <= 0.0 {
-        return None;
-    }
-    let s = k.sqrt();
-    let sign = radius.signum();
-    Some((radius - sign * s, sign * u / s, sign * d * dzv / s))
-}
-
-/// The lens surfaces' shape, in the lens's frame (module doc).
-struct Shape {
-    front_c: f64,
-    /// Back curvatures along the axis meridian and across it.
-    back_cu: f64,
-    back_cv: f64,
-    /// Unit vectors of the axis meridian and across it, in the (x, y) plane.
-    axis: [f64; 2],
-    across: [f64; 2],
-    thickness: f64,
-}
-
-impl Shape {
-    fn new(p: &Prescription) -> Shape {
-        let theta = p.axis_deg.to_radians();
-        Shape {
-            front_c: p.front_curvature(),
-            back_cu: p.back_curvature(p.sphere),
-            back_cv: p.back_curvature(p.sphere + p.cylinder),
-            axis: [-theta.cos(), theta.sin()],
-            across: [theta.sin(), theta.cos()],
-            thickness: p.center_thickness,
+impl Prescription {
+    /// The lens's exact surfaces, in the lens frame (module doc).
+    pub fn exact_lens(&self) -> ExactLens {
+        let p = self.minus_cylinder();
+        ExactLens {
+            front: LensSurface::sphere(p.front_curvature(), 0.0),
+            back: LensSurface::toric(
+                p.back_curvature(p.sphere),
+                p.back_curvature(p.sphere + p.cylinder),
+                p.axis_deg,
+                p.center_thickness,
+            ),
+            diameter: p.diameter,
         }
-    }
-
-    /// The front surface's point and outward normal (facing −Z) at (x, y).
-    fn front(&self, x: f64, y: f64) -> Option<(DVec3, DVec3)> {
-        let r = x.hypot(y);
-        let z = arc_sag(self.front_c, r)?;
-        let slope = arc_slope(self.front_c, r);
-        let (gx, gy) = if r > 0.0 {
-            (slope * x / r, slope * y / r)
-        } else {
-            (0.0, 0.0)
-        };
-        Some((DVec3::new(x, y, z), DVec3::new(gx, gy, -1.0).normalize()))
-    }
-
-    /// The back surface's point and outward normal (facing +Z) at (x, y).
-    fn back(&self, x: f64, y: f64) -> Option<(DVec3, DVec3)> {
-        let u = x * self.axis[0] + y * self.axis[1];
-        let v = x * self.across[0] + y * self.across[1];
-        let (z, dzu, dzv) = toric(self.back_cu, self.back_cv, u, v)?;
-        let gx = dzu * self.axis[0] + dzv * self.across[0];
-        let gy = dzu * self.axis[1] + dzv * self.across[1];
-        Some((
-            DVec3::new(x, y, self.thickness + z),
-            DVec3::new(-gx, -gy, 1.0).normalize(),
-        ))
     }
 }
 
@@ -224,7 +159,9 @@ pub fn spectacle_lens(
 ) -> Result<Mesh, SceneError> {
     prescription.check()?;
     let p = prescription.minus_cylinder();
-    let shape = Shape::new(&p);
+    let shape = p.exact_lens();
+    let front = |x: f64, y: f64| shape.surface_point(Face::Front, x, y);
+    let back = |x: f64, y: f64| shape.surface_point(Face::Back, x, y);
     let rim = p.diameter * 0.5;
     let segments = segments.max(8);
     let rings = rings.max(2);
@@ -242,7 +179,7 @@ pub fn spectacle_lens(
     let reaches = (0..=segments).all(|i| {
         (0..=rings).all(|j| {
             let (x, y) = at(i as f32 / segments as f32, j as f32 / rings as f32);
-            shape.front(x, y).is_some() && shape.back(x, y).is_some()
+            front(x, y).is_some() && back(x, y).is_some()
         })
     });
     let short_of_the_rim = || {
@@ -258,7 +195,7 @@ pub fn spectacle_lens(
     for k in 0..segments * 4 {
         let phi = TAU * f64::from(k) / f64::from(segments * 4);
         let (x, y) = (rim * phi.cos(), rim * phi.sin());
-        let (Some((front, _)), Some((back, _))) = (shape.front(x, y), shape.back(x, y)) else {
+        let (Some((front, _)), Some((back, _))) = (front(x, y), back(x, y)) else {
             return Err(short_of_the_rim());
         };
         thinnest = thinnest.min(back.z - front.z);
@@ -279,16 +216,16 @@ pub fn spectacle_lens(
     };
     append_grid(&mut mesh, segments, rings, |u, v| {
         let (x, y) = at(u, v);
-        to_sample(shape.front(x, y).expect("checked to the rim"), x, y)
+        to_sample(front(x, y).expect("checked to the rim"), x, y)
     });
     append_grid(&mut mesh, segments, rings, |u, v| {
         let (x, y) = at(u, v);
-        to_sample(shape.back(x, y).expect("checked to the rim"), x, y)
+        to_sample(back(x, y).expect("checked to the rim"), x, y)
     });
     append_grid(&mut mesh, segments, 1, |u, v| {
         let (x, y) = at(u, 1.0);
-        let front = shape.front(x, y).expect("checked").0;
-        let back = shape.back(x, y).expect("checked").0;
+        let front = front(x, y).expect("checked").0;
+        let back = back(x, y).expect("checked").0;
         let point = front.lerp(back, f64::from(v));
         Sample {
             p: point.as_vec3(),
@@ -296,7 +233,9 @@ pub fn spectacle_lens(
             uv: Vec2::new(u, v),
         }
     });
-    Ok(finish(mesh))
+    let mut mesh = finish(mesh);
+    mesh.exact = Some(ExactSurface::new(ExactShape::Lens(Box::new(shape))));
+    Ok(mesh)
 }
 
 #[cfg(test)]
@@ -319,30 +258,12 @@ mod tests {
     #[test]
     fn each_meridian_s_back_curvature_gives_its_back_vertex_power() {
         let p = prescription(-2.0, -1.0, 30.0);
-        let shape = Shape::new(&p);
+        let lens = p.exact_lens();
         // Thick-lens formula, forwards: F1 / (1 − t F1 / n) + (1 − n) / R2.
         let power = |c2: f64| p.front_effective() + (1.0 - p.index) * c2;
-        assert!((power(shape.back_cu) - -2.0).abs() < 1e-12);
-        assert!((power(shape.back_cv) - -3.0).abs() < 1e-12);
+        assert!((power(lens.back.curvature_axis) - -2.0).abs() < 1e-12);
+        assert!((power(lens.back.curvature_across) - -3.0).abs() < 1e-12);
         assert!((p.front_curvature() - 4.0 / 0.6).abs() < 1e-12);
-    }
-
-    #[test]
-    fn the_toric_surface_has_its_principal_curvatures_along_its_meridians() {
-        let (cu, cv) = (1.0 / 0.08, 1.0 / 0.12);
-        // Second differences of the sag along each meridian at the vertex.
-        let h = 1e-4;
-        let along_u = toric(cu, cv, h, 0.0).unwrap().0 * 2.0 / (h * h);
-        let along_v = toric(cu, cv, 0.0, h).unwrap().0 * 2.0 / (h * h);
-        assert!((along_u - cu).abs() < 1e-4 * cu, "{along_u} against {cu}");
-        assert!((along_v - cv).abs() < 1e-4 * cv, "{along_v} against {cv}");
-        // The gradient is the sag's.
-        let (u, v) = (0.01, -0.015);
-        let (z, du, dv) = toric(cu, cv, u, v).unwrap();
-        let e = 1e-7;
-        let du_fd = (toric(cu, cv, u + e, v).unwrap().0 - z) / e;
-        let dv_fd = (toric(cu, cv, u, v + e).unwrap().0 - z) / e;
-        assert!((du - du_fd).abs() < 1e-5 && (dv - dv_fd).abs() < 1e-5);
     }
 
     #[test]

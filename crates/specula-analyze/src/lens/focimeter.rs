@@ -1,0 +1,197 @@
+//! What a focimeter reads at a point of the lens: the back surface on the lens rest, the
+//! instrument's axis along the back surface's normal at the point, a narrow beam.
+//!
+//! **Prism.** The ray that leaves the back surface at the point along the instrument's axis
+//! (found by tracing it backwards, from the eye's side along −normal, out of the front) came in
+//! along w; the prism is 100 × tan of w's deviation, along the lens's right and up across the
+//! axis, base out (towards the temple of the chosen eye) and base up positive.
+//!
+//! **Power.** A parallel beam along w, of half-width `step` around that ray, is traced through
+//! the lens; in the plane through the point across the axis, in the lens's right and up, its
+//! vergence matrix L = −(∂u/∂s)(∂x/∂s)⁻¹ gives the back vertex sphere, cylinder (minus form)
+//! and axis (TABO) at the point, as the instrument reads them. Each is taken at `step` and
+//! `step / 2`; their change is the reading's finite-difference uncertainty.
+//!
+//! **The lens's frame**: for an exact lens its own (back vertex, +Z towards the eye, +X the
+//! wearer's right, +Y up); for a mesh the fitting point, the primary gaze and up.
+
+use glam::{DMat4, DVec3};
+use serde::Serialize;
+
+use super::tracer::{Failure, LensTracer};
+use super::wear::Rx;
+use super::{bundle_vergence, Eye, Power};
+
+/// A lens's own frame, world space.
+#[derive(Clone, Copy, Debug)]
+pub struct LensFrame {
+    pub back_vertex: DVec3,
+    /// Along the lens's axis, towards the eye (unit).
+    pub towards_eye: DVec3,
+    pub right: DVec3,
+    pub up: DVec3,
+}
+
+impl LensFrame {
+    /// An exact lens's frame: `world_from_lens` applied to its own axes, the back vertex at
+    /// (0, 0, `back_vertex_z`).
+    pub fn of_exact(world_from_lens: DMat4, back_vertex_z: f64) -> LensFrame {
+        let axis = |v: DVec3| world_from_lens.transform_vector3(v).normalize();
+        LensFrame {
+            back_vertex: world_from_lens.transform_point3(DVec3::new(0.0, 0.0, back_vertex_z)),
+            towards_eye: axis(DVec3::Z),
+            right: axis(DVec3::X),
+            up: axis(DVec3::Y),
+        }
+    }
+}
+
+/// One focimeter reading.
+#[derive(Clone, Debug, Serialize)]
+pub struct Reading {
+    /// "distance reference point" or "prism reference point".
+    pub point: &'static str,
+    /// Where, from the back vertex along the lens's right and up, millimetres.
+    pub at_mm: [f64; 2],
+    pub sphere_d: f64,
+    pub cylinder_d: f64,
+    pub axis_deg: f64,
+    /// Base out and base up positive, Δ.
+    pub prism_d: [f64; 2],
+    /// How far the powers may be off: the change from the beam to half of it, plus the
+    /// surface's uncertainty for a mesh, dioptres.
+    pub uncertainty_d: f64,
+    pub axis_uncertainty_deg: f64,
+    pub prism_uncertainty_d: f64,
+    /// ∂prism / ∂position (Δ per mm; columns: right, up): where the ordered prism lies.
+    #[serde(skip)]
+    pub prism_per_mm: [[f64; 2]; 2],
+}
+
+impl Reading {
+    pub fn rx(&self) -> Rx {
+        Rx {
+            sphere_d: self.sphere_d,
+            cylinder_d: self.cylinder_d,
+            axis_deg: self.axis_deg,
+            prism_d: self.prism_d,
+        }
+    }
+
+    /// How far from this point the lens has the prism `ordered`, millimetres (by its prism
+    /// gradient; None where the lens has no power to move its prism).
+    pub fn ordered_prism_offset_mm(&self, ordered: [f64; 2]) -> Option<f64> {
+        let j = self.prism_per_mm;
+        let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+        if det.abs() < 1e-12 {
+            return None;
+        }
+        let e = [ordered[0] - self.prism_d[0], ordered[1] - self.prism_d[1]];
+        let dx = (j[1][1] * e[0] - j[0][1] * e[1]) / det;
+        let dy = (-j[1][0] * e[0] + j[0][0] * e[1]) / det;
+        Some(dx.hypot(dy))
+    }
+}
+
+/// The instrument's settings.
+pub struct Focimeter<'a> {
+    pub tracer: &'a LensTracer<'a>,
+    pub frame: LensFrame,
+    pub ior: f64,
+    pub step_m: f64,
+    pub eye: Eye,
+}
+
+/// The prism and the beam's vergence matrices (beam, half beam) at one point.
+struct Raw {
+    prism: [f64; 2],
+    coarse: [f64; 3],
+    fine: [f64; 3],
+}
+
+impl Focimeter<'_> {
+    /// The reading at `at_mm` from the back vertex (module doc).
+    pub fn read(&self, point: &'static str, at_mm: [f64; 2]) -> Result<Reading, Failure> {
+        let raw = self.raw(at_mm)?;
+        // The prism's gradient, by central differences over ±0.5 mm.
+        let mut prism_per_mm = [[0.0; 2]; 2];
+        for k in 0..2 {
+            let shifted = |sign: f64| {
+                let mut at = at_mm;
+                at[k] += sign * 0.5;
+                self.raw(at).map(|r| r.prism)
+            };
+            let (plus, minus) = (shifted(1.0)?, shifted(-1.0)?);
+            for (row, column) in prism_per_mm.iter_mut().enumerate() {
+                column[k] = plus[row] - minus[row];
+            }
+        }
+        let power = Power::from_matrix(raw.fine[0], raw.fine[1], raw.fine[2]);
+        let coarse = Power::from_matrix(raw.coarse[0], raw.coarse[1], raw.coarse[2]);
+        let change = (0..3)
+            .map(|k| (raw.fine[k] - raw.coarse[k]).abs())
+            .fold(0.0, f64::max);
+        let axis_change = if power.cylinder_d.abs() > 1e-6 {
+            let d = (power.axis_deg - coarse.axis_deg).rem_euclid(180.0);
+            d.min(180.0 - d)
+        } else {
+            0.0
+        };
+        Ok(Reading {
+            point,
+            at_mm,
+            sphere_d: power.sphere_d,
+            cylinder_d: power.cylinder_d,
+            axis_deg: power.axis_deg,
+            prism_d: raw.prism,
+            uncertainty_d: change,
+            axis_uncertainty_deg: axis_change,
+            prism_uncertainty_d: 0.0,
+            prism_per_mm,
+        })
+    }
+
+    fn raw(&self, at_mm: [f64; 2]) -> Result<Raw, Failure> {
+        let f = &self.frame;
+        let start = f.back_vertex
+            + f.right * (at_mm[0] * 1e-3)
+            + f.up * (at_mm[1] * 1e-3)
+            + f.towards_eye * 0.05;
+        let (point, normal) = self
+            .tracer
+            .next_hit(start, -f.towards_eye)
+            .ok_or(Failure::Missed)?;
+        if normal.dot(f.towards_eye) <= 0.0 {
+            return Err(Failure::Edge);
+        }
+        // The lens's right and up across the instrument's axis.
+        let right = (f.right - normal * f.right.dot(normal)).normalize();
+        let up = normal.cross(right);
+        let back = self
+            .tracer
+            .trace(point + normal * 0.01, -normal, self.ior)?;
+        let out = back.dir;
+        let along = out.dot(-normal);
+        let side = match self.eye {
+            Eye::Right => 1.0,
+            Eye::Left => -1.0,
+        };
+        let prism = [
+            side * 100.0 * out.dot(right) / along,
+            100.0 * out.dot(up) / along,
+        ];
+        let light = -out;
+        let a = (right - light * right.dot(light)).normalize();
+        let b = light.cross(a);
+        let front = back.points[1];
+        let vergence = |step: f64| {
+            let launch = |s1: f64, s2: f64| (front + out * 0.01 + (a * s1 + b * s2) * step, light);
+            bundle_vergence(self.tracer, self.ior, launch, point, normal, [right, up])
+        };
+        Ok(Raw {
+            prism,
+            coarse: vergence(self.step_m)?,
+            fine: vergence(self.step_m * 0.5)?,
+        })
+    }
+}
