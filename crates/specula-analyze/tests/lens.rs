@@ -4,6 +4,7 @@
 
 use glam::{DVec3, Vec3};
 use specula_analyze::lens::{analyze, default_options, Cell, LensTracer, Options, Report};
+use specula_analyze::mirror_surface::SurfaceModel;
 use specula_scene::generators::{self, LensSpec};
 use specula_scene::spectacle::spectacle_lens;
 use specula_scene::{Camera, Material, MaterialKind, Mesh, Prescription, Scene};
@@ -366,7 +367,10 @@ fn a_toric_lens_converges_as_its_tessellation_doubles() {
         ..prescription(-3.0, -1.0, 30.0)
     };
     let figures = |rings: u32, segments: u32| {
-        let report = run(&generated(&p, rings, segments), |o| o.gaze.step_deg = 10.0);
+        let report = run(&generated(&p, rings, segments), |o| {
+            o.gaze.step_deg = 10.0;
+            o.surface = SurfaceModel::Mesh;
+        });
         report
             .grid
             .iter()
@@ -445,9 +449,10 @@ fn an_oblique_minus_cylinder_s_axis_is_where_an_examiner_reads_it() {
 }
 
 #[test]
-fn the_central_spectacle_magnification_is_the_shape_factor_times_the_power_factor() {
-    // For an eye turning about its centre of rotation, a distance d behind the back vertex:
-    // SM = 1 / (1 − (t/n) F1) × 1 / (1 − d Fv).
+fn spectacle_magnification_is_the_shape_factor_times_the_power_factor_from_the_pupil() {
+    // SM = 1 / (1 − (t/n) F1) × 1 / (1 − h Fv), h from the back vertex to the entrance pupil
+    // (3 mm behind the cornea, 12 mm in front of the centre of rotation); the same with h the
+    // distance to the centre of rotation is the rotating eye's field magnification.
     let (r1, r2, t, n) = (0.12f32, 0.075f32, 0.002f32, 1.6f32);
     let scene = spherical(r1, r2, t, n, 0.05);
     let report = run(&scene, |o| {
@@ -457,13 +462,28 @@ fn the_central_spectacle_magnification_is_the_shape_factor_times_the_power_facto
     let (r1, r2, t, n) = (f64::from(r1), f64::from(r2), f64::from(t), f64::from(n));
     let (vertex, _) = thick_lens(r1, r2, t, n);
     let f1 = (n - 1.0) / r1;
-    let d = report.vertex_sphere_radius_m;
-    let expected = 1.0 / (1.0 - t / n * f1) / (1.0 - d * vertex);
-    let [h, v] = report.spectacle_magnification;
-    eprintln!(
-        "spectacle magnification {h:.6}, {v:.6} against {expected:.6} ({:.1e} apart)",
-        (h - expected).abs().max((v - expected).abs())
-    );
-    // Measured 2026-12-02: 9.0e-8 apart (the ±0.1° central differences).
-    assert!((h - expected).abs() < 2e-7 && (v - expected).abs() < 2e-7);
+    let expected = |h: f64| 1.0 / (1.0 - t / n * f1) / (1.0 - h * vertex);
+    let to_centre = report.vertex_sphere_radius_m;
+    let to_pupil = to_centre - (report.rotation_behind_cornea_mm - 3.0) * 1e-3;
+    for (name, [h, v], expected) in [
+        (
+            "spectacle",
+            report.spectacle_magnification,
+            expected(to_pupil),
+        ),
+        (
+            "rotating eye's",
+            report.rotating_eye_magnification,
+            expected(to_centre),
+        ),
+    ] {
+        eprintln!(
+            "{name} magnification {h:.6}, {v:.6} against {expected:.6} ({:.1e} apart)",
+            (h - expected).abs().max((v - expected).abs())
+        );
+        // Measured 2026-12-04 on the exact surfaces: 1.6e-7 and 2.5e-7 apart (the ±0.1°
+        // central differences).
+        assert!((h - expected).abs() < 5e-7 && (v - expected).abs() < 5e-7);
+    }
+    assert!((to_pupil - 0.015).abs() < 1e-9, "{to_pupil}");
 }

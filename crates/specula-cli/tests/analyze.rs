@@ -620,3 +620,113 @@ fn the_example_spectacles_give_back_their_prescription_at_the_centre() {
     assert!((figure("axis_deg") - 30.0).abs() < 0.05, "{centre}");
     assert!(figure("unwanted_cylinder_d") < 3e-4, "{centre}");
 }
+
+fn spectacles_wrap() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/spectacles-wrap.toml")
+}
+
+#[test]
+fn a_wrapped_lens_is_judged_against_its_compensated_prescription() {
+    // −4.00 / −1.00 × 90 worn at 10° pantoscopic tilt and 5° wrap: the lens made to the
+    // prescription passes as ordered, but not against the compensated prescription a lab
+    // should have made for this frame.
+    let dir = tempfile::tempdir().unwrap();
+    let verdict = |extra: &[&str]| {
+        let json = dir.path().join("lens.json");
+        let out = specula()
+            .args(["analyze", "lens"])
+            .arg(spectacles_wrap())
+            .args([
+                "--lens",
+                "right lens",
+                "--gaze",
+                "0,0,1",
+                "--pantoscopic",
+                "10",
+            ])
+            .args(["--wrap", "5", "--focimeter", "--json"])
+            .arg(&json)
+            .args(extra)
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8_lossy(&out.stdout).to_string();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(
+            stdout.contains("focimeter at the distance reference point"),
+            "{stdout}"
+        );
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        report
+    };
+    let ordered = verdict(&["--standard", "ansi-z80.1"]);
+    assert_eq!(ordered["schema_version"], 2);
+    assert_eq!(ordered["verdict"]["edition"], "ANSI Z80.1-2015");
+    assert_eq!(ordered["verdict"]["passed"], true);
+    let checks = ordered["verdict"]["checks"].as_array().unwrap();
+    let quantities: Vec<&str> = checks
+        .iter()
+        .map(|c| c["quantity"].as_str().unwrap())
+        .collect();
+    assert_eq!(quantities, ["sphere", "cylinder", "axis", "prism"]);
+    let reading = &ordered["focimeter"][0];
+    // Measured 2026-12-04: −4.0000 / −1.0000 × 90.00 (the exact surfaces).
+    assert!(
+        (reading["sphere_d"].as_f64().unwrap() + 4.0).abs() < 1e-3,
+        "{reading}"
+    );
+    assert!(
+        (reading["cylinder_d"].as_f64().unwrap() + 1.0).abs() < 1e-3,
+        "{reading}"
+    );
+    let compensated = verdict(&["--standard", "iso-8980-1", "--compensate"]);
+    assert_eq!(compensated["verdict"]["passed"], false);
+    let ordered_sphere = compensated["compensated"]["ordered"]["sphere_d"]
+        .as_f64()
+        .unwrap();
+    // Measured 2026-12-04: −3.827 / −1.080 × 86.0.
+    assert!((ordered_sphere + 3.827).abs() < 0.002, "{ordered_sphere}");
+    let failed: Vec<&serde_json::Value> = compensated["verdict"]["checks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["passed"] == false)
+        .collect();
+    assert_eq!(failed.len(), 1, "{failed:?}");
+    assert_eq!(failed[0]["quantity"], "sphere");
+    assert!(failed[0]["margin"].as_f64().unwrap() < 0.0);
+}
+
+#[test]
+fn bad_lens_options_are_refused_saying_why() {
+    let refused = |extra: &[&str], expected: &[&str]| {
+        let out = specula()
+            .args(["analyze", "lens"])
+            .arg(spectacles_wrap())
+            .args(["--lens", "right lens", "--gaze", "0,0,1"])
+            .args(extra)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+        assert!(!out.status.success(), "{extra:?} was accepted");
+        for e in expected {
+            assert!(stderr.contains(e), "{extra:?}: {stderr}");
+        }
+    };
+    refused(
+        &["--standard", "din-58208"],
+        &["unknown standard 'din-58208'", "ansi-z80.1", "iso-8980-1"],
+    );
+    refused(&["--prescription=-2,-1"], &["needs its axis"]);
+    refused(&["--prescription=-2,-1,90,2XX"], &["BO, BI, BU or BD"]);
+    refused(&["--pantoscopic", "31"], &["--pantoscopic", "at most 30"]);
+    refused(&["--wrap=-45"], &["--wrap", "at most 30"]);
+    refused(
+        &["--vertex-distance", "0"],
+        &["--vertex-distance", "must be positive"],
+    );
+}

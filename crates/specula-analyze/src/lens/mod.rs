@@ -699,7 +699,8 @@ pub fn analyze(
         (true, None) => {
             return Err(AnalyzeError::BadOption {
                 option: "--compensate",
-                reason: "needs a prescription to compensate (--prescription, or a                          spectacle-lens shape's)"
+                reason: "needs a prescription to compensate (--prescription, or a \
+                 spectacle-lens shape's)"
                     .into(),
             })
         }
@@ -710,7 +711,8 @@ pub fn analyze(
         (Some(_), None) => {
             return Err(AnalyzeError::BadOption {
                 option: "--standard",
-                reason: "needs the ordered prescription (--prescription S,C,A, or a                          spectacle-lens shape's)"
+                reason: "needs the ordered prescription (--prescription S,C,A, or a \
+                 spectacle-lens shape's)"
                     .into(),
             })
         }
@@ -719,7 +721,12 @@ pub fn analyze(
                 prism_d: rx.prism_d,
                 ..c.ordered
             });
-            Some(standard::judge(table, &focimeter[0], &focimeter[1], &ordered))
+            Some(standard::judge(
+                table,
+                &focimeter[0],
+                &focimeter[1],
+                &ordered,
+            ))
         }
     };
     let finite_difference_change_d = grid
@@ -768,7 +775,8 @@ fn tracer(mesh: &Mesh, model: SurfaceModel) -> Result<LensTracer<'_>, AnalyzeErr
     LensTracer::with_model(mesh, model).ok_or_else(|| AnalyzeError::BadOption {
         option: "--surface",
         reason: format!(
-            "'{}' has no exact surfaces (only `lens` and `spectacle-lens` shapes and the              built-in lenses do); use --surface mesh or smooth",
+            "'{}' has no exact surfaces (only `lens` and `spectacle-lens` shapes and the \
+             built-in lenses do); use --surface mesh or smooth",
             mesh.name
         ),
     })
@@ -795,7 +803,8 @@ fn primary_trace(
         .map_err(|failure| AnalyzeError::BadOption {
             option: "--rotation-centre",
             reason: format!(
-                "looking straight ahead from {} the eye does not see through '{name}'                  ({failure:?}): put the centre of rotation behind the lens",
+                "looking straight ahead from {} the eye does not see through '{name}' \
+                 ({failure:?}): put the centre of rotation behind the lens",
                 options.rotation_centre
             ),
         })
@@ -844,20 +853,24 @@ fn read_focimeter(
         eye: options.eye,
     };
     let [distance, prism] = options.reference_points_mm;
-    [("distance reference point", distance), ("prism reference point", prism)]
-        .into_iter()
-        .map(|(name, at)| {
-            instrument
-                .read(name, at)
-                .map_err(|failure| AnalyzeError::BadOption {
-                    option: "--distance-reference and --prism-reference",
-                    reason: format!(
-                        "the focimeter cannot read '{}' at {at:?} mm from its back vertex                          ({failure:?}): give a point on the lens",
-                        lens.name
-                    ),
-                })
-        })
-        .collect()
+    [
+        ("distance reference point", distance),
+        ("prism reference point", prism),
+    ]
+    .into_iter()
+    .map(|(name, at)| {
+        instrument
+            .read(name, at)
+            .map_err(|failure| AnalyzeError::BadOption {
+                option: "--distance-reference and --prism-reference",
+                reason: format!(
+                    "the focimeter cannot read '{}' at {at:?} mm from its back vertex \
+                         ({failure:?}): give a point on the lens",
+                    lens.name
+                ),
+            })
+    })
+    .collect()
 }
 
 /// An exact lens's base curve (its front's mean curvature times n − 1 and 0.53).
@@ -888,7 +901,8 @@ fn compensate(
         return Err(AnalyzeError::BadOption {
             option: "--compensate",
             reason: format!(
-                "'{name}' was not made from a prescription (a spectacle-lens shape): there is                  no blank to make the ordered lens on"
+                "'{name}' was not made from a prescription (a spectacle-lens shape): there is \
+                 no blank to make the ordered lens on"
             ),
         });
     };

@@ -30,6 +30,10 @@ enum Surface<'a> {
         accel: SceneAccel,
         /// Present for [`SurfaceModel::Smooth`].
         fits: Option<Vec<LocalQuadric>>,
+        /// How far past its start a ray's next hit must lie: for the smooth fit, past the
+        /// fit's distance from the triangles (a hit moved onto the fit may lie that far off
+        /// its triangle's plane).
+        skip_m: f64,
     },
     Exact {
         lens: ExactLens,
@@ -93,6 +97,17 @@ impl<'a> LensTracer<'a> {
     }
 
     fn triangles(mesh: &'a Mesh, fits: Option<Vec<LocalQuadric>>) -> LensTracer<'a> {
+        let skip_m = fits.as_ref().map_or(0.0, |fits| {
+            let off_plane = (0..mesh.triangles.len()).map(|t| {
+                let centroid = mesh.triangles[t]
+                    .iter()
+                    .map(|&i| mesh.positions[i as usize].as_dvec3())
+                    .sum::<DVec3>()
+                    / 3.0;
+                (fits[t].at(centroid).0 - centroid).length()
+            });
+            4.0 * off_plane.fold(0.0, f64::max)
+        });
         let triangles = mesh
             .triangles
             .iter()
@@ -104,6 +119,7 @@ impl<'a> LensTracer<'a> {
                 mesh,
                 accel: SceneAccel::from_triangles(triangles, ids),
                 fits,
+                skip_m,
             },
         }
     }
@@ -112,8 +128,13 @@ impl<'a> LensTracer<'a> {
     /// normal, in double precision.
     pub fn next_hit(&self, origin: DVec3, dir: DVec3) -> Option<(DVec3, DVec3)> {
         match &self.surface {
-            Surface::Triangles { mesh, accel, fits } => {
-                let (tri, point, normal) = triangle_hit(mesh, accel, origin, dir)?;
+            Surface::Triangles {
+                mesh,
+                accel,
+                fits,
+                skip_m,
+            } => {
+                let (tri, point, normal) = triangle_hit(mesh, accel, origin, dir, *skip_m)?;
                 match fits {
                     None => Some((point, normal)),
                     Some(fits) => Some(onto_fit(&fits[tri], point, dir, normal)),
@@ -209,10 +230,11 @@ fn triangle_hit(
     accel: &SceneAccel,
     origin: DVec3,
     dir: DVec3,
+    skip_m: f64,
 ) -> Option<(usize, DVec3, DVec3)> {
     // Past the surface the ray starts on (by more than single precision's step there); the
     // exact point is found again below.
-    let nudge = 1e-6 * (1.0 + origin.abs().max_element());
+    let nudge = (1e-6 * (1.0 + origin.abs().max_element())).max(skip_m);
     let ray = Ray {
         origin: (origin + dir * nudge).as_vec3(),
         dir: dir.as_vec3(),

@@ -152,7 +152,8 @@ impl Rx {
             let (amount, base) = upper.split_at(upper.len().saturating_sub(2));
             let amount: f64 = amount.parse().map_err(|_| {
                 format!(
-                    "'{token}' in '{text}': a prism is an amount and a base, e.g. 1.5BO or 0.5BU                      (BO, BI, BU, BD)"
+                    "'{token}' in '{text}': a prism is an amount and a base, e.g. 1.5BO or 0.5BU \
+                     (BO, BI, BU, BD)"
                 )
             })?;
             match base {

@@ -1,0 +1,484 @@
+//! The lens checked as a lab checks it: the focimeter against a toric lens's construction, the
+//! standards' tolerance tables at their band edges, a tilted lens against an exact trace of
+//! this file's own (Coddington's equations) and Martin's formula, the compensated prescription
+//! traced as worn, the exact surface against the mesh.
+
+use glam::{DVec3, Mat4, Vec3};
+use specula_analyze::lens::focimeter::Reading;
+use specula_analyze::lens::standard::{find, judge};
+use specula_analyze::lens::{analyze, default_options, Options, Report, Rx, Wear};
+use specula_analyze::mirror_surface::SurfaceModel;
+use specula_scene::generators::{self, LensSpec};
+use specula_scene::spectacle::spectacle_lens;
+use specula_scene::{Camera, Material, MaterialKind, Mesh, Prescription, Scene};
+
+/// `lens` (its own frame: light along +Z, back vertex at z = `thickness`) before a camera
+/// 12 mm behind the back vertex looking along −Z, placed by `world_from_lens`.
+fn scene_of(mut lens: Mesh, n: f64, thickness: f64, world_from_lens: Mat4) -> Scene {
+    let mut scene = Scene::new("lens standards");
+    let n = n as f32;
+    scene.materials.push(Material::new(
+        "glass",
+        MaterialKind::Dielectric {
+            ior: Vec3::new(n - 0.01, n, n + 0.01),
+            thin_walled: false,
+        },
+        Vec3::ONE,
+    ));
+    lens.name = "lens".into();
+    lens.material = 0;
+    lens.transform(world_from_lens);
+    scene.meshes.push(lens);
+    scene.camera = Camera {
+        eye: Vec3::new(0.0, 0.0, thickness as f32 + 0.012),
+        target: Vec3::new(0.0, 0.0, -1.0),
+        up: Vec3::Y,
+        fov_y_deg: 50.0,
+        aspect: None,
+    };
+    scene
+}
+
+fn blank(sphere: f64, cylinder: f64, axis_deg: f64) -> Prescription {
+    Prescription {
+        sphere,
+        cylinder,
+        axis_deg,
+        index: 1.6,
+        abbe: 42.0,
+        center_thickness: 0.002,
+        base_curve: 4.0,
+        diameter: 0.05,
+    }
+}
+
+fn spectacles(p: &Prescription, world_from_lens: Mat4) -> Scene {
+    let mut scene = scene_of(
+        spectacle_lens(p, 24, 96).unwrap(),
+        p.index,
+        p.center_thickness,
+        world_from_lens,
+    );
+    scene.prescriptions.push(("lens".into(), *p));
+    scene
+}
+
+fn centre_only(o: &mut Options) {
+    o.gaze.h_max_deg = 0.0;
+    o.gaze.v_max_deg = 0.0;
+}
+
+fn run(scene: &Scene, adjust: impl FnOnce(&mut Options)) -> Report {
+    let mut options = default_options(scene, 0).unwrap();
+    centre_only(&mut options);
+    adjust(&mut options);
+    analyze(scene, &options, &|_| {}).unwrap()
+}
+
+/// The difference of two TABO axes, degrees.
+fn axis_apart(a: f64, b: f64) -> f64 {
+    let d = (a - b).rem_euclid(180.0);
+    d.min(180.0 - d)
+}
+
+#[test]
+fn a_toric_lens_s_focimeter_reading_is_its_construction_however_the_scene_holds_it() {
+    let held = [
+        Mat4::IDENTITY,
+        // Turned and tilted in the scene: the focimeter reads the lens off the face.
+        Mat4::from_translation(Vec3::new(0.0, 0.0, 0.002))
+            * Mat4::from_rotation_x(0.2)
+            * Mat4::from_rotation_y(-0.15)
+            * Mat4::from_translation(Vec3::new(0.0, 0.0, -0.002)),
+    ];
+    let mut worst: (f64, f64) = (0.0, 0.0);
+    for (sphere, cylinder, axis, thickness) in [
+        (-2.0, -1.5, 30.0, 0.002),
+        (3.0, -2.25, 90.0, 0.006),
+        (-5.0, -0.5, 172.0, 0.002),
+    ] {
+        for world_from_lens in held {
+            let p = Prescription {
+                center_thickness: thickness,
+                ..blank(sphere, cylinder, axis)
+            };
+            let report = run(&spectacles(&p, world_from_lens), |_| {});
+            assert_eq!(report.surface, SurfaceModel::Exact);
+            for f in &report.focimeter {
+                let power = (f.sphere_d - sphere)
+                    .abs()
+                    .max((f.cylinder_d - cylinder).abs());
+                let angle = axis_apart(f.axis_deg, axis);
+                eprintln!(
+                    "{sphere} / {cylinder} × {axis}: {} reads {:.5} / {:.5} × {:.4} (prism \
+                     {:.1e}, {:.1e})",
+                    f.point, f.sphere_d, f.cylinder_d, f.axis_deg, f.prism_d[0], f.prism_d[1]
+                );
+                worst = (worst.0.max(power), worst.1.max(angle));
+                assert!(f.prism_d[0].abs() < 1e-6 && f.prism_d[1].abs() < 1e-6);
+            }
+        }
+    }
+    eprintln!("largest: {:.1e} D, {:.1e}°", worst.0, worst.1);
+    // The issue's bounds: 0.005 D and 0.05°. Measured 2026-12-04: 8.0e-5 D, 1.4e-4°.
+    assert!(worst.0 < 0.005 && worst.1 < 0.05);
+}
+
+/// A focimeter reading of `rx` with no prism gradient.
+fn reading(rx: Rx) -> Reading {
+    Reading {
+        point: "distance reference point",
+        at_mm: [0.0; 2],
+        sphere_d: rx.sphere_d,
+        cylinder_d: rx.cylinder_d,
+        axis_deg: rx.axis_deg,
+        prism_d: rx.prism_d,
+        uncertainty_d: 0.0,
+        axis_uncertainty_deg: 0.0,
+        prism_uncertainty_d: 0.0,
+        prism_per_mm: [[0.0; 2]; 2],
+    }
+}
+
+/// Whether `standard` passes the check of `quantity` for a lens reading `measured`, ordered
+/// `ordered` (None: no such check).
+fn passes(standard: &str, quantity: &str, ordered: Rx, measured: Rx) -> Option<bool> {
+    let table = find(standard).unwrap();
+    let verdict = judge(table, &reading(measured), &reading(measured), &ordered);
+    let checks: Vec<_> = verdict
+        .checks
+        .iter()
+        .filter(|c| c.quantity == quantity)
+        .collect();
+    (!checks.is_empty()).then(|| checks.iter().all(|c| c.passed))
+}
+
+fn rx(sphere: f64, cylinder: f64, axis: f64) -> Rx {
+    Rx::new(sphere, cylinder, axis)
+}
+
+#[test]
+fn verdicts_flip_exactly_at_the_tolerance_tables_edges() {
+    // Each case: an error that passes just inside one band and fails just across its edge (or
+    // the reverse), and the tolerance itself passing with 1e-4 more failing.
+    let ansi = "ansi-z80.1";
+    let iso = "iso-8980-1";
+    let sphere_error = |s: f64, e: f64| (rx(s, 0.0, 0.0), rx(s - e, 0.0, 0.0));
+    // ANSI: ±0.13 D to 6.50 D, 2 % beyond (0.1302 D at 6.51).
+    let (o, m) = sphere_error(-6.50, 0.1301);
+    assert_eq!(passes(ansi, "sphere", o, m), Some(false));
+    let (o, m) = sphere_error(-6.51, 0.1301);
+    assert_eq!(passes(ansi, "sphere", o, m), Some(true));
+    let (o, m) = sphere_error(-3.0, 0.13);
+    assert_eq!(passes(ansi, "sphere", o, m), Some(true));
+    let (o, m) = sphere_error(-3.0, 0.1301);
+    assert_eq!(passes(ansi, "sphere", o, m), Some(false));
+    // ANSI cylinder: 0.13 to 2.00, 0.15 to 4.50, 4 % beyond (0.1804 at 4.51).
+    for (cylinder, error, passed) in [
+        (-2.00, 0.14, false),
+        (-2.01, 0.14, true),
+        (-4.50, 0.16, false),
+        (-4.51, 0.16, true),
+    ] {
+        let o = rx(0.0, cylinder, 90.0);
+        let m = rx(0.0, cylinder - error, 90.0);
+        assert_eq!(passes(ansi, "cylinder", o, m), Some(passed), "{cylinder}");
+    }
+    // ANSI axis: none below 0.12 D; 14° to 0.25, 7° to 0.50, 5° to 0.75, 3° to 1.50, 2° beyond.
+    for (cylinder, error, passed) in [
+        (-0.11, 20.0, None),
+        (-0.12, 20.0, Some(false)),
+        (-0.25, 10.0, Some(true)),
+        (-0.26, 10.0, Some(false)),
+        (-0.50, 6.0, Some(true)),
+        (-0.51, 6.0, Some(false)),
+        (-0.75, 4.0, Some(true)),
+        (-0.76, 4.0, Some(false)),
+        (-1.50, 2.5, Some(true)),
+        (-1.51, 2.5, Some(false)),
+    ] {
+        let o = rx(-1.0, cylinder, 20.0);
+        let m = rx(-1.0, cylinder, 20.0 + error);
+        assert_eq!(passes(ansi, "axis", o, m), passed, "{cylinder}");
+    }
+    // ANSI prism: 0.33 Δ.
+    let prism = |p: f64| Rx {
+        prism_d: [p, 0.0],
+        ..rx(-1.0, 0.0, 0.0)
+    };
+    assert_eq!(passes(ansi, "prism", prism(0.0), prism(0.33)), Some(true));
+    assert_eq!(
+        passes(ansi, "prism", prism(0.0), prism(0.3301)),
+        Some(false)
+    );
+    // ISO A: 0.12 to 9.00, 0.18 to 12.00.
+    let (o, m) = sphere_error(9.00, -0.15);
+    assert_eq!(passes(iso, "sphere", o, m), Some(false));
+    let (o, m) = sphere_error(9.01, -0.15);
+    assert_eq!(passes(iso, "sphere", o, m), Some(true));
+    // ISO B with the highest meridian at 3.00 D: 0.09 to 0.75 D of cylinder, 0.12 beyond.
+    for (sphere, cylinder, passed) in [(-2.25, -0.75, false), (-2.24, -0.76, true)] {
+        let o = rx(sphere, cylinder, 45.0);
+        let m = rx(sphere, cylinder - 0.10, 45.0);
+        assert_eq!(passes(iso, "cylinder", o, m), Some(passed), "{cylinder}");
+    }
+    // ISO axis: 16° to 0.25, 9° to 0.50.
+    for (cylinder, passed) in [(-0.25, true), (-0.26, false)] {
+        let o = rx(-1.0, cylinder, 100.0);
+        let m = rx(-1.0, cylinder, 112.0);
+        assert_eq!(passes(iso, "axis", o, m), Some(passed), "{cylinder}");
+    }
+    // ISO prism: 0.25 + 0.1 × S_max Δ (0.45 at 2 D).
+    let prism = |p: f64| Rx {
+        prism_d: [0.0, p],
+        ..rx(-2.0, 0.0, 0.0)
+    };
+    assert_eq!(passes(iso, "prism", prism(0.0), prism(0.45)), Some(true));
+    assert_eq!(passes(iso, "prism", prism(0.0), prism(0.4501)), Some(false));
+    // ISO checks both principal meridians; ANSI the highest only.
+    let ordered = rx(-1.0, -1.0, 30.0);
+    let off = rx(-1.2, -0.8, 30.0);
+    let count = |s: &str| {
+        judge(find(s).unwrap(), &reading(off), &reading(off), &ordered)
+            .checks
+            .iter()
+            .filter(|c| c.quantity == "sphere")
+            .count()
+    };
+    assert_eq!((count(ansi), count(iso)), (1, 2));
+    let error = find("din-58208").unwrap_err();
+    assert!(
+        error.contains("ansi-z80.1") && error.contains("iso-8980-1"),
+        "{error}"
+    );
+}
+
+#[test]
+fn ansi_s_prism_passes_where_the_ordered_prism_lies_within_a_millimetre() {
+    // A −4 D lens moves its prism by 0.4 Δ per mm (Prentice): 0.38 Δ off lies 0.95 mm away.
+    let table = find("ansi-z80.1").unwrap();
+    let ordered = rx(-4.0, 0.0, 0.0);
+    for (prism, passed) in [(0.38, true), (0.5, false)] {
+        let mut r = reading(Rx {
+            prism_d: [prism, 0.0],
+            ..ordered
+        });
+        r.prism_per_mm = [[-0.4, 0.0], [0.0, -0.4]];
+        let verdict = judge(table, &r, &r, &ordered);
+        let check = verdict
+            .checks
+            .iter()
+            .find(|c| c.quantity == "prism")
+            .unwrap();
+        eprintln!("{prism} Δ: {:?}", check.note);
+        assert!(check.margin < 0.0);
+        assert_eq!(check.passed, passed);
+        assert_eq!(verdict.passed, passed);
+    }
+}
+
+/// The vergences (sagittal, tangential) at the back vertex of the chief ray that leaves it at
+/// `theta` to the axis, for a spherical lens of radii `r1`, `r2` (signed, centre on the +Z side
+/// positive), thickness `t`, index `n`: the chief ray traced back through the spheres in
+/// closed form, then Coddington's equations at each surface, forwards.
+fn coddington(r1: f64, r2: f64, t: f64, n: f64, theta: f64) -> (f64, f64) {
+    let refract = |d: DVec3, normal: DVec3, eta: f64| {
+        // `normal` against d.
+        let cos_i = -d.dot(normal);
+        let k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
+        (eta * d + (eta * cos_i - k.sqrt()) * normal).normalize()
+    };
+    // Backwards from the back vertex B towards the object: the exit direction reversed.
+    let b = DVec3::new(0.0, 0.0, t);
+    let out = DVec3::new(0.0, theta.sin(), theta.cos());
+    // Facing the backward ray, which runs towards −Z.
+    let normal_at_b = DVec3::Z;
+    let inside = refract(-out, normal_at_b, 1.0 / n);
+    // The front sphere about (0, 0, r1): the nearer root behind B along `inside`.
+    let centre = DVec3::new(0.0, 0.0, r1);
+    let oc = b - centre;
+    let (bb, c) = (oc.dot(inside), oc.dot(oc) - r1 * r1);
+    let s = (bb * bb - c).sqrt();
+    let d_glass = [-bb - s, -bb + s]
+        .into_iter()
+        .filter(|x| *x > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    let p1 = b + inside * d_glass;
+    let n1 = ((p1 - centre) / r1).normalize() * r1.signum();
+    // Angles, forwards: in at the front from air, out at the back into air.
+    let forward_in_glass = -inside;
+    let cos_i2 = forward_in_glass.dot(DVec3::Z);
+    let cos_i2p = out.dot(DVec3::Z);
+    let normal1 = if n1.dot(forward_in_glass) > 0.0 {
+        n1
+    } else {
+        -n1
+    };
+    let cos_i1p = forward_in_glass.dot(normal1);
+    let sin_i1 = n * (1.0 - cos_i1p * cos_i1p).sqrt();
+    let cos_i1 = (1.0 - sin_i1 * sin_i1).sqrt();
+    let power1 = (n * cos_i1p - cos_i1) / r1;
+    let power2 = (cos_i2p - n * cos_i2) / r2;
+    // Object at infinity: n / s1' = Φ1, n cos² i1' / t1' = Φ1.
+    let s1 = n / power1;
+    let t1 = n * cos_i1p * cos_i1p / power1;
+    let (s2, t2) = (s1 - d_glass, t1 - d_glass);
+    let sagittal = n / s2 + power2;
+    let tangential = (n * cos_i2 * cos_i2 / t2 + power2) / (cos_i2p * cos_i2p);
+    (sagittal, tangential)
+}
+
+#[test]
+fn a_tilted_spherical_lens_gives_coddington_s_and_martin_s_oblique_powers() {
+    // −4.00 D: n 1.5, t 2 mm, front R 100 mm; the back solved for the back vertex power.
+    let (n, t, r1) = (1.5, 0.002, 0.1);
+    let f1 = (n - 1.0) / r1;
+    let f2 = -4.0 - f1 / (1.0 - t / n * f1);
+    let r2 = (1.0 - n) / f2;
+    let lens = generators::lens(&LensSpec {
+        front_radius: r1 as f32,
+        back_radius: r2 as f32,
+        center_thickness: t as f32,
+        diameter: 0.05,
+        rings: 24,
+        segments: 96,
+    })
+    .unwrap();
+    let scene = scene_of(lens, n, t, Mat4::IDENTITY);
+    // The f32 radii the lens was made with.
+    let (r1, r2) = (f64::from(r1 as f32), f64::from(r2 as f32));
+    let mut worst_trace: f64 = 0.0;
+    for (pantoscopic, wrap) in [(5.0, 0.0), (10.0, 0.0), (20.0, 0.0), (0.0, 15.0)] {
+        let report = run(&scene, |o| {
+            o.wear = Wear {
+                pantoscopic_deg: pantoscopic,
+                wrap_deg: wrap,
+            }
+        });
+        let c = &report.centre;
+        let (sphere, cylinder, axis) = (
+            c.sphere_d.unwrap(),
+            c.cylinder_d.unwrap(),
+            c.axis_deg.unwrap(),
+        );
+        let theta = f64::max(pantoscopic, wrap).to_radians();
+        let (sagittal, tangential) = coddington(r1, r2, t, n, theta);
+        let martin_sphere = -4.0 * (1.0 + theta.sin().powi(2) / (2.0 * n));
+        let martin_cylinder = martin_sphere * theta.tan().powi(2);
+        // The tilt axis: horizontal (0°) for pantoscopic tilt, vertical (90°) for wrap.
+        let tilt_axis = if pantoscopic > 0.0 { 0.0 } else { 90.0 };
+        eprintln!(
+            "tilt {pantoscopic}°/{wrap}°: traced {sphere:.5} / {cylinder:.5} × {axis:.2}; \
+             Coddington {sagittal:.5} / {:.5}; Martin {martin_sphere:.5} / {martin_cylinder:.5} \
+             (Martin − traced: {:.4} D sphere, {:.4} D cylinder)",
+            tangential - sagittal,
+            martin_sphere - sphere,
+            martin_cylinder - cylinder
+        );
+        let trace_error = (sphere - sagittal)
+            .abs()
+            .max((cylinder - (tangential - sagittal)).abs());
+        worst_trace = worst_trace.max(trace_error);
+        assert!(axis_apart(axis, tilt_axis) < 0.01, "axis {axis}");
+        // Martin's thin-lens formula, measured 2026-12-04: 0.0005 / 0.0006 D at 5°, 0.0022 /
+        // 0.0024 D at 10°, 0.0069 / 0.0061 D at 15° (wrap), 0.0169 / 0.0129 D at 20° (sphere /
+        // cylinder): the thick lens departs from it as the square of the tilt.
+        let bound = 0.035 * (theta / 20f64.to_radians()).powi(2) + 1e-3;
+        assert!((martin_sphere - sphere).abs() < bound);
+        assert!((martin_cylinder - cylinder).abs() < bound);
+    }
+    // Measured 2026-12-04: 9.9e-5 D (the bundle's finite differences).
+    eprintln!("traced against Coddington: {worst_trace:.1e} D at most");
+    assert!(worst_trace < 2e-4);
+}
+
+#[test]
+fn the_compensated_prescription_traced_as_worn_gives_back_the_prescription() {
+    // −4.00 / −1.00 × 90 refracted at 13 mm, worn at 12 mm with 10° pantoscopic tilt and 5°
+    // wrap.
+    let p = blank(-4.0, -1.0, 90.0);
+    let wear = Wear {
+        pantoscopic_deg: 10.0,
+        wrap_deg: 5.0,
+    };
+    let as_worn = |o: &mut Options| {
+        o.wear = wear;
+        o.refraction_vertex_m = Some(0.013);
+    };
+    let report = run(&spectacles(&p, Mat4::IDENTITY), |o| {
+        as_worn(o);
+        o.compensate = true;
+    });
+    let target = report.target.unwrap();
+    let ordered = report.compensated.unwrap().ordered;
+    eprintln!(
+        "target {:.4} / {:.4} × {:.2}; ordered {:.4} / {:.4} × {:.2}; worn uncompensated {:.4} \
+         / {:.4} × {:.2}",
+        target.sphere_d,
+        target.cylinder_d,
+        target.axis_deg,
+        ordered.sphere_d,
+        ordered.cylinder_d,
+        ordered.axis_deg,
+        report.centre.sphere_d.unwrap(),
+        report.centre.cylinder_d.unwrap(),
+        report.centre.axis_deg.unwrap()
+    );
+    // The re-referenced prescription: each meridian F / (1 − 0.001 F).
+    assert!((target.sphere_d - -4.0 / 1.004).abs() < 1e-12);
+    // The ordered lens, made and traced as worn by the analysis itself.
+    let made = Prescription {
+        sphere: ordered.sphere_d,
+        cylinder: ordered.cylinder_d,
+        axis_deg: ordered.axis_deg,
+        ..p
+    };
+    let worn = run(&spectacles(&made, Mat4::IDENTITY), as_worn);
+    let c = &worn.centre;
+    let got = Rx::new(
+        c.sphere_d.unwrap(),
+        c.cylinder_d.unwrap(),
+        c.axis_deg.unwrap(),
+    );
+    let apart = (0..3)
+        .map(|k| (got.power_vector()[k] - target.power_vector()[k]).abs())
+        .fold(0.0, f64::max);
+    eprintln!("as worn, the ordered lens is {apart:.1e} D from the target");
+    // The issue's bound, 0.01 D; measured 2026-12-04: 7.3e-11 D.
+    assert!(apart < 0.01, "{apart}");
+    // Uncompensated, the tilt shows: the lens made to the prescription misses it as worn.
+    let uncompensated = report.centre.unwanted_cylinder_d.unwrap();
+    assert!(uncompensated > 0.02, "{uncompensated}");
+}
+
+#[test]
+fn the_built_in_lens_on_its_exact_surface_and_on_its_mesh() {
+    // The issue's finding: the 10-ring mesh reads 0.175 D of cylinder at 30° where the lens
+    // as designed gives 0.138 D; the mesh reports how far its surface may move the figures.
+    let scene = specula_scene::builtin::by_name("spectacle-lens")
+        .unwrap()
+        .unwrap();
+    let lens = specula_analyze::lens::find_lens(&scene, "spectacle lens").unwrap();
+    let at_30 = |surface: SurfaceModel| {
+        let mut options = default_options(&scene, lens).unwrap();
+        options.surface = surface;
+        options.gaze.step_deg = 30.0;
+        let report = analyze(&scene, &options, &|_| {}).unwrap_or_else(|e| panic!("{e}"));
+        let cell = report
+            .grid
+            .iter()
+            .find(|c| c.gaze_deg == [30.0, 0.0])
+            .unwrap();
+        (cell.cylinder_d.unwrap(), report.surface_uncertainty_d)
+    };
+    let (exact, none) = at_30(SurfaceModel::Exact);
+    let (mesh, uncertainty) = at_30(SurfaceModel::Mesh);
+    eprintln!("cylinder at 30°: exact {exact:.4} D, mesh {mesh:.4} D (surface uncertainty {uncertainty:?})");
+    assert!(none.is_none());
+    assert!((exact - -0.138).abs() < 0.001, "{exact}");
+    assert!((mesh - -0.175).abs() < 0.001, "{mesh}");
+    // The uncertainty covers the mesh's own error at this gaze.
+    // Measured 2026-12-04: 0.0433 D against the mesh's 0.0367 D error here.
+    let uncertainty = uncertainty.unwrap();
+    assert!(uncertainty > 0.5 * (mesh - exact).abs(), "{uncertainty}");
+}
