@@ -684,6 +684,10 @@ fn a_wrapped_lens_is_judged_against_its_compensated_prescription() {
         "{reading}"
     );
     let compensated = verdict(&["--standard", "iso-8980-1", "--compensate"]);
+    assert_matches_schema(
+        &compensated,
+        include_str!("../../../docs/analyze-lens.schema.json"),
+    );
     assert_eq!(compensated["verdict"]["passed"], false);
     let ordered_sphere = compensated["compensated"]["ordered"]["sphere_d"]
         .as_f64()

@@ -35,12 +35,15 @@ enum Surface<'a> {
         /// its triangle's plane).
         skip_m: f64,
     },
-    Exact {
-        lens: ExactLens,
-        world_from_lens: DMat4,
-        lens_from_world: DMat4,
-        normal_to_world: DMat3,
-    },
+    Exact(Box<PlacedLens>),
+}
+
+/// An exact lens and its placement.
+struct PlacedLens {
+    lens: ExactLens,
+    world_from_lens: DMat4,
+    lens_from_world: DMat4,
+    normal_to_world: DMat3,
 }
 
 /// Why a ray did not pass through the lens.
@@ -87,12 +90,12 @@ impl<'a> LensTracer<'a> {
     /// An exact lens placed by `world_from_lens`.
     pub fn exact(lens: ExactLens, world_from_lens: DMat4) -> LensTracer<'static> {
         LensTracer {
-            surface: Surface::Exact {
+            surface: Surface::Exact(Box::new(PlacedLens {
                 lens,
                 world_from_lens,
                 lens_from_world: world_from_lens.inverse(),
                 normal_to_world: DMat3::from_mat4(world_from_lens).inverse().transpose(),
-            },
+            })),
         }
     }
 
@@ -140,19 +143,14 @@ impl<'a> LensTracer<'a> {
                     Some(fits) => Some(onto_fit(&fits[tri], point, dir, normal)),
                 }
             }
-            Surface::Exact {
-                lens,
-                world_from_lens,
-                lens_from_world,
-                normal_to_world,
-            } => {
-                let o = lens_from_world.transform_point3(origin);
-                let d = lens_from_world.transform_vector3(dir);
+            Surface::Exact(placed) => {
+                let o = placed.lens_from_world.transform_point3(origin);
+                let d = placed.lens_from_world.transform_vector3(dir);
                 // Past the surface the ray starts on (Newton's roots are good to 1e-15 m).
-                let hit = lens.next_hit(o, d, 1e-10 / d.length())?;
+                let hit = placed.lens.next_hit(o, d, 1e-10 / d.length())?;
                 Some((
-                    world_from_lens.transform_point3(hit.p),
-                    (*normal_to_world * hit.n_outward).normalize(),
+                    placed.world_from_lens.transform_point3(hit.p),
+                    (placed.normal_to_world * hit.n_outward).normalize(),
                 ))
             }
         }
@@ -193,13 +191,10 @@ impl<'a> LensTracer<'a> {
     /// rim; for triangles, an odd number of crossings along at least two of three directions
     /// (a ray grazing an edge could miscount one).
     pub fn contains(&self, p: DVec3) -> bool {
-        if let Surface::Exact {
-            lens,
-            lens_from_world,
-            ..
-        } = &self.surface
-        {
-            return lens.contains(lens_from_world.transform_point3(p));
+        if let Surface::Exact(placed) = &self.surface {
+            return placed
+                .lens
+                .contains(placed.lens_from_world.transform_point3(p));
         }
         let crossings = |dir: DVec3| {
             let mut count = 0;
