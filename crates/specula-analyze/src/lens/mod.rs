@@ -1,5 +1,8 @@
 //! `specula analyze lens`: a spectacle lens's power, cylinder, prism, lateral colour and
-//! distortion as the wearer gets them at each gaze direction, from exact rays.
+//! distortion as the wearer gets them at each gaze direction, from exact rays; its focimeter
+//! reading ([`focimeter`]) against a standard's tolerances ([`standard`]); the lens as the frame
+//! tilts and wraps it and the compensated prescription ([`wear`]). Rays go through the lens's
+//! exact surfaces where the scene made it from a shape, else its triangles ([`tracer`]).
 //!
 //! **The eye.** It rotates about its centre of rotation C, from the primary gaze `forward`
 //! (with `up`), by Listing's law: the rotation taking `forward` to the gaze g turns about an
@@ -8,9 +11,8 @@
 //! tan v · up (a tangent screen's coordinates: (30, 0) is 30° to the wearer's right).
 //!
 //! **The chief ray** leaves C along g, is refracted into the lens and out of it by Snell's law
-//! at each surface with the lens's own interpolated normals, and leaves into object space along
-//! g'. Rays are traced in double precision: the lens's BVH finds each triangle, its plane gives
-//! the exact point, its vertex normals interpolated there the normal. A gaze whose chief ray
+//! at each surface ([`tracer`]: the exact surfaces, or the triangles with their interpolated
+//! normals), and leaves into object space along g', in double precision. A gaze whose chief ray
 //! misses the lens, meets its edge (incidence beyond 75°) or crosses it other than in and out
 //! once, or whose bundle does, is **outside the lens**.
 //!
@@ -43,8 +45,10 @@
 //! 100 (|g_t| / |J⁻¹ (o_t − o_t₀)| − 1), where J is the derivative of the object's tangents by
 //! the gaze's at the centre (central differences at ±0.1°; a 2 × 2 matrix, since a toric lens
 //! magnifies its meridians differently). A view whose straight object lines stay straight and
-//! evenly spaced (the distortion picture) has none. The report's `spectacle_magnification` is
-//! 1 / |J e| along the horizontal and the vertical: the gaze's tangent per the object's.
+//! evenly spaced (the distortion picture) has none. `rotating_eye_magnification` is 1 / |J e|
+//! along the horizontal and the vertical (the gaze's tangent per the object's);
+//! `spectacle_magnification` the same with J taken from the entrance pupil, 3 mm behind the
+//! cornea ([1 / (1 − (t/n) F1)] · [1 / (1 − h Fv)] for a thick lens).
 
 pub mod focimeter;
 pub mod standard;
