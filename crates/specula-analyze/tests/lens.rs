@@ -166,6 +166,7 @@ fn prescription(sphere: f64, cylinder: f64, axis_deg: f64) -> Prescription {
         center_thickness: 0.002,
         base_curve: 4.0,
         diameter: 0.05,
+        ..Prescription::default()
     }
 }
 
@@ -175,7 +176,7 @@ fn generated(p: &Prescription, rings: u32, segments: u32) -> Scene {
         p.indices(),
         p.center_thickness as f32,
     );
-    scene.prescriptions.push(("lens".into(), *p));
+    scene.prescriptions.push(("lens".into(), p.clone()));
     scene
 }
 
@@ -280,6 +281,7 @@ fn oblique_astigmatism_follows_tscherning_over_the_front_base_curve() {
             center_thickness: 0.002,
             base_curve,
             diameter: 0.06,
+            ..Prescription::default()
         };
         let scene = generated(&p, 48, 192);
         let report = run(&scene, |o| {

@@ -49,6 +49,7 @@ fn blank(sphere: f64, cylinder: f64, axis_deg: f64) -> Prescription {
         center_thickness: 0.002,
         base_curve: 4.0,
         diameter: 0.05,
+        ..Prescription::default()
     }
 }
 
@@ -59,7 +60,7 @@ fn spectacles(p: &Prescription, world_from_lens: Mat4) -> Scene {
         p.center_thickness,
         world_from_lens,
     );
-    scene.prescriptions.push(("lens".into(), *p));
+    scene.prescriptions.push(("lens".into(), p.clone()));
     scene
 }
 

@@ -19,16 +19,28 @@
 
 use glam::{DVec2, DVec3};
 
+use crate::freeform::Freeform;
+
 /// One optical surface of a lens: z = `vertex_z` + s(x, y) (module doc).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct LensSurface {
     pub vertex_z: f64,
-    /// Curvature along the `axis` meridian, 1 / metres.
-    pub curvature_axis: f64,
-    /// Curvature across it.
-    pub curvature_across: f64,
-    /// The axis meridian's unit direction in the (x, y) plane.
-    pub axis: DVec2,
+    pub shape: SurfaceShape,
+}
+
+/// What a lens surface's sag s(x, y) is.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SurfaceShape {
+    /// A torus (a sphere when both curvatures agree), module doc.
+    Toric {
+        /// Curvature along the `axis` meridian, 1 / metres.
+        curvature_axis: f64,
+        /// Curvature across it.
+        curvature_across: f64,
+        /// The axis meridian's unit direction in the (x, y) plane.
+        axis: DVec2,
+    },
+    Freeform(Freeform),
 }
 
 /// Which part of the lens a ray met.
@@ -50,7 +62,7 @@ pub struct LensHit {
 }
 
 /// A lens's two optical surfaces and its round rim, in its own frame (module doc).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct ExactLens {
     pub front: LensSurface,
     pub back: LensSurface,
@@ -93,9 +105,33 @@ impl LensSurface {
     pub fn sphere(curvature: f64, vertex_z: f64) -> LensSurface {
         LensSurface {
             vertex_z,
-            curvature_axis: curvature,
-            curvature_across: curvature,
-            axis: DVec2::X,
+            shape: SurfaceShape::Toric {
+                curvature_axis: curvature,
+                curvature_across: curvature,
+                axis: DVec2::X,
+            },
+        }
+    }
+
+    pub fn freeform(shape: Freeform, vertex_z: f64) -> LensSurface {
+        LensSurface {
+            vertex_z,
+            shape: SurfaceShape::Freeform(shape),
+        }
+    }
+
+    /// The principal curvatures at the vertex (larger first for a free-form surface; along
+    /// and across the axis for a torus), 1 / metres.
+    pub fn vertex_curvatures(&self) -> [f64; 2] {
+        match &self.shape {
+            SurfaceShape::Toric {
+                curvature_axis,
+                curvature_across,
+                ..
+            } => [*curvature_axis, *curvature_across],
+            SurfaceShape::Freeform(f) => f
+                .local(0.0, 0.0)
+                .map_or([f64::NAN; 2], |l| l.principal_curvatures()),
         }
     }
 
@@ -110,30 +146,43 @@ impl LensSurface {
         let theta = axis_deg.to_radians();
         LensSurface {
             vertex_z,
-            curvature_axis,
-            curvature_across,
-            axis: DVec2::new(-theta.cos(), theta.sin()),
+            shape: SurfaceShape::Toric {
+                curvature_axis,
+                curvature_across,
+                axis: DVec2::new(-theta.cos(), theta.sin()),
+            },
         }
     }
 
     /// The surface's height z and gradient (∂z/∂x, ∂z/∂y) at (x, y).
     pub fn height(&self, x: f64, y: f64) -> Option<(f64, DVec2)> {
-        let across = self.axis.perp();
+        let (curvature_axis, curvature_across, axis) = match &self.shape {
+            SurfaceShape::Toric {
+                curvature_axis,
+                curvature_across,
+                axis,
+            } => (*curvature_axis, *curvature_across, *axis),
+            SurfaceShape::Freeform(f) => {
+                let local = f.local(x, y)?;
+                return Some((self.vertex_z + local.sag, local.gradient));
+            }
+        };
+        let across = axis.perp();
         let q = DVec2::new(x, y);
-        let (u, v) = (q.dot(self.axis), q.dot(across));
-        let (s, dsu, dsv) = if self.curvature_axis == self.curvature_across {
+        let (u, v) = (q.dot(axis), q.dot(across));
+        let (s, dsu, dsv) = if curvature_axis == curvature_across {
             let r = q.length();
-            let s = arc_sag(self.curvature_axis, r)?;
-            let slope = arc_slope(self.curvature_axis, r);
+            let s = arc_sag(curvature_axis, r)?;
+            let slope = arc_slope(curvature_axis, r);
             if r > 0.0 {
                 (s, slope * u / r, slope * v / r)
             } else {
                 (s, 0.0, 0.0)
             }
         } else {
-            toric_sag(self.curvature_axis, self.curvature_across, u, v)?
+            toric_sag(curvature_axis, curvature_across, u, v)?
         };
-        Some((self.vertex_z + s, self.axis * dsu + across * dsv))
+        Some((self.vertex_z + s, axis * dsu + across * dsv))
     }
 
     /// Where the ray o + t d first crosses the surface with t > `t_min`: Newton's method on
@@ -282,8 +331,11 @@ mod tests {
         let surface = LensSurface::toric(cu, cv, 30.0, 0.0);
         let h = 1e-4;
         let along = |dir: DVec2| surface.height(dir.x * h, dir.y * h).unwrap().0 * 2.0 / (h * h);
-        assert!((along(surface.axis) - cu).abs() < 1e-4 * cu);
-        assert!((along(surface.axis.perp()) - cv).abs() < 1e-4 * cv);
+        let SurfaceShape::Toric { axis, .. } = surface.shape else {
+            panic!("a torus")
+        };
+        assert!((along(axis) - cu).abs() < 1e-4 * cu);
+        assert!((along(axis.perp()) - cv).abs() < 1e-4 * cv);
         let (x, y) = (0.01, -0.015);
         let (z, g) = surface.height(x, y).unwrap();
         let e = 1e-7;

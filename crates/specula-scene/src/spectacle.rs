@@ -30,15 +30,16 @@
 
 use std::f64::consts::TAU;
 
-use glam::{DVec3, Vec2, Vec3};
+use glam::{DVec2, DVec3, Vec2, Vec3};
 
 use crate::exact_lens::{ExactLens, Face, LensSurface};
+use crate::freeform::Freeform;
 use crate::generators::{append_grid, empty, finish, Sample};
 use crate::{ExactShape, ExactSurface};
 use crate::{Mesh, SceneError};
 
 /// A spectacle lens's prescription and blank. Lengths in metres, powers in dioptres.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Default)]
 pub struct Prescription {
     /// Back vertex power in the axis meridian.
     pub sphere: f64,
@@ -54,12 +55,24 @@ pub struct Prescription {
     /// Front surface power in the material's index, (n_d − 1) / R1.
     pub base_curve: f64,
     pub diameter: f64,
+    /// A free-form front in place of the base curve's sphere (the base curve is then its
+    /// power at the vertex, where the back is solved).
+    pub front: Option<Freeform>,
+    /// A free-form back in place of the solved torus: sphere, cylinder and axis are then what
+    /// the lens was ordered as, not how it is made.
+    pub back: Option<Freeform>,
+    /// A progressive lens's ordered addition.
+    pub add_d: Option<f64>,
+    /// The distance and near reference points where the design sets them, metres in the lens
+    /// frame (x right, y up).
+    pub distance_reference: Option<DVec2>,
+    pub near_reference: Option<DVec2>,
 }
 
 impl Prescription {
     /// The same prescription in minus-cylinder form, axis in [0, 180).
     pub fn minus_cylinder(&self) -> Prescription {
-        let mut p = *self;
+        let mut p = self.clone();
         if p.cylinder > 0.0 {
             p.sphere += p.cylinder;
             p.cylinder = -p.cylinder;
@@ -121,6 +134,24 @@ impl Prescription {
                 self.center_thickness, self.diameter
             ));
         }
+        let rim = 0.5 * self.diameter;
+        for (side, surface) in [("front", &self.front), ("back", &self.back)] {
+            if let Some([[x0, x1], [y0, y1]]) = surface.as_ref().and_then(Freeform::extent) {
+                if x0 > -rim || x1 < rim || y0 > -rim || y1 < rim {
+                    return bad(format!(
+                        "the {side}'s {} spans x {:.1} to {:.1} mm and y {:.1} to {:.1} mm: it \
+                         must cover the lens's {:.1} mm disc (±{:.1} mm)",
+                        surface.as_ref().expect("a grid").describe(),
+                        x0 * 1e3,
+                        x1 * 1e3,
+                        y0 * 1e3,
+                        y1 * 1e3,
+                        self.diameter * 1e3,
+                        rim * 1e3
+                    ));
+                }
+            }
+        }
         if 1.0 - self.center_thickness / self.index * self.base_curve <= 0.0 {
             return bad(format!(
                 "a base curve of {} D focuses inside a {} m thick lens: no back surface can make \
@@ -136,14 +167,22 @@ impl Prescription {
     /// The lens's exact surfaces, in the lens frame (module doc).
     pub fn exact_lens(&self) -> ExactLens {
         let p = self.minus_cylinder();
-        ExactLens {
-            front: LensSurface::sphere(p.front_curvature(), 0.0),
-            back: LensSurface::toric(
+        let front = match &p.front {
+            Some(f) => LensSurface::freeform(f.clone(), 0.0),
+            None => LensSurface::sphere(p.front_curvature(), 0.0),
+        };
+        let back = match &p.back {
+            Some(f) => LensSurface::freeform(f.clone(), p.center_thickness),
+            None => LensSurface::toric(
                 p.back_curvature(p.sphere),
                 p.back_curvature(p.sphere + p.cylinder),
                 p.axis_deg,
                 p.center_thickness,
             ),
+        };
+        ExactLens {
+            front,
+            back,
             diameter: p.diameter,
         }
     }
@@ -252,6 +291,7 @@ mod tests {
             center_thickness: 0.002,
             base_curve: 4.0,
             diameter: 0.05,
+            ..Prescription::default()
         }
     }
 
@@ -261,8 +301,9 @@ mod tests {
         let lens = p.exact_lens();
         // Thick-lens formula, forwards: F1 / (1 − t F1 / n) + (1 − n) / R2.
         let power = |c2: f64| p.front_effective() + (1.0 - p.index) * c2;
-        assert!((power(lens.back.curvature_axis) - -2.0).abs() < 1e-12);
-        assert!((power(lens.back.curvature_across) - -3.0).abs() < 1e-12);
+        let [along, across] = lens.back.vertex_curvatures();
+        assert!((power(along) - -2.0).abs() < 1e-12);
+        assert!((power(across) - -3.0).abs() < 1e-12);
         assert!((p.front_curvature() - 4.0 / 0.6).abs() < 1e-12);
     }
 

@@ -880,7 +880,8 @@ fn read_focimeter(
 /// An exact lens's base curve (its front's mean curvature times n − 1 and 0.53).
 fn base_curve(lens: &Mesh, n: f64) -> Option<BaseCurve> {
     let exact = lens.exact.as_ref()?.lens()?;
-    let c = 0.5 * (exact.front.curvature_axis + exact.front.curvature_across);
+    let [k1, k2] = exact.front.vertex_curvatures();
+    let c = 0.5 * (k1 + k2);
     Some(BaseCurve {
         lens_index_d: (n - 1.0) * c,
         tooling_index_d: (TOOLING_INDEX - 1.0) * c,
@@ -900,7 +901,7 @@ fn compensate(
         .prescriptions
         .iter()
         .find(|(n, _)| n == name)
-        .map(|(_, p)| *p);
+        .map(|(_, p)| p.clone());
     let (Some(blank), Some(exact)) = (blank, worn.exact.as_ref()) else {
         return Err(AnalyzeError::BadOption {
             option: "--compensate",

@@ -82,7 +82,10 @@ impl<'a> LensTracer<'a> {
             )),
             SurfaceModel::Exact => {
                 let exact = mesh.exact.as_ref()?;
-                Some(LensTracer::exact(*exact.lens()?, exact.world_from_object))
+                Some(LensTracer::exact(
+                    exact.lens()?.clone(),
+                    exact.world_from_object,
+                ))
             }
         }
     }

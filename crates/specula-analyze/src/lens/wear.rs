@@ -265,7 +265,7 @@ pub(crate) fn compensate(
             sphere: rx.sphere_d,
             cylinder: rx.cylinder_d,
             axis_deg: rx.axis_deg,
-            ..*blank
+            ..blank.clone()
         };
         let got = as_worn(&lens)?;
         let residual = (0..3).map(|k| (goal[k] - got[k]).abs()).fold(0.0, f64::max);

@@ -5,9 +5,10 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use glam::{EulerRot, Mat4, Quat, Vec2, Vec3};
+use glam::{DVec2, EulerRot, Mat4, Quat, Vec2, Vec3};
 use serde::Deserialize;
 
+use crate::freeform::{Freeform, Polynomial, Progressive, SagGrid};
 use crate::generators::{self, LensSpec};
 use crate::material::{conductor_f0, ior_from_abbe};
 use crate::{
@@ -226,6 +227,23 @@ fn n1() -> u32 {
     1
 }
 
+/// A free-form lens surface (crate::freeform): exactly one of these keys.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum SurfaceSpec {
+    /// A CSV file of sags in mm, relative to the scene file.
+    SagGrid(String),
+    /// [[i, j, c], ...]: s = Σ c x^i y^j, millimetres.
+    Polynomial(Vec<[f64; 3]>),
+    /// The progressive surface built in code, on the base curve's sphere: metres and
+    /// dioptres.
+    Progressive {
+        add: f64,
+        corridor_length: f64,
+        blend_width: f64,
+    },
+}
+
 #[derive(Deserialize, Debug)]
 #[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
 pub enum ShapeSpec {
@@ -274,12 +292,22 @@ pub enum ShapeSpec {
         index: f64,
         abbe: f64,
         center_thickness: f64,
-        base_curve: f64,
+        /// Required unless the front is free-form (then its power at the vertex).
+        base_curve: Option<f64>,
         diameter: f64,
         #[serde(default = "n48")]
         rings: u32,
         #[serde(default = "n192")]
         segments: u32,
+        /// A free-form front (crate::freeform) in place of the base curve's sphere.
+        front: Option<SurfaceSpec>,
+        /// A free-form back in place of the torus solved from sphere, cylinder and axis.
+        back: Option<SurfaceSpec>,
+        /// A progressive lens's ordered addition, dioptres.
+        add: Option<f64>,
+        /// Reference points, millimetres in the lens frame (x right, y up).
+        distance_reference: Option<[f64; 2]>,
+        near_reference: Option<[f64; 2]>,
     },
     Box {
         size: [f32; 3],
@@ -349,36 +377,162 @@ fn placement(
     Ok(m)
 }
 
-/// A spectacle-lens shape's prescription and tessellation.
-fn prescription_of(shape: &ShapeSpec) -> Option<(Prescription, u32, u32)> {
-    match *shape {
-        ShapeSpec::SpectacleLens {
-            sphere,
-            cylinder,
-            axis,
-            index,
-            abbe,
-            center_thickness,
-            base_curve,
-            diameter,
-            rings,
-            segments,
-        } => Some((
-            Prescription {
-                sphere,
-                cylinder,
-                axis_deg: axis,
-                index,
-                abbe,
-                center_thickness,
-                base_curve,
-                diameter,
-            },
-            rings,
-            segments,
-        )),
-        _ => None,
+/// A spectacle-lens shape's prescription and tessellation (None for other shapes), its
+/// free-form surfaces read relative to `base`.
+fn prescription_of(
+    shape: &ShapeSpec,
+    base: &Path,
+) -> Result<Option<(Prescription, u32, u32)>, SceneError> {
+    let ShapeSpec::SpectacleLens {
+        sphere,
+        cylinder,
+        axis,
+        index,
+        abbe,
+        center_thickness,
+        base_curve,
+        diameter,
+        rings,
+        segments,
+        front,
+        back,
+        add,
+        distance_reference,
+        near_reference,
+    } = shape
+    else {
+        return Ok(None);
+    };
+    let mm = |p: &Option<[f64; 2]>| p.map(|[x, y]| DVec2::new(x, y) * 1e-3);
+    let mut p = Prescription {
+        sphere: *sphere,
+        cylinder: *cylinder,
+        axis_deg: *axis,
+        index: *index,
+        abbe: *abbe,
+        center_thickness: *center_thickness,
+        base_curve: base_curve.unwrap_or(f64::NAN),
+        diameter: *diameter,
+        add_d: *add,
+        distance_reference: mm(distance_reference),
+        near_reference: mm(near_reference),
+        ..Prescription::default()
+    };
+    if let Some(spec) = front {
+        let surface = freeform_of(spec, "front", &p, base)?;
+        if let Freeform::Progressive(design) = &surface {
+            p.distance_reference = p.distance_reference.or(Some(design.far_reference()));
+            p.near_reference = p.near_reference.or(Some(design.near_reference()));
+        }
+        let [k1, k2] = surface
+            .local(0.0, 0.0)
+            .map(|l| l.principal_curvatures())
+            .ok_or_else(|| SceneError::invalid("front", "the surface has no vertex at (0, 0)"))?;
+        let at_vertex = (index - 1.0) * 0.5 * (k1 + k2);
+        match base_curve {
+            None => p.base_curve = at_vertex,
+            Some(given) if (given - at_vertex).abs() > 0.01 => {
+                return Err(SceneError::invalid(
+                    "base_curve",
+                    format!(
+                        "{given} D, where the free-form front's power at its vertex is \
+                         {at_vertex:.3} D: leave base_curve out, or make them agree"
+                    ),
+                ))
+            }
+            Some(_) => {}
+        }
+        p.front = Some(surface);
+    } else if base_curve.is_none() {
+        return Err(SceneError::invalid(
+            "base_curve",
+            "missing: a spectacle lens needs its base curve (unless its front is free-form)",
+        ));
     }
+    if let Some(spec) = back {
+        if matches!(spec, SurfaceSpec::Progressive { .. }) {
+            return Err(SceneError::invalid(
+                "back",
+                "the built-in progressive design is a front surface",
+            ));
+        }
+        p.back = Some(freeform_of(spec, "back", &p, base)?);
+    }
+    Ok(Some((p, *rings, *segments)))
+}
+
+/// The free-form surface a `front` or `back` table names.
+fn freeform_of(
+    spec: &SurfaceSpec,
+    side: &str,
+    p: &Prescription,
+    base: &Path,
+) -> Result<Freeform, SceneError> {
+    let bad = |message: String| SceneError::invalid(side, message);
+    Ok(match spec {
+        SurfaceSpec::SagGrid(file) => {
+            let path = base.join(file);
+            let text =
+                std::fs::read_to_string(&path).map_err(|e| SceneError::io(path.display(), e))?;
+            Freeform::SagGrid(std::sync::Arc::new(SagGrid::parse(
+                &text,
+                &path.display().to_string(),
+            )?))
+        }
+        SurfaceSpec::Polynomial(terms) => {
+            let mut out = Vec::with_capacity(terms.len());
+            for (k, &[i, j, c]) in terms.iter().enumerate() {
+                let power =
+                    |v: f64| (v >= 0.0 && v.fract() == 0.0 && v <= 20.0).then_some(v as u32);
+                let (Some(i), Some(j)) = (power(i), power(j)) else {
+                    return Err(bad(format!(
+                        "polynomial[{k}]: the powers {i} and {j} must be whole numbers from 0 \
+                         to 20"
+                    )));
+                };
+                if !c.is_finite() {
+                    return Err(bad(format!(
+                        "polynomial[{k}]: the coefficient {c} is not a number"
+                    )));
+                }
+                if i + j < 2 && c != 0.0 {
+                    return Err(bad(format!(
+                        "polynomial[{k}]: x^{i} y^{j} would tilt or lift the surface off its \
+                         vertex; a sag is measured from the vertex, along the axis"
+                    )));
+                }
+                out.push((i, j, c));
+            }
+            Freeform::Polynomial(Polynomial { terms: out })
+        }
+        SurfaceSpec::Progressive {
+            add,
+            corridor_length,
+            blend_width,
+        } => {
+            let values = [
+                ("add", *add),
+                ("corridor_length", *corridor_length),
+                ("blend_width", *blend_width),
+            ];
+            if let Some((name, v)) = values.iter().find(|(_, v)| !(v.is_finite() && *v > 0.0)) {
+                return Err(bad(format!("progressive.{name} = {v}: must be positive")));
+            }
+            if !p.base_curve.is_finite() {
+                return Err(bad(
+                    "a progressive front is built on the base curve's sphere: give base_curve"
+                        .into(),
+                ));
+            }
+            Freeform::Progressive(Progressive {
+                far_curvature: p.base_curve / (p.index - 1.0),
+                add_d: *add,
+                index: p.index,
+                corridor_length: *corridor_length,
+                blend_width: *blend_width,
+            })
+        }
+    })
 }
 
 fn shape_meshes(
@@ -444,7 +598,7 @@ fn shape_meshes(
         })?],
         ShapeSpec::SpectacleLens { .. } => {
             let (prescription, rings, segments) =
-                prescription_of(shape).expect("a spectacle lens has one");
+                prescription_of(shape, base)?.expect("a spectacle lens has one");
             vec![crate::spectacle::spectacle_lens(
                 &prescription,
                 rings,
@@ -773,8 +927,10 @@ fn listed_scene(shown: &str, file: &SceneFile, base: &Path) -> Result<Scene, Sce
     let mut prescriptions = Vec::new();
     for (i, object) in file.objects.iter().enumerate() {
         let path = format!("objects[{i}]");
-        let prescription = prescription_of(&object.shape).map(|(p, _, _)| p);
-        let material = match (&object.material, prescription) {
+        let prescription = prescription_of(&object.shape, base)
+            .map_err(|e| at(format!("{path}.shape"), e))?
+            .map(|(p, _, _)| p);
+        let material = match (&object.material, &prescription) {
             (Some(name), _) => {
                 let Some(&material) = material_index.get(name) else {
                     let known: Vec<&str> = material_index.keys().map(String::as_str).collect();
@@ -790,8 +946,8 @@ fn listed_scene(shown: &str, file: &SceneFile, base: &Path) -> Result<Scene, Sce
                         ),
                     ));
                 };
-                if let Some(p) = prescription {
-                    lens_glass_agrees(&materials[material], &p)
+                if let Some(p) = &prescription {
+                    lens_glass_agrees(&materials[material], p)
                         .map_err(|e| SceneError::invalid(shown, format!("{path}.material: {e}")))?;
                 }
                 material
@@ -846,8 +1002,8 @@ fn listed_scene(shown: &str, file: &SceneFile, base: &Path) -> Result<Scene, Sce
             }
             mesh.transform(world_from_object);
             mesh.material = material;
-            if let Some(p) = prescription {
-                prescriptions.push((mesh.name.clone(), p));
+            if let Some(p) = &prescription {
+                prescriptions.push((mesh.name.clone(), p.clone()));
             }
             meshes.push(mesh);
         }
