@@ -263,9 +263,9 @@ impl SagGrid {
         };
         let sum = |dx: usize, dy: usize| {
             let mut total = 0.0;
-            for p in 0..4 {
-                for q in 0..4 {
-                    total += bx[dx][p] * by[dy][q] * coefficient(p, q);
+            for (p, wx) in bx[dx].iter().enumerate() {
+                for (q, wy) in by[dy].iter().enumerate() {
+                    total += wx * wy * coefficient(p, q);
                 }
             }
             total
