@@ -81,18 +81,43 @@ pub struct LensArgs {
     /// checks against it.
     #[arg(long)]
     compensate: bool,
-    /// Check the focimeter reading against a standard's tolerances: ansi-z80.1 or iso-8980-1.
+    /// Check the focimeter reading against a standard's tolerances: ansi-z80.1, iso-8980-1, or
+    /// iso-8980-2 (progressive lenses; with --add, ansi-z80.1 uses its progressive table).
     #[arg(long, value_parser = parse_standard)]
     standard: Option<&'static specula_analyze::lens::standard::Table>,
     /// Print the focimeter's readings (they are always in the JSON).
     #[arg(long)]
     focimeter: bool,
-    /// The distance reference point X,Y, mm from the back vertex (the lens's right and up).
-    #[arg(long, value_parser = parse_pair, allow_hyphen_values = true, default_value = "0,0")]
-    distance_reference: [f64; 2],
+    /// The distance reference point X,Y, mm from the back vertex (the lens's right and up;
+    /// default: a spectacle-lens shape's, else 0,0).
+    #[arg(long, value_parser = parse_pair, allow_hyphen_values = true)]
+    distance_reference: Option<[f64; 2]>,
     /// The prism reference point X,Y, mm from the back vertex.
     #[arg(long, value_parser = parse_pair, allow_hyphen_values = true, default_value = "0,0")]
     prism_reference: [f64; 2],
+    /// A progressive lens's ordered addition, dioptres: reads the add on the progressive
+    /// surface's side and reports the corridor, the zones and the largest unwanted cylinder
+    /// (default: a spectacle-lens shape's `add`).
+    #[arg(long)]
+    add: Option<f64>,
+    /// A progressive lens's near reference point X,Y, mm from the back vertex (default: a
+    /// spectacle-lens shape's).
+    #[arg(long, value_parser = parse_pair, allow_hyphen_values = true)]
+    near_reference: Option<[f64; 2]>,
+    /// Turn both eyes to a near point on the midline this many metres away (convergence) and
+    /// report the near zone's power, prism and inset.
+    #[arg(long, allow_hyphen_values = true)]
+    near: Option<f64>,
+    /// The interpupillary distance for --near, mm.
+    #[arg(long, default_value_t = 64.0)]
+    pd: f64,
+    /// The near point's depression below the primary gaze, degrees (default: so that the line
+    /// of sight crosses the near reference point's height, else 0).
+    #[arg(long, allow_hyphen_values = true)]
+    near_down: Option<f64>,
+    /// The lens map's spacing, mm: the clear zones and the progressive figures come from it.
+    #[arg(long, default_value_t = specula_analyze::lens::DEFAULT_LENS_STEP_MM)]
+    lens_step: f64,
     /// The lens's surface: its exact one (the default where the scene made it from a `lens` or
     /// `spectacle-lens` shape), its triangles (mesh) or a smooth fit to them.
     #[arg(long, value_enum)]
@@ -444,7 +469,23 @@ fn lens(args: LensArgs) -> Result<()> {
     options.refraction_vertex_m = args.refraction_vertex.map(|d| d * 1e-3);
     options.compensate = args.compensate;
     options.standard = args.standard;
-    options.reference_points_mm = [args.distance_reference, args.prism_reference];
+    options.reference_points_mm = [
+        args.distance_reference
+            .unwrap_or(options.reference_points_mm[0]),
+        args.prism_reference,
+    ];
+    if args.add.is_some() {
+        options.add_d = args.add;
+    }
+    if args.near_reference.is_some() {
+        options.near_reference_mm = args.near_reference;
+    }
+    options.near = args.near.map(|distance_m| lens::near::Near {
+        distance_m,
+        half_pd_m: args.pd * 0.5e-3,
+        down_deg: args.near_down,
+    });
+    options.lens_step_mm = Some(args.lens_step);
     let rows = options.gaze.vertical().len();
     let bar = ProgressBar::new(rows as u64);
     bar.set_style(
@@ -592,6 +633,7 @@ fn print_lens_checks(r: &specula_analyze::lens::Report, focimeter: bool) {
             c.ordered.sphere_d, c.ordered.cylinder_d, c.ordered.axis_deg, c.residual_d
         );
     }
+    print_zones(r);
     if let Some(v) = &r.verdict {
         println!("{}: {}", v.edition, if v.passed { "PASS" } else { "FAIL" });
         for c in &v.checks {
@@ -612,6 +654,71 @@ fn print_lens_checks(r: &specula_analyze::lens::Report, focimeter: bool) {
                     .unwrap_or_default()
             );
         }
+    }
+}
+
+/// The clear zones, a progressive lens's figures and the near figures.
+fn print_zones(r: &specula_analyze::lens::Report) {
+    for z in &r.clear_zones {
+        println!(
+            "clear where {}: {:.0} mm² of lens, {:.4} sr of gaze, {:.1} mm wide through the \
+             fitting point",
+            z.criterion, z.lens_area_mm2, z.solid_angle_sr, z.horizontal_width_mm
+        );
+    }
+    if let Some(p) = &r.progressive {
+        let length = |v: Option<f64>| {
+            v.map(|v| format!("{v:.1} mm"))
+                .unwrap_or_else(|| "not reached".into())
+        };
+        println!(
+            "progressive: add {:.3} D measured on the {} (ordered {:.2}; far {:.3}, near {:.3} \
+             D; as worn {:.3} D); corridor length {} (85 %), {} (95 %); corridor width {:.1} mm \
+             (0.50 D), {:.1} mm (1.00 D); far zone {:.1} mm, near zone {:.1} mm wide (0.50 D); \
+             largest unwanted cylinder {:.2} D at ({:.1}, {:.1}) mm",
+            p.add_d,
+            p.measured_on,
+            p.ordered_add_d,
+            p.far_power_d,
+            p.near_power_d,
+            p.map_add_d,
+            length(p.corridor_length_mm_85),
+            length(p.corridor_length_mm_95),
+            p.corridor_width_mm_050,
+            p.corridor_width_mm_100,
+            p.far_zone_width_mm_050,
+            p.near_zone_width_mm_050,
+            p.max_unwanted_cylinder_d,
+            p.max_unwanted_cylinder_at_mm[0],
+            p.max_unwanted_cylinder_at_mm[1]
+        );
+    }
+    if let Some(n) = &r.near {
+        let c = &n.cell;
+        println!(
+            "near point {:.3} m away, {:.1}° down (PD {:.0} mm): through the lens at ({:.2}, \
+             {:.2}) mm, inset {:.2} mm; power {} D for the object's {:.3} D (error {} D, \
+             unwanted cylinder {} D), prism {}",
+            n.distance_m,
+            n.down_deg,
+            n.pd_mm,
+            n.point_on_lens_mm[0],
+            n.point_on_lens_mm[1],
+            n.inset_mm,
+            if n.power_d.is_finite() {
+                format!("{:.3}", n.power_d)
+            } else {
+                "outside".into()
+            },
+            n.object_vergence_d,
+            c.power_error_d
+                .map_or_else(|| "–".into(), |v| format!("{v:.3}")),
+            c.unwanted_cylinder_d
+                .map_or_else(|| "–".into(), |v| format!("{v:.3}")),
+            c.prism_d
+                .map(|[a, b]| format!("{a:.2} Δ out, {b:.2} Δ up"))
+                .unwrap_or_else(|| "–".into())
+        );
     }
 }
 

@@ -13,7 +13,9 @@
 //! `step / 2`; their change is the reading's finite-difference uncertainty.
 //!
 //! **The lens's frame**: for an exact lens its own (back vertex, +Z towards the eye, +X the
-//! wearer's right, +Y up); for a mesh the fitting point, the primary gaze and up.
+//! wearer's right, +Y up); for a mesh the fitting point, the primary gaze and up. A
+//! progressive lens's add is read on its progressive surface's side ([`LensFrame::from_front`]
+//! for a front surface: the lens turned over on the rest).
 
 use glam::{DMat4, DVec3};
 use serde::Serialize;
@@ -43,6 +45,23 @@ impl LensFrame {
             right: axis(DVec3::X),
             up: axis(DVec3::Y),
         }
+    }
+
+    /// The same lens seen from its front: the instrument's reference at the front vertex
+    /// (`front_vertex_z` along the lens's axis from the back vertex's origin) and its axis
+    /// pointing away from the eye, right and up kept.
+    pub fn from_front(world_from_lens: DMat4, front_vertex_z: f64) -> LensFrame {
+        let frame = LensFrame::of_exact(world_from_lens, front_vertex_z);
+        LensFrame {
+            towards_eye: -frame.towards_eye,
+            ..frame
+        }
+    }
+
+    /// A point's coordinates across the lens's axis, mm from the vertex.
+    pub fn mm_of(&self, p: DVec3) -> glam::DVec2 {
+        let q = p - self.back_vertex;
+        glam::DVec2::new(q.dot(self.right), q.dot(self.up)) * 1e3
     }
 }
 
@@ -165,8 +184,10 @@ impl Focimeter<'_> {
             return Err(Failure::Edge);
         }
         // The lens's right and up across the instrument's axis.
+        // Up from the lens's up, not normal × right: read from the front, the instrument's
+        // axis is reversed but the wearer's right and up (and so the TABO axis) are not.
         let right = (f.right - normal * f.right.dot(normal)).normalize();
-        let up = normal.cross(right);
+        let up = (f.up - normal * f.up.dot(normal) - right * f.up.dot(right)).normalize();
         let back = self
             .tracer
             .trace(point + normal * 0.01, -normal, self.ior)?;

@@ -51,9 +51,11 @@
 //! cornea ([1 / (1 − (t/n) F1)] · [1 / (1 − h Fv)] for a thick lens).
 
 pub mod focimeter;
+pub mod near;
 pub mod standard;
 pub mod tracer;
 pub mod wear;
+pub mod zones;
 
 use glam::{DQuat, DVec3};
 use rayon::prelude::*;
@@ -68,7 +70,7 @@ pub use tracer::{Failure, LensTracer, Traced};
 pub use wear::{Compensated, Rx, Wear};
 
 /// The version of [`Report`]'s JSON (docs/analyze-lens.schema.json).
-pub const SCHEMA_VERSION: u32 = 2;
+pub const SCHEMA_VERSION: u32 = 3;
 
 /// The default vertex distance: from the cornea to the lens's back surface along the primary
 /// line of sight.
@@ -82,6 +84,9 @@ pub const ENTRANCE_PUPIL_BEHIND_CORNEA_M: f64 = 0.003;
 
 /// The index labs quote base curves in.
 pub const TOOLING_INDEX: f64 = 1.53;
+
+/// The lens map's default spacing, millimetres.
+pub const DEFAULT_LENS_STEP_MM: f64 = 1.0;
 
 /// The gaze angle at which the central magnification (J) is taken.
 const CENTRAL_GAZE_DEG: f64 = 0.1;
@@ -153,6 +158,14 @@ pub struct Options {
     /// The distance and prism reference points, millimetres from the back vertex along the
     /// lens's right and up.
     pub reference_points_mm: [[f64; 2]; 2],
+    /// A progressive lens's near reference point, millimetres like the others.
+    pub near_reference_mm: Option<[f64; 2]>,
+    /// A progressive lens's ordered addition: asks for its progressive figures.
+    pub add_d: Option<f64>,
+    /// Where the eyes look at near, if they do.
+    pub near: Option<near::Near>,
+    /// The lens map's spacing, millimetres (None: no lens map and no clear zones).
+    pub lens_step_mm: Option<f64>,
 }
 
 /// The lens's material's red, green and blue indices; the lens must be a solid refractor.
@@ -327,6 +340,28 @@ pub struct Cell {
     pub fd_change_d: f64,
 }
 
+impl Cell {
+    /// A gaze outside the lens: no figures.
+    pub fn outside(gaze_deg: [f64; 2]) -> Cell {
+        Cell {
+            gaze_deg,
+            outside: true,
+            sphere_d: None,
+            cylinder_d: None,
+            axis_deg: None,
+            mean_power_d: None,
+            prism_d: None,
+            lateral_colour_arcmin: None,
+            distortion_percent: None,
+            power_error_d: None,
+            unwanted_cylinder_d: None,
+            back_point_mm: None,
+            object_tangent: None,
+            fd_change_d: 0.0,
+        }
+    }
+}
+
 /// The base curve: the front surface's power in the lens's index and in the 1.53 tooling index
 /// labs quote.
 #[derive(Clone, Copy, Debug, Serialize)]
@@ -389,6 +424,16 @@ pub struct Report {
     pub target: Option<Rx>,
     pub compensated: Option<Compensated>,
     pub verdict: Option<Verdict>,
+    /// The lens map over the lens's own coordinates.
+    pub lens_map: Option<zones::LensMap>,
+    /// The fitting point in the lens map's coordinates, mm.
+    pub fitting_point_mm: [f64; 2],
+    pub clear_zones: Vec<zones::ClearZone>,
+    /// The focimeter on the progressive surface's side, at the distance and near reference
+    /// points.
+    pub add_focimeter: Vec<focimeter::Reading>,
+    pub progressive: Option<zones::Progressive>,
+    pub near: Option<near::NearFigures>,
     pub centre: Cell,
     /// Row by row from the lowest v, each from the smallest h.
     pub grid: Vec<Cell>,
@@ -665,6 +710,55 @@ pub fn analyze(
     });
     let (centre, grid) = setup.grid(&central, target.as_ref(), progress);
     let mut focimeter = read_focimeter(&placed, lens, options, indices.y, fitting_point)?;
+    let frame = worn_frame(&worn, &setup);
+    let fitting_mm = frame.mm_of(setup.primary.points[0]);
+    let reference = target.unwrap_or_else(|| own_power(&centre));
+    let lens_map = options.lens_step_mm.map(|step| {
+        zones::lens_map(&setup, &frame, rim_mm(&worn, &frame), step, &central, &reference)
+    });
+    let clear_zones = lens_map.as_ref().map_or_else(Vec::new, |map| {
+        zones::clear_zones(map, &grid, options.gaze.step_deg, fitting_mm)
+    });
+    let (add_focimeter, progressive) = match options.add_d {
+        None => (Vec::new(), None),
+        Some(add) => {
+            let (readings, side) = read_add(&placed, lens, options, indices.y)?;
+            let map = lens_map.as_ref().ok_or_else(|| AnalyzeError::BadOption {
+                option: "--add",
+                reason: "a progressive lens's figures come from the lens map: give --lens-step"
+                    .into(),
+            })?;
+            let figures = zones::progressive(map, [&readings[0], &readings[1]], side, add, fitting_mm)
+                .ok_or_else(|| AnalyzeError::BadOption {
+                    option: "--distance-reference and --near-reference",
+                    reason: format!(
+                        "the reference points {:?} and {:?} mm must lie on the lens map, inside                          the lens",
+                        readings[0].at_mm, readings[1].at_mm
+                    ),
+                })?;
+            (readings, Some(figures))
+        }
+    };
+    let near = match options.near {
+        None => None,
+        Some(near) => {
+            let near_target = target.map(|rx| Rx {
+                sphere_d: rx.sphere_d + options.add_d.unwrap_or(0.0),
+                ..rx
+            });
+            Some(near::near_figures(
+                &setup,
+                &near,
+                &frame,
+                options.near_reference_mm,
+                fitting_mm,
+                &central,
+                near_target.as_ref(),
+                tracer(&worn, options.surface)?,
+                &lens.name,
+            )?)
+        }
+    };
     let surface_uncertainty_d = match options.surface {
         SurfaceModel::Exact => None,
         model => {
@@ -725,12 +819,42 @@ pub fn analyze(
                 prism_d: rx.prism_d,
                 ..c.ordered
             });
-            Some(standard::judge(
-                table,
-                &focimeter[0],
-                &focimeter[1],
-                &ordered,
-            ))
+            Some(match (options.add_d, &progressive) {
+                (Some(add), Some(p)) => {
+                    let table = table.progressive.unwrap_or(table);
+                    if !table.is_progressive() {
+                        return Err(AnalyzeError::BadOption {
+                            option: "--standard",
+                            reason: format!(
+                                "{} has no tolerance for an add: judge a progressive lens \
+                                 against {}",
+                                table.id,
+                                progressive_standards()
+                            ),
+                        });
+                    }
+                    let uncertainty = add_focimeter[0].uncertainty_d + add_focimeter[1].uncertainty_d;
+                    standard::judge_progressive(
+                        table,
+                        &focimeter[0],
+                        &focimeter[1],
+                        &ordered,
+                        p.add_d,
+                        add,
+                        uncertainty,
+                    )
+                }
+                _ if table.is_progressive() => {
+                    return Err(AnalyzeError::BadOption {
+                        option: "--standard",
+                        reason: format!(
+                            "{} judges progressive lenses: give the ordered --add",
+                            table.id
+                        ),
+                    })
+                }
+                _ => standard::judge(table, &focimeter[0], &focimeter[1], &ordered),
+            })
         }
     };
     let finite_difference_change_d = grid
@@ -769,9 +893,128 @@ pub fn analyze(
         target,
         compensated,
         verdict,
+        lens_map,
+        fitting_point_mm: fitting_mm.to_array(),
+        clear_zones,
+        add_focimeter,
+        progressive,
+        near,
         centre,
         grid,
     })
+}
+
+/// The standards that judge an add, for an error.
+fn progressive_standards() -> String {
+    standard::STANDARDS
+        .iter()
+        .filter(|t| t.is_progressive() || t.progressive.is_some())
+        .map(|t| t.id)
+        .collect::<Vec<_>>()
+        .join(" or ")
+}
+
+/// The lens's own frame as worn: an exact lens's, else the fitting point's with the primary
+/// gaze and up.
+fn worn_frame(worn: &Mesh, setup: &Setup) -> LensFrame {
+    match worn.exact.as_ref().and_then(|e| Some((e, e.lens()?))) {
+        Some((exact, lens)) => LensFrame::of_exact(exact.world_from_object, lens.back.vertex_z),
+        None => LensFrame {
+            back_vertex: setup.primary.points[0],
+            towards_eye: -setup.options.forward,
+            right: setup.right,
+            up: setup.options.up,
+        },
+    }
+}
+
+/// How far the lens reaches from its axis in `frame`, mm: an exact lens's rim, else its
+/// farthest vertex.
+fn rim_mm(worn: &Mesh, frame: &LensFrame) -> f64 {
+    match worn.exact.as_ref().and_then(|e| e.lens()) {
+        Some(lens) => lens.rim() * 1e3,
+        None => worn
+            .positions
+            .iter()
+            .map(|p| frame.mm_of(p.as_dvec3()).length())
+            .fold(0.0, f64::max),
+    }
+}
+
+/// The lens's own power at a cell, as a prescription (no power where the cell is outside).
+fn own_power(cell: &Cell) -> Rx {
+    Rx::new(
+        cell.sphere_d.unwrap_or(0.0),
+        cell.cylinder_d.unwrap_or(0.0),
+        cell.axis_deg.unwrap_or(0.0),
+    )
+}
+
+/// The focimeter at the distance and near reference points on the progressive surface's side
+/// of the lens as the scene places it, and which side that is; refused where the lens has no
+/// free-form surface or no near reference point.
+fn read_add(
+    placed: &LensTracer,
+    lens: &Mesh,
+    options: &Options,
+    ior: f64,
+) -> Result<(Vec<focimeter::Reading>, &'static str), AnalyzeError> {
+    let exact = lens.exact.as_ref().and_then(|e| Some((e, e.lens()?)));
+    let freeform = |s: &specula_scene::exact_lens::LensSurface| {
+        matches!(s.shape, specula_scene::SurfaceShape::Freeform(_))
+    };
+    let (frame, side) = match exact {
+        Some((e, l)) if freeform(&l.front) => (
+            LensFrame::from_front(e.world_from_object, l.front.vertex_z),
+            "front",
+        ),
+        Some((e, l)) if freeform(&l.back) => {
+            (LensFrame::of_exact(e.world_from_object, l.back.vertex_z), "back")
+        }
+        _ => {
+            return Err(AnalyzeError::BadOption {
+                option: "--add",
+                reason: format!(
+                    "an add without a progressive surface: '{}' has no free-form front or back                      (a spectacle-lens shape's `front` or `back` = a sag grid, a polynomial or                      a progressive design)",
+                    lens.name
+                ),
+            })
+        }
+    };
+    let Some(near_at) = options.near_reference_mm else {
+        return Err(AnalyzeError::BadOption {
+            option: "--add",
+            reason: format!(
+                "the add is read at the near reference point, which '{}' does not give: pass                  --near-reference X,Y (mm) or set the spectacle-lens's near_reference",
+                lens.name
+            ),
+        });
+    };
+    let instrument = Focimeter {
+        tracer: placed,
+        frame,
+        ior,
+        step_m: options.step_m,
+        eye: options.eye,
+    };
+    let readings = [
+        ("distance reference point", options.reference_points_mm[0]),
+        ("near reference point", near_at),
+    ]
+    .into_iter()
+    .map(|(name, at)| {
+        instrument
+            .read(name, at)
+            .map_err(|failure| AnalyzeError::BadOption {
+                option: "--distance-reference and --near-reference",
+                reason: format!(
+                    "the focimeter cannot read '{}' at {at:?} mm on its {side} ({failure:?}):                      give a point on the lens",
+                    lens.name
+                ),
+            })
+    })
+    .collect::<Result<Vec<_>, _>>()?;
+    Ok((readings, side))
 }
 
 /// The lens in `model`, refused where it asks for an exact surface the lens lacks.
@@ -978,6 +1221,57 @@ fn validate(options: &Options) -> Result<(), AnalyzeError> {
         });
     }
     options.wear.check()?;
+    if let Some(near) = options.near {
+        if !(near.distance_m.is_finite() && near.distance_m > 0.0) {
+            return Err(AnalyzeError::BadOption {
+                option: "--near",
+                reason: format!(
+                    "{} m: the near point must be in front of the eyes (a positive distance)",
+                    near.distance_m
+                ),
+            });
+        }
+        if !(near.half_pd_m.is_finite() && near.half_pd_m >= 0.0 && near.half_pd_m < 0.1) {
+            return Err(AnalyzeError::BadOption {
+                option: "--pd",
+                reason: format!(
+                    "{} mm: the interpupillary distance must be between 0 and 200 mm",
+                    near.half_pd_m * 2e3
+                ),
+            });
+        }
+        if near.down_deg.is_some_and(|d| !(d.is_finite() && d.abs() < 80.0)) {
+            return Err(AnalyzeError::BadOption {
+                option: "--near-down",
+                reason: "the near point's depression must be between −80° and 80°".into(),
+            });
+        }
+    }
+    if let Some(step) = options.lens_step_mm {
+        if !(step.is_finite() && step >= 0.05) {
+            return Err(AnalyzeError::BadOption {
+                option: "--lens-step",
+                reason: format!("{step} mm: the lens map's spacing must be at least 0.05 mm"),
+            });
+        }
+    }
+    if let Some(add) = options.add_d {
+        if !(add.is_finite() && add > 0.0 && add <= 6.0) {
+            return Err(AnalyzeError::BadOption {
+                option: "--add",
+                reason: format!("{add} D: an addition is between 0 and 6.00 D"),
+            });
+        }
+    }
+    if options
+        .near_reference_mm
+        .is_some_and(|p| !p.iter().all(|v| v.is_finite()))
+    {
+        return Err(AnalyzeError::BadOption {
+            option: "--near-reference",
+            reason: "the near reference point must be two numbers (mm)".into(),
+        });
+    }
     for (option, value) in [
         (
             "--rotation-behind-cornea",
@@ -1059,22 +1353,7 @@ impl Central {
 
 /// One gaze direction's figures (see the module doc).
 fn figures(setup: &Setup, h: f64, v: f64, central: &Central, target: Option<&Rx>) -> Cell {
-    let outside = Cell {
-        gaze_deg: [h, v],
-        outside: true,
-        sphere_d: None,
-        cylinder_d: None,
-        axis_deg: None,
-        mean_power_d: None,
-        prism_d: None,
-        lateral_colour_arcmin: None,
-        distortion_percent: None,
-        power_error_d: None,
-        unwanted_cylinder_d: None,
-        back_point_mm: None,
-        object_tangent: None,
-        fd_change_d: 0.0,
-    };
+    let outside = Cell::outside([h, v]);
     let o = setup.options;
     let frame = setup.frame(h, v);
     let Ok(chief) = setup.chief(&frame, setup.indices.y) else {
@@ -1203,6 +1482,12 @@ pub fn default_options_with(
         scene.camera.eye.as_dvec3()
     };
     let mesh = &scene.meshes[lens];
+    let made_from = scene
+        .prescriptions
+        .iter()
+        .find(|(name, _)| *name == mesh.name)
+        .map(|(_, p)| p);
+    let mm = |p: Option<glam::DVec2>| p.map(|p| (p * 1e3).to_array());
     Ok(Options {
         lens,
         eye: Eye::Right,
@@ -1219,14 +1504,17 @@ pub fn default_options_with(
         step_m: 5e-4,
         surface: best_surface(mesh),
         wear: Wear::default(),
-        prescription: scene
-            .prescriptions
-            .iter()
-            .find(|(name, _)| *name == mesh.name)
-            .map(|(_, p)| Rx::of(p)),
+        prescription: made_from.map(Rx::of),
         refraction_vertex_m: None,
         compensate: false,
         standard: None,
-        reference_points_mm: [[0.0; 2]; 2],
+        reference_points_mm: [
+            mm(made_from.and_then(|p| p.distance_reference)).unwrap_or([0.0; 2]),
+            [0.0; 2],
+        ],
+        near_reference_mm: mm(made_from.and_then(|p| p.near_reference)),
+        add_d: made_from.and_then(|p| p.add_d),
+        near: None,
+        lens_step_mm: Some(DEFAULT_LENS_STEP_MM),
     })
 }

@@ -68,7 +68,60 @@ pub struct Table {
     pub axis_from_cylinder_d: f64,
     pub axis_deg: Bands<f64>,
     pub prism: PrismRule,
+    /// A progressive lens's addition tolerance by the ordered add (empty: a single-vision
+    /// table).
+    pub add: Bands<Tolerance>,
+    /// The same standard's table for progressive lenses, where it has one apart.
+    pub progressive: Option<&'static Table>,
 }
+
+impl Table {
+    pub fn is_progressive(&self) -> bool {
+        !self.add.is_empty()
+    }
+}
+
+/// ANSI Z80.1-2015's progressive addition lens tolerances (its quick reference's Table 2).
+const ANSI_PAL: Table = Table {
+    id: "ansi-z80.1",
+    edition: "ANSI Z80.1-2015 (progressive addition lenses)",
+    source: "ANSI Z80.1-2015's progressive addition lens table as its published quick \
+             reference states it: sphere ±0.16 D to ±8.00 D, ±2 % beyond; cylinder ±0.16 D to \
+             2.00 D, ±0.18 D to 3.50 D, ±5 % beyond; add ±0.12 D to 4.00 D, ±0.18 D beyond; \
+             axis and prism as for single vision",
+    meridians: MeridianRule::Highest,
+    power: &[
+        (8.00, Tolerance::Dioptres(0.16)),
+        (INF, Tolerance::Percent(2.0)),
+    ],
+    cylinder: &[(
+        INF,
+        &[
+            (2.00, Tolerance::Dioptres(0.16)),
+            (3.50, Tolerance::Dioptres(0.18)),
+            (INF, Tolerance::Percent(5.0)),
+        ],
+    )],
+    axis_from_cylinder_d: 0.12,
+    axis_deg: ANSI_AXIS,
+    prism: PrismRule::FixedOrWithin {
+        prism_d: 0.33,
+        within_mm: 1.0,
+    },
+    add: &[
+        (4.00, Tolerance::Dioptres(0.12)),
+        (INF, Tolerance::Dioptres(0.18)),
+    ],
+    progressive: None,
+};
+
+const ANSI_AXIS: Bands<f64> = &[
+    (0.25, 14.0),
+    (0.50, 7.0),
+    (0.75, 5.0),
+    (1.50, 3.0),
+    (INF, 2.0),
+];
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MeridianRule {
@@ -110,17 +163,13 @@ pub const STANDARDS: &[Table] = &[
             ],
         )],
         axis_from_cylinder_d: 0.12,
-        axis_deg: &[
-            (0.25, 14.0),
-            (0.50, 7.0),
-            (0.75, 5.0),
-            (1.50, 3.0),
-            (INF, 2.0),
-        ],
+        axis_deg: ANSI_AXIS,
         prism: PrismRule::FixedOrWithin {
             prism_d: 0.33,
             within_mm: 1.0,
         },
+        add: &[],
+        progressive: Some(&ANSI_PAL),
     },
     Table {
         id: "iso-8980-1",
@@ -128,15 +177,51 @@ pub const STANDARDS: &[Table] = &[
         source: "ISO 8980-1:2017 Table 1 (tolerances A and B), the axis and prism tolerances, \
                  as commonly reproduced: not confirmed against the standard's text",
         meridians: MeridianRule::Each,
-        power: &[
+        power: ISO_POWER,
+        cylinder: ISO_CYLINDER,
+        axis_from_cylinder_d: 0.12,
+        axis_deg: ISO_AXIS,
+        prism: PrismRule::ByPower {
+            base_d: 0.25,
+            per_dioptre: 0.1,
+        },
+        add: &[],
+        progressive: None,
+    },
+    Table {
+        id: "iso-8980-2",
+        edition: "ISO 8980-2:2017",
+        source: "ISO 8980-2 (progressive power lenses): the distance power by ISO 8980-1's \
+                 tolerances, to which its 1997 edition refers, and the addition ±0.12 D to \
+                 4.00 D, ±0.18 D beyond, as commonly reproduced: none confirmed against the \
+                 standard's text",
+        meridians: MeridianRule::Each,
+        power: ISO_POWER,
+        cylinder: ISO_CYLINDER,
+        axis_from_cylinder_d: 0.12,
+        axis_deg: ISO_AXIS,
+        prism: PrismRule::ByPower {
+            base_d: 0.25,
+            per_dioptre: 0.1,
+        },
+        add: &[
+            (4.00, Tolerance::Dioptres(0.12)),
+            (INF, Tolerance::Dioptres(0.18)),
+        ],
+        progressive: None,
+    },
+];
+
+const ISO_POWER: Bands<Tolerance> = &[
             (3.00, Tolerance::Dioptres(0.12)),
             (6.00, Tolerance::Dioptres(0.12)),
             (9.00, Tolerance::Dioptres(0.12)),
             (12.00, Tolerance::Dioptres(0.18)),
             (20.00, Tolerance::Dioptres(0.25)),
             (INF, Tolerance::Dioptres(0.37)),
-        ],
-        cylinder: &[
+        ];
+
+const ISO_CYLINDER: Bands<Bands<Tolerance>> = &[
             (
                 3.00,
                 // The table has no entry over 6.00 D of cylinder here; the next row's is used.
@@ -192,21 +277,15 @@ pub const STANDARDS: &[Table] = &[
                     (INF, Tolerance::Dioptres(0.37)),
                 ],
             ),
-        ],
-        axis_from_cylinder_d: 0.12,
-        axis_deg: &[
+        ];
+
+const ISO_AXIS: Bands<f64> = &[
             (0.25, 16.0),
             (0.50, 9.0),
             (0.75, 6.0),
             (1.50, 4.0),
             (INF, 3.0),
-        ],
-        prism: PrismRule::ByPower {
-            base_d: 0.25,
-            per_dioptre: 0.1,
-        },
-    },
-];
+        ];
 
 /// The standard named `id`; an unknown one lists the valid ones.
 pub fn find(id: &str) -> Result<&'static Table, String> {
@@ -222,7 +301,7 @@ pub fn find(id: &str) -> Result<&'static Table, String> {
 /// One check of a verdict.
 #[derive(Clone, Debug, Serialize)]
 pub struct Check {
-    /// "sphere" (a principal meridian's power), "cylinder", "axis" or "prism".
+    /// "sphere" (a principal meridian's power), "cylinder", "axis", "prism" or "add".
     pub quantity: &'static str,
     /// The ordered meridian a sphere check is on, TABO degrees.
     pub meridian: Option<f64>,
@@ -347,6 +426,31 @@ pub fn judge(table: &Table, distance: &Reading, prism: &Reading, ordered: &Rx) -
         passed: checks.iter().all(|c| c.passed),
         checks,
     }
+}
+
+/// A progressive lens's verdict: [`judge`] on the distance power and prism, and the measured
+/// add against the ordered one.
+pub fn judge_progressive(
+    table: &Table,
+    distance: &Reading,
+    prism: &Reading,
+    ordered: &Rx,
+    measured_add_d: f64,
+    ordered_add_d: f64,
+    add_uncertainty_d: f64,
+) -> Verdict {
+    let mut verdict = judge(table, distance, prism, ordered);
+    let tolerance = band(table.add, ordered_add_d).of(ordered_add_d);
+    verdict.checks.push(check(
+        "add",
+        None,
+        measured_add_d,
+        ordered_add_d,
+        tolerance,
+        add_uncertainty_d,
+    ));
+    verdict.passed = verdict.checks.iter().all(|c| c.passed);
+    verdict
 }
 
 fn prism_check(table: &Table, prism: &Reading, ordered: &Rx, s_max: f64) -> Check {

@@ -423,6 +423,7 @@ fn prescription_of(
         if let Freeform::Progressive(design) = &surface {
             p.distance_reference = p.distance_reference.or(Some(design.far_reference()));
             p.near_reference = p.near_reference.or(Some(design.near_reference()));
+            p.add_d = p.add_d.or(Some(design.add_d));
         }
         let [k1, k2] = surface
             .local(0.0, 0.0)
@@ -524,13 +525,13 @@ fn freeform_of(
                         .into(),
                 ));
             }
-            Freeform::Progressive(Progressive {
-                far_curvature: p.base_curve / (p.index - 1.0),
-                add_d: *add,
-                index: p.index,
-                corridor_length: *corridor_length,
-                blend_width: *blend_width,
-            })
+            Freeform::Progressive(Progressive::new(
+                p.base_curve / (p.index - 1.0),
+                *add,
+                p.index,
+                *corridor_length,
+                *blend_width,
+            ))
         }
     })
 }
