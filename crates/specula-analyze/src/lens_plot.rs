@@ -143,7 +143,10 @@ struct Layout {
 
 impl Layout {
     fn new(report: &Report) -> Layout {
-        let (columns, rows) = (report.columns, report.rows);
+        Layout::sized(report.columns, report.rows)
+    }
+
+    fn sized(columns: usize, rows: usize) -> Layout {
         let cell_px = (480.0 / columns.max(rows) as f32).clamp(6.0, 48.0).round();
         Layout {
             columns,
@@ -354,6 +357,195 @@ pub fn lens_map(report: &Report, map: Map) -> Plot {
         Some((layout.extent(report), false)),
         &legend,
     )
+}
+
+/// A map over the lens's own coordinates ([`crate::lens::zones::LensMap`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LensCoordinateMap {
+    /// Mean power, iso-lines every 0.25 D, with the |power error| = 0.25 D line (the clear
+    /// zone's edge) in white.
+    MeanPower,
+    /// Unwanted cylinder, iso-lines at 0.25 D and every 0.50 D from 0.50 D, the 0.50 D and
+    /// 1.00 D lines drawn thick.
+    UnwantedCylinder,
+}
+
+impl LensCoordinateMap {
+    pub const ALL: [LensCoordinateMap; 2] = [
+        LensCoordinateMap::MeanPower,
+        LensCoordinateMap::UnwantedCylinder,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            LensCoordinateMap::MeanPower => "lens-mean-power",
+            LensCoordinateMap::UnwantedCylinder => "lens-cylinder",
+        }
+    }
+}
+
+const CORRIDOR: Rgb<u8> = Rgb([255, 255, 255]);
+const MARK: Rgb<u8> = Rgb([230, 30, 120]);
+
+/// A map over the lens map's points (x to the wearer's right, y up, mm), with the corridor
+/// (white), the fitting point (a cross), the reference points and the near point's crossing
+/// (circles); None without a lens map.
+pub fn lens_coordinate_map(report: &Report, kind: LensCoordinateMap) -> Option<Plot> {
+    let map = report.lens_map.as_ref()?;
+    let reference = map.reference.power_vector();
+    let deviation = |c: &Cell| {
+        let got = crate::lens::Rx::new(c.sphere_d?, c.cylinder_d?, c.axis_deg?).power_vector();
+        Some((
+            got[0] - reference[0],
+            2.0 * (got[1] - reference[1]).hypot(got[2] - reference[2]),
+        ))
+    };
+    let values: Vec<Option<f64>> = map
+        .points
+        .iter()
+        .map(|p| match kind {
+            LensCoordinateMap::MeanPower => p.cell.mean_power_d,
+            LensCoordinateMap::UnwantedCylinder => deviation(&p.cell).map(|d| d.1),
+        })
+        .collect();
+    let (columns, rows) = (map.columns, map.rows);
+    let layout = Layout::sized(columns, rows);
+    let (mut lo, mut hi) = values
+        .iter()
+        .flatten()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(*v), hi.max(*v))
+        });
+    if !lo.is_finite() {
+        (lo, hi) = (0.0, 1.0);
+    }
+    if hi - lo < 1e-9 {
+        (lo, hi) = (lo - 0.5, hi + 0.5);
+    }
+    let mut png = RgbImage::from_fn(layout.width, layout.height, |x, y| {
+        match sample(&values, columns, rows, layout.grid(x, y)) {
+            Some(v) => Rgb(scale_colour((v - lo) / (hi - lo))),
+            None => OUTSIDE,
+        }
+    });
+    let line = |png: &mut RgbImage, values: &[Option<f64>], level: f64, colour, thick: bool| {
+        for [a, b] in iso_segments(values, columns, rows, level) {
+            let (a, b) = (layout.pixel(a), layout.pixel(b));
+            draw_line(png, a, b, colour);
+            if thick {
+                for d in [Vec2::X, Vec2::Y] {
+                    draw_line(png, a + d, b + d, colour);
+                }
+            }
+        }
+    };
+    let levels: Vec<f64> = match kind {
+        LensCoordinateMap::MeanPower => {
+            let first = (lo / 0.25).ceil() as i64;
+            (first..=(hi / 0.25).floor() as i64)
+                .map(|k| k as f64 * 0.25)
+                .collect()
+        }
+        LensCoordinateMap::UnwantedCylinder => std::iter::once(0.25)
+            .chain((1..).map(|k| k as f64 * 0.5).take_while(|l| *l <= hi))
+            .collect(),
+    };
+    for &level in &levels {
+        let thick = kind == LensCoordinateMap::UnwantedCylinder && (level == 0.5 || level == 1.0);
+        line(&mut png, &values, level, INK, thick);
+    }
+    if kind == LensCoordinateMap::MeanPower {
+        let error: Vec<Option<f64>> = map
+            .points
+            .iter()
+            .map(|p| deviation(&p.cell).map(|d| d.0.abs()))
+            .collect();
+        line(&mut png, &error, 0.25, CORRIDOR, true);
+    }
+    let to_grid = |at: [f64; 2]| {
+        [
+            (at[0] - map.origin_mm[0]) / map.step_mm,
+            (at[1] - map.origin_mm[1]) / map.step_mm,
+        ]
+    };
+    if let Some(p) = &report.progressive {
+        for w in p.corridor_mm.windows(2) {
+            let (a, b) = (layout.pixel(to_grid(w[0])), layout.pixel(to_grid(w[1])));
+            draw_line(&mut png, a, b, CORRIDOR);
+            draw_line(&mut png, a + Vec2::X, b + Vec2::X, CORRIDOR);
+        }
+    }
+    let r = 0.6 * layout.cell_px.max(6.0);
+    let circle = |png: &mut RgbImage, at: [f64; 2]| {
+        let c = layout.pixel(to_grid(at));
+        for k in 0..24 {
+            let (a, b) = (k as f32 / 24.0 * 6.2832, (k + 1) as f32 / 24.0 * 6.2832);
+            let p = |t: f32| c + Vec2::new(t.cos(), t.sin()) * r;
+            draw_line(png, p(a), p(b), MARK);
+        }
+    };
+    let fitting = layout.pixel(to_grid(report.fitting_point_mm));
+    draw_line(&mut png, fitting - Vec2::X * r, fitting + Vec2::X * r, MARK);
+    draw_line(&mut png, fitting - Vec2::Y * r, fitting + Vec2::Y * r, MARK);
+    if let Some(p) = &report.progressive {
+        circle(&mut png, p.distance_reference_mm);
+        circle(&mut png, p.near_reference_mm);
+    }
+    if let Some(n) = &report.near {
+        circle(&mut png, n.point_on_lens_mm);
+    }
+    let half = 0.5 * map.step_mm as f32;
+    let extent = Extent {
+        min: Vec2::new(
+            map.origin_mm[0] as f32 - half,
+            map.origin_mm[1] as f32 - half,
+        ),
+        max: Vec2::new(
+            (map.origin_mm[0] + (columns - 1) as f64 * map.step_mm) as f32 + half,
+            (map.origin_mm[1] + (rows - 1) as f64 * map.step_mm) as f32 + half,
+        ),
+    };
+    let (what, lines) = match kind {
+        LensCoordinateMap::MeanPower => (
+            "mean power (D)",
+            "every 0.25 D; white: |power error| 0.25 D",
+        ),
+        LensCoordinateMap::UnwantedCylinder => (
+            "unwanted cylinder (D)",
+            "lines at 0.25, 0.50 (thick), 1.00 (thick), …",
+        ),
+    };
+    let title = format!(
+        "'{}': {what} over the lens (as worn, from the eye's side)",
+        report.lens
+    );
+    let mut legend = vec![
+        (format!("{lo:.2}"), scale_colour(0.0)),
+        (format!("{hi:.2}; {lines}"), scale_colour(1.0)),
+    ];
+    if report.progressive.is_some() {
+        legend.push((
+            "corridor (white line)".into(),
+            [CORRIDOR.0[0], CORRIDOR.0[1], CORRIDOR.0[2]],
+        ));
+    }
+    legend.extend([
+        (
+            "fitting point +; references, near point o".into(),
+            [MARK.0[0], MARK.0[1], MARK.0[2]],
+        ),
+        (
+            "off the lens".into(),
+            [OUTSIDE.0[0], OUTSIDE.0[1], OUTSIDE.0[2]],
+        ),
+    ]);
+    Some(plot_around(
+        png,
+        &title,
+        ("x (mm, the wearer's right)", "y (mm, up)"),
+        Some((extent, false)),
+        &legend,
+    ))
 }
 
 /// The distortion picture: straight object-space lines (constant horizontal or vertical

@@ -277,7 +277,15 @@ fn lens_sections(r: &crate::lens::Report) -> String {
             f.prism_d[0], f.prism_d[1], f.uncertainty_d
         ));
     }
+    for f in &r.add_focimeter {
+        html.push_str(&format!(
+            "<tr><td>{} (add, on the progressive side)</td><td>{:.1}, {:.1}</td><td>{:.3}</td><td>{:.3}</td><td>{:.1}</td><td>–</td><td>{:.1e}</td></tr>\n",
+            f.point, f.at_mm[0], f.at_mm[1], f.sphere_d, f.cylinder_d, f.axis_deg,
+            f.uncertainty_d
+        ));
+    }
     html.push_str("</table>\n");
+    html.push_str(&zone_sections(r));
     if let Some(v) = &r.verdict {
         html.push_str(&format!(
             "<p>{}: <b>{}</b></p>\n<table>\n<tr><th>check</th><th>measured</th><th>ordered</th><th>tolerance</th><th>margin</th><th></th></tr>\n",
@@ -299,6 +307,75 @@ fn lens_sections(r: &crate::lens::Report) -> String {
             ));
         }
         html.push_str("</table>\n");
+    }
+    html
+}
+
+/// The clear zones, a progressive lens's figures and the near figures as tables.
+fn zone_sections(r: &crate::lens::Report) -> String {
+    let mut html = String::new();
+    if !r.clear_zones.is_empty() {
+        html.push_str("<table>\n<tr><th>clear zone</th><th>lens area mm²</th><th>gaze solid angle sr</th><th>width through the fitting point mm</th></tr>\n");
+        for z in &r.clear_zones {
+            html.push_str(&format!(
+                "<tr><td>{}</td><td>{:.0}</td><td>{:.4}</td><td>{:.1}</td></tr>\n",
+                plot::html_escape(z.criterion),
+                z.lens_area_mm2,
+                z.solid_angle_sr,
+                z.horizontal_width_mm
+            ));
+        }
+        html.push_str("</table>\n");
+    }
+    if let Some(p) = &r.progressive {
+        let length = |v: Option<f64>| v.map_or_else(|| "not reached".into(), |v| format!("{v:.1}"));
+        html.push_str(&format!(
+            "<table>\n<tr><th>progressive</th><th></th></tr>\n\
+             <tr><td>add (measured on the {}; ordered {:.2})</td><td>{:.3} D (far {:.3}, near {:.3}; as worn {:.3})</td></tr>\n\
+             <tr><td>corridor length to 85 % / 95 % of the add</td><td>{} / {} mm</td></tr>\n\
+             <tr><td>corridor width at 0.50 / 1.00 D</td><td>{:.1} / {:.1} mm</td></tr>\n\
+             <tr><td>far / near zone width at 0.50 D</td><td>{:.1} / {:.1} mm</td></tr>\n\
+             <tr><td>largest unwanted cylinder</td><td>{:.2} D at ({:.1}, {:.1}) mm</td></tr>\n</table>\n",
+            p.measured_on,
+            p.ordered_add_d,
+            p.add_d,
+            p.far_power_d,
+            p.near_power_d,
+            p.map_add_d,
+            length(p.corridor_length_mm_85),
+            length(p.corridor_length_mm_95),
+            p.corridor_width_mm_050,
+            p.corridor_width_mm_100,
+            p.far_zone_width_mm_050,
+            p.near_zone_width_mm_050,
+            p.max_unwanted_cylinder_d,
+            p.max_unwanted_cylinder_at_mm[0],
+            p.max_unwanted_cylinder_at_mm[1]
+        ));
+    }
+    if let Some(n) = &r.near {
+        let number = |v: Option<f64>| v.map_or_else(|| "–".into(), |v| format!("{v:.3}"));
+        html.push_str(&format!(
+            "<table>\n<tr><th>near vision</th><th></th></tr>\n\
+             <tr><td>near point</td><td>{:.3} m, {:.1}° down, PD {:.0} mm</td></tr>\n\
+             <tr><td>through the lens at</td><td>({:.2}, {:.2}) mm, inset {:.2} mm</td></tr>\n\
+             <tr><td>power for the near object</td><td>{:.3} D (the object's vergence {:.3} D)</td></tr>\n\
+             <tr><td>power error / unwanted cylinder</td><td>{} / {} D</td></tr>\n\
+             <tr><td>prism (out, up)</td><td>{}</td></tr>\n</table>\n",
+            n.distance_m,
+            n.down_deg,
+            n.pd_mm,
+            n.point_on_lens_mm[0],
+            n.point_on_lens_mm[1],
+            n.inset_mm,
+            n.power_d,
+            n.object_vergence_d,
+            number(n.cell.power_error_d),
+            number(n.cell.unwanted_cylinder_d),
+            n.cell
+                .prism_d
+                .map_or_else(|| "–".into(), |[h, v]| format!("{h:.2}, {v:.2} Δ"))
+        ));
     }
     html
 }
@@ -331,6 +408,15 @@ pub fn write_lens(dir: &Path, r: &crate::lens::Report) -> Result<PathBuf, Analyz
             "<figure><img src=\"{0}.svg\"><figcaption>{0}</figcaption></figure>\n",
             map.name()
         ));
+    }
+    for kind in lens_plot::LensCoordinateMap::ALL {
+        if let Some(plot) = lens_plot::lens_coordinate_map(r, kind) {
+            write_plot(dir, kind.name(), &plot)?;
+            figures.push_str(&format!(
+                "<figure><img src=\"{0}.svg\"><figcaption>{0}</figcaption></figure>\n",
+                kind.name()
+            ));
+        }
     }
     write_plot(dir, "distortion", &lens_plot::distortion(r))?;
     let c = &r.centre;

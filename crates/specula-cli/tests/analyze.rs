@@ -733,4 +733,66 @@ fn bad_lens_options_are_refused_saying_why() {
         &["--vertex-distance", "0"],
         &["--vertex-distance", "must be positive"],
     );
+    refused(&["--near=-0.4"], &["--near", "in front of the eyes"]);
+    refused(&["--near", "0.01"], &["--near", "at or behind the lens"]);
+    refused(&["--add", "2"], &["an add without a progressive surface"]);
+    refused(&["--lens-step", "0"], &["--lens-step", "at least 0.05 mm"]);
+}
+
+#[test]
+fn a_progressive_lens_gets_its_add_corridor_zones_near_figures_and_verdict() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = specula()
+        .current_dir(dir.path())
+        .args(["analyze", "lens"])
+        .arg(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/progressive.toml"))
+        .args(["--lens", "right lens", "--gaze", "20,30,5", "--near", "0.4"])
+        .args([
+            "--standard",
+            "ansi-z80.1",
+            "--json",
+            "lens.json",
+            "--report",
+            "report",
+        ])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    for line in [
+        "progressive: add",
+        "near point 0.400 m away",
+        "clear where",
+        "PASS",
+    ] {
+        assert!(stdout.contains(line), "{line}: {stdout}");
+    }
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("lens.json")).unwrap())
+            .unwrap();
+    assert_matches_schema(
+        &json,
+        include_str!("../../../docs/analyze-lens.schema.json"),
+    );
+    let add = json["progressive"]["add_d"].as_f64().unwrap();
+    // Measured 2026-12-04: 1.9746 D on the front.
+    assert!((add - 1.9746).abs() < 1e-3, "{add}");
+    assert_eq!(json["progressive"]["measured_on"], "front");
+    let quantities: Vec<&str> = json["verdict"]["checks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["quantity"].as_str().unwrap())
+        .collect();
+    assert_eq!(quantities, ["sphere", "cylinder", "prism", "add"]);
+    assert!(json["near"]["inset_mm"].as_f64().unwrap() > 1.0);
+    assert_eq!(json["clear_zones"].as_array().unwrap().len(), 3);
+    for name in [
+        "lens-mean-power.svg",
+        "lens-cylinder.svg",
+        "lens-mean-power.png",
+    ] {
+        assert!(dir.path().join("report").join(name).is_file(), "{name}");
+    }
 }

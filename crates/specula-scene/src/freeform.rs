@@ -53,7 +53,6 @@ impl Local {
     }
 }
 
-
 /// The largest curvature error a sag grid's interpolation may carry, 1 / metres (0.024 D of
 /// surface power at n = 1.6: a fifth of the standards' tightest tolerance, 0.12 D).
 pub const MAX_CURVATURE_ERROR: f64 = 0.04;
@@ -578,7 +577,11 @@ impl Progressive {
             b = c;
             fb = miss(b);
         }
-        design(if fb.is_finite() { b } else { add_d / (index - 1.0) })
+        design(if fb.is_finite() {
+            b
+        } else {
+            add_d / (index - 1.0)
+        })
     }
 
     /// The design's far (distance) reference point, metres.

@@ -714,7 +714,14 @@ pub fn analyze(
     let fitting_mm = frame.mm_of(setup.primary.points[0]);
     let reference = target.unwrap_or_else(|| own_power(&centre));
     let lens_map = options.lens_step_mm.map(|step| {
-        zones::lens_map(&setup, &frame, rim_mm(&worn, &frame), step, &central, &reference)
+        zones::lens_map(
+            &setup,
+            &frame,
+            rim_mm(&worn, &frame),
+            step,
+            &central,
+            &reference,
+        )
     });
     let clear_zones = lens_map.as_ref().map_or_else(Vec::new, |map| {
         zones::clear_zones(map, &grid, options.gaze.step_deg, fitting_mm)
@@ -833,7 +840,8 @@ pub fn analyze(
                             ),
                         });
                     }
-                    let uncertainty = add_focimeter[0].uncertainty_d + add_focimeter[1].uncertainty_d;
+                    let uncertainty =
+                        add_focimeter[0].uncertainty_d + add_focimeter[1].uncertainty_d;
                     standard::judge_progressive(
                         table,
                         &focimeter[0],
@@ -1240,7 +1248,10 @@ fn validate(options: &Options) -> Result<(), AnalyzeError> {
                 ),
             });
         }
-        if near.down_deg.is_some_and(|d| !(d.is_finite() && d.abs() < 80.0)) {
+        if near
+            .down_deg
+            .is_some_and(|d| !(d.is_finite() && d.abs() < 80.0))
+        {
             return Err(AnalyzeError::BadOption {
                 option: "--near-down",
                 reason: "the near point's depression must be between −80° and 80°".into(),

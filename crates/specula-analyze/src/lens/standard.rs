@@ -213,79 +213,79 @@ pub const STANDARDS: &[Table] = &[
 ];
 
 const ISO_POWER: Bands<Tolerance> = &[
-            (3.00, Tolerance::Dioptres(0.12)),
-            (6.00, Tolerance::Dioptres(0.12)),
-            (9.00, Tolerance::Dioptres(0.12)),
-            (12.00, Tolerance::Dioptres(0.18)),
-            (20.00, Tolerance::Dioptres(0.25)),
-            (INF, Tolerance::Dioptres(0.37)),
-        ];
+    (3.00, Tolerance::Dioptres(0.12)),
+    (6.00, Tolerance::Dioptres(0.12)),
+    (9.00, Tolerance::Dioptres(0.12)),
+    (12.00, Tolerance::Dioptres(0.18)),
+    (20.00, Tolerance::Dioptres(0.25)),
+    (INF, Tolerance::Dioptres(0.37)),
+];
 
 const ISO_CYLINDER: Bands<Bands<Tolerance>> = &[
-            (
-                3.00,
-                // The table has no entry over 6.00 D of cylinder here; the next row's is used.
-                &[
-                    (0.75, Tolerance::Dioptres(0.09)),
-                    (4.00, Tolerance::Dioptres(0.12)),
-                    (6.00, Tolerance::Dioptres(0.18)),
-                    (INF, Tolerance::Dioptres(0.25)),
-                ],
-            ),
-            (
-                6.00,
-                &[
-                    (0.75, Tolerance::Dioptres(0.12)),
-                    (4.00, Tolerance::Dioptres(0.12)),
-                    (6.00, Tolerance::Dioptres(0.18)),
-                    (INF, Tolerance::Dioptres(0.25)),
-                ],
-            ),
-            (
-                9.00,
-                &[
-                    (0.75, Tolerance::Dioptres(0.12)),
-                    (4.00, Tolerance::Dioptres(0.18)),
-                    (6.00, Tolerance::Dioptres(0.18)),
-                    (INF, Tolerance::Dioptres(0.25)),
-                ],
-            ),
-            (
-                12.00,
-                &[
-                    (0.75, Tolerance::Dioptres(0.12)),
-                    (4.00, Tolerance::Dioptres(0.18)),
-                    (6.00, Tolerance::Dioptres(0.18)),
-                    (INF, Tolerance::Dioptres(0.25)),
-                ],
-            ),
-            (
-                20.00,
-                &[
-                    (0.75, Tolerance::Dioptres(0.18)),
-                    (4.00, Tolerance::Dioptres(0.25)),
-                    (6.00, Tolerance::Dioptres(0.25)),
-                    (INF, Tolerance::Dioptres(0.25)),
-                ],
-            ),
-            (
-                INF,
-                &[
-                    (0.75, Tolerance::Dioptres(0.25)),
-                    (4.00, Tolerance::Dioptres(0.25)),
-                    (6.00, Tolerance::Dioptres(0.37)),
-                    (INF, Tolerance::Dioptres(0.37)),
-                ],
-            ),
-        ];
+    (
+        3.00,
+        // The table has no entry over 6.00 D of cylinder here; the next row's is used.
+        &[
+            (0.75, Tolerance::Dioptres(0.09)),
+            (4.00, Tolerance::Dioptres(0.12)),
+            (6.00, Tolerance::Dioptres(0.18)),
+            (INF, Tolerance::Dioptres(0.25)),
+        ],
+    ),
+    (
+        6.00,
+        &[
+            (0.75, Tolerance::Dioptres(0.12)),
+            (4.00, Tolerance::Dioptres(0.12)),
+            (6.00, Tolerance::Dioptres(0.18)),
+            (INF, Tolerance::Dioptres(0.25)),
+        ],
+    ),
+    (
+        9.00,
+        &[
+            (0.75, Tolerance::Dioptres(0.12)),
+            (4.00, Tolerance::Dioptres(0.18)),
+            (6.00, Tolerance::Dioptres(0.18)),
+            (INF, Tolerance::Dioptres(0.25)),
+        ],
+    ),
+    (
+        12.00,
+        &[
+            (0.75, Tolerance::Dioptres(0.12)),
+            (4.00, Tolerance::Dioptres(0.18)),
+            (6.00, Tolerance::Dioptres(0.18)),
+            (INF, Tolerance::Dioptres(0.25)),
+        ],
+    ),
+    (
+        20.00,
+        &[
+            (0.75, Tolerance::Dioptres(0.18)),
+            (4.00, Tolerance::Dioptres(0.25)),
+            (6.00, Tolerance::Dioptres(0.25)),
+            (INF, Tolerance::Dioptres(0.25)),
+        ],
+    ),
+    (
+        INF,
+        &[
+            (0.75, Tolerance::Dioptres(0.25)),
+            (4.00, Tolerance::Dioptres(0.25)),
+            (6.00, Tolerance::Dioptres(0.37)),
+            (INF, Tolerance::Dioptres(0.37)),
+        ],
+    ),
+];
 
 const ISO_AXIS: Bands<f64> = &[
-            (0.25, 16.0),
-            (0.50, 9.0),
-            (0.75, 6.0),
-            (1.50, 4.0),
-            (INF, 3.0),
-        ];
+    (0.25, 16.0),
+    (0.50, 9.0),
+    (0.75, 6.0),
+    (1.50, 4.0),
+    (INF, 3.0),
+];
 
 /// The standard named `id`; an unknown one lists the valid ones.
 pub fn find(id: &str) -> Result<&'static Table, String> {

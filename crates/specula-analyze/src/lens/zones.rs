@@ -2,8 +2,8 @@
 //!
 //! **The lens map** samples the lens in its own frame (x to the wearer's right, y up, mm from
 //! the back vertex; as worn for a tilted or wrapped lens) every `lens_step_mm` over its disc:
-//! at each point the eye turns until its chief ray crosses the back surface there (the gaze
-//! from the centre of rotation, corrected by the crossing's miss until it is within 1e-4 mm),
+//! at each point the eye turns until its chief ray crosses the back surface there (Newton's
+//! method on the crossing's miss, to within 1e-4 mm),
 //! and the point gets that gaze's figures (module doc of [`super`]). Power errors and unwanted
 //! cylinder are against the target, or, without a prescription, against the lens's own power
 //! at the fitting point.
@@ -135,9 +135,17 @@ pub(super) fn lens_map(
                 .flatten();
             let cell = match gaze {
                 Some([h, v]) => figures(setup, h, v, central, Some(reference)),
-                None => Cell::outside([f64::NAN; 2]),
+                // Off the lens: the gaze straight at the point.
+                None => {
+                    let point = frame.back_vertex + (frame.right * x + frame.up * y) * 1e-3;
+                    let dir = (point - setup.options.rotation_centre).normalize();
+                    Cell::outside(angles(setup, dir))
+                }
             };
-            MapPoint { at_mm: [x, y], cell }
+            MapPoint {
+                at_mm: [x, y],
+                cell,
+            }
         })
         .collect();
     LensMap {
@@ -154,16 +162,37 @@ pub(super) fn lens_map(
 pub(super) fn gaze_through(setup: &Setup, frame: &LensFrame, at_mm: [f64; 2]) -> Option<[f64; 2]> {
     let o = setup.options;
     let want = DVec2::from(at_mm) * 1e-3;
-    let mut aim = frame.back_vertex + frame.right * want.x + frame.up * want.y;
-    for _ in 0..8 {
-        let dir = (aim - o.rotation_centre).normalize();
-        let chief = setup.tracer.trace(o.rotation_centre, dir, setup.indices.y).ok()?;
+    // Where the line from the centre through the point `aim` of the back vertex's plane
+    // crosses the back surface, in the lens's (right, up).
+    let crossing = |aim: DVec2| -> Option<(DVec2, DVec3)> {
+        let p = frame.back_vertex + frame.right * aim.x + frame.up * aim.y;
+        let dir = (p - o.rotation_centre).normalize();
+        let chief = setup
+            .tracer
+            .trace(o.rotation_centre, dir, setup.indices.y)
+            .ok()?;
         let q = chief.points[0] - frame.back_vertex;
-        let miss = want - DVec2::new(q.dot(frame.right), q.dot(frame.up));
+        Some((DVec2::new(q.dot(frame.right), q.dot(frame.up)), dir))
+    };
+    // Newton's method, the Jacobian by forward differences over 1 µm.
+    let mut aim = want;
+    for _ in 0..12 {
+        let (at, dir) = crossing(aim)?;
+        let miss = want - at;
         if miss.length() < 1e-7 {
             return Some(angles(setup, dir));
         }
-        aim += frame.right * miss.x + frame.up * miss.y;
+        let e = 1e-6;
+        let dx = (crossing(aim + DVec2::X * e)?.0 - at) / e;
+        let dy = (crossing(aim + DVec2::Y * e)?.0 - at) / e;
+        let det = dx.x * dy.y - dy.x * dx.y;
+        if det.abs() < 1e-12 {
+            return None;
+        }
+        aim += DVec2::new(
+            (miss.x * dy.y - dy.x * miss.y) / det,
+            (dx.x * miss.y - miss.x * dx.y) / det,
+        );
     }
     None
 }
@@ -239,8 +268,7 @@ pub(super) fn clear_zones(
                     * map.step_mm
                     * map.step_mm,
                 solid_angle_sr: grid.iter().filter(|c| holds(c)).map(solid_angle).sum(),
-                horizontal_width_mm: map
-                    .run_width(row, column, |c| margin(k, c, &map.reference)),
+                horizontal_width_mm: map.run_width(row, column, |c| margin(k, c, &map.reference)),
             }
         })
         .collect()
@@ -359,4 +387,3 @@ pub(super) fn progressive(
         corridor_mm: corridor.iter().map(|&(r, c, _)| at(r, c)).collect(),
     })
 }
-
