@@ -479,7 +479,10 @@ pub fn lens_coordinate_map(report: &Report, kind: LensCoordinateMap) -> Option<P
     let circle = |png: &mut RgbImage, at: [f64; 2]| {
         let c = layout.pixel(to_grid(at));
         for k in 0..24 {
-            let (a, b) = (k as f32 / 24.0 * 6.2832, (k + 1) as f32 / 24.0 * 6.2832);
+            let (a, b) = (
+                k as f32 / 24.0 * std::f32::consts::TAU,
+                (k + 1) as f32 / 24.0 * std::f32::consts::TAU,
+            );
             let p = |t: f32| c + Vec2::new(t.cos(), t.sin()) * r;
             draw_line(png, p(a), p(b), MARK);
         }

@@ -316,7 +316,7 @@ fn a_near_point_behind_the_eye_and_an_add_without_a_progressive_surface_are_refu
         ..Prescription::default()
     };
     let single = spectacles(&p);
-    let said = |r: Result<Report, AnalyzeError>| r.err().expect("refused").to_string();
+    let said = |r: Result<Report, AnalyzeError>| r.expect_err("refused").to_string();
     let behind = said(run(&single, |o| {
         o.near = Some(Near {
             distance_m: -0.4,

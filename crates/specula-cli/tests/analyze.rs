@@ -664,7 +664,7 @@ fn a_wrapped_lens_is_judged_against_its_compensated_prescription() {
         report
     };
     let ordered = verdict(&["--standard", "ansi-z80.1"]);
-    assert_eq!(ordered["schema_version"], 2);
+    assert_eq!(ordered["schema_version"], 3);
     assert_eq!(ordered["verdict"]["edition"], "ANSI Z80.1-2015");
     assert_eq!(ordered["verdict"]["passed"], true);
     let checks = ordered["verdict"]["checks"].as_array().unwrap();
