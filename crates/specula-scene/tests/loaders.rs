@@ -1134,3 +1134,76 @@ fn toml_spectacle_lens_errors_name_the_object_and_what_is_wrong() {
         &["material: missing", "spectacle-lens"],
     );
 }
+
+/// A free-form front's errors in a scene: the grid's file, row and column; a grid that does
+/// not cover the lens; a polynomial that tilts the surface; a base curve that disagrees.
+#[test]
+fn toml_free_form_lens_surfaces_refuse_bad_grids_naming_the_file_row_and_column() {
+    let dir = tempfile::tempdir().unwrap();
+    // A sphere of curvature 4 / 0.6 1/m sampled every 5 mm over ±30 mm.
+    let nodes: Vec<f64> = (-6..=6).map(|k| f64::from(k) * 5.0).collect();
+    let c = 4.0 / 0.6 / 1000.0;
+    let csv = |bad: Option<(usize, usize, &str)>| {
+        let mut text = String::from("y\\x");
+        for x in &nodes {
+            text.push_str(&format!(",{x}"));
+        }
+        text.push('\n');
+        for (j, y) in nodes.iter().enumerate() {
+            text.push_str(&format!("{y}"));
+            for (i, x) in nodes.iter().enumerate() {
+                let r2 = x * x + y * y;
+                let sag = c * r2 / (1.0 + (1.0 - c * c * r2).sqrt());
+                match bad {
+                    Some((row, column, cell)) if row == j && column == i => {
+                        text.push_str(&format!(",{cell}"))
+                    }
+                    _ => text.push_str(&format!(",{sag:.9}")),
+                }
+            }
+            text.push('\n');
+        }
+        text
+    };
+    let scene = |front: &str| {
+        SPECTACLES.replacen(
+            "base_curve = 4.0, diameter = 0.05, rings = 12, segments = 48 }",
+            &format!("diameter = 0.05, rings = 12, segments = 48, front = {front} }}"),
+            1,
+        )
+    };
+    write(dir.path(), "good.csv", &csv(None));
+    let good = load(
+        write(dir.path(), "g.toml", scene("{ sag_grid = \"good.csv\" }"))
+            .to_str()
+            .unwrap(),
+    )
+    .unwrap();
+    let base = good.prescriptions[0].1.base_curve;
+    assert!((base - 4.0).abs() < 0.01, "{base}");
+    write(dir.path(), "nan.csv", &csv(Some((3, 5, "NaN"))));
+    write(dir.path(), "hole.csv", &csv(Some((7, 2, ""))));
+    let cases = [
+        (
+            "{ sag_grid = \"nan.csv\" }",
+            vec!["nan.csv", "row 5", "column 7"],
+        ),
+        (
+            "{ sag_grid = \"hole.csv\" }",
+            vec!["hole.csv", "row 9", "column 4"],
+        ),
+        ("{ sag_grid = \"missing.csv\" }", vec!["missing.csv"]),
+        (
+            "{ polynomial = [[1, 0, 0.01]] }",
+            vec!["objects[0].shape", "polynomial[0]", "tilt"],
+        ),
+        (
+            "{ progressive = { add = -2.0, corridor_length = 0.014, blend_width = 0.008 } }",
+            vec!["progressive.add", "positive"],
+        ),
+    ];
+    for (front, wanted) in cases {
+        let message = error_of(&write(dir.path(), "bad.toml", scene(front)));
+        assert_mentions(&message, &wanted);
+    }
+}
