@@ -1172,7 +1172,7 @@ fn toml_free_form_lens_surfaces_refuse_bad_grids_naming_the_file_row_and_column(
             1,
         )
     };
-    write(dir.path(), "good.csv", &csv(None));
+    write(dir.path(), "good.csv", csv(None));
     let good = load(
         write(dir.path(), "g.toml", scene("{ sag_grid = \"good.csv\" }"))
             .to_str()
@@ -1181,8 +1181,8 @@ fn toml_free_form_lens_surfaces_refuse_bad_grids_naming_the_file_row_and_column(
     .unwrap();
     let base = good.prescriptions[0].1.base_curve;
     assert!((base - 4.0).abs() < 0.01, "{base}");
-    write(dir.path(), "nan.csv", &csv(Some((3, 5, "NaN"))));
-    write(dir.path(), "hole.csv", &csv(Some((7, 2, ""))));
+    write(dir.path(), "nan.csv", csv(Some((3, 5, "NaN"))));
+    write(dir.path(), "hole.csv", csv(Some((7, 2, ""))));
     let cases = [
         (
             "{ sag_grid = \"nan.csv\" }",
