@@ -333,7 +333,7 @@ fn zone_sections(r: &crate::lens::Report) -> String {
             "<table>\n<tr><th>progressive</th><th></th></tr>\n\
              <tr><td>add (measured on the {}; ordered {:.2})</td><td>{:.3} D (far {:.3}, near {:.3}; as worn {:.3})</td></tr>\n\
              <tr><td>corridor length to 85 % / 95 % of the add</td><td>{} / {} mm</td></tr>\n\
-             <tr><td>corridor width at 0.50 / 1.00 D</td><td>{:.1} / {:.1} mm</td></tr>\n\
+             <tr><td>corridor width at 0.50 / 1.00 D</td><td>{} / {} mm</td></tr>\n\
              <tr><td>far / near zone width at 0.50 D</td><td>{:.1} / {:.1} mm</td></tr>\n\
              <tr><td>largest unwanted cylinder</td><td>{:.2} D at ({:.1}, {:.1}) mm</td></tr>\n</table>\n",
             p.measured_on,
@@ -344,8 +344,8 @@ fn zone_sections(r: &crate::lens::Report) -> String {
             p.map_add_d,
             length(p.corridor_length_mm_85),
             length(p.corridor_length_mm_95),
-            p.corridor_width_mm_050,
-            p.corridor_width_mm_100,
+            length(p.corridor_width_mm_050),
+            length(p.corridor_width_mm_100),
             p.far_zone_width_mm_050,
             p.near_zone_width_mm_050,
             p.max_unwanted_cylinder_d,
@@ -359,7 +359,7 @@ fn zone_sections(r: &crate::lens::Report) -> String {
             "<table>\n<tr><th>near vision</th><th></th></tr>\n\
              <tr><td>near point</td><td>{:.3} m, {:.1}° down, PD {:.0} mm</td></tr>\n\
              <tr><td>through the lens at</td><td>({:.2}, {:.2}) mm, inset {:.2} mm</td></tr>\n\
-             <tr><td>power for the near object</td><td>{:.3} D (the object's vergence {:.3} D)</td></tr>\n\
+             <tr><td>power for the near object</td><td>{} D (the object's vergence {:.3} D)</td></tr>\n\
              <tr><td>power error / unwanted cylinder</td><td>{} / {} D</td></tr>\n\
              <tr><td>prism (out, up)</td><td>{}</td></tr>\n</table>\n",
             n.distance_m,
@@ -368,7 +368,7 @@ fn zone_sections(r: &crate::lens::Report) -> String {
             n.point_on_lens_mm[0],
             n.point_on_lens_mm[1],
             n.inset_mm,
-            n.power_d,
+            number(n.power_d),
             n.object_vergence_d,
             number(n.cell.power_error_d),
             number(n.cell.unwanted_cylinder_d),

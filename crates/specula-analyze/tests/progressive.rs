@@ -72,9 +72,10 @@ fn example() -> (Scene, Progressive) {
     (scene, design)
 }
 
-/// The example's front sampled every half millimetre over ±30.5 mm, as its CSV holds it.
+/// The example's front sampled every half millimetre over ±32 mm (past the 30 mm rim, where
+/// the rays leaving the lens's edge still need it), as its CSV holds it.
 fn sampled_front(design: &Progressive) -> SagGrid {
-    let nodes: Vec<f64> = (-61..=61).map(|k| f64::from(k) * 0.5e-3).collect();
+    let nodes: Vec<f64> = (-64..=64).map(|k| f64::from(k) * 0.5e-3).collect();
     SagGrid::sampled("progressive-front.csv", nodes.clone(), nodes, |x, y| {
         design.local(x, y).unwrap().sag
     })
@@ -236,18 +237,38 @@ fn the_grid_example_analyses_like_the_design() {
     .unwrap();
     let a = run(&design, |_| {}).unwrap();
     let b = run(&grid, |_| {}).unwrap();
+    // Point by point over the lens map where both see through the lens. The grid ends 2 mm
+    // past the rim: the steepest gazes through the lens's bottom edge start their search for
+    // the front off it and are outside the lens for the grid alone.
+    let (ma, mb) = (a.lens_map.as_ref().unwrap(), b.lens_map.as_ref().unwrap());
+    let mut worst: f64 = 0.0;
+    for (p, q) in ma.points.iter().zip(&mb.points) {
+        match (p.cell.unwanted_cylinder_d, q.cell.unwanted_cylinder_d) {
+            (Some(u), Some(v)) => {
+                worst = worst
+                    .max((u - v).abs())
+                    .max((p.cell.mean_power_d.unwrap() - q.cell.mean_power_d.unwrap()).abs())
+            }
+            (None, None) => {}
+            _ => {
+                let r = p.at_mm[0].hypot(p.at_mm[1]);
+                assert!(r > 26.0, "{:?} is inside for one surface only", p.at_mm);
+            }
+        }
+    }
+    println!("lens maps, design against grid: {worst:.2e} D");
+    assert!(worst < 0.01, "{worst}");
     let (pa, pb) = (a.progressive.unwrap(), b.progressive.unwrap());
     println!("design: {pa:?}\ngrid: {pb:?}");
     // Measured: 4e-6 D and 5e-4 D apart, the lengths and widths within 0.002 mm.
     assert!((pa.add_d - pb.add_d).abs() < 1e-4);
-    assert!((pa.max_unwanted_cylinder_d - pb.max_unwanted_cylinder_d).abs() < 2e-3);
     for (x, y) in [
         (pa.corridor_length_mm_85, pb.corridor_length_mm_85),
         (pa.corridor_length_mm_95, pb.corridor_length_mm_95),
     ] {
         assert!((x.unwrap() - y.unwrap()).abs() < 0.01);
     }
-    assert!((pa.corridor_width_mm_100 - pb.corridor_width_mm_100).abs() < 0.01);
+    assert!((pa.corridor_width_mm_100.unwrap() - pb.corridor_width_mm_100.unwrap()).abs() < 0.01);
     assert!((pa.near_zone_width_mm_050 - pb.near_zone_width_mm_050).abs() < 0.01);
 }
 
@@ -353,6 +374,13 @@ fn a_near_point_behind_the_eye_and_an_add_without_a_progressive_surface_are_refu
         o.standard = Some(find("iso-8980-2").unwrap())
     }));
     assert!(iso2.contains("--add"), "{iso2}");
+    let upside_down = said(run(&example, |o| o.near_reference_mm = Some([0.0, 10.0])));
+    assert!(
+        upside_down.contains("not below the distance reference"),
+        "{upside_down}"
+    );
+    let coarse = said(run(&example, |o| o.lens_step_mm = Some(20.0)));
+    assert!(coarse.contains("--lens-step"), "{coarse}");
     let no_near = said(run(&example, |o| o.near_reference_mm = None));
     assert!(no_near.contains("near reference"), "{no_near}");
 }

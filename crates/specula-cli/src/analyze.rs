@@ -673,8 +673,8 @@ fn print_zones(r: &specula_analyze::lens::Report) {
         };
         println!(
             "progressive: add {:.3} D measured on the {} (ordered {:.2}; far {:.3}, near {:.3} \
-             D; as worn {:.3} D); corridor length {} (85 %), {} (95 %); corridor width {:.1} mm \
-             (0.50 D), {:.1} mm (1.00 D); far zone {:.1} mm, near zone {:.1} mm wide (0.50 D); \
+             D; as worn {:.3} D); corridor length {} (85 %), {} (95 %); corridor width {} \
+             (0.50 D), {} (1.00 D); far zone {:.1} mm, near zone {:.1} mm wide (0.50 D); \
              largest unwanted cylinder {:.2} D at ({:.1}, {:.1}) mm",
             p.add_d,
             p.measured_on,
@@ -684,8 +684,8 @@ fn print_zones(r: &specula_analyze::lens::Report) {
             p.map_add_d,
             length(p.corridor_length_mm_85),
             length(p.corridor_length_mm_95),
-            p.corridor_width_mm_050,
-            p.corridor_width_mm_100,
+            length(p.corridor_width_mm_050),
+            length(p.corridor_width_mm_100),
             p.far_zone_width_mm_050,
             p.near_zone_width_mm_050,
             p.max_unwanted_cylinder_d,
@@ -705,11 +705,8 @@ fn print_zones(r: &specula_analyze::lens::Report) {
             n.point_on_lens_mm[0],
             n.point_on_lens_mm[1],
             n.inset_mm,
-            if n.power_d.is_finite() {
-                format!("{:.3}", n.power_d)
-            } else {
-                "outside".into()
-            },
+            n.power_d
+                .map_or_else(|| "outside".into(), |p| format!("{p:.3}")),
             n.object_vergence_d,
             c.power_error_d
                 .map_or_else(|| "–".into(), |v| format!("{v:.3}")),

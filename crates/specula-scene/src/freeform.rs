@@ -501,30 +501,28 @@ impl Polynomial {
 
 /// A progressive addition surface (the front of a progressive lens), built in code:
 ///
-/// s(x, y) = sphere(c_far) + Δc G(y) + ½ A(y) h(x), A ≈ Δc g(y), Δc ≈ add / (n − 1),
+/// s(x, y) = m(y) + [sphere(x, y) − sphere(0, y)] + ½ A(y) h(x), Δc = add / (n − 1),
 ///
+/// - the meridian x = 0 is the plane curve m(y) whose *true* curvature is κ(y) = c + Δc g(y):
+///   with S(y) = ∫κ = c y + Δc G'(y) (G'' = g), its slope is m' = S / √(1 − S²) (a plane
+///   curve's curvature is d/dy [m' / √(1 + m'²)]), m'' = κ / (1 − S²)^{3/2}, and m is m'
+///   integrated (Gauss–Legendre, 16 nodes per piece; exactly the far sphere above the fitting
+///   point). So the far zone is the far sphere and the meridian below the corridor has the
+///   near sphere's curvature, the focimeter's add at every point of it;
 /// - g(y) rises from 0 at the fitting point (y = 0) to 1 a corridor length L below it, as the
 ///   septic smoothstep of t = −y / L (its first three derivatives vanish at both ends, so the
 ///   curvature and its rate of change are continuous); 0 above, 1 below;
-/// - G'' = g with G = G' = 0 above the fitting point: along x = 0 the addition's Hessian is
-///   Δc g (1, 0, 1), isotropic, and the corridor umbilic, its mean power rising by the add
-///   (to first order: the blend's coefficient is Δc g less the slope's foreshortening,
-///   [`Progressive::umbilic_blend`], which makes it exactly umbilic in true curvature);
+/// - A(y) = κ √(1 + m'²) − c / √(1 − c²y²) makes the meridian umbilic: across it the normal
+///   curvature s_xx / √(1 + m'²) equals κ ([`Progressive::umbilic_blend`]);
 /// - h(x) = W² tanh(x²/W²) = x² − x⁶/(3W⁴) + … near the corridor (quadratic to within 0.4 %
 ///   at W / 4, so the unwanted cylinder rises linearly beside it as Minkwitz's theorem says,
-///   ∂C/∂x = 2 ∂M/∂y), bounded beside it: the near zone is the far sphere plus
-///   Δc (x² + (y − y₀)²)/2 for |x| ≪ W (a near sphere to second order), and beside it the
-///   addition blends into a function of y alone over about W on both sides, where the
-///   cylinder is about the add and largest (1.5 to 2 times the add) where h'' dips below 0.
-///   A textbook construction, not an optimised commercial design.
+///   ∂C/∂x = 2 ∂M/∂y), bounded beside it: the addition blends into a function of y alone over
+///   about W on both sides, where the cylinder is about the add, and largest (1.5 to 2 times
+///   the add) where h'' dips below 0. A textbook construction, not an optimised commercial
+///   design.
 ///
 /// The fitting point is the vertex (0, 0), the prism reference point too; the design's far
 /// and near reference points are (0, +8 mm) and (0, −(L + 3 mm)).
-///
-/// The sag's second derivatives are not the surface's curvatures where it slopes (the near
-/// reference point is ~10° off the axis), so Δc is solved ([`Progressive::new`]) for the
-/// *true* mean curvature there to exceed the far sphere's by add / (n − 1): the add is what
-/// a focimeter reads along the surface's normal.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Progressive {
     /// The far zone's sphere, 1 / metres.
@@ -536,12 +534,37 @@ pub struct Progressive {
     pub corridor_length: f64,
     /// W, metres.
     pub blend_width: f64,
-    /// Δc, 1 / metres.
-    add_curvature: f64,
+}
+
+/// The 16-point Gauss–Legendre nodes and weights on [−1, 1] (Newton on P₁₆).
+fn gauss_legendre() -> &'static [(f64, f64); 16] {
+    static NODES: std::sync::OnceLock<[(f64, f64); 16]> = std::sync::OnceLock::new();
+    NODES.get_or_init(|| {
+        let n = 16;
+        let mut out = [(0.0, 0.0); 16];
+        for (i, node) in out.iter_mut().enumerate() {
+            let mut x = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
+            let mut derivative = 0.0;
+            for _ in 0..100 {
+                let (mut p0, mut p1) = (1.0, x);
+                for k in 2..=n {
+                    let k = k as f64;
+                    (p0, p1) = (p1, ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / k);
+                }
+                derivative = n as f64 * (x * p1 - p0) / (x * x - 1.0);
+                let step = p1 / derivative;
+                x -= step;
+                if step.abs() < 1e-16 {
+                    break;
+                }
+            }
+            *node = (x, 2.0 / ((1.0 - x * x) * derivative * derivative));
+        }
+        out
+    })
 }
 
 impl Progressive {
-    /// The design with its Δc solved (type doc; a secant search to 1e-12 of the curvature).
     pub fn new(
         far_curvature: f64,
         add_d: f64,
@@ -549,39 +572,13 @@ impl Progressive {
         corridor_length: f64,
         blend_width: f64,
     ) -> Progressive {
-        let design = |add_curvature: f64| Progressive {
+        Progressive {
             far_curvature,
             add_d,
             index,
             corridor_length,
             blend_width,
-            add_curvature,
-        };
-        let want = far_curvature + add_d / (index - 1.0);
-        let miss = |dc: f64| {
-            let d = design(dc);
-            let near = d.near_reference();
-            d.local(near.x, near.y).map_or(f64::NAN, |l| {
-                let [k1, k2] = l.principal_curvatures();
-                0.5 * (k1 + k2) - want
-            })
-        };
-        let (mut a, mut b) = (add_d / (index - 1.0), 1.05 * add_d / (index - 1.0));
-        let (mut fa, mut fb) = (miss(a), miss(b));
-        for _ in 0..50 {
-            if !(fb.abs() > 1e-12 && (fb - fa).abs() > 0.0) {
-                break;
-            }
-            let c = b - fb * (b - a) / (fb - fa);
-            (a, fa) = (b, fb);
-            b = c;
-            fb = miss(b);
         }
-        design(if fb.is_finite() {
-            b
-        } else {
-            add_d / (index - 1.0)
-        })
     }
 
     /// The design's far (distance) reference point, metres.
@@ -596,7 +593,7 @@ impl Progressive {
 
     /// Δc, 1 / metres.
     pub fn add_curvature(&self) -> f64 {
-        self.add_curvature
+        self.add_d / (self.index - 1.0)
     }
 
     /// g and its y-derivatives [g, g', g''], and G, G' (G'' = g).
@@ -625,6 +622,38 @@ impl Progressive {
         ([g, -g_t / l, g_tt / (l * l)], [l * l * p2, -l * p1])
     }
 
+    /// S(y) = c y + Δc G'(y): the sine of the meridian's slope angle.
+    fn sine(&self, y: f64) -> f64 {
+        self.far_curvature * y + self.add_curvature() * self.profile(y).1[1]
+    }
+
+    /// The meridian's height m(y) less the far sphere's at (0, y): ∫₀^y of their slopes'
+    /// difference, zero above the fitting point.
+    fn meridian_excess(&self, y: f64) -> Option<f64> {
+        if y >= 0.0 {
+            return Some(0.0);
+        }
+        let c = self.far_curvature;
+        let excess = |t: f64| -> Option<f64> {
+            let s = self.sine(t);
+            let (u, k2) = (1.0 - s * s, 1.0 - c * c * t * t);
+            (u > 1e-12 && k2 > 1e-12).then(|| s / u.sqrt() - c * t / k2.sqrt())
+        };
+        let integral = |a: f64, b: f64| -> Option<f64> {
+            let (mid, half) = (0.5 * (a + b), 0.5 * (b - a));
+            gauss_legendre()
+                .iter()
+                .try_fold(0.0, |sum, &(x, w)| Some(sum + w * excess(mid + half * x)?))
+                .map(|sum| sum * half)
+        };
+        let corner = y.max(-self.corridor_length);
+        let mut total = integral(0.0, corner)?;
+        if y < corner {
+            total += integral(corner, y)?;
+        }
+        Some(total)
+    }
+
     pub fn local(&self, x: f64, y: f64) -> Option<Local> {
         let c = self.far_curvature;
         let r2 = x * x + y * y;
@@ -633,10 +662,9 @@ impl Progressive {
             return None;
         }
         let k = k2.sqrt();
-        let sphere_sag = c * r2 / (1.0 + k);
         let k3 = k2 * k;
         let sphere = Local {
-            sag: sphere_sag,
+            sag: c * r2 / (1.0 + k),
             gradient: DVec2::new(c * x / k, c * y / k),
             hessian: [
                 c / k + c * c * c * x * x / k3,
@@ -644,50 +672,62 @@ impl Progressive {
                 c / k + c * c * c * y * y / k3,
             ],
         };
+        // The sphere's meridian at (0, y), which the progressive meridian replaces.
+        let k0 = (1.0 - c * c * y * y).sqrt();
+        let (sphere_y0, sphere_yy0) = (c * y / k0, c / (k0 * k0 * k0));
         let dc = self.add_curvature();
+        let ([g, _, _], _) = self.profile(y);
+        let s = self.sine(y);
+        let u = 1.0 - s * s;
+        if u <= 1e-12 {
+            return None;
+        }
+        let (m_y, m_yy) = (s / u.sqrt(), (c + dc * g) / (u * u.sqrt()));
         let w2 = self.blend_width * self.blend_width;
-        let u = x * x / w2;
-        let t = u.tanh();
+        let v = x * x / w2;
+        let t = v.tanh();
         let sech2 = 1.0 - t * t;
-        let (h, h_x, h_xx) = (w2 * t, 2.0 * x * sech2, 2.0 * sech2 * (1.0 - 4.0 * u * t));
-        let ([g, _, _], [big, big_y]) = self.profile(y);
-        let [a, a_y, a_yy] = self.umbilic_blend(y);
+        let (h, h_x, h_xx) = (w2 * t, 2.0 * x * sech2, 2.0 * sech2 * (1.0 - 4.0 * v * t));
+        let [a, a_y, a_yy] = self.umbilic_blend(y)?;
         Some(Local {
-            sag: sphere.sag + dc * big + 0.5 * a * h,
-            gradient: sphere.gradient + DVec2::new(0.5 * a * h_x, dc * big_y + 0.5 * a_y * h),
+            sag: sphere.sag + self.meridian_excess(y)? + 0.5 * a * h,
+            gradient: DVec2::new(
+                sphere.gradient.x + 0.5 * a * h_x,
+                sphere.gradient.y - sphere_y0 + m_y + 0.5 * a_y * h,
+            ),
             hessian: [
                 sphere.hessian[0] + 0.5 * a * h_xx,
                 sphere.hessian[1] + 0.5 * a_y * h_x,
-                sphere.hessian[2] + dc * g + 0.5 * a_yy * h,
+                sphere.hessian[2] - sphere_yy0 + m_yy + 0.5 * a_yy * h,
             ],
         })
     }
 
-    /// The blend's coefficient A(y) = Δc a(y) and its y-derivatives: what makes the line
-    /// x = 0 umbilic in true curvature, not only in the sag's second derivatives. There, with
-    /// k = √(1 − c²y²), P = s_yy = c/k³ + Δc g, the slope q = s_y = cy/k + Δc G' (q' = P) and
-    /// D = 1 + q², the normal curvatures are s_xx / √D and s_yy / D^{3/2}; equal where
-    /// s_xx = c/k + A = P / D, so A = P/D − c/k (≈ Δc g where the surface is flat).
-    fn umbilic_blend(&self, y: f64) -> [f64; 3] {
+    /// The blend's coefficient A(y) and its y-derivatives (type doc): with κ = c + Δc g,
+    /// u = 1 − S², k = √(1 − c²y²), A = κ/√u − c/k.
+    fn umbilic_blend(&self, y: f64) -> Option<[f64; 3]> {
         let (c, dc) = (self.far_curvature, self.add_curvature());
-        let ([g, g_y, g_yy], [_, big_y]) = self.profile(y);
+        let ([g, g_y, g_yy], _) = self.profile(y);
+        let (kappa, kappa_y, kappa_yy) = (c + dc * g, dc * g_y, dc * g_yy);
+        let s = self.sine(y);
+        let u = 1.0 - s * s;
         let k2 = 1.0 - c * c * y * y;
-        let k = k2.sqrt();
-        let (k3, k5, k7) = (k2 * k, k2 * k2 * k, k2 * k2 * k2 * k);
+        if u <= 1e-12 || k2 <= 1e-12 {
+            return None;
+        }
+        let (ru, k) = (u.sqrt(), k2.sqrt());
+        let (u3, u5) = (u * ru, u * u * ru);
+        let (k3, k5) = (k2 * k, k2 * k2 * k);
         let (c3, c5) = (c * c * c, c * c * c * c * c);
-        let p = c / k3 + dc * g;
-        let p_y = 3.0 * c3 * y / k5 + dc * g_y;
-        let p_yy = 3.0 * c3 / k5 + 15.0 * c5 * y * y / k7 + dc * g_yy;
-        let q = c * y / k + dc * big_y;
-        let d = 1.0 + q * q;
-        let (d2, d3) = (d * d, d * d * d);
-        let a = p / d - c / k;
-        let a_y = p_y / d - 2.0 * q * p * p / d2 - c3 * y / k3;
-        let a_yy = p_yy / d - 6.0 * q * p * p_y / d2 - 2.0 * p * p * p / d2
-            + 8.0 * q * q * p * p * p / d3
+        let a = kappa / ru - c / k;
+        let a_y = kappa_y / ru + kappa * kappa * s / u3 - c3 * y / k3;
+        let a_yy = kappa_yy / ru
+            + 3.0 * kappa * kappa_y * s / u3
+            + kappa * kappa * kappa / u3
+            + 3.0 * kappa * kappa * kappa * s * s / u5
             - c3 / k3
             - 3.0 * c5 * y * y / k5;
-        [a, a_y, a_yy]
+        Some([a, a_y, a_yy])
     }
 }
 
@@ -783,6 +823,22 @@ mod tests {
             &finite_differences(&p, 0.01, -0.007),
             1e-7,
         );
+    }
+
+    /// Along the meridian the surface is umbilic with the true curvature c + Δc g: the far
+    /// sphere above the fitting point, the near sphere's below the corridor, however far down.
+    #[test]
+    fn the_progressive_meridian_has_the_far_and_near_spheres_true_curvature() {
+        let design = Progressive::new(1.0 / 0.12, 2.0, 1.6, 0.014, 0.008);
+        for y_mm in [8.0, 0.0, -3.5, -7.0, -14.0, -17.0, -25.0] {
+            let y = y_mm * 1e-3;
+            let [k1, k2] = design.local(0.0, y).unwrap().principal_curvatures();
+            let want = design.far_curvature + design.add_curvature() * design.profile(y).0[0];
+            assert!(
+                (k1 - want).abs() < 1e-6 && (k2 - want).abs() < 1e-6,
+                "{y_mm} mm: {k1} {k2} against {want}"
+            );
+        }
     }
 
     #[test]

@@ -713,16 +713,22 @@ pub fn analyze(
     let frame = worn_frame(&worn, &setup);
     let fitting_mm = frame.mm_of(setup.primary.points[0]);
     let reference = target.unwrap_or_else(|| own_power(&centre));
-    let lens_map = options.lens_step_mm.map(|step| {
-        zones::lens_map(
-            &setup,
-            &frame,
-            rim_mm(&worn, &frame),
-            step,
-            &central,
-            &reference,
-        )
-    });
+    let rim = rim_mm(&worn, &frame);
+    if let Some(step) = options.lens_step_mm {
+        let points = (2.0 * (rim / step).floor() + 1.0).powi(2);
+        if step > 0.5 * rim || points > 1e6 {
+            return Err(AnalyzeError::BadOption {
+                option: "--lens-step",
+                reason: format!(
+                    "{step} mm over a lens {rim:.1} mm in radius: the lens map needs a step of \
+                     at most half the radius and at most a million points"
+                ),
+            });
+        }
+    }
+    let lens_map = options
+        .lens_step_mm
+        .map(|step| zones::lens_map(&setup, &frame, rim, step, &central, &reference));
     let clear_zones = lens_map.as_ref().map_or_else(Vec::new, |map| {
         zones::clear_zones(map, &grid, options.gaze.step_deg, fitting_mm)
     });
@@ -739,7 +745,7 @@ pub fn analyze(
                 .ok_or_else(|| AnalyzeError::BadOption {
                     option: "--distance-reference and --near-reference",
                     reason: format!(
-                        "the reference points {:?} and {:?} mm must lie on the lens map, inside                          the lens",
+                        "the reference points {:?} and {:?} mm must lie on the lens map, inside the lens",
                         readings[0].at_mm, readings[1].at_mm
                     ),
                 })?;
@@ -983,7 +989,7 @@ fn read_add(
             return Err(AnalyzeError::BadOption {
                 option: "--add",
                 reason: format!(
-                    "an add without a progressive surface: '{}' has no free-form front or back                      (a spectacle-lens shape's `front` or `back` = a sag grid, a polynomial or                      a progressive design)",
+                    "an add without a progressive surface: '{}' has no free-form front or back (a spectacle-lens shape's `front` or `back` = a sag grid, a polynomial or a progressive design)",
                     lens.name
                 ),
             })
@@ -993,11 +999,21 @@ fn read_add(
         return Err(AnalyzeError::BadOption {
             option: "--add",
             reason: format!(
-                "the add is read at the near reference point, which '{}' does not give: pass                  --near-reference X,Y (mm) or set the spectacle-lens's near_reference",
+                "the add is read at the near reference point, which '{}' does not give: pass --near-reference X,Y (mm) or set the spectacle-lens's near_reference",
                 lens.name
             ),
         });
     };
+    let far_at = options.reference_points_mm[0];
+    if near_at[1] >= far_at[1] {
+        return Err(AnalyzeError::BadOption {
+            option: "--near-reference",
+            reason: format!(
+                "{near_at:?} mm is not below the distance reference point {far_at:?} mm: a \
+                 progressive lens's near zone lies below its far zone"
+            ),
+        });
+    }
     let instrument = Focimeter {
         tracer: placed,
         frame,
@@ -1016,7 +1032,7 @@ fn read_add(
             .map_err(|failure| AnalyzeError::BadOption {
                 option: "--distance-reference and --near-reference",
                 reason: format!(
-                    "the focimeter cannot read '{}' at {at:?} mm on its {side} ({failure:?}):                      give a point on the lens",
+                    "the focimeter cannot read '{}' at {at:?} mm on its {side} ({failure:?}): give a point on the lens",
                     lens.name
                 ),
             })

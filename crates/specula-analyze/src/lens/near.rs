@@ -47,8 +47,9 @@ pub struct NearFigures {
     pub inset_mm: f64,
     /// The near object's vergence at the vertex sphere (negative: diverging).
     pub object_vergence_d: f64,
-    /// The lens's mean power for the near object: mean exit vergence less the object's.
-    pub power_d: f64,
+    /// The lens's mean power for the near object: mean exit vergence less the object's (None
+    /// where the bundle fails).
+    pub power_d: Option<f64>,
     /// The gaze's figures from the near object (exit vergences, prism, and the power error
     /// against the target plus the add).
     pub cell: Cell,
@@ -147,7 +148,7 @@ pub(super) fn near_figures(
         point_on_lens_mm: on_lens.to_array(),
         inset_mm: -side * (on_lens.x - fitting_mm.x),
         object_vergence_d: object_vergence,
-        power_d: cell.mean_power_d.map_or(f64::NAN, |m| m - object_vergence),
+        power_d: cell.mean_power_d.map(|m| m - object_vergence),
         cell,
     })
 }

@@ -63,7 +63,13 @@ impl LensMap {
     pub fn sample(&self, at_mm: DVec2, value: impl Fn(&Cell) -> Option<f64>) -> Option<f64> {
         let g = (at_mm - DVec2::from(self.origin_mm)) / self.step_mm;
         let (columns, rows) = (self.columns, self.rows);
-        if g.x < 0.0 || g.y < 0.0 || g.x > (columns - 1) as f64 || g.y > (rows - 1) as f64 {
+        if columns < 2
+            || rows < 2
+            || g.x < 0.0
+            || g.y < 0.0
+            || g.x > (columns - 1) as f64
+            || g.y > (rows - 1) as f64
+        {
             return None;
         }
         let (i, j) = (
@@ -293,8 +299,9 @@ pub struct Progressive {
     pub map_add_d: f64,
     pub corridor_length_mm_85: Option<f64>,
     pub corridor_length_mm_95: Option<f64>,
-    pub corridor_width_mm_050: f64,
-    pub corridor_width_mm_100: f64,
+    /// On the row where the corridor has half the add; None where it never does.
+    pub corridor_width_mm_050: Option<f64>,
+    pub corridor_width_mm_100: Option<f64>,
     pub far_zone_width_mm_050: f64,
     pub near_zone_width_mm_050: f64,
     pub max_unwanted_cylinder_d: f64,
@@ -353,11 +360,11 @@ pub(super) fn progressive(
                 fitting_mm.y - y
             })
     };
+    // The row where the corridor has half the add; none where it never gets there.
     let half = corridor
         .iter()
-        .find(|c| c.2 >= far_mean + 0.5 * map_add)
-        .copied()
-        .unwrap_or(*corridor.last()?);
+        .find(|c| map_add > 0.01 && c.2 >= far_mean + 0.5 * map_add)
+        .copied();
     let width = |row: usize, column: usize, limit: f64| {
         map.run_width(row, column, |c| unwanted(c).map(|u| limit - u))
     };
@@ -378,8 +385,8 @@ pub(super) fn progressive(
         map_add_d: map_add,
         corridor_length_mm_85: reaches(0.85),
         corridor_length_mm_95: reaches(0.95),
-        corridor_width_mm_050: width(half.0, half.1, 0.5),
-        corridor_width_mm_100: width(half.0, half.1, 1.0),
+        corridor_width_mm_050: half.map(|h| width(h.0, h.1, 0.5)),
+        corridor_width_mm_100: half.map(|h| width(h.0, h.1, 1.0)),
         far_zone_width_mm_050: width(top, map.column_of(far_at.x), 0.5),
         near_zone_width_mm_050: width(bottom, map.column_of(near_at.x), 0.5),
         max_unwanted_cylinder_d: worst,
