@@ -7,6 +7,7 @@
 use glam::Vec2;
 use image::{Rgb, RgbImage};
 
+use crate::lens::zones::LensMap;
 use crate::lens::{Cell, Eye, Report};
 use crate::plot::{draw_line, plot_around, scale_colour, Extent, Plot};
 
@@ -252,20 +253,29 @@ pub fn map_interval(report: &Report, map: Map, lo: f64, hi: f64) -> f64 {
     }
 }
 
-/// A map of one quantity over the gaze grid (module doc).
-pub fn lens_map(report: &Report, map: Map) -> Plot {
-    let layout = Layout::new(report);
-    let values: Vec<Option<f64>> = report.grid.iter().map(|c| map.value(c)).collect();
-    let known = values.iter().flatten();
-    let (mut lo, mut hi) = known.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-        (lo.min(*v), hi.max(*v))
-    });
+/// The range a map's colour scale spans: its values' (0 to 1 without any; widened by ±0.5
+/// where they are all equal).
+fn value_range(values: &[Option<f64>]) -> (f64, f64) {
+    let (mut lo, mut hi) = values
+        .iter()
+        .flatten()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(*v), hi.max(*v))
+        });
     if !lo.is_finite() {
         (lo, hi) = (0.0, 1.0);
     }
     if hi - lo < 1e-9 {
         (lo, hi) = (lo - 0.5, hi + 0.5);
     }
+    (lo, hi)
+}
+
+/// A map of one quantity over the gaze grid (module doc).
+pub fn lens_map(report: &Report, map: Map) -> Plot {
+    let layout = Layout::new(report);
+    let values: Vec<Option<f64>> = report.grid.iter().map(|c| map.value(c)).collect();
+    let (lo, hi) = value_range(&values);
     let mut png = RgbImage::from_fn(layout.width, layout.height, |x, y| {
         match sample(&values, layout.columns, layout.rows, layout.grid(x, y)) {
             Some(v) => Rgb(scale_colour((v - lo) / (hi - lo))),
@@ -410,18 +420,7 @@ pub fn lens_coordinate_map(report: &Report, kind: LensCoordinateMap) -> Option<P
         .collect();
     let (columns, rows) = (map.columns, map.rows);
     let layout = Layout::sized(columns, rows);
-    let (mut lo, mut hi) = values
-        .iter()
-        .flatten()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-            (lo.min(*v), hi.max(*v))
-        });
-    if !lo.is_finite() {
-        (lo, hi) = (0.0, 1.0);
-    }
-    if hi - lo < 1e-9 {
-        (lo, hi) = (lo - 0.5, hi + 0.5);
-    }
+    let (lo, hi) = value_range(&values);
     let mut png = RgbImage::from_fn(layout.width, layout.height, |x, y| {
         match sample(&values, columns, rows, layout.grid(x, y)) {
             Some(v) => Rgb(scale_colour((v - lo) / (hi - lo))),
@@ -462,41 +461,7 @@ pub fn lens_coordinate_map(report: &Report, kind: LensCoordinateMap) -> Option<P
             .collect();
         line(&mut png, &error, 0.25, CORRIDOR, true);
     }
-    let to_grid = |at: [f64; 2]| {
-        [
-            (at[0] - map.origin_mm[0]) / map.step_mm,
-            (at[1] - map.origin_mm[1]) / map.step_mm,
-        ]
-    };
-    if let Some(p) = &report.progressive {
-        for w in p.corridor_mm.windows(2) {
-            let (a, b) = (layout.pixel(to_grid(w[0])), layout.pixel(to_grid(w[1])));
-            draw_line(&mut png, a, b, CORRIDOR);
-            draw_line(&mut png, a + Vec2::X, b + Vec2::X, CORRIDOR);
-        }
-    }
-    let r = 0.6 * layout.cell_px.max(6.0);
-    let circle = |png: &mut RgbImage, at: [f64; 2]| {
-        let c = layout.pixel(to_grid(at));
-        for k in 0..24 {
-            let (a, b) = (
-                k as f32 / 24.0 * std::f32::consts::TAU,
-                (k + 1) as f32 / 24.0 * std::f32::consts::TAU,
-            );
-            let p = |t: f32| c + Vec2::new(t.cos(), t.sin()) * r;
-            draw_line(png, p(a), p(b), MARK);
-        }
-    };
-    let fitting = layout.pixel(to_grid(report.fitting_point_mm));
-    draw_line(&mut png, fitting - Vec2::X * r, fitting + Vec2::X * r, MARK);
-    draw_line(&mut png, fitting - Vec2::Y * r, fitting + Vec2::Y * r, MARK);
-    if let Some(p) = &report.progressive {
-        circle(&mut png, p.distance_reference_mm);
-        circle(&mut png, p.near_reference_mm);
-    }
-    if let Some(n) = &report.near {
-        circle(&mut png, n.point_on_lens_mm);
-    }
+    draw_marks(&mut png, &layout, map, report);
     let half = 0.5 * map.step_mm as f32;
     let extent = Extent {
         min: Vec2::new(
@@ -549,6 +514,46 @@ pub fn lens_coordinate_map(report: &Report, kind: LensCoordinateMap) -> Option<P
         Some((extent, false)),
         &legend,
     ))
+}
+
+/// The corridor (white), the fitting point (a cross), the reference points and the near
+/// crossing (circles) on a map over the lens.
+fn draw_marks(png: &mut RgbImage, layout: &Layout, map: &LensMap, report: &Report) {
+    let to_grid = |at: [f64; 2]| {
+        [
+            (at[0] - map.origin_mm[0]) / map.step_mm,
+            (at[1] - map.origin_mm[1]) / map.step_mm,
+        ]
+    };
+    if let Some(p) = &report.progressive {
+        for w in p.corridor_mm.windows(2) {
+            let (a, b) = (layout.pixel(to_grid(w[0])), layout.pixel(to_grid(w[1])));
+            draw_line(png, a, b, CORRIDOR);
+            draw_line(png, a + Vec2::X, b + Vec2::X, CORRIDOR);
+        }
+    }
+    let r = 0.6 * layout.cell_px.max(6.0);
+    let circle = |png: &mut RgbImage, at: [f64; 2]| {
+        let c = layout.pixel(to_grid(at));
+        for k in 0..24 {
+            let (a, b) = (
+                k as f32 / 24.0 * std::f32::consts::TAU,
+                (k + 1) as f32 / 24.0 * std::f32::consts::TAU,
+            );
+            let p = |t: f32| c + Vec2::new(t.cos(), t.sin()) * r;
+            draw_line(png, p(a), p(b), MARK);
+        }
+    };
+    let fitting = layout.pixel(to_grid(report.fitting_point_mm));
+    draw_line(png, fitting - Vec2::X * r, fitting + Vec2::X * r, MARK);
+    draw_line(png, fitting - Vec2::Y * r, fitting + Vec2::Y * r, MARK);
+    if let Some(p) = &report.progressive {
+        circle(png, p.distance_reference_mm);
+        circle(png, p.near_reference_mm);
+    }
+    if let Some(n) = &report.near {
+        circle(png, n.point_on_lens_mm);
+    }
 }
 
 /// The distortion picture: straight object-space lines (constant horizontal or vertical

@@ -9,35 +9,10 @@ use specula_analyze::lens::standard::{find, judge};
 use specula_analyze::lens::{analyze, default_options, Options, Report, Rx, Wear};
 use specula_analyze::mirror_surface::SurfaceModel;
 use specula_scene::generators::{self, LensSpec};
-use specula_scene::spectacle::spectacle_lens;
-use specula_scene::{Camera, Material, MaterialKind, Mesh, Prescription, Scene};
+use specula_scene::{Prescription, Scene};
 
-/// `lens` (its own frame: light along +Z, back vertex at z = `thickness`) before a camera
-/// 12 mm behind the back vertex looking along −Z, placed by `world_from_lens`.
-fn scene_of(mut lens: Mesh, n: f64, thickness: f64, world_from_lens: Mat4) -> Scene {
-    let mut scene = Scene::new("lens standards");
-    let n = n as f32;
-    scene.materials.push(Material::new(
-        "glass",
-        MaterialKind::Dielectric {
-            ior: Vec3::new(n - 0.01, n, n + 0.01),
-            thin_walled: false,
-        },
-        Vec3::ONE,
-    ));
-    lens.name = "lens".into();
-    lens.material = 0;
-    lens.transform(world_from_lens);
-    scene.meshes.push(lens);
-    scene.camera = Camera {
-        eye: Vec3::new(0.0, 0.0, thickness as f32 + 0.012),
-        target: Vec3::new(0.0, 0.0, -1.0),
-        up: Vec3::Y,
-        fov_y_deg: 50.0,
-        aspect: None,
-    };
-    scene
-}
+mod common;
+use common::{scene_of, spectacles};
 
 fn blank(sphere: f64, cylinder: f64, axis_deg: f64) -> Prescription {
     Prescription {
@@ -51,17 +26,6 @@ fn blank(sphere: f64, cylinder: f64, axis_deg: f64) -> Prescription {
         diameter: 0.05,
         ..Prescription::default()
     }
-}
-
-fn spectacles(p: &Prescription, world_from_lens: Mat4) -> Scene {
-    let mut scene = scene_of(
-        spectacle_lens(p, 24, 96).unwrap(),
-        p.index,
-        p.center_thickness,
-        world_from_lens,
-    );
-    scene.prescriptions.push(("lens".into(), p.clone()));
-    scene
 }
 
 fn centre_only(o: &mut Options) {

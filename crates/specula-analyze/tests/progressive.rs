@@ -6,45 +6,19 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use glam::{Mat4, Vec3};
+use glam::Mat4;
 use specula_analyze::lens::near::Near;
 use specula_analyze::lens::standard::find;
 use specula_analyze::lens::{analyze, default_options, Options, Report};
 use specula_analyze::AnalyzeError;
 use specula_scene::freeform::{Freeform, Progressive, SagGrid};
-use specula_scene::spectacle::spectacle_lens;
-use specula_scene::{Camera, Material, MaterialKind, Prescription, Scene};
+use specula_scene::{Prescription, Scene};
+
+mod common;
+use common::spectacles;
 
 fn repository() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-/// `p`'s lens 12 mm before a camera looking along −Z, as the lens analysis takes it.
-fn spectacles(p: &Prescription) -> Scene {
-    let mut scene = Scene::new("progressive");
-    let n = p.index as f32;
-    scene.materials.push(Material::new(
-        "glass",
-        MaterialKind::Dielectric {
-            ior: Vec3::new(n - 0.01, n, n + 0.01),
-            thin_walled: false,
-        },
-        Vec3::ONE,
-    ));
-    let mut lens = spectacle_lens(p, 24, 96).unwrap();
-    lens.name = "lens".into();
-    lens.material = 0;
-    lens.transform(Mat4::IDENTITY);
-    scene.meshes.push(lens);
-    scene.camera = Camera {
-        eye: Vec3::new(0.0, 0.0, p.center_thickness as f32 + 0.012),
-        target: Vec3::new(0.0, 0.0, -1.0),
-        up: Vec3::Y,
-        fov_y_deg: 50.0,
-        aspect: None,
-    };
-    scene.prescriptions.push(("lens".into(), p.clone()));
-    scene
 }
 
 fn run(scene: &Scene, adjust: impl FnOnce(&mut Options)) -> Result<Report, AnalyzeError> {
@@ -165,8 +139,8 @@ fn sag_grids_sampled_from_a_sphere_and_a_torus_analyse_like_them() {
         back: Some(grid(&exact.back, "torus")),
         ..p.clone()
     };
-    let a = run(&spectacles(&p), |_| {}).unwrap();
-    let b = run(&spectacles(&gridded), |_| {}).unwrap();
+    let a = run(&spectacles(&p, Mat4::IDENTITY), |_| {}).unwrap();
+    let b = run(&spectacles(&gridded, Mat4::IDENTITY), |_| {}).unwrap();
     let mut worst: f64 = 0.0;
     for (x, y) in a.grid.iter().zip(&b.grid).chain([(&a.centre, &b.centre)]) {
         for (u, v) in [
@@ -205,7 +179,7 @@ fn the_measured_add_is_the_construction_s() {
         near_reference: Some(design.near_reference()),
         ..Prescription::default()
     };
-    let plano_back = run(&spectacles(&p), |_| {}).unwrap();
+    let plano_back = run(&spectacles(&p, Mat4::IDENTITY), |_| {}).unwrap();
     let measured = plano_back.progressive.as_ref().unwrap();
     assert_eq!(measured.measured_on, "front");
     let (_, example_design) = example();
@@ -294,7 +268,7 @@ fn near_vision_converges_and_follows_prentice_s_rule() {
             diameter: 0.06,
             ..Prescription::default()
         };
-        let report = run(&spectacles(&p), |o| o.near = Some(near)).unwrap();
+        let report = run(&spectacles(&p, Mat4::IDENTITY), |o| o.near = Some(near)).unwrap();
         let figures = report.near.unwrap();
         let x_cm = figures.point_on_lens_mm[0] / 10.0;
         let prism = figures.cell.prism_d.unwrap();
@@ -336,7 +310,7 @@ fn a_near_point_behind_the_eye_and_an_add_without_a_progressive_surface_are_refu
         diameter: 0.06,
         ..Prescription::default()
     };
-    let single = spectacles(&p);
+    let single = spectacles(&p, Mat4::IDENTITY);
     let said = |r: Result<Report, AnalyzeError>| r.expect_err("refused").to_string();
     let behind = said(run(&single, |o| {
         o.near = Some(Near {
@@ -399,7 +373,7 @@ fn a_single_vision_lens_s_clear_zones_agree_with_its_gaze_grid() {
         diameter: 0.06,
         ..Prescription::default()
     };
-    let report = run(&spectacles(&p), |o| {
+    let report = run(&spectacles(&p, Mat4::IDENTITY), |o| {
         o.gaze.h_max_deg = 40.0;
         o.gaze.v_max_deg = 0.0;
         o.gaze.step_deg = 0.5;

@@ -713,167 +713,39 @@ pub fn analyze(
     let frame = worn_frame(&worn, &setup);
     let fitting_mm = frame.mm_of(setup.primary.points[0]);
     let reference = target.unwrap_or_else(|| own_power(&centre));
-    let rim = rim_mm(&worn, &frame);
-    if let Some(step) = options.lens_step_mm {
-        let points = (2.0 * (rim / step).floor() + 1.0).powi(2);
-        if step > 0.5 * rim || points > 1e6 {
-            return Err(AnalyzeError::BadOption {
-                option: "--lens-step",
-                reason: format!(
-                    "{step} mm over a lens {rim:.1} mm in radius: the lens map needs a step of \
-                     at most half the radius and at most a million points"
-                ),
-            });
-        }
-    }
-    let lens_map = options
-        .lens_step_mm
-        .map(|step| zones::lens_map(&setup, &frame, rim, step, &central, &reference));
+    let lens_map = lens_map_of(&setup, &frame, &worn, &central, &reference)?;
     let clear_zones = lens_map.as_ref().map_or_else(Vec::new, |map| {
         zones::clear_zones(map, &grid, options.gaze.step_deg, fitting_mm)
     });
-    let (add_focimeter, progressive) = match options.add_d {
-        None => (Vec::new(), None),
-        Some(add) => {
-            let (readings, side) = read_add(&placed, lens, options, indices.y)?;
-            let map = lens_map.as_ref().ok_or_else(|| AnalyzeError::BadOption {
-                option: "--add",
-                reason: "a progressive lens's figures come from the lens map: give --lens-step"
-                    .into(),
-            })?;
-            let figures = zones::progressive(map, [&readings[0], &readings[1]], side, add, fitting_mm)
-                .ok_or_else(|| AnalyzeError::BadOption {
-                    option: "--distance-reference and --near-reference",
-                    reason: format!(
-                        "the reference points {:?} and {:?} mm must lie on the lens map, inside the lens",
-                        readings[0].at_mm, readings[1].at_mm
-                    ),
-                })?;
-            (readings, Some(figures))
-        }
-    };
-    let near = match options.near {
-        None => None,
-        Some(near) => {
-            let near_target = target.map(|rx| Rx {
-                sphere_d: rx.sphere_d + options.add_d.unwrap_or(0.0),
-                ..rx
-            });
-            Some(near::near_figures(
-                &setup,
-                &near,
-                &frame,
-                options.near_reference_mm,
-                fitting_mm,
-                &central,
-                near_target.as_ref(),
-                tracer(&worn, options.surface)?,
-                &lens.name,
-            )?)
-        }
-    };
-    let surface_uncertainty_d = match options.surface {
-        SurfaceModel::Exact => None,
-        model => {
-            let other = if model == SurfaceModel::Mesh {
-                SurfaceModel::Smooth
-            } else {
-                SurfaceModel::Mesh
-            };
-            let other_setup = Setup::new(tracer(&worn, other)?, options, indices, &lens.name)?;
-            let (other_centre, other_grid) = other_setup.grid(&central, target.as_ref(), &|_| {});
-            let other_placed = tracer(lens, other)?;
-            let other_readings =
-                read_focimeter(&other_placed, lens, options, indices.y, fitting_point)?;
-            let mut change = cells_change(
-                std::iter::once((&centre, &other_centre)).chain(grid.iter().zip(&other_grid)),
-            );
-            for (reading, other) in focimeter.iter_mut().zip(&other_readings) {
-                let powers = (reading.sphere_d - other.sphere_d)
-                    .abs()
-                    .max((reading.cylinder_d - other.cylinder_d).abs());
-                change = change.max(powers);
-                reading.uncertainty_d += powers;
-                reading.prism_uncertainty_d += (reading.prism_d[0] - other.prism_d[0])
-                    .abs()
-                    .max((reading.prism_d[1] - other.prism_d[1]).abs());
-                if reading.cylinder_d.abs() > 1e-6 {
-                    let d = (reading.axis_deg - other.axis_deg).rem_euclid(180.0);
-                    reading.axis_uncertainty_deg += d.min(180.0 - d);
-                }
-            }
-            Some(change)
-        }
-    };
-    let compensated = match (options.compensate, target) {
-        (false, _) => None,
-        (true, None) => {
-            return Err(AnalyzeError::BadOption {
-                option: "--compensate",
-                reason: "needs a prescription to compensate (--prescription, or a \
-                 spectacle-lens shape's)"
-                    .into(),
-            })
-        }
-        (true, Some(target)) => Some(compensate(scene, options, &setup, &worn, target)?),
-    };
-    let verdict = match (options.standard, options.prescription) {
-        (None, _) => None,
-        (Some(_), None) => {
-            return Err(AnalyzeError::BadOption {
-                option: "--standard",
-                reason: "needs the ordered prescription (--prescription S,C,A, or a \
-                 spectacle-lens shape's)"
-                    .into(),
-            })
-        }
-        (Some(table), Some(rx)) => {
-            let ordered = compensated.map_or(rx, |c| Rx {
-                prism_d: rx.prism_d,
-                ..c.ordered
-            });
-            Some(match (options.add_d, &progressive) {
-                (Some(add), Some(p)) => {
-                    let table = table.progressive.unwrap_or(table);
-                    if !table.is_progressive() {
-                        return Err(AnalyzeError::BadOption {
-                            option: "--standard",
-                            reason: format!(
-                                "{} has no tolerance for an add: judge a progressive lens \
-                                 against {}",
-                                table.id,
-                                progressive_standards()
-                            ),
-                        });
-                    }
-                    let uncertainty =
-                        add_focimeter[0].uncertainty_d + add_focimeter[1].uncertainty_d;
-                    standard::judge_progressive(
-                        table,
-                        &focimeter[0],
-                        &focimeter[1],
-                        &ordered,
-                        p.add_d,
-                        add,
-                        uncertainty,
-                    )
-                }
-                _ if table.is_progressive() => {
-                    return Err(AnalyzeError::BadOption {
-                        option: "--standard",
-                        reason: format!(
-                            "{} judges progressive lenses: give the ordered --add",
-                            table.id
-                        ),
-                    })
-                }
-                _ => standard::judge(table, &focimeter[0], &focimeter[1], &ordered),
-            })
-        }
-    };
-    let finite_difference_change_d = grid
-        .iter()
-        .chain(std::iter::once(&centre))
+    let (add_focimeter, progressive) = progressive_figures(
+        &placed,
+        lens,
+        options,
+        indices.y,
+        lens_map.as_ref(),
+        fitting_mm,
+    )?;
+    let near = near_of(&setup, &worn, &frame, fitting_mm, &central, target)?;
+    let surface_uncertainty_d = surface_uncertainty(
+        &setup,
+        lens,
+        &worn,
+        &central,
+        target.as_ref(),
+        (&centre, &grid),
+        &mut focimeter,
+        fitting_point,
+    )?;
+    let compensated = compensated_of(scene, &setup, &worn, target)?;
+    let verdict = verdict_of(
+        options,
+        compensated,
+        &focimeter,
+        &add_focimeter,
+        progressive.as_ref(),
+    )?;
+    let finite_difference_change_d = std::iter::once(&centre)
+        .chain(&grid)
         .map(|c| c.fd_change_d)
         .fold(0.0, f64::max);
     Ok(Report {
@@ -916,6 +788,227 @@ pub fn analyze(
         centre,
         grid,
     })
+}
+
+/// A mesh lens's surface uncertainty (the `surface_uncertainty_d` of [`Report`]; None on the
+/// exact surface): the largest change of a power over the grid and the focimeter's readings
+/// when the other of the mesh and its smooth fit is traced; the readings' uncertainties grow
+/// by their change.
+#[allow(clippy::too_many_arguments)]
+fn surface_uncertainty(
+    setup: &Setup,
+    lens: &Mesh,
+    worn: &Mesh,
+    central: &Central,
+    target: Option<&Rx>,
+    (centre, grid): (&Cell, &[Cell]),
+    focimeter: &mut [focimeter::Reading],
+    fitting_point: DVec3,
+) -> Result<Option<f64>, AnalyzeError> {
+    let options = setup.options;
+    let other = match options.surface {
+        SurfaceModel::Exact => return Ok(None),
+        SurfaceModel::Mesh => SurfaceModel::Smooth,
+        SurfaceModel::Smooth => SurfaceModel::Mesh,
+    };
+    let other_setup = Setup::new(tracer(worn, other)?, options, setup.indices, &lens.name)?;
+    let (other_centre, other_grid) = other_setup.grid(central, target, &|_| {});
+    let other_placed = tracer(lens, other)?;
+    let other_readings =
+        read_focimeter(&other_placed, lens, options, setup.indices.y, fitting_point)?;
+    let mut change =
+        cells_change(std::iter::once((centre, &other_centre)).chain(grid.iter().zip(&other_grid)));
+    for (reading, other) in focimeter.iter_mut().zip(&other_readings) {
+        let powers = (reading.sphere_d - other.sphere_d)
+            .abs()
+            .max((reading.cylinder_d - other.cylinder_d).abs());
+        change = change.max(powers);
+        reading.uncertainty_d += powers;
+        reading.prism_uncertainty_d += (reading.prism_d[0] - other.prism_d[0])
+            .abs()
+            .max((reading.prism_d[1] - other.prism_d[1]).abs());
+        if reading.cylinder_d.abs() > 1e-6 {
+            let d = (reading.axis_deg - other.axis_deg).rem_euclid(180.0);
+            reading.axis_uncertainty_deg += d.min(180.0 - d);
+        }
+    }
+    Ok(Some(change))
+}
+
+/// The near figures where `--near` asks for them, against the target plus the add.
+fn near_of(
+    setup: &Setup,
+    worn: &Mesh,
+    frame: &LensFrame,
+    fitting_mm: glam::DVec2,
+    central: &Central,
+    target: Option<Rx>,
+) -> Result<Option<near::NearFigures>, AnalyzeError> {
+    let options = setup.options;
+    let Some(near) = options.near else {
+        return Ok(None);
+    };
+    let near_target = target.map(|rx| Rx {
+        sphere_d: rx.sphere_d + options.add_d.unwrap_or(0.0),
+        ..rx
+    });
+    near::near_figures(
+        setup,
+        &near,
+        frame,
+        options.near_reference_mm,
+        fitting_mm,
+        central,
+        near_target.as_ref(),
+        tracer(worn, options.surface)?,
+        &worn.name,
+    )
+    .map(Some)
+}
+
+/// The compensated prescription where `--compensate` asks for it (module doc of [`wear`]).
+fn compensated_of(
+    scene: &Scene,
+    setup: &Setup,
+    worn: &Mesh,
+    target: Option<Rx>,
+) -> Result<Option<Compensated>, AnalyzeError> {
+    Ok(match (setup.options.compensate, target) {
+        (false, _) => None,
+        (true, None) => {
+            return Err(AnalyzeError::BadOption {
+                option: "--compensate",
+                reason: "needs a prescription to compensate (--prescription, or a \
+                 spectacle-lens shape's)"
+                    .into(),
+            })
+        }
+        (true, Some(target)) => Some(compensate(scene, setup.options, setup, worn, target)?),
+    })
+}
+
+/// The verdict of `options.standard` on the focimeter's readings against the ordered
+/// prescription (the compensated one where solved), with the add for a progressive lens;
+/// refused where the standard and the lens do not go together.
+fn verdict_of(
+    options: &Options,
+    compensated: Option<Compensated>,
+    focimeter: &[focimeter::Reading],
+    add_focimeter: &[focimeter::Reading],
+    progressive: Option<&zones::Progressive>,
+) -> Result<Option<Verdict>, AnalyzeError> {
+    Ok(match (options.standard, options.prescription) {
+        (None, _) => None,
+        (Some(_), None) => {
+            return Err(AnalyzeError::BadOption {
+                option: "--standard",
+                reason: "needs the ordered prescription (--prescription S,C,A, or a \
+             spectacle-lens shape's)"
+                    .into(),
+            })
+        }
+        (Some(table), Some(rx)) => {
+            let ordered = compensated.map_or(rx, |c| Rx {
+                prism_d: rx.prism_d,
+                ..c.ordered
+            });
+            Some(match (options.add_d, progressive) {
+                (Some(add), Some(p)) => {
+                    let table = table.progressive.unwrap_or(table);
+                    if !table.is_progressive() {
+                        return Err(AnalyzeError::BadOption {
+                            option: "--standard",
+                            reason: format!(
+                                "{} has no tolerance for an add: judge a progressive lens \
+                             against {}",
+                                table.id,
+                                progressive_standards()
+                            ),
+                        });
+                    }
+                    let uncertainty =
+                        add_focimeter[0].uncertainty_d + add_focimeter[1].uncertainty_d;
+                    standard::judge_progressive(
+                        table,
+                        &focimeter[0],
+                        &focimeter[1],
+                        &ordered,
+                        p.add_d,
+                        add,
+                        uncertainty,
+                    )
+                }
+                _ if table.is_progressive() => {
+                    return Err(AnalyzeError::BadOption {
+                        option: "--standard",
+                        reason: format!(
+                            "{} judges progressive lenses: give the ordered --add",
+                            table.id
+                        ),
+                    })
+                }
+                _ => standard::judge(table, &focimeter[0], &focimeter[1], &ordered),
+            })
+        }
+    })
+}
+
+/// The lens map of the worn lens over its disc (None without a step), refused where the step
+/// leaves fewer than two points across the radius or more than a million.
+fn lens_map_of(
+    setup: &Setup,
+    frame: &LensFrame,
+    worn: &Mesh,
+    central: &Central,
+    reference: &Rx,
+) -> Result<Option<zones::LensMap>, AnalyzeError> {
+    let Some(step) = setup.options.lens_step_mm else {
+        return Ok(None);
+    };
+    let rim = rim_mm(worn, frame);
+    let points = (2.0 * (rim / step).floor() + 1.0).powi(2);
+    if step > 0.5 * rim || points > 1e6 {
+        return Err(AnalyzeError::BadOption {
+            option: "--lens-step",
+            reason: format!(
+                "{step} mm over a lens {rim:.1} mm in radius: the lens map needs a step of at \
+                 most half the radius and at most a million points"
+            ),
+        });
+    }
+    Ok(Some(zones::lens_map(
+        setup, frame, rim, step, central, reference,
+    )))
+}
+
+/// A progressive lens's add (the focimeter on its progressive side) and figures from the lens
+/// map, with an ordered add; nothing without one.
+fn progressive_figures(
+    placed: &LensTracer,
+    lens: &Mesh,
+    options: &Options,
+    ior: f64,
+    lens_map: Option<&zones::LensMap>,
+    fitting_mm: glam::DVec2,
+) -> Result<(Vec<focimeter::Reading>, Option<zones::Progressive>), AnalyzeError> {
+    let Some(add) = options.add_d else {
+        return Ok((Vec::new(), None));
+    };
+    let (readings, side) = read_add(placed, lens, options, ior)?;
+    let map = lens_map.ok_or_else(|| AnalyzeError::BadOption {
+        option: "--add",
+        reason: "a progressive lens's figures come from the lens map: give --lens-step".into(),
+    })?;
+    let figures = zones::progressive(map, [&readings[0], &readings[1]], side, add, fitting_mm)
+        .ok_or_else(|| AnalyzeError::BadOption {
+            option: "--distance-reference and --near-reference",
+            reason: format!(
+                "the reference points {:?} and {:?} mm must lie on the lens map, inside the \
+                 lens",
+                readings[0].at_mm, readings[1].at_mm
+            ),
+        })?;
+    Ok((readings, Some(figures)))
 }
 
 /// The standards that judge an add, for an error.
@@ -1245,6 +1338,55 @@ fn validate(options: &Options) -> Result<(), AnalyzeError> {
         });
     }
     options.wear.check()?;
+    validate_near_and_add(options)?;
+    for (option, value) in [
+        (
+            "--rotation-behind-cornea",
+            Some(options.rotation_behind_cornea_m),
+        ),
+        ("--refraction-vertex", options.refraction_vertex_m),
+    ] {
+        if value.is_some_and(|v| !(v.is_finite() && v > 0.0)) {
+            return Err(AnalyzeError::BadOption {
+                option,
+                reason: format!(
+                    "{} mm: the distance must be positive",
+                    value.unwrap_or(f64::NAN) * 1e3
+                ),
+            });
+        }
+    }
+    if let Some(rx) = options.prescription {
+        let values = [
+            rx.sphere_d,
+            rx.cylinder_d,
+            rx.axis_deg,
+            rx.prism_d[0],
+            rx.prism_d[1],
+        ];
+        if values.iter().any(|v| !v.is_finite()) {
+            return Err(AnalyzeError::BadOption {
+                option: "--prescription",
+                reason: format!("{values:?}: every value must be a number"),
+            });
+        }
+    }
+    if options
+        .reference_points_mm
+        .iter()
+        .flatten()
+        .any(|v| !v.is_finite())
+    {
+        return Err(AnalyzeError::BadOption {
+            option: "--distance-reference and --prism-reference",
+            reason: "a reference point must be two numbers (mm)".into(),
+        });
+    }
+    Ok(())
+}
+
+/// The near point's, the lens map's and the add's options.
+fn validate_near_and_add(options: &Options) -> Result<(), AnalyzeError> {
     if let Some(near) = options.near {
         if !(near.distance_m.is_finite() && near.distance_m > 0.0) {
             return Err(AnalyzeError::BadOption {
@@ -1297,49 +1439,6 @@ fn validate(options: &Options) -> Result<(), AnalyzeError> {
         return Err(AnalyzeError::BadOption {
             option: "--near-reference",
             reason: "the near reference point must be two numbers (mm)".into(),
-        });
-    }
-    for (option, value) in [
-        (
-            "--rotation-behind-cornea",
-            Some(options.rotation_behind_cornea_m),
-        ),
-        ("--refraction-vertex", options.refraction_vertex_m),
-    ] {
-        if value.is_some_and(|v| !(v.is_finite() && v > 0.0)) {
-            return Err(AnalyzeError::BadOption {
-                option,
-                reason: format!(
-                    "{} mm: the distance must be positive",
-                    value.unwrap_or(f64::NAN) * 1e3
-                ),
-            });
-        }
-    }
-    if let Some(rx) = options.prescription {
-        let values = [
-            rx.sphere_d,
-            rx.cylinder_d,
-            rx.axis_deg,
-            rx.prism_d[0],
-            rx.prism_d[1],
-        ];
-        if values.iter().any(|v| !v.is_finite()) {
-            return Err(AnalyzeError::BadOption {
-                option: "--prescription",
-                reason: format!("{values:?}: every value must be a number"),
-            });
-        }
-    }
-    if options
-        .reference_points_mm
-        .iter()
-        .flatten()
-        .any(|v| !v.is_finite())
-    {
-        return Err(AnalyzeError::BadOption {
-            option: "--distance-reference and --prism-reference",
-            reason: "a reference point must be two numbers (mm)".into(),
         });
     }
     Ok(())
