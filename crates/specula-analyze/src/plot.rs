@@ -631,7 +631,7 @@ pub fn scale_colour(t: f64) -> [u8; 3] {
 }
 
 /// The eye points seen from the front, each a square coloured by how much of its view the glare
-/// covers (its solid angle; grey: no glare), with its largest relative luminance written in it
+/// covers (its solid angle; grey: no glare), with its largest luminance factor written in it
 /// (SVG).
 pub fn glare_eyebox(report: &crate::glare::Report, frame: &crate::frame::VehicleFrame) -> Plot {
     let eyes: Vec<Vec3> = report
@@ -688,10 +688,10 @@ pub fn glare_eyebox(report: &crate::glare::Report, frame: &crate::frame::Vehicle
                 png.put_pixel(x, y, Rgb(colour));
             }
         }
-        // The largest relative luminance, written in the square (the PNG's and the SVG's
+        // The largest luminance factor, written in the square (the PNG's and the SVG's
         // raster alike).
         let text = if e.glare {
-            format!("{:.4}", e.max_relative_luminance)
+            format!("{:.4}", e.max_luminance_factor)
         } else {
             "none".into()
         };
@@ -711,7 +711,7 @@ pub fn glare_eyebox(report: &crate::glare::Report, frame: &crate::frame::Vehicle
         );
     }
     let title = format!(
-        "'{}' in '{}' per eye point (seen from behind the driver): the glare's solid angle (colour) and largest relative luminance",
+        "'{}' in '{}' per eye point (seen from behind the driver): the glare's solid angle (colour) and largest luminance factor",
         report.source, report.surface
     );
     let legend = vec![
@@ -740,7 +740,7 @@ pub fn glare_image(glare: &crate::glare::Glare, k: usize) -> Plot {
     image.pixels.clone_from(&images.radiance);
     let mut png = image.to_srgb8();
     let threshold = glare.report.threshold;
-    let lit = |x: u32, y: u32| images.relative[(y * width + x) as usize] > threshold;
+    let lit = |x: u32, y: u32| images.factor[(y * width + x) as usize] > threshold;
     for y in 0..height {
         for x in 0..width {
             if !lit(x, y) {

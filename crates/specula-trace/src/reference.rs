@@ -7,7 +7,8 @@
 //! - dielectric: exact unpolarised Fresnel R; R × L(reflected) + (1 − R) × L(refracted), both
 //!   branches followed; total internal reflection sends everything to the reflected branch; a
 //!   dispersive material (one IOR per channel) splits into one ray per RGB channel; thin-walled
-//!   sheets reflect 2R/(1+R) and pass the rest straight through;
+//!   sheets reflect ½[2R_s/(1+R_s) + 2R_p/(1+R_p)] (s and p summed apart) and pass the rest
+//!   straight through;
 //! - a ray that leaves the scene sees the background.
 //!
 //! `max_depth` bounds the number of specular bounces on a path (reflections and refractions);

@@ -296,10 +296,12 @@ impl Settings {
     fn glare_options(&self) -> Result<glare::Options, AnalyzeError> {
         Ok(glare::Options {
             surface: self.object,
-            source: self.source.ok_or(AnalyzeError::BadOption {
+            source: glare::Source::Named(self.source.ok_or(AnalyzeError::BadOption {
                 option: "source",
                 reason: "glare needs a source".into(),
-            })?,
+            })?),
+            source_luminance: None,
+            display: None,
             width: self.glare_size.0,
             height: self.glare_size.1,
             max_depth: 8,
@@ -914,11 +916,11 @@ fn glare_colour(
     if x >= width || y >= height {
         return CLEAR;
     }
-    let relative = eye.relative[(y * width + x) as usize];
-    if relative <= threshold {
+    let factor = eye.factor[(y * width + x) as usize];
+    if factor <= threshold {
         return CLEAR;
     }
-    let t = (relative.log10() - threshold.log10()) / -threshold.log10();
+    let t = (factor.log10() - threshold.log10()) / -threshold.log10();
     let [r, g, b] = specula_analyze::plot::scale_colour(t);
     [r, g, b, 190]
 }
@@ -1111,6 +1113,7 @@ fn run(
                 scene,
                 &accel,
                 eyes,
+                &frame,
                 &settings.glare_options()?,
                 &|_| {},
             )?),
@@ -1241,9 +1244,9 @@ pub fn summary(analysis: &Analysis, scene: &Scene) -> String {
             let r = &g.report;
             let worst = match r.worst_eye {
                 Some(k) => format!(
-                    "worst eye point {} (relative luminance {:.4}, veiling ratio {})",
+                    "worst eye point {} (luminance factor {:.4}, veiling ratio {})",
                     k + 1,
-                    r.eyes[k].max_relative_luminance,
+                    r.eyes[k].max_luminance_factor,
                     glare::veiling_text(r.eyes[k].max_veiling_ratio)
                 ),
                 None => "no glare".into(),

@@ -593,7 +593,7 @@ fn figures_section(ui: &mut egui::Ui, analysis: &mut Analysis) {
             ui.small(format!(
                 "eye point {} shown: relative luminance {:.4}, veiling ratio {}, {:.3e} sr",
                 shown + 1,
-                e.max_relative_luminance,
+                e.max_luminance_factor,
                 specula_analyze::glare::veiling_text(e.max_veiling_ratio),
                 e.solid_angle_sr
             ));

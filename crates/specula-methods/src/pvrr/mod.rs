@@ -75,7 +75,7 @@
 //!   suite's lens, a magnifier, 0.078 (0.100);
 //! - a dielectric's surface reflection: a mirror drawn over its transmitted light (float
 //!   blending; on a device without it, left out) whose per-vertex weight is the exact Fresnel
-//!   reflectance (a thin sheet's 2R / (1 + R)), with patches and 1st passes of its own. The
+//!   reflectance (a thin sheet's, ½ Σ 2R_σ / (1 + R_σ)), with patches and 1st passes of its own. The
 //!   paper's lens shows its transmitted light only (§4.5) (paper: `surface_reflection=false`);
 //! - the light reflected once inside a solid dielectric: refracted in, reflected with weight R
 //!   where it first meets the surface again, refracted out where it meets it next; drawn as

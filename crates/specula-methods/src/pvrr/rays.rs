@@ -27,7 +27,8 @@ pub enum Interaction {
         ior: f32,
     },
     /// The light a dielectric's surface reflects towards the eye: a mirror whose weight is the
-    /// exact Fresnel reflectance (a thin sheet's, 2R / (1 + R), when `thin`).
+    /// exact Fresnel reflectance (a thin sheet's, s and p summed apart, ½ Σ 2R_σ / (1 + R_σ),
+    /// when `thin`).
     SurfaceReflect {
         ior: f32,
         thin: bool,

@@ -1,13 +1,14 @@
 //! `specula analyze KIND SCENE ...`: the analyses of `specula_analyze`, on all cores, with a
 //! progress bar over the eye points, a table on the terminal and the JSON report.
 
+mod glare;
+
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
 use specula_analyze::frame::{Eyes, VehicleFrame};
-use specula_analyze::glare;
 use specula_analyze::mirror_surface::SurfaceModel;
 use specula_analyze::mirror_view::{self, Region};
 use specula_scene::builtin::DEFAULT_SCENE;
@@ -19,11 +20,11 @@ pub enum Kind {
     /// vertical extent, solid angle), its footprint on the ground within a range, and the
     /// share of a required region seen by any and by every eye point (its blind part).
     MirrorView(MirrorViewArgs),
-    /// Whether and how brightly a source is seen reflected in a surface, per eye point: the
-    /// glare's relative luminance (over the source's own), its veiling ratio (over what the
-    /// pixel shows without it), its solid angle and centroid; the share of eye points that see
-    /// it and the worst one.
-    Glare(GlareArgs),
+    /// Whether and how brightly a source (a named surface or the sun) is seen reflected in a
+    /// surface, per eye point: the glare's luminance factor and luminance in cd/m², its veiling
+    /// ratio, solid angle and centroid, the contrast of a display behind the cover under it;
+    /// sun sweeps and solar days by lookup.
+    Glare(glare::GlareArgs),
     /// A spectacle lens as worn, per gaze direction: sphere, cylinder and axis at the vertex
     /// sphere, mean power, prism, lateral colour and distortion, from exact rays (Listing's
     /// law about the eye's centre of rotation).
@@ -172,37 +173,6 @@ fn parse_gaze(text: &str) -> Result<[f64; 3], String> {
         .map_err(|_| format!("expected H_MAX,V_MAX,STEP (3 numbers), got '{text}'"))
 }
 
-#[derive(clap::Args)]
-pub struct GlareArgs {
-    /// Built-in scene name, a .toml scene file, or a mesh/scene file.
-    #[arg(default_value = DEFAULT_SCENE)]
-    scene: String,
-    /// The reflecting surface (a mirror or a glass), as the scene names it.
-    #[arg(long)]
-    surface: String,
-    /// The source (an unlit or lit surface: a window, a lamp), as the scene names it.
-    #[arg(long)]
-    source: String,
-    #[command(flatten)]
-    eyes: EyeArgs,
-    /// Each eye point's image, WIDTHxHEIGHT (aimed at the surface, fitted to it).
-    #[arg(long, default_value = "320x240", value_parser = crate::parse_size)]
-    size: (u32, u32),
-    /// Relative luminance above which a pixel counts as glare.
-    #[arg(long, default_value_t = 1e-3)]
-    threshold: f64,
-    /// Specular bounces a path may take (as the reference's --max-depth).
-    #[arg(long, default_value_t = 8)]
-    max_depth: u32,
-    /// Write the report as JSON here (schema: docs/analyze-glare.schema.json).
-    #[arg(long)]
-    json: Option<PathBuf>,
-    /// Write a report folder: report.html, report.json, the eye points' map and the worst eye
-    /// point's view with its glare outlined, as PNG and SVG.
-    #[arg(long)]
-    report: Option<PathBuf>,
-}
-
 /// Where the eyes are, in the vehicle frame.
 #[derive(clap::Args)]
 pub struct EyeArgs {
@@ -320,7 +290,7 @@ enum SideArg {
     Right,
 }
 
-fn parse_eyellipse(text: &str) -> Result<(Vec3, Vec3, usize), String> {
+pub(crate) fn parse_eyellipse(text: &str) -> Result<(Vec3, Vec3, usize), String> {
     let what = "CX,CY,CZ,AX,AY,AZ[,N]";
     let (values, count) = match numbers::<7>(text, what) {
         Ok(v) => {
@@ -356,7 +326,7 @@ impl SurfaceArg {
     }
 }
 
-fn numbers<const N: usize>(text: &str, what: &str) -> Result<[f32; N], String> {
+pub(crate) fn numbers<const N: usize>(text: &str, what: &str) -> Result<[f32; N], String> {
     let values: Vec<f32> = text
         .split(',')
         .map(|v| v.trim().parse::<f32>())
@@ -371,7 +341,7 @@ fn numbers<const N: usize>(text: &str, what: &str) -> Result<[f32; N], String> {
     Ok(values)
 }
 
-fn parse_point(text: &str) -> Result<Vec3, String> {
+pub(crate) fn parse_point(text: &str) -> Result<Vec3, String> {
     numbers::<3>(text, "X,Y,Z").map(Vec3::from_array)
 }
 
@@ -396,7 +366,7 @@ fn parse_region(text: &str) -> Result<Region, String> {
 }
 
 /// The progress bar over `count` eye points.
-fn eye_bar(count: usize) -> ProgressBar {
+pub(crate) fn eye_bar(count: usize) -> ProgressBar {
     let bar = ProgressBar::new(count as u64);
     bar.set_style(
         ProgressStyle::with_template("{bar:30} {pos}/{len} eye points ({elapsed})")
@@ -406,7 +376,10 @@ fn eye_bar(count: usize) -> ProgressBar {
 }
 
 /// Writes `report` as JSON to `path`, where one was asked for.
-fn write_json(path: Option<&std::path::Path>, report: &impl serde::Serialize) -> Result<()> {
+pub(crate) fn write_json(
+    path: Option<&std::path::Path>,
+    report: &impl serde::Serialize,
+) -> Result<()> {
     if let Some(path) = path {
         std::fs::write(path, serde_json::to_string_pretty(report)?)
             .with_context(|| format!("writing {}", path.display()))?;
@@ -417,7 +390,7 @@ fn write_json(path: Option<&std::path::Path>, report: &impl serde::Serialize) ->
 pub fn run(kind: Kind) -> Result<()> {
     match kind {
         Kind::MirrorView(args) => mirror_view(args),
-        Kind::Glare(args) => glare(args),
+        Kind::Glare(args) => glare::run(args),
         Kind::Lens(args) => lens(args),
     }
 }
@@ -755,71 +728,6 @@ fn mirror_view(args: MirrorViewArgs) -> Result<()> {
     write_json(args.json.as_deref(), &view.report)?;
     if let Some(dir) = &args.report {
         let html = specula_analyze::report::write_mirror_view(dir, &view, &scene, &accel, mirror)?;
-        println!("report: {}", html.display());
-    }
-    Ok(())
-}
-
-fn glare(args: GlareArgs) -> Result<()> {
-    let scene = crate::load_scene(&args.scene)?;
-    let surface = specula_analyze::object(&scene, "--surface", &args.surface)?;
-    let source = specula_analyze::object(&scene, "--source", &args.source)?;
-    let eye_points = args.eyes.eyes();
-    let frame = VehicleFrame::for_eyes(&scene.camera, args.eyes.forward, &eye_points)?;
-    let eyes = eye_points.points(scene.camera.eye, &frame)?;
-    let options = glare::Options {
-        surface,
-        source,
-        width: args.size.0,
-        height: args.size.1,
-        max_depth: args.max_depth,
-        threshold: args.threshold,
-    };
-    options.validate(&scene)?;
-    let accel = SceneAccel::new(&scene);
-    let bar = eye_bar(eyes.len());
-    let result = glare::analyze(&scene, &accel, &eyes, &options, &|done| {
-        bar.set_position(done as u64)
-    })?;
-    bar.finish_and_clear();
-    let r = &result.report;
-    println!(
-        "{}: '{}' reflected in '{}', {}x{} per eye point",
-        r.scene, r.source, r.surface, r.width, r.height
-    );
-    println!(
-        "{:<28}{:>7}{:>12}{:>12}{:>14}{:>16}",
-        "eye point", "glare", "rel. lum.", "veiling", "solid sr", "centroid px"
-    );
-    for e in &r.eyes {
-        let [x, y, z] = e.position;
-        println!(
-            "{:<28}{:>7}{:>12.5}{:>12}{:>14.3e}{:>16}",
-            format!("({x:.3}, {y:.3}, {z:.3})"),
-            if e.glare { "yes" } else { "no" },
-            e.max_relative_luminance,
-            glare::veiling_text(e.max_veiling_ratio),
-            e.solid_angle_sr,
-            e.centroid_px
-                .map(|[cx, cy]| format!("{cx:.0}, {cy:.0}"))
-                .unwrap_or_else(|| "-".into())
-        );
-    }
-    match r.worst_eye {
-        Some(k) => println!(
-            "glare seen from {:.0} % of the eye points; the worst: eye {} (veiling ratio {})",
-            r.share_with_glare * 100.0,
-            k + 1,
-            glare::veiling_text(r.eyes[k].max_veiling_ratio)
-        ),
-        None => println!(
-            "no glare: no eye point sees '{}' reflected in '{}'",
-            r.source, r.surface
-        ),
-    }
-    write_json(args.json.as_deref(), r)?;
-    if let Some(dir) = &args.report {
-        let html = specula_analyze::report::write_glare(dir, &result, &frame)?;
         println!("report: {}", html.display());
     }
     Ok(())
