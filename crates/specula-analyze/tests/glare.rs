@@ -414,3 +414,409 @@ fn a_ball_seen_in_a_metal_plate_covers_its_mirror_image_s_solid_angle_about_its_
     assert!(relative < 3.5e-3, "solid angle off by {relative}");
     assert!(off < 0.1, "centroid {off} px off");
 }
+
+/// Bisection for the incidence (radians) at which a ray from `eye_height` above a slab's front
+/// face (index `n`, thickness `t`) reaches `across` metres sideways at the back face's mirror
+/// point and returns to the same height: (h − ... ) tan θi + t tan θt = across.
+fn back_reflection_incidence(eye_height: f64, t: f64, across: f64, n: f64) -> f64 {
+    let reach = |theta: f64| {
+        let theta_t = (theta.sin() / n).asin();
+        eye_height * theta.tan() + t * theta_t.tan()
+    };
+    let (mut lo, mut hi) = (0.0, std::f64::consts::FRAC_PI_2 - 1e-6);
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if reach(mid) < across {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+#[test]
+fn a_thick_slab_shows_two_images_each_with_its_polarisations_summed_apart() {
+    // A 6 cm slab (n = 1.5) and a small emitter (L = 4): the front image has R(θ) (the mean of
+    // R_s and R_p); the back face's image, refracted in, reflected inside and refracted out,
+    // has ½ Σ_σ (1 − R_σ)² R_σ (the inner reflectance equals the outer one at the refracted
+    // angle), not (1 − R)² R of the mean.
+    let thickness = 0.06f32;
+    let pane = generators::cuboid(Vec3::new(1.2, 0.4, thickness));
+    let emitter = Vec3::new(0.5, 0.0, 0.5);
+    let eye = Vec3::new(-0.5, 0.0, 0.5);
+    let scene = scene(pane, Material::glass("glass", 1.5), emitter, 0.015, eye);
+    let accel = SceneAccel::new(&scene);
+    let (width, height) = (960, 720);
+    let glare = analyze(&scene, &accel, &[eye], &options(width, height), &|_| {}).unwrap();
+    let images = &glare.images[0];
+    let front = f64::from(thickness) * 0.5;
+    let height_above = f64::from(eye.z) - front;
+    let across = f64::from(emitter.x - eye.x) * 0.5;
+    // The pixels whose rays meet the front face where the chief rays of the two images do;
+    // each pixel's own ray sets its incidence, the same at both faces (they are parallel).
+    let theta_front = (across / height_above).atan();
+    let theta_back = back_reflection_incidence(height_above, f64::from(thickness), across, 1.5);
+    let pixel = |theta: f64| {
+        let x = f64::from(eye.x) + height_above * theta.tan();
+        let towards = Vec3::new(x as f32, 0.0, front as f32) - eye;
+        let i = pixel_towards(&images.camera, width, height, towards);
+        let dir = images.camera.ray_direction(
+            (i as u32 % width) as f32 + 0.5,
+            (i as u32 / width) as f32 + 0.5,
+            width,
+            height,
+        );
+        (images.factor[i], fresnel_sp(f64::from(-dir.z), 1.5))
+    };
+    let (front_factor, (rs, rp)) = pixel(theta_front);
+    let expected_front = 0.5 * (rs + rp);
+    let (back_factor, (bs, bp)) = pixel(theta_back);
+    let expected_back = 0.5 * ((1.0 - bs).powi(2) * bs + (1.0 - bp).powi(2) * bp);
+    let unpolarised_back = (1.0 - 0.5 * (bs + bp)).powi(2) * 0.5 * (bs + bp);
+    let off_front = (front_factor - expected_front).abs() / expected_front;
+    let off_back = (back_factor - expected_back).abs() / expected_back;
+    let rule_gap = (unpolarised_back - expected_back).abs() / expected_back;
+    eprintln!(
+        "front image at {:.2}°: {front_factor:.6} against {expected_front:.6} ({off_front:.1e}); \
+         back image at {:.2}°: {back_factor:.6} against {expected_back:.6} ({off_back:.1e}); the \
+         unpolarised rule's {unpolarised_back:.6} is {rule_gap:.1e} off",
+        theta_front.to_degrees(),
+        theta_back.to_degrees()
+    );
+    // Measured 2026-12-04: 1.2e-7 and 5.2e-8 (f32 rounding; the issue asks 0.2 %), the
+    // unpolarised rule 7.5 % off.
+    assert!(off_front < 5e-7, "front {off_front}");
+    assert!(off_back < 5e-7, "back {off_back}");
+    assert!(
+        rule_gap > 2.0 * off_back,
+        "the test tells the two rules apart"
+    );
+}
+
+/// A scene with a flat `metal` plate (0.4 m square in z = 0, facing +z, F0 = `f0`) and nothing
+/// else: the sun is met where paths leave it.
+fn plate_in_the_sun(f0: f32, eye: Vec3) -> Scene {
+    let mut scene = Scene::new("a plate in the sun");
+    scene.materials.push(Material::new(
+        "metal",
+        MaterialKind::Mirror { fresnel: false },
+        Vec3::splat(f0),
+    ));
+    scene.meshes.push(placed(
+        generators::plane(glam::Vec2::splat(0.4), 1),
+        "plate",
+        0,
+        Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2),
+    ));
+    scene.camera = Camera {
+        eye,
+        target: Vec3::ZERO,
+        up: Vec3::Y,
+        fov_y_deg: 40.0,
+        aspect: None,
+    };
+    scene
+}
+
+fn sun_options(sun: glare::Sun, width: u32, height: u32) -> Options {
+    Options {
+        source: Source::Sun(sun),
+        ..options(width, height)
+    }
+}
+
+#[test]
+fn the_sun_in_a_flat_mirror_is_seen_from_the_eyes_whose_mirror_line_crosses_it_at_r_e_over_omega() {
+    let (f0, centre) = (0.9f32, Vec3::new(0.05, 0.0, 0.6));
+    let scene = plate_in_the_sun(f0, centre);
+    let frame = VehicleFrame::new(&scene.camera, Some(Vec3::NEG_Z)).unwrap();
+    assert!(frame.forward.abs_diff_eq(Vec3::NEG_Z, 1e-6) && frame.right.abs_diff_eq(Vec3::X, 1e-6));
+    // Behind the driver and to the right, low: its mirror image lies ahead, to the right.
+    let sun = glare::Sun {
+        azimuth_deg: 155.0,
+        elevation_deg: 10.0,
+        illuminance_lx: 100_000.0,
+    };
+    let s = sun.direction(&frame);
+    let columns = 9;
+    let eyes = Eyes::Eyebox {
+        width: 0.4,
+        height: 0.1,
+        columns,
+        rows: 3,
+    }
+    .points(centre, &frame)
+    .unwrap();
+    let accel = SceneAccel::new(&scene);
+    let glare = glare::analyze(
+        &scene,
+        &accel,
+        &eyes,
+        &frame,
+        &sun_options(sun, 160, 120),
+        &|_| {},
+    )
+    .unwrap();
+    let omega = glare::sun::disc_solid_angle();
+    assert!((omega - 6.72e-5).abs() < 0.005e-5, "Ω = {omega}");
+    let expected = f64::from(f0) * 100_000.0 / omega;
+    // Each eye looks along the sun's mirror image, (s.x, s.y, −s.z).
+    let image = Vec3::new(s.x, s.y, -s.z);
+    let step = 0.4 / (columns - 1) as f32 * 0.5;
+    let (mut with, mut without) = (0, 0);
+    for (eye, figures) in eyes.iter().zip(&glare.report.eyes) {
+        let p = *eye + image * (eye.z / -image.z);
+        let inside = p.x.abs() <= 0.2 && p.y.abs() <= 0.2;
+        let margin = (p.x.abs() - 0.2).abs().min((p.y.abs() - 0.2).abs());
+        if margin > step {
+            assert_eq!(figures.glare, inside, "eye {eye} meets the plane at {p}");
+        }
+        if !figures.glare {
+            without += 1;
+            continue;
+        }
+        with += 1;
+        let luminance = figures.max_luminance_cd_m2.unwrap();
+        let solid = figures.solid_angle_sr / omega;
+        eprintln!(
+            "eye {eye}: {luminance:.6e} cd/m² against R·E/Ω = {expected:.6e}; the image covers \
+             {solid:.4} Ω in {} pixels",
+            figures.glare_pixels
+        );
+        assert!((luminance - expected).abs() / expected < 1e-6);
+        assert!((figures.max_luminance_factor - f64::from(f0)).abs() < 1e-6);
+        if margin > step {
+            // Measured 2026-12-04: within 0.74 % (the disc's share of each pixel, from 256
+            // samples).
+            assert!((solid - 1.0).abs() < 0.015, "solid angle {solid} Ω");
+        }
+    }
+    eprintln!("{with} eye points see the sun, {without} do not");
+    assert!(with >= 6 && without >= 6, "{with} {without}");
+}
+
+#[test]
+fn a_display_under_known_glare_has_the_contrast_of_the_formula() {
+    // A thin pane (n = 1.5) over an unlit display; a named source of 2,000 cd/m² reflected in
+    // the pane over it. Where its image falls: (τ L_s + L_g) / (τ L_b + L_g), τ = 1 − r,
+    // L_g = r × 2,000, r the sheet's reflectance at the specular angle.
+    let pane = placed(
+        generators::plane(glam::Vec2::splat(0.4), 1),
+        "pane",
+        0,
+        Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2),
+    );
+    let sheet = Material::new(
+        "sheet",
+        MaterialKind::Dielectric {
+            ior: Vec3::splat(1.5),
+            thin_walled: true,
+        },
+        Vec3::ONE,
+    );
+    let (emitter, eye) = (Vec3::new(0.3, 0.0, 0.5), Vec3::new(-0.3, 0.0, 0.5));
+    let mut scene = scene(pane, sheet, emitter, 0.02, eye);
+    scene
+        .materials
+        .push(Material::unlit("display", Vec3::splat(0.2)));
+    scene.meshes.push(placed(
+        generators::plane(glam::Vec2::splat(2.0), 1),
+        "display",
+        2,
+        Mat4::from_translation(Vec3::new(0.0, 0.0, -0.1))
+            * Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2),
+    ));
+    let display = glare::Display {
+        mesh: 2,
+        symbol_cd_m2: 250.0,
+        background_cd_m2: 5.0,
+        min_contrast: 3.0,
+    };
+    let with_display = Options {
+        source_luminance: Some(2_000.0),
+        display: Some(display),
+        ..options(320, 240)
+    };
+    let accel = SceneAccel::new(&scene);
+    let glare = analyze(&scene, &accel, &[eye], &with_display, &|_| {}).unwrap();
+    let figures = &glare.report.eyes[0];
+    let d = figures.display.as_ref().expect("display figures");
+    let p = Vec3::ZERO; // the specular point: the pane's centre, half-way between them
+    let cos_i = f64::from((eye - p).normalize().z);
+    let r = sheet_reflectance(cos_i, 1.5);
+    let (tau, lg) = (1.0 - r, r * 2_000.0);
+    let expected = (tau * 250.0 + lg) / (tau * 5.0 + lg);
+    assert!((display.contrast(tau, lg) - expected).abs() < 1e-12);
+    let off = (d.min_contrast - expected).abs() / expected;
+    eprintln!(
+        "lowest contrast {:.5} against {expected:.5} ({off:.1e}); without glare {}; {} display \
+         pixels, τ {:.5} (1 − r at the centre {tau:.5}), washed out {:.4}",
+        d.min_contrast, d.contrast_without_glare, d.pixels, d.transmittance, d.washed_out_share
+    );
+    assert_eq!(d.contrast_without_glare, 50.0);
+    // The darkest pixel is the image's brightest, near the specular point: r varies little
+    // across the image (measured 2026-12-04: 2.3e-3).
+    assert!(off < 5e-3, "{off}");
+    assert!(expected < 3.0 && d.washed_out_share > 0.0 && d.washed_out_share < 0.2);
+    // Every washed-out pixel shows the glare, and is below the threshold by the formula.
+    let images = &glare.images[0];
+    for (i, washed) in images.washed_out.iter().enumerate() {
+        if *washed {
+            assert!(images.factor[i] > 0.0);
+            assert!(images.glare_cd_m2[i] > 0.0);
+        }
+    }
+}
+
+#[test]
+fn a_sweep_s_lookup_equals_tracing_each_sun_position() {
+    let scene = specula_scene::builtin::by_name("truck-cover")
+        .unwrap()
+        .unwrap();
+    let accel = SceneAccel::new(&scene);
+    let frame = VehicleFrame::new(&scene.camera, None).unwrap();
+    let surface = specula_analyze::object(&scene, "--surface", "cover glass").unwrap();
+    let display = specula_analyze::object(&scene, "--display", "dial").unwrap();
+    let eyes = Eyes::Eyebox {
+        width: 0.2,
+        height: 0.1,
+        columns: 3,
+        rows: 1,
+    }
+    .points(scene.camera.eye, &frame)
+    .unwrap();
+    let base = glare::Sun {
+        azimuth_deg: 0.0,
+        elevation_deg: 45.0,
+        illuminance_lx: 100_000.0,
+    };
+    let options = Options {
+        surface,
+        display: Some(glare::Display {
+            mesh: display,
+            symbol_cd_m2: 300.0,
+            background_cd_m2: 10.0,
+            min_contrast: 3.0,
+        }),
+        threshold: 1e-3,
+        ..sun_options(base, 96, 72)
+    };
+    let spec = glare::sweep::SweepSpec {
+        azimuth: [120.0, 180.0],
+        elevation: [4.0, 24.0],
+        step_deg: 4.0,
+    };
+    let swept = glare::sweep::sweep(
+        &scene,
+        &accel,
+        &eyes,
+        &frame,
+        &options,
+        &spec,
+        None,
+        &|_| {},
+    )
+    .unwrap();
+    let sweep = swept.report.sweep.as_ref().unwrap();
+    let (mut glaring, mut washed) = (0, 0);
+    for effect in &sweep.positions {
+        let sun = glare::Sun {
+            azimuth_deg: effect.azimuth_deg,
+            elevation_deg: effect.elevation_deg,
+            ..base
+        };
+        let direct = Options {
+            source: Source::Sun(sun),
+            ..options.clone()
+        };
+        let traced = glare::analyze(&scene, &accel, &eyes, &frame, &direct, &|_| {}).unwrap();
+        let by_tracing = glare::sweep::SunEffect::of(
+            effect.azimuth_deg,
+            effect.elevation_deg,
+            &traced.report.eyes,
+        );
+        assert_eq!(*effect, by_tracing);
+        glaring += usize::from(effect.glare());
+        washed += usize::from(effect.washed_out());
+    }
+    let worst = &sweep.positions[sweep.worst_position];
+    let sun = glare::Sun {
+        azimuth_deg: worst.azimuth_deg,
+        elevation_deg: worst.elevation_deg,
+        ..base
+    };
+    let direct = Options {
+        source: Source::Sun(sun),
+        ..options.clone()
+    };
+    let traced = glare::analyze(&scene, &accel, &eyes, &frame, &direct, &|_| {}).unwrap();
+    assert_eq!(swept.report.eyes, traced.report.eyes);
+    eprintln!(
+        "{} positions, {glaring} with glare, {washed} washed out: the lookup equals the trace",
+        sweep.positions.len()
+    );
+    assert!(glaring > 0 && glaring < sweep.positions.len() && washed > 0);
+}
+
+#[test]
+fn the_sun_stands_where_the_closed_forms_put_it() {
+    use glare::sun::{day_of_year, declination, solar_position};
+    assert_eq!(day_of_year("2026-06-21").unwrap(), 172);
+    assert_eq!(day_of_year("2024-12-31").unwrap(), 366);
+    assert!(day_of_year("2026-02-29")
+        .unwrap_err()
+        .to_string()
+        .contains("--date"));
+    assert!(day_of_year("21/06/2026").is_err());
+    // 21 June: the declination is the obliquity, 23.44°; at 48° N the noon sun stands
+    // 90° − 48° + 23.44° high, due south.
+    let delta = declination(172).to_degrees();
+    assert!((delta - 23.44).abs() < 0.05, "δ = {delta}");
+    let (azimuth, elevation) = solar_position(48.0, 172, 12.0);
+    assert!((azimuth - 180.0).abs() < 1e-9 && (elevation - (42.0 + delta)).abs() < 1e-9);
+    // At an equinox the sun rises due east at 6 h solar time, for any latitude.
+    let equinox = (60..100)
+        .min_by(|a, b| declination(*a).abs().total_cmp(&declination(*b).abs()))
+        .unwrap();
+    let (azimuth, elevation) = solar_position(48.0, equinox, 6.0);
+    let residual = declination(equinox).to_degrees();
+    assert!(
+        (azimuth - 90.0).abs() < 0.5 && elevation.abs() < 0.5,
+        "{azimuth} {elevation} {residual}"
+    );
+    // Symmetric about noon: morning east, afternoon west.
+    let (am, _) = solar_position(48.0, 172, 9.0);
+    let (pm, _) = solar_position(48.0, 172, 15.0);
+    assert!((am + pm - 360.0).abs() < 1e-9 && am < 180.0);
+}
+
+#[test]
+fn bad_sun_display_and_sweep_inputs_are_clear_errors() {
+    let scene = plate_in_the_sun(0.9, Vec3::new(0.0, 0.0, 0.6));
+    let sun = |elevation_deg: f64, illuminance_lx: f64| glare::Sun {
+        azimuth_deg: 180.0,
+        elevation_deg,
+        illuminance_lx,
+    };
+    let error = |options: Options| options.validate(&scene).unwrap_err().to_string();
+    assert!(error(sun_options(sun(-3.0, 1e5), 8, 8)).contains("below the horizon"));
+    assert!(error(sun_options(sun(95.0, 1e5), 8, 8)).contains("at most 90°"));
+    assert!(error(sun_options(sun(30.0, -1.0), 8, 8)).contains("--sun-illuminance"));
+    let spec = |step_deg: f64, elevation: [f64; 2]| glare::sweep::SweepSpec {
+        azimuth: [0.0, 90.0],
+        elevation,
+        step_deg,
+    };
+    assert!(spec(0.0, [10.0, 20.0])
+        .validate()
+        .unwrap_err()
+        .to_string()
+        .contains("positive step"));
+    assert!(spec(5.0, [-10.0, 20.0])
+        .validate()
+        .unwrap_err()
+        .to_string()
+        .contains("below the horizon"));
+    assert!(spec(5.0, [30.0, 20.0]).validate().is_err());
+}

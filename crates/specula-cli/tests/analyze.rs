@@ -422,6 +422,70 @@ fn glare_over_an_eyebox_writes_json_that_matches_the_schema() {
 }
 
 #[test]
+fn a_sun_sweep_over_a_solar_day_writes_json_that_matches_the_schema_and_its_plots() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = specula()
+        .current_dir(dir.path())
+        .args([
+            "analyze",
+            "glare",
+            "truck-cover",
+            "--surface",
+            "cover glass",
+            "--sun-sweep",
+            "-180,180,5,65,20",
+            "--latitude",
+            "48",
+            "--heading",
+            "270",
+            "--date",
+            "2026-06-21",
+            "--time-step",
+            "30",
+            "--display",
+            "dial",
+            "--symbol-luminance",
+            "300",
+            "--background-luminance",
+            "10",
+            "--min-contrast",
+            "3",
+            "--eyebox",
+            "0.2,0.1,2,1",
+            "--size",
+            "64x48",
+            "--json",
+            "glare.json",
+            "--report",
+            "report",
+        ])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("glare.json")).unwrap())
+            .unwrap();
+    assert_matches_schema(
+        &json,
+        include_str!("../../../docs/analyze-glare.schema.json"),
+    );
+    let sweep = &json["sweep"];
+    // 19 azimuths × 4 elevations; the day every half hour while the sun is up.
+    assert_eq!(sweep["positions"].as_array().unwrap().len(), 19 * 4);
+    let times = sweep["day"]["times"].as_array().unwrap();
+    assert!(times.len() > 20 && times.len() < 40, "{}", times.len());
+    let report = dir.path().join("report");
+    for plot in ["eyebox", "worst", "sweep", "polar"] {
+        let png = image::open(report.join(format!("{plot}.png"))).unwrap();
+        assert!(png.width() >= 8 && png.height() >= 8);
+    }
+    let html = std::fs::read_to_string(report.join("report.html")).unwrap();
+    assert!(html.contains("sweep.svg") && html.contains("polar.svg"));
+    assert!(html.contains("apparent solar time"));
+}
+
+#[test]
 fn bad_glare_input_is_a_clear_error() {
     let cases: Vec<(Vec<&str>, &str)> = vec![
         (
@@ -456,6 +520,68 @@ fn bad_glare_input_is_a_clear_error() {
                 "--threshold=-1",
             ],
             "--threshold",
+        ),
+        (
+            vec!["--surface", "cover glass", "--sun", "120,-5"],
+            "--sun: elevation -5°: the sun is below the horizon",
+        ),
+        (
+            vec!["--surface", "cover glass", "--sun-sweep", "0,90,10,40,0"],
+            "--sun-sweep: step 0°: a sweep needs a positive step",
+        ),
+        (
+            vec![
+                "--surface",
+                "cover glass",
+                "--source",
+                "side window",
+                "--source-luminance=-20",
+            ],
+            "--source-luminance: -20 cd/m²: a luminance must be a finite number above 0",
+        ),
+        (
+            vec![
+                "--surface",
+                "cover glass",
+                "--sun",
+                "180,10",
+                "--display",
+                "dial",
+                "--symbol-luminance=-300",
+                "--background-luminance",
+                "10",
+                "--min-contrast",
+                "3",
+            ],
+            "--symbol-luminance: -300 cd/m²",
+        ),
+        (
+            vec![
+                "--surface",
+                "cover glass",
+                "--sun",
+                "180,10",
+                "--display",
+                "side window",
+                "--symbol-luminance",
+                "300",
+                "--background-luminance",
+                "10",
+                "--min-contrast",
+                "3",
+            ],
+            "--display: 'side window' is not behind 'cover glass'",
+        ),
+        (
+            vec![
+                "--surface",
+                "cover glass",
+                "--sun",
+                "180,10",
+                "--display",
+                "dial",
+            ],
+            "--symbol-luminance",
         ),
     ];
     assert_each_fails_naming(&["analyze", "glare", "truck-cover"], &cases);

@@ -474,7 +474,7 @@ pub enum Analysed {
         /// Judged against a regulation: the verdict and its fields' corners on the ground.
         judged: Option<Box<(Verdict, Vec<[Vec2; 4]>)>>,
     },
-    Glare(Glare),
+    Glare(Box<Glare>),
     Lens(Box<lens::Report>),
 }
 
@@ -1109,14 +1109,14 @@ fn run(
                     }
                 }
             },
-            Kind::Glare => Analysed::Glare(glare::analyze(
+            Kind::Glare => Analysed::Glare(Box::new(glare::analyze(
                 scene,
                 &accel,
                 eyes,
                 &frame,
                 &settings.glare_options()?,
                 &|_| {},
-            )?),
+            )?)),
             Kind::Lens => Analysed::Lens(Box::new(lens::analyze(
                 scene,
                 &settings.lens_options(scene)?,

@@ -150,6 +150,23 @@ pub struct SunEffect {
 }
 
 impl SunEffect {
+    /// What the sun at (azimuth, elevation) does, from every eye point's figures.
+    pub fn of(azimuth_deg: f64, elevation_deg: f64, eyes: &[EyeGlare]) -> SunEffect {
+        SunEffect {
+            azimuth_deg,
+            elevation_deg,
+            eyes_with_glare: eyes.iter().filter(|e| e.glare).count(),
+            max_luminance_cd_m2: eyes
+                .iter()
+                .filter_map(|e| e.max_luminance_cd_m2)
+                .fold(0.0, f64::max),
+            max_washed_out_share: eyes
+                .iter()
+                .filter_map(|e| e.display.as_ref().map(|d| d.washed_out_share))
+                .reduce(f64::max),
+        }
+    }
+
     pub fn glare(&self) -> bool {
         self.eyes_with_glare > 0
     }
@@ -224,8 +241,9 @@ impl SkyIndex {
             for (k, exit) in pixel.sky.iter().enumerate() {
                 let elevation = frame.elevation_deg(exit.dir);
                 let reach = sun::reach(exit).to_degrees();
-                for band in band_of(elevation - reach)..=band_of(elevation + reach) {
-                    bands[band].push((i as u32, k as u32));
+                let touched = band_of(elevation - reach)..=band_of(elevation + reach);
+                for band in &mut bands[touched] {
+                    band.push((i as u32, k as u32));
                 }
             }
         }
@@ -272,22 +290,6 @@ fn look_up(
         .collect()
 }
 
-fn effect(azimuth_deg: f64, elevation_deg: f64, eyes: &[EyeGlare]) -> SunEffect {
-    SunEffect {
-        azimuth_deg,
-        elevation_deg,
-        eyes_with_glare: eyes.iter().filter(|e| e.glare).count(),
-        max_luminance_cd_m2: eyes
-            .iter()
-            .filter_map(|e| e.max_luminance_cd_m2)
-            .fold(0.0, f64::max),
-        max_washed_out_share: eyes
-            .iter()
-            .filter_map(|e| e.display.as_ref().map(|d| d.washed_out_share))
-            .reduce(f64::max),
-    }
-}
-
 /// Runs a sweep: `options.source` must be the sun (its illuminance is the sweep's; its position
 /// is replaced by each of `spec`'s), calling `progress` after each eye point is traced.
 #[allow(clippy::too_many_arguments)]
@@ -323,7 +325,7 @@ pub fn sweep(
         .positions()
         .par_iter()
         .map(|&(az, el)| {
-            effect(
+            SunEffect::of(
                 az,
                 el,
                 &look_up(&traces, &indexes, frame, options, &at(az, el)),
@@ -409,7 +411,7 @@ fn solar_day(
             Some(SolarTime {
                 hours,
                 compass_azimuth_deg: compass,
-                effect: effect(azimuth, elevation, &eyes),
+                effect: SunEffect::of(azimuth, elevation, &eyes),
             })
         })
         .collect();

@@ -24,7 +24,7 @@ pub enum Kind {
     /// surface, per eye point: the glare's luminance factor and luminance in cd/m², its veiling
     /// ratio, solid angle and centroid, the contrast of a display behind the cover under it;
     /// sun sweeps and solar days by lookup.
-    Glare(glare::GlareArgs),
+    Glare(Box<glare::GlareArgs>),
     /// A spectacle lens as worn, per gaze direction: sphere, cylinder and axis at the vertex
     /// sphere, mean power, prism, lateral colour and distortion, from exact rays (Listing's
     /// law about the eye's centre of rotation).
@@ -390,7 +390,7 @@ pub(crate) fn write_json(
 pub fn run(kind: Kind) -> Result<()> {
     match kind {
         Kind::MirrorView(args) => mirror_view(args),
-        Kind::Glare(args) => glare::run(args),
+        Kind::Glare(args) => glare::run(*args),
         Kind::Lens(args) => lens(args),
     }
 }
