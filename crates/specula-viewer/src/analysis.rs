@@ -18,8 +18,11 @@
 //!   where some eye sees it (stronger where every one does); inside the required region,
 //!   green where an eye sees it and red where none does (its blind part).
 //! - Glare: where the first hit is the surface, that point as the chosen eye point sees it
-//!   (projected into its glare image): the glare's relative luminance there, on a log scale
-//!   from the threshold (dark blue) to 1 (yellow), where it is above the threshold.
+//!   (projected into its glare image): where the glare's luminance factor is above the
+//!   threshold, its luminance on a log scale from 1 cd/m² (dark blue) to 10⁹ cd/m² (yellow)
+//!   (the factor's log from the threshold to 1 where no luminance is known); display pixels the
+//!   glare washes out in red. The source is a named mesh (at the panel's cd/m²) or the sun,
+//!   dragged on the panel's sky disc.
 //! - Lens: where the first hit is the lens, the gaze through that point and the lens map's
 //!   mean power or cylinder there, in false colour with contour lines ([`lens_overlay`]).
 //!
@@ -72,6 +75,13 @@ pub struct Settings {
     pub object: usize,
     /// The glare's source.
     pub source: Option<usize>,
+    /// The sun as the glare's source instead (its position in the vehicle frame of the scene's
+    /// camera, dragged in the panel's sky disc).
+    pub sun: Option<glare::Sun>,
+    /// A display behind the glare's surface, whose washed-out pixels the overlay marks.
+    pub display: Option<glare::Display>,
+    /// A named source's luminance, cd/m² (the glare in cd/m², the display's contrast).
+    pub source_luminance: f64,
     /// The centre eye point, world metres (default: the scene camera's eye); for a lens, the
     /// eye's centre of rotation (default: 27 mm behind the lens's back vertex on the camera's
     /// view axis).
@@ -192,6 +202,9 @@ impl Settings {
             kind,
             object,
             source,
+            sun: None,
+            display: None,
+            source_luminance: 5_000.0,
             eye: scene.camera.eye,
             eyes: Eyes::Camera,
             ground_y: mirror_view::lowest_point(scene),
@@ -294,14 +307,25 @@ impl Settings {
     }
 
     fn glare_options(&self) -> Result<glare::Options, AnalyzeError> {
+        let source = match (self.sun, self.source) {
+            (Some(sun), _) => glare::Source::Sun(sun),
+            (None, Some(mesh)) => glare::Source::Named(mesh),
+            (None, None) => {
+                return Err(AnalyzeError::BadOption {
+                    option: "source",
+                    reason: "glare needs a source".into(),
+                })
+            }
+        };
+        let source_luminance = match source {
+            glare::Source::Named(_) => Some(self.source_luminance),
+            glare::Source::Sun(_) => None,
+        };
         Ok(glare::Options {
             surface: self.object,
-            source: glare::Source::Named(self.source.ok_or(AnalyzeError::BadOption {
-                option: "source",
-                reason: "glare needs a source".into(),
-            })?),
-            source_luminance: None,
-            display: None,
+            source,
+            source_luminance,
+            display: self.display,
             width: self.glare_size.0,
             height: self.glare_size.1,
             max_depth: 8,
@@ -348,6 +372,10 @@ pub struct Request {
     /// What a lens overlay maps (default mean power).
     pub lens_map: Option<LensMap>,
     pub regulation: Option<RegulationRequest>,
+    /// Glare from the sun at [azimuth, elevation] degrees (vehicle frame) instead of a source.
+    pub sun: Option<[f64; 2]>,
+    /// A display behind the surface: its name and [symbol, background] cd/m², minimum contrast.
+    pub display: Option<(String, [f64; 3])>,
 }
 
 /// A regulation to judge a mirror view against, objects by name.
@@ -377,6 +405,7 @@ impl Request {
         let object = specula_analyze::object(scene, role, &self.object)?;
         let source = match (source_role, &self.source) {
             (Some(role), Some(name)) => Some(specula_analyze::object(scene, role, name)?),
+            (Some(_), None) if self.sun.is_some() => None,
             (Some(_), None) => {
                 return Err(AnalyzeError::BadOption {
                     option: "source",
@@ -392,6 +421,19 @@ impl Request {
             (None, None) => None,
         };
         let mut settings = Settings::new(scene, self.kind, object, source);
+        settings.sun = self.sun.map(|[azimuth_deg, elevation_deg]| glare::Sun {
+            azimuth_deg,
+            elevation_deg,
+            illuminance_lx: glare::sun::DEFAULT_ILLUMINANCE_LX,
+        });
+        if let Some((name, [symbol, background, min_contrast])) = &self.display {
+            settings.display = Some(glare::Display {
+                mesh: specula_analyze::object(scene, "display", name)?,
+                symbol_cd_m2: *symbol,
+                background_cd_m2: *background,
+                min_contrast: *min_contrast,
+            });
+        }
         if self.kind == Kind::Lens {
             settings.eye = lens::default_options(scene, object)?
                 .rotation_centre
@@ -916,14 +958,27 @@ fn glare_colour(
     if x >= width || y >= height {
         return CLEAR;
     }
-    let factor = eye.factor[(y * width + x) as usize];
+    let i = (y * width + x) as usize;
+    if eye.washed_out[i] {
+        return WASHED_OUT;
+    }
+    let factor = eye.factor[i];
     if factor <= threshold {
         return CLEAR;
     }
-    let t = (factor.log10() - threshold.log10()) / -threshold.log10();
-    let [r, g, b] = specula_analyze::plot::scale_colour(t);
+    // In cd/m² where the source's luminance is known (1 to 10⁹ cd/m², log scale), else the
+    // luminance factor's log from the threshold to 1.
+    let t = if eye.glare_cd_m2[i] > 0.0 {
+        eye.glare_cd_m2[i].log10() / 9.0
+    } else {
+        (factor.log10() - threshold.log10()) / -threshold.log10()
+    };
+    let [r, g, b] = specula_analyze::plot::scale_colour(t.clamp(0.0, 1.0));
     [r, g, b, 190]
 }
+
+/// Display pixels washed out by the glare.
+const WASHED_OUT: [u8; 4] = [230, 20, 60, 220];
 
 /// What the lens overlay maps (the two: the wearer's mean power or cylinder).
 pub type LensMap = specula_analyze::lens_plot::Map;
@@ -1244,9 +1299,10 @@ pub fn summary(analysis: &Analysis, scene: &Scene) -> String {
             let r = &g.report;
             let worst = match r.worst_eye {
                 Some(k) => format!(
-                    "worst eye point {} (luminance factor {:.4}, veiling ratio {})",
+                    "worst eye point {} (luminance factor {:.4}, {} cd/m², veiling ratio {})",
                     k + 1,
                     r.eyes[k].max_luminance_factor,
+                    glare::luminance_text(r.eyes[k].max_luminance_cd_m2),
                     glare::veiling_text(r.eyes[k].max_veiling_ratio)
                 ),
                 None => "no glare".into(),
@@ -1369,6 +1425,8 @@ mod tests {
             ground_y: Some(0.0),
             tolerance: None,
             lens_map: None,
+            sun: None,
+            display: None,
             regulation: None,
         };
         let settings = request.settings(live.scene()).unwrap();
@@ -1458,6 +1516,8 @@ mod tests {
             ground_y: Some(0.0),
             tolerance: None,
             lens_map: None,
+            sun: None,
+            display: None,
             regulation: Some(RegulationRequest {
                 name: "r46-iii".into(),
                 forward: Some(Vec3::NEG_Z),
@@ -1582,6 +1642,81 @@ mod tests {
     }
 
     #[test]
+    fn the_sun_overlay_marks_the_display_pixels_its_reflection_washes_out() {
+        // A thin glass pane in z = 0 over an unlit display in z = −0.1; the sun behind the
+        // eye, low and to its right: its mirror image in the pane washes the display out.
+        let mut scene = Scene::new("pane in the sun");
+        scene.materials.push(Material::new(
+            "sheet",
+            MaterialKind::Dielectric {
+                ior: Vec3::splat(1.5),
+                thin_walled: true,
+            },
+            Vec3::ONE,
+        ));
+        scene
+            .materials
+            .push(Material::unlit("display", Vec3::splat(0.2)));
+        let facing_z = Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2);
+        scene.meshes.push(placed(
+            generators::plane(Vec2::splat(0.4), 1),
+            "pane",
+            0,
+            facing_z,
+        ));
+        scene.meshes.push(placed(
+            generators::plane(Vec2::splat(1.0), 1),
+            "display",
+            1,
+            Mat4::from_translation(Vec3::new(0.0, 0.0, -0.1)) * facing_z,
+        ));
+        let eye = Vec3::new(0.0, 0.0, 0.6);
+        scene.camera = Camera {
+            eye,
+            target: Vec3::ZERO,
+            up: Vec3::Y,
+            fov_y_deg: 40.0,
+            aspect: None,
+        };
+        let live = LiveScene::new(scene);
+        let request = Request {
+            kind: Kind::Glare,
+            object: "pane".into(),
+            source: None,
+            eye: None,
+            eyes: Eyes::Camera,
+            region: None,
+            range_m: None,
+            ground_y: None,
+            tolerance: None,
+            lens_map: None,
+            sun: Some([170.0, 8.0]),
+            display: Some(("display".into(), [300.0, 10.0, 3.0])),
+            regulation: None,
+        };
+        let mut analysis = Analysis::new(request.settings(live.scene()).unwrap());
+        analysis.finish(&live);
+        let (width, height) = analysis.settings.glare_size;
+        let view = glare::eye_camera(live.scene(), 0, eye, width, height).unwrap();
+        let overlay = analysis.overlay(&live, &view, width, height).unwrap();
+        let frame = VehicleFrame::new(&live.scene().camera, None).unwrap();
+        let sun = analysis.settings.sun.unwrap().direction(&frame);
+        let image = Vec3::new(sun.x, sun.y, -sun.z);
+        let mut washed = 0;
+        for (i, pixel) in overlay.pixels.iter().enumerate() {
+            if *pixel != WASHED_OUT {
+                continue;
+            }
+            washed += 1;
+            let (x, y) = (i as u32 % width, i as u32 / width);
+            let dir = view.ray_direction(x as f32 + 0.5, y as f32 + 0.5, width, height);
+            let off = dir.dot(image).clamp(-1.0, 1.0).acos().to_degrees();
+            assert!(off < 0.7, "pixel ({x}, {y}) is {off}° from the sun's image");
+        }
+        assert!(washed > 0, "the sun's image washes some display pixels out");
+    }
+
+    #[test]
     fn the_glare_overlay_marks_where_a_metal_plate_shows_the_emitter() {
         // A 0.4 m plate in z = 0 facing +z, a ball beside the eye.
         let mut scene = Scene::new("plate and emitter");
@@ -1626,6 +1761,8 @@ mod tests {
             ground_y: None,
             tolerance: None,
             lens_map: None,
+            sun: None,
+            display: None,
             regulation: None,
         };
         let mut analysis = Analysis::new(request.settings(live.scene()).unwrap());
@@ -1707,6 +1844,8 @@ mod tests {
             ground_y: None,
             tolerance: None,
             lens_map: None,
+            sun: None,
+            display: None,
             regulation: None,
         };
         let cases = [
@@ -1785,6 +1924,8 @@ mod tests {
             ground_y: None,
             tolerance: None,
             lens_map: Some(LensMap::Cylinder),
+            sun: None,
+            display: None,
             regulation: None,
         };
         let mut analysis = Analysis::new(request.settings(live.scene()).unwrap());

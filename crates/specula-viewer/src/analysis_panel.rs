@@ -163,10 +163,129 @@ fn what_section(
                     .range(1e-6..=1.0)
                     .speed(1e-4),
             )
-            .on_hover_text("relative luminance above which a pixel counts as glare");
+            .on_hover_text("luminance factor (glare over source luminance) above which a pixel counts as glare");
             ui.end_row();
+            sun_and_display_controls(ui, settings, names, sources);
         }
     });
+}
+
+/// The glare's sun (a direction dragged on a sky disc seen from above, forward up) and the
+/// display behind the surface.
+fn sun_and_display_controls(
+    ui: &mut egui::Ui,
+    settings: &mut Settings,
+    names: &[String],
+    sources: &[usize],
+) {
+    ui.label("the sun");
+    let mut on = settings.sun.is_some();
+    ui.checkbox(&mut on, "instead of the source")
+        .on_hover_text("glare from the sun at 100,000 lx; drag it on the sky disc below");
+    ui.end_row();
+    match (on, settings.sun) {
+        (true, None) => {
+            settings.sun = Some(specula_analyze::glare::Sun {
+                azimuth_deg: 180.0,
+                elevation_deg: 15.0,
+                illuminance_lx: specula_analyze::glare::sun::DEFAULT_ILLUMINANCE_LX,
+            })
+        }
+        (false, Some(_)) => settings.sun = None,
+        _ => {}
+    }
+    if let Some(sun) = &mut settings.sun {
+        ui.label("sun position");
+        ui.vertical(|ui| {
+            sky_disc(ui, sun);
+            ui.horizontal(|ui| {
+                ui.add(
+                    egui::DragValue::new(&mut sun.azimuth_deg)
+                        .range(-180.0..=180.0)
+                        .suffix("° az"),
+                );
+                ui.add(
+                    egui::DragValue::new(&mut sun.elevation_deg)
+                        .range(0.5..=90.0)
+                        .suffix("° el"),
+                );
+            });
+        });
+        ui.end_row();
+    } else {
+        ui.label("source cd/m²");
+        ui.add(
+            egui::DragValue::new(&mut settings.source_luminance)
+                .range(1e-3..=1e10)
+                .speed(10.0),
+        )
+        .on_hover_text("the source's luminance: the glare in cd/m²");
+        ui.end_row();
+    }
+    ui.label("display");
+    let shown = settings
+        .display
+        .map_or("none".to_string(), |d| names[d.mesh].clone());
+    egui::ComboBox::from_id_salt("glare display")
+        .selected_text(shown)
+        .show_ui(ui, |ui| {
+            if ui
+                .selectable_label(settings.display.is_none(), "none")
+                .clicked()
+            {
+                settings.display = None;
+            }
+            for &m in sources {
+                let chosen = settings.display.is_some_and(|d| d.mesh == m);
+                if ui.selectable_label(chosen, &names[m]).clicked() {
+                    settings.display = Some(specula_analyze::glare::Display {
+                        mesh: m,
+                        symbol_cd_m2: 300.0,
+                        background_cd_m2: 10.0,
+                        min_contrast: 3.0,
+                    });
+                }
+            }
+        });
+    ui.end_row();
+    if let Some(display) = &mut settings.display {
+        ui.label("display cd/m²");
+        ui.horizontal(|ui| {
+            ui.add(egui::DragValue::new(&mut display.symbol_cd_m2).range(0.0..=1e5).prefix("symbols "));
+            ui.add(egui::DragValue::new(&mut display.background_cd_m2).range(0.0..=1e5).prefix("background "));
+            ui.add(egui::DragValue::new(&mut display.min_contrast).range(1.01..=1e3).speed(0.05).prefix("min contrast "))
+                .on_hover_text("washed out below this contrast ratio (the user's figure: ISO 15008's is for passenger cars)");
+        });
+        ui.end_row();
+    }
+}
+
+/// The sky seen from above, forward up, the zenith in the centre and the horizon on the rim:
+/// drag the sun across it.
+fn sky_disc(ui: &mut egui::Ui, sun: &mut specula_analyze::glare::Sun) {
+    let size = egui::vec2(120.0, 120.0);
+    let (rect, response) = ui.allocate_exact_size(size, egui::Sense::click_and_drag());
+    let centre = rect.center();
+    let radius = rect.width() * 0.5 - 4.0;
+    if let Some(p) = response.interact_pointer_pos() {
+        let d = p - centre;
+        let r = (d.length() / radius).min(1.0 - 0.5 / 90.0);
+        sun.elevation_deg = f64::from(90.0 * (1.0 - r));
+        sun.azimuth_deg = f64::from(d.x.atan2(-d.y).to_degrees());
+    }
+    let painter = ui.painter_at(rect);
+    let stroke = egui::Stroke::new(1.0, egui::Color32::GRAY);
+    for ring in [1.0, 2.0 / 3.0, 1.0 / 3.0] {
+        painter.circle_stroke(centre, radius * ring, stroke);
+    }
+    painter.line_segment([centre, centre - egui::vec2(0.0, radius)], stroke);
+    let (az, r) = (
+        sun.azimuth_deg.to_radians() as f32,
+        radius * (90.0 - sun.elevation_deg as f32) / 90.0,
+    );
+    let at = centre + egui::vec2(az.sin(), -az.cos()) * r;
+    painter.circle_filled(at, 5.0, egui::Color32::from_rgb(255, 200, 40));
+    response.on_hover_text("the sky from above, the vehicle's forward axis up: drag the sun");
 }
 
 /// How [`point_controls`] presents a point.

@@ -158,6 +158,9 @@ struct RawAnalysis {
     outermost: Option<[f32; 3]>,
     side: Option<String>,
     vehicle: Option<Vec<String>>,
+    sun: Option<[f64; 2]>,
+    display: Option<String>,
+    display_luminance: Option<[f64; 3]>,
 }
 
 #[derive(Deserialize)]
@@ -337,6 +340,8 @@ fn analysis(a: RawAnalysis) -> Result<Option<Request>, String> {
         "off" => {
             let others = a.object.is_some()
                 || a.source.is_some()
+                || a.sun.is_some()
+                || a.display.is_some()
                 || a.eye.is_some()
                 || a.eyes.is_some()
                 || a.eyebox.is_some()
@@ -462,6 +467,18 @@ fn analysis(a: RawAnalysis) -> Result<Option<Request>, String> {
         kind,
         lens_map,
         object,
+        sun: a.sun,
+        display: match (a.display, a.display_luminance) {
+            (Some(name), Some(luminances)) => Some((name, luminances)),
+            (None, None) => None,
+            _ => {
+                return Err(
+                    "display and display_luminance = [symbol, background, min contrast] \
+                            come together"
+                        .into(),
+                )
+            }
+        },
         source: a.source,
         eye: a.eye.map(Vec3::from_array),
         eyes,
