@@ -17,9 +17,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 use specula_compare::metrics::{flip_map, measure};
 use specula_methods::vertex_tracing::compose::RasterComposition;
-use specula_methods::vertex_tracing::{
-    FramePhases, PackageCounters, RefineSettings, VertexTracing,
-};
+use specula_methods::vertex_tracing::{FramePhases, PackageCounters, Params, VertexTracing};
 use specula_methods::LiveScene;
 use specula_trace::reference::{pixel_radiance, rays_traced_on_this_thread, Tracer};
 
@@ -44,12 +42,11 @@ fn main() {
     let mut defaults = VertexTracing::default();
     // Table 1 times the vertex method: every reflector by its vertices (what `tracing=auto`
     // also chooses for the cover at 1024 x 768; at small sizes it would trace it per pixel).
-    defaults.settings.tracing = specula_methods::vertex_tracing::ReflectorTracing::Vertices;
-    let max_depth = defaults.max_depth;
+    defaults.params.tracing = specula_methods::vertex_tracing::ReflectorTracing::Vertices;
+    let max_depth = defaults.params.max_depth;
 
     let start = Instant::now();
-    let phases =
-        FramePhases::visibility(&live, &camera, width, height, defaults.settings, max_depth);
+    let phases = FramePhases::visibility(&live, &camera, width, height, defaults.params, max_depth);
     let visibility_ms = start.elapsed().as_secs_f64() * 1e3;
     let start = Instant::now();
     let rest = phases.rest_of_scene();
@@ -133,25 +130,25 @@ fn main() {
     for setting in preset.settings {
         specula_methods::apply_setting(&mut published, setting).expect("the preset applies");
     }
-    let paper = published.settings;
+    let paper = published.params;
     let steps = [
-        ("preview", false, false, defaults.settings),
+        ("preview", false, false, defaults.params),
         (
             "refinement without triangle filling",
             true,
             false,
-            defaults.settings,
+            defaults.params,
         ),
         (
             "refinement with triangle filling",
             true,
             true,
-            defaults.settings,
+            defaults.params,
         ),
         ("with filling, vertex-tracing:paper", true, true, paper),
     ];
     for (label, refine, fill, base) in steps {
-        let settings = RefineSettings {
+        let settings = Params {
             refine,
             fill,
             ..base

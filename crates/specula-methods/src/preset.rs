@@ -16,19 +16,9 @@
 
 use std::fmt;
 
-use crate::registry::{method, METHODS};
-use crate::technique::{apply_setting, MethodInfo, Technique, TechniqueError};
+use specula_core::{apply_setting, MethodInfo, Preset, Technique, TechniqueError};
 
-/// A named list of settings of one method.
-#[derive(Debug)]
-pub struct Preset {
-    /// The name after the colon (`c3rc:paper`).
-    pub name: &'static str,
-    /// One line: what running with it means.
-    pub summary: &'static str,
-    /// `NAME=VALUE` settings, applied in order over the defaults.
-    pub settings: &'static [&'static str],
-}
+use crate::registry::{method, METHODS};
 
 /// One way of running a method: its defaults, or one of its presets.
 #[derive(Clone, Copy)]

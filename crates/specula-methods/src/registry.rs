@@ -2,7 +2,7 @@
 //! adds its `INFO` here and nowhere else; the CLI, reports, `specula methods` and the viewer's
 //! controls all read this table.
 
-use crate::technique::{MethodInfo, Technique, TechniqueError};
+use specula_core::{MethodInfo, Technique, TechniqueError};
 
 /// Every registered method: the exact reference first, then the techniques.
 pub static METHODS: &[&MethodInfo] = &[
@@ -68,7 +68,7 @@ pub const SEED_TECHNIQUES: &[&str] = &[
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::technique::SurfaceClass;
+    use specula_core::SurfaceClass;
 
     /// Each seed technique's module source, whose top doc is read.
     const SEED_SOURCES: &[(&str, &str)] = &[

@@ -2,7 +2,8 @@
 //! measurably wrong where it is not.
 
 use glam::{Mat4, Vec3};
-use specula_methods::envmap::{EnvMap, Exit};
+use specula_core::cube_maps::Exit;
+use specula_methods::envmap::EnvMap;
 use specula_methods::RenderStill;
 use specula_methods::{by_name, Technique};
 use specula_scene::{generators, Background, Camera, Material, MaterialKind, Scene, Texture};

@@ -308,7 +308,7 @@ fn rays_past_the_stack_or_queues_are_dropped_counted_and_warned() {
     let lens = specula_scene::load("spectacle-lens").unwrap();
     for (mode, depth, scene) in [(Mode::Megakernel, 30, &scene), (Mode::Wavefront, 8, &lens)] {
         let mut technique = GpuTrace::new(mode, depth);
-        technique.queue_factor = 1;
+        technique.params.queue_factor = 1;
         let still = technique.render_still(&ctx, scene, WIDTH, HEIGHT).unwrap();
         assert!(dropped(&still) > 0, "{mode:?}");
         assert!(still.warnings.iter().any(|w| w.contains("dropped")));

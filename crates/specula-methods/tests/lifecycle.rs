@@ -383,15 +383,12 @@ impl Technique for CreatesEachFrame {
     fn info(&self) -> &'static specula_methods::MethodInfo {
         by_name("envmap").unwrap().info()
     }
-    fn parameter(&self, _: &str) -> String {
-        String::new()
+    fn params(&self) -> &dyn specula_core::ParamSet {
+        &specula_core::NoParams
     }
-    fn set_parameter(
-        &mut self,
-        _: &str,
-        _: &specula_methods::ParamValue,
-    ) -> Result<(), specula_methods::TechniqueError> {
-        Ok(())
+    fn params_mut(&mut self) -> &mut dyn specula_core::ParamSet {
+        // A unit struct: leaking one allocates nothing.
+        Box::leak(Box::new(specula_core::NoParams))
     }
     fn invalidate(&mut self, _: specula_methods::Invalidates) {}
     fn prepare(

@@ -3,6 +3,9 @@
 
 use std::mem::{offset_of, size_of};
 
+use specula_core::cube_maps::{self, GpuReflector};
+use specula_core::gpu_scene::{GpuLight, GpuMaterial, GpuSceneInfo, GpuTextureInfo};
+use specula_core::raster::{self, ShadowView};
 use specula_methods::c3rc::{
     self,
     gpu::{GpuCamera, GpuPoint, GpuSettings as ProjectionSettings},
@@ -10,11 +13,8 @@ use specula_methods::c3rc::{
 use specula_methods::distance_maps::{
     self, GpuFace, GpuLayerView, GpuMapReflector, GpuTraceSettings,
 };
-use specula_methods::envmap::{self, GpuReflector};
-use specula_methods::gpu_scene::{GpuLight, GpuMaterial, GpuSceneInfo, GpuTextureInfo};
 use specula_methods::image_space::{self, GpuPlane, GpuSettings};
 use specula_methods::pvrr::{self, GpuMirrorMaterial};
-use specula_methods::raster::{self, ShadowView};
 use specula_methods::vertex_tracing::compose::ComposeSettings;
 
 fn parse(name: &str, source: &str) -> naga::Module {
@@ -52,7 +52,7 @@ fn assert_layout(module: &naga::Module, name: &str, size: usize, host: &[usize])
 #[test]
 fn technique_shaders_validate() {
     parse("raster.wgsl", &raster::shader_source());
-    parse("envmap.wgsl", &envmap::shader_source());
+    parse("cube-map shading", &cube_maps::shader_source());
     parse("c3rc.wgsl", &c3rc::shader_source());
     parse("c3rc/project.wgsl", &c3rc::gpu::shader_source());
     parse("image_space.wgsl", &image_space::shader_source());
@@ -201,7 +201,7 @@ fn host_structs_match_wgsl_layouts() {
             offset_of!(GpuCamera, ids),
         ],
     );
-    let module = parse("envmap.wgsl", &envmap::shader_source());
+    let module = parse("cube-map shading", &cube_maps::shader_source());
     assert_layout(
         &module,
         "Reflector",

@@ -14,7 +14,7 @@ use specula_gpu::{GpuContext, GpuError};
 
 use super::phases::{FrameSettings, PlacedCloud, Plan, ScreenView};
 use super::points::PointCloud;
-use crate::raster::GBuffer;
+use specula_core::raster::GBuffer;
 
 const SHADER: &str = include_str!("project.wgsl");
 

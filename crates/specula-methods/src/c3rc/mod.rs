@@ -12,7 +12,7 @@
 //!    eight-way kd-tree per object ([`points::PointCloud::build_tree`]: each node splits at its
 //!    box's centre on all three axes at once), kept in the object's loaded pose so that a rigid
 //!    move keeps it (colours are shaded again after a move: light and shadows change).
-//! 2. Far field: envmap's cube maps ([`crate::envmap::CubeMaps`]) drawn from each mirror with
+//! 2. Far field: the cube maps of `specula-core` ([`CubeMaps`]) drawn from each mirror with
 //!    its nearby objects left out (the paper's environment-mapped background, §7).
 //! 3. A C3RC per visible mirror triangle (§5; [`camera::C3rc::reflector`]): the view direction
 //!    reflected about each vertex normal; the base is the triangle. The G-buffer says which
@@ -196,175 +196,157 @@ use specula_gpu::util::{
 use specula_gpu::{GpuContext, GpuError, TimingSource};
 use specula_scene::{Camera, MaterialKind, Scene};
 
-use crate::envmap::{self, CubeMaps, Exit};
-use crate::gpu_scene::GpuScene;
-use crate::live_scene::LiveScene;
-use crate::raster::{self, BindGroupsBySlot, OutputTexture, RasterPass, RasterSpec};
-use crate::screen::SurfaceReadback;
-use crate::technique::{
-    Context, Drawn, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, StageTime,
-    Technique, TechniqueError,
-};
 use phases::{FrameSettings, PhaseReport, PlacedCloud, ScreenView};
 use points::{PointCloud, TreeLimits};
+use specula_core::cube_maps::{self, CubeMaps, Exit};
+use specula_core::gpu_scene::GpuScene;
+use specula_core::live_scene::LiveScene;
+use specula_core::raster::{self, BindGroupsBySlot, OutputTexture, RasterPass, RasterSpec};
+use specula_core::screen::SurfaceReadback;
+use specula_core::{
+    Context, Drawn, Invalidates, MethodInfo, Param, ParamKind, ParamSet, Pixels, StageTime,
+    Technique, TechniqueError,
+};
 
 const SHADER: &str = include_str!("c3rc.wgsl");
 
 pub fn shader_source() -> String {
-    envmap::shading_shader_source(SHADER)
+    cube_maps::shading_shader_source(SHADER)
 }
 
-pub const PARAMS: &[ParamSpec] = &[
-    ParamSpec {
-        name: "points",
-        kind: ParamKind::Integer { min: 1, max: 50_000_000 },
-        default: "100000",
-        doc: "points over all nearby objects (sets the density): fewer holes, linear projection cost",
-        invalidates: Invalidates::Resources,
-    },
-    ParamSpec {
-        name: "density",
-        kind: ParamKind::Number { min: 0.0, max: 1e9 },
-        default: "0",
-        doc: "points per square metre; 0 takes the density from `points`",
-        invalidates: Invalidates::Resources,
-    },
-    ParamSpec {
-        name: "near",
-        kind: ParamKind::Number { min: 0.0, max: 1e6 },
-        default: "3",
-        doc: "objects within this many reflector radii become points; farther ones are the cube map's",
-        invalidates: Invalidates::Resources,
-    },
-    ParamSpec {
-        name: "leaf_points",
-        kind: ParamKind::Integer { min: 1, max: 1_000_000 },
-        default: "256",
-        doc: "kd-tree leaf size: smaller culls more precisely at more culling cost",
-        invalidates: Invalidates::Resources,
-    },
-    ParamSpec {
-        name: "tree_depth",
-        kind: ParamKind::Integer { min: 0, max: 30 },
-        default: "12",
-        doc: "kd-tree depth limit",
-        invalidates: Invalidates::Resources,
-    },
-    ParamSpec {
-        name: "splat_scale",
-        kind: ParamKind::Number { min: 0.01, max: 100.0 },
-        default: "2.5",
-        doc: "splat radius over the radius of the disc a point stands for: closes holes at more cost (with exact_hits it also widens the light kernel and plane extrapolation; else it blurs)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "max_splat",
-        kind: ParamKind::Number { min: 0.5, max: 64.0 },
-        default: "16",
-        doc: "largest splat half-size in pixels (where reflected rays converge)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "min_pixels",
-        kind: ParamKind::Integer { min: 0, max: 1_000_000 },
-        default: "0",
-        doc: "triangles covering fewer visible pixels take the per-vertex reflected colour (0: every visible triangle gets a camera, as the paper; the default since exact hits)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "split_pixels",
-        kind: ParamKind::Integer { min: 0, max: 1_000_000 },
-        default: "0",
-        doc: "triangles covering more pixels are cut in four (up to 3 times) for more cameras; 0: never",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "trace_self",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "trace per pixel the triangles whose vertex rays hit their own mirror (false: first order, as the paper)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "level_of_detail",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "project every k-th point of nodes the camera minifies to more than 4 points a pixel (false: every point, as the paper)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "conservative_culling",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "keep the tree boxes the paper's two conditions miss: folds, the base's inside (false: the paper's test, §5.2)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "one_sided",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "skip points (and tree nodes) facing away from the reflector triangle (false: every point splats, as the paper)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "multiple_projections",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "splat every valid projection of a point (false: the first only, as the paper's GPU)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "fixed_splat",
-        kind: ParamKind::Number { min: 0.0, max: 64.0 },
-        default: "0",
-        doc: "side in pixels of every splat square (the paper: 1 or 2); 0 sizes each to its footprint (splat_scale, max_splat)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "depth_band",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "within a depth band behind the nearest splat, the nearest centre gives the colour (false: the nearest depth alone, as the paper)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "fill_holes",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "fill uncovered mirror pixels with at least 5 covered neighbours (with exact_hits: try every mirror pixel with its neighbours' surfaces) (false: the far field shows, as the paper)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "exact_hits",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "splats nominate surfaces: each mirror pixel's exact reflected ray meets their triangles, the albedo is looked up where it hits, lit by the points (false: each pixel takes a splat's colour, as the paper; runs on the CPU)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "resolution",
-        kind: ParamKind::Integer { min: 1, max: 8192 },
-        default: "256",
-        doc: "texels per far-field cube-map face side",
-        invalidates: Invalidates::Resources,
-    },
-    ParamSpec {
-        name: "dynamic",
-        kind: ParamKind::Flag,
-        default: "false",
-        doc: "redraw the far-field cube maps every frame (else only after a move)",
-        invalidates: Invalidates::Uniform,
-    },
-    envmap::TWO_LEVEL_MAPS,
-    ParamSpec {
-        name: "projection",
-        kind: ParamKind::Choice(&["auto", "cpu", "gpu"]),
-        default: "auto",
-        doc: "where the forward phase runs: rayon on the CPU, compute passes on the GPU, or auto (the CPU on a software GPU, else the GPU)",
-        invalidates: Invalidates::Uniform,
-    },
-    raster::SHADOW_RESOLUTION,
-];
+specula_core::params! {
+    /// c3rc's parameters (the table above).
+    pub struct Params {
+        points: u32 = Param {
+            kind: ParamKind::Integer { min: 1, max: 50_000_000 },
+            default: "100000",
+            doc: "points over all nearby objects (sets the density): fewer holes, linear projection cost",
+            invalidates: Invalidates::Resources,
+        },
+        density: f32 = Param {
+            kind: ParamKind::Number { min: 0.0, max: 1e9 },
+            default: "0",
+            doc: "points per square metre; 0 takes the density from `points`",
+            invalidates: Invalidates::Resources,
+        },
+        near: f32 = Param {
+            kind: ParamKind::Number { min: 0.0, max: 1e6 },
+            default: "3",
+            doc: "objects within this many reflector radii become points; farther ones are the cube map's",
+            invalidates: Invalidates::Resources,
+        },
+        leaf_points: usize = Param {
+            kind: ParamKind::Integer { min: 1, max: 1_000_000 },
+            default: "256",
+            doc: "kd-tree leaf size: smaller culls more precisely at more culling cost",
+            invalidates: Invalidates::Resources,
+        },
+        tree_depth: u32 = Param {
+            kind: ParamKind::Integer { min: 0, max: 30 },
+            default: "12",
+            doc: "kd-tree depth limit",
+            invalidates: Invalidates::Resources,
+        },
+        splat_scale: f32 = Param {
+            kind: ParamKind::Number { min: 0.01, max: 100.0 },
+            default: "2.5",
+            doc: "splat radius over the radius of the disc a point stands for: closes holes at more cost (with exact_hits it also widens the light kernel and plane extrapolation; else it blurs)",
+            invalidates: Invalidates::Uniform,
+        },
+        max_splat: f32 = Param {
+            kind: ParamKind::Number { min: 0.5, max: 64.0 },
+            default: "16",
+            doc: "largest splat half-size in pixels (where reflected rays converge)",
+            invalidates: Invalidates::Uniform,
+        },
+        min_pixels: u32 = Param {
+            kind: ParamKind::Integer { min: 0, max: 1_000_000 },
+            default: "0",
+            doc: "triangles covering fewer visible pixels take the per-vertex reflected colour (0: every visible triangle gets a camera, as the paper; the default since exact hits)",
+            invalidates: Invalidates::Uniform,
+        },
+        split_pixels: u32 = Param {
+            kind: ParamKind::Integer { min: 0, max: 1_000_000 },
+            default: "0",
+            doc: "triangles covering more pixels are cut in four (up to 3 times) for more cameras; 0: never",
+            invalidates: Invalidates::Uniform,
+        },
+        trace_self: bool = Param {
+            kind: ParamKind::Flag,
+            default: "true",
+            doc: "trace per pixel the triangles whose vertex rays hit their own mirror (false: first order, as the paper)",
+            invalidates: Invalidates::Uniform,
+        },
+        level_of_detail: bool = Param {
+            kind: ParamKind::Flag,
+            default: "true",
+            doc: "project every k-th point of nodes the camera minifies to more than 4 points a pixel (false: every point, as the paper)",
+            invalidates: Invalidates::Uniform,
+        },
+        conservative_culling: bool = Param {
+            kind: ParamKind::Flag,
+            default: "true",
+            doc: "keep the tree boxes the paper's two conditions miss: folds, the base's inside (false: the paper's test, §5.2)",
+            invalidates: Invalidates::Uniform,
+        },
+        one_sided: bool = Param {
+            kind: ParamKind::Flag,
+            default: "true",
+            doc: "skip points (and tree nodes) facing away from the reflector triangle (false: every point splats, as the paper)",
+            invalidates: Invalidates::Uniform,
+        },
+        multiple_projections: bool = Param {
+            kind: ParamKind::Flag,
+            default: "true",
+            doc: "splat every valid projection of a point (false: the first only, as the paper's GPU)",
+            invalidates: Invalidates::Uniform,
+        },
+        fixed_splat: f32 = Param {
+            kind: ParamKind::Number { min: 0.0, max: 64.0 },
+            default: "0",
+            doc: "side in pixels of every splat square (the paper: 1 or 2); 0 sizes each to its footprint (splat_scale, max_splat)",
+            invalidates: Invalidates::Uniform,
+        },
+        depth_band: bool = Param {
+            kind: ParamKind::Flag,
+            default: "true",
+            doc: "within a depth band behind the nearest splat, the nearest centre gives the colour (false: the nearest depth alone, as the paper)",
+            invalidates: Invalidates::Uniform,
+        },
+        fill_holes: bool = Param {
+            kind: ParamKind::Flag,
+            default: "true",
+            doc: "fill uncovered mirror pixels with at least 5 covered neighbours (with exact_hits: try every mirror pixel with its neighbours' surfaces) (false: the far field shows, as the paper)",
+            invalidates: Invalidates::Uniform,
+        },
+        exact_hits: bool = Param {
+            kind: ParamKind::Flag,
+            default: "true",
+            doc: "splats nominate surfaces: each mirror pixel's exact reflected ray meets their triangles, the albedo is looked up where it hits, lit by the points (false: each pixel takes a splat's colour, as the paper; runs on the CPU)",
+            invalidates: Invalidates::Uniform,
+        },
+        resolution: u32 = Param {
+            kind: ParamKind::Integer { min: 1, max: 8192 },
+            default: "256",
+            doc: "texels per far-field cube-map face side",
+            invalidates: Invalidates::Resources,
+        },
+        dynamic: bool = Param {
+            kind: ParamKind::Flag,
+            default: "false",
+            doc: "redraw the far-field cube maps every frame (else only after a move)",
+            invalidates: Invalidates::Uniform,
+        },
+        two_level_maps: bool = cube_maps::TWO_LEVEL_MAPS,
+        projection: Projection = Param {
+            kind: ParamKind::Choice(Projection::WORDS),
+            default: "auto",
+            doc: "where the forward phase runs: rayon on the CPU, compute passes on the GPU, or auto (the CPU on a software GPU, else the GPU)",
+            invalidates: Invalidates::Uniform,
+        },
+        shadow_resolution: u32 = raster::SHADOW_RESOLUTION,
+    }
+}
 
 pub const INFO: MethodInfo = MethodInfo {
     name: "c3rc",
@@ -376,12 +358,12 @@ pub const INFO: MethodInfo = MethodInfo {
     // Refractors are shaded by envmap's shading pass from cube maps drawn as envmap draws
     // them (module doc: "Dielectric objects are shaded as envmap shades them"); only mirrors
     // get points and cameras.
-    delegates: &[crate::technique::Delegation {
-        material: crate::technique::SurfaceClass::Refractor,
-        to: crate::envmap::INFO.name,
+    delegates: &[specula_core::Delegation {
+        material: specula_core::SurfaceClass::Refractor,
+        to: "envmap",
     }],
-    params: PARAMS,
-    presets: &[crate::preset::Preset {
+    params: Params::SPECS,
+    presets: &[specula_core::Preset {
         name: "paper",
         summary: "the published algorithm (Mei, Popescu, Sacks 2007): a camera per visible triangle, the paper's box test, every point splatted once as a fixed 2-pixel square, nearest depth wins",
         settings: &[
@@ -417,65 +399,17 @@ pub enum Projection {
     Gpu,
 }
 
+specula_core::choice!(Projection {
+    Auto = "auto",
+    Cpu = "cpu",
+    Gpu = "gpu",
+});
+
+#[derive(Default)]
 pub struct C3rcMethod {
-    pub points: u32,
-    pub density: f32,
-    pub near: f32,
-    pub limits: TreeLimits,
-    pub splat_scale: f32,
-    pub max_splat: f32,
-    pub min_pixels: u32,
-    pub split_pixels: u32,
-    pub trace_self: bool,
-    pub level_of_detail: bool,
-    pub conservative_culling: bool,
-    pub one_sided: bool,
-    pub multiple_projections: bool,
-    pub fixed_splat: f32,
-    pub depth_band: bool,
-    pub fill_holes: bool,
-    pub exact_hits: bool,
-    pub resolution: u32,
-    pub dynamic: bool,
-    pub two_level_maps: bool,
-    pub shadow_resolution: u32,
-    pub projection: Projection,
+    pub params: Params,
     prepared: Option<Prepared>,
     output: OutputTexture,
-}
-
-impl Default for C3rcMethod {
-    fn default() -> Self {
-        C3rcMethod {
-            points: 100_000,
-            density: 0.0,
-            near: 3.0,
-            limits: TreeLimits {
-                leaf_points: 256,
-                max_depth: 12,
-            },
-            splat_scale: 2.5,
-            max_splat: 16.0,
-            min_pixels: 0,
-            split_pixels: 0,
-            trace_self: true,
-            level_of_detail: true,
-            conservative_culling: true,
-            one_sided: true,
-            multiple_projections: true,
-            fixed_splat: 0.0,
-            depth_band: true,
-            fill_holes: true,
-            exact_hits: true,
-            resolution: 256,
-            dynamic: false,
-            two_level_maps: true,
-            shadow_resolution: 1024,
-            projection: Projection::Auto,
-            prepared: None,
-            output: OutputTexture::default(),
-        }
-    }
 }
 
 /// The nearby objects of the mirrors, as points.
@@ -514,7 +448,7 @@ struct Prepared {
 
 /// The mirrors (specular meshes of mirror material) with their centres and radii.
 fn mirrors(scene: &Scene) -> Vec<(usize, Vec3, f32)> {
-    envmap::reflectors(scene)
+    cube_maps::reflectors(scene)
         .into_iter()
         .filter(|&(m, ..)| {
             matches!(
@@ -543,13 +477,13 @@ impl C3rcMethod {
     fn build(&self, ctx: &GpuContext, live: &LiveScene) -> Result<Prepared, GpuError> {
         let device = &ctx.device;
         let gpu_scene = live.gpu(ctx);
-        let raster = RasterPass::new(ctx, live, RasterSpec::scene(self.shadow_resolution))?;
+        let raster = RasterPass::new(ctx, live, RasterSpec::scene(self.params.shadow_resolution))?;
         ctx.validated("c3rc set-up", || {
             let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some("c3rc.wgsl"),
                 source: wgpu::ShaderSource::Wgsl(shader_source().into()),
             });
-            let mut entries = envmap::shading_layout_entries();
+            let mut entries = cube_maps::shading_layout_entries();
             entries.push(layout_entry(
                 9,
                 wgpu::ShaderStages::FRAGMENT,
@@ -614,7 +548,7 @@ impl C3rcMethod {
         if !stale {
             return false;
         }
-        let near = near_objects(scene, self.near);
+        let near = near_objects(scene, self.params.near);
         let mut meshes: Vec<usize> = near.iter().flat_map(|(_, m)| m.iter().copied()).collect();
         meshes.sort_unstable();
         meshes.dedup();
@@ -624,10 +558,10 @@ impl C3rcMethod {
         if !same_set {
             let start = std::time::Instant::now();
             let area: f32 = meshes.iter().map(|&m| points::area(&scene.meshes[m])).sum();
-            let density = if self.density > 0.0 {
-                self.density
+            let density = if self.params.density > 0.0 {
+                self.params.density
             } else {
-                self.points as f32 / area.max(1e-12)
+                self.params.points as f32 / area.max(1e-12)
             };
             let clouds = meshes
                 .iter()
@@ -638,7 +572,10 @@ impl C3rcMethod {
                         live.world_from_loaded(m).inverse(),
                         density,
                         1.0,
-                        self.limits,
+                        TreeLimits {
+                            leaf_points: self.params.leaf_points,
+                            max_depth: self.params.tree_depth,
+                        },
                     )
                 })
                 .collect();
@@ -666,69 +603,12 @@ impl Technique for C3rcMethod {
         &INFO
     }
 
-    fn parameter(&self, name: &str) -> String {
-        match name {
-            "points" => self.points.to_string(),
-            "density" => self.density.to_string(),
-            "near" => self.near.to_string(),
-            "leaf_points" => self.limits.leaf_points.to_string(),
-            "tree_depth" => self.limits.max_depth.to_string(),
-            "splat_scale" => self.splat_scale.to_string(),
-            "max_splat" => self.max_splat.to_string(),
-            "min_pixels" => self.min_pixels.to_string(),
-            "split_pixels" => self.split_pixels.to_string(),
-            "trace_self" => self.trace_self.to_string(),
-            "level_of_detail" => self.level_of_detail.to_string(),
-            "conservative_culling" => self.conservative_culling.to_string(),
-            "one_sided" => self.one_sided.to_string(),
-            "multiple_projections" => self.multiple_projections.to_string(),
-            "fixed_splat" => self.fixed_splat.to_string(),
-            "depth_band" => self.depth_band.to_string(),
-            "fill_holes" => self.fill_holes.to_string(),
-            "exact_hits" => self.exact_hits.to_string(),
-            "resolution" => self.resolution.to_string(),
-            "dynamic" => self.dynamic.to_string(),
-            "two_level_maps" => self.two_level_maps.to_string(),
-            "shadow_resolution" => self.shadow_resolution.to_string(),
-            "projection" => format!("{:?}", self.projection).to_lowercase(),
-            _ => String::new(),
-        }
+    fn params(&self) -> &dyn ParamSet {
+        &self.params
     }
 
-    fn set_parameter(&mut self, name: &str, value: &ParamValue) -> Result<(), TechniqueError> {
-        match name {
-            "points" => self.points = value.integer() as u32,
-            "density" => self.density = value.number() as f32,
-            "near" => self.near = value.number() as f32,
-            "leaf_points" => self.limits.leaf_points = value.integer() as usize,
-            "tree_depth" => self.limits.max_depth = value.integer() as u32,
-            "splat_scale" => self.splat_scale = value.number() as f32,
-            "max_splat" => self.max_splat = value.number() as f32,
-            "min_pixels" => self.min_pixels = value.integer() as u32,
-            "split_pixels" => self.split_pixels = value.integer() as u32,
-            "trace_self" => self.trace_self = value.flag(),
-            "level_of_detail" => self.level_of_detail = value.flag(),
-            "conservative_culling" => self.conservative_culling = value.flag(),
-            "one_sided" => self.one_sided = value.flag(),
-            "multiple_projections" => self.multiple_projections = value.flag(),
-            "fixed_splat" => self.fixed_splat = value.number() as f32,
-            "depth_band" => self.depth_band = value.flag(),
-            "fill_holes" => self.fill_holes = value.flag(),
-            "exact_hits" => self.exact_hits = value.flag(),
-            "resolution" => self.resolution = value.integer() as u32,
-            "dynamic" => self.dynamic = value.flag(),
-            "two_level_maps" => self.two_level_maps = value.flag(),
-            "shadow_resolution" => self.shadow_resolution = value.integer() as u32,
-            "projection" => {
-                self.projection = match value.word() {
-                    "gpu" => Projection::Gpu,
-                    "cpu" => Projection::Cpu,
-                    _ => Projection::Auto,
-                }
-            }
-            _ => {}
-        }
-        Ok(())
+    fn params_mut(&mut self) -> &mut dyn ParamSet {
+        &mut self.params
     }
 
     fn invalidate(&mut self, what: Invalidates) {
@@ -778,14 +658,14 @@ impl Technique for C3rcMethod {
         stages.lap(gpu, "g-buffer")?;
 
         p.maps.set_hidden(field.near.clone());
-        p.maps.set_two_levels(self.two_level_maps);
+        p.maps.set_two_levels(self.params.two_level_maps);
         let faces_drawn = p.maps.update(
             gpu,
             &p.raster,
             live,
-            self.resolution,
+            self.params.resolution,
             Exit::Slab,
-            self.dynamic,
+            self.params.dynamic,
         )?;
         stages.lap(gpu, "far-field cube maps")?;
 
@@ -814,19 +694,19 @@ impl Technique for C3rcMethod {
         let mirror_meshes: Vec<usize> = field.near.iter().map(|(m, _)| *m).collect();
         let view = ScreenView::new(camera, width, height);
         let settings = FrameSettings {
-            min_pixels: self.min_pixels,
-            split_pixels: self.split_pixels,
-            trace_self: self.trace_self,
-            level_of_detail: self.level_of_detail,
-            conservative_culling: self.conservative_culling,
-            one_sided: self.one_sided,
-            multiple_projections: self.multiple_projections,
-            fixed_splat: self.fixed_splat,
-            depth_band: self.depth_band,
-            fill_holes: self.fill_holes,
-            exact_hits: self.exact_hits,
-            splat_scale: self.splat_scale,
-            max_splat: self.max_splat,
+            min_pixels: self.params.min_pixels,
+            split_pixels: self.params.split_pixels,
+            trace_self: self.params.trace_self,
+            level_of_detail: self.params.level_of_detail,
+            conservative_culling: self.params.conservative_culling,
+            one_sided: self.params.one_sided,
+            multiple_projections: self.params.multiple_projections,
+            fixed_splat: self.params.fixed_splat,
+            depth_band: self.params.depth_band,
+            fill_holes: self.params.fill_holes,
+            exact_hits: self.params.exact_hits,
+            splat_scale: self.params.splat_scale,
+            max_splat: self.params.max_splat,
             max_depth: FALLBACK_MAX_DEPTH,
         };
         let mut plan = phases::plan(
@@ -850,13 +730,13 @@ impl Technique for C3rcMethod {
         let points: usize = field.clouds.iter().map(|c| c.len()).sum();
         // The exact hits' resolve runs on the CPU only: `auto` keeps it there.
         let on_gpu = points <= gpu::MAX_POINTS
-            && match self.projection {
+            && match self.params.projection {
                 Projection::Gpu => true,
                 Projection::Cpu => false,
-                Projection::Auto => !gpu.is_software() && !self.exact_hits,
+                Projection::Auto => !gpu.is_software() && !self.params.exact_hits,
             };
         let mut warnings = Vec::new();
-        if on_gpu && self.exact_hits {
+        if on_gpu && self.params.exact_hits {
             warnings.push(
                 "c3rc: projection=gpu splats colours (exact_hits runs on the CPU only)".into(),
             );
@@ -928,7 +808,7 @@ impl Technique for C3rcMethod {
                 .write_buffer(&p.camera_buffer, 0, bytemuck::bytes_of(&camera_uniform));
             let group = p.bind_groups.get_or_make(g.slot, || {
                 let views = g.views();
-                let mut entries = envmap::shading_bindings(&p.camera_buffer, &views, &p.maps);
+                let mut entries = cube_maps::shading_bindings(&p.camera_buffer, &views, &p.maps);
                 entries.push(p.near_buffer.get().as_entire_binding());
                 entries.push(wgpu::BindingResource::TextureView(
                     p.maps.positions_view().expect("kept since build"),

@@ -18,7 +18,7 @@ use specula_trace::{Ray, SceneAccel};
 use super::camera::{C3rc, PlaneBound, Projector};
 use super::points::{Node, OneRing, PointCloud};
 
-pub use crate::screen::{PixelSurfaces, ScreenView};
+pub use specula_core::screen::{PixelSurfaces, ScreenView};
 
 /// Per-frame knobs (see the module parameters in `c3rc/mod.rs`).
 #[derive(Clone, Copy, Debug)]

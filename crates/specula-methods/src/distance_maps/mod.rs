@@ -169,12 +169,14 @@ use specula_gpu::util::{
 use specula_gpu::{GpuContext, StageTimer};
 use specula_scene::{Camera, Scene};
 
-use crate::gpu_scene::GpuScene;
-use crate::live_scene::LiveScene;
-use crate::raster::{self, BindGroupsBySlot, OutputTexture, RasterPass, RasterSpec, CUBE_FACES};
-use crate::technique::{
-    Context, Drawn, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, Technique,
-    TechniqueError,
+use specula_core::gpu_scene::GpuScene;
+use specula_core::live_scene::LiveScene;
+use specula_core::raster::{
+    self, BindGroupsBySlot, OutputTexture, RasterPass, RasterSpec, CUBE_FACES,
+};
+use specula_core::{
+    Context, Drawn, Invalidates, MethodInfo, Param, ParamKind, ParamSet, ParamType, ParamValue,
+    Pixels, Technique, TechniqueError,
 };
 
 /// The tracing pass's fallback counters, in trace.wgsl's order: counter name, and what the
@@ -194,121 +196,108 @@ const FALLBACK_KINDS: [(&str, &str); 3] = [
     ),
 ];
 
-pub const PARAMS: &[ParamSpec] = &[
-    ParamSpec {
-        name: "resolution",
-        kind: ParamKind::Integer { min: 1, max: 8192 },
-        default: "512",
-        doc: "texels per face side: finer geometry and more exact hits; 6 x resolution^2 texels per layer",
-        invalidates: Invalidates::Resources,
-    },
-    ParamSpec {
-        name: "layers",
-        kind: ParamKind::Choice(&["simple", "1", "2", "3", "4", "5", "6", "7", "8"]),
-        default: "simple",
-        doc: "the paper's three layers (simple) or that many depth-peeled layers",
-        invalidates: Invalidates::Resources,
-    },
-    ParamSpec {
-        name: "diffuse_layers",
-        kind: ParamKind::Integer { min: 1, max: 6 },
-        default: "1",
-        doc: "with layers=simple, depth-peeled layers of the non-specular surfaces",
-        invalidates: Invalidates::Resources,
-    },
-    ParamSpec {
-        name: "linear_steps",
-        kind: ParamKind::Integer { min: 1, max: 1000 },
-        default: "80",
-        doc: "most linear-search steps per layer; fewer miss thin objects",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "secant_steps",
-        kind: ParamKind::Integer { min: 0, max: 100 },
-        default: "10",
-        doc: "secant iterations after the linear search (0: its overshooting sample is the hit)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "max_depth",
-        kind: ParamKind::Integer { min: 1, max: 16 },
-        default: "4",
-        doc: "most specular bounces on a path (deeper branches take the map's estimate)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "min_max",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "min-max acceleration: march only between each layer's nearest and farthest distance",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "skip_start",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "start each secondary ray's search 2/resolution of |x| away (false: the paper's t = 0.0001)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "refine_every_layer",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "refine every layer's bracket, nearest refined hit wins (false: the paper's layer with the nearest overshoot only)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "interpolation",
-        kind: ParamKind::Choice(&["mesh", "plain"]),
-        default: "mesh",
-        doc: "mesh: interpolate within one mesh, brackets across meshes only where the ray passes the second; plain: the paper's",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "dielectric_branches",
-        kind: ParamKind::Choice(&["both", "refracted"]),
-        default: "both",
-        doc: "trace reflected and refracted branches at glass (refracted: the paper's single path)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "dielectric_fresnel",
-        kind: ParamKind::Choice(&["exact", "schlick"]),
-        default: "exact",
-        doc: "Fresnel terms at glass: exact, or the paper's Schlick approximation",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "dispersion",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "trace dispersive glass once per colour channel (false: the green index, as the paper's one index)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "estimate",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "unresolved rays and cut branches take the map's estimate (false: background, and the paper's path weight)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "output",
-        kind: ParamKind::Choice(&["radiance", "first-hit"]),
-        default: "radiance",
-        doc: "first-hit writes each reflector pixel's first secondary hit position instead",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "dynamic",
-        kind: ParamKind::Flag,
-        default: "false",
-        doc: "redraw the maps every frame (else only after a move)",
-        invalidates: Invalidates::Uniform,
-    },
-    raster::SHADOW_RESOLUTION,
-];
+specula_core::params! {
+    /// distance-maps' parameters (the table above).
+    pub struct Params {
+        resolution: u32 = Param {
+            kind: ParamKind::Integer { min: 1, max: 8192 },
+            default: "512",
+            doc: "texels per face side: finer geometry and more exact hits; 6 x resolution^2 texels per layer",
+            invalidates: Invalidates::Resources,
+        },
+        layers: Layers = Param {
+            kind: ParamKind::Choice(&["simple", "1", "2", "3", "4", "5", "6", "7", "8"]),
+            default: "simple",
+            doc: "the paper's three layers (simple) or that many depth-peeled layers",
+            invalidates: Invalidates::Resources,
+        },
+        diffuse_layers: u32 = Param {
+            kind: ParamKind::Integer { min: 1, max: 6 },
+            default: "1",
+            doc: "with layers=simple, depth-peeled layers of the non-specular surfaces",
+            invalidates: Invalidates::Resources,
+        },
+        linear_steps: u32 = Param {
+            kind: ParamKind::Integer { min: 1, max: 1000 },
+            default: "80",
+            doc: "most linear-search steps per layer; fewer miss thin objects",
+            invalidates: Invalidates::Uniform,
+        },
+        secant_steps: u32 = Param {
+            kind: ParamKind::Integer { min: 0, max: 100 },
+            default: "10",
+            doc: "secant iterations after the linear search (0: its overshooting sample is the hit)",
+            invalidates: Invalidates::Uniform,
+        },
+        max_depth: u32 = Param {
+            kind: ParamKind::Integer { min: 1, max: 16 },
+            default: "4",
+            doc: "most specular bounces on a path (deeper branches take the map's estimate)",
+            invalidates: Invalidates::Uniform,
+        },
+        min_max: bool = Param {
+            kind: ParamKind::Flag,
+            default: "true",
+            doc: "min-max acceleration: march only between each layer's nearest and farthest distance",
+            invalidates: Invalidates::Uniform,
+        },
+        skip_start: bool = Param {
+            kind: ParamKind::Flag,
+            default: "true",
+            doc: "start each secondary ray's search 2/resolution of |x| away (false: the paper's t = 0.0001)",
+            invalidates: Invalidates::Uniform,
+        },
+        refine_every_layer: bool = Param {
+            kind: ParamKind::Flag,
+            default: "true",
+            doc: "refine every layer's bracket, nearest refined hit wins (false: the paper's layer with the nearest overshoot only)",
+            invalidates: Invalidates::Uniform,
+        },
+        interpolation: Interpolation = Param {
+            kind: ParamKind::Choice(Interpolation::WORDS),
+            default: "mesh",
+            doc: "mesh: interpolate within one mesh, brackets across meshes only where the ray passes the second; plain: the paper's",
+            invalidates: Invalidates::Uniform,
+        },
+        dielectric_branches: Branches = Param {
+            kind: ParamKind::Choice(Branches::WORDS),
+            default: "both",
+            doc: "trace reflected and refracted branches at glass (refracted: the paper's single path)",
+            invalidates: Invalidates::Uniform,
+        },
+        dielectric_fresnel: DielectricFresnel = Param {
+            kind: ParamKind::Choice(DielectricFresnel::WORDS),
+            default: "exact",
+            doc: "Fresnel terms at glass: exact, or the paper's Schlick approximation",
+            invalidates: Invalidates::Uniform,
+        },
+        dispersion: bool = Param {
+            kind: ParamKind::Flag,
+            default: "true",
+            doc: "trace dispersive glass once per colour channel (false: the green index, as the paper's one index)",
+            invalidates: Invalidates::Uniform,
+        },
+        estimate: bool = Param {
+            kind: ParamKind::Flag,
+            default: "true",
+            doc: "unresolved rays and cut branches take the map's estimate (false: background, and the paper's path weight)",
+            invalidates: Invalidates::Uniform,
+        },
+        output: Output = Param {
+            kind: ParamKind::Choice(Output::WORDS),
+            default: "radiance",
+            doc: "first-hit writes each reflector pixel's first secondary hit position instead",
+            invalidates: Invalidates::Uniform,
+        },
+        dynamic: bool = Param {
+            kind: ParamKind::Flag,
+            default: "false",
+            doc: "redraw the maps every frame (else only after a move)",
+            invalidates: Invalidates::Uniform,
+        },
+        shadow_resolution: u32 = raster::SHADOW_RESOLUTION,
+    }
+}
 
 pub const INFO: MethodInfo = MethodInfo {
     name: "distance-maps",
@@ -318,8 +307,8 @@ pub const INFO: MethodInfo = MethodInfo {
     gpu_optional: false,
     progressive: false,
     delegates: &[],
-    params: PARAMS,
-    presets: &[crate::preset::Preset {
+    params: Params::SPECS,
+    presets: &[specula_core::Preset {
         name: "paper",
         summary: "the published algorithm (Umenhoffer, Patow, Szirmay-Kalos 2007) at its published settings (the video's depth 2, maps redrawn every frame): every step beyond the paper off",
         settings: &[
@@ -381,11 +370,29 @@ pub enum Layers {
     Peeled(u32),
 }
 
+impl ParamType for Layers {
+    fn from_param(value: &ParamValue) -> Result<Self, String> {
+        match value.word() {
+            "simple" => Ok(Layers::Simple),
+            n => n
+                .parse()
+                .map(Layers::Peeled)
+                .map_err(|_| format!("expected simple or a layer count, not {n}")),
+        }
+    }
+    fn to_param(&self) -> String {
+        match self {
+            Layers::Simple => "simple".to_string(),
+            Layers::Peeled(n) => n.to_string(),
+        }
+    }
+}
+
 impl DistanceMaps {
     /// Layers per reflector map.
     pub fn layer_count(&self) -> u32 {
-        match self.layers {
-            Layers::Simple => 2 + self.diffuse_layers,
+        match self.params.layers {
+            Layers::Simple => 2 + self.params.diffuse_layers,
             Layers::Peeled(n) => n,
         }
     }
@@ -401,6 +408,38 @@ pub enum Interpolation {
     Plain,
 }
 
+specula_core::choice!(Interpolation {
+    Mesh = "mesh",
+    Plain = "plain",
+});
+
+/// Which branches a path follows at a dielectric.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Branches {
+    /// Reflected and refracted.
+    Both,
+    /// The refracted one only, as the paper.
+    Refracted,
+}
+
+specula_core::choice!(Branches {
+    Both = "both",
+    Refracted = "refracted",
+});
+
+/// The Fresnel terms at a dielectric.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DielectricFresnel {
+    Exact,
+    /// Schlick's approximation, as the paper.
+    Schlick,
+}
+
+specula_core::choice!(DielectricFresnel {
+    Exact = "exact",
+    Schlick = "schlick",
+});
+
 /// What the tracing pass writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Output {
@@ -408,6 +447,11 @@ pub enum Output {
     /// World position of the first secondary hit (see the module doc).
     FirstHit = 1,
 }
+
+specula_core::choice!(Output {
+    Radiance = "radiance",
+    FirstHit = "first-hit",
+});
 
 /// Host mirror of WGSL `LayerView` (layers.wgsl).
 #[repr(C)]
@@ -523,59 +567,12 @@ struct Prepared {
     fallbacks: Counters,
 }
 
+#[derive(Default)]
 pub struct DistanceMaps {
-    pub resolution: u32,
-    pub layers: Layers,
-    /// Depth-peeled layers of non-specular surfaces in [`Layers::Simple`].
-    pub diffuse_layers: u32,
-    pub linear_steps: u32,
-    pub secant_steps: u32,
-    pub max_depth: u32,
-    pub min_max: bool,
-    /// Start the search 2/resolution of |x| along each secondary ray (else at the paper's t).
-    pub skip_start: bool,
-    pub refine_every_layer: bool,
-    pub interpolation: Interpolation,
-    /// Both branches at a dielectric (else only the refracted one, as the paper).
-    pub both_branches: bool,
-    /// Exact Fresnel terms at dielectrics (else Schlick's, as the paper).
-    pub exact_fresnel: bool,
-    pub dispersion: bool,
-    /// Unresolved rays and cut branches take the map's estimate (see the module doc).
-    pub estimate: bool,
-    pub output: Output,
-    pub dynamic: bool,
-    pub shadow_resolution: u32,
+    pub params: Params,
     prepared: Option<Prepared>,
     timer: StageTimer,
     output_texture: OutputTexture,
-}
-
-impl Default for DistanceMaps {
-    fn default() -> Self {
-        DistanceMaps {
-            resolution: 512,
-            layers: Layers::Simple,
-            diffuse_layers: 1,
-            linear_steps: 80,
-            secant_steps: 10,
-            max_depth: 4,
-            min_max: true,
-            skip_start: true,
-            refine_every_layer: true,
-            interpolation: Interpolation::Mesh,
-            both_branches: true,
-            exact_fresnel: true,
-            dispersion: true,
-            estimate: true,
-            output: Output::Radiance,
-            dynamic: false,
-            shadow_resolution: 1024,
-            prepared: None,
-            timer: StageTimer::default(),
-            output_texture: OutputTexture::default(),
-        }
-    }
 }
 
 // What most bindings here are.
@@ -791,9 +788,9 @@ impl DistanceMaps {
                 far,
                 pad: [0; 3],
             });
-            let views = raster::cube_views(origin, near, far, self.resolution);
+            let views = raster::cube_views(origin, near, far, self.params.resolution);
             for j in 0..layer_count {
-                let (select, peel, ranges) = match self.layers {
+                let (select, peel, ranges) = match self.params.layers {
                     Layers::Simple => match j {
                         0 => (KEEP_SPECULAR_FACING, 0, &specular_ranges),
                         1 => (KEEP_SPECULAR_AWAY, 0, &specular_ranges),
@@ -831,7 +828,7 @@ impl DistanceMaps {
             .map(|i| {
                 let array_layer = i as u32;
                 let j = (array_layer / 6) % layer_count;
-                let peel = match self.layers {
+                let peel = match self.params.layers {
                     Layers::Simple => j > 2,
                     Layers::Peeled(_) => j > 0,
                 };
@@ -870,7 +867,7 @@ impl DistanceMaps {
         let device = &ctx.device;
         let scene = live.scene();
         let gpu_scene = live.gpu(ctx);
-        let raster = RasterPass::new(ctx, live, RasterSpec::scene(self.shadow_resolution))?;
+        let raster = RasterPass::new(ctx, live, RasterSpec::scene(self.params.shadow_resolution))?;
         let reflectors: Vec<usize> = (0..scene.meshes.len())
             .filter(|&m| scene.materials[scene.meshes[m].material].is_specular())
             .collect();
@@ -895,8 +892,8 @@ impl DistanceMaps {
                 ctx.create_texture(&wgpu::TextureDescriptor {
                     label: Some(label),
                     size: wgpu::Extent3d {
-                        width: self.resolution,
-                        height: self.resolution,
+                        width: self.params.resolution,
+                        height: self.params.resolution,
                         depth_or_array_layers: array_layers,
                     },
                     mip_level_count: 1,
@@ -923,8 +920,8 @@ impl DistanceMaps {
             let depth = texture_2d(
                 ctx,
                 "distance-map depth",
-                self.resolution,
-                self.resolution,
+                self.params.resolution,
+                self.params.resolution,
                 raster::DEPTH_FORMAT,
                 wgpu::TextureUsages::RENDER_ATTACHMENT,
             )
@@ -1111,90 +1108,12 @@ impl Technique for DistanceMaps {
         &INFO
     }
 
-    fn parameter(&self, name: &str) -> String {
-        match name {
-            "resolution" => self.resolution.to_string(),
-            "layers" => match self.layers {
-                Layers::Simple => "simple".to_string(),
-                Layers::Peeled(n) => n.to_string(),
-            },
-            "diffuse_layers" => self.diffuse_layers.to_string(),
-            "linear_steps" => self.linear_steps.to_string(),
-            "secant_steps" => self.secant_steps.to_string(),
-            "max_depth" => self.max_depth.to_string(),
-            "min_max" => self.min_max.to_string(),
-            "skip_start" => self.skip_start.to_string(),
-            "refine_every_layer" => self.refine_every_layer.to_string(),
-            "interpolation" => match self.interpolation {
-                Interpolation::Mesh => "mesh".into(),
-                Interpolation::Plain => "plain".into(),
-            },
-            "dielectric_branches" => {
-                let word = if self.both_branches {
-                    "both"
-                } else {
-                    "refracted"
-                };
-                word.into()
-            }
-            "dielectric_fresnel" => {
-                let word = if self.exact_fresnel {
-                    "exact"
-                } else {
-                    "schlick"
-                };
-                word.into()
-            }
-            "dispersion" => self.dispersion.to_string(),
-            "estimate" => self.estimate.to_string(),
-            "output" => match self.output {
-                Output::Radiance => "radiance".into(),
-                Output::FirstHit => "first-hit".into(),
-            },
-            "dynamic" => self.dynamic.to_string(),
-            "shadow_resolution" => self.shadow_resolution.to_string(),
-            _ => String::new(),
-        }
+    fn params(&self) -> &dyn ParamSet {
+        &self.params
     }
 
-    fn set_parameter(&mut self, name: &str, value: &ParamValue) -> Result<(), TechniqueError> {
-        let count = value.integer() as u32;
-        match name {
-            "resolution" => self.resolution = count,
-            "shadow_resolution" => self.shadow_resolution = count,
-            "layers" => {
-                self.layers = match value.word() {
-                    "simple" => Layers::Simple,
-                    n => Layers::Peeled(n.parse().unwrap_or(1)),
-                }
-            }
-            "diffuse_layers" => self.diffuse_layers = count,
-            "linear_steps" => self.linear_steps = count,
-            "secant_steps" => self.secant_steps = count,
-            "max_depth" => self.max_depth = count,
-            "min_max" => self.min_max = value.flag(),
-            "skip_start" => self.skip_start = value.flag(),
-            "refine_every_layer" => self.refine_every_layer = value.flag(),
-            "interpolation" => {
-                self.interpolation = match value.word() {
-                    "plain" => Interpolation::Plain,
-                    _ => Interpolation::Mesh,
-                }
-            }
-            "dielectric_branches" => self.both_branches = value.word() == "both",
-            "dielectric_fresnel" => self.exact_fresnel = value.word() == "exact",
-            "dispersion" => self.dispersion = value.flag(),
-            "estimate" => self.estimate = value.flag(),
-            "dynamic" => self.dynamic = value.flag(),
-            "output" => {
-                self.output = match value.word() {
-                    "first-hit" => Output::FirstHit,
-                    _ => Output::Radiance,
-                }
-            }
-            _ => {}
-        }
-        Ok(())
+    fn params_mut(&mut self) -> &mut dyn ParamSet {
+        &mut self.params
     }
 
     fn invalidate(&mut self, what: Invalidates) {
@@ -1222,21 +1141,21 @@ impl Technique for DistanceMaps {
         let gpu_scene = live.gpu(gpu);
         let settings = GpuTraceSettings {
             layers: self.layer_count(),
-            linear_steps: self.linear_steps,
-            secant_steps: self.secant_steps,
-            max_depth: self.max_depth,
-            min_max: u32::from(self.min_max),
+            linear_steps: self.params.linear_steps,
+            secant_steps: self.params.secant_steps,
+            max_depth: self.params.max_depth,
+            min_max: u32::from(self.params.min_max),
             dispersive: u32::from(
-                self.dispersion && scene.materials.iter().any(|m| m.is_dispersive()),
+                self.params.dispersion && scene.materials.iter().any(|m| m.is_dispersive()),
             ),
-            output: self.output as u32,
-            resolution: self.resolution as f32,
-            skip_start: u32::from(self.skip_start),
-            refine_every_layer: u32::from(self.refine_every_layer),
-            per_mesh: u32::from(self.interpolation == Interpolation::Mesh),
-            both_branches: u32::from(self.both_branches),
-            exact_fresnel: u32::from(self.exact_fresnel),
-            estimate: u32::from(self.estimate),
+            output: self.params.output as u32,
+            resolution: self.params.resolution as f32,
+            skip_start: u32::from(self.params.skip_start),
+            refine_every_layer: u32::from(self.params.refine_every_layer),
+            per_mesh: u32::from(self.params.interpolation == Interpolation::Mesh),
+            both_branches: u32::from(self.params.dielectric_branches == Branches::Both),
+            exact_fresnel: u32::from(self.params.dielectric_fresnel == DielectricFresnel::Exact),
+            estimate: u32::from(self.params.estimate),
             pad: [0; 2],
         };
         let layer_count = self.layer_count() as u64;
@@ -1249,14 +1168,14 @@ impl Technique for DistanceMaps {
         let camera_uniform = raster::camera_uniform(camera, &scene.bounds(), width, height);
         let g = p.raster.render(gpu, gpu_scene, &camera_uniform, None)?;
         self.timer.lap(gpu, "g-buffer")?;
-        let redraw = self.dynamic || p.maps_drawn_at != Some(live.version());
+        let redraw = self.params.dynamic || p.maps_drawn_at != Some(live.version());
         let faces = if redraw { p.draws.len() as u64 } else { 0 };
         if redraw {
             gpu.validated("distance-map layers", || p.draw_maps(gpu, gpu_scene))?;
             self.timer.lap(gpu, "distance maps")?;
             p.maps_drawn_at = Some(live.version());
         }
-        if self.min_max && (redraw || p.ranges_at != p.maps_drawn_at) {
+        if self.params.min_max && (redraw || p.ranges_at != p.maps_drawn_at) {
             gpu.validated("distance-map ranges", || p.reduce_ranges(gpu))?;
             self.timer.lap(gpu, "min-max")?;
             p.ranges_at = p.maps_drawn_at;
@@ -1276,14 +1195,14 @@ impl Technique for DistanceMaps {
             ("cube map faces rendered".into(), faces),
             (
                 "distance map texels".into(),
-                faces * (self.resolution as u64).pow(2),
+                faces * (self.params.resolution as u64).pow(2),
             ),
             ("raster passes".into(), 1 + faces),
         ];
         for (kind, ((name, what), &count)) in FALLBACK_KINDS.iter().zip(&fallbacks).enumerate() {
             counters.push((name.to_string(), count as u64));
             if count > 0 {
-                let taken = match (self.estimate, kind) {
+                let taken = match (self.params.estimate, kind) {
                     (true, _) => {
                         "they take the farthest diffuse surface the map holds in their direction (an estimate)"
                     }

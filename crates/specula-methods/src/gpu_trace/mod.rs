@@ -60,11 +60,11 @@ use specula_gpu::{GpuContext, GpuError, StageTimer};
 use specula_scene::Camera;
 use specula_trace::SceneAccel;
 
-use crate::gpu_scene::GpuScene;
-use crate::live_scene::LiveScene;
-use crate::raster::{self, OutputTexture};
-use crate::technique::{
-    Context, Drawn, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, Technique,
+use specula_core::gpu_scene::GpuScene;
+use specula_core::live_scene::LiveScene;
+use specula_core::raster::{self, OutputTexture};
+use specula_core::{
+    Context, Drawn, Invalidates, MethodInfo, Param, ParamKind, ParamSet, Pixels, Technique,
     TechniqueError, COUNTER_RAYS_TRACED, COUNTER_SHADOW_RAYS,
 };
 
@@ -104,29 +104,29 @@ pub const COUNTER_NAMES: [&str; 4] = [
 ];
 const DROPPED: usize = 3;
 
-pub const PARAMS: &[ParamSpec] = &[
-    ParamSpec {
-        name: "max_depth",
-        kind: ParamKind::Integer { min: 0, max: 64 },
-        default: "8",
-        doc: "most specular bounces on a path (the megakernel is exact up to 11)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "mode",
-        kind: ParamKind::Choice(&["megakernel", "wavefront"]),
-        default: "megakernel",
-        doc: "one thread per pixel with a private ray stack, or ray queues in GPU memory",
-        invalidates: Invalidates::Resources,
-    },
-    ParamSpec {
-        name: "queue_factor",
-        kind: ParamKind::Integer { min: 1, max: 16 },
-        default: "4",
-        doc: "wavefront: rays per pixel each queue holds",
-        invalidates: Invalidates::Resources,
-    },
-];
+specula_core::params! {
+    /// gpu-trace's parameters (the table above).
+    pub struct Params {
+        max_depth: u32 = Param {
+            kind: ParamKind::Integer { min: 0, max: 64 },
+            default: "8",
+            doc: "most specular bounces on a path (the megakernel is exact up to 11)",
+            invalidates: Invalidates::Uniform,
+        },
+        mode: Mode = Param {
+            kind: ParamKind::Choice(Mode::WORDS),
+            default: "megakernel",
+            doc: "one thread per pixel with a private ray stack, or ray queues in GPU memory",
+            invalidates: Invalidates::Resources,
+        },
+        queue_factor: u32 = Param {
+            kind: ParamKind::Integer { min: 1, max: 16 },
+            default: "4",
+            doc: "wavefront: rays per pixel each queue holds",
+            invalidates: Invalidates::Resources,
+        },
+    }
+}
 
 pub const INFO: MethodInfo = MethodInfo {
     name: "gpu-trace",
@@ -136,7 +136,7 @@ pub const INFO: MethodInfo = MethodInfo {
     gpu_optional: false,
     progressive: false,
     delegates: &[],
-    params: PARAMS,
+    params: Params::SPECS,
     presets: &[],
     create: || Box::new(GpuTrace::default()),
 };
@@ -211,6 +211,11 @@ pub enum Mode {
     Megakernel,
     Wavefront,
 }
+
+specula_core::choice!(Mode {
+    Megakernel = "megakernel",
+    Wavefront = "wavefront",
+});
 
 /// The wavefront's pipelines and buffers, for one queue capacity.
 struct Wavefront {
@@ -401,37 +406,21 @@ impl Wavefront {
     }
 }
 
+#[derive(Default)]
 pub struct GpuTrace {
-    pub max_depth: u32,
-    pub mode: Mode,
-    pub queue_factor: u32,
+    pub params: Params,
     prepared: Option<Prepared>,
     wavefront: Option<Wavefront>,
     timer: StageTimer,
     output: OutputTexture,
 }
 
-impl Default for GpuTrace {
-    fn default() -> Self {
-        GpuTrace {
-            max_depth: 8,
-            mode: Mode::Megakernel,
-            queue_factor: 4,
-            prepared: None,
-            wavefront: None,
-            timer: StageTimer::default(),
-            output: OutputTexture::default(),
-        }
-    }
-}
-
 impl GpuTrace {
     pub fn new(mode: Mode, max_depth: u32) -> Self {
-        GpuTrace {
-            mode,
-            max_depth,
-            ..Default::default()
-        }
+        let mut trace = GpuTrace::default();
+        trace.params.mode = mode;
+        trace.params.max_depth = max_depth;
+        trace
     }
 }
 
@@ -592,28 +581,12 @@ impl Technique for GpuTrace {
         &INFO
     }
 
-    fn parameter(&self, name: &str) -> String {
-        match name {
-            "max_depth" => self.max_depth.to_string(),
-            "mode" => format!("{:?}", self.mode).to_lowercase(),
-            "queue_factor" => self.queue_factor.to_string(),
-            _ => String::new(),
-        }
+    fn params(&self) -> &dyn ParamSet {
+        &self.params
     }
 
-    fn set_parameter(&mut self, name: &str, value: &ParamValue) -> Result<(), TechniqueError> {
-        match name {
-            "max_depth" => self.max_depth = value.integer() as u32,
-            "queue_factor" => self.queue_factor = value.integer() as u32,
-            "mode" => {
-                self.mode = match value.word() {
-                    "wavefront" => Mode::Wavefront,
-                    _ => Mode::Megakernel,
-                }
-            }
-            _ => {}
-        }
-        Ok(())
+    fn params_mut(&mut self) -> &mut dyn ParamSet {
+        &mut self.params
     }
 
     fn invalidate(&mut self, what: Invalidates) {
@@ -646,20 +619,20 @@ impl Technique for GpuTrace {
         p.upload_moves(gpu, live);
         self.timer.lap(gpu, "bvh upload")?;
         let camera_uniform = raster::camera_uniform(camera, &live.scene().bounds(), width, height);
-        if self.mode == Mode::Wavefront && self.wavefront.is_none() {
-            self.wavefront = Some(Wavefront::new(gpu, p, self.queue_factor)?);
+        if self.params.mode == Mode::Wavefront && self.wavefront.is_none() {
+            self.wavefront = Some(Wavefront::new(gpu, p, self.params.queue_factor)?);
         }
         let wavefront = self
             .wavefront
             .as_ref()
-            .filter(|_| self.mode == Mode::Wavefront);
+            .filter(|_| self.params.mode == Mode::Wavefront);
         let settings = GpuSettings {
-            max_depth: self.max_depth,
+            max_depth: self.params.max_depth,
             triangle_count: p.triangle_count,
             queue_capacity: wavefront.map(Wavefront::capacity).unwrap_or(0),
             pad: 0,
         };
-        let max_depth = self.max_depth;
+        let max_depth = self.params.max_depth;
         gpu.validated("gpu-trace", || {
             gpu.queue
                 .write_buffer(&p.camera, 0, bytemuck::bytes_of(&camera_uniform));
@@ -688,7 +661,7 @@ impl Technique for GpuTrace {
         if counts[DROPPED] > 0 {
             warnings.push(format!(
                 "gpu-trace dropped {} rays (its ray stack or queues were full; max_depth {} is past what they hold): the image is darker where they went",
-                counts[DROPPED], self.max_depth
+                counts[DROPPED], self.params.max_depth
             ));
         }
         Ok(Drawn {

@@ -176,12 +176,12 @@ use specula_gpu::{GpuContext, StageTimer};
 use specula_scene::{Camera, MaterialKind, Scene};
 use specula_trace::accel::{Ray, SceneAccel};
 
-use crate::envmap::{self, CubeMaps, Exit};
-use crate::gpu_scene::GpuScene;
-use crate::live_scene::LiveScene;
-use crate::raster::{self, MeshSelection, OutputTexture, RasterPass, RasterSpec, Targets};
-use crate::technique::{
-    Context, Drawn, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, Technique,
+use specula_core::cube_maps::{self, CubeMaps, Exit};
+use specula_core::gpu_scene::GpuScene;
+use specula_core::live_scene::LiveScene;
+use specula_core::raster::{self, MeshSelection, OutputTexture, RasterPass, RasterSpec, Targets};
+use specula_core::{
+    Context, Drawn, Invalidates, MethodInfo, Param, ParamKind, ParamSet, Pixels, Technique,
     TechniqueError,
 };
 
@@ -192,7 +192,7 @@ const SHADER: &str = include_str!("image_space.wgsl");
 pub fn shader_source() -> String {
     shaders::compose(
         &["optics.wgsl", "camera.wgsl", "scene.wgsl", "cubemap.wgsl"],
-        &format!("{}\n{SHADER}", envmap::LOOKUP_SHADER),
+        &format!("{}\n{SHADER}", cube_maps::LOOKUP_SHADER),
     )
 }
 
@@ -222,139 +222,124 @@ const COUNTERS: [(&str, &str); 7] = [
     ("total internal reflections not followed", ""),
 ];
 
-pub const PARAMS: &[ParamSpec] = &[
-    ParamSpec {
-        name: "mode",
-        kind: ParamKind::Choice(&["kay-greenberg", "ray-plane", "iterative"]),
-        default: "iterative",
-        doc: "how refracted rays find nearby geometry: the NG texture behind the exit point, the nearest fitted plane, or seeded iteration",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "seeds",
-        kind: ParamKind::Integer { min: 1, max: 64 },
-        default: "7",
-        doc: "iterative mode: samples along the refracted ray choosing where iteration starts (more find smaller features)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "iterations",
-        kind: ParamKind::Integer { min: 0, max: 32 },
-        default: "4",
-        doc: "iterative mode: refinement steps from the best seed",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "bracket",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "iterative mode: refine by secant between seeds that bracket the nearby surface and keep the best-agreeing point (false: the paper's iteration from the best seed)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "depth_tolerance",
-        kind: ParamKind::Number { min: 0.0, max: 1.0 },
-        default: "0.05",
-        doc: "iterative mode: the relative depth disagreement within which the texel found is accepted (0: any, as the paper)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "discs",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "ray-plane mode: planes are discs around what they were fitted to (false: the paper's infinite planes)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "index",
-        kind: ParamKind::Number { min: 0.0, max: 4.0 },
-        default: "0",
-        doc: "index of refraction of every refractor (0: each material's own)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "texture_scale",
-        kind: ParamKind::Number {
-            min: 0.125,
-            max: 2.0,
+specula_core::params! {
+    /// image-space's parameters (the table above).
+    pub struct Params {
+        mode: NearbyMode = Param {
+            kind: ParamKind::Choice(NearbyMode::WORDS),
+            default: "iterative",
+            doc: "how refracted rays find nearby geometry: the NG texture behind the exit point, the nearest fitted plane, or seeded iteration",
+            invalidates: Invalidates::Uniform,
         },
-        default: "1",
-        doc: "size of the back-face and nearby-geometry textures relative to the frame",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "inside_steps",
-        kind: ParamKind::Integer { min: 1, max: 256 },
-        default: "24",
-        doc: "march steps following light reflected inside the refractor",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "exit_iterations",
-        kind: ParamKind::Integer { min: 0, max: 16 },
-        default: "2",
-        doc: "steps moving the estimated exit point to the back face's depth (0: the paper's interpolated distance alone)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "internal_reflection",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "split light by Fresnel at the exit and follow the reflected part inside once more (false: the paper's refraction of all of it, the zero vector under total internal reflection)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "reflection",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "add the first surface's Fresnel reflection (false: the refracted colour alone, as the paper)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "fallback",
-        kind: ParamKind::Choice(&["cube-map", "background"]),
-        default: "cube-map",
-        doc: "what a ray that finds no nearby geometry sees: the refractor's cube map, or the paper's background",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "dispersion",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "refract once per colour channel on dispersive materials (false: one path at the green index)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "resolution",
-        kind: ParamKind::Integer { min: 1, max: 8192 },
-        default: "256",
-        doc: "texels per face side of the fallback cube maps (envmap's)",
-        invalidates: Invalidates::Resources,
-    },
-    ParamSpec {
-        name: "dynamic",
-        kind: ParamKind::Flag,
-        default: "false",
-        doc: "redraw the fallback cube maps every frame (else only after a move)",
-        invalidates: Invalidates::Uniform,
-    },
-    envmap::TWO_LEVEL_MAPS,
-    ParamSpec {
-        name: "layers",
-        kind: ParamKind::Integer { min: 1, max: 4 },
-        default: "1",
-        doc: "pairs of interfaces a path may cross (1: the paper's two); more peel 2 x layers surface layers",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "parallax",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "correct cube-map lookups for parallax against the scene's bounding box (false: the direction alone, as envmap)",
-        invalidates: Invalidates::Uniform,
-    },
-    raster::SHADOW_RESOLUTION,
-];
+        seeds: u32 = Param {
+            kind: ParamKind::Integer { min: 1, max: 64 },
+            default: "7",
+            doc: "iterative mode: samples along the refracted ray choosing where iteration starts (more find smaller features)",
+            invalidates: Invalidates::Uniform,
+        },
+        iterations: u32 = Param {
+            kind: ParamKind::Integer { min: 0, max: 32 },
+            default: "4",
+            doc: "iterative mode: refinement steps from the best seed",
+            invalidates: Invalidates::Uniform,
+        },
+        bracket: bool = Param {
+            kind: ParamKind::Flag,
+            default: "true",
+            doc: "iterative mode: refine by secant between seeds that bracket the nearby surface and keep the best-agreeing point (false: the paper's iteration from the best seed)",
+            invalidates: Invalidates::Uniform,
+        },
+        depth_tolerance: f32 = Param {
+            kind: ParamKind::Number { min: 0.0, max: 1.0 },
+            default: "0.05",
+            doc: "iterative mode: the relative depth disagreement within which the texel found is accepted (0: any, as the paper)",
+            invalidates: Invalidates::Uniform,
+        },
+        discs: bool = Param {
+            kind: ParamKind::Flag,
+            default: "true",
+            doc: "ray-plane mode: planes are discs around what they were fitted to (false: the paper's infinite planes)",
+            invalidates: Invalidates::Uniform,
+        },
+        index: f32 = Param {
+            kind: ParamKind::Number { min: 0.0, max: 4.0 },
+            default: "0",
+            doc: "index of refraction of every refractor (0: each material's own)",
+            invalidates: Invalidates::Uniform,
+        },
+        texture_scale: f32 = Param {
+            kind: ParamKind::Number {
+                min: 0.125,
+                max: 2.0,
+            },
+            default: "1",
+            doc: "size of the back-face and nearby-geometry textures relative to the frame",
+            invalidates: Invalidates::Uniform,
+        },
+        inside_steps: u32 = Param {
+            kind: ParamKind::Integer { min: 1, max: 256 },
+            default: "24",
+            doc: "march steps following light reflected inside the refractor",
+            invalidates: Invalidates::Uniform,
+        },
+        exit_iterations: u32 = Param {
+            kind: ParamKind::Integer { min: 0, max: 16 },
+            default: "2",
+            doc: "steps moving the estimated exit point to the back face's depth (0: the paper's interpolated distance alone)",
+            invalidates: Invalidates::Uniform,
+        },
+        internal_reflection: bool = Param {
+            kind: ParamKind::Flag,
+            default: "true",
+            doc: "split light by Fresnel at the exit and follow the reflected part inside once more (false: the paper's refraction of all of it, the zero vector under total internal reflection)",
+            invalidates: Invalidates::Uniform,
+        },
+        reflection: bool = Param {
+            kind: ParamKind::Flag,
+            default: "true",
+            doc: "add the first surface's Fresnel reflection (false: the refracted colour alone, as the paper)",
+            invalidates: Invalidates::Uniform,
+        },
+        fallback: Fallback = Param {
+            kind: ParamKind::Choice(Fallback::WORDS),
+            default: "cube-map",
+            doc: "what a ray that finds no nearby geometry sees: the refractor's cube map, or the paper's background",
+            invalidates: Invalidates::Uniform,
+        },
+        dispersion: bool = Param {
+            kind: ParamKind::Flag,
+            default: "true",
+            doc: "refract once per colour channel on dispersive materials (false: one path at the green index)",
+            invalidates: Invalidates::Uniform,
+        },
+        resolution: u32 = Param {
+            kind: ParamKind::Integer { min: 1, max: 8192 },
+            default: "256",
+            doc: "texels per face side of the fallback cube maps (envmap's)",
+            invalidates: Invalidates::Resources,
+        },
+        dynamic: bool = Param {
+            kind: ParamKind::Flag,
+            default: "false",
+            doc: "redraw the fallback cube maps every frame (else only after a move)",
+            invalidates: Invalidates::Uniform,
+        },
+        two_level_maps: bool = cube_maps::TWO_LEVEL_MAPS,
+        layers: u32 = Param {
+            kind: ParamKind::Integer { min: 1, max: 4 },
+            default: "1",
+            doc: "pairs of interfaces a path may cross (1: the paper's two); more peel 2 x layers surface layers",
+            invalidates: Invalidates::Uniform,
+        },
+        parallax: bool = Param {
+            kind: ParamKind::Flag,
+            default: "true",
+            doc: "correct cube-map lookups for parallax against the scene's bounding box (false: the direction alone, as envmap)",
+            invalidates: Invalidates::Uniform,
+        },
+        shadow_resolution: u32 = raster::SHADOW_RESOLUTION,
+    }
+}
 
 pub const INFO: MethodInfo = MethodInfo {
     name: "image-space",
@@ -368,8 +353,8 @@ pub const INFO: MethodInfo = MethodInfo {
     // changes their figure (suite mirror sphere: envmap 0.20, image-space 0.017), so it is
     // image-space's own.
     delegates: &[],
-    params: PARAMS,
-    presets: &[crate::preset::Preset {
+    params: Params::SPECS,
+    presets: &[specula_core::Preset {
         name: "paper",
         summary:
             "the published algorithm (Wyman 2005, nearby geometry): every step beyond the paper off",
@@ -397,15 +382,11 @@ pub enum NearbyMode {
     Iterative = 2,
 }
 
-impl NearbyMode {
-    pub fn name(self) -> &'static str {
-        match self {
-            NearbyMode::KayGreenberg => "kay-greenberg",
-            NearbyMode::RayPlane => "ray-plane",
-            NearbyMode::Iterative => "iterative",
-        }
-    }
-}
+specula_core::choice!(NearbyMode {
+    KayGreenberg = "kay-greenberg",
+    RayPlane = "ray-plane",
+    Iterative = "iterative",
+});
 
 /// What a ray that finds no nearby geometry sees.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -414,14 +395,10 @@ pub enum Fallback {
     Background = 1,
 }
 
-impl Fallback {
-    pub fn name(self) -> &'static str {
-        match self {
-            Fallback::CubeMap => "cube-map",
-            Fallback::Background => "background",
-        }
-    }
-}
+specula_core::choice!(Fallback {
+    CubeMap = "cube-map",
+    Background = "background",
+});
 
 /// Host mirror of WGSL `Settings`.
 #[repr(C)]
@@ -487,68 +464,19 @@ struct Prepared {
     refractor_extent: f32,
 }
 
+#[derive(Default)]
 pub struct ImageSpace {
-    pub mode: NearbyMode,
-    pub seeds: u32,
-    pub iterations: u32,
-    pub bracket: bool,
-    pub depth_tolerance: f32,
-    pub discs: bool,
-    pub index: f32,
-    pub texture_scale: f32,
-    pub inside_steps: u32,
-    pub exit_iterations: u32,
-    pub resolution: u32,
-    pub dynamic: bool,
-    pub two_level_maps: bool,
-    pub parallax: bool,
-    pub internal_reflection: bool,
-    pub reflection: bool,
-    pub fallback: Fallback,
-    pub dispersion: bool,
-    pub layers: u32,
-    pub shadow_resolution: u32,
+    pub params: Params,
     prepared: Option<Prepared>,
     timer: StageTimer,
     output: OutputTexture,
 }
 
-impl Default for ImageSpace {
-    fn default() -> Self {
-        ImageSpace {
-            mode: NearbyMode::Iterative,
-            seeds: 7,
-            iterations: 4,
-            bracket: true,
-            depth_tolerance: 0.05,
-            discs: true,
-            index: 0.0,
-            texture_scale: 1.0,
-            inside_steps: 24,
-            exit_iterations: 2,
-            resolution: 256,
-            dynamic: false,
-            two_level_maps: true,
-            parallax: true,
-            internal_reflection: true,
-            reflection: true,
-            fallback: Fallback::CubeMap,
-            dispersion: true,
-            layers: 1,
-            shadow_resolution: 1024,
-            prepared: None,
-            timer: StageTimer::default(),
-            output: OutputTexture::default(),
-        }
-    }
-}
-
 impl ImageSpace {
     pub fn new(mode: NearbyMode) -> Self {
-        ImageSpace {
-            mode,
-            ..Default::default()
-        }
+        let mut technique = ImageSpace::default();
+        technique.params.mode = mode;
+        technique
     }
 }
 
@@ -822,7 +750,7 @@ impl ImageSpace {
         let device = &ctx.device;
         let scene = live.scene();
         let gpu_scene = live.gpu(ctx);
-        let raster = RasterPass::new(ctx, live, RasterSpec::scene(self.shadow_resolution))?;
+        let raster = RasterPass::new(ctx, live, RasterSpec::scene(self.params.shadow_resolution))?;
         let back_faces = RasterPass::new(
             ctx,
             live,
@@ -831,7 +759,7 @@ impl ImageSpace {
                 targets: Targets::Geometry,
                 cull_mode: Some(wgpu::Face::Front),
                 background: false,
-                shadow_resolution: self.shadow_resolution,
+                shadow_resolution: self.params.shadow_resolution,
             },
         )?;
         let nearby = RasterPass::new(
@@ -842,7 +770,7 @@ impl ImageSpace {
                 targets: Targets::Shaded,
                 cull_mode: None,
                 background: false,
-                shadow_resolution: self.shadow_resolution,
+                shadow_resolution: self.params.shadow_resolution,
             },
         )?;
         let distances: Vec<f32> = normal_distances(scene, live.accel())
@@ -1004,68 +932,12 @@ impl Technique for ImageSpace {
         &INFO
     }
 
-    fn parameter(&self, name: &str) -> String {
-        match name {
-            "mode" => self.mode.name().to_string(),
-            "seeds" => self.seeds.to_string(),
-            "iterations" => self.iterations.to_string(),
-            "bracket" => self.bracket.to_string(),
-            "depth_tolerance" => self.depth_tolerance.to_string(),
-            "discs" => self.discs.to_string(),
-            "index" => self.index.to_string(),
-            "texture_scale" => self.texture_scale.to_string(),
-            "inside_steps" => self.inside_steps.to_string(),
-            "exit_iterations" => self.exit_iterations.to_string(),
-            "resolution" => self.resolution.to_string(),
-            "dynamic" => self.dynamic.to_string(),
-            "two_level_maps" => self.two_level_maps.to_string(),
-            "parallax" => self.parallax.to_string(),
-            "internal_reflection" => self.internal_reflection.to_string(),
-            "reflection" => self.reflection.to_string(),
-            "fallback" => self.fallback.name().to_string(),
-            "dispersion" => self.dispersion.to_string(),
-            "layers" => self.layers.to_string(),
-            "shadow_resolution" => self.shadow_resolution.to_string(),
-            _ => String::new(),
-        }
+    fn params(&self) -> &dyn ParamSet {
+        &self.params
     }
 
-    fn set_parameter(&mut self, name: &str, value: &ParamValue) -> Result<(), TechniqueError> {
-        match name {
-            "mode" => {
-                self.mode = match value.word() {
-                    "kay-greenberg" => NearbyMode::KayGreenberg,
-                    "ray-plane" => NearbyMode::RayPlane,
-                    _ => NearbyMode::Iterative,
-                }
-            }
-            "seeds" => self.seeds = value.integer() as u32,
-            "iterations" => self.iterations = value.integer() as u32,
-            "bracket" => self.bracket = value.flag(),
-            "depth_tolerance" => self.depth_tolerance = value.number() as f32,
-            "discs" => self.discs = value.flag(),
-            "index" => self.index = value.number() as f32,
-            "texture_scale" => self.texture_scale = value.number() as f32,
-            "inside_steps" => self.inside_steps = value.integer() as u32,
-            "exit_iterations" => self.exit_iterations = value.integer() as u32,
-            "resolution" => self.resolution = value.integer() as u32,
-            "dynamic" => self.dynamic = value.flag(),
-            "two_level_maps" => self.two_level_maps = value.flag(),
-            "parallax" => self.parallax = value.flag(),
-            "internal_reflection" => self.internal_reflection = value.flag(),
-            "reflection" => self.reflection = value.flag(),
-            "fallback" => {
-                self.fallback = match value.word() {
-                    "background" => Fallback::Background,
-                    _ => Fallback::CubeMap,
-                }
-            }
-            "dispersion" => self.dispersion = value.flag(),
-            "layers" => self.layers = value.integer() as u32,
-            "shadow_resolution" => self.shadow_resolution = value.integer() as u32,
-            _ => {}
-        }
-        Ok(())
+    fn params_mut(&mut self) -> &mut dyn ParamSet {
+        &mut self.params
     }
 
     fn invalidate(&mut self, what: Invalidates) {
@@ -1111,24 +983,28 @@ impl Technique for ImageSpace {
         let camera_uniform = raster::camera_uniform(camera, &bounds, width, height);
         let g = p.raster.render(gpu, gpu_scene, &camera_uniform, None)?;
         self.timer.lap(gpu, "g-buffer")?;
-        let texture_width = ((width as f32 * self.texture_scale).round() as u32).max(1);
-        let texture_height = ((height as f32 * self.texture_scale).round() as u32).max(1);
+        let texture_width = ((width as f32 * self.params.texture_scale).round() as u32).max(1);
+        let texture_height = ((height as f32 * self.params.texture_scale).round() as u32).max(1);
         let texture_camera = raster::camera_uniform(camera, &bounds, texture_width, texture_height);
         let back = p.back_faces.render(gpu, gpu_scene, &texture_camera, None)?;
         self.timer.lap(gpu, "back faces")?;
         let nearby = p.nearby.render(gpu, gpu_scene, &texture_camera, None)?;
         self.timer.lap(gpu, "nearby geometry")?;
-        p.maps.set_two_levels(self.two_level_maps);
+        p.maps.set_two_levels(self.params.two_level_maps);
         let faces_drawn = p.maps.update(
             gpu,
             &p.raster,
             live,
-            self.resolution,
+            self.params.resolution,
             Exit::None,
-            self.dynamic,
+            self.params.dynamic,
         )?;
         self.timer.lap(gpu, "fallback cube maps")?;
-        let peeled = if self.layers > 1 { 2 * self.layers } else { 0 };
+        let peeled = if self.params.layers > 1 {
+            2 * self.params.layers
+        } else {
+            0
+        };
         if peeled > 0 {
             gpu.validated("image-space peel", || {
                 p.peel
@@ -1137,29 +1013,29 @@ impl Technique for ImageSpace {
             self.timer.lap(gpu, "peeled layers")?;
         }
         let settings = GpuSettings {
-            mode: self.mode as u32,
-            seeds: self.seeds,
-            iterations: self.iterations,
+            mode: self.params.mode as u32,
+            seeds: self.params.seeds,
+            iterations: self.params.iterations,
             plane_count: p.plane_count,
-            index_override: self.index,
-            depth_tolerance: self.depth_tolerance,
-            inside_steps: self.inside_steps,
-            exit_iterations: self.exit_iterations,
+            index_override: self.params.index,
+            depth_tolerance: self.params.depth_tolerance,
+            inside_steps: self.params.inside_steps,
+            exit_iterations: self.params.exit_iterations,
             scene_center: bounds.center().to_array(),
             scene_radius: bounds.radius(),
             scene_min: bounds.min.to_array(),
-            parallax: self.parallax as u32,
+            parallax: self.params.parallax as u32,
             scene_max: bounds.max.to_array(),
-            layers: self.layers,
+            layers: self.params.layers,
             peeled,
             refractor_extent: p.refractor_extent,
             far_depth: raster::depth_range(&bounds, camera.eye).1,
-            bracket: self.bracket as u32,
-            discs: self.discs as u32,
-            internal_reflection: self.internal_reflection as u32,
-            reflection: self.reflection as u32,
-            fallback: self.fallback as u32,
-            dispersion: self.dispersion as u32,
+            bracket: self.params.bracket as u32,
+            discs: self.params.discs as u32,
+            internal_reflection: self.params.internal_reflection as u32,
+            reflection: self.params.reflection as u32,
+            fallback: self.params.fallback as u32,
+            dispersion: self.params.dispersion as u32,
             pad: [0; 3],
         };
         let output = self.output.get(gpu, width, height);

@@ -9,8 +9,8 @@ use specula_gpu::util::{
 };
 use specula_gpu::GpuContext;
 
-use crate::gpu_scene::GpuScene;
-use crate::raster;
+use specula_core::gpu_scene::GpuScene;
+use specula_core::raster;
 
 const SHADER: &str = include_str!("peel.wgsl");
 

@@ -222,14 +222,14 @@ use specula_gpu::{GpuContext, GpuError, StageTimer};
 use specula_scene::{Camera, MaterialKind, Scene};
 use specula_trace::SceneAccel;
 
-use crate::gpu_scene::GpuScene;
-use crate::live_scene::LiveScene;
-use crate::raster::{self, BindGroupsBySlot, GBuffer, RasterPass, RasterSpec};
-use crate::technique::{
-    bad_value, Context, Drawn, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels,
-    Technique, TechniqueError,
-};
 use rays::{trace_hits, trace_paths, ChannelPaths};
+use specula_core::gpu_scene::GpuScene;
+use specula_core::live_scene::LiveScene;
+use specula_core::raster::{self, BindGroupsBySlot, GBuffer, RasterPass, RasterSpec};
+use specula_core::{
+    Context, Drawn, Invalidates, MethodInfo, Param, ParamKind, ParamSet, ParamType, ParamValue,
+    Pixels, Technique, TechniqueError,
+};
 use view::{PatchInput, PatchLimits};
 
 const SHADER: &str = include_str!("pvrr.wgsl");
@@ -253,138 +253,139 @@ pub enum Zooming {
     Map,
 }
 
-impl Zooming {
-    fn word(self) -> &'static str {
-        match self {
-            Zooming::View => "view",
-            Zooming::Traced => "traced",
-            Zooming::Map => "map",
+specula_core::choice!(Zooming {
+    View = "view",
+    Traced = "traced",
+    Map = "map",
+});
+
+/// The lenses' indices of refraction where `ior` overrides their materials': `material`
+/// (None), one index, or three (red, green, blue).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Ior(pub Option<Vec3>);
+
+impl ParamType for Ior {
+    fn from_param(value: &ParamValue) -> Result<Self, String> {
+        parse_ior(value.word()).map(Ior).map_err(str::to_string)
+    }
+    fn to_param(&self) -> String {
+        match self.0 {
+            None => "material".to_string(),
+            Some(i) => format!("{},{},{}", i.x, i.y, i.z),
         }
     }
 }
 
-pub use crate::gpu_scene::MARKER_RADIANCE;
+pub use specula_core::gpu_scene::MARKER_RADIANCE;
 
-pub const PARAMS: &[ParamSpec] = &[
-    ParamSpec {
-        name: "resolution",
-        kind: ParamKind::Integer { min: 1, max: 8192 },
-        default: "512",
-        doc: "reflection-map height in texels of an undivided reflector (patches share it by solid angle)",
-        invalidates: Invalidates::Uniform,
-    },
-    raster::SHADOW_RESOLUTION,
-    // Both shape the patches, which the cached mode keeps: changing them clears the cache.
-    ParamSpec {
-        name: "max_fov",
-        kind: ParamKind::Number { min: 1.0, max: 170.0 },
-        default: "90",
-        doc: "widest view volume a patch may keep, degrees; lower: more, less distorted maps",
-        invalidates: Invalidates::Resources,
-    },
-    ParamSpec {
-        name: "max_patches",
-        kind: ParamKind::Integer { min: 1, max: 4096 },
-        default: "256",
-        doc: "most patches per reflector (1: the paper's one view per reflector); each costs a 1st pass",
-        invalidates: Invalidates::Resources,
-    },
-    ParamSpec {
-        name: "fit_hits",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "fit each view volume's sides to its hits, the only points the 2nd pass looks up (false: contain the whole reflection lines, as the paper's §3.3)",
-        invalidates: Invalidates::Resources,
-    },
-    ParamSpec {
-        name: "zooming",
-        kind: ParamKind::Choice(&["view", "traced", "map"]),
-        default: "view",
-        doc: "the vertices whose hit lies between the mirror and their rays' convergence (zooming region): view = the zooming view of §7 (from the viewpoint back toward the mirror, farthest surface kept); traced = their ray-traced radiance blended across their triangles; map = the map where their line through the viewpoint meets it, as the paper's algorithm",
-        invalidates: Invalidates::Resources,
-    },
-    ParamSpec {
-        name: "surface_reflection",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "add a dielectric's surface reflection (the paper's lens shows transmitted light only)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "internal_reflection",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "add the light reflected once inside a solid dielectric (the paper's lens shows transmitted light only)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "depth",
-        kind: ParamKind::Integer { min: 1, max: 4 },
-        default: "2",
-        doc: "reflectors seen in reflectors, levels deep",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "nested_share",
-        kind: ParamKind::Number {
-            min: 0.0,
-            max: 1000.0,
+specula_core::params! {
+    /// pvrr's parameters (the table above).
+    pub struct Params {
+        resolution: u32 = Param {
+            kind: ParamKind::Integer { min: 1, max: 8192 },
+            default: "512",
+            doc: "reflection-map height in texels of an undivided reflector (patches share it by solid angle)",
+            invalidates: Invalidates::Uniform,
         },
-        default: "8",
-        doc: "the levels below the top may draw up to this many times the top level's 1st passes and map texels, and trace a quarter of that times its per-vertex rays (0: none)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "frame_patches",
-        kind: ParamKind::Integer {
-            min: 1,
-            max: 1 << 20,
+        shadow_resolution: u32 = raster::SHADOW_RESOLUTION,
+        // Both shape the patches, which the cached mode keeps: changing them clears the cache.
+        max_fov: f32 = Param {
+            kind: ParamKind::Number { min: 1.0, max: 170.0 },
+            default: "90",
+            doc: "widest view volume a patch may keep, degrees; lower: more, less distorted maps",
+            invalidates: Invalidates::Resources,
         },
-        default: "2048",
-        doc: "the most 1st passes a frame draws, all levels together (nested levels are left out first)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "frame_texels",
-        kind: ParamKind::Integer {
-            min: 1,
-            max: 1 << 32,
+        max_patches: usize = Param {
+            kind: ParamKind::Integer { min: 1, max: 4096 },
+            default: "256",
+            doc: "most patches per reflector (1: the paper's one view per reflector); each costs a 1st pass",
+            invalidates: Invalidates::Resources,
         },
-        default: "16777216",
-        doc: "the most reflection-map texels a frame draws, all levels together (nested levels are left out first)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "ior",
-        kind: ParamKind::Text {
-            expected: "`material`, one index of refraction or three (red,green,blue), each above 1 and at most 4",
+        fit_hits: bool = Param {
+            kind: ParamKind::Flag,
+            default: "true",
+            doc: "fit each view volume's sides to its hits, the only points the 2nd pass looks up (false: contain the whole reflection lines, as the paper's §3.3)",
+            invalidates: Invalidates::Resources,
         },
-        default: "material",
-        doc: "the lenses' indices of refraction (three: chromatic aberration)",
-        invalidates: Invalidates::Scene,
-    },
-    ParamSpec {
-        name: "cached",
-        kind: ParamKind::Flag,
-        default: "false",
-        doc: "keep exit rays and patches in the eye's frame while the lens does not move relative to it",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "markers",
-        kind: ParamKind::Flag,
-        default: "false",
-        doc: "verification overlay: a red ball at every vertex's exact ray-traced hit",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "marker_size",
-        kind: ParamKind::Number { min: 1e-6, max: 0.1 },
-        default: "0.012",
-        doc: "marker radius as a fraction of its distance from the reflector",
-        invalidates: Invalidates::Uniform,
-    },
-];
+        zooming: Zooming = Param {
+            kind: ParamKind::Choice(Zooming::WORDS),
+            default: "view",
+            doc: "the vertices whose hit lies between the mirror and their rays' convergence (zooming region): view = the zooming view of §7 (from the viewpoint back toward the mirror, farthest surface kept); traced = their ray-traced radiance blended across their triangles; map = the map where their line through the viewpoint meets it, as the paper's algorithm",
+            invalidates: Invalidates::Resources,
+        },
+        surface_reflection: bool = Param {
+            kind: ParamKind::Flag,
+            default: "true",
+            doc: "add a dielectric's surface reflection (the paper's lens shows transmitted light only)",
+            invalidates: Invalidates::Uniform,
+        },
+        internal_reflection: bool = Param {
+            kind: ParamKind::Flag,
+            default: "true",
+            doc: "add the light reflected once inside a solid dielectric (the paper's lens shows transmitted light only)",
+            invalidates: Invalidates::Uniform,
+        },
+        depth: u32 = Param {
+            kind: ParamKind::Integer { min: 1, max: 4 },
+            default: "2",
+            doc: "reflectors seen in reflectors, levels deep",
+            invalidates: Invalidates::Uniform,
+        },
+        nested_share: f32 = Param {
+            kind: ParamKind::Number {
+                min: 0.0,
+                max: 1000.0,
+            },
+            default: "8",
+            doc: "the levels below the top may draw up to this many times the top level's 1st passes and map texels, and trace a quarter of that times its per-vertex rays (0: none)",
+            invalidates: Invalidates::Uniform,
+        },
+        frame_patches: u64 = Param {
+            kind: ParamKind::Integer {
+                min: 1,
+                max: 1 << 20,
+            },
+            default: "2048",
+            doc: "the most 1st passes a frame draws, all levels together (nested levels are left out first)",
+            invalidates: Invalidates::Uniform,
+        },
+        frame_texels: u64 = Param {
+            kind: ParamKind::Integer {
+                min: 1,
+                max: 1 << 32,
+            },
+            default: "16777216",
+            doc: "the most reflection-map texels a frame draws, all levels together (nested levels are left out first)",
+            invalidates: Invalidates::Uniform,
+        },
+        ior: Ior = Param {
+            kind: ParamKind::Text {
+                expected: "`material`, one index of refraction or three (red,green,blue), each above 1 and at most 4",
+            },
+            default: "material",
+            doc: "the lenses' indices of refraction (three: chromatic aberration)",
+            invalidates: Invalidates::Scene,
+        },
+        cached: bool = Param {
+            kind: ParamKind::Flag,
+            default: "false",
+            doc: "keep exit rays and patches in the eye's frame while the lens does not move relative to it",
+            invalidates: Invalidates::Uniform,
+        },
+        markers: bool = Param {
+            kind: ParamKind::Flag,
+            default: "false",
+            doc: "verification overlay: a red ball at every vertex's exact ray-traced hit",
+            invalidates: Invalidates::Uniform,
+        },
+        marker_size: f32 = Param {
+            kind: ParamKind::Number { min: 1e-6, max: 0.1 },
+            default: "0.012",
+            doc: "marker radius as a fraction of its distance from the reflector",
+            invalidates: Invalidates::Uniform,
+        },
+    }
+}
 
 pub const INFO: MethodInfo = MethodInfo {
     name: "pvrr",
@@ -394,8 +395,8 @@ pub const INFO: MethodInfo = MethodInfo {
     gpu_optional: false,
     progressive: false,
     delegates: &[],
-    params: PARAMS,
-    presets: &[crate::preset::Preset {
+    params: Params::SPECS,
+    presets: &[specula_core::Preset {
         name: "paper",
         summary: "the published algorithm (Kakimoto, Tatsukawa, Chun, Nishita): one view per reflector, the zooming region as projected, a lens's transmitted light only",
         settings: &[
@@ -676,58 +677,21 @@ impl std::ops::Deref for Shared<'_> {
     }
 }
 
+#[derive(Default)]
 pub struct Pvrr {
-    pub resolution: u32,
-    pub shadow_resolution: u32,
-    pub max_fov_deg: f32,
-    pub max_patches: usize,
-    pub fit_hits: bool,
-    pub depth: u32,
-    pub nested_share: f32,
-    pub frame_patches: u64,
-    pub frame_texels: u64,
-    pub zooming: Zooming,
-    pub surface_reflection: bool,
-    pub internal_reflection: bool,
-    pub ior: Option<Vec3>,
-    pub cached: bool,
-    pub markers: bool,
-    pub marker_size: f32,
+    pub params: Params,
     prepared: Option<Prepared>,
     cache: Vec<Option<CachedReflector>>,
     timer: StageTimer,
 }
 
-impl Default for Pvrr {
-    fn default() -> Self {
-        Pvrr {
-            resolution: 512,
-            shadow_resolution: 1024,
-            max_fov_deg: 90.0,
-            max_patches: 256,
-            fit_hits: true,
-            depth: 2,
-            nested_share: 8.0,
-            frame_patches: 2048,
-            frame_texels: 1 << 24,
-            zooming: Zooming::View,
-            surface_reflection: true,
-            internal_reflection: true,
-            ior: None,
-            cached: false,
-            markers: false,
-            marker_size: 0.012,
-            prepared: None,
-            cache: Vec::new(),
-            timer: StageTimer::default(),
-        }
-    }
-}
-
 /// Marker balls (centre, radius, colour channel) as `GpuVertex` triangles of the marker mesh
 /// `first_marker_mesh` + channel.
-fn marker_vertices(first_marker_mesh: u32, balls: &[Ball]) -> Vec<crate::gpu_scene::GpuVertex> {
-    use crate::gpu_scene::GpuVertex;
+fn marker_vertices(
+    first_marker_mesh: u32,
+    balls: &[Ball],
+) -> Vec<specula_core::gpu_scene::GpuVertex> {
+    use specula_core::gpu_scene::GpuVertex;
     let ball = specula_scene::generators::sphere(1.0, 8, 4);
     let mut vertices = Vec::new();
     for &(p, radius, channel) in balls {
@@ -1435,7 +1399,7 @@ impl Pvrr {
     fn build(&self, ctx: &GpuContext, live: &LiveScene) -> Result<Prepared, GpuError> {
         let device = &ctx.device;
         let scene = live.scene();
-        let raster = RasterPass::new(ctx, live, RasterSpec::scene(self.shadow_resolution))?;
+        let raster = RasterPass::new(ctx, live, RasterSpec::scene(self.params.shadow_resolution))?;
         ctx.validated("pvrr set-up", || {
             let stages = wgpu::ShaderStages::VERTEX_FRAGMENT;
             // Cameras and materials live in the uniform arena, bound at dynamic offsets.
@@ -1527,7 +1491,7 @@ impl Pvrr {
                 .float32_blendable
                 .then(|| pipeline((wgpu::ColorWrites::ALL, Some(add))));
             let reflectors = (0..scene.meshes.len())
-                .flat_map(|mesh| Reflector::of(scene, mesh, self.ior))
+                .flat_map(|mesh| Reflector::of(scene, mesh, self.params.ior.0))
                 .filter(|r| !r.additive || additive.is_some())
                 .collect();
             let (scene_corners, far_distance) = scene_extent(scene);
@@ -1883,61 +1847,12 @@ impl Technique for Pvrr {
         &INFO
     }
 
-    fn parameter(&self, name: &str) -> String {
-        match name {
-            "resolution" => self.resolution.to_string(),
-            "shadow_resolution" => self.shadow_resolution.to_string(),
-            "max_fov" => self.max_fov_deg.to_string(),
-            "max_patches" => self.max_patches.to_string(),
-            "fit_hits" => self.fit_hits.to_string(),
-            "depth" => self.depth.to_string(),
-            "nested_share" => self.nested_share.to_string(),
-            "frame_patches" => self.frame_patches.to_string(),
-            "frame_texels" => self.frame_texels.to_string(),
-            "zooming" => self.zooming.word().to_string(),
-            "surface_reflection" => self.surface_reflection.to_string(),
-            "internal_reflection" => self.internal_reflection.to_string(),
-            "ior" => match self.ior {
-                None => "material".to_string(),
-                Some(i) => format!("{},{},{}", i.x, i.y, i.z),
-            },
-            "cached" => self.cached.to_string(),
-            "markers" => self.markers.to_string(),
-            "marker_size" => self.marker_size.to_string(),
-            _ => String::new(),
-        }
+    fn params(&self) -> &dyn ParamSet {
+        &self.params
     }
 
-    fn set_parameter(&mut self, name: &str, value: &ParamValue) -> Result<(), TechniqueError> {
-        match name {
-            "resolution" => self.resolution = value.integer() as u32,
-            "shadow_resolution" => self.shadow_resolution = value.integer() as u32,
-            "markers" => self.markers = value.flag(),
-            "marker_size" => self.marker_size = value.number() as f32,
-            "cached" => self.cached = value.flag(),
-            "max_fov" => self.max_fov_deg = value.number() as f32,
-            "max_patches" => self.max_patches = value.integer() as usize,
-            "fit_hits" => self.fit_hits = value.flag(),
-            "depth" => self.depth = value.integer() as u32,
-            "nested_share" => self.nested_share = value.number() as f32,
-            "frame_patches" => self.frame_patches = value.integer() as u64,
-            "frame_texels" => self.frame_texels = value.integer() as u64,
-            "zooming" => {
-                self.zooming = match value.word() {
-                    "traced" => Zooming::Traced,
-                    "map" => Zooming::Map,
-                    _ => Zooming::View,
-                }
-            }
-            "surface_reflection" => self.surface_reflection = value.flag(),
-            "internal_reflection" => self.internal_reflection = value.flag(),
-            "ior" => {
-                self.ior = parse_ior(value.word())
-                    .map_err(|reason| bad_value(INFO.name, name, value, reason))?
-            }
-            _ => {}
-        }
-        Ok(())
+    fn params_mut(&mut self) -> &mut dyn ParamSet {
+        &mut self.params
     }
 
     fn invalidate(&mut self, what: Invalidates) {
@@ -1985,20 +1900,23 @@ impl Technique for Pvrr {
         // (at most 4 times as wide as high) within its share of it, each patch perhaps a
         // zooming view (two 1st passes, twice the texels).
         let reflectors = prepared.reflectors.len().max(1) as u64;
-        let top_patches = (self.frame_patches / reflectors / 2).max(1) as usize;
-        let top_resolution = ((self.frame_texels / reflectors / 8) as f64).sqrt() as u32;
+        let top_patches = (self.params.frame_patches / reflectors / 2).max(1) as usize;
+        let top_resolution = ((self.params.frame_texels / reflectors / 8) as f64).sqrt() as u32;
         let settings = PlanSettings {
-            resolution: self.resolution.min(top_resolution.max(MIN_MAP_TEXELS)),
+            resolution: self
+                .params
+                .resolution
+                .min(top_resolution.max(MIN_MAP_TEXELS)),
             limits: PatchLimits {
-                max_fov_deg: self.max_fov_deg,
-                max_patches: self.max_patches.min(top_patches),
-                zooming_view: self.zooming == Zooming::View,
+                max_fov_deg: self.params.max_fov,
+                max_patches: self.params.max_patches.min(top_patches),
+                zooming_view: self.params.zooming == Zooming::View,
             },
-            markers: self.markers.then_some(self.marker_size),
-            fit_hits: self.fit_hits,
-            zooming: self.zooming,
-            surface_reflection: self.surface_reflection,
-            internal_reflection: self.internal_reflection,
+            markers: self.params.markers.then_some(self.params.marker_size),
+            fit_hits: self.params.fit_hits,
+            zooming: self.params.zooming,
+            surface_reflection: self.params.surface_reflection,
+            internal_reflection: self.params.internal_reflection,
         };
         let frame = camera.frame();
         let eye_frame = EyeFrame {
@@ -2008,14 +1926,14 @@ impl Technique for Pvrr {
             forward: frame.forward,
         };
         let mut tally = Tally::default();
-        let cache = self.cached.then_some((&mut self.cache, &eye_frame));
+        let cache = self.params.cached.then_some((&mut self.cache, &eye_frame));
         let top = plan_level(
             &p, &settings, scene, camera.eye, None, cache, &mut tally, true,
         );
         let limits = FrameLimits {
-            nested_share: self.nested_share,
-            frame_patches: self.frame_patches,
-            frame_texels: self.frame_texels,
+            nested_share: self.params.nested_share,
+            frame_patches: self.params.frame_patches,
+            frame_texels: self.params.frame_texels,
         };
         let mut budget = FrameBudget::after_top(&top, tally.rays, &limits);
         let mut tree = plan_tree(
@@ -2023,7 +1941,7 @@ impl Technique for Pvrr {
             &settings,
             scene,
             top,
-            self.depth,
+            self.params.depth,
             &mut budget,
             &mut tally,
         );
@@ -2031,11 +1949,12 @@ impl Technique for Pvrr {
         if tally.budget_cuts > 0 {
             tally.warnings.push(format!(
                 "pvrr: the frame budget (nested_share = {}, frame_patches = {}, frame_texels = {}) left out the reflections seen in reflectors of {} map(s): other reflectors show there as the scene raster draws them, their vertices' ray-traced radiance blended in",
-                self.nested_share, self.frame_patches, self.frame_texels, tally.budget_cuts
+                self.params.nested_share, self.params.frame_patches, self.params.frame_texels, tally.budget_cuts
             ));
         }
         self.timer.lap(gpu, "per-vertex rays")?;
         let markers = self
+            .params
             .markers
             .then(|| marker_vertices(p.gpu_scene.marker_mesh(0), &tree.level.balls));
         // Every buffer the frame writes is sized from the plan and checked before any is.

@@ -35,35 +35,35 @@ use specula_scene::Camera;
 use specula_trace::reference::{pixel_radiance, rays_traced_on_this_thread, trace_image, Tracer};
 use specula_trace::Image;
 
-use crate::live_scene::LiveScene;
-use crate::technique::{
-    Context, Drawn, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels, Technique,
+use specula_core::live_scene::LiveScene;
+use specula_core::{
+    Context, Drawn, Invalidates, MethodInfo, Param, ParamKind, ParamSet, Pixels, Technique,
     TechniqueError, COUNTER_RAYS_TRACED, COUNTER_SHADOW_RAYS,
 };
 
-pub const PARAMS: &[ParamSpec] = &[
-    ParamSpec {
-        name: "spp",
-        kind: ParamKind::Integer { min: 1, max: 4096 },
-        default: "1",
-        doc: "samples per pixel: 1 = the pixel centre; more = stratified jitter, averaged",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "max_depth",
-        kind: ParamKind::Integer { min: 0, max: 64 },
-        default: "8",
-        doc: "most specular bounces on a path",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "budget_ms",
-        kind: ParamKind::Integer { min: 0, max: 60000 },
-        default: "0",
-        doc: "progressive mode: milliseconds per call, coarse to fine (0: the whole image at once)",
-        invalidates: Invalidates::Uniform,
-    },
-];
+specula_core::params! {
+    /// The reference's parameters (the table above).
+    pub struct Params {
+        spp: u32 = Param {
+            kind: ParamKind::Integer { min: 1, max: 4096 },
+            default: "1",
+            doc: "samples per pixel: 1 = the pixel centre; more = stratified jitter, averaged",
+            invalidates: Invalidates::Uniform,
+        },
+        max_depth: u32 = Param {
+            kind: ParamKind::Integer { min: 0, max: 64 },
+            default: "8",
+            doc: "most specular bounces on a path",
+            invalidates: Invalidates::Uniform,
+        },
+        budget_ms: u32 = Param {
+            kind: ParamKind::Integer { min: 0, max: 60000 },
+            default: "0",
+            doc: "progressive mode: milliseconds per call, coarse to fine (0: the whole image at once)",
+            invalidates: Invalidates::Uniform,
+        },
+    }
+}
 
 pub const INFO: MethodInfo = MethodInfo {
     name: "reference",
@@ -73,7 +73,7 @@ pub const INFO: MethodInfo = MethodInfo {
     gpu_optional: false,
     progressive: true,
     delegates: &[],
-    params: PARAMS,
+    params: Params::SPECS,
     presets: &[],
     create: || Box::new(Reference::default()),
 };
@@ -105,22 +105,10 @@ struct Progress {
     next_tile: u32,
 }
 
+#[derive(Default)]
 pub struct Reference {
-    pub spp: u32,
-    pub max_depth: u32,
-    pub budget_ms: u32,
+    pub params: Params,
     progress: Option<Progress>,
-}
-
-impl Default for Reference {
-    fn default() -> Self {
-        Reference {
-            spp: 1,
-            max_depth: 8,
-            budget_ms: 0,
-            progress: None,
-        }
-    }
 }
 
 /// Whether pixel (x, y) is traced at progressive level `level`: on the level's grid and not on
@@ -135,24 +123,12 @@ impl Technique for Reference {
         &INFO
     }
 
-    fn parameter(&self, name: &str) -> String {
-        match name {
-            "spp" => self.spp.to_string(),
-            "max_depth" => self.max_depth.to_string(),
-            "budget_ms" => self.budget_ms.to_string(),
-            _ => String::new(),
-        }
+    fn params(&self) -> &dyn ParamSet {
+        &self.params
     }
 
-    fn set_parameter(&mut self, name: &str, value: &ParamValue) -> Result<(), TechniqueError> {
-        let v = value.integer() as u32;
-        match name {
-            "spp" => self.spp = v,
-            "max_depth" => self.max_depth = v,
-            "budget_ms" => self.budget_ms = v,
-            _ => {}
-        }
-        Ok(())
+    fn params_mut(&mut self) -> &mut dyn ParamSet {
+        &mut self.params
     }
 
     fn invalidate(&mut self, _: Invalidates) {
@@ -173,11 +149,11 @@ impl Technique for Reference {
         height: u32,
     ) -> Result<Drawn, TechniqueError> {
         let start = Instant::now();
-        let (spp, budget_ms) = (self.spp, self.budget_ms);
+        let (spp, budget_ms) = (self.params.spp, self.params.budget_ms);
         let tracer = Tracer {
             scene: live.scene(),
             accel: live.accel(),
-            max_depth: self.max_depth,
+            max_depth: self.params.max_depth,
         };
         let pixel_rays = camera.pixel_rays(width, height);
         if budget_ms == 0 {
@@ -212,7 +188,7 @@ impl Technique for Reference {
             width,
             height,
             spp,
-            max_depth: self.max_depth,
+            max_depth: self.params.max_depth,
             scene: (live.id(), live.version()),
         };
         if self.progress.as_ref().is_none_or(|p| p.key != key) {

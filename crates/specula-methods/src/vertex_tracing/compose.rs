@@ -23,7 +23,7 @@ use specula_gpu::util::{
 };
 use specula_gpu::{GpuContext, GpuError};
 
-use crate::raster::{COLOR_FORMAT, IDS_FORMAT};
+use specula_core::raster::{COLOR_FORMAT, IDS_FORMAT};
 
 const SHADER: &str = include_str!("compose.wgsl");
 

@@ -33,10 +33,11 @@ use specula_scene::{Camera, Scene};
 use specula_trace::Image;
 
 use super::balance::{imbalance, Balancer, WorkerFrame};
-use super::refine::{OriginalSamples, PackageCounters, RefineSettings, Topology};
+use super::refine::{OriginalSamples, PackageCounters, Topology};
 use super::wire::{self, Message};
 use super::FrameSetup;
-use crate::live_scene::LiveScene;
+use super::Params;
+use specula_core::live_scene::LiveScene;
 
 pub use super::wire::WireError;
 
@@ -51,8 +52,7 @@ pub struct Options {
     pub frames: u32,
     pub width: u32,
     pub height: u32,
-    pub settings: RefineSettings,
-    pub max_depth: u32,
+    pub params: Params,
     /// Packages each worker asks for per frame at the frame's start (the grain).
     pub packages_per_worker: usize,
     /// A worker that leaves a package unanswered this long is lost.
@@ -315,15 +315,15 @@ impl Master<'_> {
             self.options.width,
             self.options.height,
             self.topology.clone(),
-            self.options.settings,
-            self.options.max_depth,
+            self.options.params,
+            self.options.params.max_depth,
             None,
         );
         let visibility_seconds = start.elapsed().as_secs_f64();
         let count = setup.active.len();
         // The rest of the scene first, so that the refinement phase timed below is the
         // packages' alone (the workers compute their ID buffers meanwhile).
-        let (rest, _) = setup.rest_of_scene(self.live, &self.camera, self.options.max_depth);
+        let (rest, _) = setup.rest_of_scene(self.live, &self.camera, self.options.params.max_depth);
         let refine_start = Instant::now();
         let gathered = self.refine_frame(&setup, rest, frame)?;
         let refine_seconds = refine_start.elapsed().as_secs_f64();
@@ -424,7 +424,7 @@ impl Master<'_> {
     /// The packages no worker is left for, refined by the master itself, each range as one
     /// package.
     fn refine_remaining_here(&mut self, setup: &FrameSetup, gathered: &mut Gathered) {
-        let (settings, max_depth) = (self.options.settings, self.options.max_depth);
+        let (settings, max_depth) = (self.options.params, self.options.params.max_depth);
         for range in self.balancer.take_queue() {
             let mut package = setup.package(range.clone());
             let inputs = setup.inputs(self.live, &self.camera, settings, max_depth);
@@ -548,8 +548,8 @@ fn worker(
                     width,
                     height,
                     topology.clone(),
-                    options.settings,
-                    options.max_depth,
+                    options.params,
+                    options.params.max_depth,
                     recycled,
                 );
                 view = Some((camera, setup));
@@ -608,7 +608,7 @@ fn refine_package(
     }
     let clock = Instant::now();
     let mut package = setup.package(start as usize..end as usize);
-    let mut inputs = setup.inputs(live, camera, options.settings, options.max_depth);
+    let mut inputs = setup.inputs(live, camera, options.params, options.params.max_depth);
     inputs.originals = Some(&*traced);
     package.run(&inputs, None);
     let pixels = package.take_pixels(&inputs, None);

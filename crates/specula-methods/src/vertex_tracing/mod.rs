@@ -6,7 +6,7 @@
 //!
 //! Steps, and where they are:
 //! 1. Visibility (§3): the ID buffer — the scene raster pass's G-buffer ids where the run has a
-//!    GPU, the CPU tracer's primary hits where it has none ([`crate::screen::PixelSurfaces`]).
+//!    GPU, the CPU tracer's primary hits where it has none ([`specula_core::screen::PixelSurfaces`]).
 //!    A reflector vertex is seen when the ID buffer at its pixel shows its surface at its depth
 //!    ([`refine::FrameInputs::is_visible`]; the paper's ID buffer "is essentially a Z-buffer").
 //!    The rest of the scene comes from the same pass (the raster colour, or the reference's
@@ -196,188 +196,171 @@ use specula_scene::Camera;
 use specula_trace::reference::{in_tiles, rays_traced_on_this_thread, Tracer};
 use specula_trace::{Image, Ray};
 
-use crate::live_scene::LiveScene;
-use crate::raster::{self, RasterPass, RasterSpec};
-use crate::screen::{PixelSurfaces, ScreenView, ShadeAtOnce, SurfaceReadback};
-use crate::technique::{
-    bad_value, Context, Drawn, Invalidates, MethodInfo, ParamKind, ParamSpec, ParamValue, Pixels,
-    Technique, TechniqueError, COUNTER_RAYS_TRACED, COUNTER_SHADOW_RAYS,
-};
 use compose::{FaceVertex, RasterComposition};
 pub use phases::FramePhases;
 use refine::{FrameInputs, OriginalSamples, Package, PixelOwners, Topology, TriangleId};
-pub use refine::{PackageCounters, RefineSettings, ReflectorTracing};
+pub use refine::{PackageCounters, ReflectorTracing};
+use specula_core::live_scene::LiveScene;
+use specula_core::raster::{self, RasterPass, RasterSpec};
+use specula_core::screen::{PixelSurfaces, ScreenView, ShadeAtOnce, SurfaceReadback};
+use specula_core::{
+    Context, Drawn, Invalidates, MethodInfo, Param, ParamKind, ParamSet, Pixels, Technique,
+    TechniqueError, COUNTER_RAYS_TRACED, COUNTER_SHADOW_RAYS,
+};
 
 /// Packages per rayon thread when `package_triangles` is 0: enough that a package holding a
 /// reflection's outline does not leave the other threads idle.
 const PACKAGES_PER_THREAD: usize = 16;
 
-pub const PARAMS: &[ParamSpec] = &[
-    ParamSpec {
-        name: "epsilon",
-        kind: ParamKind::Number { min: 0.0, max: 1.0 },
-        default: "0.03",
-        doc: "ε: display-colour difference (largest channel, 0-1) that splits an edge",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "flatness",
-        kind: ParamKind::Number { min: 0.0, max: 1.0 },
-        default: "0.2",
-        doc: "v: a refined face with height/longest edge below this has that edge split",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "min_edge_px",
-        kind: ParamKind::Number {
-            min: 0.5,
-            max: 1000.0,
+specula_core::params! {
+    /// vertex-tracing's parameters (the table above): what a frame and the refinement of
+    /// every package follow.
+    #[derive(Copy)]
+    pub struct Params {
+        epsilon: f32 = Param {
+            kind: ParamKind::Number { min: 0.0, max: 1.0 },
+            default: "0.03",
+            doc: "ε: display-colour difference (largest channel, 0-1) that splits an edge",
+            invalidates: Invalidates::Uniform,
         },
-        default: "3",
-        doc: "l: shortest edge (pixels) split for a colour difference; shorter ones are filled",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "max_level",
-        kind: ParamKind::Integer { min: 0, max: 40 },
-        default: "20",
-        doc: "deepest split of an original edge",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "tree_weight",
-        kind: ParamKind::Number { min: 0.0, max: 1.0 },
-        default: "0.02",
-        doc: "rays reaching the eye with less weight than this are left out of the ray trees compared",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "refine",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "adaptive refinement (false: the Gouraud preview of the original vertices only)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "fill",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "triangle filling: trace each pixel of the faces refinement left unresolved",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "deferred_textures",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "interpolate texture coordinates between alike paths and read texels per pixel (false: split edges across texture detail)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "perspective_correct",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "Gouraud interpolation perspective-correct (false: linear on the screen, the paper's)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "flatness_inside_triangles",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "the flatness rule leaves triangle borders alone, so packages never disagree (false: any longest edge, the paper's)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "trace_unseen",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "trace faces seen only between their corners (false: the paper: a triangle with no seen corner is not drawn)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "trace_behind_eye",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "trace faces with a corner behind the eye (false: interpolate them where each pixel's ray meets them)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "trace_stray",
-        kind: ParamKind::Flag,
-        default: "true",
-        doc: "trace pixels the ID buffer gives to a triangle that cannot be seen there (false: interpolate them from that triangle, the paper's display)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "tracing",
-        kind: ParamKind::Choice(&["auto", "vertices", "pixels"]),
-        default: "auto",
-        doc: "per reflector: auto traces its pixels where its seen vertices or its paths make vertices no cheaper (vertex_ratio, min_path_rays); vertices (the paper) or pixels for all",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "vertex_ratio",
-        kind: ParamKind::Number {
-            min: 0.0,
-            max: 1000.0,
+        flatness: f32 = Param {
+            kind: ParamKind::Number { min: 0.0, max: 1.0 },
+            default: "0.2",
+            doc: "v: a refined face with height/longest edge below this has that edge split",
+            invalidates: Invalidates::Uniform,
         },
-        default: "0.05",
-        doc: "tracing=auto: seen vertices per pixel above which a reflector is traced per pixel",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "min_path_rays",
-        kind: ParamKind::Number {
-            min: 0.0,
-            max: 1000.0,
+        min_edge_px: f32 = Param {
+            kind: ParamKind::Number {
+                min: 0.5,
+                max: 1000.0,
+            },
+            default: "3",
+            doc: "l: shortest edge (pixels) split for a colour difference; shorter ones are filled",
+            invalidates: Invalidates::Uniform,
         },
-        default: "6",
-        doc: "tracing=auto: rays per pixel path (beyond the primary, on a sample) below which a reflector is traced per pixel",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "budget_ms",
-        kind: ParamKind::Integer { min: 0, max: 60000 },
-        default: "0",
-        doc: "progressive mode: milliseconds per call, preview first (0: everything in one call)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "package_triangles",
-        kind: ParamKind::Integer { min: 0, max: 1 << 20 },
-        default: "0",
-        doc: "reflector triangles per task package (0: sixteen packages per thread)",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "visibility",
-        kind: ParamKind::Choice(&["auto", "cpu", "gpu"]),
-        default: "auto",
-        doc: "ID buffer from the GPU raster pass, from CPU primary rays, or the GPU where present",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "composition",
-        kind: ParamKind::Choice(&["auto", "cpu", "gpu"]),
-        default: "auto",
-        doc: "refined faces Gouraud-shaded by the GPU raster (the paper's display) or each pixel located and interpolated on the CPU; auto: the GPU where the run has one that is not a software rasterizer",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "max_depth",
-        kind: ParamKind::Integer { min: 0, max: 64 },
-        default: "8",
-        doc: "most specular bounces on a vertex's or a filled pixel's path",
-        invalidates: Invalidates::Uniform,
-    },
-    ParamSpec {
-        name: "show_faces",
-        kind: ParamKind::Flag,
-        default: "false",
-        doc: "draw the edges of the refined faces over the image (the paper's Figure 13)",
-        invalidates: Invalidates::Uniform,
-    },
-    raster::SHADOW_RESOLUTION,
-];
+        max_level: u32 = Param {
+            kind: ParamKind::Integer { min: 0, max: 40 },
+            default: "20",
+            doc: "deepest split of an original edge",
+            invalidates: Invalidates::Uniform,
+        },
+        tree_weight: f32 = Param {
+            kind: ParamKind::Number { min: 0.0, max: 1.0 },
+            default: "0.02",
+            doc: "rays reaching the eye with less weight than this are left out of the ray trees compared",
+            invalidates: Invalidates::Uniform,
+        },
+        refine: bool = Param {
+            kind: ParamKind::Flag,
+            default: "true",
+            doc: "adaptive refinement (false: the Gouraud preview of the original vertices only)",
+            invalidates: Invalidates::Uniform,
+        },
+        fill: bool = Param {
+            kind: ParamKind::Flag,
+            default: "true",
+            doc: "triangle filling: trace each pixel of the faces refinement left unresolved",
+            invalidates: Invalidates::Uniform,
+        },
+        deferred_textures: bool = Param {
+            kind: ParamKind::Flag,
+            default: "true",
+            doc: "interpolate texture coordinates between alike paths and read texels per pixel (false: split edges across texture detail)",
+            invalidates: Invalidates::Uniform,
+        },
+        perspective_correct: bool = Param {
+            kind: ParamKind::Flag,
+            default: "true",
+            doc: "Gouraud interpolation perspective-correct (false: linear on the screen, the paper's)",
+            invalidates: Invalidates::Uniform,
+        },
+        flatness_inside_triangles: bool = Param {
+            kind: ParamKind::Flag,
+            default: "true",
+            doc: "the flatness rule leaves triangle borders alone, so packages never disagree (false: any longest edge, the paper's)",
+            invalidates: Invalidates::Uniform,
+        },
+        trace_unseen: bool = Param {
+            kind: ParamKind::Flag,
+            default: "true",
+            doc: "trace faces seen only between their corners (false: the paper: a triangle with no seen corner is not drawn)",
+            invalidates: Invalidates::Uniform,
+        },
+        trace_behind_eye: bool = Param {
+            kind: ParamKind::Flag,
+            default: "true",
+            doc: "trace faces with a corner behind the eye (false: interpolate them where each pixel's ray meets them)",
+            invalidates: Invalidates::Uniform,
+        },
+        trace_stray: bool = Param {
+            kind: ParamKind::Flag,
+            default: "true",
+            doc: "trace pixels the ID buffer gives to a triangle that cannot be seen there (false: interpolate them from that triangle, the paper's display)",
+            invalidates: Invalidates::Uniform,
+        },
+        tracing: ReflectorTracing = Param {
+            kind: ParamKind::Choice(ReflectorTracing::WORDS),
+            default: "auto",
+            doc: "per reflector: auto traces its pixels where its seen vertices or its paths make vertices no cheaper (vertex_ratio, min_path_rays); vertices (the paper) or pixels for all",
+            invalidates: Invalidates::Uniform,
+        },
+        vertex_ratio: f32 = Param {
+            kind: ParamKind::Number {
+                min: 0.0,
+                max: 1000.0,
+            },
+            default: "0.05",
+            doc: "tracing=auto: seen vertices per pixel above which a reflector is traced per pixel",
+            invalidates: Invalidates::Uniform,
+        },
+        min_path_rays: f32 = Param {
+            kind: ParamKind::Number {
+                min: 0.0,
+                max: 1000.0,
+            },
+            default: "6",
+            doc: "tracing=auto: rays per pixel path (beyond the primary, on a sample) below which a reflector is traced per pixel",
+            invalidates: Invalidates::Uniform,
+        },
+        budget_ms: u32 = Param {
+            kind: ParamKind::Integer { min: 0, max: 60000 },
+            default: "0",
+            doc: "progressive mode: milliseconds per call, preview first (0: everything in one call)",
+            invalidates: Invalidates::Uniform,
+        },
+        package_triangles: usize = Param {
+            kind: ParamKind::Integer { min: 0, max: 1 << 20 },
+            default: "0",
+            doc: "reflector triangles per task package (0: sixteen packages per thread)",
+            invalidates: Invalidates::Uniform,
+        },
+        visibility: GpuChoice = Param {
+            kind: ParamKind::Choice(GpuChoice::WORDS),
+            default: "auto",
+            doc: "ID buffer from the GPU raster pass, from CPU primary rays, or the GPU where present",
+            invalidates: Invalidates::Uniform,
+        },
+        composition: GpuChoice = Param {
+            kind: ParamKind::Choice(GpuChoice::WORDS),
+            default: "auto",
+            doc: "refined faces Gouraud-shaded by the GPU raster (the paper's display) or each pixel located and interpolated on the CPU; auto: the GPU where the run has one that is not a software rasterizer",
+            invalidates: Invalidates::Uniform,
+        },
+        max_depth: u32 = Param {
+            kind: ParamKind::Integer { min: 0, max: 64 },
+            default: "8",
+            doc: "most specular bounces on a vertex's or a filled pixel's path",
+            invalidates: Invalidates::Uniform,
+        },
+        show_faces: bool = Param {
+            kind: ParamKind::Flag,
+            default: "false",
+            doc: "draw the edges of the refined faces over the image (the paper's Figure 13)",
+            invalidates: Invalidates::Uniform,
+        },
+        shadow_resolution: u32 = raster::SHADOW_RESOLUTION,
+    }
+}
 
 pub const INFO: MethodInfo = MethodInfo {
     name: "vertex-tracing",
@@ -387,8 +370,8 @@ pub const INFO: MethodInfo = MethodInfo {
     gpu_optional: true,
     progressive: true,
     delegates: &[],
-    params: PARAMS,
-    presets: &[crate::preset::Preset {
+    params: Params::SPECS,
+    presets: &[specula_core::Preset {
         name: "paper",
         summary: "the published algorithm (Ullmann et al. 2001): whole ray trees, texels interpolated as colours, Gouraud linear on the screen, the flatness rule on any edge, faces with no seen corner not drawn, nothing traced but vertices and unresolved faces",
         settings: &[
@@ -414,24 +397,13 @@ pub enum GpuChoice {
     Gpu,
 }
 
+specula_core::choice!(GpuChoice {
+    Auto = "auto",
+    Cpu = "cpu",
+    Gpu = "gpu",
+});
+
 impl GpuChoice {
-    fn word(self) -> &'static str {
-        match self {
-            GpuChoice::Auto => "auto",
-            GpuChoice::Cpu => "cpu",
-            GpuChoice::Gpu => "gpu",
-        }
-    }
-
-    fn parse(name: &str, value: &ParamValue) -> Result<GpuChoice, TechniqueError> {
-        match value.word() {
-            "auto" => Ok(GpuChoice::Auto),
-            "cpu" => Ok(GpuChoice::Cpu),
-            "gpu" => Ok(GpuChoice::Gpu),
-            _ => Err(bad_value(INFO.name, name, value, "auto, cpu or gpu")),
-        }
-    }
-
     /// The GPU this choice uses in a run whose context is `ctx`.
     fn gpu(self, ctx: &Context) -> Result<Option<&GpuContext>, TechniqueError> {
         match self {
@@ -446,15 +418,9 @@ impl GpuChoice {
     }
 }
 
+#[derive(Default)]
 pub struct VertexTracing {
-    pub settings: RefineSettings,
-    pub budget_ms: u32,
-    pub package_triangles: usize,
-    pub visibility: GpuChoice,
-    pub composition: GpuChoice,
-    pub max_depth: u32,
-    pub shadow_resolution: u32,
-    pub show_faces: bool,
+    pub params: Params,
     gpu: Option<GpuPass>,
     raster_composition: Option<RasterComposition>,
     /// The scene id it was built for, and the topology.
@@ -463,43 +429,6 @@ pub struct VertexTracing {
     /// next frame shades them in its ID buffer's pass (see `FrameSetup::traced_shading_the_rest`).
     per_pixel_guess: Option<(u64, Vec<bool>)>,
     progress: Option<Progress>,
-}
-
-impl Default for VertexTracing {
-    fn default() -> Self {
-        VertexTracing {
-            settings: RefineSettings {
-                epsilon: 0.03,
-                flatness: 0.2,
-                min_edge_px: 3.0,
-                max_level: 20,
-                tree_weight: 0.02,
-                refine: true,
-                fill: true,
-                deferred_textures: true,
-                perspective_correct: true,
-                flatness_inside_triangles: true,
-                trace_unseen: true,
-                trace_behind_eye: true,
-                trace_stray: true,
-                tracing: ReflectorTracing::Auto,
-                vertex_ratio: 0.05,
-                min_path_rays: 6.0,
-            },
-            budget_ms: 0,
-            package_triangles: 0,
-            visibility: GpuChoice::Auto,
-            composition: GpuChoice::Auto,
-            max_depth: 8,
-            shadow_resolution: 1024,
-            show_faces: false,
-            gpu: None,
-            raster_composition: None,
-            topology: None,
-            per_pixel_guess: None,
-            progress: None,
-        }
-    }
 }
 
 /// The scene raster pass and its readback, for the GPU ID buffer.
@@ -517,7 +446,7 @@ struct ViewKey {
     width: u32,
     height: u32,
     scene: (u64, u64),
-    settings: RefineSettings,
+    settings: Params,
     package_triangles: usize,
     max_depth: u32,
     gpu_visibility: bool,
@@ -616,7 +545,7 @@ impl ReflectorChoice {
         width: u32,
         surfaces: &PixelSurfaces,
         topology: &Topology,
-        settings: &RefineSettings,
+        settings: &Params,
     ) -> Vec<ReflectorChoice> {
         let scene = tracer.scene;
         // In parallel over the pixels: each reflector's pixel count, and the triangles its
@@ -767,7 +696,7 @@ impl FrameSetup {
         height: u32,
         surfaces: PixelSurfaces,
         topology: Arc<Topology>,
-        settings: RefineSettings,
+        settings: Params,
         max_depth: u32,
     ) -> FrameSetup {
         let view = ScreenView::new(camera, width, height);
@@ -838,7 +767,7 @@ impl FrameSetup {
         width: u32,
         height: u32,
         topology: Arc<Topology>,
-        settings: RefineSettings,
+        settings: Params,
         max_depth: u32,
         recycled: Option<PixelSurfaces>,
     ) -> FrameSetup {
@@ -865,7 +794,7 @@ impl FrameSetup {
         width: u32,
         height: u32,
         topology: Arc<Topology>,
-        settings: RefineSettings,
+        settings: Params,
         max_depth: u32,
         recycled: Option<PixelSurfaces>,
         guess_per_pixel: &[bool],
@@ -907,7 +836,7 @@ impl FrameSetup {
         &'a self,
         live: &'a LiveScene,
         camera: &'a Camera,
-        settings: RefineSettings,
+        settings: Params,
         max_depth: u32,
     ) -> FrameInputs<'a> {
         FrameInputs {
@@ -1160,84 +1089,12 @@ impl Technique for VertexTracing {
         &INFO
     }
 
-    fn parameter(&self, name: &str) -> String {
-        let s = &self.settings;
-        match name {
-            "epsilon" => s.epsilon.to_string(),
-            "flatness" => s.flatness.to_string(),
-            "min_edge_px" => s.min_edge_px.to_string(),
-            "max_level" => s.max_level.to_string(),
-            "tree_weight" => s.tree_weight.to_string(),
-            "refine" => s.refine.to_string(),
-            "fill" => s.fill.to_string(),
-            "deferred_textures" => s.deferred_textures.to_string(),
-            "perspective_correct" => s.perspective_correct.to_string(),
-            "flatness_inside_triangles" => s.flatness_inside_triangles.to_string(),
-            "trace_unseen" => s.trace_unseen.to_string(),
-            "trace_behind_eye" => s.trace_behind_eye.to_string(),
-            "trace_stray" => s.trace_stray.to_string(),
-            "tracing" => match s.tracing {
-                ReflectorTracing::Auto => "auto",
-                ReflectorTracing::Vertices => "vertices",
-                ReflectorTracing::Pixels => "pixels",
-            }
-            .into(),
-            "vertex_ratio" => s.vertex_ratio.to_string(),
-            "min_path_rays" => s.min_path_rays.to_string(),
-            "budget_ms" => self.budget_ms.to_string(),
-            "package_triangles" => self.package_triangles.to_string(),
-            "visibility" => self.visibility.word().into(),
-            "composition" => self.composition.word().into(),
-            "max_depth" => self.max_depth.to_string(),
-            "shadow_resolution" => self.shadow_resolution.to_string(),
-            "show_faces" => self.show_faces.to_string(),
-            _ => String::new(),
-        }
+    fn params(&self) -> &dyn ParamSet {
+        &self.params
     }
 
-    fn set_parameter(&mut self, name: &str, value: &ParamValue) -> Result<(), TechniqueError> {
-        let s = &mut self.settings;
-        match name {
-            "epsilon" => s.epsilon = value.number() as f32,
-            "flatness" => s.flatness = value.number() as f32,
-            "min_edge_px" => s.min_edge_px = value.number() as f32,
-            "max_level" => s.max_level = value.integer() as u32,
-            "tree_weight" => s.tree_weight = value.number() as f32,
-            "refine" => s.refine = value.flag(),
-            "fill" => s.fill = value.flag(),
-            "deferred_textures" => s.deferred_textures = value.flag(),
-            "perspective_correct" => s.perspective_correct = value.flag(),
-            "flatness_inside_triangles" => s.flatness_inside_triangles = value.flag(),
-            "trace_unseen" => s.trace_unseen = value.flag(),
-            "trace_behind_eye" => s.trace_behind_eye = value.flag(),
-            "trace_stray" => s.trace_stray = value.flag(),
-            "tracing" => {
-                s.tracing = match value.word() {
-                    "auto" => ReflectorTracing::Auto,
-                    "vertices" => ReflectorTracing::Vertices,
-                    "pixels" => ReflectorTracing::Pixels,
-                    _ => {
-                        return Err(bad_value(
-                            INFO.name,
-                            name,
-                            value,
-                            "auto, vertices or pixels",
-                        ))
-                    }
-                }
-            }
-            "vertex_ratio" => s.vertex_ratio = value.number() as f32,
-            "min_path_rays" => s.min_path_rays = value.number() as f32,
-            "budget_ms" => self.budget_ms = value.integer() as u32,
-            "package_triangles" => self.package_triangles = value.integer() as usize,
-            "visibility" => self.visibility = GpuChoice::parse(name, value)?,
-            "composition" => self.composition = GpuChoice::parse(name, value)?,
-            "max_depth" => self.max_depth = value.integer() as u32,
-            "shadow_resolution" => self.shadow_resolution = value.integer() as u32,
-            "show_faces" => self.show_faces = value.flag(),
-            _ => {}
-        }
-        Ok(())
+    fn params_mut(&mut self) -> &mut dyn ParamSet {
+        &mut self.params
     }
 
     fn invalidate(&mut self, what: Invalidates) {
@@ -1250,7 +1107,7 @@ impl Technique for VertexTracing {
 
     fn prepare(&mut self, ctx: &Context, live: &LiveScene) -> Result<(), TechniqueError> {
         self.topology(live);
-        if let Some(gpu) = self.visibility.gpu(ctx)? {
+        if let Some(gpu) = self.params.visibility.gpu(ctx)? {
             self.ensure_raster(gpu, live)?;
         }
         Ok(())
@@ -1265,26 +1122,28 @@ impl Technique for VertexTracing {
         height: u32,
     ) -> Result<Drawn, TechniqueError> {
         let start = Instant::now();
-        let gpu = self.visibility.gpu(ctx)?;
-        let composition_gpu = self.composition.gpu(ctx)?;
+        let gpu = self.params.visibility.gpu(ctx)?;
+        let composition_gpu = self.params.composition.gpu(ctx)?;
         let key = ViewKey {
             camera: camera.clone(),
             width,
             height,
             scene: (live.id(), live.version()),
-            settings: self.settings,
-            package_triangles: self.package_triangles,
-            max_depth: self.max_depth,
+            settings: self.params,
+            package_triangles: self.params.package_triangles,
+            max_depth: self.params.max_depth,
             gpu_visibility: gpu.is_some(),
         };
         // Without a budget every call is a whole fresh frame (as bench times it).
-        let keep = self.budget_ms > 0 && self.progress.as_ref().is_some_and(|p| p.key == key);
+        let keep =
+            self.params.budget_ms > 0 && self.progress.as_ref().is_some_and(|p| p.key == key);
         let mut fresh = false;
         if !keep {
             self.progress = Some(self.start_frame(gpu, live, camera, width, height, key)?);
             fresh = true;
         }
-        let (settings, max_depth, budget_ms) = (self.settings, self.max_depth, self.budget_ms);
+        let (settings, max_depth, budget_ms) =
+            (self.params, self.params.max_depth, self.params.budget_ms);
         let progress = self.progress.as_mut().expect("set above");
         let deadline = (budget_ms > 0).then(|| start + Duration::from_millis(budget_ms as u64));
         let clock = Instant::now();
@@ -1369,7 +1228,7 @@ impl Technique for VertexTracing {
         } else {
             std::mem::replace(&mut progress.image, Image::new(0, 0))
         };
-        if self.show_faces {
+        if self.params.show_faces {
             for package in &progress.packages {
                 for (a, b) in package.leaf_edges() {
                     draw_line(&mut image, a, b, Vec3::new(1.0, 0.1, 0.1));
@@ -1402,13 +1261,17 @@ impl VertexTracing {
 
     fn ensure_raster(&mut self, gpu: &GpuContext, live: &LiveScene) -> Result<(), TechniqueError> {
         let stale = self.gpu.as_ref().is_none_or(|p| {
-            p.scene_id != live.id() || p.shadow_resolution != self.shadow_resolution
+            p.scene_id != live.id() || p.shadow_resolution != self.params.shadow_resolution
         });
         if stale {
             self.gpu = Some(GpuPass {
                 scene_id: live.id(),
-                shadow_resolution: self.shadow_resolution,
-                raster: RasterPass::new(gpu, live, RasterSpec::scene(self.shadow_resolution))?,
+                shadow_resolution: self.params.shadow_resolution,
+                raster: RasterPass::new(
+                    gpu,
+                    live,
+                    RasterSpec::scene(self.params.shadow_resolution),
+                )?,
                 readback: None,
             });
         }
@@ -1427,7 +1290,7 @@ impl VertexTracing {
         key: ViewKey,
     ) -> Result<Progress, TechniqueError> {
         let clock = Instant::now();
-        let (settings, max_depth) = (self.settings, self.max_depth);
+        let (settings, max_depth) = (self.params, self.params.max_depth);
         let topology = self.topology(live);
         let (setup, rest, rest_rays, visibility_ms) = match gpu {
             Some(gpu) => {
@@ -1486,7 +1349,7 @@ impl VertexTracing {
             0.0,
             0.0,
         ];
-        let packages = setup.packages(self.package_triangles);
+        let packages = setup.packages(self.params.package_triangles);
         Ok(Progress {
             key,
             setup,

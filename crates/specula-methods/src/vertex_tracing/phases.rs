@@ -14,11 +14,12 @@ use specula_scene::Camera;
 use specula_trace::Image;
 
 use super::compose::RasterComposition;
-use super::refine::{OriginalSamples, PackageCounters, RefineSettings, Topology};
+use super::refine::{OriginalSamples, PackageCounters, Topology};
+use super::Params;
 use super::{compose_on_raster, FrameSetup, RasterFrame};
-use crate::live_scene::LiveScene;
-use crate::raster;
-use crate::technique::TechniqueError;
+use specula_core::live_scene::LiveScene;
+use specula_core::raster;
+use specula_core::TechniqueError;
 
 /// A frame of `camera`'s view with CPU visibility, its phases run one at a time.
 pub struct FramePhases<'a> {
@@ -38,7 +39,7 @@ impl<'a> FramePhases<'a> {
         camera: &'a Camera,
         width: u32,
         height: u32,
-        settings: RefineSettings,
+        settings: Params,
         max_depth: u32,
     ) -> FramePhases<'a> {
         let topology = Arc::new(Topology::new(live.scene()));
@@ -74,7 +75,7 @@ impl<'a> FramePhases<'a> {
     /// Returns the work of all of them together and the milliseconds composition took.
     pub fn shade_reflector(
         &self,
-        settings: RefineSettings,
+        settings: Params,
         image: &mut Image,
         raster: Option<(&GpuContext, &mut RasterComposition)>,
     ) -> Result<(PackageCounters, f64), TechniqueError> {

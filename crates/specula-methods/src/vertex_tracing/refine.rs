@@ -31,60 +31,14 @@ use specula_trace::reference::{
 use specula_trace::{Hit, Ray, SceneAccel};
 
 use super::compose::FaceVertex;
-use crate::screen::{PixelSurfaces, ScreenView};
+use super::Params;
+use specula_core::screen::{PixelSurfaces, ScreenView};
 
 /// Filled pixels per parallel job.
 const PARALLEL_FILL_PIXELS: usize = 256;
 
 /// With a deadline, the clock is read after every this many edge decisions.
 const EDGES_PER_CLOCK_READ: u32 = 16;
-
-/// What the refinement of every package of a frame follows.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RefineSettings {
-    /// ε: two end points whose display colours differ by more (largest channel, 0–1 after
-    /// clamping and gamma 2.2) split their edge.
-    pub epsilon: f32,
-    /// v: a refined face whose height over its longest edge is below this splits that edge.
-    pub flatness: f32,
-    /// l: edges shorter than this on the screen (pixels) are not split for a colour difference.
-    pub min_edge_px: f32,
-    /// The deepest an edge may be split to.
-    pub max_level: u32,
-    /// Rays whose weight (the factor their radiance reaches the eye with) is below this are
-    /// left out of the ray trees compared.
-    pub tree_weight: f32,
-    /// Refine at all (false: the Gouraud preview only).
-    pub refine: bool,
-    /// Trace each pixel of the faces refinement could not resolve (triangle filling).
-    pub fill: bool,
-    /// Interpolate texture coordinates, not texture colours, between vertices whose paths
-    /// read the same textures (else: the texture test splits edges across texture detail).
-    pub deferred_textures: bool,
-    /// Gouraud weights divided by each corner's depth (else: linear on the screen, the
-    /// paper's Gouraud shading).
-    pub perspective_correct: bool,
-    /// The flatness rule leaves triangle borders alone, so that a package's image does not
-    /// depend on its neighbours (else: the paper's rule, any longest edge).
-    pub flatness_inside_triangles: bool,
-    /// Trace the pixels of faces none of whose corners is seen, and make a triangle seen only
-    /// between its corners active for it (else: the paper — such a triangle is not drawn, such
-    /// a refined face is interpolated).
-    pub trace_unseen: bool,
-    /// Trace the pixels of faces with a corner behind the eye (else: interpolate them at the
-    /// point where the pixel's ray meets the face).
-    pub trace_behind_eye: bool,
-    /// Trace stray pixels (else: interpolate them in the leaf face they fall in or beside).
-    pub trace_stray: bool,
-    /// Whether a reflector's pixels are shaded from its vertices or traced one by one.
-    pub tracing: ReflectorTracing,
-    /// With [`ReflectorTracing::Auto`]: a reflector whose seen vertices (those of its triangles
-    /// the ID buffer shows) number more than this times its pixels is traced per pixel.
-    pub vertex_ratio: f32,
-    /// With [`ReflectorTracing::Auto`]: a reflector whose sampled pixel paths take fewer rays
-    /// than this beyond the primary is traced per pixel.
-    pub min_path_rays: f32,
-}
 
 /// How a frame shades a reflector's pixels.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -99,6 +53,12 @@ pub enum ReflectorTracing {
     /// Every reflector per pixel: the reference's image.
     Pixels,
 }
+
+specula_core::choice!(ReflectorTracing {
+    Auto = "auto",
+    Vertices = "vertices",
+    Pixels = "pixels",
+});
 
 /// A reflector triangle of the scene: the unit of work packages are made of.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -297,7 +257,7 @@ pub struct FrameInputs<'a> {
     pub surfaces: &'a PixelSurfaces,
     pub owners: &'a PixelOwners,
     pub topology: &'a Topology,
-    pub settings: RefineSettings,
+    pub settings: Params,
     /// The original vertices already traced, if this process traced them for all packages.
     pub originals: Option<&'a OriginalSamples>,
 }
@@ -1064,7 +1024,7 @@ impl Package {
 
     /// §3.2's factor of flatness: a refined face whose height is below `flatness` × its
     /// longest edge, and still at least two pixels, has that edge split.
-    fn is_flat(&self, face: u32, settings: &RefineSettings) -> Option<u32> {
+    fn is_flat(&self, face: u32, settings: &Params) -> Option<u32> {
         let f = &self.faces[face as usize];
         if f.level == 0 || f.children.is_some() {
             return None;
@@ -1234,7 +1194,7 @@ impl Package {
 
     /// Whether any leaf of triangle `index`'s refinement needs filling (most need none: their
     /// pixels are not looked at).
-    fn any_leaf_needs_filling(&self, index: usize, settings: &RefineSettings) -> bool {
+    fn any_leaf_needs_filling(&self, index: usize, settings: &Params) -> bool {
         let mut stack = vec![self.roots[index]];
         while let Some(face) = stack.pop() {
             match self.faces[face as usize].children {
@@ -1249,7 +1209,7 @@ impl Package {
     /// Whether triangle filling traces this leaf's pixels: refinement left one of its edges
     /// unresolved, none of its corners is seen (with `trace_unseen`), or a corner is behind
     /// the eye (with `trace_behind_eye`).
-    fn needs_filling(&self, face: u32, settings: &RefineSettings) -> bool {
+    fn needs_filling(&self, face: u32, settings: &Params) -> bool {
         let v = self.faces[face as usize].v;
         let corners = v.map(|i| &self.vertices[i as usize]);
         (settings.trace_behind_eye && corners.iter().any(|c| c.depth <= 0.0))

@@ -1,4 +1,5 @@
-// envmap: every specular pixel shaded from the cube maps alone (shade.wgsl).
+// Every specular pixel shaded from the cube maps alone (shade.wgsl): envmap, and the second
+// level of two-level cube maps.
 
 @fragment
 fn fs_shade(in: FullscreenOut) -> @location(0) vec4<f32> {

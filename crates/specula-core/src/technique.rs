@@ -1,4 +1,4 @@
-//! The one interface every technique implements, with its typed parameters.
+//! The one interface every technique implements.
 //!
 //! Lifecycle: a technique is created unprepared ([`MethodInfo::create`]); `prepare` builds what
 //! depends on the scene (it is optional: `render` builds whatever is missing); `render` draws one
@@ -16,7 +16,7 @@ use specula_scene::{Camera, Material, MaterialKind};
 use specula_trace::Image;
 
 use crate::live_scene::LiveScene;
-use crate::preset::Preset;
+use crate::params::{bad_value, Invalidates, ParamSet, ParamSpec, ParamValue};
 
 #[derive(Debug, thiserror::Error)]
 pub enum TechniqueError {
@@ -207,153 +207,6 @@ impl dyn Technique + '_ {
 pub const COUNTER_RAYS_TRACED: &str = "rays traced (primary and secondary)";
 pub const COUNTER_SHADOW_RAYS: &str = "shadow rays";
 
-/// What a parameter's value may be.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum ParamKind {
-    /// A whole number in `min..=max`.
-    Integer { min: i64, max: i64 },
-    /// A number in `min..=max`.
-    Number { min: f64, max: f64 },
-    /// `true` or `false`.
-    Flag,
-    /// One of these words.
-    Choice(&'static [&'static str]),
-    /// Free text the technique parses itself; `expected` says what it takes.
-    Text { expected: &'static str },
-}
-
-/// What changing a parameter makes stale.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
-pub enum Invalidates {
-    /// Nothing but a value read each frame (a uniform, a loop bound).
-    Uniform,
-    /// The technique's own GPU resources (maps, pipelines); the scene preparation is kept.
-    Resources,
-    /// Everything the technique prepared for the scene.
-    Scene,
-}
-
-impl Invalidates {
-    pub fn describe(self) -> &'static str {
-        match self {
-            Invalidates::Uniform => "uniform",
-            Invalidates::Resources => "resources",
-            Invalidates::Scene => "scene preparation",
-        }
-    }
-}
-
-/// One parameter of a technique: the single source of its parsing, listing, reports and UI.
-#[derive(Clone, Copy, Debug)]
-pub struct ParamSpec {
-    pub name: &'static str,
-    pub kind: ParamKind,
-    pub default: &'static str,
-    pub doc: &'static str,
-    pub invalidates: Invalidates,
-}
-
-/// A parsed parameter value.
-#[derive(Clone, Debug, PartialEq)]
-pub enum ParamValue {
-    Integer(i64),
-    Number(f64),
-    Flag(bool),
-    Word(String),
-}
-
-impl fmt::Display for ParamValue {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            ParamValue::Integer(v) => write!(f, "{v}"),
-            ParamValue::Number(v) => write!(f, "{v}"),
-            ParamValue::Flag(v) => write!(f, "{v}"),
-            ParamValue::Word(v) => write!(f, "{v}"),
-        }
-    }
-}
-
-impl ParamValue {
-    /// The value as a whole number (integers only; the spec's range has been checked).
-    pub fn integer(&self) -> i64 {
-        match self {
-            ParamValue::Integer(v) => *v,
-            ParamValue::Number(v) => *v as i64,
-            _ => 0,
-        }
-    }
-
-    pub fn number(&self) -> f64 {
-        match self {
-            ParamValue::Integer(v) => *v as f64,
-            ParamValue::Number(v) => *v,
-            _ => 0.0,
-        }
-    }
-
-    pub fn flag(&self) -> bool {
-        matches!(self, ParamValue::Flag(true))
-    }
-
-    pub fn word(&self) -> &str {
-        match self {
-            ParamValue::Word(w) => w,
-            _ => "",
-        }
-    }
-}
-
-impl ParamKind {
-    /// What a value must be, for error messages and listings.
-    pub fn describe(&self) -> String {
-        match self {
-            ParamKind::Integer { min, max } => format!("a whole number from {min} to {max}"),
-            ParamKind::Number { min, max } => format!("a number from {min} to {max}"),
-            ParamKind::Flag => "true or false".into(),
-            ParamKind::Choice(words) => format!("one of {}", words.join(", ")),
-            ParamKind::Text { expected } => expected.to_string(),
-        }
-    }
-}
-
-impl ParamSpec {
-    /// Parses `value` for this parameter of `technique`.
-    pub fn parse(
-        &self,
-        technique: &'static str,
-        value: &str,
-    ) -> Result<ParamValue, TechniqueError> {
-        let bad = || TechniqueError::BadParameter {
-            technique,
-            name: self.name.to_string(),
-            value: value.to_string(),
-            reason: format!("expected {}", self.kind.describe()),
-        };
-        let value = value.trim();
-        match self.kind {
-            ParamKind::Integer { min, max } => value
-                .parse::<i64>()
-                .ok()
-                .filter(|v| (min..=max).contains(v))
-                .map(ParamValue::Integer)
-                .ok_or_else(bad),
-            ParamKind::Number { min, max } => value
-                .parse::<f64>()
-                .ok()
-                .filter(|v| v.is_finite() && (min..=max).contains(v))
-                .map(ParamValue::Number)
-                .ok_or_else(bad),
-            ParamKind::Flag => value.parse().map(ParamValue::Flag).map_err(|_| bad()),
-            ParamKind::Choice(words) => words
-                .iter()
-                .find(|w| **w == value)
-                .map(|w| ParamValue::Word(w.to_string()))
-                .ok_or_else(bad),
-            ParamKind::Text { .. } => Ok(ParamValue::Word(value.to_string())),
-        }
-    }
-}
-
 /// The class of specular surface a pixel's primary ray meets: what a method's
 /// [`MethodInfo::delegates`] is declared per, and what `compare` splits its figures by.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize)]
@@ -405,6 +258,17 @@ pub struct Delegation {
     pub to: &'static str,
 }
 
+/// A named list of settings of one method (`METHOD:PRESET`).
+#[derive(Debug)]
+pub struct Preset {
+    /// The name after the colon (`c3rc:paper`).
+    pub name: &'static str,
+    /// One line: what running with it means.
+    pub summary: &'static str,
+    /// `NAME=VALUE` settings, applied in order over the defaults.
+    pub settings: &'static [&'static str],
+}
+
 /// A registered method: its name, what it is, its parameters and how to make one.
 pub struct MethodInfo {
     /// The name users type (`--method`).
@@ -424,7 +288,7 @@ pub struct MethodInfo {
     pub delegates: &'static [Delegation],
     pub params: &'static [ParamSpec],
     /// Named lists of settings (`METHOD:PRESET`); a seed technique's `paper` runs the
-    /// published algorithm ([`crate::preset`]).
+    /// published algorithm.
     pub presets: &'static [Preset],
     pub create: fn() -> Box<dyn Technique>,
 }
@@ -465,13 +329,26 @@ pub trait Technique {
         self.info().name
     }
 
+    /// Its parameters (a [`params!`](crate::params) block's struct, whose `SPECS` are
+    /// [`MethodInfo::params`]).
+    fn params(&self) -> &dyn ParamSet;
+    fn params_mut(&mut self) -> &mut dyn ParamSet;
+
     /// The current value of the parameter `name` of [`MethodInfo::params`], as text.
-    fn parameter(&self, name: &str) -> String;
+    fn parameter(&self, name: &str) -> String {
+        self.params().get(name).unwrap_or_default()
+    }
 
     /// Sets a parameter, already parsed by its spec (only names in [`MethodInfo::params`]
     /// arrive). Returns an error where the value is valid for the kind but not for the
-    /// technique (e.g. an unparsable text value).
-    fn set_parameter(&mut self, name: &str, value: &ParamValue) -> Result<(), TechniqueError>;
+    /// technique's type.
+    fn set_parameter(&mut self, name: &str, value: &ParamValue) -> Result<(), TechniqueError> {
+        let technique = self.info().name;
+        match self.params_mut().set(name, value) {
+            Some(Err(reason)) => Err(bad_value(technique, name, value, &reason)),
+            _ => Ok(()),
+        }
+    }
 
     /// Drops what a parameter change made stale; it is rebuilt by the next `render`.
     fn invalidate(&mut self, what: Invalidates);
@@ -500,74 +377,62 @@ pub trait Technique {
     }
 }
 
-/// Parses `NAME=VALUE` and applies it to `technique`, invalidating what the spec says.
-pub fn apply_setting(technique: &mut dyn Technique, setting: &str) -> Result<(), TechniqueError> {
-    let info = technique.info();
-    let bad = |name: &str, value: &str, reason: String| TechniqueError::BadParameter {
-        technique: info.name,
-        name: name.to_string(),
-        value: value.to_string(),
-        reason,
-    };
-    let (name, value) = setting
-        .split_once('=')
-        .ok_or_else(|| bad(setting, "", "expected NAME=VALUE".into()))?;
-    let (name, value) = (name.trim(), value.trim());
-    let spec = info.param(name).ok_or_else(|| {
-        let names: Vec<&str> = info.params.iter().map(|p| p.name).collect();
-        bad(
-            name,
-            value,
-            format!("{}'s parameters are {}", info.name, names.join(", ")),
-        )
-    })?;
-    let parsed = spec.parse(info.name, value)?;
-    technique.set_parameter(name, &parsed)?;
-    technique.invalidate(spec.invalidates);
-    Ok(())
+/// One frame of a still scene from its own camera, with its pixels on the CPU: for tests,
+/// benches and one-shot renders. Wraps the scene in a fresh [`LiveScene`], so the technique
+/// prepares for it.
+pub trait RenderStill {
+    fn render_still(
+        &mut self,
+        ctx: &Context,
+        scene: &specula_scene::Scene,
+        width: u32,
+        height: u32,
+    ) -> Result<Still, TechniqueError>;
 }
 
-/// Applies `NAME=VALUE` settings to a technique, in order.
-pub fn apply_parameters(
-    technique: &mut dyn Technique,
-    settings: &[String],
-) -> Result<(), TechniqueError> {
-    settings
-        .iter()
-        .try_for_each(|s| apply_setting(technique, s))
+/// A frame and its image on the CPU.
+pub struct Still {
+    pub frame: Frame,
+    pub image: specula_trace::Image,
 }
 
-/// Applies those of the `NAME=VALUE` settings whose name the technique has, in order; returns,
-/// per setting, whether it was applied. For runs over several techniques, where a parameter
-/// belongs to some of them only.
-pub fn apply_known_parameters(
-    technique: &mut dyn Technique,
-    settings: &[String],
-) -> Result<Vec<bool>, TechniqueError> {
-    let info = technique.info();
-    let mut applied = Vec::with_capacity(settings.len());
-    for setting in settings {
-        let name = setting.split_once('=').map(|(n, _)| n.trim());
-        let used = name.is_some_and(|n| info.param(n).is_some());
-        if used {
-            apply_setting(technique, setting)?;
-        }
-        applied.push(used);
+impl std::ops::Deref for Still {
+    type Target = Frame;
+    fn deref(&self) -> &Frame {
+        &self.frame
     }
-    Ok(applied)
 }
 
-/// The error a technique returns for a valid-looking value it cannot use.
-pub fn bad_value(
-    technique: &'static str,
-    name: &str,
-    value: &ParamValue,
-    reason: &str,
-) -> TechniqueError {
-    TechniqueError::BadParameter {
-        technique,
-        name: name.to_string(),
-        value: value.to_string(),
-        reason: reason.to_string(),
+impl RenderStill for dyn Technique + '_ {
+    fn render_still(
+        &mut self,
+        ctx: &Context,
+        scene: &specula_scene::Scene,
+        width: u32,
+        height: u32,
+    ) -> Result<Still, TechniqueError> {
+        let live = LiveScene::new(scene.clone());
+        self.prepare(ctx, &live)?;
+        let frame = self.render(ctx, &live, &scene.camera, width, height)?;
+        let image = frame.image(ctx)?;
+        Ok(Still { frame, image })
     }
+}
+
+impl<T: Technique> RenderStill for T {
+    fn render_still(
+        &mut self,
+        ctx: &Context,
+        scene: &specula_scene::Scene,
+        width: u32,
+        height: u32,
+    ) -> Result<Still, TechniqueError> {
+        (self as &mut dyn Technique).render_still(ctx, scene, width, height)
+    }
+}
+
+/// The context for GPU tests: a missing Vulkan adapter fails the test unless the runner opted
+/// out, and then it is `None` (see [`specula_gpu::test_context`]).
+pub fn test_context(test: &str) -> Option<Context> {
+    specula_gpu::test_context(test).map(Context::with_gpu)
 }

@@ -39,7 +39,7 @@ use specula_trace::Image;
 
 use crate::gpu_scene::{GpuScene, GpuVertex, LIGHT_DIRECTIONAL};
 use crate::live_scene::LiveScene;
-use crate::technique::{Invalidates, ParamKind, ParamSpec};
+use crate::params::{Invalidates, Param, ParamKind};
 
 const SHADER: &str = include_str!("raster.wgsl");
 
@@ -51,9 +51,9 @@ pub fn shader_source() -> String {
     )
 }
 
-/// The raster pass's parameter, in the list of every technique that draws it.
-pub const SHADOW_RESOLUTION: ParamSpec = ParamSpec {
-    name: "shadow_resolution",
+/// The raster pass's parameter, `shadow_resolution` in the list of every technique that draws
+/// it.
+pub const SHADOW_RESOLUTION: Param = Param {
     kind: ParamKind::Integer { min: 1, max: 8192 },
     default: "1024",
     doc: "texels per side of the scene raster's shadow maps",
