@@ -7,6 +7,7 @@
 
 pub mod cube_maps;
 pub mod gpu_scene;
+pub mod lifecycle;
 pub mod live_scene;
 pub mod params;
 pub mod raster;
@@ -14,6 +15,7 @@ pub mod screen;
 pub mod technique;
 
 pub use gpu_scene::GpuScene;
+pub use lifecycle::{GpuFrame, GpuMethod, GpuTechnique};
 pub use live_scene::{AccelUpdate, LiveScene, MoveError};
 pub use params::{
     apply_known_parameters, apply_parameters, apply_setting, bad_value, Invalidates, NoParams,

@@ -23,8 +23,12 @@ struct Timestamps {
     readback: wgpu::Buffer,
 }
 
-/// A technique's stage timer. Make one per technique and call [`StageTimer::start`] at the start
-/// of every frame: its GPU objects are made once, so timing adds nothing to a frame's count.
+/// The one stage timer of every technique and of progressive steps. Make one per technique and
+/// call [`StageTimer::start`] at the start of every frame: its GPU objects are made once, so
+/// timing adds nothing to a frame's count. With a GPU whose adapter has timestamps, stages are
+/// timed on the GPU; otherwise (no GPU, no timestamps, or a timer made by
+/// [`StageTimer::wall_clock`] for stages that run on the CPU) on the CPU's clock, waiting for
+/// the GPU at each stage's end where there is one.
 #[derive(Default)]
 pub struct StageTimer {
     names: Vec<String>,
@@ -32,12 +36,27 @@ pub struct StageTimer {
     marks: u32,
     cpu_last: Option<Instant>,
     cpu_stages: Vec<StageTime>,
+    /// Always the CPU's clock, even where the GPU has timestamps.
+    wall_clock: bool,
+    /// This frame is timed by GPU timestamps.
+    timestamps: bool,
 }
 
 impl StageTimer {
+    /// A timer on the CPU's clock whatever the GPU offers: for stages that run on the CPU, or
+    /// mix CPU and GPU work.
+    pub fn wall_clock() -> StageTimer {
+        StageTimer {
+            wall_clock: true,
+            ..StageTimer::default()
+        }
+    }
+
     /// Starts a frame: marks the beginning of the first stage.
-    pub fn start(&mut self, ctx: &GpuContext) {
-        if ctx.timing == TimingSource::GpuTimestamps && self.gpu.is_none() {
+    pub fn start(&mut self, gpu: Option<&GpuContext>) {
+        self.timestamps =
+            !self.wall_clock && gpu.is_some_and(|g| g.timing == TimingSource::GpuTimestamps);
+        if let (true, Some(ctx), None) = (self.timestamps, gpu, &self.gpu) {
             let size = MAX_MARKS as u64 * 8;
             let buffer = |label, usage| {
                 ctx.create_buffer(&wgpu::BufferDescriptor {
@@ -67,7 +86,9 @@ impl StageTimer {
         self.cpu_stages.clear();
         self.marks = 0;
         self.cpu_last = Some(Instant::now());
-        self.mark(ctx);
+        if let (true, Some(ctx)) = (self.timestamps, gpu) {
+            self.mark(ctx);
+        }
     }
 
     fn mark(&mut self, ctx: &GpuContext) {
@@ -83,25 +104,49 @@ impl StageTimer {
 
     /// Ends the current stage, named `stage`, and starts the next. All GPU work submitted so far
     /// belongs to the stages ended so far.
-    pub fn lap(&mut self, ctx: &GpuContext, stage: &str) -> Result<(), GpuError> {
-        self.names.push(stage.to_string());
-        if self.gpu.is_some() {
-            self.mark(ctx);
-        } else {
-            ctx.wait()?;
-            let now = Instant::now();
-            let last = self.cpu_last.replace(now).unwrap_or(now);
-            self.cpu_stages.push(StageTime {
-                stage: stage.to_string(),
-                milliseconds: (now - last).as_secs_f64() * 1e3,
-            });
+    pub fn lap(&mut self, gpu: Option<&GpuContext>, stage: &str) -> Result<(), GpuError> {
+        match (self.timestamps, gpu) {
+            (true, Some(ctx)) => {
+                self.names.push(stage.to_string());
+                self.mark(ctx);
+            }
+            _ => {
+                if let Some(ctx) = gpu {
+                    ctx.wait()?;
+                }
+                let now = Instant::now();
+                let last = self.cpu_last.replace(now).unwrap_or(now);
+                self.add(stage, (now - last).as_secs_f64() * 1e3);
+            }
         }
         Ok(())
     }
 
-    /// The frame's stage times and where they came from.
-    pub fn finish(&mut self, ctx: &GpuContext) -> Result<(Vec<StageTime>, TimingSource), GpuError> {
-        let Some(t) = &self.gpu else {
+    /// Records a stage its own code timed (a phase on the CPU), or adds to the stage of that
+    /// name this frame already has; the next stage starts now. On the CPU's clock only: a frame
+    /// timed by GPU timestamps has no place for it.
+    pub fn measured(&mut self, stage: &str, milliseconds: f64) {
+        debug_assert!(!self.timestamps, "a measured stage in a GPU-timed frame");
+        self.add(stage, milliseconds);
+        self.cpu_last = Some(Instant::now());
+    }
+
+    fn add(&mut self, stage: &str, milliseconds: f64) {
+        match self.cpu_stages.iter_mut().find(|s| s.stage == stage) {
+            Some(s) => s.milliseconds += milliseconds,
+            None => self.cpu_stages.push(StageTime {
+                stage: stage.to_string(),
+                milliseconds,
+            }),
+        }
+    }
+
+    /// The frame's stage times and where they came from; the timer is empty after.
+    pub fn finish(
+        &mut self,
+        gpu: Option<&GpuContext>,
+    ) -> Result<(Vec<StageTime>, TimingSource), GpuError> {
+        let (Some(t), true, Some(ctx)) = (&self.gpu, self.timestamps, gpu) else {
             return Ok((
                 std::mem::take(&mut self.cpu_stages),
                 TimingSource::CpuWallClock,

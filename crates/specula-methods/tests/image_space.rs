@@ -7,6 +7,7 @@ mod common;
 
 use common::{cpu_reference, looking_down_z, prism, scene};
 use glam::{Mat4, Vec2, Vec3};
+use specula_core::GpuMethod;
 use specula_methods::image_space::{
     fit_planes, nearby_visibility, normal_distances, ImageSpace, NearbyMode, NearbyVisibility,
 };
@@ -181,7 +182,7 @@ fn every_builtin_scene_with_a_refractor_renders_in_every_mode() {
     for name in ["spectacle-lens", "glass-dragon", "truck-cover"] {
         let scene = specula_scene::load(name).unwrap();
         for mode in ["kay-greenberg", "ray-plane", "iterative"] {
-            let mut technique = ImageSpace::default();
+            let mut technique = GpuMethod::<ImageSpace>::default();
             apply_setting(&mut technique, &format!("mode={mode}")).unwrap();
             let still = technique.render_still(&ctx, &scene, 64, 48).unwrap();
             assert!(
@@ -195,7 +196,7 @@ fn every_builtin_scene_with_a_refractor_renders_in_every_mode() {
 
 #[test]
 fn bad_parameters_name_the_parameter_and_the_range() {
-    let mut technique = ImageSpace::default();
+    let mut technique = GpuMethod::<ImageSpace>::default();
     for (setting, words) in [
         ("mode=raymarch", &["mode", "kay-greenberg", "iterative"][..]),
         ("seeds=0", &["seeds", "1"][..]),
@@ -233,7 +234,7 @@ fn a_refractor_alone_before_the_background_renders_with_every_option() {
         "layers=3",
         "parallax=false",
     ] {
-        let mut technique = ImageSpace::default();
+        let mut technique = GpuMethod::<ImageSpace>::default();
         apply_setting(&mut technique, setting).unwrap();
         let still = technique.render_still(&ctx, &s, 32, 32).unwrap();
         let centre = still.image.get(16, 16);
@@ -346,7 +347,7 @@ fn the_table1_and_figure11_scenes_load_and_render() {
         assert!(files.len() >= 4, "{folder}: {files:?}");
         for file in files {
             let scene = specula_scene::load(file.to_str().unwrap()).unwrap();
-            let still = ImageSpace::default()
+            let still = GpuMethod::<ImageSpace>::default()
                 .render_still(&ctx, &scene, 32, 24)
                 .unwrap();
             assert!(

@@ -150,16 +150,19 @@ pub fn read_rgba32f(ctx: &GpuContext, texture: &wgpu::Texture) -> Result<Image, 
 pub struct BindGroupsBySlot(Vec<(usize, wgpu::BindGroup)>);
 
 impl BindGroupsBySlot {
-    /// The bind group of `slot`, made by `make` the first time.
+    /// The bind group of `g`'s slot, made by `make` the first time. Those of G-buffers `pass`
+    /// no longer pools are dropped first, so they do not keep the textures alive.
     pub fn get_or_make(
         &mut self,
-        slot: usize,
+        pass: &RasterPass,
+        g: &GBuffer,
         make: impl FnOnce() -> wgpu::BindGroup,
     ) -> &wgpu::BindGroup {
-        let index = match self.0.iter().position(|(s, _)| *s == slot) {
+        self.keep_pooled(pass);
+        let index = match self.0.iter().position(|(s, _)| *s == g.slot) {
             Some(index) => index,
             None => {
-                self.0.push((slot, make()));
+                self.0.push((g.slot, make()));
                 self.0.len() - 1
             }
         };
@@ -176,9 +179,8 @@ impl BindGroupsBySlot {
         self.0.clear();
     }
 
-    /// Forgets the bind groups of G-buffers `pass` no longer pools (call after
-    /// [`RasterPass::begin_frame`]), so they do not keep the textures alive.
-    pub fn keep_pooled(&mut self, pass: &RasterPass) {
+    /// Forgets the bind groups of G-buffers `pass` no longer pools.
+    fn keep_pooled(&mut self, pass: &RasterPass) {
         let pool = pass.pool.borrow();
         self.0
             .retain(|(slot, _)| pool.iter().any(|entry| entry.g.slot == *slot));

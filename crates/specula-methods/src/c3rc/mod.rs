@@ -193,20 +193,18 @@ use specula_gpu::shaders::CameraUniform;
 use specula_gpu::util::{
     bind_group, buffer_binding, layout_entry, texture_binding, writable_buffer,
 };
-use specula_gpu::{GpuContext, GpuError, TimingSource};
-use specula_scene::{Camera, MaterialKind, Scene};
+use specula_gpu::{GpuContext, GpuError};
+use specula_scene::{MaterialKind, Scene};
 
 use phases::{FrameSettings, PhaseReport, PlacedCloud, ScreenView};
 use points::{PointCloud, TreeLimits};
 use specula_core::cube_maps::{self, CubeMaps, Exit};
 use specula_core::gpu_scene::GpuScene;
+use specula_core::lifecycle::{GpuFrame, GpuMethod, GpuTechnique};
 use specula_core::live_scene::LiveScene;
-use specula_core::raster::{self, BindGroupsBySlot, OutputTexture, RasterPass, RasterSpec};
-use specula_core::screen::SurfaceReadback;
-use specula_core::{
-    Context, Drawn, Invalidates, MethodInfo, Param, ParamKind, ParamSet, Pixels, StageTime,
-    Technique, TechniqueError,
-};
+use specula_core::raster::{self, BindGroupsBySlot, RasterPass, RasterSpec};
+use specula_core::screen::{PixelSurfaces, SurfaceReadback};
+use specula_core::{Invalidates, MethodInfo, Param, ParamKind, ParamSet, TechniqueError};
 
 const SHADER: &str = include_str!("c3rc.wgsl");
 
@@ -380,7 +378,7 @@ pub const INFO: MethodInfo = MethodInfo {
             "two_level_maps=false",
         ],
     }],
-    create: || Box::new(C3rcMethod::default()),
+    create: || Box::new(GpuMethod::<C3rcMethod>::default()),
 };
 
 /// Source of `NearField::generation`: unique across techniques and scenes.
@@ -408,8 +406,6 @@ specula_core::choice!(Projection {
 #[derive(Default)]
 pub struct C3rcMethod {
     pub params: Params,
-    prepared: Option<Prepared>,
-    output: OutputTexture,
 }
 
 /// The nearby objects of the mirrors, as points.
@@ -426,9 +422,7 @@ struct NearField {
 }
 
 /// What depends on the scene.
-struct Prepared {
-    scene_id: u64,
-    raster: RasterPass,
+pub struct Prepared {
     maps: CubeMaps,
     camera_buffer: wgpu::Buffer,
     pipeline: wgpu::RenderPipeline,
@@ -477,7 +471,6 @@ impl C3rcMethod {
     fn build(&self, ctx: &GpuContext, live: &LiveScene) -> Result<Prepared, GpuError> {
         let device = &ctx.device;
         let gpu_scene = live.gpu(ctx);
-        let raster = RasterPass::new(ctx, live, RasterSpec::scene(self.params.shadow_resolution))?;
         ctx.validated("c3rc set-up", || {
             let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some("c3rc.wgsl"),
@@ -505,7 +498,6 @@ impl C3rcMethod {
             let pipeline =
                 raster::shading_pipeline(device, "c3rc shade", &module, &layout, &scene_layout);
             Prepared {
-                scene_id: live.id(),
                 scene_bind_group: gpu_scene.bind_group(ctx, &scene_layout),
                 maps: {
                     let mut maps = CubeMaps::new(ctx, live.scene());
@@ -518,7 +510,6 @@ impl C3rcMethod {
                     size_of::<CameraUniform>() as u64,
                     wgpu::BufferUsages::UNIFORM,
                 ),
-                raster,
                 pipeline,
                 layout,
                 bind_groups: BindGroupsBySlot::default(),
@@ -530,13 +521,6 @@ impl C3rcMethod {
                 near_pixels: Vec::new(),
             }
         })
-    }
-
-    fn ensure_prepared(&mut self, ctx: &GpuContext, live: &LiveScene) -> Result<(), GpuError> {
-        if self.prepared.as_ref().map(|p| p.scene_id) != Some(live.id()) {
-            self.prepared = Some(self.build(ctx, live)?);
-        }
-        Ok(())
     }
 
     /// The nearby objects' point clouds for `live`, made when missing or when the set of
@@ -598,7 +582,9 @@ impl C3rcMethod {
     }
 }
 
-impl Technique for C3rcMethod {
+impl GpuTechnique for C3rcMethod {
+    type Prepared = Prepared;
+
     fn info(&self) -> &'static MethodInfo {
         &INFO
     }
@@ -611,119 +597,112 @@ impl Technique for C3rcMethod {
         &mut self.params
     }
 
-    fn invalidate(&mut self, what: Invalidates) {
-        if what >= Invalidates::Resources {
-            if let Some(p) = &mut self.prepared {
-                p.maps.drop_faces();
-                p.near_field = None;
-            }
-        }
-        if what >= Invalidates::Scene {
-            self.prepared = None;
-        }
+    fn scene_raster(&self) -> Option<RasterSpec> {
+        Some(RasterSpec::scene(self.params.shadow_resolution))
     }
 
-    fn prepare(&mut self, ctx: &Context, live: &LiveScene) -> Result<(), TechniqueError> {
-        self.ensure_prepared(ctx.gpu(INFO.name)?, live)?;
-        let mut field = self.prepared.as_mut().and_then(|p| p.near_field.take());
-        self.update_near_field(live, &mut field);
-        self.prepared.as_mut().expect("prepared above").near_field = field;
+    /// Its forward phase runs on the CPU (on lavapipe): every stage on the CPU's clock.
+    fn wall_clock(&self) -> bool {
+        true
+    }
+
+    fn prepare(
+        &mut self,
+        gpu: &GpuContext,
+        live: &LiveScene,
+        _: Option<&RasterPass>,
+    ) -> Result<Prepared, TechniqueError> {
+        // The points are sampled by the first frame, which counts them.
+        Ok(self.build(gpu, live)?)
+    }
+
+    fn invalidate(&mut self, prepared: Option<&mut Prepared>, what: Invalidates) -> bool {
+        if let (Some(p), true) = (prepared, what >= Invalidates::Resources) {
+            p.maps.drop_faces();
+            p.near_field = None;
+        }
+        true
+    }
+
+    /// The paper's steps after the G-buffer: the nearby objects as points (§4), the far
+    /// field's cube maps (§7), the backward phase culling the trees per mirror triangle's
+    /// camera (§5), the forward phase projecting and splatting the points (§6), then the
+    /// shading.
+    fn shade(&mut self, p: &mut Prepared, frame: &mut GpuFrame<'_>) -> Result<(), TechniqueError> {
+        let mut field = p.near_field.take();
+        let rebuilt = self.update_near_field(frame.live, &mut field);
+        let field = field.expect("made by update_near_field");
+        frame.lap("points (sample, trees, shading)")?;
+        let faces_drawn = self.far_field(p, frame, &field)?;
+        let surfaces = read_g_buffer(p, frame)?;
+        let report = self.phases(p, frame, &field, &surfaces)?;
+        shade_pixels(p, frame)?;
+        frame.lap("upload and shading")?;
+        for (name, value) in counters(&field, &report, rebuilt, faces_drawn) {
+            frame.count(&name, value);
+        }
+        let visible = report.cameras + report.small_triangles + report.self_seeing_triangles;
+        if visible == 0 && !field.near.is_empty() {
+            frame.warn("c3rc: no mirror triangle is visible; only the far field shows".into());
+        }
+        p.near_field = Some(field);
         Ok(())
     }
+}
 
-    fn draw(
-        &mut self,
-        ctx: &Context,
-        live: &LiveScene,
-        camera: &Camera,
-        width: u32,
-        height: u32,
-    ) -> Result<Drawn, TechniqueError> {
-        let gpu = ctx.gpu(INFO.name)?;
-        self.ensure_prepared(gpu, live)?;
-        let scene = live.scene();
-        let gpu_scene = live.gpu(gpu);
-        let mut stages = WallStages::new();
-
-        let mut field = self.prepared.as_mut().and_then(|p| p.near_field.take());
-        let rebuilt = self.update_near_field(live, &mut field);
-        let field = field.expect("made by update_near_field");
-        stages.lap(gpu, "points (sample, trees, shading)")?;
-
-        let p = self.prepared.as_mut().expect("prepared above");
-        p.raster.begin_frame(gpu, live)?;
-        p.bind_groups.keep_pooled(&p.raster);
-        let camera_uniform = raster::camera_uniform(camera, &scene.bounds(), width, height);
-        let g = p.raster.render(gpu, gpu_scene, &camera_uniform, None)?;
-        stages.lap(gpu, "g-buffer")?;
-
+impl C3rcMethod {
+    /// The far field: the mirrors' cube maps with their nearby objects left out. Returns the
+    /// faces drawn.
+    fn far_field(
+        &self,
+        p: &mut Prepared,
+        frame: &mut GpuFrame<'_>,
+        field: &NearField,
+    ) -> Result<u64, TechniqueError> {
         p.maps.set_hidden(field.near.clone());
         p.maps.set_two_levels(self.params.two_level_maps);
         let faces_drawn = p.maps.update(
-            gpu,
-            &p.raster,
-            live,
+            frame.gpu,
+            frame.raster(),
+            frame.live,
             self.params.resolution,
             Exit::Slab,
             self.params.dynamic,
         )?;
-        stages.lap(gpu, "far-field cube maps")?;
+        frame.lap("far-field cube maps")?;
+        Ok(faces_drawn)
+    }
 
-        if p.readback.as_ref().map(|r| (r.width, r.height)) != Some((width, height)) {
-            p.readback = Some(SurfaceReadback::new(gpu, width, height));
-        }
-        let surfaces = p.readback.as_ref().expect("made above").read(gpu, &g)?;
-        stages.lap(gpu, "g-buffer readback")?;
-
-        let placed: Vec<PlacedCloud> = field
-            .clouds
-            .iter()
-            .map(|cloud| {
-                PlacedCloud::new(
-                    cloud,
-                    DMat4::from_cols_array(
-                        &live
-                            .world_from_loaded(cloud.mesh)
-                            .inverse()
-                            .to_cols_array()
-                            .map(f64::from),
-                    ),
-                )
-            })
-            .collect();
+    /// The backward and forward phases, on the GPU or the CPU, leaving each mirror pixel's
+    /// reflection of the nearby objects in the near buffer. Returns what they counted.
+    fn phases(
+        &self,
+        p: &mut Prepared,
+        frame: &mut GpuFrame<'_>,
+        field: &NearField,
+        surfaces: &PixelSurfaces,
+    ) -> Result<PhaseReport, TechniqueError> {
+        let (gpu, live, camera) = (frame.gpu, frame.live, frame.camera);
+        let scene = live.scene();
+        let placed = placed_clouds(field, live);
         let mirror_meshes: Vec<usize> = field.near.iter().map(|(m, _)| *m).collect();
-        let view = ScreenView::new(camera, width, height);
-        let settings = FrameSettings {
-            min_pixels: self.params.min_pixels,
-            split_pixels: self.params.split_pixels,
-            trace_self: self.params.trace_self,
-            level_of_detail: self.params.level_of_detail,
-            conservative_culling: self.params.conservative_culling,
-            one_sided: self.params.one_sided,
-            multiple_projections: self.params.multiple_projections,
-            fixed_splat: self.params.fixed_splat,
-            depth_band: self.params.depth_band,
-            fill_holes: self.params.fill_holes,
-            exact_hits: self.params.exact_hits,
-            splat_scale: self.params.splat_scale,
-            max_splat: self.params.max_splat,
-            max_depth: FALLBACK_MAX_DEPTH,
-        };
+        let view = ScreenView::new(camera, frame.width, frame.height);
+        let settings = self.frame_settings();
         let mut plan = phases::plan(
             scene,
             live.accel(),
             &mirror_meshes,
             &placed,
             &view,
-            &surfaces,
+            surfaces,
             settings,
         );
-        stages.measured("c3rc set-up", plan.report.setup_ms);
-        stages.measured("culling (backward phase)", plan.report.culling_ms);
+        frame.measured("c3rc set-up", plan.report.setup_ms);
+        frame.measured("culling (backward phase)", plan.report.culling_ms);
         p.near_buffer.fit(
             gpu,
             "c3rc near reflection",
-            (width * height) as usize,
+            (frame.width * frame.height) as usize,
             16,
             wgpu::BufferUsages::STORAGE,
         );
@@ -735,9 +714,8 @@ impl Technique for C3rcMethod {
                 Projection::Cpu => false,
                 Projection::Auto => !gpu.is_software() && !self.params.exact_hits,
             };
-        let mut warnings = Vec::new();
         if on_gpu && self.params.exact_hits {
-            warnings.push(
+            frame.warn(
                 "c3rc: projection=gpu splats colours (exact_hits runs on the CPU only)".into(),
             );
         }
@@ -746,7 +724,7 @@ impl Technique for C3rcMethod {
                 scene,
                 live.accel(),
                 &view,
-                &surfaces,
+                surfaces,
                 FALLBACK_MAX_DEPTH,
                 &mut p.near_pixels,
             );
@@ -765,7 +743,7 @@ impl Technique for C3rcMethod {
                 &view,
                 camera,
                 &settings,
-                &g,
+                frame.g(),
                 &p.near_buffer,
             )?;
             let report = &mut plan.report;
@@ -773,7 +751,7 @@ impl Technique for C3rcMethod {
             report.points_projected = counts[1] as u64;
             report.valid_projections = counts[2] as u64;
             report.splats = counts[3] as u64;
-            stages.lap(gpu, "projection and splatting (GPU)")?;
+            frame.lap("projection and splatting (GPU)")?;
         } else {
             phases::forward(
                 &mut plan,
@@ -782,97 +760,106 @@ impl Technique for C3rcMethod {
                 &mirror_meshes,
                 &placed,
                 &view,
-                &surfaces,
+                surfaces,
                 settings,
                 &mut p.near_pixels,
             );
-            stages.measured("projection (forward phase)", plan.report.projection_ms);
-            stages.measured("splatting (resolve, holes)", plan.report.splatting_ms);
-            stages.measured(
+            frame.measured("projection (forward phase)", plan.report.projection_ms);
+            frame.measured("splatting (resolve, holes)", plan.report.splatting_ms);
+            frame.measured(
                 "pixels without a camera (per-vertex, traced)",
                 plan.report.fallback_ms,
             );
             gpu.queue
                 .write_buffer(p.near_buffer.get(), 0, bytemuck::cast_slice(&p.near_pixels));
         }
-        let report = plan.report;
+        Ok(plan.report)
+    }
 
-        let bound = Some((p.maps.faces_generation(), p.near_buffer.generation()));
-        if p.bound != bound {
-            p.bind_groups.clear();
-            p.bound = bound;
+    /// What the phases follow, from the parameters.
+    fn frame_settings(&self) -> FrameSettings {
+        let params = &self.params;
+        FrameSettings {
+            min_pixels: params.min_pixels,
+            split_pixels: params.split_pixels,
+            trace_self: params.trace_self,
+            level_of_detail: params.level_of_detail,
+            conservative_culling: params.conservative_culling,
+            one_sided: params.one_sided,
+            multiple_projections: params.multiple_projections,
+            fixed_splat: params.fixed_splat,
+            depth_band: params.depth_band,
+            fill_holes: params.fill_holes,
+            exact_hits: params.exact_hits,
+            splat_scale: params.splat_scale,
+            max_splat: params.max_splat,
+            max_depth: FALLBACK_MAX_DEPTH,
         }
-        let output = self.output.get(gpu, width, height);
-        gpu.validated("c3rc shade", || {
-            gpu.queue
-                .write_buffer(&p.camera_buffer, 0, bytemuck::bytes_of(&camera_uniform));
-            let group = p.bind_groups.get_or_make(g.slot, || {
-                let views = g.views();
-                let mut entries = cube_maps::shading_bindings(&p.camera_buffer, &views, &p.maps);
-                entries.push(p.near_buffer.get().as_entire_binding());
-                entries.push(wgpu::BindingResource::TextureView(
-                    p.maps.positions_view().expect("kept since build"),
-                ));
-                bind_group(gpu, "c3rc", &p.layout, &entries)
-            });
-            raster::fullscreen_pass(
-                gpu,
-                "c3rc shade",
-                &p.pipeline,
-                &[group, &p.scene_bind_group],
-                &output,
-            )
-        })?;
-        stages.lap(gpu, "upload and shading")?;
+    }
+}
 
-        let counters = counters(&field, &report, rebuilt, faces_drawn);
-        p.near_field = Some(field);
-        let visible = report.cameras + report.small_triangles + report.self_seeing_triangles;
-        if visible == 0 && !mirror_meshes.is_empty() {
-            warnings.push("c3rc: no mirror triangle is visible; only the far field shows".into());
-        }
-        Ok(Drawn {
-            pixels: Pixels::Texture(output),
-            stages: stages.stages,
-            counters,
-            timing: TimingSource::CpuWallClock,
-            warnings,
-            converged: true,
+/// The nearby objects' clouds where their objects are now.
+fn placed_clouds<'a>(field: &'a NearField, live: &LiveScene) -> Vec<PlacedCloud<'a>> {
+    field
+        .clouds
+        .iter()
+        .map(|cloud| {
+            let object_from_world = live.world_from_loaded(cloud.mesh).inverse();
+            let matrix = DMat4::from_cols_array(&object_from_world.to_cols_array().map(f64::from));
+            PlacedCloud::new(cloud, matrix)
         })
-    }
+        .collect()
 }
 
-/// Wall-clock stage times: the CPU phases have no GPU timestamps, so every stage is timed on
-/// the CPU, waiting for the GPU at the end of GPU stages.
-struct WallStages {
-    stages: Vec<StageTime>,
-    clock: std::time::Instant,
+/// The G-buffer's surfaces on the CPU, for the phases.
+fn read_g_buffer(
+    p: &mut Prepared,
+    frame: &mut GpuFrame<'_>,
+) -> Result<PixelSurfaces, TechniqueError> {
+    let (gpu, width, height) = (frame.gpu, frame.width, frame.height);
+    if p.readback.as_ref().map(|r| (r.width, r.height)) != Some((width, height)) {
+        p.readback = Some(SurfaceReadback::new(gpu, width, height));
+    }
+    let surfaces = p
+        .readback
+        .as_ref()
+        .expect("made above")
+        .read(gpu, frame.g())?;
+    frame.lap("g-buffer readback")?;
+    Ok(surfaces)
 }
 
-impl WallStages {
-    fn new() -> WallStages {
-        WallStages {
-            stages: Vec::new(),
-            clock: std::time::Instant::now(),
-        }
+/// The shading: envmap's over the far field, with each mirror pixel's near reflection.
+fn shade_pixels(p: &mut Prepared, frame: &GpuFrame<'_>) -> Result<(), TechniqueError> {
+    let (gpu, g) = (frame.gpu, frame.g());
+    let bound = Some((p.maps.faces_generation(), p.near_buffer.generation()));
+    if p.bound != bound {
+        p.bind_groups.clear();
+        p.bound = bound;
     }
-
-    /// Ends a stage that ran since the last one ended.
-    fn lap(&mut self, gpu: &GpuContext, name: &str) -> Result<(), GpuError> {
-        gpu.wait()?;
-        let now = std::time::Instant::now();
-        self.measured(name, (now - self.clock).as_secs_f64() * 1e3);
-        Ok(())
-    }
-
-    /// Records a stage timed by its own code; the next stage starts now.
-    fn measured(&mut self, name: &str, milliseconds: f64) {
-        self.stages.push(StageTime {
-            stage: name.into(),
-            milliseconds,
+    Ok(gpu.validated("c3rc shade", || {
+        gpu.queue.write_buffer(
+            &p.camera_buffer,
+            0,
+            bytemuck::bytes_of(&frame.camera_uniform),
+        );
+        let group = p.bind_groups.get_or_make(frame.raster(), g, || {
+            let views = g.views();
+            let mut entries = cube_maps::shading_bindings(&p.camera_buffer, &views, &p.maps);
+            entries.push(p.near_buffer.get().as_entire_binding());
+            entries.push(wgpu::BindingResource::TextureView(
+                p.maps.positions_view().expect("kept since build"),
+            ));
+            bind_group(gpu, "c3rc", &p.layout, &entries)
         });
-        self.clock = std::time::Instant::now();
-    }
+        raster::fullscreen_pass(
+            gpu,
+            "c3rc shade",
+            &p.pipeline,
+            &[group, &p.scene_bind_group],
+            frame.output(),
+        )
+    })?)
 }
 
 /// The frame's counters: the paper's Tables 1 and 2 and what the fallbacks took.

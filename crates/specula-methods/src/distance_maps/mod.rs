@@ -166,17 +166,15 @@ use specula_gpu::util::{
     bind_group, buffer_binding, layout_entry, render_pipeline, texture_2d, texture_binding,
     writable_buffer, PipelineSpec,
 };
-use specula_gpu::{GpuContext, StageTimer};
-use specula_scene::{Camera, Scene};
+use specula_gpu::GpuContext;
+use specula_scene::Scene;
 
 use specula_core::gpu_scene::GpuScene;
+use specula_core::lifecycle::{GpuFrame, GpuMethod, GpuTechnique};
 use specula_core::live_scene::LiveScene;
-use specula_core::raster::{
-    self, BindGroupsBySlot, OutputTexture, RasterPass, RasterSpec, CUBE_FACES,
-};
+use specula_core::raster::{self, BindGroupsBySlot, RasterPass, RasterSpec, CUBE_FACES};
 use specula_core::{
-    Context, Drawn, Invalidates, MethodInfo, Param, ParamKind, ParamSet, ParamType, ParamValue,
-    Pixels, Technique, TechniqueError,
+    Invalidates, MethodInfo, Param, ParamKind, ParamSet, ParamType, ParamValue, TechniqueError,
 };
 
 /// The tracing pass's fallback counters, in trace.wgsl's order: counter name, and what the
@@ -329,7 +327,7 @@ pub const INFO: MethodInfo = MethodInfo {
             "estimate=false",
         ],
     }],
-    create: || Box::new(DistanceMaps::default()),
+    create: || Box::new(GpuMethod::<DistanceMaps>::default()),
 };
 
 const CODES: &str = include_str!("codes.wgsl");
@@ -533,15 +531,13 @@ struct LayerDraw {
     vertex_ranges: Vec<std::ops::Range<u32>>,
 }
 
-struct Prepared {
-    scene_id: u64,
+pub struct Prepared {
     /// The scene version the layer views and reflector origins were made for.
     version: u64,
     /// The scene version the maps were drawn at (None: not yet).
     maps_drawn_at: Option<u64>,
     /// The scene version of the maps the min-max ranges were reduced from.
     ranges_at: Option<u64>,
-    raster: RasterPass,
     reflectors: Vec<usize>,
     material_maps: wgpu::Texture,
     geometry_maps: wgpu::Texture,
@@ -570,9 +566,6 @@ struct Prepared {
 #[derive(Default)]
 pub struct DistanceMaps {
     pub params: Params,
-    prepared: Option<Prepared>,
-    timer: StageTimer,
-    output_texture: OutputTexture,
 }
 
 // What most bindings here are.
@@ -863,11 +856,15 @@ impl DistanceMaps {
             .collect()
     }
 
-    fn build(&self, ctx: &GpuContext, live: &LiveScene) -> Result<Prepared, TechniqueError> {
+    fn build(
+        &self,
+        ctx: &GpuContext,
+        live: &LiveScene,
+        raster: &RasterPass,
+    ) -> Result<Prepared, TechniqueError> {
         let device = &ctx.device;
         let scene = live.scene();
         let gpu_scene = live.gpu(ctx);
-        let raster = RasterPass::new(ctx, live, RasterSpec::scene(self.params.shadow_resolution))?;
         let reflectors: Vec<usize> = (0..scene.meshes.len())
             .filter(|&m| scene.materials[scene.meshes[m].material].is_specular())
             .collect();
@@ -957,7 +954,6 @@ impl DistanceMaps {
                 writable_buffer(ctx, label, size as u64, wgpu::BufferUsages::UNIFORM)
             };
             Prepared {
-                scene_id: live.id(),
                 version: live.version(),
                 maps_drawn_at: None,
                 ranges_at: None,
@@ -975,7 +971,6 @@ impl DistanceMaps {
                 camera_buffer: uniform("camera", size_of::<CameraUniform>()),
                 trace_bind_groups: BindGroupsBySlot::default(),
                 fallbacks: Counters::new(ctx, "distance-map fallbacks", FALLBACK_KINDS.len()),
-                raster,
                 reflectors,
                 material_maps: maps.material,
                 geometry_maps: maps.geometry,
@@ -994,23 +989,12 @@ impl DistanceMaps {
         Ok(prepared)
     }
 
-    /// The prepared state for `live`, (re)built when missing or made for another scene; after
-    /// a move, the layer views and origins follow the new geometry.
-    fn ensure_prepared(
-        &mut self,
-        ctx: &GpuContext,
-        live: &LiveScene,
-    ) -> Result<(), TechniqueError> {
-        if self.prepared.as_ref().map(|p| p.scene_id) != Some(live.id()) {
-            self.prepared = Some(self.build(ctx, live)?);
-        }
-        let mut p = self.prepared.take().expect("built above");
+    /// The maps' views and origins, written again after a move.
+    fn place_for(&self, p: &mut Prepared, gpu: &GpuContext, live: &LiveScene) {
         if p.version != live.version() {
-            p.place(self, ctx, live.scene(), live.gpu(ctx));
+            p.place(self, gpu, live.scene(), live.gpu(gpu));
             p.version = live.version();
         }
-        self.prepared = Some(p);
-        Ok(())
     }
 }
 
@@ -1036,7 +1020,7 @@ impl Prepared {
     }
 
     /// Draws every face of every layer of every map.
-    fn draw_maps(&self, ctx: &GpuContext, gpu_scene: &GpuScene) {
+    fn draw_maps(&self, ctx: &GpuContext, gpu_scene: &GpuScene, raster: &RasterPass) {
         let device = &ctx.device;
         let mut encoder = device.create_command_encoder(&Default::default());
         for draw in &self.draws {
@@ -1075,7 +1059,7 @@ impl Prepared {
             pass.set_pipeline(&self.layer_pipeline);
             pass.set_bind_group(0, &draw.bind_group, &[]);
             pass.set_bind_group(1, &self.scene_bind_group, &[]);
-            pass.set_bind_group(2, self.raster.shadow_bind_group(), &[]);
+            pass.set_bind_group(2, raster.shadow_bind_group(), &[]);
             pass.set_vertex_buffer(0, gpu_scene.vertices.slice(..));
             for range in &draw.vertex_ranges {
                 pass.draw(range.clone(), 0..1);
@@ -1103,7 +1087,9 @@ impl Prepared {
     }
 }
 
-impl Technique for DistanceMaps {
+impl GpuTechnique for DistanceMaps {
+    type Prepared = Prepared;
+
     fn info(&self) -> &'static MethodInfo {
         &INFO
     }
@@ -1116,91 +1102,108 @@ impl Technique for DistanceMaps {
         &mut self.params
     }
 
-    fn invalidate(&mut self, what: Invalidates) {
-        // The maps and most passes follow the resolution and layer count: both levels rebuild.
-        if what >= Invalidates::Resources {
-            self.prepared = None;
+    fn scene_raster(&self) -> Option<RasterSpec> {
+        Some(RasterSpec::scene(self.params.shadow_resolution))
+    }
+
+    fn prepare(
+        &mut self,
+        gpu: &GpuContext,
+        live: &LiveScene,
+        raster: Option<&RasterPass>,
+    ) -> Result<Prepared, TechniqueError> {
+        self.build(gpu, live, raster.expect("declared by scene_raster"))
+    }
+
+    // The maps and most passes follow the resolution and layer count: the default rebuilds
+    // the whole preparation on a change of resources.
+
+    /// The paper's steps after the G-buffer: the layered distance maps (drawn again after a
+    /// move), their min-max ranges, then each pixel's paths traced through them.
+    fn shade(&mut self, p: &mut Prepared, frame: &mut GpuFrame<'_>) -> Result<(), TechniqueError> {
+        let (gpu, live) = (frame.gpu, frame.live);
+        self.place_for(p, gpu, live);
+        gpu.queue.write_buffer(
+            &p.settings,
+            0,
+            bytemuck::bytes_of(&self.trace_settings(live)),
+        );
+        let faces = self.distance_maps(p, frame)?;
+        p.fallbacks.clear(gpu);
+        gpu.validated("distance-map trace", || trace(gpu, p, frame))?;
+        frame.lap("tracing")?;
+        self.report(p, frame, faces)
+    }
+}
+
+impl DistanceMaps {
+    /// The tracing pass's settings for this frame.
+    fn trace_settings(&self, live: &LiveScene) -> GpuTraceSettings {
+        let params = &self.params;
+        let dispersive = live.scene().materials.iter().any(|m| m.is_dispersive());
+        GpuTraceSettings {
+            layers: self.layer_count(),
+            linear_steps: params.linear_steps,
+            secant_steps: params.secant_steps,
+            max_depth: params.max_depth,
+            min_max: u32::from(params.min_max),
+            dispersive: u32::from(params.dispersion && dispersive),
+            output: params.output as u32,
+            resolution: params.resolution as f32,
+            skip_start: u32::from(params.skip_start),
+            refine_every_layer: u32::from(params.refine_every_layer),
+            per_mesh: u32::from(params.interpolation == Interpolation::Mesh),
+            both_branches: u32::from(params.dielectric_branches == Branches::Both),
+            exact_fresnel: u32::from(params.dielectric_fresnel == DielectricFresnel::Exact),
+            estimate: u32::from(params.estimate),
+            pad: [0; 2],
         }
     }
 
-    fn prepare(&mut self, ctx: &Context, scene: &LiveScene) -> Result<(), TechniqueError> {
-        self.ensure_prepared(ctx.gpu(INFO.name)?, scene)
-    }
-
-    fn draw(
-        &mut self,
-        ctx: &Context,
-        live: &LiveScene,
-        camera: &Camera,
-        width: u32,
-        height: u32,
-    ) -> Result<Drawn, TechniqueError> {
-        let gpu = ctx.gpu(INFO.name)?;
-        self.ensure_prepared(gpu, live)?;
-        let scene = live.scene();
-        let gpu_scene = live.gpu(gpu);
-        let settings = GpuTraceSettings {
-            layers: self.layer_count(),
-            linear_steps: self.params.linear_steps,
-            secant_steps: self.params.secant_steps,
-            max_depth: self.params.max_depth,
-            min_max: u32::from(self.params.min_max),
-            dispersive: u32::from(
-                self.params.dispersion && scene.materials.iter().any(|m| m.is_dispersive()),
-            ),
-            output: self.params.output as u32,
-            resolution: self.params.resolution as f32,
-            skip_start: u32::from(self.params.skip_start),
-            refine_every_layer: u32::from(self.params.refine_every_layer),
-            per_mesh: u32::from(self.params.interpolation == Interpolation::Mesh),
-            both_branches: u32::from(self.params.dielectric_branches == Branches::Both),
-            exact_fresnel: u32::from(self.params.dielectric_fresnel == DielectricFresnel::Exact),
-            estimate: u32::from(self.params.estimate),
-            pad: [0; 2],
-        };
-        let layer_count = self.layer_count() as u64;
-        let p = self.prepared.as_mut().expect("prepared above");
-        p.raster.begin_frame(gpu, live)?;
-        p.trace_bind_groups.keep_pooled(&p.raster);
-        self.timer.start(gpu);
-        gpu.queue
-            .write_buffer(&p.settings, 0, bytemuck::bytes_of(&settings));
-        let camera_uniform = raster::camera_uniform(camera, &scene.bounds(), width, height);
-        let g = p.raster.render(gpu, gpu_scene, &camera_uniform, None)?;
-        self.timer.lap(gpu, "g-buffer")?;
+    /// The layered maps, drawn again after a move (or every frame with `dynamic`), and their
+    /// min-max ranges reduced again after them. Returns the faces drawn.
+    fn distance_maps(
+        &self,
+        p: &mut Prepared,
+        frame: &mut GpuFrame<'_>,
+    ) -> Result<u64, TechniqueError> {
+        let (gpu, live) = (frame.gpu, frame.live);
         let redraw = self.params.dynamic || p.maps_drawn_at != Some(live.version());
         let faces = if redraw { p.draws.len() as u64 } else { 0 };
         if redraw {
-            gpu.validated("distance-map layers", || p.draw_maps(gpu, gpu_scene))?;
-            self.timer.lap(gpu, "distance maps")?;
+            let raster = frame.raster();
+            gpu.validated("distance-map layers", || {
+                p.draw_maps(gpu, live.gpu(gpu), raster)
+            })?;
+            frame.lap("distance maps")?;
             p.maps_drawn_at = Some(live.version());
         }
         if self.params.min_max && (redraw || p.ranges_at != p.maps_drawn_at) {
             gpu.validated("distance-map ranges", || p.reduce_ranges(gpu))?;
-            self.timer.lap(gpu, "min-max")?;
+            frame.lap("min-max")?;
             p.ranges_at = p.maps_drawn_at;
         }
-        let output = self.output_texture.get(gpu, width, height);
-        p.fallbacks.clear(gpu);
-        gpu.validated("distance-map trace", || {
-            trace(gpu, p, &camera_uniform, &g, &output)
-        })?;
-        self.timer.lap(gpu, "tracing")?;
-        let (stages, timing) = self.timer.finish(gpu)?;
-        let fallbacks = p.fallbacks.read(gpu)?;
-        let mut warnings = Vec::new();
-        let mut counters = vec![
-            ("reflectors".into(), p.reflectors.len() as u64),
-            ("layers per map".into(), layer_count),
-            ("cube map faces rendered".into(), faces),
-            (
-                "distance map texels".into(),
-                faces * (self.params.resolution as u64).pow(2),
-            ),
-            ("raster passes".into(), 1 + faces),
-        ];
+        Ok(faces)
+    }
+
+    /// The frame's counters, and a warning for each kind of fallback the tracing took.
+    fn report(
+        &self,
+        p: &Prepared,
+        frame: &mut GpuFrame<'_>,
+        faces: u64,
+    ) -> Result<(), TechniqueError> {
+        let fallbacks = p.fallbacks.read(frame.gpu)?;
+        frame.count("reflectors", p.reflectors.len() as u64);
+        frame.count("layers per map", self.layer_count() as u64);
+        frame.count("cube map faces rendered", faces);
+        frame.count(
+            "distance map texels",
+            faces * (self.params.resolution as u64).pow(2),
+        );
+        frame.count("raster passes", 1 + faces);
         for (kind, ((name, what), &count)) in FALLBACK_KINDS.iter().zip(&fallbacks).enumerate() {
-            counters.push((name.to_string(), count as u64));
+            frame.count(name, count as u64);
             if count > 0 {
                 let taken = match (self.params.estimate, kind) {
                     (true, _) => {
@@ -1211,31 +1214,22 @@ impl Technique for DistanceMaps {
                         "they end with their weight so far, as if the surface they stop at sent radiance 1 (estimate=false, the paper's Listing 17-5)"
                     }
                 };
-                warnings.push(format!("distance-maps: {count} {what}; {taken}"));
+                frame.warn(format!("distance-maps: {count} {what}; {taken}"));
             }
         }
-        Ok(Drawn {
-            pixels: Pixels::Texture(output),
-            stages,
-            counters,
-            timing,
-            warnings,
-            converged: true,
-        })
+        Ok(())
     }
 }
 
 /// The tracing pass over the G-buffer, into `output`.
-fn trace(
-    ctx: &GpuContext,
-    p: &mut Prepared,
-    camera: &CameraUniform,
-    g: &raster::GBuffer,
-    output: &wgpu::Texture,
-) {
-    ctx.queue
-        .write_buffer(&p.camera_buffer, 0, bytemuck::bytes_of(camera));
-    let group = p.trace_bind_groups.get_or_make(g.slot, || {
+fn trace(ctx: &GpuContext, p: &mut Prepared, frame: &GpuFrame<'_>) {
+    let g = frame.g();
+    ctx.queue.write_buffer(
+        &p.camera_buffer,
+        0,
+        bytemuck::bytes_of(&frame.camera_uniform),
+    );
+    let group = p.trace_bind_groups.get_or_make(frame.raster(), g, || {
         let [color, position, normal, ids] = g.views();
         let views = [
             color,
@@ -1267,7 +1261,7 @@ fn trace(
         "distance-map trace",
         &p.trace_pipeline,
         &[group, &p.scene_bind_group],
-        output,
+        frame.output(),
     )
 }
 

@@ -45,15 +45,14 @@
 //! - `shadow_resolution` (default 1024): shadow maps of the scene raster (see `raster`).
 
 use specula_core::cube_maps::{shading_bindings, shading_pass, CubeMaps, Exit, TWO_LEVEL_MAPS};
-use specula_core::raster::{self, BindGroupsBySlot, OutputTexture, RasterPass, RasterSpec};
+use specula_core::lifecycle::{GpuFrame, GpuMethod, GpuTechnique};
+use specula_core::raster::{self, BindGroupsBySlot, RasterPass, RasterSpec};
 use specula_core::{
-    Context, Drawn, Invalidates, LiveScene, MethodInfo, Param, ParamKind, ParamSet, Pixels,
-    Technique, TechniqueError,
+    Invalidates, LiveScene, MethodInfo, Param, ParamKind, ParamSet, TechniqueError,
 };
 use specula_gpu::shaders::CameraUniform;
 use specula_gpu::util::{bind_group, writable_buffer};
-use specula_gpu::{GpuContext, GpuError, StageTimer};
-use specula_scene::Camera;
+use specula_gpu::GpuContext;
 
 specula_core::params! {
     /// envmap's parameters (the table above).
@@ -91,13 +90,11 @@ pub const INFO: MethodInfo = MethodInfo {
     delegates: &[],
     params: Params::SPECS,
     presets: &[],
-    create: || Box::new(EnvMap::default()),
+    create: || Box::new(GpuMethod::<EnvMap>::default()),
 };
 
 /// What depends on the scene (not on `resolution`).
-struct Prepared {
-    scene_id: u64,
-    raster: RasterPass,
+pub struct Prepared {
     maps: CubeMaps,
     camera_buffer: wgpu::Buffer,
     pipeline: wgpu::RenderPipeline,
@@ -111,56 +108,20 @@ struct Prepared {
 #[derive(Default)]
 pub struct EnvMap {
     pub params: Params,
-    prepared: Option<Prepared>,
-    timer: StageTimer,
-    output: OutputTexture,
 }
 
 impl EnvMap {
-    pub fn new(resolution: u32, exit: Exit) -> Self {
-        let mut envmap = EnvMap::default();
+    pub fn new(resolution: u32, exit: Exit) -> GpuMethod<EnvMap> {
+        let mut envmap = GpuMethod::<EnvMap>::default();
         envmap.params.resolution = resolution;
         envmap.params.exit = exit;
         envmap
     }
 }
 
-impl EnvMap {
-    fn build(&self, ctx: &GpuContext, live: &LiveScene) -> Result<Prepared, GpuError> {
-        let device = &ctx.device;
-        let gpu_scene = live.gpu(ctx);
-        let raster = RasterPass::new(ctx, live, RasterSpec::scene(self.params.shadow_resolution))?;
-        ctx.validated("envmap set-up", || {
-            let (layout, scene_layout, pipeline) = shading_pass(device, "envmap shade");
-            Prepared {
-                scene_id: live.id(),
-                scene_bind_group: gpu_scene.bind_group(ctx, &scene_layout),
-                maps: CubeMaps::new(ctx, live.scene()),
-                camera_buffer: writable_buffer(
-                    ctx,
-                    "camera",
-                    size_of::<CameraUniform>() as u64,
-                    wgpu::BufferUsages::UNIFORM,
-                ),
-                raster,
-                pipeline,
-                layout,
-                bind_groups: BindGroupsBySlot::default(),
-                bound_faces: None,
-            }
-        })
-    }
+impl GpuTechnique for EnvMap {
+    type Prepared = Prepared;
 
-    /// The prepared state for `live`, (re)built when missing or made for another scene.
-    fn ensure_prepared(&mut self, ctx: &GpuContext, live: &LiveScene) -> Result<(), GpuError> {
-        if self.prepared.as_ref().map(|p| p.scene_id) != Some(live.id()) {
-            self.prepared = Some(self.build(ctx, live)?);
-        }
-        Ok(())
-    }
-}
-
-impl Technique for EnvMap {
     fn info(&self) -> &'static MethodInfo {
         &INFO
     }
@@ -173,90 +134,103 @@ impl Technique for EnvMap {
         &mut self.params
     }
 
-    fn invalidate(&mut self, what: Invalidates) {
-        if what >= Invalidates::Resources {
-            if let Some(p) = &mut self.prepared {
-                p.maps.drop_faces();
-            }
-        }
-        if what >= Invalidates::Scene {
-            self.prepared = None;
-        }
+    fn scene_raster(&self) -> Option<RasterSpec> {
+        Some(RasterSpec::scene(self.params.shadow_resolution))
     }
 
-    fn prepare(&mut self, ctx: &Context, scene: &LiveScene) -> Result<(), TechniqueError> {
-        self.ensure_prepared(ctx.gpu(INFO.name)?, scene)?;
+    fn prepare(
+        &mut self,
+        gpu: &GpuContext,
+        live: &LiveScene,
+        _: Option<&RasterPass>,
+    ) -> Result<Prepared, TechniqueError> {
+        Ok(gpu.validated("envmap set-up", || {
+            let (layout, scene_layout, pipeline) = shading_pass(&gpu.device, "envmap shade");
+            Prepared {
+                scene_bind_group: live.gpu(gpu).bind_group(gpu, &scene_layout),
+                maps: CubeMaps::new(gpu, live.scene()),
+                camera_buffer: writable_buffer(
+                    gpu,
+                    "camera",
+                    size_of::<CameraUniform>() as u64,
+                    wgpu::BufferUsages::UNIFORM,
+                ),
+                pipeline,
+                layout,
+                bind_groups: BindGroupsBySlot::default(),
+                bound_faces: None,
+            }
+        })?)
+    }
+
+    fn invalidate(&mut self, prepared: Option<&mut Prepared>, what: Invalidates) -> bool {
+        if let (Some(p), true) = (prepared, what >= Invalidates::Resources) {
+            p.maps.drop_faces();
+        }
+        true
+    }
+
+    /// The classic technique's steps after the G-buffer: the cube maps, then the shading.
+    fn shade(&mut self, p: &mut Prepared, frame: &mut GpuFrame<'_>) -> Result<(), TechniqueError> {
+        let faces_drawn = self.environment_maps(p, frame)?;
+        frame.lap("environment cube maps")?;
+        shade_from_maps(p, frame)?;
+        frame.lap("shading")?;
+        let resolution = self.params.resolution as u64;
+        frame.count("reflectors", p.maps.reflectors.len() as u64);
+        frame.count("cube map faces rendered", faces_drawn);
+        frame.count("cube map texels", faces_drawn * resolution.pow(2));
+        frame.count("raster passes", 1 + faces_drawn);
         Ok(())
     }
+}
 
-    fn draw(
-        &mut self,
-        ctx: &Context,
-        live: &LiveScene,
-        camera: &Camera,
-        width: u32,
-        height: u32,
-    ) -> Result<Drawn, TechniqueError> {
-        let gpu = ctx.gpu(INFO.name)?;
-        self.ensure_prepared(gpu, live)?;
-        let scene = live.scene();
-        let gpu_scene = live.gpu(gpu);
-        let (resolution, exit, dynamic) = (
-            self.params.resolution,
-            self.params.exit,
-            self.params.dynamic,
-        );
-        let two_level_maps = self.params.two_level_maps;
-        let p = self.prepared.as_mut().expect("prepared above");
-        p.raster.begin_frame(gpu, live)?;
-        p.bind_groups.keep_pooled(&p.raster);
-        self.timer.start(gpu);
-        let camera_uniform = raster::camera_uniform(camera, &scene.bounds(), width, height);
-        let g = p.raster.render(gpu, gpu_scene, &camera_uniform, None)?;
-        self.timer.lap(gpu, "g-buffer")?;
-        p.maps.set_two_levels(two_level_maps);
-        let faces_drawn = p
-            .maps
-            .update(gpu, &p.raster, live, resolution, exit, dynamic)?;
+impl EnvMap {
+    /// Step 2: each reflector's cube map, drawn again where the scene moved (or every frame
+    /// with `dynamic`). Returns the faces drawn.
+    fn environment_maps(
+        &self,
+        p: &mut Prepared,
+        frame: &GpuFrame<'_>,
+    ) -> Result<u64, TechniqueError> {
+        let params = &self.params;
+        p.maps.set_two_levels(params.two_level_maps);
+        let faces_drawn = p.maps.update(
+            frame.gpu,
+            frame.raster(),
+            frame.live,
+            params.resolution,
+            params.exit,
+            params.dynamic,
+        )?;
         if p.bound_faces != p.maps.faces_generation() {
             p.bind_groups.clear();
             p.bound_faces = p.maps.faces_generation();
         }
-        self.timer.lap(gpu, "environment cube maps")?;
-        let output = self.output.get(gpu, width, height);
-        gpu.validated("envmap shade", || {
-            gpu.queue
-                .write_buffer(&p.camera_buffer, 0, bytemuck::bytes_of(&camera_uniform));
-            let group = p.bind_groups.get_or_make(g.slot, || {
-                let views = g.views();
-                let entries = shading_bindings(&p.camera_buffer, &views, &p.maps);
-                bind_group(gpu, "envmap", &p.layout, &entries)
-            });
-            raster::fullscreen_pass(
-                gpu,
-                "envmap shade",
-                &p.pipeline,
-                &[group, &p.scene_bind_group],
-                &output,
-            )
-        })?;
-        self.timer.lap(gpu, "shading")?;
-        let (stages, timing) = self.timer.finish(gpu)?;
-        Ok(Drawn {
-            pixels: Pixels::Texture(output),
-            stages,
-            counters: vec![
-                ("reflectors".into(), p.maps.reflectors.len() as u64),
-                ("cube map faces rendered".into(), faces_drawn),
-                (
-                    "cube map texels".into(),
-                    faces_drawn * (resolution as u64).pow(2),
-                ),
-                ("raster passes".into(), 1 + faces_drawn),
-            ],
-            timing,
-            warnings: Vec::new(),
-            converged: true,
-        })
+        Ok(faces_drawn)
     }
+}
+
+/// Step 3: every specular pixel of the G-buffer shaded from the cube maps.
+fn shade_from_maps(p: &mut Prepared, frame: &GpuFrame<'_>) -> Result<(), TechniqueError> {
+    let (gpu, g) = (frame.gpu, frame.g());
+    Ok(gpu.validated("envmap shade", || {
+        gpu.queue.write_buffer(
+            &p.camera_buffer,
+            0,
+            bytemuck::bytes_of(&frame.camera_uniform),
+        );
+        let group = p.bind_groups.get_or_make(frame.raster(), g, || {
+            let views = g.views();
+            let entries = shading_bindings(&p.camera_buffer, &views, &p.maps);
+            bind_group(gpu, "envmap", &p.layout, &entries)
+        });
+        raster::fullscreen_pass(
+            gpu,
+            "envmap shade",
+            &p.pipeline,
+            &[group, &p.scene_bind_group],
+            frame.output(),
+        )
+    })?)
 }

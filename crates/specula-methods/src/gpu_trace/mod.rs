@@ -56,16 +56,16 @@ use bytemuck::{Pod, Zeroable};
 use specula_gpu::counters::Counters;
 use specula_gpu::shaders::{self, CameraUniform};
 use specula_gpu::util::{buffer_binding, layout_entry, writable_buffer};
-use specula_gpu::{GpuContext, GpuError, StageTimer};
-use specula_scene::Camera;
+use specula_gpu::{GpuContext, GpuError};
 use specula_trace::SceneAccel;
 
 use specula_core::gpu_scene::GpuScene;
+use specula_core::lifecycle::{GpuFrame, GpuMethod, GpuTechnique};
 use specula_core::live_scene::LiveScene;
-use specula_core::raster::{self, OutputTexture};
+use specula_core::raster::{self, RasterPass, RasterSpec};
 use specula_core::{
-    Context, Drawn, Invalidates, MethodInfo, Param, ParamKind, ParamSet, Pixels, Technique,
-    TechniqueError, COUNTER_RAYS_TRACED, COUNTER_SHADOW_RAYS,
+    Invalidates, MethodInfo, Param, ParamKind, ParamSet, TechniqueError, COUNTER_RAYS_TRACED,
+    COUNTER_SHADOW_RAYS,
 };
 
 const BVH: &str = include_str!("bvh.wgsl");
@@ -138,7 +138,7 @@ pub const INFO: MethodInfo = MethodInfo {
     delegates: &[],
     params: Params::SPECS,
     presets: &[],
-    create: || Box::new(GpuTrace::default()),
+    create: || Box::new(GpuMethod::<GpuTrace>::default()),
 };
 
 /// Host mirror of WGSL `Settings` (shade.wgsl).
@@ -188,8 +188,7 @@ fn leaf_triangles(accel: &SceneAccel, gpu_scene: &GpuScene) -> Vec<GpuTriangle> 
 }
 
 /// What depends on the scene: the BVH on the GPU and the pipeline.
-struct Prepared {
-    scene_id: u64,
+pub struct Prepared {
     /// Scene version the nodes and triangles were written at.
     uploaded_at: u64,
     nodes: wgpu::Buffer,
@@ -409,15 +408,13 @@ impl Wavefront {
 #[derive(Default)]
 pub struct GpuTrace {
     pub params: Params,
-    prepared: Option<Prepared>,
+    /// The wavefront's queues, made for the current preparation at the first wavefront frame.
     wavefront: Option<Wavefront>,
-    timer: StageTimer,
-    output: OutputTexture,
 }
 
 impl GpuTrace {
-    pub fn new(mode: Mode, max_depth: u32) -> Self {
-        let mut trace = GpuTrace::default();
+    pub fn new(mode: Mode, max_depth: u32) -> GpuMethod<GpuTrace> {
+        let mut trace = GpuMethod::<GpuTrace>::default();
         trace.params.mode = mode;
         trace.params.max_depth = max_depth;
         trace
@@ -495,7 +492,6 @@ impl GpuTrace {
                 writable_buffer(ctx, label, size as u64, wgpu::BufferUsages::UNIFORM)
             };
             Prepared {
-                scene_id: live.id(),
                 uploaded_at: live.version(),
                 nodes: storage_buffer(ctx, "bvh nodes", bytemuck::cast_slice(&accel.bvh.nodes)),
                 triangles: storage_buffer(
@@ -514,14 +510,6 @@ impl GpuTrace {
                 bind_group: None,
             }
         })
-    }
-
-    fn ensure_prepared(&mut self, ctx: &GpuContext, live: &LiveScene) -> Result<(), GpuError> {
-        if self.prepared.as_ref().map(|p| p.scene_id) != Some(live.id()) {
-            self.prepared = Some(Self::build(ctx, live)?);
-            self.wavefront = None;
-        }
-        Ok(())
     }
 }
 
@@ -576,7 +564,9 @@ impl Prepared {
     }
 }
 
-impl Technique for GpuTrace {
+impl GpuTechnique for GpuTrace {
+    type Prepared = Prepared;
+
     fn info(&self) -> &'static MethodInfo {
         &INFO
     }
@@ -589,36 +579,53 @@ impl Technique for GpuTrace {
         &mut self.params
     }
 
-    fn invalidate(&mut self, what: Invalidates) {
+    fn scene_raster(&self) -> Option<RasterSpec> {
+        None
+    }
+
+    fn prepare(
+        &mut self,
+        gpu: &GpuContext,
+        live: &LiveScene,
+        _: Option<&RasterPass>,
+    ) -> Result<Prepared, TechniqueError> {
+        self.wavefront = None;
+        Ok(Self::build(gpu, live)?)
+    }
+
+    fn invalidate(&mut self, _: Option<&mut Prepared>, what: Invalidates) -> bool {
         if what >= Invalidates::Resources {
             self.wavefront = None;
         }
-        if what >= Invalidates::Scene {
-            self.prepared = None;
-        }
+        true
     }
 
-    fn prepare(&mut self, ctx: &Context, scene: &LiveScene) -> Result<(), TechniqueError> {
-        self.ensure_prepared(ctx.gpu(INFO.name)?, scene)?;
+    /// The moved scene's BVH uploaded, then every pixel's path traced in one dispatch (the
+    /// megakernel) or generation by generation through queues (the wavefront).
+    fn shade(&mut self, p: &mut Prepared, frame: &mut GpuFrame<'_>) -> Result<(), TechniqueError> {
+        p.upload_moves(frame.gpu, frame.live);
+        frame.lap("bvh upload")?;
+        self.trace(p, frame)?;
+        frame.lap("ray tracing")?;
+        let counts = p.counters.read(frame.gpu)?;
+        if counts[DROPPED] > 0 {
+            frame.warn(format!(
+                "gpu-trace dropped {} rays (its ray stack or queues were full; max_depth {} is past what they hold): the image is darker where they went",
+                counts[DROPPED], self.params.max_depth
+            ));
+        }
+        for (name, count) in COUNTER_NAMES.iter().zip(counts) {
+            frame.count(name, count as u64);
+        }
         Ok(())
     }
+}
 
-    fn draw(
-        &mut self,
-        ctx: &Context,
-        live: &LiveScene,
-        camera: &Camera,
-        width: u32,
-        height: u32,
-    ) -> Result<Drawn, TechniqueError> {
-        let gpu = ctx.gpu(INFO.name)?;
-        self.ensure_prepared(gpu, live)?;
-        let output = self.output.get(gpu, width, height);
-        let p = self.prepared.as_mut().expect("prepared above");
-        self.timer.start(gpu);
-        p.upload_moves(gpu, live);
-        self.timer.lap(gpu, "bvh upload")?;
-        let camera_uniform = raster::camera_uniform(camera, &live.scene().bounds(), width, height);
+impl GpuTrace {
+    /// Every pixel's path, into `frame.output`.
+    fn trace(&mut self, p: &mut Prepared, frame: &GpuFrame<'_>) -> Result<(), TechniqueError> {
+        let (gpu, live, output) = (frame.gpu, frame.live, frame.output());
+        let (width, height) = (frame.width, frame.height);
         if self.params.mode == Mode::Wavefront && self.wavefront.is_none() {
             self.wavefront = Some(Wavefront::new(gpu, p, self.params.queue_factor)?);
         }
@@ -633,13 +640,13 @@ impl Technique for GpuTrace {
             pad: 0,
         };
         let max_depth = self.params.max_depth;
-        gpu.validated("gpu-trace", || {
+        Ok(gpu.validated("gpu-trace", || {
             gpu.queue
-                .write_buffer(&p.camera, 0, bytemuck::bytes_of(&camera_uniform));
+                .write_buffer(&p.camera, 0, bytemuck::bytes_of(&frame.camera_uniform));
             gpu.queue
                 .write_buffer(&p.settings, 0, bytemuck::bytes_of(&settings));
             p.counters.clear(gpu);
-            let group = p.bind_group(gpu, live, &output).clone();
+            let group = p.bind_group(gpu, live, output).clone();
             if let Some(wavefront) = wavefront {
                 wavefront.trace(gpu, p, &group, width, height, max_depth);
                 return;
@@ -653,28 +660,6 @@ impl Technique for GpuTrace {
                 pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
             }
             gpu.queue.submit([encoder.finish()]);
-        })?;
-        self.timer.lap(gpu, "ray tracing")?;
-        let (stages, timing) = self.timer.finish(gpu)?;
-        let counts = p.counters.read(gpu)?;
-        let mut warnings = Vec::new();
-        if counts[DROPPED] > 0 {
-            warnings.push(format!(
-                "gpu-trace dropped {} rays (its ray stack or queues were full; max_depth {} is past what they hold): the image is darker where they went",
-                counts[DROPPED], self.params.max_depth
-            ));
-        }
-        Ok(Drawn {
-            pixels: Pixels::Texture(output),
-            stages,
-            counters: COUNTER_NAMES
-                .iter()
-                .zip(counts)
-                .map(|(name, count)| (name.to_string(), count as u64))
-                .collect(),
-            timing,
-            warnings,
-            converged: true,
-        })
+        })?)
     }
 }

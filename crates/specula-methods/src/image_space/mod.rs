@@ -172,18 +172,16 @@ use specula_gpu::shaders::{self, CameraUniform};
 use specula_gpu::util::{
     bind_group, buffer_binding, layout_entry, texture_binding, writable_buffer,
 };
-use specula_gpu::{GpuContext, StageTimer};
-use specula_scene::{Camera, MaterialKind, Scene};
+use specula_gpu::GpuContext;
+use specula_scene::{MaterialKind, Scene};
 use specula_trace::accel::{Ray, SceneAccel};
 
 use specula_core::cube_maps::{self, CubeMaps, Exit};
 use specula_core::gpu_scene::GpuScene;
+use specula_core::lifecycle::{GpuFrame, GpuMethod, GpuTechnique};
 use specula_core::live_scene::LiveScene;
-use specula_core::raster::{self, MeshSelection, OutputTexture, RasterPass, RasterSpec, Targets};
-use specula_core::{
-    Context, Drawn, Invalidates, MethodInfo, Param, ParamKind, ParamSet, Pixels, Technique,
-    TechniqueError,
-};
+use specula_core::raster::{self, MeshSelection, RasterPass, RasterSpec, Targets};
+use specula_core::{Invalidates, MethodInfo, Param, ParamKind, ParamSet, TechniqueError};
 
 pub mod peel;
 
@@ -371,7 +369,7 @@ pub const INFO: MethodInfo = MethodInfo {
             "two_level_maps=false",
         ],
     }],
-    create: || Box::new(ImageSpace::default()),
+    create: || Box::new(GpuMethod::<ImageSpace>::default()),
 };
 
 /// How refracted rays find the nearby geometry (§4).
@@ -436,9 +434,7 @@ pub struct GpuSettings {
 type BindingKey = (usize, usize, usize, Option<u64>, u64);
 
 /// What depends on the scene.
-struct Prepared {
-    scene_id: u64,
-    raster: RasterPass,
+pub struct Prepared {
     back_faces: RasterPass,
     nearby: RasterPass,
     maps: CubeMaps,
@@ -467,14 +463,11 @@ struct Prepared {
 #[derive(Default)]
 pub struct ImageSpace {
     pub params: Params,
-    prepared: Option<Prepared>,
-    timer: StageTimer,
-    output: OutputTexture,
 }
 
 impl ImageSpace {
-    pub fn new(mode: NearbyMode) -> Self {
-        let mut technique = ImageSpace::default();
+    pub fn new(mode: NearbyMode) -> GpuMethod<ImageSpace> {
+        let mut technique = GpuMethod::<ImageSpace>::default();
         technique.params.mode = mode;
         technique
     }
@@ -750,7 +743,6 @@ impl ImageSpace {
         let device = &ctx.device;
         let scene = live.scene();
         let gpu_scene = live.gpu(ctx);
-        let raster = RasterPass::new(ctx, live, RasterSpec::scene(self.params.shadow_resolution))?;
         let back_faces = RasterPass::new(
             ctx,
             live,
@@ -863,8 +855,6 @@ impl ImageSpace {
                 writable_buffer(ctx, label, size as u64, wgpu::BufferUsages::UNIFORM)
             };
             Prepared {
-                scene_id: live.id(),
-                raster,
                 back_faces,
                 nearby,
                 maps: CubeMaps::new(ctx, scene),
@@ -914,20 +904,11 @@ impl ImageSpace {
             }
         })?)
     }
-
-    fn ensure_prepared(
-        &mut self,
-        ctx: &GpuContext,
-        live: &LiveScene,
-    ) -> Result<(), TechniqueError> {
-        if self.prepared.as_ref().map(|p| p.scene_id) != Some(live.id()) {
-            self.prepared = Some(self.build(ctx, live)?);
-        }
-        Ok(())
-    }
 }
 
-impl Technique for ImageSpace {
+impl GpuTechnique for ImageSpace {
+    type Prepared = Prepared;
+
     fn info(&self) -> &'static MethodInfo {
         &INFO
     }
@@ -940,109 +921,180 @@ impl Technique for ImageSpace {
         &mut self.params
     }
 
-    fn invalidate(&mut self, what: Invalidates) {
-        if what >= Invalidates::Resources {
-            if let Some(p) = &mut self.prepared {
-                p.maps.drop_faces();
-            }
-        }
-        if what >= Invalidates::Scene {
-            self.prepared = None;
-        }
+    fn scene_raster(&self) -> Option<RasterSpec> {
+        Some(RasterSpec::scene(self.params.shadow_resolution))
     }
 
-    fn prepare(&mut self, ctx: &Context, scene: &LiveScene) -> Result<(), TechniqueError> {
-        self.ensure_prepared(ctx.gpu(INFO.name)?, scene)
-    }
-
-    fn draw(
+    fn prepare(
         &mut self,
-        ctx: &Context,
+        gpu: &GpuContext,
         live: &LiveScene,
-        camera: &Camera,
-        width: u32,
-        height: u32,
-    ) -> Result<Drawn, TechniqueError> {
-        let gpu = ctx.gpu(INFO.name)?;
-        self.ensure_prepared(gpu, live)?;
-        let scene = live.scene();
-        let gpu_scene = live.gpu(gpu);
-        let p = self.prepared.as_mut().expect("prepared above");
-        for pass in [&p.raster, &p.back_faces, &p.nearby] {
+        _: Option<&RasterPass>,
+    ) -> Result<Prepared, TechniqueError> {
+        self.build(gpu, live)
+    }
+
+    fn invalidate(&mut self, prepared: Option<&mut Prepared>, what: Invalidates) -> bool {
+        if let (Some(p), true) = (prepared, what >= Invalidates::Resources) {
+            p.maps.drop_faces();
+        }
+        true
+    }
+
+    /// The paper's steps after the G-buffer: the refractors' back faces and the nearby
+    /// geometry from the eye, the fallback cube maps, the peeled layers, then each refractor
+    /// pixel refracted through both interfaces.
+    fn shade(&mut self, p: &mut Prepared, frame: &mut GpuFrame<'_>) -> Result<(), TechniqueError> {
+        let (gpu, live) = (frame.gpu, frame.live);
+        for pass in [&p.back_faces, &p.nearby] {
             pass.begin_frame(gpu, live)?;
         }
-        if p.planes_at != Some(live.version()) {
-            let planes = fit_planes(scene);
-            gpu.queue
-                .write_buffer(&p.planes, 0, bytemuck::cast_slice(&planes));
-            p.plane_count = planes.len() as u32;
-            p.planes_at = Some(live.version());
-        }
-        self.timer.start(gpu);
-        let bounds = scene.bounds();
-        let camera_uniform = raster::camera_uniform(camera, &bounds, width, height);
-        let g = p.raster.render(gpu, gpu_scene, &camera_uniform, None)?;
-        self.timer.lap(gpu, "g-buffer")?;
-        let texture_width = ((width as f32 * self.params.texture_scale).round() as u32).max(1);
-        let texture_height = ((height as f32 * self.params.texture_scale).round() as u32).max(1);
-        let texture_camera = raster::camera_uniform(camera, &bounds, texture_width, texture_height);
-        let back = p.back_faces.render(gpu, gpu_scene, &texture_camera, None)?;
-        self.timer.lap(gpu, "back faces")?;
-        let nearby = p.nearby.render(gpu, gpu_scene, &texture_camera, None)?;
-        self.timer.lap(gpu, "nearby geometry")?;
+        fit_planes_after_moves(p, gpu, live);
+        let textures = self.nearby_textures(p, frame)?;
         p.maps.set_two_levels(self.params.two_level_maps);
         let faces_drawn = p.maps.update(
             gpu,
-            &p.raster,
+            frame.raster(),
             live,
             self.params.resolution,
             Exit::None,
             self.params.dynamic,
         )?;
-        self.timer.lap(gpu, "fallback cube maps")?;
+        frame.lap("fallback cube maps")?;
+        let peeled = self.peel(p, frame, &textures.camera)?;
+        self.refract(p, frame, &textures, peeled)?;
+        frame.lap("refraction")?;
+        let counts = p.counters.read(gpu)?;
+        frame.count("refractors", p.maps.reflectors.len() as u64);
+        frame.count("planes", p.plane_count as u64);
+        frame.count("cube map faces rendered", faces_drawn);
+        frame.count("raster passes", 3 + faces_drawn + peeled as u64);
+        for ((name, what), &n) in COUNTERS.iter().zip(&counts) {
+            frame.count(name, n as u64);
+            if n > 0 && !what.is_empty() {
+                frame.warn(format!("image-space: {n} {what}"));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The back faces and the nearby geometry, drawn from the eye at the texture scale.
+struct NearbyTextures {
+    camera: CameraUniform,
+    back: raster::GBuffer,
+    nearby: raster::GBuffer,
+}
+
+/// The planes of the ray-plane mode, fitted again after a move.
+fn fit_planes_after_moves(p: &mut Prepared, gpu: &GpuContext, live: &LiveScene) {
+    if p.planes_at != Some(live.version()) {
+        let planes = fit_planes(live.scene());
+        gpu.queue
+            .write_buffer(&p.planes, 0, bytemuck::cast_slice(&planes));
+        p.plane_count = planes.len() as u32;
+        p.planes_at = Some(live.version());
+    }
+}
+
+impl ImageSpace {
+    /// The refractors' back faces and the nearby geometry, from the eye.
+    fn nearby_textures(
+        &self,
+        p: &Prepared,
+        frame: &mut GpuFrame<'_>,
+    ) -> Result<NearbyTextures, TechniqueError> {
+        let (gpu, gpu_scene) = (frame.gpu, frame.live.gpu(frame.gpu));
+        let scale = self.params.texture_scale;
+        let texture_width = ((frame.width as f32 * scale).round() as u32).max(1);
+        let texture_height = ((frame.height as f32 * scale).round() as u32).max(1);
+        let bounds = frame.live.scene().bounds();
+        let camera = raster::camera_uniform(frame.camera, &bounds, texture_width, texture_height);
+        let back = p.back_faces.render(gpu, gpu_scene, &camera, None)?;
+        frame.lap("back faces")?;
+        let nearby = p.nearby.render(gpu, gpu_scene, &camera, None)?;
+        frame.lap("nearby geometry")?;
+        Ok(NearbyTextures {
+            camera,
+            back,
+            nearby,
+        })
+    }
+
+    /// More interfaces: the solid refractors depth-peeled into layers. Returns the layers.
+    fn peel(
+        &self,
+        p: &mut Prepared,
+        frame: &mut GpuFrame<'_>,
+        texture_camera: &CameraUniform,
+    ) -> Result<u32, TechniqueError> {
         let peeled = if self.params.layers > 1 {
             2 * self.params.layers
         } else {
             0
         };
         if peeled > 0 {
+            let (gpu, gpu_scene) = (frame.gpu, frame.live.gpu(frame.gpu));
             gpu.validated("image-space peel", || {
                 p.peel
-                    .draw(gpu, gpu_scene, &p.solid_ranges, &texture_camera, peeled)
+                    .draw(gpu, gpu_scene, &p.solid_ranges, texture_camera, peeled)
             })?;
-            self.timer.lap(gpu, "peeled layers")?;
+            frame.lap("peeled layers")?;
         }
-        let settings = GpuSettings {
-            mode: self.params.mode as u32,
-            seeds: self.params.seeds,
-            iterations: self.params.iterations,
+        Ok(peeled)
+    }
+
+    /// The refraction pass's settings for this frame.
+    fn settings(&self, p: &Prepared, frame: &GpuFrame<'_>, peeled: u32) -> GpuSettings {
+        let params = &self.params;
+        let bounds = frame.live.scene().bounds();
+        GpuSettings {
+            mode: params.mode as u32,
+            seeds: params.seeds,
+            iterations: params.iterations,
             plane_count: p.plane_count,
-            index_override: self.params.index,
-            depth_tolerance: self.params.depth_tolerance,
-            inside_steps: self.params.inside_steps,
-            exit_iterations: self.params.exit_iterations,
+            index_override: params.index,
+            depth_tolerance: params.depth_tolerance,
+            inside_steps: params.inside_steps,
+            exit_iterations: params.exit_iterations,
             scene_center: bounds.center().to_array(),
             scene_radius: bounds.radius(),
             scene_min: bounds.min.to_array(),
-            parallax: self.params.parallax as u32,
+            parallax: params.parallax as u32,
             scene_max: bounds.max.to_array(),
-            layers: self.params.layers,
+            layers: params.layers,
             peeled,
             refractor_extent: p.refractor_extent,
-            far_depth: raster::depth_range(&bounds, camera.eye).1,
-            bracket: self.params.bracket as u32,
-            discs: self.params.discs as u32,
-            internal_reflection: self.params.internal_reflection as u32,
-            reflection: self.params.reflection as u32,
-            fallback: self.params.fallback as u32,
-            dispersion: self.params.dispersion as u32,
+            far_depth: raster::depth_range(&bounds, frame.camera.eye).1,
+            bracket: params.bracket as u32,
+            discs: params.discs as u32,
+            internal_reflection: params.internal_reflection as u32,
+            reflection: params.reflection as u32,
+            fallback: params.fallback as u32,
+            dispersion: params.dispersion as u32,
             pad: [0; 3],
-        };
-        let output = self.output.get(gpu, width, height);
+        }
+    }
+
+    /// Each refractor pixel refracted through both interfaces, into `frame.output`.
+    fn refract(
+        &self,
+        p: &mut Prepared,
+        frame: &GpuFrame<'_>,
+        textures: &NearbyTextures,
+        peeled: u32,
+    ) -> Result<(), TechniqueError> {
+        let settings = self.settings(p, frame, peeled);
+        let (gpu, g) = (frame.gpu, frame.g());
+        let gpu_scene = frame.live.gpu(gpu);
+        let (back, nearby) = (&textures.back, &textures.nearby);
         p.counters.clear(gpu);
-        gpu.validated("image-space refraction", || {
-            gpu.queue
-                .write_buffer(&p.camera_buffer, 0, bytemuck::bytes_of(&camera_uniform));
+        Ok(gpu.validated("image-space refraction", || {
+            gpu.queue.write_buffer(
+                &p.camera_buffer,
+                0,
+                bytemuck::bytes_of(&frame.camera_uniform),
+            );
             gpu.queue
                 .write_buffer(&p.settings_buffer, 0, bytemuck::bytes_of(&settings));
             let layer_views = match p.peel.views() {
@@ -1100,32 +1152,8 @@ impl Technique for ImageSpace {
                 "image-space refraction",
                 &p.pipeline,
                 &[group, &p.scene_bind_group],
-                &output,
+                frame.output(),
             )
-        })?;
-        self.timer.lap(gpu, "refraction")?;
-        let (stages, timing) = self.timer.finish(gpu)?;
-        let counts = p.counters.read(gpu)?;
-        let mut counters = vec![
-            ("refractors".into(), p.maps.reflectors.len() as u64),
-            ("planes".into(), p.plane_count as u64),
-            ("cube map faces rendered".into(), faces_drawn),
-            ("raster passes".into(), 3 + faces_drawn + peeled as u64),
-        ];
-        let mut warnings = Vec::new();
-        for ((name, what), &n) in COUNTERS.iter().zip(&counts) {
-            counters.push((name.to_string(), n as u64));
-            if n > 0 && !what.is_empty() {
-                warnings.push(format!("image-space: {n} {what}"));
-            }
-        }
-        Ok(Drawn {
-            pixels: Pixels::Texture(output),
-            stages,
-            counters,
-            timing,
-            warnings,
-            converged: true,
-        })
+        })?)
     }
 }

@@ -218,17 +218,17 @@ use rayon::prelude::*;
 use specula_gpu::arena::Arena;
 use specula_gpu::shaders::{self, CameraUniform};
 use specula_gpu::util::{bind_group, layout_entry, render_pipeline, texture_binding, PipelineSpec};
-use specula_gpu::{GpuContext, GpuError, StageTimer};
+use specula_gpu::{GpuContext, GpuError};
 use specula_scene::{Camera, MaterialKind, Scene};
 use specula_trace::SceneAccel;
 
 use rays::{trace_hits, trace_paths, ChannelPaths};
 use specula_core::gpu_scene::GpuScene;
+use specula_core::lifecycle::{GpuFrame, GpuMethod, GpuTechnique};
 use specula_core::live_scene::LiveScene;
 use specula_core::raster::{self, BindGroupsBySlot, GBuffer, RasterPass, RasterSpec};
 use specula_core::{
-    Context, Drawn, Invalidates, MethodInfo, Param, ParamKind, ParamSet, ParamType, ParamValue,
-    Pixels, Technique, TechniqueError,
+    Invalidates, MethodInfo, Param, ParamKind, ParamSet, ParamType, ParamValue, TechniqueError,
 };
 use view::{PatchInput, PatchLimits};
 
@@ -410,7 +410,7 @@ pub const INFO: MethodInfo = MethodInfo {
             "frame_texels=4294967296",
         ],
     }],
-    create: || Box::new(Pvrr::default()),
+    create: || Box::new(GpuMethod::<Pvrr>::default()),
 };
 
 /// The smallest map height a patch gets, however little of the view it covers.
@@ -634,11 +634,9 @@ struct Tally {
     warnings: Vec<String>,
 }
 
-struct Prepared {
-    scene_id: u64,
+pub struct Prepared {
     /// The scene version the corners and far distance were made for.
     version: u64,
-    raster: RasterPass,
     /// Every mirror and dielectric mesh.
     reflectors: Vec<Reflector>,
     /// Corners of the scene's bounds, which every map's far plane must hold.
@@ -666,6 +664,7 @@ struct Arenas {
 /// What the frame's steps read: the prepared state and the live scene's BVH and GPU upload.
 struct Shared<'a> {
     prepared: &'a Prepared,
+    raster: &'a RasterPass,
     accel: &'a SceneAccel,
     gpu_scene: &'a GpuScene,
 }
@@ -680,9 +679,8 @@ impl std::ops::Deref for Shared<'_> {
 #[derive(Default)]
 pub struct Pvrr {
     pub params: Params,
-    prepared: Option<Prepared>,
+    /// Per reflector, its exit rays and patches in the eye's frame (`cached`).
     cache: Vec<Option<CachedReflector>>,
-    timer: StageTimer,
 }
 
 /// Marker balls (centre, radius, colour channel) as `GpuVertex` triangles of the marker mesh
@@ -1384,22 +1382,9 @@ fn report(
 impl Pvrr {
     /// The prepared state for `live`, (re)built when missing or made for another scene; after
     /// a move, the scene's extent follows the new geometry.
-    fn ensure_prepared(&mut self, ctx: &GpuContext, live: &LiveScene) -> Result<(), GpuError> {
-        if self.prepared.as_ref().map(|p| p.scene_id) != Some(live.id()) {
-            self.prepared = Some(self.build(ctx, live)?);
-        }
-        let p = self.prepared.as_mut().expect("built above");
-        if p.version != live.version() {
-            (p.scene_corners, p.far_distance) = scene_extent(live.scene());
-            p.version = live.version();
-        }
-        Ok(())
-    }
-
     fn build(&self, ctx: &GpuContext, live: &LiveScene) -> Result<Prepared, GpuError> {
         let device = &ctx.device;
         let scene = live.scene();
-        let raster = RasterPass::new(ctx, live, RasterSpec::scene(self.params.shadow_resolution))?;
         ctx.validated("pvrr set-up", || {
             let stages = wgpu::ShaderStages::VERTEX_FRAGMENT;
             // Cameras and materials live in the uniform arena, bound at dynamic offsets.
@@ -1497,9 +1482,7 @@ impl Pvrr {
             let (scene_corners, far_distance) = scene_extent(scene);
             let alignment = device.limits().min_uniform_buffer_offset_alignment as u64;
             Prepared {
-                scene_id: live.id(),
                 version: live.version(),
-                raster,
                 reflectors,
                 scene_corners,
                 far_distance,
@@ -1763,7 +1746,7 @@ fn second_pass(
                 as u32;
             for (patch, map) in reflector.patches.iter().zip(maps) {
                 let uniforms = arenas.uniforms.buffer();
-                arenas.bind_groups.get_or_make(map.slot, || {
+                arenas.bind_groups.get_or_make(p.raster, map, || {
                     let map_view = map.color.create_view(&Default::default());
                     let binding = |size: usize| {
                         wgpu::BindingResource::Buffer(wgpu::BufferBinding {
@@ -1842,7 +1825,9 @@ fn second_pass(
     })?
 }
 
-impl Technique for Pvrr {
+impl GpuTechnique for Pvrr {
+    type Prepared = Prepared;
+
     fn info(&self) -> &'static MethodInfo {
         &INFO
     }
@@ -1855,51 +1840,93 @@ impl Technique for Pvrr {
         &mut self.params
     }
 
-    fn invalidate(&mut self, what: Invalidates) {
+    fn scene_raster(&self) -> Option<RasterSpec> {
+        Some(RasterSpec::scene(self.params.shadow_resolution))
+    }
+
+    /// Its G-buffer holds the markers too, drawn after the reflection maps.
+    fn draws_own_g_buffer(&self) -> bool {
+        true
+    }
+
+    fn prepare(
+        &mut self,
+        gpu: &GpuContext,
+        live: &LiveScene,
+        _: Option<&RasterPass>,
+    ) -> Result<Prepared, TechniqueError> {
+        // The cache survives: its entries are checked against the new scene's geometry.
+        Ok(self.build(gpu, live)?)
+    }
+
+    fn invalidate(&mut self, _: Option<&mut Prepared>, what: Invalidates) -> bool {
         if what >= Invalidates::Resources {
             self.cache.clear();
         }
-        if what >= Invalidates::Scene {
-            self.prepared = None;
-        }
+        true
     }
 
-    fn prepare(&mut self, ctx: &Context, scene: &LiveScene) -> Result<(), TechniqueError> {
-        // The cache survives: its entries are checked against the new scene's geometry.
-        self.ensure_prepared(ctx.gpu(INFO.name)?, scene)?;
-        Ok(())
-    }
-
-    fn draw(
+    /// The paper's steps: per-vertex rays and the patches' views planned (steps 1–5), the
+    /// reflection maps (1st pass), the scene's G-buffer, then the reflectors drawn with their
+    /// vertices' texture coordinates (2nd pass).
+    fn shade(
         &mut self,
-        ctx: &Context,
-        live: &LiveScene,
-        camera: &Camera,
-        width: u32,
-        height: u32,
-    ) -> Result<Drawn, TechniqueError> {
-        let gpu = ctx.gpu(INFO.name)?;
-        self.ensure_prepared(gpu, live)?;
-        let scene = live.scene();
-        let prepared = self.prepared.as_ref().expect("prepared above");
+        prepared: &mut Prepared,
+        frame: &mut GpuFrame<'_>,
+    ) -> Result<(), TechniqueError> {
+        let (gpu, live) = (frame.gpu, frame.live);
+        if prepared.version != live.version() {
+            (prepared.scene_corners, prepared.far_distance) = scene_extent(live.scene());
+            prepared.version = live.version();
+        }
         let p = Shared {
             prepared,
+            raster: frame.raster(),
             accel: live.accel(),
             gpu_scene: live.gpu(gpu),
         };
-        p.raster.begin_frame(gpu, live)?;
         {
             let mut arenas = p.arenas.borrow_mut();
             arenas.vertices.begin_frame();
             arenas.uniforms.begin_frame();
-            arenas.bind_groups.keep_pooled(&p.raster);
         }
-        self.timer.start(gpu);
-        let camera_uniform = raster::camera_uniform(camera, &scene.bounds(), width, height);
+        let (tree, mut tally, traced_corners) = self.plan(&p, live.scene(), frame.camera);
+        frame.lap("per-vertex rays")?;
+        let markers = self.markers(&p, gpu, &tree, &tally)?;
+        // Marker vertices sit at `offset` in the vertex arena; the raster pass draws them from a
+        // buffer of their own, so the arena's buffer is passed with a slice there.
+        let arena_buffer = markers.map(|_| p.arenas.borrow().vertices.buffer().clone());
+        let marker_slice = arena_buffer
+            .as_ref()
+            .zip(markers)
+            .map(|(buffer, (offset, count))| (buffer, offset, count));
+        let maps = render_maps(gpu, &p, &tree, marker_slice)?;
+        frame.lap("reflection maps (1st pass)")?;
+        let g =
+            p.raster
+                .render_with(gpu, p.gpu_scene, &frame.camera_uniform, None, marker_slice)?;
+        frame.lap("g-buffer")?;
+        second_pass(gpu, &p, &frame.camera_uniform, &g, &tree.level, &maps)?;
+        let vertex_peak = p.arenas.borrow().vertices.peak();
+        frame.lap("mirror (2nd pass)")?;
+        // The 2nd pass drew over the G-buffer's colour: that is the frame.
+        frame.show(g.color.clone());
+        for warning in std::mem::take(&mut tally.warnings) {
+            frame.warn(warning);
+        }
+        count(frame, &tree, &tally, vertex_peak, traced_corners);
+        Ok(())
+    }
+}
+
+impl Pvrr {
+    /// Steps 1–5 for every level of reflectors seen in reflectors, within the frame budget:
+    /// the plan, what it counted, and the corners traced for want of a nested level.
+    fn plan(&mut self, p: &Shared, scene: &Scene, camera: &Camera) -> (PlanTree, Tally, u64) {
         // The top level fits the frame budget by itself: each reflector's patches and map
         // (at most 4 times as wide as high) within its share of it, each patch perhaps a
         // zooming view (two 1st passes, twice the texels).
-        let reflectors = prepared.reflectors.len().max(1) as u64;
+        let reflectors = p.reflectors.len().max(1) as u64;
         let top_patches = (self.params.frame_patches / reflectors / 2).max(1) as usize;
         let top_resolution = ((self.params.frame_texels / reflectors / 8) as f64).sqrt() as u32;
         let settings = PlanSettings {
@@ -1928,7 +1955,7 @@ impl Technique for Pvrr {
         let mut tally = Tally::default();
         let cache = self.params.cached.then_some((&mut self.cache, &eye_frame));
         let top = plan_level(
-            &p, &settings, scene, camera.eye, None, cache, &mut tally, true,
+            p, &settings, scene, camera.eye, None, cache, &mut tally, true,
         );
         let limits = FrameLimits {
             nested_share: self.params.nested_share,
@@ -1937,7 +1964,7 @@ impl Technique for Pvrr {
         };
         let mut budget = FrameBudget::after_top(&top, tally.rays, &limits);
         let mut tree = plan_tree(
-            &p,
+            p,
             &settings,
             scene,
             top,
@@ -1952,12 +1979,22 @@ impl Technique for Pvrr {
                 self.params.nested_share, self.params.frame_patches, self.params.frame_texels, tally.budget_cuts
             ));
         }
-        self.timer.lap(gpu, "per-vertex rays")?;
+        (tree, tally, traced_corners)
+    }
+
+    /// The verification markers' vertices, in the vertex arena: (offset, count). Every buffer
+    /// the frame writes is sized from the plan and checked before any is.
+    fn markers(
+        &self,
+        p: &Shared,
+        gpu: &GpuContext,
+        tree: &PlanTree,
+        tally: &Tally,
+    ) -> Result<Option<(u64, u32)>, TechniqueError> {
         let markers = self
             .params
             .markers
             .then(|| marker_vertices(p.gpu_scene.marker_mesh(0), &tree.level.balls));
-        // Every buffer the frame writes is sized from the plan and checked before any is.
         let marker_bytes = markers
             .as_ref()
             .map_or(0, |m| std::mem::size_of_val(m.as_slice()) as u64);
@@ -1975,7 +2012,7 @@ impl Technique for Pvrr {
             }
             .into());
         }
-        let markers = match markers {
+        Ok(match markers {
             Some(vertices) => {
                 let mut arenas = p.arenas.borrow_mut();
                 let bytes: &[u8] = bytemuck::cast_slice(&vertices);
@@ -1984,65 +2021,37 @@ impl Technique for Pvrr {
                 Some((offset, vertices.len() as u32))
             }
             None => None,
-        };
-        // Marker vertices sit at `offset` in the vertex arena; the raster pass draws them from a
-        // buffer of their own, so the arena's buffer is passed with a slice there.
-        let arena_buffer = markers.map(|_| p.arenas.borrow().vertices.buffer().clone());
-        let marker_slice = arena_buffer
-            .as_ref()
-            .zip(markers)
-            .map(|(buffer, (offset, count))| (buffer, offset, count));
-        let maps = render_maps(gpu, &p, &tree, marker_slice)?;
-        self.timer.lap(gpu, "reflection maps (1st pass)")?;
-        let g = p
-            .raster
-            .render_with(gpu, p.gpu_scene, &camera_uniform, None, marker_slice)?;
-        self.timer.lap(gpu, "g-buffer")?;
-        second_pass(gpu, &p, &camera_uniform, &g, &tree.level, &maps)?;
-        let vertex_peak = p.arenas.borrow().vertices.peak();
-        self.timer.lap(gpu, "mirror (2nd pass)")?;
-        let (stages, timing) = self.timer.finish(gpu)?;
-        Ok(Drawn {
-            pixels: Pixels::Texture(g.color.clone()),
-            stages,
-            counters: vec![
-                ("mirrors".into(), tree.level.reflectors.len() as u64),
-                ("per-vertex rays".into(), tally.rays),
-                ("1st passes".into(), tally.passes),
-                (
-                    "patches with a principal up vector".into(),
-                    tally.principal_up,
-                ),
-                ("reflection map texels".into(), tally.map_texels),
-                (
-                    "1st passes in levels below the top".into(),
-                    tally.nested_passes,
-                ),
-                (
-                    "map texels in levels below the top".into(),
-                    tally.nested_texels,
-                ),
-                (
-                    "maps whose nested level the frame budget left out".into(),
-                    tally.budget_cuts,
-                ),
-                ("largest 2nd-pass vertex buffer (bytes)".into(), vertex_peak),
-                (
-                    "patches drawn from a zooming view".into(),
-                    tally.zooming_views,
-                ),
-                (
-                    "corners on another reflector traced for want of a nested level".into(),
-                    traced_corners,
-                ),
-                ("unresolved vertices".into(), tally.unresolved),
-                ("reflectors from the cache".into(), tally.cache_hits),
-            ],
-            timing,
-            warnings: tally.warnings,
-            converged: true,
         })
     }
+}
+
+/// The frame's counters, as reports list them.
+fn count(
+    frame: &mut GpuFrame<'_>,
+    tree: &PlanTree,
+    tally: &Tally,
+    vertex_peak: u64,
+    traced_corners: u64,
+) {
+    frame.count("mirrors", tree.level.reflectors.len() as u64);
+    frame.count("per-vertex rays", tally.rays);
+    frame.count("1st passes", tally.passes);
+    frame.count("patches with a principal up vector", tally.principal_up);
+    frame.count("reflection map texels", tally.map_texels);
+    frame.count("1st passes in levels below the top", tally.nested_passes);
+    frame.count("map texels in levels below the top", tally.nested_texels);
+    frame.count(
+        "maps whose nested level the frame budget left out",
+        tally.budget_cuts,
+    );
+    frame.count("largest 2nd-pass vertex buffer (bytes)", vertex_peak);
+    frame.count("patches drawn from a zooming view", tally.zooming_views);
+    frame.count(
+        "corners on another reflector traced for want of a nested level",
+        traced_corners,
+    );
+    frame.count("unresolved vertices", tally.unresolved);
+    frame.count("reflectors from the cache", tally.cache_hits);
 }
 
 /// `material`, one index, or three (red, green, blue), each in (1, 4].

@@ -30,7 +30,7 @@ use std::time::Instant;
 
 use glam::Vec3;
 use rayon::prelude::*;
-use specula_gpu::{StageTime, TimingSource};
+use specula_gpu::StageTimer;
 use specula_scene::Camera;
 use specula_trace::reference::{pixel_radiance, rays_traced_on_this_thread, trace_image, Tracer};
 use specula_trace::Image;
@@ -148,41 +148,76 @@ impl Technique for Reference {
         width: u32,
         height: u32,
     ) -> Result<Drawn, TechniqueError> {
-        let start = Instant::now();
-        let (spp, budget_ms) = (self.params.spp, self.params.budget_ms);
-        let tracer = Tracer {
+        let mut timer = StageTimer::wall_clock();
+        timer.start(None);
+        let (pixels, counters, converged) = if self.params.budget_ms == 0 {
+            // The whole image at once (a fresh render, as bench times it).
+            self.progress = None;
+            let (image, counters) = self.whole_image(live, camera, width, height);
+            (image, counters, true)
+        } else {
+            self.progressive_step(live, camera, width, height)
+        };
+        timer.lap(None, "ray tracing")?;
+        let (stages, timing) = timer.finish(None)?;
+        Ok(Drawn {
+            pixels: Pixels::Image(pixels),
+            stages,
+            counters,
+            timing,
+            warnings: Vec::new(),
+            converged,
+        })
+    }
+}
+
+impl Reference {
+    fn tracer<'a>(&self, live: &'a LiveScene) -> Tracer<'a> {
+        Tracer {
             scene: live.scene(),
             accel: live.accel(),
             max_depth: self.params.max_depth,
-        };
-        let pixel_rays = camera.pixel_rays(width, height);
-        if budget_ms == 0 {
-            // The whole image at once (a fresh render, as bench times it): traced in place in
-            // bands of rows, nothing kept.
-            self.progress = None;
-            let mut image = Image::new(width, height);
-            let (rays_traced, shadow_rays) =
-                trace_image(&tracer, &pixel_rays, spp, &mut image, &|_, _| {});
-            return Ok(Drawn {
-                pixels: Pixels::Image(image),
-                stages: vec![StageTime {
-                    stage: "ray tracing".into(),
-                    milliseconds: start.elapsed().as_secs_f64() * 1e3,
-                }],
-                counters: vec![
-                    (
-                        "camera rays".into(),
-                        width as u64 * height as u64 * spp as u64,
-                    ),
-                    (COUNTER_RAYS_TRACED.into(), rays_traced),
-                    (COUNTER_SHADOW_RAYS.into(), shadow_rays),
-                    ("pixels per side of a block".into(), 1),
-                ],
-                timing: TimingSource::CpuWallClock,
-                warnings: Vec::new(),
-                converged: true,
-            });
         }
+    }
+
+    /// The whole image, traced in place in bands of rows, nothing kept.
+    fn whole_image(
+        &self,
+        live: &LiveScene,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+    ) -> (Image, Vec<(String, u64)>) {
+        let spp = self.params.spp;
+        let pixel_rays = camera.pixel_rays(width, height);
+        let mut image = Image::new(width, height);
+        let (rays_traced, shadow_rays) =
+            trace_image(&self.tracer(live), &pixel_rays, spp, &mut image, &|_, _| {});
+        let counters = vec![
+            (
+                "camera rays".into(),
+                width as u64 * height as u64 * spp as u64,
+            ),
+            (COUNTER_RAYS_TRACED.into(), rays_traced),
+            (COUNTER_SHADOW_RAYS.into(), shadow_rays),
+            ("pixels per side of a block".into(), 1),
+        ];
+        (image, counters)
+    }
+
+    /// One call of the progressive mode: levels of tiles, coarse to fine, until the budget is
+    /// spent. Returns the image so far, the counters and whether it is complete.
+    fn progressive_step(
+        &mut self,
+        live: &LiveScene,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+    ) -> (Image, Vec<(String, u64)>, bool) {
+        let start = Instant::now();
+        let (spp, budget_ms) = (self.params.spp, self.params.budget_ms);
+        let tracer = self.tracer(live);
+        let pixel_rays = camera.pixel_rays(width, height);
         let key = ViewKey {
             camera: camera.clone(),
             width,
@@ -249,30 +284,21 @@ impl Technique for Reference {
             }
         }
         let converged = progress.level == LEVELS.len();
-        Ok(Drawn {
-            pixels: Pixels::Image(progress.image.clone()),
-            stages: vec![StageTime {
-                stage: "ray tracing".into(),
-                milliseconds: start.elapsed().as_secs_f64() * 1e3,
-            }],
-            counters: vec![
-                ("camera rays".into(), camera_rays),
-                (COUNTER_RAYS_TRACED.into(), rays_traced),
-                (COUNTER_SHADOW_RAYS.into(), shadow_rays),
-                // The largest block still shown: the last finished level's stride (the first
-                // level's while it runs).
-                (
-                    "pixels per side of a block".into(),
-                    if converged {
-                        1
-                    } else {
-                        LEVELS[progress.level.saturating_sub(1)] as u64
-                    },
-                ),
-            ],
-            timing: TimingSource::CpuWallClock,
-            warnings: Vec::new(),
-            converged,
-        })
+        let counters = vec![
+            ("camera rays".into(), camera_rays),
+            (COUNTER_RAYS_TRACED.into(), rays_traced),
+            (COUNTER_SHADOW_RAYS.into(), shadow_rays),
+            // The largest block still shown: the last finished level's stride (the first
+            // level's while it runs).
+            (
+                "pixels per side of a block".into(),
+                if converged {
+                    1
+                } else {
+                    LEVELS[progress.level.saturating_sub(1)] as u64
+                },
+            ),
+        ];
+        (progress.image.clone(), counters, converged)
     }
 }

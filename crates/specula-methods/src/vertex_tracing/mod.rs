@@ -191,7 +191,7 @@ use std::time::{Duration, Instant};
 
 use glam::Vec3;
 use rayon::prelude::*;
-use specula_gpu::{GpuContext, StageTime, TimingSource};
+use specula_gpu::{GpuContext, StageTimer};
 use specula_scene::Camera;
 use specula_trace::reference::{in_tiles, rays_traced_on_this_thread, Tracer};
 use specula_trace::{Image, Ray};
@@ -980,6 +980,16 @@ const STAGES: [&str; 6] = [
     "reflector: composition",
 ];
 const VERTICES_STAGE: usize = 4;
+
+/// A timer holding every stage of [`STAGES`], in order, at these times so far.
+fn stage_timer(milliseconds: [f64; STAGES.len()]) -> StageTimer {
+    let mut timer = StageTimer::wall_clock();
+    timer.start(None);
+    for (stage, ms) in STAGES.iter().zip(milliseconds) {
+        timer.measured(stage, ms);
+    }
+    timer
+}
 const COMPOSITION_STAGE: usize = 5;
 
 struct Progress {
@@ -988,8 +998,8 @@ struct Progress {
     packages: Vec<Package>,
     originals: OriginalSamples,
     image: Image,
-    /// Milliseconds so far, as [`STAGES`] names them.
-    stages: [f64; STAGES.len()],
+    /// Milliseconds so far, every one of [`STAGES`] in order.
+    stages: StageTimer,
     rest_rays: (u64, u64),
     /// Whether the ID buffer is on the GPU for composition on the raster.
     ids_uploaded: bool,
@@ -1167,7 +1177,9 @@ impl Technique for VertexTracing {
                 package.run(&inputs, until);
             }
         });
-        progress.stages[VERTICES_STAGE] += clock.elapsed().as_secs_f64() * 1e3;
+        progress
+            .stages
+            .measured(STAGES[VERTICES_STAGE], clock.elapsed().as_secs_f64() * 1e3);
         let clock = Instant::now();
         let mut warnings = Vec::new();
         let composed = match composition_gpu {
@@ -1203,22 +1215,16 @@ impl Technique for VertexTracing {
         for (k, color) in results.into_iter().flatten() {
             progress.image.pixels[k as usize] = color;
         }
-        progress.stages[COMPOSITION_STAGE] += clock.elapsed().as_secs_f64() * 1e3;
+        progress.stages.measured(
+            STAGES[COMPOSITION_STAGE],
+            clock.elapsed().as_secs_f64() * 1e3,
+        );
 
         let converged = progress.packages.iter().all(Package::is_done);
-        let stages = STAGES
-            .iter()
-            .zip(progress.stages)
-            .map(|(name, ms)| StageTime {
-                stage: name.to_string(),
-                milliseconds: ms,
-            })
-            .collect();
+        let (stages, timing) = progress.stages.finish(None)?;
         let counters = progress.counters(live.scene());
         // Later calls of a progressive frame report their own time only.
-        if budget_ms > 0 {
-            progress.stages = [0.0; STAGES.len()];
-        }
+        progress.stages = stage_timer([0.0; STAGES.len()]);
         if progress.setup.choices.is_empty() {
             warnings.push("no reflector pixel is visible: nothing to vertex-trace".into());
         }
@@ -1239,7 +1245,7 @@ impl Technique for VertexTracing {
             pixels: Pixels::Image(image),
             stages,
             counters,
-            timing: TimingSource::CpuWallClock,
+            timing,
             warnings,
             converged,
         })
@@ -1341,14 +1347,14 @@ impl VertexTracing {
         };
         let per_pixel_ms =
             clock.elapsed().as_secs_f64() * 1e3 - visibility_ms - setup.choice_ms - setup.owners_ms;
-        let stages = [
+        let stages = stage_timer([
             visibility_ms,
             setup.choice_ms,
             setup.owners_ms,
             per_pixel_ms,
             0.0,
             0.0,
-        ];
+        ]);
         let packages = setup.packages(self.params.package_triangles);
         Ok(Progress {
             key,
