@@ -1,5 +1,5 @@
 //! `c3rc` against the exact reference and against `envmap` on the paper's claim (Mei, Popescu
-//! and Sacks, `../shared/seeds/002_4c71036af837317b.txt`, Figure 2): environment mapping is
+//! and Sacks, *A hybrid backward-forward method for interactive reflections*, 2007, Figure 2): environment mapping is
 //! wrong for objects close to the reflector; the hybrid method is right there.
 
 use std::path::Path;

@@ -1,5 +1,5 @@
 //! `image-space` against the exact reference on scenes made for the paper's claims (Wyman,
-//! `../shared/seeds/003_c76f67374e02f221.txt`): the iterative lookup beats Kay–Greenberg's
+//! *Interactive image-space refraction of nearby geometry*, 2005): the iterative lookup beats Kay–Greenberg's
 //! (§4.3 vs §4.1), seven seeds at 512² find every nearby feature larger than ten pixels
 //! (Figure 9), and peeled layers take light through more than the paper's two interfaces.
 

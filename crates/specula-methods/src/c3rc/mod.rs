@@ -1,8 +1,8 @@
 //! `c3rc`: hybrid backward–forward reflections with continuous 3-ray cameras.
 //!
 //! Paper: Mei, Popescu, Sacks, *A hybrid backward-forward method for interactive reflections*,
-//! GRAPP 2007 (`../shared/seeds/002_4c71036af837317b.txt`); the projection cubic and the
-//! multiple-projection quadratic as in `../shared/seeds/README.md`.
+//! GRAPP 2007; the projection cubic and the multiple-projection quadratic derived below
+//! (the paper's text states them without their coefficients).
 //!
 //! Steps, and where they are:
 //! 1. Pre-processing (§3.1, §4; [`points`]): every non-specular object within `near` reflector

@@ -2,7 +2,7 @@
 //! maps.
 //!
 //! Paper: Umenhoffer, Patow, Szirmay-Kalos, *Robust multiple specular reflections and refractions*,
-//! GPU Gems 3, ch. 17 (`../shared/seeds/001_7674acf89cfed11c.txt`).
+//! GPU Gems 3, ch. 17, 2007.
 //!
 //! Steps, per frame (the paper's; by default the steps beyond the paper, below, replace parts of
 //! step 4):

@@ -1,7 +1,8 @@
 //! `envmap`: classic dynamic environment mapping, the baseline the papers argue against.
 //!
-//! Paper: none (the standard technique; Umenhoffer et al., `001_7674acf89cfed11c.txt`, and
-//! Kakimoto et al., `000_00fe11db0f879bd7.txt`, both compare against it).
+//! Paper: none (the standard technique; Umenhoffer, Patow, Szirmay-Kalos, *Robust multiple
+//! specular reflections and refractions*, 2007, and Kakimoto, Tatsukawa, Chun, Nishita,
+//! *Real-time reflection and refraction on a per-vertex basis*, 2008, both compare against it).
 //!
 //! Steps, per frame:
 //! 1. the scene raster pass (G-buffer) for the camera;

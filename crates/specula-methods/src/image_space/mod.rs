@@ -1,8 +1,7 @@
 //! `image-space`: two-interface image-space refraction of nearby geometry.
 //!
-//! Paper: Wyman, *Interactive image-space refraction of nearby geometry*
-//! (`../shared/seeds/003_c76f67374e02f221.txt`), building on Wyman 2005's two-interface
-//! image-space refraction.
+//! Paper: Wyman, *Interactive image-space refraction of nearby geometry*, 2005, building on
+//! Wyman's two-interface image-space refraction of the same year.
 //!
 //! The paper's steps and where they are:
 //! - **Precompute d_N** at each vertex (§3): [`normal_distances`], a ray cast along the

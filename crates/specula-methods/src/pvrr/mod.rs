@@ -1,7 +1,8 @@
 //! `pvrr`: per-vertex reflection and refraction.
 //!
 //! Paper: Kakimoto, Tatsukawa, Chun, Nishita, *Real-time reflection and refraction on a
-//! per-vertex basis* (`../shared/seeds/000_00fe11db0f879bd7.txt`).
+//! per-vertex basis*, Journal of the Institute of Image Electronics Engineers of Japan
+//! 37(3), 2008.
 //!
 //! Every mesh with a mirror or dielectric material is a reflector. Steps, per frame:
 //! 1. for every reflector vertex V the eye's ray is followed exactly, in parallel through the

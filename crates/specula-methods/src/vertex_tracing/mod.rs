@@ -1,8 +1,7 @@
 //! `vertex-tracing`: adaptive progressive vertex tracing.
 //!
 //! Paper: Ullmann, Schmidt, Beier, Bruderlin, *Adaptive progressive vertex tracing for
-//! interactive reflections*, Eurographics 2001 short paper
-//! (`../shared/seeds/004_6bde20ba87b77a0a.txt`).
+//! interactive reflections*, Eurographics 2001 short paper.
 //!
 //! Steps, and where they are:
 //! 1. Visibility (§3): the ID buffer — the scene raster pass's G-buffer ids where the run has a
