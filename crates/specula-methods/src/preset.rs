@@ -18,7 +18,8 @@ use std::fmt;
 
 use specula_core::{apply_setting, MethodInfo, Preset, Technique, TechniqueError};
 
-use crate::registry::{method, METHODS};
+use crate::registry::method;
+use crate::METHODS;
 
 /// One way of running a method: its defaults, or one of its presets.
 #[derive(Clone, Copy)]

@@ -1,20 +1,23 @@
-//! The registry: every method specula can run, in the order reports list them. A new technique
-//! adds its `INFO` here and nowhere else; the CLI, reports, `specula methods` and the viewer's
-//! controls all read this table.
+//! The registry: every method specula can run, in the order reports list them. A technique is
+//! registered by one line of the crate root's [`techniques!`] list, which declares its module
+//! and lists its `INFO` in [`METHODS`](crate::METHODS); the CLI, reports, `specula methods` and
+//! the viewer's controls all read that table.
 
 use specula_core::{MethodInfo, Technique, TechniqueError};
 
-/// Every registered method: the exact reference first, then the techniques.
-pub static METHODS: &[&MethodInfo] = &[
-    &crate::reference::INFO,
-    &crate::gpu_trace::INFO,
-    &crate::envmap::INFO,
-    &crate::pvrr::INFO,
-    &crate::distance_maps::INFO,
-    &crate::image_space::INFO,
-    &crate::c3rc::INFO,
-    &crate::vertex_tracing::INFO,
-];
+use crate::METHODS;
+
+/// Declares each technique's module (`pub mod NAME;`, whose `INFO` describes it) and lists them
+/// all, in order, as `METHODS`. Attributes (e.g. `#[cfg(test)]`) apply to both.
+macro_rules! techniques {
+    ($($(#[$attr:meta])* $module:ident,)*) => {
+        $($(#[$attr])* pub mod $module;)*
+
+        /// Every registered method: the exact reference first, then the techniques.
+        pub static METHODS: &[&specula_core::MethodInfo] = &[$($(#[$attr])* &$module::INFO,)*];
+    };
+}
+pub(crate) use techniques;
 
 /// The registered method called `name`.
 pub fn method(name: &str) -> Result<&'static MethodInfo, TechniqueError> {
