@@ -119,7 +119,7 @@ pub struct Drawn {
 /// technique can write the count. A technique builds what it drew:
 ///
 /// ```
-/// use specula_methods::{Drawn, Pixels};
+/// use specula_core::{Drawn, Pixels};
 /// let drawn = Drawn {
 ///     pixels: Pixels::Image(specula_trace::Image::new(1, 1)),
 ///     stages: Vec::new(),
@@ -133,7 +133,7 @@ pub struct Drawn {
 /// and the same, with a count, as a `Frame`, does not compile:
 ///
 /// ```compile_fail
-/// use specula_methods::{Drawn, Frame, Pixels};
+/// use specula_core::{Drawn, Frame, Pixels};
 /// let frame = Frame {
 ///     drawn: Drawn {
 ///         pixels: Pixels::Image(specula_trace::Image::new(1, 1)),

@@ -73,6 +73,83 @@ mod tests {
     use super::*;
     use specula_core::SurfaceClass;
 
+    /// Each technique's module source (path in the crate's `src`), whose top doc is read.
+    const SOURCES: &[(&str, &str, &str)] = &[
+        (
+            "reference",
+            "reference/mod.rs",
+            include_str!("reference/mod.rs"),
+        ),
+        (
+            "gpu-trace",
+            "gpu_trace/mod.rs",
+            include_str!("gpu_trace/mod.rs"),
+        ),
+        ("envmap", "envmap/mod.rs", include_str!("envmap/mod.rs")),
+        ("pvrr", "pvrr/mod.rs", include_str!("pvrr/mod.rs")),
+        (
+            "distance-maps",
+            "distance_maps/mod.rs",
+            include_str!("distance_maps/mod.rs"),
+        ),
+        (
+            "image-space",
+            "image_space/mod.rs",
+            include_str!("image_space/mod.rs"),
+        ),
+        ("c3rc", "c3rc/mod.rs", include_str!("c3rc/mod.rs")),
+        (
+            "vertex-tracing",
+            "vertex_tracing/mod.rs",
+            include_str!("vertex_tracing/mod.rs"),
+        ),
+    ];
+
+    /// The lines that open and close the parameter table of a module's top doc.
+    const TABLE_BEGIN: &str = "//! <!-- The parameter table: made from `Params::SPECS` by `specula_core::params::doc_table`;\n//! `SPECULA_REGENERATE=1 cargo test -p specula-methods --lib doc` writes it again. -->\n";
+    const TABLE_END: &str = "//! <!-- end of the parameter table -->\n";
+
+    /// Every technique's module doc holds the table its parameter declarations make, as they
+    /// are now (`SPECULA_REGENERATE=1` writes it again).
+    #[test]
+    fn every_module_doc_holds_its_parameter_table() {
+        let regenerate = std::env::var_os("SPECULA_REGENERATE").is_some();
+        let mut stale = Vec::new();
+        for (name, path, source) in SOURCES {
+            let info = method(name).unwrap();
+            let begin = source
+                .find(TABLE_BEGIN)
+                .unwrap_or_else(|| panic!("{path}: no table"));
+            let start = begin + TABLE_BEGIN.len();
+            let end = start + source[start..].find(TABLE_END).expect("the table closes");
+            let table = specula_core::params::doc_table(info.params);
+            if source[start..end] == table {
+                continue;
+            }
+            if regenerate {
+                let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                    .join("src")
+                    .join(path);
+                let written = format!("{}{table}{}", &source[..start], &source[end..]);
+                std::fs::write(&file, written).unwrap();
+            } else {
+                stale.push(*path);
+            }
+        }
+        assert!(
+            stale.is_empty(),
+            "parameter tables out of date in {stale:?}: run SPECULA_REGENERATE=1 cargo test -p specula-methods --lib doc"
+        );
+        // Every method has its source listed (the test-only toy has no module doc table).
+        for info in METHODS.iter().filter(|m| m.name != "toy-normals") {
+            assert!(
+                SOURCES.iter().any(|(n, ..)| *n == info.name),
+                "{}",
+                info.name
+            );
+        }
+    }
+
     /// Each seed technique's module source, whose top doc is read.
     const SEED_SOURCES: &[(&str, &str)] = &[
         ("pvrr", include_str!("pvrr/mod.rs")),

@@ -137,7 +137,38 @@
 //! - Dielectric objects are shaded as envmap shades them, with the nearby objects in their
 //!   cube maps.
 //!
-//! Parameters:
+//! ## Parameters
+//!
+//! <!-- The parameter table: made from `Params::SPECS` by `specula_core::params::doc_table`;
+//! `SPECULA_REGENERATE=1 cargo test -p specula-methods --lib doc` writes it again. -->
+//! | parameter | takes | default | a change redoes | what it does |
+//! |---|---|---|---|---|
+//! | `points` | a whole number from 1 to 50000000 | `100000` | resources | points over all nearby objects (sets the density): fewer holes, linear projection cost |
+//! | `density` | a number from 0 to 1000000000 | `0` | resources | points per square metre; 0 takes the density from `points` |
+//! | `near` | a number from 0 to 1000000 | `3` | resources | objects within this many reflector radii become points; farther ones are the cube map's |
+//! | `leaf_points` | a whole number from 1 to 1000000 | `256` | resources | kd-tree leaf size: smaller culls more precisely at more culling cost |
+//! | `tree_depth` | a whole number from 0 to 30 | `12` | resources | kd-tree depth limit |
+//! | `splat_scale` | a number from 0.01 to 100 | `2.5` | uniform | splat radius over the radius of the disc a point stands for: closes holes at more cost (with exact_hits it also widens the light kernel and plane extrapolation; else it blurs) |
+//! | `max_splat` | a number from 0.5 to 64 | `16` | uniform | largest splat half-size in pixels (where reflected rays converge) |
+//! | `min_pixels` | a whole number from 0 to 1000000 | `0` | uniform | triangles covering fewer visible pixels take the per-vertex reflected colour (0: every visible triangle gets a camera, as the paper; the default since exact hits) |
+//! | `split_pixels` | a whole number from 0 to 1000000 | `0` | uniform | triangles covering more pixels are cut in four (up to 3 times) for more cameras; 0: never |
+//! | `trace_self` | true or false | `true` | uniform | trace per pixel the triangles whose vertex rays hit their own mirror (false: first order, as the paper) |
+//! | `level_of_detail` | true or false | `true` | uniform | project every k-th point of nodes the camera minifies to more than 4 points a pixel (false: every point, as the paper) |
+//! | `conservative_culling` | true or false | `true` | uniform | keep the tree boxes the paper's two conditions miss: folds, the base's inside (false: the paper's test, §5.2) |
+//! | `one_sided` | true or false | `true` | uniform | skip points (and tree nodes) facing away from the reflector triangle (false: every point splats, as the paper) |
+//! | `multiple_projections` | true or false | `true` | uniform | splat every valid projection of a point (false: the first only, as the paper's GPU) |
+//! | `fixed_splat` | a number from 0 to 64 | `0` | uniform | side in pixels of every splat square (the paper: 1 or 2); 0 sizes each to its footprint (splat_scale, max_splat) |
+//! | `depth_band` | true or false | `true` | uniform | within a depth band behind the nearest splat, the nearest centre gives the colour (false: the nearest depth alone, as the paper) |
+//! | `fill_holes` | true or false | `true` | uniform | fill uncovered mirror pixels with at least 5 covered neighbours (with exact_hits: try every mirror pixel with its neighbours' surfaces) (false: the far field shows, as the paper) |
+//! | `exact_hits` | true or false | `true` | uniform | splats nominate surfaces: each mirror pixel's exact reflected ray meets their triangles, the albedo is looked up where it hits, lit by the points (false: each pixel takes a splat's colour, as the paper; runs on the CPU) |
+//! | `resolution` | a whole number from 1 to 8192 | `256` | resources | texels per far-field cube-map face side |
+//! | `dynamic` | true or false | `false` | uniform | redraw the far-field cube maps every frame (else only after a move) |
+//! | `two_level_maps` | true or false | `true` | uniform | with two reflectors or more, shade the other specular objects a cube map shows from their own maps (two levels; else black) |
+//! | `projection` | one of auto, cpu, gpu | `auto` | uniform | where the forward phase runs: rayon on the CPU, compute passes on the GPU, or auto (the CPU on a software GPU, else the GPU) |
+//! | `shadow_resolution` | a whole number from 1 to 8192 | `1024` | scene preparation | texels per side of the scene raster's shadow maps |
+//! <!-- end of the parameter table -->
+//!
+//! What they change:
 //! - `points` (100000): how many points the nearby objects get in all (sets the density; the
 //!   paper's Table 1 has 10,000 to 543,000, the 100,000-point dragon among them).
 //!   More points: fewer holes and sharper reflections, linear cost in projection (less with

@@ -113,51 +113,76 @@
 //! - paths longer than `max_depth` end as `estimate` says; the reference follows them to its own
 //!   depth (8 in `compare`).
 //!
-//! Parameters:
-//! - `resolution` (default 512; (paper: `resolution=512`), its cube maps): texels per face side.
+//! ## Parameters
+//!
+//! <!-- The parameter table: made from `Params::SPECS` by `specula_core::params::doc_table`;
+//! `SPECULA_REGENERATE=1 cargo test -p specula-methods --lib doc` writes it again. -->
+//! | parameter | takes | default | a change redoes | what it does |
+//! |---|---|---|---|---|
+//! | `resolution` | a whole number from 1 to 8192 | `512` | resources | texels per face side: finer geometry and more exact hits; 6 x resolution^2 texels per layer |
+//! | `layers` | one of simple, 1, 2, 3, 4, 5, 6, 7, 8 | `simple` | resources | the paper's three layers (simple) or that many depth-peeled layers |
+//! | `diffuse_layers` | a whole number from 1 to 6 | `1` | resources | with layers=simple, depth-peeled layers of the non-specular surfaces |
+//! | `linear_steps` | a whole number from 1 to 1000 | `80` | uniform | most linear-search steps per layer; fewer miss thin objects |
+//! | `secant_steps` | a whole number from 0 to 100 | `10` | uniform | secant iterations after the linear search (0: its overshooting sample is the hit) |
+//! | `max_depth` | a whole number from 1 to 16 | `4` | uniform | most specular bounces on a path (deeper branches take the map's estimate) |
+//! | `min_max` | true or false | `true` | uniform | min-max acceleration: march only between each layer's nearest and farthest distance |
+//! | `skip_start` | true or false | `true` | uniform | start each secondary ray's search 2/resolution of \|x\| away (false: the paper's t = 0.0001) |
+//! | `refine_every_layer` | true or false | `true` | uniform | refine every layer's bracket, nearest refined hit wins (false: the paper's layer with the nearest overshoot only) |
+//! | `interpolation` | one of mesh, plain | `mesh` | uniform | mesh: interpolate within one mesh, brackets across meshes only where the ray passes the second; plain: the paper's |
+//! | `dielectric_branches` | one of both, refracted | `both` | uniform | trace reflected and refracted branches at glass (refracted: the paper's single path) |
+//! | `dielectric_fresnel` | one of exact, schlick | `exact` | uniform | Fresnel terms at glass: exact, or the paper's Schlick approximation |
+//! | `dispersion` | true or false | `true` | uniform | trace dispersive glass once per colour channel (false: the green index, as the paper's one index) |
+//! | `estimate` | true or false | `true` | uniform | unresolved rays and cut branches take the map's estimate (false: background, and the paper's path weight) |
+//! | `output` | one of radiance, first-hit | `radiance` | uniform | first-hit writes each reflector pixel's first secondary hit position instead |
+//! | `dynamic` | true or false | `false` | uniform | redraw the maps every frame (else only after a move) |
+//! | `shadow_resolution` | a whole number from 1 to 8192 | `1024` | scene preparation | texels per side of the scene raster's shadow maps |
+//! <!-- end of the parameter table -->
+//!
+//! What they change:
+//! - `resolution` ((paper: `resolution=512`), its cube maps): texels per face side.
 //!   Higher resolves finer geometry and texture and makes hits more exact; cost 6 × resolution²
 //!   texels per layer per reflector per frame, and longer linear searches (steps follow the texels
 //!   a ray spans).
-//! - `layers` (default `simple`; (paper: `layers=simple`), its implementation): `simple`, or a
+//! - `layers` ((paper: `layers=simple`), its implementation): `simple`, or a
 //!   number 1 to 8 of depth-peeled layers. More layers capture surfaces hidden from the reference
 //!   point; each costs a rasterisation of the scene into six faces and a linear search per ray.
-//! - `diffuse_layers` (default 1; (paper: `diffuse_layers=1`), all diffuse surfaces in one layer):
+//! - `diffuse_layers` ((paper: `diffuse_layers=1`), all diffuse surfaces in one layer):
 //!   with `layers=simple`, the non-specular surfaces in this many depth-peeled layers (1 to 6); the
 //!   same trade-off.
-//! - `linear_steps` (default 80; (paper: `linear_steps=80`), the finest of its Figure 17-6): the
+//! - `linear_steps` ((paper: `linear_steps=80`), the finest of its Figure 17-6): the
 //!   most steps of a linear search per layer (fewer where a ray spans fewer texels). Fewer miss
 //!   thin objects and leave stair steps the secant search cannot always recover; cost is linear.
-//! - `secant_steps` (default 10; (paper: `secant_steps=10`), the finest of its Figure 17-6): secant
+//! - `secant_steps` ((paper: `secant_steps=10`), the finest of its Figure 17-6): secant
 //!   iterations after the linear search (0: the linear search's overshooting sample is the hit).
 //!   Removes stair-stepping; exact on planes in one.
-//! - `max_depth` (default 4; (paper: `max_depth=2`), the paper's video): the most specular bounces
+//! - `max_depth` ((paper: `max_depth=2`), the paper's video): the most specular bounces
 //!   on a path, the surface the camera sees being the first (the paper's MAXDEPTH). Each costs one
 //!   more trace, only on paths that need it; a glass object needs 3 or more (in, reflected inside,
 //!   out): on the suite's glass sphere mean FLIP 0.098 at 2, 0.027 at 3, 0.020 at 4, 0.020 at 8
 //!   (320 × 240); at 2 on the suite at 160 × 120, glass-block 0.066 → 0.229, glass-sphere 0.019 →
 //!   0.061.
-//! - `min_max` (default true; (paper: `min_max=true`), its 50 fps video): min-max acceleration;
+//! - `min_max` ((paper: `min_max=true`), its 50 fps video): min-max acceleration;
 //!   marches only between each layer's smallest and largest distance (fewer steps wasted and finer
 //!   steps where surfaces are; the paper: 25 → 50 fps); costs a reduction over the maps.
-//! - `dynamic` (default false; (paper: `dynamic=true`), its maps "were updated in every frame"):
+//! - `dynamic` ((paper: `dynamic=true`), its maps "were updated in every frame"):
 //!   redraw the maps (and their min-max ranges) every frame even when nothing moved; otherwise only
 //!   after a move. Changes the cost, not the image.
-//! - `refine_every_layer` (default true): see Beyond the paper; costs a secant search per layer
+//! - `refine_every_layer`: see Beyond the paper; costs a secant search per layer
 //!   with a bracket instead of one.
-//! - `interpolation` (default `mesh`): `mesh` or `plain`, see Beyond the paper; `plain` draws
+//! - `interpolation`: `mesh` or `plain`, see Beyond the paper; `plain` draws
 //!   surfaces spanned between objects at silhouettes.
-//! - `skip_start` (default true): see Beyond the paper; without it rays can hit the interpolated
+//! - `skip_start`: see Beyond the paper; without it rays can hit the interpolated
 //!   copy of the surface they leave.
-//! - `dielectric_branches` (default `both`): `both` or `refracted`, see Beyond the paper; both cost
+//! - `dielectric_branches`: `both` or `refracted`, see Beyond the paper; both cost
 //!   a second trace per dielectric surface on the path (up to the stack).
-//! - `dielectric_fresnel` (default `exact`): `exact` or `schlick`; no cost difference.
-//! - `dispersion` (default true): a dispersive scene costs three traces per glass pixel.
-//! - `estimate` (default true): see Beyond the paper; costs a lookup per layer for each unresolved
+//! - `dielectric_fresnel`: `exact` or `schlick`; no cost difference.
+//! - `dispersion`: a dispersive scene costs three traces per glass pixel.
+//! - `estimate`: see Beyond the paper; costs a lookup per layer for each unresolved
 //!   ray and cut branch.
-//! - `output` (default `radiance`): `first-hit` writes, instead of radiance, the world position
+//! - `output`: `first-hit` writes, instead of radiance, the world position
 //!   where each reflector pixel's first secondary ray hits (-1e30 where it finds nothing), to check
 //!   the search.
-//! - `shadow_resolution` (default 1024): the raster pass's shadow maps.
+//! - `shadow_resolution`: the raster pass's shadow maps.
 
 use bytemuck::{Pod, Zeroable};
 use specula_gpu::counters::Counters;

@@ -28,22 +28,35 @@
 //! through a bounding sphere or a parallel face instead of its real back surface, and ignore
 //! internal reflection.
 //!
-//! Parameters:
-//! - `resolution` (default 256): texels per cube-map face side. Higher sharpens reflections;
+//! ## Parameters
+//!
+//! <!-- The parameter table: made from `Params::SPECS` by `specula_core::params::doc_table`;
+//! `SPECULA_REGENERATE=1 cargo test -p specula-methods --lib doc` writes it again. -->
+//! | parameter | takes | default | a change redoes | what it does |
+//! |---|---|---|---|---|
+//! | `resolution` | a whole number from 1 to 8192 | `256` | resources | texels per cube-map face side: sharper reflections, 6 x resolution^2 texels per reflector |
+//! | `exit` | one of none, sphere, slab | `slab` | uniform | second interface of solid refractors: none, the bounding sphere, or a parallel face |
+//! | `dynamic` | true or false | `false` | uniform | redraw the cube maps every frame (else only after a move) |
+//! | `two_level_maps` | true or false | `true` | uniform | with two reflectors or more, shade the other specular objects a cube map shows from their own maps (two levels; else black) |
+//! | `shadow_resolution` | a whole number from 1 to 8192 | `1024` | scene preparation | texels per side of the scene raster's shadow maps |
+//! <!-- end of the parameter table -->
+//!
+//! What they change:
+//! - `resolution`: texels per cube-map face side. Higher sharpens reflections;
 //!   cost is 6 × resolution² rasterised texels per reflector per redraw, twice (and a shading
 //!   pass per face) when the scene has two specular meshes or more and `two_level_maps` is on.
-//! - `two_level_maps` (default true): with two reflectors or more, shade the specular objects a
+//! - `two_level_maps`: with two reflectors or more, shade the specular objects a
 //!   cube map shows from their own maps (see above); false draws them black, at half the cost.
-//! - `exit` (default `slab`): the naive second interface of solid refractors. `none` looks the
+//! - `exit`: the naive second interface of solid refractors. `none` looks the
 //!   environment up right after the first refraction (single interface); `sphere` refracts
 //!   again where the ray leaves the bounding sphere (exact for a sphere); `slab` refracts again
 //!   at a face parallel to the entry face (exact for thin shells with parallel faces). The
 //!   default is the one with the lowest RMSE on the built-in refraction scenes (glass-dragon
 //!   0.092 vs 0.097 none / 0.102 sphere; spectacle-lens 0.176 vs 0.191 / 0.205, at 320×240);
 //!   costs are equal.
-//! - `dynamic` (default false): redraw the cube maps every frame even when nothing moved (the
+//! - `dynamic`: redraw the cube maps every frame even when nothing moved (the
 //!   cost of a fully dynamic scene); otherwise they are redrawn only after a move.
-//! - `shadow_resolution` (default 1024): shadow maps of the scene raster (see `raster`).
+//! - `shadow_resolution`: shadow maps of the scene raster (see `raster`).
 
 use specula_core::cube_maps::{shading_bindings, shading_pass, CubeMaps, Exit, TWO_LEVEL_MAPS};
 use specula_core::lifecycle::{GpuFrame, GpuMethod, GpuTechnique};

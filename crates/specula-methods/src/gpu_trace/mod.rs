@@ -44,12 +44,23 @@
 //! (`specula methods`, `bench`); neither lavapipe nor the H200 machine sometimes lent here has
 //! them, so the compute traversal is the method and no second path is compiled.
 //!
-//! Parameters:
-//! - `max_depth` (default 8): the most specular bounces on a path, as the CPU reference's.
+//! ## Parameters
+//!
+//! <!-- The parameter table: made from `Params::SPECS` by `specula_core::params::doc_table`;
+//! `SPECULA_REGENERATE=1 cargo test -p specula-methods --lib doc` writes it again. -->
+//! | parameter | takes | default | a change redoes | what it does |
+//! |---|---|---|---|---|
+//! | `max_depth` | a whole number from 0 to 64 | `8` | uniform | most specular bounces on a path (the megakernel is exact up to 11) |
+//! | `mode` | one of megakernel, wavefront | `megakernel` | resources | one thread per pixel with a private ray stack, or ray queues in GPU memory |
+//! | `queue_factor` | a whole number from 1 to 16 | `4` | resources | wavefront: rays per pixel each queue holds |
+//! <!-- end of the parameter table -->
+//!
+//! What they change:
+//! - `max_depth`: the most specular bounces on a path, as the CPU reference's.
 //!   Cost grows with the paths that need it.
-//! - `mode` (default `megakernel`, the faster on lavapipe; docs/benchmarks.md): the form of
+//! - `mode` (docs/benchmarks.md): the form of
 //!   the tracing, above.
-//! - `queue_factor` (default 4): wavefront queue capacity in rays per pixel. More memory, fewer
+//! - `queue_factor`: wavefront queue capacity in rays per pixel. More memory, fewer
 //!   drops on deep glass.
 
 use bytemuck::{Pod, Zeroable};

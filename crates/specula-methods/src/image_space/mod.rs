@@ -28,7 +28,7 @@
 //!   sheets look straight through to the nearby geometry.
 //!
 //! Beyond the paper (each switched off by the `paper` preset; figures: mean FLIP at 320 × 240):
-//! - `exit_iterations` (default 2) moves P̃2 along T1 to the depth of the back face under it,
+//! - `exit_iterations` moves P̃2 along T1 to the depth of the back face under it,
 //!   the §4.3 iteration applied to the back-face texture (0.240 → 0.118 with the cube maps
 //!   looked up along the direction alone; the suite's glass sphere unless named, as in
 //!   docs/benchmarks.md) (paper: `exit_iterations=0`).
@@ -40,7 +40,7 @@
 //!   `scenes/table1`: 0.253 → 0.163, with the depth agreement below). The paper iterates from
 //!   the best-agreeing seed (empty texels holding the far plane's depth, as a cleared
 //!   z-buffer does) and takes the texel the last step lands on (paper: `bracket=false`).
-//! - `depth_tolerance` (default 0.05): the iterative mode accepts the texel it ends on only
+//! - `depth_tolerance`: the iterative mode accepts the texel it ends on only
 //!   where its depth agrees with the ray's within that fraction (else nothing nearby); the
 //!   paper takes it whatever its depth (10 %, 5 %, 2 % measured: sphere before the dragon
 //!   0.164 / 0.163 / 0.156, the bunny 0.240 / 0.217 / 0.206, the suite's glass sphere 0.072 /
@@ -68,11 +68,11 @@
 //! - `reflection`: the first surface's Fresnel reflection, from envmap's cube map as the
 //!   reference has it, weighting the refraction by what is transmitted; the paper's steps
 //!   (A–F, G–J) return the refracted colour alone (paper: `reflection=false`).
-//! - `fallback` (default `cube-map`): a ray that leaves the NG texture's frustum or finds
+//! - `fallback`: a ray that leaves the NG texture's frustum or finds
 //!   nothing nearby takes envmap's cube map of the refractor (drawn without it, [`CubeMaps`]),
 //!   which also holds the nearby objects, instead of the paper's background environment map
 //!   (paper: `fallback=background`).
-//! - `parallax` (default on): cube-map lookups go towards where the ray leaves the scene's
+//! - `parallax`: cube-map lookups go towards where the ray leaves the scene's
 //!   bounding box, seen from the map's centre (0.118 → 0.072; lens 0.079 → 0.066); off, they
 //!   go along the direction as envmap's do (mirrors included) (paper: `parallax=false`).
 //! - `dispersion`: a dispersive material refracts once per colour channel; the paper's
@@ -129,37 +129,65 @@
 //! (unless `dynamic`); bind groups are kept per set of textures; each refracted path's lookups
 //! are one call site in the shader, so that it compiles once.
 //!
-//! Parameters:
-//! - `mode` (default `iterative`, the paper's choice): `kay-greenberg`, `ray-plane` or
+//! ## Parameters
+//!
+//! <!-- The parameter table: made from `Params::SPECS` by `specula_core::params::doc_table`;
+//! `SPECULA_REGENERATE=1 cargo test -p specula-methods --lib doc` writes it again. -->
+//! | parameter | takes | default | a change redoes | what it does |
+//! |---|---|---|---|---|
+//! | `mode` | one of kay-greenberg, ray-plane, iterative | `iterative` | uniform | how refracted rays find nearby geometry: the NG texture behind the exit point, the nearest fitted plane, or seeded iteration |
+//! | `seeds` | a whole number from 1 to 64 | `7` | uniform | iterative mode: samples along the refracted ray choosing where iteration starts (more find smaller features) |
+//! | `iterations` | a whole number from 0 to 32 | `4` | uniform | iterative mode: refinement steps from the best seed |
+//! | `bracket` | true or false | `true` | uniform | iterative mode: refine by secant between seeds that bracket the nearby surface and keep the best-agreeing point (false: the paper's iteration from the best seed) |
+//! | `depth_tolerance` | a number from 0 to 1 | `0.05` | uniform | iterative mode: the relative depth disagreement within which the texel found is accepted (0: any, as the paper) |
+//! | `discs` | true or false | `true` | uniform | ray-plane mode: planes are discs around what they were fitted to (false: the paper's infinite planes) |
+//! | `index` | a number from 0 to 4 | `0` | uniform | index of refraction of every refractor (0: each material's own) |
+//! | `texture_scale` | a number from 0.125 to 2 | `1` | uniform | size of the back-face and nearby-geometry textures relative to the frame |
+//! | `inside_steps` | a whole number from 1 to 256 | `24` | uniform | march steps following light reflected inside the refractor |
+//! | `exit_iterations` | a whole number from 0 to 16 | `2` | uniform | steps moving the estimated exit point to the back face's depth (0: the paper's interpolated distance alone) |
+//! | `internal_reflection` | true or false | `true` | uniform | split light by Fresnel at the exit and follow the reflected part inside once more (false: the paper's refraction of all of it, the zero vector under total internal reflection) |
+//! | `reflection` | true or false | `true` | uniform | add the first surface's Fresnel reflection (false: the refracted colour alone, as the paper) |
+//! | `fallback` | one of cube-map, background | `cube-map` | uniform | what a ray that finds no nearby geometry sees: the refractor's cube map, or the paper's background |
+//! | `dispersion` | true or false | `true` | uniform | refract once per colour channel on dispersive materials (false: one path at the green index) |
+//! | `resolution` | a whole number from 1 to 8192 | `256` | resources | texels per face side of the fallback cube maps (envmap's) |
+//! | `dynamic` | true or false | `false` | uniform | redraw the fallback cube maps every frame (else only after a move) |
+//! | `two_level_maps` | true or false | `true` | uniform | with two reflectors or more, shade the other specular objects a cube map shows from their own maps (two levels; else black) |
+//! | `layers` | a whole number from 1 to 4 | `1` | uniform | pairs of interfaces a path may cross (1: the paper's two); more peel 2 x layers surface layers |
+//! | `parallax` | true or false | `true` | uniform | correct cube-map lookups for parallax against the scene's bounding box (false: the direction alone, as envmap) |
+//! | `shadow_resolution` | a whole number from 1 to 8192 | `1024` | scene preparation | texels per side of the scene raster's shadow maps |
+//! <!-- end of the parameter table -->
+//!
+//! What they change:
+//! - `mode`: `kay-greenberg`, `ray-plane` or
 //!   `iterative` (above). Kay–Greenberg costs one texture read and barely bends what is seen;
 //!   ray-plane adds a loop over at most 8 planes and is exact for planar surroundings;
 //!   iterative costs `seeds + iterations` reads and follows any geometry.
-//! - `seeds` (default 7, the paper's): samples along T2 choosing the iteration's start. More
+//! - `seeds`: samples along T2 choosing the iteration's start. More
 //!   find smaller features (the paper: seven find every feature larger than ten pixels at
 //!   512²); cost linear.
-//! - `iterations` (default 4; the paper: fewer than five are typically needed): refinement
+//! - `iterations` (the paper: fewer than five are typically needed): refinement
 //!   steps of the iterative mode; cost linear.
-//! - `bracket` (default true) and `depth_tolerance` (default 0.05; 0: none): the iterative
+//! - `bracket` and `depth_tolerance` (0: none): the iterative
 //!   mode's search and acceptance (above); neither costs a texture read more.
-//! - `discs` (default true): ray-plane's planes are discs (above); no cost.
-//! - `index` (default 0 = each material's own): overrides the refractors' index of refraction
+//! - `discs`: ray-plane's planes are discs (above); no cost.
+//! - `index`: overrides the refractors' index of refraction
 //!   (the paper's scenes: 1.2, spheres 1.5).
-//! - `texture_scale` (default 1): the back-face and NG textures' size relative to the frame
+//! - `texture_scale`: the back-face and NG textures' size relative to the frame
 //!   (the paper draws them at the frame's size). Lower is cheaper and more aliased.
-//! - `exit_iterations` (default 2; 0 is the paper's P̃2): see above; cost two texture reads
+//! - `exit_iterations` (0 is the paper's P̃2): see above; cost two texture reads
 //!   per step.
-//! - `internal_reflection` (default true): see above; cost a march where Fresnel reflects.
-//! - `reflection` (default true), `dispersion` (default true): see above; dispersion triples
+//! - `internal_reflection`: see above; cost a march where Fresnel reflects.
+//! - `reflection`, `dispersion`: see above; dispersion triples
 //!   the refraction's cost on dispersive materials.
-//! - `fallback` (default `cube-map`) and `parallax` (default true): see above. The cube maps
+//! - `fallback` and `parallax`: see above. The cube maps
 //!   are drawn whatever `fallback` says (mirrors and thin sheets read them).
-//! - `layers` (default 1, the paper's two interfaces): see limitation 1; cost one raster pass
+//! - `layers`: see limitation 1; cost one raster pass
 //!   of the refractors per peeled layer and a march per extra interface.
-//! - `inside_steps` (default 24): march steps following light inside a refractor or between
+//! - `inside_steps`: march steps following light inside a refractor or between
 //!   refractors; more find thinner parts; cost linear, only where the march runs.
-//! - `resolution` (default 256) and `dynamic` (default false): the fallback cube maps' texels
+//! - `resolution` and `dynamic`: the fallback cube maps' texels
 //!   per face side, and whether they are redrawn every frame (as envmap's parameters).
-//! - `shadow_resolution` (default 1024): shadow maps of the raster passes (see `raster`).
+//! - `shadow_resolution`: shadow maps of the raster passes (see `raster`).
 
 use std::collections::HashMap;
 

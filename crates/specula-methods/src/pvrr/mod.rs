@@ -156,48 +156,71 @@
 //! 2nd-pass vertices and uniforms from arenas written in place ([`specula_gpu::arena`]), bind
 //! groups are kept per map slot.
 //!
-//! Parameters:
-//! - `resolution` (default 512; the paper states none): reflection-map height in texels of an
+//! ## Parameters
+//!
+//! <!-- The parameter table: made from `Params::SPECS` by `specula_core::params::doc_table`;
+//! `SPECULA_REGENERATE=1 cargo test -p specula-methods --lib doc` writes it again. -->
+//! | parameter | takes | default | a change redoes | what it does |
+//! |---|---|---|---|---|
+//! | `resolution` | a whole number from 1 to 8192 | `512` | uniform | reflection-map height in texels of an undivided reflector (patches share it by solid angle) |
+//! | `shadow_resolution` | a whole number from 1 to 8192 | `1024` | scene preparation | texels per side of the scene raster's shadow maps |
+//! | `max_fov` | a number from 1 to 170 | `90` | resources | widest view volume a patch may keep, degrees; lower: more, less distorted maps |
+//! | `max_patches` | a whole number from 1 to 4096 | `256` | resources | most patches per reflector (1: the paper's one view per reflector); each costs a 1st pass |
+//! | `fit_hits` | true or false | `true` | resources | fit each view volume's sides to its hits, the only points the 2nd pass looks up (false: contain the whole reflection lines, as the paper's §3.3) |
+//! | `zooming` | one of view, traced, map | `view` | resources | the vertices whose hit lies between the mirror and their rays' convergence (zooming region): view = the zooming view of §7 (from the viewpoint back toward the mirror, farthest surface kept); traced = their ray-traced radiance blended across their triangles; map = the map where their line through the viewpoint meets it, as the paper's algorithm |
+//! | `surface_reflection` | true or false | `true` | uniform | add a dielectric's surface reflection (the paper's lens shows transmitted light only) |
+//! | `internal_reflection` | true or false | `true` | uniform | add the light reflected once inside a solid dielectric (the paper's lens shows transmitted light only) |
+//! | `depth` | a whole number from 1 to 4 | `2` | uniform | reflectors seen in reflectors, levels deep |
+//! | `nested_share` | a number from 0 to 1000 | `8` | uniform | the levels below the top may draw up to this many times the top level's 1st passes and map texels, and trace a quarter of that times its per-vertex rays (0: none) |
+//! | `frame_patches` | a whole number from 1 to 1048576 | `2048` | uniform | the most 1st passes a frame draws, all levels together (nested levels are left out first) |
+//! | `frame_texels` | a whole number from 1 to 4294967296 | `16777216` | uniform | the most reflection-map texels a frame draws, all levels together (nested levels are left out first) |
+//! | `ior` | `material`, one index of refraction or three (red,green,blue), each above 1 and at most 4 | `material` | scene preparation | the lenses' indices of refraction (three: chromatic aberration) |
+//! | `cached` | true or false | `false` | uniform | keep exit rays and patches in the eye's frame while the lens does not move relative to it |
+//! | `markers` | true or false | `false` | uniform | verification overlay: a red ball at every vertex's exact ray-traced hit |
+//! | `marker_size` | a number from 0.000001 to 0.1 | `0.012` | uniform | marker radius as a fraction of its distance from the reflector |
+//! <!-- end of the parameter table -->
+//!
+//! What they change:
+//! - `resolution` (the paper states none): reflection-map height in texels of an
 //!   undivided reflector (the width follows the view volume's aspect ratio); patches share it
 //!   in proportion to the solid angle each covers (height × √share, at least 16). Higher
 //!   sharpens the reflection between vertices; costs rasterising about that many texels per
 //!   frame.
-//! - `shadow_resolution` (default 1024): shadow maps of the scene raster (see `raster`).
-//! - `max_fov` (default 90, degrees): the widest view volume a patch may keep (subdivision
+//! - `shadow_resolution`: shadow maps of the scene raster (see `raster`).
+//! - `max_fov`: the widest view volume a patch may keep (subdivision
 //!   only). Lower gives more, less distorted maps (more 1st passes).
-//! - `max_patches` (default 256; 1 is the paper's one view per reflector): the most patches
+//! - `max_patches` (1 is the paper's one view per reflector): the most patches
 //!   per reflector; each costs a 1st pass (a zooming view two). A level below the top shares this budget across all
 //!   the patches of the level above (each of N outer patches plans at most
 //!   max(1, `max_patches` / N) per inner reflector), so the 1st passes of a frame stay within
 //!   `max_patches` × reflectors per level.
-//! - `depth` (default 2, the paper's multiple reflection: §4.4's Figure 11 shows the
-//!   background in the car's side windows in the door mirror): reflectors seen in reflectors,
+//! - `depth`: reflectors seen in reflectors,
 //!   levels deep (1: other reflectors appear in maps as the scene raster draws them, their
 //!   vertices' ray-traced radiance blended in, above). Each
 //!   level adds at most `max_patches` 1st passes per reflector it shows; inner reflections get
 //!   coarser patches as outer ones get finer; the frame budget bounds them all (below).
-//! - `nested_share` (default 8): the levels below the top may draw this many times the top
+//! - `nested_share`: the levels below the top may draw this many times the top
 //!   level's 1st passes and map texels and trace a quarter of that times its per-vertex rays
 //!   (0: depth 1's frame). Higher shows reflections in reflectors in more of the picture; on
 //!   the scene suite at 160 × 120 a depth-2 frame took 0.67–1.13 times depth 1's with 8
 //!   (docs/benchmarks.md), where unbounded it took up to 24 times (the lit room).
-//! - `frame_patches` (default 2048), `frame_texels` (default 16,777,216): the most 1st passes
+//! - `frame_patches`, `frame_texels`: the most 1st passes
 //!   and map texels of a frame, all levels together; the top level's reflectors share them
 //!   first (each at most `frame_patches` / (2 × reflectors) patches and a map of
 //!   `frame_texels` / (8 × reflectors) texels: a zooming view draws two maps), the nested
 //!   levels take what is left. They bound a frame's
 //!   passes and its maps' memory (60 bytes a texel).
-//! - `fit_hits` (default true): view volumes fitted to the hits (above); false: to the whole
+//! - `fit_hits`: view volumes fitted to the hits (above); false: to the whole
 //!   reflection lines, as §3.3, with coarser maps where the lines spread.
-//! - `zooming` (default `view`): the zooming region (above). `view` costs two 1st passes per
+//! - `zooming`: the zooming region (above). `view` costs two 1st passes per
 //!   zooming patch and a traced path per unresolved vertex; `traced` a traced path per vertex
 //!   whose P lies behind its viewpoint (and more patches, split for them); `map` nothing.
-//! - `surface_reflection`, `internal_reflection` (default true): a dielectric's reflections
+//! - `surface_reflection`, `internal_reflection`: a dielectric's reflections
 //!   (above); each costs its own per-vertex rays, patches and 1st passes.
-//! - `ior` (default `material`): the dielectric's indices; one value, or three (red, green,
+//! - `ior`: the dielectric's indices; one value, or three (red, green,
 //!   blue; the paper's Figure 15 uses 1.60,1.61,1.62), overrides the material's.
-//! - `cached` (default false): the cached mode above.
-//! - `markers` (default false): the paper's verification overlay (Figures 1 and 14): a small
+//! - `cached`: the cached mode above.
+//! - `markers`: the paper's verification overlay (Figures 1 and 14): a small
 //!   red ball at every visible vertex's exact hit P, drawn in every pass, so each ball should
 //!   sit on its vertex in the picture. A dispersive lens gets a red, a green and a blue ball
 //!   per vertex, at its three channels' P, each seen through its own channel (so white where

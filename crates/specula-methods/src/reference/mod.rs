@@ -19,11 +19,22 @@
 //! Approximations: none beyond sampling (the reference defines "exact"); while not converged,
 //! untraced pixels show their block's traced corner.
 //!
-//! Parameters:
-//! - `spp` (default 1): samples per pixel. Cost is linear; more smooths edges.
-//! - `max_depth` (default 8): the most specular bounces on a path. Cost grows with the paths
+//! ## Parameters
+//!
+//! <!-- The parameter table: made from `Params::SPECS` by `specula_core::params::doc_table`;
+//! `SPECULA_REGENERATE=1 cargo test -p specula-methods --lib doc` writes it again. -->
+//! | parameter | takes | default | a change redoes | what it does |
+//! |---|---|---|---|---|
+//! | `spp` | a whole number from 1 to 4096 | `1` | uniform | samples per pixel: 1 = the pixel centre; more = stratified jitter, averaged |
+//! | `max_depth` | a whole number from 0 to 64 | `8` | uniform | most specular bounces on a path |
+//! | `budget_ms` | a whole number from 0 to 60000 | `0` | uniform | progressive mode: milliseconds per call, coarse to fine (0: the whole image at once) |
+//! <!-- end of the parameter table -->
+//!
+//! What they change:
+//! - `spp`: samples per pixel. Cost is linear; more smooths edges.
+//! - `max_depth`: the most specular bounces on a path. Cost grows with the paths
 //!   that need it.
-//! - `budget_ms` (default 0): the time one call may take in progressive mode; 0 traces the
+//! - `budget_ms`: the time one call may take in progressive mode; 0 traces the
 //!   whole image in one call.
 
 use std::time::Instant;

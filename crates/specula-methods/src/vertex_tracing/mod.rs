@@ -124,7 +124,38 @@
 //! (`min_edge_px`). The paper states no values for ε, v, l, the deepest split or the ray
 //! depth, so the `paper` preset keeps specula's defaults for them.
 //!
-//! Parameters (quality / cost):
+//! ## Parameters
+//!
+//! <!-- The parameter table: made from `Params::SPECS` by `specula_core::params::doc_table`;
+//! `SPECULA_REGENERATE=1 cargo test -p specula-methods --lib doc` writes it again. -->
+//! | parameter | takes | default | a change redoes | what it does |
+//! |---|---|---|---|---|
+//! | `epsilon` | a number from 0 to 1 | `0.03` | uniform | ε: display-colour difference (largest channel, 0-1) that splits an edge |
+//! | `flatness` | a number from 0 to 1 | `0.2` | uniform | v: a refined face with height/longest edge below this has that edge split |
+//! | `min_edge_px` | a number from 0.5 to 1000 | `3` | uniform | l: shortest edge (pixels) split for a colour difference; shorter ones are filled |
+//! | `max_level` | a whole number from 0 to 40 | `20` | uniform | deepest split of an original edge |
+//! | `tree_weight` | a number from 0 to 1 | `0.02` | uniform | rays reaching the eye with less weight than this are left out of the ray trees compared |
+//! | `refine` | true or false | `true` | uniform | adaptive refinement (false: the Gouraud preview of the original vertices only) |
+//! | `fill` | true or false | `true` | uniform | triangle filling: trace each pixel of the faces refinement left unresolved |
+//! | `deferred_textures` | true or false | `true` | uniform | interpolate texture coordinates between alike paths and read texels per pixel (false: split edges across texture detail) |
+//! | `perspective_correct` | true or false | `true` | uniform | Gouraud interpolation perspective-correct (false: linear on the screen, the paper's) |
+//! | `flatness_inside_triangles` | true or false | `true` | uniform | the flatness rule leaves triangle borders alone, so packages never disagree (false: any longest edge, the paper's) |
+//! | `trace_unseen` | true or false | `true` | uniform | trace faces seen only between their corners (false: the paper: a triangle with no seen corner is not drawn) |
+//! | `trace_behind_eye` | true or false | `true` | uniform | trace faces with a corner behind the eye (false: interpolate them where each pixel's ray meets them) |
+//! | `trace_stray` | true or false | `true` | uniform | trace pixels the ID buffer gives to a triangle that cannot be seen there (false: interpolate them from that triangle, the paper's display) |
+//! | `tracing` | one of auto, vertices, pixels | `auto` | uniform | per reflector: auto traces its pixels where its seen vertices or its paths make vertices no cheaper (vertex_ratio, min_path_rays); vertices (the paper) or pixels for all |
+//! | `vertex_ratio` | a number from 0 to 1000 | `0.05` | uniform | tracing=auto: seen vertices per pixel above which a reflector is traced per pixel |
+//! | `min_path_rays` | a number from 0 to 1000 | `6` | uniform | tracing=auto: rays per pixel path (beyond the primary, on a sample) below which a reflector is traced per pixel |
+//! | `budget_ms` | a whole number from 0 to 60000 | `0` | uniform | progressive mode: milliseconds per call, preview first (0: everything in one call) |
+//! | `package_triangles` | a whole number from 0 to 1048576 | `0` | uniform | reflector triangles per task package (0: sixteen packages per thread) |
+//! | `visibility` | one of auto, cpu, gpu | `auto` | uniform | ID buffer from the GPU raster pass, from CPU primary rays, or the GPU where present |
+//! | `composition` | one of auto, cpu, gpu | `auto` | uniform | refined faces Gouraud-shaded by the GPU raster (the paper's display) or each pixel located and interpolated on the CPU; auto: the GPU where the run has one that is not a software rasterizer |
+//! | `max_depth` | a whole number from 0 to 64 | `8` | uniform | most specular bounces on a vertex's or a filled pixel's path |
+//! | `show_faces` | true or false | `false` | uniform | draw the edges of the refined faces over the image (the paper's Figure 13) |
+//! | `shadow_resolution` | a whole number from 1 to 8192 | `1024` | scene preparation | texels per side of the scene raster's shadow maps |
+//! <!-- end of the parameter table -->
+//!
+//! What they change (quality / cost):
 //! - `epsilon` (0.03): colour difference that splits an edge. Lower follows fainter changes,
 //!   with more vertex rays.
 //! - `flatness` (0.2): the factor of flatness v; higher cuts more slivers (more rays, better
