@@ -3,7 +3,7 @@
 
 use glam::{DVec3, Mat4, Vec3};
 use specula_methods::c3rc::camera::C3rc;
-use specula_methods::c3rc::phases::{
+use specula_methods::c3rc::cpu_frame::{
     reflect_near, FrameSettings, PixelSurfaces, PlacedCloud, ScreenView,
 };
 use specula_methods::c3rc::points::{PointCloud, TreeLimits};

@@ -12,7 +12,7 @@ use specula_gpu::util::{
 };
 use specula_gpu::{GpuContext, GpuError};
 
-use super::phases::{FrameSettings, PlacedCloud, Plan, ScreenView};
+use super::cpu_frame::{FrameSettings, PlacedCloud, Plan, ScreenView};
 use super::points::PointCloud;
 use specula_core::raster::GBuffer;
 
@@ -221,7 +221,7 @@ impl GpuProjection {
     }
 
     /// Runs the forward phase of `plan` into `near` (a storage buffer of one vec4 per pixel
-    /// that already holds the per-vertex colour, alpha [`super::phases::TAKEN_AS_IT_IS`], where the
+    /// that already holds the per-vertex colour, alpha [`super::cpu_frame::TAKEN_AS_IT_IS`], where the
     /// plan gives it).
     #[allow(clippy::too_many_arguments)]
     pub fn forward(
@@ -413,7 +413,7 @@ impl GpuProjection {
 
 /// A camera in its own frame (origin at its first vertex, scaled by its longest edge) with
 /// its plane bound in world space, and the forward phase's switches.
-fn gpu_camera(camera: &super::phases::TriangleCamera, settings: &FrameSettings) -> GpuCamera {
+fn gpu_camera(camera: &super::cpu_frame::TriangleCamera, settings: &FrameSettings) -> GpuCamera {
     let c = &camera.world;
     let scale = (0..3)
         .map(|i| (c.v[(i + 1) % 3] - c.v[i]).length())

@@ -6,7 +6,7 @@
 //!
 //! Steps, and where they are:
 //! 1. Pre-processing (§3.1, §4; [`points`]): every non-specular object within `near` reflector
-//!    radii of a mirror ([`phases::mesh_is_near`]) is sampled uniformly by area
+//!    radii of a mirror ([`cpu_frame::mesh_is_near`]) is sampled uniformly by area
 //!    ([`points::PointCloud::sample`]), each point shaded as the reference shades that surface
 //!    ([`points::PointCloud::shade`]) and given a splat radius (the disc it stands for); an
 //!    eight-way kd-tree per object ([`points::PointCloud::build_tree`]: each node splits at its
@@ -16,16 +16,16 @@
 //!    its nearby objects left out (the paper's environment-mapped background, §7).
 //! 3. A C3RC per visible mirror triangle (§5; [`camera::C3rc::reflector`]): the view direction
 //!    reflected about each vertex normal; the base is the triangle. The G-buffer says which
-//!    triangles are visible and how many pixels each covers ([`phases::plan`]). The paper builds
+//!    triangles are visible and how many pixels each covers ([`cpu_frame::plan`]). The paper builds
 //!    one per triangle and its depth test hides the splats of hidden ones; here a hidden
 //!    triangle has no pixel for its splats.
-//! 4. Backward phase (§5.2; [`phases::plan`]): each camera, mapped into each object's space,
+//! 4. Backward phase (§5.2; [`cpu_frame::plan`]): each camera, mapped into each object's space,
 //!    against that object's tree ([`camera::C3rc::corner_inside_or_face_meets_wall`]: the
 //!    paper's two conditions, a face meeting a side wall read as the paper defines it, not only
 //!    where the wall crosses the face's frame, which would cull every box a narrow volume passes
 //!    through; by default the conservative [`camera::C3rc::may_see_box`], below), collecting
 //!    leaves.
-//! 5. Forward phase (§5.1, §6; [`phases::forward`] on the CPU, [`gpu::GpuProjection`] as GPU
+//! 5. Forward phase (§5.1, §6; [`cpu_frame::forward`] on the CPU, [`gpu::GpuProjection`] as GPU
 //!    compute passes): each leaf's points projected with the camera (the cubic; a point may
 //!    show several times, in one camera or in several), each splatted as a square at the pixel
 //!    of its base point, with push-back depth (its distance from the reflector) so that the
@@ -37,7 +37,7 @@
 //! 6. Shading: envmap's shading pass, taking a mirror pixel's reflected radiance from the
 //!    splats where they cover it and from the far-field cube map where they do not.
 //!
-//! With `exact_hits` (the default) steps 5 and 6 go further ([`phases`]'s `resolve_exact`):
+//! With `exact_hits` (the default) steps 5 and 6 go further ([`cpu_frame`]'s `resolve_exact`):
 //! a splat only nominates its point's triangle for the pixels it covers; each mirror pixel's
 //! exact reflected ray is met with the nominated triangles, the nearest meeting inside one
 //! wins, its colour is the albedo where the ray meets it (texture at the exact UV) times the
@@ -216,7 +216,7 @@
 
 pub mod camera;
 pub mod gpu;
-pub mod phases;
+pub mod cpu_frame;
 pub mod points;
 
 use glam::{DMat4, Vec3};
@@ -227,7 +227,7 @@ use specula_gpu::util::{
 use specula_gpu::{GpuContext, GpuError};
 use specula_scene::{MaterialKind, Scene};
 
-use phases::{FrameSettings, PhaseReport, PlacedCloud, ScreenView};
+use cpu_frame::{FrameSettings, PhaseReport, PlacedCloud, ScreenView};
 use points::{PointCloud, TreeLimits};
 use specula_core::cube_maps::{self, CubeMaps, Exit};
 use specula_core::gpu_scene::GpuScene;
@@ -491,7 +491,7 @@ fn near_objects(scene: &Scene, near: f32) -> Vec<(usize, Vec<usize>)> {
         .map(|(mirror, center, radius)| {
             let objects = (0..scene.meshes.len())
                 .filter(|&m| !scene.materials[scene.meshes[m].material].is_specular())
-                .filter(|&m| phases::mesh_is_near(scene, m, center, near * radius))
+                .filter(|&m| cpu_frame::mesh_is_near(scene, m, center, near * radius))
                 .collect();
             (mirror, objects)
         })
@@ -719,7 +719,7 @@ impl C3rcMethod {
         let mirror_meshes: Vec<usize> = field.near.iter().map(|(m, _)| *m).collect();
         let view = ScreenView::new(camera, frame.width, frame.height);
         let settings = self.frame_settings();
-        let mut plan = phases::plan(
+        let mut plan = cpu_frame::plan(
             scene,
             live.accel(),
             &mirror_meshes,
@@ -784,7 +784,7 @@ impl C3rcMethod {
             report.splats = counts[3] as u64;
             frame.lap("projection and splatting (GPU)")?;
         } else {
-            phases::forward(
+            cpu_frame::forward(
                 &mut plan,
                 scene,
                 live.accel(),
