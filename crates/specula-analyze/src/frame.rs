@@ -103,7 +103,36 @@ pub enum Eyes {
     Ocular,
 }
 
+/// The most eye points an eyebox may have each way.
+pub const MAX_EYEBOX_POINTS: u32 = 10_000;
+
 impl Eyes {
+    /// The eyebox `[W, H, NX, NY]` as a command or a script gives it: sizes in metres, finite
+    /// and not negative; NX and NY whole numbers from 1 to [`MAX_EYEBOX_POINTS`]. The error
+    /// says what is wrong.
+    pub fn eyebox(values: [f32; 4]) -> Result<Eyes, String> {
+        let [width, height, columns, rows] = values;
+        if !(width.is_finite() && height.is_finite() && width >= 0.0 && height >= 0.0) {
+            return Err(format!(
+                "{width} × {height} m: the size must be finite and not negative"
+            ));
+        }
+        let count = |v: f32| {
+            (v.fract() == 0.0 && (1.0..=MAX_EYEBOX_POINTS as f32).contains(&v))
+                .then_some(v as u32)
+                .ok_or(format!(
+                    "NX and NY must be whole numbers, at least one point each way and at most \
+                     {MAX_EYEBOX_POINTS}, got {v}"
+                ))
+        };
+        Ok(Eyes::Eyebox {
+            width,
+            height,
+            columns: count(columns)?,
+            rows: count(rows)?,
+        })
+    }
+
     /// The eye points, about the camera's eye `centre`.
     pub fn points(&self, centre: Vec3, frame: &VehicleFrame) -> Result<Vec<Vec3>, AnalyzeError> {
         let bad = |reason: String| AnalyzeError::BadOption {
@@ -243,5 +272,29 @@ mod tests {
         .points(centre, &frame)
         .unwrap_err();
         assert!(empty.to_string().contains("at least one point"), "{empty}");
+    }
+
+    /// The eyebox as a command or a script gives it: the same checks for both.
+    #[test]
+    fn an_eyebox_from_its_four_numbers_is_checked_once() {
+        assert_eq!(
+            Eyes::eyebox([0.3, 0.15, 4.0, 3.0]).unwrap(),
+            Eyes::Eyebox {
+                width: 0.3,
+                height: 0.15,
+                columns: 4,
+                rows: 3
+            }
+        );
+        for (values, says) in [
+            ([0.3, 0.1, 0.0, 3.0], "at least one point"),
+            ([0.3, 0.1, 2.5, 3.0], "whole numbers"),
+            ([0.3, 0.1, 3.0, 20_000.0], "at most 10000"),
+            ([f32::NAN, 0.1, 3.0, 3.0], "finite"),
+            ([0.3, -0.1, 3.0, 3.0], "not negative"),
+        ] {
+            let error = Eyes::eyebox(values).unwrap_err();
+            assert!(error.contains(says), "{values:?}: {error}");
+        }
     }
 }

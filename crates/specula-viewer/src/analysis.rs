@@ -39,7 +39,6 @@ use rayon::prelude::*;
 use specula_analyze::frame::{Eyes, VehicleFrame};
 use specula_analyze::glare::{self, Glare};
 use specula_analyze::lens;
-use specula_analyze::mirror_surface;
 use specula_analyze::mirror_view::{self, MirrorView, Region};
 use specula_analyze::regulation::{self, Regulation, Side, Vehicle, Verdict};
 use specula_analyze::AnalyzeError;
@@ -196,7 +195,7 @@ impl RegulationSettings {
 
 impl Settings {
     /// Settings for `kind` on `scene`'s mesh `object` (and `source`, for glare), from the scene
-    /// camera's eye, with the command's defaults but the viewer's tolerances.
+    /// camera's eye, with the library's defaults (the interactive precision for mirror views).
     pub fn new(scene: &Scene, kind: Kind, object: usize, source: Option<usize>) -> Settings {
         Settings {
             kind,
@@ -208,12 +207,12 @@ impl Settings {
             eye: scene.camera.eye,
             eyes: Eyes::Camera,
             ground_y: mirror_view::lowest_point(scene),
-            range_m: 100.0,
+            range_m: mirror_view::DEFAULT_RANGE_M,
             region: None,
-            tolerance: 0.02,
-            tolerance_deg: 0.1,
-            glare_size: (320, 240),
-            threshold: 1e-3,
+            tolerance: mirror_view::Precision::INTERACTIVE.tolerance,
+            tolerance_deg: mirror_view::Precision::INTERACTIVE.tolerance_deg,
+            glare_size: glare::DEFAULT_SIZE,
+            threshold: glare::DEFAULT_THRESHOLD,
             lens_eye: lens::Eye::Right,
             regulation: None,
         }
@@ -292,18 +291,14 @@ impl Settings {
     }
 
     fn mirror_options(&self, scene: &Scene, frame: VehicleFrame) -> mirror_view::Options {
-        mirror_view::Options {
-            mirror: self.object,
-            frame,
-            ground_y: self.ground_y,
-            range_m: self.range_m,
-            region: self.region,
-            tolerance: self.tolerance,
-            tolerance_deg: self.tolerance_deg,
-            max_samples: 1_000_000,
-            surface: mirror_surface::SurfaceModel::best_for(&scene.meshes[self.object]),
-            obstacles: mirror_view::Obstacles::Scene,
-        }
+        let precision = mirror_view::Precision::INTERACTIVE;
+        let mut options = mirror_view::Options::new(scene, self.object, frame, precision);
+        options.ground_y = self.ground_y;
+        options.range_m = self.range_m;
+        options.region = self.region;
+        options.tolerance = self.tolerance;
+        options.tolerance_deg = self.tolerance_deg;
+        options
     }
 
     fn glare_options(&self) -> Result<glare::Options, AnalyzeError> {
@@ -321,16 +316,12 @@ impl Settings {
             glare::Source::Named(_) => Some(self.source_luminance),
             glare::Source::Sun(_) => None,
         };
-        Ok(glare::Options {
-            surface: self.object,
-            source,
-            source_luminance,
-            display: self.display,
-            width: self.glare_size.0,
-            height: self.glare_size.1,
-            max_depth: 8,
-            threshold: self.threshold,
-        })
+        let mut options = glare::Options::new(self.object, source);
+        options.source_luminance = source_luminance;
+        options.display = self.display;
+        (options.width, options.height) = self.glare_size;
+        options.threshold = self.threshold;
+        Ok(options)
     }
 }
 

@@ -385,21 +385,8 @@ fn analysis(a: RawAnalysis) -> Result<Option<Request>, String> {
             "analysis.eyes = \"{other}\": expected centre or ocular (or eyebox = [W, H, NX, NY])"
         ))
         }
-        (None, Some([width, height, columns, rows])) => {
-            finite(&[width, height], "analysis.eyebox")?;
-            let count = |v: f32| {
-                (v.fract() == 0.0 && (1.0..=10_000.0).contains(&v))
-                    .then_some(v as u32)
-                    .ok_or(format!(
-                        "analysis.eyebox = [W, H, NX, NY]: NX and NY must be whole numbers ≥ 1, got {v}"
-                    ))
-            };
-            Eyes::Eyebox {
-                width,
-                height,
-                columns: count(columns)?,
-                rows: count(rows)?,
-            }
+        (None, Some(eyebox)) => {
+            Eyes::eyebox(eyebox).map_err(|e| format!("analysis.eyebox = [W, H, NX, NY]: {e}"))?
         }
     };
     let region = a

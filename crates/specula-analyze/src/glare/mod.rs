@@ -124,6 +124,13 @@ impl Display {
     }
 }
 
+/// Each eye point's image by default, pixels (the command's `--size`, the viewer's).
+pub const DEFAULT_SIZE: (u32, u32) = (320, 240);
+/// The luminance factor above which a pixel counts as glare by default (`--threshold`).
+pub const DEFAULT_THRESHOLD: f64 = 1e-3;
+/// Specular bounces a glare path may take by default (the reference's).
+pub const DEFAULT_MAX_DEPTH: u32 = 8;
+
 #[derive(Clone, Debug)]
 pub struct Options {
     pub surface: usize,
@@ -153,6 +160,21 @@ fn positive_luminance(option: &'static str, value: f64, zero: bool) -> Result<()
 }
 
 impl Options {
+    /// The defaults for `surface` glaring with `source`: no luminance in cd/m², no display,
+    /// [`DEFAULT_SIZE`], [`DEFAULT_MAX_DEPTH`] and [`DEFAULT_THRESHOLD`].
+    pub fn new(surface: usize, source: Source) -> Options {
+        Options {
+            surface,
+            source,
+            source_luminance: None,
+            display: None,
+            width: DEFAULT_SIZE.0,
+            height: DEFAULT_SIZE.1,
+            max_depth: DEFAULT_MAX_DEPTH,
+            threshold: DEFAULT_THRESHOLD,
+        }
+    }
+
     /// The surface must be a mirror or a glass; a named source and the display neither (they
     /// emit or are lit); luminances finite and not negative.
     pub fn validate(&self, scene: &Scene) -> Result<(), AnalyzeError> {

@@ -83,10 +83,10 @@ pub struct GlareArgs {
     size: (u32, u32),
     /// Luminance factor (the glare's luminance over the source's, dimensionless) above which a
     /// pixel counts as glare.
-    #[arg(long, default_value_t = 1e-3)]
+    #[arg(long, default_value_t = glare::DEFAULT_THRESHOLD)]
     threshold: f64,
     /// Specular bounces a path may take (as the reference's --max-depth).
-    #[arg(long, default_value_t = 8)]
+    #[arg(long, default_value_t = glare::DEFAULT_MAX_DEPTH)]
     max_depth: u32,
     /// Write the report as JSON here (schema: docs/analyze-glare.schema.json).
     #[arg(long)]

@@ -221,16 +221,16 @@ pub struct MirrorViewArgs {
     #[arg(long, allow_hyphen_values = true)]
     ground: Option<f32>,
     /// Ground farther than this from an eye point, horizontally, is not counted (metres).
-    #[arg(long, default_value_t = 100.0)]
+    #[arg(long, default_value_t = mirror_view::DEFAULT_RANGE_M)]
     range: f32,
     /// A required region on the ground, X0,Z0,X1,Z1 in metres.
     #[arg(long, value_parser = parse_region, allow_hyphen_values = true)]
     region: Option<Region>,
     /// Refinement stops when the solid angle and the areas change by less than this share.
-    #[arg(long, default_value_t = 0.005)]
+    #[arg(long, default_value_t = mirror_view::Precision::REPORT.tolerance)]
     tolerance: f64,
     /// ... and the extents by less than this many degrees.
-    #[arg(long, default_value_t = 0.05)]
+    #[arg(long, default_value_t = mirror_view::Precision::REPORT.tolerance_deg)]
     tolerance_deg: f64,
     /// Judge the mirror against a regulation's prescribed fields and mirror rules: r46-i,
     /// r46-ii, r46-iii, r46-iv, r46-v or fmvss111 (see docs/analyses.md).
@@ -346,18 +346,8 @@ pub(crate) fn parse_point(text: &str) -> Result<Vec3, String> {
 }
 
 fn parse_eyebox(text: &str) -> Result<Eyes, String> {
-    let [width, height, columns, rows] = numbers::<4>(text, "W,H,NX,NY")?;
-    let count = |v: f32| {
-        (v.fract() == 0.0 && (0.0..=10_000.0).contains(&v))
-            .then_some(v as u32)
-            .ok_or_else(|| format!("NX and NY must be whole numbers, got '{text}'"))
-    };
-    Ok(Eyes::Eyebox {
-        width,
-        height,
-        columns: count(columns)?,
-        rows: count(rows)?,
-    })
+    let values = numbers::<4>(text, "W,H,NX,NY")?;
+    Eyes::eyebox(values).map_err(|e| format!("{e} ('{text}')"))
 }
 
 fn parse_region(text: &str) -> Result<Region, String> {
@@ -697,23 +687,16 @@ fn mirror_view(args: MirrorViewArgs) -> Result<()> {
     let mirror = specula_analyze::object(&scene, "--mirror", &args.mirror)?;
     let frame = VehicleFrame::new(&scene.camera, args.eyes.forward)?;
     let eyes = args.eyes.eyes().points(scene.camera.eye, &frame)?;
-    let options = mirror_view::Options {
-        mirror,
-        frame,
-        ground_y: args
-            .ground
-            .unwrap_or_else(|| mirror_view::lowest_point(&scene)),
-        range_m: args.range,
-        region: args.region,
-        tolerance: args.tolerance,
-        tolerance_deg: args.tolerance_deg,
-        max_samples: 4_000_000,
-        surface: args
-            .surface
-            .map(SurfaceArg::model)
-            .unwrap_or_else(|| SurfaceModel::best_for(&scene.meshes[mirror])),
-        obstacles: mirror_view::Obstacles::Scene,
-    };
+    let mut options =
+        mirror_view::Options::new(&scene, mirror, frame, mirror_view::Precision::REPORT);
+    options.ground_y = args.ground.unwrap_or(options.ground_y);
+    options.range_m = args.range;
+    options.region = args.region;
+    options.tolerance = args.tolerance;
+    options.tolerance_deg = args.tolerance_deg;
+    if let Some(surface) = args.surface {
+        options.surface = surface.model();
+    }
     options.validate(&scene)?;
     if let Some(name) = &args.regulation {
         return regulation(&args, name, &scene, options, eyes);
