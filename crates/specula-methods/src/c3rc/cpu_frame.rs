@@ -583,7 +583,6 @@ pub fn forward(
     let pixel_count = (view.width * view.height) as usize;
     out.clear();
     out.resize(pixel_count, [0.0; 4]);
-    let report = &mut plan.report;
     // Forward phase: the leaves' points projected with the camera, every valid projection.
     let start = Instant::now();
     // The work spread node by node (a few wide cameras see most of the points: per-camera
@@ -596,106 +595,154 @@ pub fn forward(
         .collect();
     let per_node: Vec<(Vec<Splat>, [u64; 5])> = items
         .par_iter()
-        .map(|&(i, seen)| {
-            let camera = &plan.cameras[i];
-            let cloud = clouds[seen.cloud].cloud;
-            let world_from_object = clouds[seen.cloud].world_from_object;
-            let InCloud {
-                camera: local,
-                bound,
-                projector,
-                reach,
-            } = &plan.in_cloud[i * clouds.len() + seen.cloud];
-            let range = cloud.nodes[seen.node].points();
-            let stride = seen.stride;
-            let (tried, skipped) = (range.len(), range.len() - range.len().div_ceil(stride));
-            let (mut solved, mut valid, mut twice) = (0u64, 0u64, 0u64);
-            let mut splats = Vec::new();
-            // Kept points stand for the skipped ones: larger splats.
-            let radius = (cloud.radius * settings.splat_scale) as f64 * (stride as f64).sqrt();
-            for i in range.step_by(stride) {
-                let q = cloud.p_object[i].as_dvec3();
-                if !bound.may_contain(q) {
-                    continue;
-                }
-                // Points seen from behind belong to a surface whose front is nearer: a point
-                // facing away from all three base vertices faces away from every base point.
-                let n = cloud.n_object[i].as_dvec3();
-                if settings.one_sided && local.v.iter().all(|v| n.dot(*v - q) <= 0.0) {
-                    continue;
-                }
-                solved += 1;
-                let first_only = !settings.multiple_projections || !camera.may_project_twice();
-                let (projections, count) =
-                    local.project_with(projector.cubic(q), q, *reach, first_only);
-                twice += (count > 1) as u64;
-                valid += count as u64;
-                for projection in &projections[..count] {
-                    let base_local = projection.base_point(local);
-                    if settings.one_sided && n.dot(base_local - q) <= 0.0 {
-                        continue;
-                    }
-                    let p_world = projection.base_point(&camera.world).as_vec3();
-                    let Some((x, y, z_view)) = view.project(p_world) else {
-                        continue;
-                    };
-                    let area = camera.world.sweep_area(projection.lambda).max(1e-30);
-                    let r = (radius * (camera.screen_area / area).sqrt()) as f32;
-                    let radius_px = if settings.fixed_splat > 0.0 {
-                        0.5 * settings.fixed_splat
-                    } else if settings.exact_hits && r < settings.max_splat {
-                        // The disc's edge projected with the same camera: its actual
-                        // footprint, which the cross-section's area underestimates where the
-                        // surface is oblique to it or the rays converge.
-                        let footprint = disc_footprint(
-                            local,
-                            projector,
-                            q,
-                            n,
-                            radius,
-                            projection.lambda,
-                            &camera.world,
-                            view,
-                            (x, y),
-                        );
-                        r.max(footprint).clamp(0.5, settings.max_splat)
-                    } else if settings.exact_hits {
-                        settings.max_splat
-                    } else {
-                        r.clamp(0.5, settings.max_splat)
-                    };
-                    let depth = (q - base_local).length() as f32;
-                    splats.push(Splat {
-                        x,
-                        y,
-                        radius: radius_px,
-                        depth,
-                        band: if settings.depth_band {
-                            2.0 * radius as f32 + 0.01 * depth
-                        } else {
-                            0.0
-                        },
-                        reach: (radius_px + 1.5) * view.footprint(z_view) * camera.obliquity,
-                        p_world,
-                        color: cloud.color[i],
-                        mesh: camera.mesh as u32,
-                        object: cloud.mesh as u32,
-                        triangle: cloud.triangle[i],
-                        q_world: world_from_object.transform_point3(q).as_vec3(),
-                        disc: radius as f32,
-                        light: cloud.light[i],
-                    });
-                }
-            }
-            (splats, [tried as u64, solved, valid, twice, skipped as u64])
-        })
+        .map(|&(i, seen)| project_node(plan, clouds, view, &settings, i, seen))
         .collect();
-    report.projection_ms = ms(start);
+    plan.report.projection_ms = ms(start);
 
-    // Splats resolved per pixel: on the reflector surface the splat came from, nearest first.
     let start = Instant::now();
+    resolve_splats(plan, scene, mirrors, clouds, view, surfaces, &settings, &per_node, out);
+    plan.report.splatting_ms = ms(start);
+
+    // Small triangles (per-vertex colour) and those that see their own mirror (traced).
+    let start = Instant::now();
+    fallback_pixels(
+        scene,
+        accel,
+        view,
+        surfaces,
+        &plan.sources,
+        &plan.vertices,
+        &plan.traced,
+        settings.max_depth,
+        settings.exact_hits,
+        out,
+    );
+    plan.report.fallback_ms = ms(start);
+}
+
+/// The points of one tree node seen by camera `i`, projected with it: their splats, and
+/// (points tried, solved, valid projections, points projected twice, points skipped by the
+/// level of detail).
+fn project_node(
+    plan: &Plan,
+    clouds: &[PlacedCloud],
+    view: &ScreenView,
+    settings: &FrameSettings,
+    i: usize,
+    seen: Seen,
+) -> (Vec<Splat>, [u64; 5]) {
+    let camera = &plan.cameras[i];
+    let cloud = clouds[seen.cloud].cloud;
+    let world_from_object = clouds[seen.cloud].world_from_object;
+    let InCloud {
+        camera: local,
+        bound,
+        projector,
+        reach,
+    } = &plan.in_cloud[i * clouds.len() + seen.cloud];
+    let range = cloud.nodes[seen.node].points();
+    let stride = seen.stride;
+    let (tried, skipped) = (range.len(), range.len() - range.len().div_ceil(stride));
+    let (mut solved, mut valid, mut twice) = (0u64, 0u64, 0u64);
+    let mut splats = Vec::new();
+    // Kept points stand for the skipped ones: larger splats.
+    let radius = (cloud.radius * settings.splat_scale) as f64 * (stride as f64).sqrt();
+    for i in range.step_by(stride) {
+        let q = cloud.p_object[i].as_dvec3();
+        if !bound.may_contain(q) {
+            continue;
+        }
+        // Points seen from behind belong to a surface whose front is nearer: a point
+        // facing away from all three base vertices faces away from every base point.
+        let n = cloud.n_object[i].as_dvec3();
+        if settings.one_sided && local.v.iter().all(|v| n.dot(*v - q) <= 0.0) {
+            continue;
+        }
+        solved += 1;
+        let first_only = !settings.multiple_projections || !camera.may_project_twice();
+        let (projections, count) =
+            local.project_with(projector.cubic(q), q, *reach, first_only);
+        twice += (count > 1) as u64;
+        valid += count as u64;
+        for projection in &projections[..count] {
+            let base_local = projection.base_point(local);
+            if settings.one_sided && n.dot(base_local - q) <= 0.0 {
+                continue;
+            }
+            let p_world = projection.base_point(&camera.world).as_vec3();
+            let Some((x, y, z_view)) = view.project(p_world) else {
+                continue;
+            };
+            let area = camera.world.sweep_area(projection.lambda).max(1e-30);
+            let r = (radius * (camera.screen_area / area).sqrt()) as f32;
+            let radius_px = if settings.fixed_splat > 0.0 {
+                0.5 * settings.fixed_splat
+            } else if settings.exact_hits && r < settings.max_splat {
+                // The disc's edge projected with the same camera: its actual
+                // footprint, which the cross-section's area underestimates where the
+                // surface is oblique to it or the rays converge.
+                let footprint = disc_footprint(
+                    local,
+                    projector,
+                    q,
+                    n,
+                    radius,
+                    projection.lambda,
+                    &camera.world,
+                    view,
+                    (x, y),
+                );
+                r.max(footprint).clamp(0.5, settings.max_splat)
+            } else if settings.exact_hits {
+                settings.max_splat
+            } else {
+                r.clamp(0.5, settings.max_splat)
+            };
+            let depth = (q - base_local).length() as f32;
+            splats.push(Splat {
+                x,
+                y,
+                radius: radius_px,
+                depth,
+                band: if settings.depth_band {
+                    2.0 * radius as f32 + 0.01 * depth
+                } else {
+                    0.0
+                },
+                reach: (radius_px + 1.5) * view.footprint(z_view) * camera.obliquity,
+                p_world,
+                color: cloud.color[i],
+                mesh: camera.mesh as u32,
+                object: cloud.mesh as u32,
+                triangle: cloud.triangle[i],
+                q_world: world_from_object.transform_point3(q).as_vec3(),
+                disc: radius as f32,
+                light: cloud.light[i],
+            });
+        }
+    }
+    (splats, [tried as u64, solved, valid, twice, skipped as u64])
+}
+
+/// Splats resolved per pixel: with exact hits, each mirror pixel's own reflected ray met with
+/// the triangles its splats nominate; else on the reflector surface the splat came from,
+/// nearest first. Then the one-pixel holes filled (`fill_holes`).
+#[allow(clippy::too_many_arguments)]
+fn resolve_splats(
+    plan: &mut Plan,
+    scene: &Scene,
+    mirrors: &[usize],
+    clouds: &[PlacedCloud],
+    view: &ScreenView,
+    surfaces: &PixelSurfaces,
+    settings: &FrameSettings,
+    per_node: &[(Vec<Splat>, [u64; 5])],
+    out: &mut [[f32; 4]],
+) {
+    let pixel_count = (view.width * view.height) as usize;
+    let report = &mut plan.report;
     let mut depth = vec![f32::INFINITY; pixel_count];
-    for (splats, [tried, solved, valid, twice, skipped]) in &per_node {
+    for (splats, [tried, solved, valid, twice, skipped]) in per_node {
         report.points_skipped_by_level_of_detail += skipped;
         report.points_in_leaves += tried;
         report.points_projected += solved;
@@ -733,7 +780,7 @@ pub fn forward(
             }
         }
     } else {
-        resolve(&per_node, view, surfaces, plan.mirror_rows, &mut depth, out);
+        resolve(per_node, view, surfaces, plan.mirror_rows, &mut depth, out);
         let w = view.width as usize;
         let (first, last) = plan.mirror_rows;
         if first < last {
@@ -745,23 +792,6 @@ pub fn forward(
             }
         }
     }
-    report.splatting_ms = ms(start);
-
-    // Small triangles (per-vertex colour) and those that see their own mirror (traced).
-    let start = Instant::now();
-    fallback_pixels(
-        scene,
-        accel,
-        view,
-        surfaces,
-        &plan.sources,
-        &plan.vertices,
-        &plan.traced,
-        settings.max_depth,
-        settings.exact_hits,
-        out,
-    );
-    report.fallback_ms = ms(start);
 }
 
 /// Pixels from `centre` (the screen position of point `q`'s projection at `lambda`) to where

@@ -222,7 +222,8 @@ impl GpuProjection {
 
     /// Runs the forward phase of `plan` into `near` (a storage buffer of one vec4 per pixel
     /// that already holds the per-vertex colour, alpha [`super::cpu_frame::TAKEN_AS_IT_IS`], where the
-    /// plan gives it).
+    /// plan gives it): the points and the frame's cameras and work uploaded, then the splats'
+    /// depth, the nearest splat, the resolve and the holes filled, in compute passes.
     #[allow(clippy::too_many_arguments)]
     pub fn forward(
         &mut self,
@@ -238,18 +239,23 @@ impl GpuProjection {
         g: &GBuffer,
         near: &Growing,
     ) -> Result<GpuCounts, GpuError> {
+        let points_made = self.upload_points(ctx, placed, cloud_generation);
+        let (frame_made, work_items, row) =
+            self.upload_frame(ctx, plan, placed, mirrors, mesh_count, view, camera, settings);
+        if points_made || frame_made {
+            self.generation += 1;
+        }
+        self.bind(ctx, g, near);
+        let pixels = (view.width * view.height) as u64;
+        self.dispatch(ctx, pixels, work_items, row, settings)
+    }
+
+    /// Every cloud's points, one after another, uploaded when the clouds changed. Returns
+    /// whether a buffer was made again.
+    fn upload_points(&mut self, ctx: &GpuContext, placed: &[PlacedCloud], cloud_generation: u64) -> bool {
         let storage = wgpu::BufferUsages::STORAGE;
         let mut made = false;
         let clouds: Vec<&PointCloud> = placed.iter().map(|p| p.cloud).collect();
-        // Points: all clouds, one after another.
-        let offsets: Vec<u32> = clouds
-            .iter()
-            .scan(0u32, |at, c| {
-                let first = *at;
-                *at += c.len() as u32;
-                Some(first)
-            })
-            .collect();
         let total: usize = clouds.iter().map(|c| c.len()).sum();
         made |= self
             .points
@@ -270,6 +276,35 @@ impl GpuProjection {
                 .write_buffer(self.points.get(), 0, bytemuck::cast_slice(&data));
             self.uploaded = Some(cloud_generation);
         }
+        made
+    }
+
+    /// The frame's cloud placements, cameras, work items (camera, first point, count, stride),
+    /// depth and nearest buffers, mirror flags and settings. Returns whether a buffer was made
+    /// again, the work items and the dispatch's row width.
+    #[allow(clippy::too_many_arguments)]
+    fn upload_frame(
+        &mut self,
+        ctx: &GpuContext,
+        plan: &Plan,
+        placed: &[PlacedCloud],
+        mirrors: &[usize],
+        mesh_count: usize,
+        view: &ScreenView,
+        camera: &specula_scene::Camera,
+        settings: &FrameSettings,
+    ) -> (bool, usize, u32) {
+        let storage = wgpu::BufferUsages::STORAGE;
+        let mut made = false;
+        let clouds: Vec<&PointCloud> = placed.iter().map(|p| p.cloud).collect();
+        let offsets: Vec<u32> = clouds
+            .iter()
+            .scan(0u32, |at, c| {
+                let first = *at;
+                *at += c.len() as u32;
+                Some(first)
+            })
+            .collect();
         let matrices: Vec<[f32; 16]> = placed
             .iter()
             .map(|p| p.world_from_object.as_mat4().to_cols_array())
@@ -349,9 +384,11 @@ impl GpuProjection {
         };
         ctx.queue
             .write_buffer(&self.settings, 0, bytemuck::bytes_of(&gpu_settings));
-        if made {
-            self.generation += 1;
-        }
+        (made, work.len(), row)
+    }
+
+    /// The projection's bind group, made again for another G-buffer, buffers or near buffer.
+    fn bind(&mut self, ctx: &GpuContext, g: &GBuffer, near: &Growing) {
         let key = (g.slot, self.generation, near.generation());
         if self.bound.as_ref().map(|b| b.0) != Some(key) {
             let position = g.position.create_view(&Default::default());
@@ -377,6 +414,17 @@ impl GpuProjection {
             );
             self.bound = Some((key, group));
         }
+    }
+
+    /// The compute passes over `work_items` items, and the counts they took.
+    fn dispatch(
+        &self,
+        ctx: &GpuContext,
+        pixels: u64,
+        work_items: usize,
+        row: u32,
+        settings: &FrameSettings,
+    ) -> Result<GpuCounts, GpuError> {
         let group = &self.bound.as_ref().expect("made above").1;
         ctx.validated("c3rc projection", || {
             let mut encoder = ctx.device.create_command_encoder(&Default::default());
@@ -387,8 +435,8 @@ impl GpuProjection {
                 let pixel_groups = (pixels as u32).div_ceil(64);
                 pass.set_pipeline(&self.clear);
                 pass.dispatch_workgroups(pixel_groups, 1, 1);
-                if !work.is_empty() {
-                    let rows = (work.len() as u32).div_ceil(row);
+                if work_items > 0 {
+                    let rows = (work_items as u32).div_ceil(row);
                     pass.set_pipeline(&self.splat_depth);
                     pass.dispatch_workgroups(row, rows, 1);
                     pass.set_pipeline(&self.splat_nearest);

@@ -1153,6 +1153,9 @@ impl Technique for VertexTracing {
         Ok(())
     }
 
+    /// A progressive step, or a whole frame without a budget: the ID buffer and the reflectors'
+    /// packages (a fresh frame), then the vertex rays, refinement and filling within the
+    /// budget, then the composition of the refined faces into the image.
     fn draw(
         &mut self,
         ctx: &Context,
@@ -1162,54 +1165,24 @@ impl Technique for VertexTracing {
         height: u32,
     ) -> Result<Drawn, TechniqueError> {
         let start = Instant::now();
-        let gpu = self.params.visibility.gpu(ctx)?;
         let composition_gpu = self.params.composition.gpu(ctx)?;
-        let key = ViewKey {
-            camera: camera.clone(),
-            width,
-            height,
-            scene: (live.id(), live.version()),
-            settings: self.params,
-            package_triangles: self.params.package_triangles,
-            max_depth: self.params.max_depth,
-            gpu_visibility: gpu.is_some(),
-        };
-        // Without a budget every call is a whole fresh frame (as bench times it).
-        let keep =
-            self.params.budget_ms > 0 && self.progress.as_ref().is_some_and(|p| p.key == key);
-        let mut fresh = false;
-        if !keep {
-            self.progress = Some(self.start_frame(gpu, live, camera, width, height, key)?);
-            fresh = true;
-        }
-        let (settings, max_depth, budget_ms) =
-            (self.params, self.params.max_depth, self.params.budget_ms);
+        let fresh = self.keep_or_start_frame(ctx, live, camera, width, height)?;
+        let (params, budget_ms) = (self.params, self.params.budget_ms);
         let progress = self.progress.as_mut().expect("set above");
         let deadline = (budget_ms > 0).then(|| start + Duration::from_millis(budget_ms as u64));
+
         let clock = Instant::now();
         if fresh && !progress.setup.active.is_empty() {
-            let inputs = progress.setup.inputs(live, camera, settings, max_depth);
+            let inputs = progress.setup.inputs(live, camera, params, params.max_depth);
             progress.originals = OriginalSamples::trace(&inputs, &progress.setup.active);
         }
-        let mut inputs = progress.setup.inputs(live, camera, settings, max_depth);
+        let mut inputs = progress.setup.inputs(live, camera, params, params.max_depth);
         inputs.originals = Some(&progress.originals);
-
-        let preview_only = fresh && budget_ms > 0;
-        progress.packages.par_iter_mut().for_each(|package| {
-            let skip = package.is_done() || (preview_only && package.has_preview());
-            if !skip {
-                // A fresh progressive frame shows its preview before any refinement.
-                let until = if preview_only {
-                    Some(Instant::now())
-                } else {
-                    deadline
-                };
-                package.run(&inputs, until);
-            }
-        });
+        refine_packages(&mut progress.packages, &inputs, fresh && budget_ms > 0, deadline);
         progress
             .stages
             .measured(STAGES[VERTICES_STAGE], clock.elapsed().as_secs_f64() * 1e3);
+
         let clock = Instant::now();
         let mut warnings = Vec::new();
         let composed = match composition_gpu {
@@ -1225,15 +1198,7 @@ impl Technique for VertexTracing {
                     ids_uploaded: &mut progress.ids_uploaded,
                 };
                 let packages = &progress.packages;
-                compose_on_raster(
-                    gpu,
-                    composer,
-                    frame,
-                    packages,
-                    &inputs,
-                    &uniform,
-                    &mut warnings,
-                )?
+                compose_on_raster(gpu, composer, frame, packages, &inputs, &uniform, &mut warnings)?
             }
             _ => None,
         };
@@ -1249,7 +1214,71 @@ impl Technique for VertexTracing {
             STAGES[COMPOSITION_STAGE],
             clock.elapsed().as_secs_f64() * 1e3,
         );
+        self.finish_step(live, warnings)
+    }
+}
 
+/// Runs every package not yet done until `deadline` (a fresh progressive frame: only as far as
+/// its Gouraud preview, which it shows before any refinement).
+fn refine_packages(
+    packages: &mut [Package],
+    inputs: &FrameInputs,
+    preview_only: bool,
+    deadline: Option<Instant>,
+) {
+    packages.par_iter_mut().for_each(|package| {
+        if package.is_done() || (preview_only && package.has_preview()) {
+            return;
+        }
+        let until = if preview_only {
+            Some(Instant::now())
+        } else {
+            deadline
+        };
+        package.run(inputs, until);
+    });
+}
+
+impl VertexTracing {
+    /// Keeps the progressive frame in hand where the view, the scene and the settings are
+    /// those it was started for (and there is a budget), else starts one. Returns whether it
+    /// is fresh.
+    fn keep_or_start_frame(
+        &mut self,
+        ctx: &Context,
+        live: &LiveScene,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+    ) -> Result<bool, TechniqueError> {
+        let gpu = self.params.visibility.gpu(ctx)?;
+        let key = ViewKey {
+            camera: camera.clone(),
+            width,
+            height,
+            scene: (live.id(), live.version()),
+            settings: self.params,
+            package_triangles: self.params.package_triangles,
+            max_depth: self.params.max_depth,
+            gpu_visibility: gpu.is_some(),
+        };
+        // Without a budget every call is a whole fresh frame (as bench times it).
+        let keep =
+            self.params.budget_ms > 0 && self.progress.as_ref().is_some_and(|p| p.key == key);
+        if !keep {
+            self.progress = Some(self.start_frame(gpu, live, camera, width, height, key)?);
+        }
+        Ok(!keep)
+    }
+
+    /// The step's image (with the leaf faces drawn where asked), stages and counters.
+    fn finish_step(
+        &mut self,
+        live: &LiveScene,
+        mut warnings: Vec<String>,
+    ) -> Result<Drawn, TechniqueError> {
+        let budget_ms = self.params.budget_ms;
+        let progress = self.progress.as_mut().expect("a frame in hand");
         let converged = progress.packages.iter().all(Package::is_done);
         let (stages, timing) = progress.stages.finish(None)?;
         let counters = progress.counters(live.scene());
