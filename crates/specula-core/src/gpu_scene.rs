@@ -163,37 +163,7 @@ impl GpuScene {
             vertices.extend(Self::mesh_vertices(m, mesh));
             mesh_vertex_ranges.push(start..vertices.len() as u32);
         }
-        let markers = [Vec3::X, Vec3::Y, Vec3::Z]
-            .map(|c| specula_scene::Material::unlit("marker", c * MARKER_RADIANCE));
-        let materials: Vec<GpuMaterial> = scene
-            .materials
-            .iter()
-            .chain(&markers)
-            .map(|m| {
-                let (kind, ior, flags) = match m.kind {
-                    MaterialKind::Unlit => (MATERIAL_UNLIT, Vec3::ONE, 0),
-                    MaterialKind::Diffuse => (MATERIAL_DIFFUSE, Vec3::ONE, 0),
-                    MaterialKind::Mirror { fresnel } => (
-                        MATERIAL_MIRROR,
-                        Vec3::ONE,
-                        if fresnel { FLAG_FRESNEL } else { 0 },
-                    ),
-                    MaterialKind::Dielectric { ior, thin_walled } => (
-                        MATERIAL_DIELECTRIC,
-                        ior,
-                        if thin_walled { FLAG_THIN } else { 0 },
-                    ),
-                };
-                GpuMaterial {
-                    color: m.color.to_array(),
-                    kind,
-                    ior: ior.to_array(),
-                    texture: m.texture.map(|t| t as i32).unwrap_or(-1),
-                    flags,
-                    pad: [0; 3],
-                }
-            })
-            .collect();
+        let materials = gpu_materials(scene);
         let first_marker_material = scene.materials.len() as u32;
         let mesh_materials: Vec<u32> = scene
             .meshes
@@ -201,70 +171,8 @@ impl GpuScene {
             .map(|m| m.material as u32)
             .chain((0..3).map(|c| first_marker_material + c))
             .collect();
-        let mut texels: Vec<[f32; 4]> = Vec::new();
-        let texture_infos: Vec<GpuTextureInfo> = scene
-            .textures
-            .iter()
-            .map(|t| {
-                let offset = texels.len() as u32;
-                texels.extend(t.texels.iter().map(|c| [c.x, c.y, c.z, 1.0]));
-                GpuTextureInfo {
-                    offset,
-                    width: t.width,
-                    height: t.height,
-                    pad: 0,
-                }
-            })
-            .collect();
-        let mut gpu_lights = Vec::new();
-        let mut layer = 0;
-        for light in &scene.lights {
-            let (kind, position, direction, intensity, cos_inner, cos_outer, layers) = match *light
-            {
-                Light::Point {
-                    position,
-                    intensity,
-                } => (LIGHT_POINT, position, Vec3::Z, intensity, 1.0, 1.0, 6),
-                Light::Directional {
-                    direction,
-                    irradiance,
-                } => (
-                    LIGHT_DIRECTIONAL,
-                    Vec3::ZERO,
-                    direction,
-                    irradiance,
-                    1.0,
-                    1.0,
-                    1,
-                ),
-                Light::Spot {
-                    position,
-                    direction,
-                    intensity,
-                    inner_cone,
-                    outer_cone,
-                } => (
-                    LIGHT_SPOT,
-                    position,
-                    direction,
-                    intensity,
-                    inner_cone.cos(),
-                    outer_cone.cos(),
-                    6,
-                ),
-            };
-            gpu_lights.push(GpuLight {
-                position: position.to_array(),
-                kind,
-                direction: direction.to_array(),
-                cos_inner,
-                intensity: intensity.to_array(),
-                cos_outer,
-                shadow_layer: layer,
-                pad: [0; 3],
-            });
-            layer += layers;
-        }
+        let (texture_infos, texels) = gpu_textures(scene);
+        let gpu_lights = gpu_lights(scene);
         let (background, background_texture, background_intensity) = match scene.background {
             Background::Color(c) => (c, -1, 1.0),
             Background::Equirect { texture, intensity } => (Vec3::ZERO, texture as i32, intensity),
@@ -334,6 +242,115 @@ impl GpuScene {
             .map(|l| if l.kind == LIGHT_DIRECTIONAL { 1 } else { 6 })
             .sum()
     }
+}
+
+/// The scene's materials and, after them, the three marker materials.
+fn gpu_materials(scene: &Scene) -> Vec<GpuMaterial> {
+    let markers = [Vec3::X, Vec3::Y, Vec3::Z]
+        .map(|c| specula_scene::Material::unlit("marker", c * MARKER_RADIANCE));
+    scene
+        .materials
+        .iter()
+        .chain(&markers)
+        .map(|m| {
+            let (kind, ior, flags) = match m.kind {
+                MaterialKind::Unlit => (MATERIAL_UNLIT, Vec3::ONE, 0),
+                MaterialKind::Diffuse => (MATERIAL_DIFFUSE, Vec3::ONE, 0),
+                MaterialKind::Mirror { fresnel } => (
+                    MATERIAL_MIRROR,
+                    Vec3::ONE,
+                    if fresnel { FLAG_FRESNEL } else { 0 },
+                ),
+                MaterialKind::Dielectric { ior, thin_walled } => (
+                    MATERIAL_DIELECTRIC,
+                    ior,
+                    if thin_walled { FLAG_THIN } else { 0 },
+                ),
+            };
+            GpuMaterial {
+                color: m.color.to_array(),
+                kind,
+                ior: ior.to_array(),
+                texture: m.texture.map(|t| t as i32).unwrap_or(-1),
+                flags,
+                pad: [0; 3],
+            }
+        })
+        .collect()
+}
+
+/// Every texture's place in one texel buffer, and the texels.
+fn gpu_textures(scene: &Scene) -> (Vec<GpuTextureInfo>, Vec<[f32; 4]>) {
+    let mut texels: Vec<[f32; 4]> = Vec::new();
+    let texture_infos: Vec<GpuTextureInfo> = scene
+        .textures
+        .iter()
+        .map(|t| {
+            let offset = texels.len() as u32;
+            texels.extend(t.texels.iter().map(|c| [c.x, c.y, c.z, 1.0]));
+            GpuTextureInfo {
+                offset,
+                width: t.width,
+                height: t.height,
+                pad: 0,
+            }
+        })
+        .collect();
+    (texture_infos, texels)
+}
+
+/// The lights, each with the first layer of its shadow maps (six for a point or spot light,
+/// one for a directional light).
+fn gpu_lights(scene: &Scene) -> Vec<GpuLight> {
+    let mut gpu_lights = Vec::new();
+    let mut layer = 0;
+    for light in &scene.lights {
+        let (kind, position, direction, intensity, cos_inner, cos_outer, layers) = match *light {
+            Light::Point {
+                position,
+                intensity,
+            } => (LIGHT_POINT, position, Vec3::Z, intensity, 1.0, 1.0, 6),
+            Light::Directional {
+                direction,
+                irradiance,
+            } => (
+                LIGHT_DIRECTIONAL,
+                Vec3::ZERO,
+                direction,
+                irradiance,
+                1.0,
+                1.0,
+                1,
+            ),
+            Light::Spot {
+                position,
+                direction,
+                intensity,
+                inner_cone,
+                outer_cone,
+            } => (
+                LIGHT_SPOT,
+                position,
+                direction,
+                intensity,
+                inner_cone.cos(),
+                outer_cone.cos(),
+                6,
+            ),
+        };
+        gpu_lights.push(GpuLight {
+            position: position.to_array(),
+            kind,
+            direction: direction.to_array(),
+            cos_inner,
+            intensity: intensity.to_array(),
+            cos_outer,
+            shadow_layer: layer,
+            pad: [0; 3],
+        });
+        layer += layers;
+    }
+    gpu_lights
 }
 
 impl GpuScene {

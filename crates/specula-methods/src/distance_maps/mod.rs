@@ -894,60 +894,9 @@ impl DistanceMaps {
             .filter(|&m| scene.materials[scene.meshes[m].material].is_specular())
             .collect();
         let layer_count = self.layer_count();
-        let map_count = (reflectors.len() as u32 * layer_count).max(1);
-        let array_layers = 6 * map_count;
-        let limit = device.limits().max_texture_array_layers;
-        if array_layers > limit {
-            return Err(TechniqueError::BadParameter {
-                technique: "distance-maps",
-                name: "layers".into(),
-                value: layer_count.to_string(),
-                reason: format!(
-                    "{} reflectors × {layer_count} layers × 6 faces = {array_layers} cube faces; \
-                     this adapter holds at most {limit}",
-                    reflectors.len()
-                ),
-            });
-        }
+        let (map_count, array_layers) = self.map_layers(device, reflectors.len())?;
         let mut prepared = ctx.validated("distance-maps set-up", || {
-            let map_texture = |label| {
-                ctx.create_texture(&wgpu::TextureDescriptor {
-                    label: Some(label),
-                    size: wgpu::Extent3d {
-                        width: self.params.resolution,
-                        height: self.params.resolution,
-                        depth_or_array_layers: array_layers,
-                    },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format: MAP_FORMAT,
-                    usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                        | wgpu::TextureUsages::TEXTURE_BINDING,
-                    view_formats: &[],
-                })
-            };
-            let maps = MapTextures {
-                material: map_texture("distance-map materials"),
-                geometry: map_texture("distance-map geometry"),
-                placeholder: texture_2d(
-                    ctx,
-                    "distance-map placeholder",
-                    1,
-                    1,
-                    MAP_FORMAT,
-                    wgpu::TextureUsages::TEXTURE_BINDING,
-                ),
-            };
-            let depth = texture_2d(
-                ctx,
-                "distance-map depth",
-                self.params.resolution,
-                self.params.resolution,
-                raster::DEPTH_FORMAT,
-                wgpu::TextureUsages::RENDER_ATTACHMENT,
-            )
-            .create_view(&Default::default());
+            let (maps, depth) = self.map_textures(ctx, array_layers);
             let scene_layout = GpuScene::bind_group_layout(device);
             let (layer_layout, layer_pipeline) =
                 layer_pass(device, &scene_layout, raster.shadow_layout());
@@ -1012,6 +961,71 @@ impl DistanceMaps {
         })?;
         prepared.place(self, ctx, scene, gpu_scene);
         Ok(prepared)
+    }
+
+    /// The maps' count (reflectors × layers) and their cube faces' array layers, refused where
+    /// the adapter holds fewer.
+    fn map_layers(&self, device: &wgpu::Device, reflectors: usize) -> Result<(u32, u32), TechniqueError> {
+        let layer_count = self.layer_count();
+        let map_count = (reflectors as u32 * layer_count).max(1);
+        let array_layers = 6 * map_count;
+        let limit = device.limits().max_texture_array_layers;
+        if array_layers > limit {
+            return Err(TechniqueError::BadParameter {
+                technique: "distance-maps",
+                name: "layers".into(),
+                value: layer_count.to_string(),
+                reason: format!(
+                    "{reflectors} reflectors × {layer_count} layers × 6 faces = {array_layers} cube faces; \
+                     this adapter holds at most {limit}"
+                ),
+            });
+        }
+        Ok((map_count, array_layers))
+    }
+
+    /// Every map's material and geometry layers (`array_layers` faces each) and the depth
+    /// buffer they are drawn with.
+    fn map_textures(&self, ctx: &GpuContext, array_layers: u32) -> (MapTextures, wgpu::TextureView) {
+        let map_texture = |label| {
+            ctx.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d {
+                    width: self.params.resolution,
+                    height: self.params.resolution,
+                    depth_or_array_layers: array_layers,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: MAP_FORMAT,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                    | wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            })
+        };
+        let maps = MapTextures {
+            material: map_texture("distance-map materials"),
+            geometry: map_texture("distance-map geometry"),
+            placeholder: texture_2d(
+                ctx,
+                "distance-map placeholder",
+                1,
+                1,
+                MAP_FORMAT,
+                wgpu::TextureUsages::TEXTURE_BINDING,
+            ),
+        };
+        let depth = texture_2d(
+            ctx,
+            "distance-map depth",
+            self.params.resolution,
+            self.params.resolution,
+            raster::DEPTH_FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        )
+        .create_view(&Default::default());
+        (maps, depth)
     }
 
     /// The maps' views and origins, written again after a move.

@@ -770,39 +770,8 @@ impl ImageSpace {
         let device = &ctx.device;
         let scene = live.scene();
         let gpu_scene = live.gpu(ctx);
-        let back_faces = RasterPass::new(
-            ctx,
-            live,
-            RasterSpec {
-                meshes: MeshSelection::Specular,
-                targets: Targets::Geometry,
-                cull_mode: Some(wgpu::Face::Front),
-                background: false,
-                shadow_resolution: self.params.shadow_resolution,
-            },
-        )?;
-        let nearby = RasterPass::new(
-            ctx,
-            live,
-            RasterSpec {
-                meshes: MeshSelection::NonSpecular,
-                targets: Targets::Shaded,
-                cull_mode: None,
-                background: false,
-                shadow_resolution: self.params.shadow_resolution,
-            },
-        )?;
-        let distances: Vec<f32> = normal_distances(scene, live.accel())
-            .into_iter()
-            .zip(&scene.meshes)
-            .flat_map(|(d, mesh)| {
-                if d.is_empty() {
-                    vec![-1.0; 3 * mesh.triangles.len()]
-                } else {
-                    d
-                }
-            })
-            .collect();
+        let (back_faces, nearby) = self.nearby_passes(ctx, live)?;
+        let distances = triangle_normal_distances(scene, live.accel());
         Ok(ctx.validated("image-space set-up", || {
             let storage = |label, bytes: &[u8]| {
                 let buffer = writable_buffer(
@@ -825,47 +794,7 @@ impl ImageSpace {
                 label: Some("image_space.wgsl"),
                 source: wgpu::ShaderSource::Wgsl(shader_source().into()),
             });
-            use wgpu::{
-                BufferBindingType as B, ShaderStages as St, TextureSampleType as S,
-                TextureViewDimension as D,
-            };
-            let float = S::Float { filterable: false };
-            let read_only = || buffer_binding(B::Storage { read_only: true });
-            let mut entries = vec![layout_entry(0, St::FRAGMENT, buffer_binding(B::Uniform))];
-            // Three G-buffers: the scene's, the back faces', the nearby geometry's.
-            let mut binding = 1;
-            for targets in [4, 3, 3] {
-                for target in 0..targets {
-                    let kind = if target == targets - 1 {
-                        S::Uint
-                    } else {
-                        float
-                    };
-                    entries.push(layout_entry(
-                        binding,
-                        St::FRAGMENT,
-                        texture_binding(kind, D::D2),
-                    ));
-                    binding += 1;
-                }
-            }
-            entries.extend([
-                layout_entry(11, St::FRAGMENT, read_only()),
-                layout_entry(12, St::FRAGMENT, read_only()),
-                layout_entry(13, St::FRAGMENT, read_only()),
-                layout_entry(14, St::FRAGMENT, buffer_binding(B::Uniform)),
-                layout_entry(15, St::FRAGMENT, read_only()),
-                layout_entry(
-                    16,
-                    St::FRAGMENT,
-                    buffer_binding(B::Storage { read_only: false }),
-                ),
-            ]);
-            entries.extend(CubeMaps::layout_entries(17));
-            entries.extend([
-                layout_entry(21, St::FRAGMENT, texture_binding(float, D::D2Array)),
-                layout_entry(22, St::FRAGMENT, texture_binding(float, D::D2Array)),
-            ]);
+            let entries = refraction_layout_entries();
             let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("image-space"),
                 entries: &entries,
@@ -931,6 +860,101 @@ impl ImageSpace {
             }
         })?)
     }
+
+    /// The back faces of the solid refractors and the nearby (non-specular) geometry, each a
+    /// raster pass of its own.
+    fn nearby_passes(
+        &self,
+        ctx: &GpuContext,
+        live: &LiveScene,
+    ) -> Result<(RasterPass, RasterPass), TechniqueError> {
+        let back_faces = RasterPass::new(
+            ctx,
+            live,
+            RasterSpec {
+                meshes: MeshSelection::Specular,
+                targets: Targets::Geometry,
+                cull_mode: Some(wgpu::Face::Front),
+                background: false,
+                shadow_resolution: self.params.shadow_resolution,
+            },
+        )?;
+        let nearby = RasterPass::new(
+            ctx,
+            live,
+            RasterSpec {
+                meshes: MeshSelection::NonSpecular,
+                targets: Targets::Shaded,
+                cull_mode: None,
+                background: false,
+                shadow_resolution: self.params.shadow_resolution,
+            },
+        )?;
+        Ok((back_faces, nearby))
+    }
+}
+
+/// d_N per triangle corner, in scene order; -1 for the meshes that have none.
+fn triangle_normal_distances(scene: &Scene, accel: &SceneAccel) -> Vec<f32> {
+    normal_distances(scene, accel)
+        .into_iter()
+        .zip(&scene.meshes)
+        .flat_map(|(d, mesh)| {
+            if d.is_empty() {
+                vec![-1.0; 3 * mesh.triangles.len()]
+            } else {
+                d
+            }
+        })
+        .collect()
+}
+
+/// The refraction pass's bindings: the camera, three G-buffers (the scene's, the back faces',
+/// the nearby geometry's), d_N, the meshes' first vertices, the settings, the planes, the
+/// counters, the cube maps and the peeled layers.
+fn refraction_layout_entries() -> Vec<wgpu::BindGroupLayoutEntry> {
+        use wgpu::{
+            BufferBindingType as B, ShaderStages as St, TextureSampleType as S,
+            TextureViewDimension as D,
+        };
+        let float = S::Float { filterable: false };
+        let read_only = || buffer_binding(B::Storage { read_only: true });
+        let mut entries = vec![layout_entry(0, St::FRAGMENT, buffer_binding(B::Uniform))];
+        // Three G-buffers: the scene's, the back faces', the nearby geometry's.
+        let mut binding = 1;
+        for targets in [4, 3, 3] {
+            for target in 0..targets {
+                let kind = if target == targets - 1 {
+                    S::Uint
+                } else {
+                    float
+                };
+                entries.push(layout_entry(
+                    binding,
+                    St::FRAGMENT,
+                    texture_binding(kind, D::D2),
+                ));
+                binding += 1;
+            }
+        }
+        entries.extend([
+            layout_entry(11, St::FRAGMENT, read_only()),
+            layout_entry(12, St::FRAGMENT, read_only()),
+            layout_entry(13, St::FRAGMENT, read_only()),
+            layout_entry(14, St::FRAGMENT, buffer_binding(B::Uniform)),
+            layout_entry(15, St::FRAGMENT, read_only()),
+            layout_entry(
+                16,
+                St::FRAGMENT,
+                buffer_binding(B::Storage { read_only: false }),
+            ),
+        ]);
+        entries.extend(CubeMaps::layout_entries(17));
+        entries.extend([
+            layout_entry(21, St::FRAGMENT, texture_binding(float, D::D2Array)),
+            layout_entry(22, St::FRAGMENT, texture_binding(float, D::D2Array)),
+        ]);
+    entries
 }
 
 impl GpuTechnique for ImageSpace {
