@@ -278,25 +278,7 @@ pub fn compare(
 ) -> Result<Comparison, CompareError> {
     let (width, height) = (options.width, options.height);
     // Build every technique first so an unknown name or setting fails before any long work.
-    let labels = Label::parse_list(&options.methods)?;
-    check_settings(&labels, &options.parameters)?;
-    let mut techniques = labels
-        .iter()
-        .map(|label| {
-            let mut technique = label.create()?;
-            if label.info.name == specula_methods::gpu_trace::INFO.name {
-                apply_parameters(
-                    technique.as_mut(),
-                    &[format!("max_depth={}", options.max_depth)],
-                )?;
-            }
-            for setting in label.settings_for(&options.parameters) {
-                apply_setting(technique.as_mut(), setting)?;
-            }
-            Ok((*label, technique))
-        })
-        .collect::<Result<Vec<_>, TechniqueError>>()?;
-
+    let mut techniques = techniques_for(options)?;
     progress("reference");
     let build_start = Instant::now();
     let live = LiveScene::new(scene.clone());
@@ -316,14 +298,7 @@ pub fn compare(
     progress("mask");
     // The class of the mirror or dielectric each pixel's primary ray (through the pixel
     // centre, as the G-buffer's) sees; the mask is where there is one.
-    let classes: Vec<Option<SurfaceClass>> = primary_hits(scene, live.accel(), width, height)
-        .iter()
-        .map(|hit| {
-            hit.and_then(|h| {
-                SurfaceClass::of(&scene.materials[scene.meshes[h.mesh as usize].material])
-            })
-        })
-        .collect();
+    let classes = pixel_classes(scene, &live, width, height);
     let count = |class: SurfaceClass| classes.iter().filter(|&&c| c == Some(class)).count();
     let (mirror_pixels, refractor_pixels) =
         (count(SurfaceClass::Mirror), count(SurfaceClass::Refractor));
@@ -353,72 +328,20 @@ pub fn compare(
                 continue;
             }
         };
-        let frame = &timed.frame;
-        let flip = metrics::flip_map(&reference, &image);
-        let (metrics, delegated) =
-            method_figures(technique.info(), &reference, &image, &flip, &classes);
-        let total_ms = timed.frame_times.median_ms;
-        methods.push(MethodReport {
-            label: label.to_string(),
-            method: technique.name().to_string(),
-            preset: label.preset.map(|p| p.name.to_string()),
-            parameters: technique.parameters().into_iter().collect(),
-            timing: timing_name(frame.timing).to_string(),
-            stages: timed.stages.clone(),
-            total_ms,
-            frame: timed.frame_times,
-            prepare_ms: timed.prepare_ms,
-            first_frame_ms: timed.first_frame_ms,
-            speedup_over_reference: timing::speedup(reference_ms, total_ms),
-            speedup_over_gpu_trace: None,
-            counters: frame.counters.iter().cloned().collect(),
-            metrics,
-            delegated,
-            image: format!("{}.png", label.file_stem()),
-            heat_map: format!("{}-flip.png", label.file_stem()),
-            warnings: frame.warnings.clone(),
-            created: CreatedReport {
-                textures: frame.created().textures,
-                buffers: frame.created().buffers,
-                bind_groups: frame.created().bind_groups,
-            },
-        });
-        method_images.push((image, metrics::heat_map(&flip, width, height)));
+        let (report, images) = method_report(
+            label,
+            technique.as_ref(),
+            &timed,
+            image,
+            &reference,
+            &classes,
+            reference_ms,
+        );
+        methods.push(report);
+        method_images.push(images);
     }
-    let mut gpu_trace = None;
-    let gpu_trace_ms = match methods
-        .iter()
-        .find(|m| m.label == specula_methods::gpu_trace::INFO.name)
-    {
-        Some(m) => Some(m.total_ms),
-        None if ctx.gpu.is_some() => {
-            progress(specula_methods::gpu_trace::INFO.name);
-            let mut base = by_name(specula_methods::gpu_trace::INFO.name)?;
-            apply_parameters(base.as_mut(), &[format!("max_depth={}", options.max_depth)])?;
-            match time_frames(base.as_mut(), ctx, &live, options) {
-                Ok(timed) => {
-                    gpu_trace = Some(BaseReport {
-                        prepare_ms: timed.prepare_ms,
-                        first_frame_ms: timed.first_frame_ms,
-                        frame: timed.frame_times,
-                    });
-                    Some(timed.frame_times.median_ms)
-                }
-                Err(error) => {
-                    failed.push(FailedMethod {
-                        label: specula_methods::gpu_trace::INFO.name.to_string(),
-                        method: specula_methods::gpu_trace::INFO.name.to_string(),
-                        error: format!(
-                            "timing the second speed-up's base: {}",
-                            error_chain(&error)
-                        ),
-                    });
-                    None
-                }
-            }
-        }
-        None => None,
-    };
+    let (gpu_trace, gpu_trace_ms) =
+        gpu_trace_base(&methods, ctx, &live, options, progress, &mut failed)?;
     for m in &mut methods {
         m.speedup_over_gpu_trace = gpu_trace_ms.map(|g| timing::speedup(g, m.total_ms));
     }
@@ -451,6 +374,138 @@ pub fn compare(
         method_images,
         classes,
     })
+}
+
+/// Every method of the run, made with its preset and settings (an unknown name or setting
+/// fails here, before any long work).
+fn techniques_for(options: &Options) -> Result<Vec<(Label, Box<dyn Technique>)>, CompareError> {
+    let labels = Label::parse_list(&options.methods)?;
+    check_settings(&labels, &options.parameters)?;
+    let techniques = labels
+        .iter()
+        .map(|label| {
+            let mut technique = label.create()?;
+            if label.info.name == specula_methods::gpu_trace::INFO.name {
+                apply_parameters(
+                    technique.as_mut(),
+                    &[format!("max_depth={}", options.max_depth)],
+                )?;
+            }
+            for setting in label.settings_for(&options.parameters) {
+                apply_setting(technique.as_mut(), setting)?;
+            }
+            Ok((*label, technique))
+        })
+        .collect::<Result<Vec<_>, TechniqueError>>()?;
+    Ok(techniques)
+}
+
+/// The class of the mirror or dielectric each pixel's primary ray (through the pixel centre,
+/// as the G-buffer's) sees; the mask is where there is one.
+fn pixel_classes(
+    scene: &Scene,
+    live: &LiveScene,
+    width: u32,
+    height: u32,
+) -> Vec<Option<SurfaceClass>> {
+    primary_hits(scene, live.accel(), width, height)
+        .iter()
+        .map(|hit| {
+            hit.and_then(|h| {
+                SurfaceClass::of(&scene.materials[scene.meshes[h.mesh as usize].material])
+            })
+        })
+        .collect()
+}
+
+/// One method's report and its image and FLIP heat map.
+fn method_report(
+    label: &Label,
+    technique: &dyn Technique,
+    timed: &Timed,
+    image: Image,
+    reference: &Image,
+    classes: &[Option<SurfaceClass>],
+    reference_ms: f64,
+) -> (MethodReport, (Image, image::RgbImage)) {
+    let (width, height) = (image.width, image.height);
+    let frame = &timed.frame;
+    let flip = metrics::flip_map(reference, &image);
+    let (metrics, delegated) = method_figures(technique.info(), reference, &image, &flip, classes);
+    let total_ms = timed.frame_times.median_ms;
+    let report = MethodReport {
+        label: label.to_string(),
+        method: technique.name().to_string(),
+        preset: label.preset.map(|p| p.name.to_string()),
+        parameters: technique.parameters().into_iter().collect(),
+        timing: timing_name(frame.timing).to_string(),
+        stages: timed.stages.clone(),
+        total_ms,
+        frame: timed.frame_times,
+        prepare_ms: timed.prepare_ms,
+        first_frame_ms: timed.first_frame_ms,
+        speedup_over_reference: timing::speedup(reference_ms, total_ms),
+        speedup_over_gpu_trace: None,
+        counters: frame.counters.iter().cloned().collect(),
+        metrics,
+        delegated,
+        image: format!("{}.png", label.file_stem()),
+        heat_map: format!("{}-flip.png", label.file_stem()),
+        warnings: frame.warnings.clone(),
+        created: CreatedReport {
+            textures: frame.created().textures,
+            buffers: frame.created().buffers,
+            bind_groups: frame.created().bind_groups,
+        },
+    };
+    (report, (image, metrics::heat_map(&flip, width, height)))
+}
+
+/// The second speed-up's base, gpu-trace's frame time: from the run where it is one of the
+/// methods, else timed apart where the run has a GPU.
+fn gpu_trace_base(
+    methods: &[MethodReport],
+    ctx: &Context,
+    live: &LiveScene,
+    options: &Options,
+    progress: &dyn Fn(&str),
+    failed: &mut Vec<FailedMethod>,
+) -> Result<(Option<BaseReport>, Option<f64>), CompareError> {
+    let mut gpu_trace = None;
+    let gpu_trace_ms = match methods
+        .iter()
+        .find(|m| m.label == specula_methods::gpu_trace::INFO.name)
+    {
+        Some(m) => Some(m.total_ms),
+        None if ctx.gpu.is_some() => {
+            progress(specula_methods::gpu_trace::INFO.name);
+            let mut base = by_name(specula_methods::gpu_trace::INFO.name)?;
+            apply_parameters(base.as_mut(), &[format!("max_depth={}", options.max_depth)])?;
+            match time_frames(base.as_mut(), ctx, live, options) {
+                Ok(timed) => {
+                    gpu_trace = Some(BaseReport {
+                        prepare_ms: timed.prepare_ms,
+                        first_frame_ms: timed.first_frame_ms,
+                        frame: timed.frame_times,
+                    });
+                    Some(timed.frame_times.median_ms)
+                }
+                Err(error) => {
+                    failed.push(FailedMethod {
+                        label: specula_methods::gpu_trace::INFO.name.to_string(),
+                        method: specula_methods::gpu_trace::INFO.name.to_string(),
+                        error: format!(
+                            "timing the second speed-up's base: {}",
+                            error_chain(&error)
+                        ),
+                    });
+                    None
+                }
+            }
+        }
+        None => None,
+    };
+    Ok((gpu_trace, gpu_trace_ms))
 }
 
 /// A method timed as [`compare`] times every method: prepared, a first frame, then
@@ -583,6 +638,60 @@ impl Comparison {
 
     pub fn html(&self) -> String {
         let r = &self.report;
+        let rows = self.table_rows();
+        let figures = self.figures();
+        format!(
+            r#"<!DOCTYPE html>
+<html><head><meta charset="utf-8"><title>specula compare: {scene}</title>
+<style>
+body {{ font-family: sans-serif; margin: 2em; background: #fafafa; }}
+table {{ border-collapse: collapse; margin: 1em 0; }}
+td, th {{ border: 1px solid #bbb; padding: 4px 8px; text-align: right; vertical-align: top; }}
+td:first-child, th:first-child {{ text-align: left; }}
+tr.delegated td {{ color: #666; font-style: italic; }}
+tr.failed td {{ color: #a00; text-align: left; }}
+figure {{ display: inline-block; margin: 0.5em; }}
+img {{ image-rendering: pixelated; width: {display_width}px; }}
+</style></head><body>
+<h1>specula compare: {scene}</h1>
+<p>{width}×{height} pixels on {adapter}. Errors are measured on the {mask} pixels whose visible surface is a mirror or
+dielectric ({mirrors} mirror, {refractors} refractor; from the primary hits, as the G-buffer's IDs): RMSE and PSNR on
+linear radiance clamped to [0, 1]; FLIP on the sRGB images. A method's row counts the surfaces it shades itself; the
+surfaces it hands to another method (c3rc's refractors are envmap's) are on a row of their own below it, naming that
+method: that figure is the other method's. A method that failed is a row with its error.
+Times compare like with like: every method, the CPU reference included, is prepared and renders a first frame
+(timed apart), then {frames} warm frames; "frame" is their median (min–max below it), and each stage its median.
+Speed-up is the reference's warm median ({reference:.1} ms; its BVH build, {build:.1} ms, and first frame,
+{first:.1} ms, are not in it) over the method's; the next column is gpu-trace's warm median on the same GPU over
+the method's ({gpu_trace}).</p>
+<table>
+<tr><th>method</th><th>RMSE</th><th>PSNR (dB)</th><th>mean FLIP</th><th>FLIP &gt; 0.1</th><th>frame (ms)</th><th>prepare (ms)</th><th>speed-up over reference (warm / warm)</th><th>vs gpu-trace (warm / warm)</th><th>stages (ms)</th><th>timing</th></tr>
+{rows}</table>
+{figures}
+</body></html>
+"#,
+            scene = escape(&r.scene),
+            width = r.width,
+            height = r.height,
+            adapter = escape(&r.adapter),
+            mask = r.mask_pixels,
+            mirrors = r.mirror_pixels,
+            refractors = r.refractor_pixels,
+            display_width = r.width.clamp(256, 512),
+            frames = r.frames,
+            reference = r.reference.total_ms,
+            build = r.reference.build_ms,
+            first = r.reference.first_frame_ms,
+            gpu_trace = r
+                .gpu_trace_ms
+                .map(|g| format!("gpu-trace {g:.1} ms warm"))
+                .unwrap_or_else(|| "no GPU in this run".into()),
+        )
+    }
+    /// The table's rows: per method its figures (warnings above, the surfaces it delegates
+    /// below), then the methods that failed.
+    fn table_rows(&self) -> String {
+        let r = &self.report;
         let mut rows = String::new();
         for m in &r.methods {
             let stages: Vec<String> = m
@@ -632,6 +741,12 @@ impl Comparison {
                 escape(&f.error)
             ));
         }
+        rows
+    }
+
+    /// The reference, then each method's image and its FLIP heat map.
+    fn figures(&self) -> String {
+        let r = &self.report;
         let mut figures = format!(
             "<figure><img src=\"{}\"><figcaption>reference ({} spp, depth {}; warm frame {:.1} ms, BVH build {:.1} ms, first frame {:.1} ms)</figcaption></figure>\n",
             data_uri(&self.reference.to_srgb8()),
@@ -656,52 +771,6 @@ impl Comparison {
                 escape(&m.label)
             ));
         }
-        format!(
-            r#"<!DOCTYPE html>
-<html><head><meta charset="utf-8"><title>specula compare: {scene}</title>
-<style>
-body {{ font-family: sans-serif; margin: 2em; background: #fafafa; }}
-table {{ border-collapse: collapse; margin: 1em 0; }}
-td, th {{ border: 1px solid #bbb; padding: 4px 8px; text-align: right; vertical-align: top; }}
-td:first-child, th:first-child {{ text-align: left; }}
-tr.delegated td {{ color: #666; font-style: italic; }}
-tr.failed td {{ color: #a00; text-align: left; }}
-figure {{ display: inline-block; margin: 0.5em; }}
-img {{ image-rendering: pixelated; width: {display_width}px; }}
-</style></head><body>
-<h1>specula compare: {scene}</h1>
-<p>{width}×{height} pixels on {adapter}. Errors are measured on the {mask} pixels whose visible surface is a mirror or
-dielectric ({mirrors} mirror, {refractors} refractor; from the primary hits, as the G-buffer's IDs): RMSE and PSNR on
-linear radiance clamped to [0, 1]; FLIP on the sRGB images. A method's row counts the surfaces it shades itself; the
-surfaces it hands to another method (c3rc's refractors are envmap's) are on a row of their own below it, naming that
-method: that figure is the other method's. A method that failed is a row with its error.
-Times compare like with like: every method, the CPU reference included, is prepared and renders a first frame
-(timed apart), then {frames} warm frames; "frame" is their median (min–max below it), and each stage its median.
-Speed-up is the reference's warm median ({reference:.1} ms; its BVH build, {build:.1} ms, and first frame,
-{first:.1} ms, are not in it) over the method's; the next column is gpu-trace's warm median on the same GPU over
-the method's ({gpu_trace}).</p>
-<table>
-<tr><th>method</th><th>RMSE</th><th>PSNR (dB)</th><th>mean FLIP</th><th>FLIP &gt; 0.1</th><th>frame (ms)</th><th>prepare (ms)</th><th>speed-up over reference (warm / warm)</th><th>vs gpu-trace (warm / warm)</th><th>stages (ms)</th><th>timing</th></tr>
-{rows}</table>
-{figures}
-</body></html>
-"#,
-            scene = escape(&r.scene),
-            width = r.width,
-            height = r.height,
-            adapter = escape(&r.adapter),
-            mask = r.mask_pixels,
-            mirrors = r.mirror_pixels,
-            refractors = r.refractor_pixels,
-            display_width = r.width.clamp(256, 512),
-            frames = r.frames,
-            reference = r.reference.total_ms,
-            build = r.reference.build_ms,
-            first = r.reference.first_frame_ms,
-            gpu_trace = r
-                .gpu_trace_ms
-                .map(|g| format!("gpu-trace {g:.1} ms warm"))
-                .unwrap_or_else(|| "no GPU in this run".into()),
-        )
+        figures
     }
 }
