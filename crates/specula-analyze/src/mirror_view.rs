@@ -906,7 +906,9 @@ fn refine(
     }
 }
 
-/// Runs the analysis from `eyes`, calling `progress` after each eye point.
+/// Runs the analysis from `eyes`, calling `progress` after each eye point: each eye point's
+/// footprint and directions refined, then the union over the eye points on a ground grid and
+/// a direction grid, the required region seen by any and by all.
 pub fn analyze(
     scene: &Scene,
     accel: &SceneAccel,
@@ -918,9 +920,6 @@ pub fn analyze(
     let surface = MirrorSurface::new(scene, options.mirror, options.surface)
         .expect("validate checked the mirror has the surface asked for");
     let mirror = &scene.meshes[options.mirror];
-    let mirror_area: f64 = (0..mirror.triangles.len())
-        .map(|t| 0.5 * f64::from(mirror.face_normal_scaled(t).length()))
-        .sum();
     // Eye points in parallel (a flat mirror has two triangles: too few to share out alone).
     let done = std::sync::atomic::AtomicUsize::new(0);
     let refined: Vec<Refined> = eyes
@@ -932,154 +931,22 @@ pub fn analyze(
         })
         .collect();
     let frame = &options.frame;
-
-    // The ground grid: over every footprint, within the range square of every eye.
-    let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
-    for t in refined.iter().flat_map(|r| &r.sampled.ground) {
-        for p in t {
-            lo = lo.min(*p);
-            hi = hi.max(*p);
-        }
-    }
-    let (mut range_lo, mut range_hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
-    for e in eyes {
-        let e = Vec2::new(e.x, e.z);
-        range_lo = range_lo.min(e - options.range_m);
-        range_hi = range_hi.max(e + options.range_m);
-    }
-    let (lo, hi) = (lo.max(range_lo), hi.min(range_hi));
-    let has_ground = lo.x < hi.x && lo.y < hi.y;
-    // The union of the eyes' footprints, each clipped to its own range (a unit grid counting
-    // nothing where no eye sees the ground).
-    let (lo, hi) = if has_ground {
-        (lo, hi)
-    } else {
-        (Vec2::ZERO, Vec2::ONE)
-    };
-    let mut union_ground = Raster::new(lo, hi, GRID, GRID);
-    if has_ground {
-        for (k, r) in refined.iter().enumerate() {
-            let e = Vec2::new(eyes[k].x, eyes[k].z);
-            let keep = |p: Vec2| p.distance(e) <= options.range_m;
-            for t in &r.sampled.ground {
-                union_ground.fill(t, &keep);
-            }
-        }
-    }
-    let region_grid = |k: Option<usize>| {
-        options.region.map(|region| {
-            let mut raster = Raster::new(
-                Vec2::new(region.x0, region.z0),
-                Vec2::new(region.x1, region.z1),
-                512,
-                512,
-            );
-            for (i, r) in refined.iter().enumerate() {
-                if k.is_some_and(|k| k != i) {
-                    continue;
-                }
-                let e = Vec2::new(eyes[i].x, eyes[i].z);
-                let keep = |p: Vec2| p.distance(e) <= options.range_m;
-                for t in &r.sampled.ground {
-                    raster.fill(t, &keep);
-                }
-            }
-            raster
-        })
-    };
-    let region_share = |raster: &Raster| raster.count() as f64 / raster.covered.len() as f64;
-
-    // The direction grid for the ambinocular solid angle.
-    let reference = reference_of(frame, refined.iter().flat_map(|r| &r.sampled.directions));
-    let angles = |d: Vec3| {
-        Vec2::new(
-            frame.horizontal_deg(d, reference) as f32,
-            frame.elevation_deg(d) as f32,
-        )
-    };
-    let (mut a_lo, mut a_hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
-    for d in refined.iter().flat_map(|r| &r.sampled.directions).flatten() {
-        let a = angles(*d);
-        a_lo = a_lo.min(a);
-        a_hi = a_hi.max(a);
-    }
-    let has_directions = a_lo.x <= a_hi.x;
-    if !has_directions {
-        (a_lo, a_hi) = (Vec2::ZERO, Vec2::ONE);
-    }
-    let a_side = (a_hi - a_lo).max_element().max(1e-6);
-
-    let mut eye_reports = Vec::with_capacity(eyes.len());
-    let any_region = region_grid(None);
-    let mut all_region: Option<Vec<bool>> = None;
-    for (k, r) in refined.iter().enumerate() {
-        let own_reference = reference_of(frame, r.sampled.directions.iter());
-        let (horizontal_deg, vertical_deg) = extents(frame, own_reference, &r.sampled.directions);
-        let region = region_grid(Some(k));
-        let share = region.as_ref().map(region_share);
-        if let Some(region) = &region {
-            all_region = Some(match all_region {
-                None => region.covered.clone(),
-                Some(all) => all
-                    .iter()
-                    .zip(&region.covered)
-                    .map(|(a, b)| *a && *b)
-                    .collect(),
-            });
-        }
-        eye_reports.push(EyeReport {
-            position: eyes[k].to_array(),
-            figures: Figures {
-                horizontal_deg,
-                vertical_deg,
-                solid_angle_sr: r.sampled.solid_angle_sr,
-                ground_area_m2: r.ground_area_m2,
-                region_seen_by_any: share,
-                region_seen_by_all: share,
-                blind_area_m2: options
-                    .region
-                    .zip(share)
-                    .map(|(region, share)| region.area() * (1.0 - share)),
-            },
-            subdivision: r.subdivision as u32,
-            edge_depth: r.depth,
-            samples: r.sampled.samples,
-            seen_samples: r.sampled.seen,
-            density_per_m2: r.sampled.samples as f64 / mirror_area.max(1e-12),
-            converged: r.converged,
-        });
-    }
-
-    let mut directions = Raster::new(a_lo, a_lo + Vec2::splat(a_side), GRID, GRID);
-    for t in refined.iter().flat_map(|r| &r.sampled.directions) {
-        directions.fill(&t.map(angles), &|_| true);
-    }
-    let cell_sr = |row: usize| {
-        let elevation = (directions.centre(0, row).y as f64).to_radians();
-        elevation.cos()
-            * f64::from(directions.cell.x).to_radians()
-            * f64::from(directions.cell.y).to_radians()
-    };
-    let union_solid_angle: f64 = (0..directions.rows)
-        .map(|row| {
-            let covered = directions.covered[row * directions.columns..][..directions.columns]
-                .iter()
-                .filter(|c| **c)
-                .count();
-            covered as f64 * cell_sr(row)
-        })
-        .sum();
+    let union_ground = union_ground(&refined, eyes, options);
+    let directions = DirectionGrid::new(frame, &refined);
+    let (eye_reports, all_region) = eye_reports(mirror, &refined, eyes, options);
+    let any_share = region_grid(&refined, eyes, options, None)
+        .as_ref()
+        .map(region_share);
+    let all_share =
+        all_region.map(|all| all.iter().filter(|c| **c).count() as f64 / all.len() as f64);
     let (horizontal_deg, vertical_deg) = extents(
         frame,
-        reference,
+        directions.reference,
         &refined
             .iter()
             .flat_map(|r| r.sampled.directions.iter().copied())
             .collect::<Vec<_>>(),
     );
-    let any_share = any_region.as_ref().map(region_share);
-    let all_share =
-        all_region.map(|all| all.iter().filter(|c| **c).count() as f64 / all.len() as f64);
     let report = Report {
         schema_version: SCHEMA_VERSION,
         scene: scene.name.clone(),
@@ -1092,21 +959,17 @@ pub fn analyze(
         region: options.region,
         tolerance: options.tolerance,
         tolerance_deg: options.tolerance_deg,
-        ground_cell_m: if has_ground {
-            f64::from(union_ground.cell.max_element())
-        } else {
-            0.0
-        },
-        direction_cell_deg: if has_directions {
-            f64::from(a_side) / GRID as f64
-        } else {
-            0.0
-        },
+        ground_cell_m: union_ground
+            .as_ref()
+            .map_or(0.0, |g| f64::from(g.cell.max_element())),
+        direction_cell_deg: directions.cell_deg(),
         figures: Figures {
             horizontal_deg,
             vertical_deg,
-            solid_angle_sr: union_solid_angle,
-            ground_area_m2: union_ground.count() as f64 * union_ground.cell_area(),
+            solid_angle_sr: directions.union_solid_angle(&refined),
+            ground_area_m2: union_ground
+                .as_ref()
+                .map_or(0.0, |g| g.count() as f64 * g.cell_area()),
             region_seen_by_any: any_share,
             region_seen_by_all: all_share,
             blind_area_m2: options
@@ -1131,4 +994,197 @@ pub fn analyze(
         view.directions.push(r.sampled.directions);
     }
     Ok(view)
+}
+
+/// The union of the eyes' footprints, each clipped to its own range, on a grid over them all
+/// within the range square of every eye; None where no eye sees the ground.
+fn union_ground(refined: &[Refined], eyes: &[Vec3], options: &Options) -> Option<Raster> {
+    let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
+    for t in refined.iter().flat_map(|r| &r.sampled.ground) {
+        for p in t {
+            lo = lo.min(*p);
+            hi = hi.max(*p);
+        }
+    }
+    let (mut range_lo, mut range_hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
+    for e in eyes {
+        let e = Vec2::new(e.x, e.z);
+        range_lo = range_lo.min(e - options.range_m);
+        range_hi = range_hi.max(e + options.range_m);
+    }
+    let (lo, hi) = (lo.max(range_lo), hi.min(range_hi));
+    if !(lo.x < hi.x && lo.y < hi.y) {
+        return None;
+    }
+    let mut union = Raster::new(lo, hi, GRID, GRID);
+    for (k, r) in refined.iter().enumerate() {
+        let e = Vec2::new(eyes[k].x, eyes[k].z);
+        let keep = |p: Vec2| p.distance(e) <= options.range_m;
+        for t in &r.sampled.ground {
+            union.fill(t, &keep);
+        }
+    }
+    Some(union)
+}
+
+/// The required region's grid, covered where eye point `k` (or, for None, any eye point) sees
+/// the ground within its range.
+fn region_grid(
+    refined: &[Refined],
+    eyes: &[Vec3],
+    options: &Options,
+    k: Option<usize>,
+) -> Option<Raster> {
+    options.region.map(|region| {
+        let mut raster = Raster::new(
+            Vec2::new(region.x0, region.z0),
+            Vec2::new(region.x1, region.z1),
+            512,
+            512,
+        );
+        for (i, r) in refined.iter().enumerate() {
+            if k.is_some_and(|k| k != i) {
+                continue;
+            }
+            let e = Vec2::new(eyes[i].x, eyes[i].z);
+            let keep = |p: Vec2| p.distance(e) <= options.range_m;
+            for t in &r.sampled.ground {
+                raster.fill(t, &keep);
+            }
+        }
+        raster
+    })
+}
+
+fn region_share(raster: &Raster) -> f64 {
+    raster.count() as f64 / raster.covered.len() as f64
+}
+
+/// Each eye point's figures, and the region's cells every eye point sees (None without a
+/// region).
+fn eye_reports(
+    mirror: &specula_scene::Mesh,
+    refined: &[Refined],
+    eyes: &[Vec3],
+    options: &Options,
+) -> (Vec<EyeReport>, Option<Vec<bool>>) {
+    let frame = &options.frame;
+    let mirror_area: f64 = (0..mirror.triangles.len())
+        .map(|t| 0.5 * f64::from(mirror.face_normal_scaled(t).length()))
+        .sum();
+    let mut reports = Vec::with_capacity(eyes.len());
+    let mut all_region: Option<Vec<bool>> = None;
+    for (k, r) in refined.iter().enumerate() {
+        let own_reference = reference_of(frame, r.sampled.directions.iter());
+        let (horizontal_deg, vertical_deg) = extents(frame, own_reference, &r.sampled.directions);
+        let region = region_grid(refined, eyes, options, Some(k));
+        let share = region.as_ref().map(region_share);
+        if let Some(region) = &region {
+            all_region = Some(match all_region {
+                None => region.covered.clone(),
+                Some(all) => all
+                    .iter()
+                    .zip(&region.covered)
+                    .map(|(a, b)| *a && *b)
+                    .collect(),
+            });
+        }
+        reports.push(EyeReport {
+            position: eyes[k].to_array(),
+            figures: Figures {
+                horizontal_deg,
+                vertical_deg,
+                solid_angle_sr: r.sampled.solid_angle_sr,
+                ground_area_m2: r.ground_area_m2,
+                region_seen_by_any: share,
+                region_seen_by_all: share,
+                blind_area_m2: options
+                    .region
+                    .zip(share)
+                    .map(|(region, share)| region.area() * (1.0 - share)),
+            },
+            subdivision: r.subdivision as u32,
+            edge_depth: r.depth,
+            samples: r.sampled.samples,
+            seen_samples: r.sampled.seen,
+            density_per_m2: r.sampled.samples as f64 / mirror_area.max(1e-12),
+            converged: r.converged,
+        });
+    }
+    (reports, all_region)
+}
+
+/// The grid of reflected directions, in degrees (horizontal from a reference direction,
+/// elevation), over every eye point's: the ambinocular solid angle's.
+struct DirectionGrid<'a> {
+    frame: &'a VehicleFrame,
+    reference: Vec3,
+    lo: Vec2,
+    side: f32,
+    /// Any direction at all.
+    any: bool,
+}
+
+impl<'a> DirectionGrid<'a> {
+    fn new(frame: &'a VehicleFrame, refined: &[Refined]) -> DirectionGrid<'a> {
+        let reference = reference_of(frame, refined.iter().flat_map(|r| &r.sampled.directions));
+        let mut grid = DirectionGrid {
+            frame,
+            reference,
+            lo: Vec2::ZERO,
+            side: 1.0,
+            any: false,
+        };
+        let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
+        for d in refined.iter().flat_map(|r| &r.sampled.directions).flatten() {
+            let a = grid.angles(*d);
+            lo = lo.min(a);
+            hi = hi.max(a);
+        }
+        grid.any = lo.x <= hi.x;
+        if !grid.any {
+            (lo, hi) = (Vec2::ZERO, Vec2::ONE);
+        }
+        grid.lo = lo;
+        grid.side = (hi - lo).max_element().max(1e-6);
+        grid
+    }
+
+    fn angles(&self, d: Vec3) -> Vec2 {
+        Vec2::new(
+            self.frame.horizontal_deg(d, self.reference) as f32,
+            self.frame.elevation_deg(d) as f32,
+        )
+    }
+
+    fn cell_deg(&self) -> f64 {
+        if self.any {
+            f64::from(self.side) / GRID as f64
+        } else {
+            0.0
+        }
+    }
+
+    /// The solid angle the eye points' directions cover together.
+    fn union_solid_angle(&self, refined: &[Refined]) -> f64 {
+        let mut directions = Raster::new(self.lo, self.lo + Vec2::splat(self.side), GRID, GRID);
+        for t in refined.iter().flat_map(|r| &r.sampled.directions) {
+            directions.fill(&t.map(|d| self.angles(d)), &|_| true);
+        }
+        let cell_sr = |row: usize| {
+            let elevation = (directions.centre(0, row).y as f64).to_radians();
+            elevation.cos()
+                * f64::from(directions.cell.x).to_radians()
+                * f64::from(directions.cell.y).to_radians()
+        };
+        (0..directions.rows)
+            .map(|row| {
+                let covered = directions.covered[row * directions.columns..][..directions.columns]
+                    .iter()
+                    .filter(|c| **c)
+                    .count();
+                covered as f64 * cell_sr(row)
+            })
+            .sum()
+    }
 }
