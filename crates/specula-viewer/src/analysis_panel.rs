@@ -593,146 +593,168 @@ fn figures_section(ui: &mut egui::Ui, analysis: &mut Analysis) {
             judged: Some(judged),
             ..
         } => verdict_section(ui, &judged.0),
-        Analysed::MirrorView { view, .. } => {
-            let f = &view.report.figures;
-            egui::Grid::new("mirror figures")
-                .num_columns(2)
-                .show(ui, |ui| {
-                    let mut row = |name: &str, value: String| {
-                        ui.label(name);
-                        ui.label(value);
-                        ui.end_row();
-                    };
-                    row("horizontal", format!("{:.2}°", f.horizontal_deg));
-                    row("vertical", format!("{:.2}°", f.vertical_deg));
-                    row("solid angle", format!("{:.4} sr", f.solid_angle_sr));
-                    row(
-                        "ground",
-                        format!(
-                            "{:.2} m² within {} m",
-                            f.ground_area_m2, view.report.range_m
-                        ),
-                    );
-                    if let (Some(any), Some(blind)) = (f.region_seen_by_any, f.blind_area_m2) {
-                        row(
-                            "region seen",
-                            format!("{:.1} % by any eye point", any * 100.0),
-                        );
-                        if let Some(all) = f.region_seen_by_all {
-                            row("", format!("{:.1} % by every one", all * 100.0));
-                        }
-                        row("blind", format!("{blind:.2} m²"));
-                    }
-                    let unconverged = view.report.eyes.iter().filter(|e| !e.converged).count();
-                    if unconverged > 0 {
-                        row(
-                            "not converged",
-                            format!("{unconverged} eye point(s): raise the tolerance"),
-                        );
-                    }
-                });
-            ui.small(
-                "on the ground: cyan seen (stronger: by every eye point); in the region green \
-                 seen, red blind",
-            );
-        }
-        Analysed::Lens(r) => {
-            let c = &r.centre;
-            let number = |v: Option<f64>| {
-                v.map(|v| format!("{v:.3}"))
-                    .unwrap_or_else(|| "outside".into())
-            };
-            egui::Grid::new("lens figures")
-                .num_columns(2)
-                .show(ui, |ui| {
-                    let mut row = |name: &str, value: String| {
-                        ui.label(name);
-                        ui.label(value);
-                        ui.end_row();
-                    };
-                    row(
-                        "at the centre",
-                        format!(
-                            "{} / {} × {}",
-                            number(c.sphere_d),
-                            number(c.cylinder_d),
-                            c.axis_deg.map(|a| format!("{a:.0}")).unwrap_or_default()
-                        ),
-                    );
-                    row("mean power", format!("{} D", number(c.mean_power_d)));
-                    if let Some([h, v]) = c.prism_d {
-                        row("prism", format!("{h:.2} Δ out, {v:.2} Δ up"));
-                    }
-                    let largest = |f: &dyn Fn(&specula_analyze::lens::Cell) -> Option<f64>| {
-                        r.grid
-                            .iter()
-                            .filter_map(f)
-                            .fold(0.0, |a: f64, v| a.max(v.abs()))
-                    };
-                    row(
-                        "largest cylinder",
-                        format!(
-                            "{:.3} D over ±{}° × ±{}°",
-                            largest(&|c| c.cylinder_d),
-                            r.gaze.h_max_deg,
-                            r.gaze.v_max_deg
-                        ),
-                    );
-                    if r.prescription.is_some() {
-                        row(
-                            "unwanted cylinder",
-                            format!("{:.3} D at most", largest(&|c| c.unwanted_cylinder_d)),
-                        );
-                    }
-                    row(
-                        "outside the lens",
-                        format!(
-                            "{} of {} gazes",
-                            r.grid.iter().filter(|c| c.outside).count(),
-                            r.grid.len()
-                        ),
-                    );
-                });
-        }
-        Analysed::Glare(g) => {
-            let r = &g.report;
-            let shown = analysis.glare_eye().min(r.eyes.len() - 1);
-            ui.label(match r.worst_eye {
-                Some(k) => format!(
-                    "glare from {:.0} % of the eye points; worst: eye point {}",
-                    r.share_with_glare * 100.0,
-                    k + 1
-                ),
-                None => format!(
-                    "no glare: no eye point sees '{}' in '{}'",
-                    r.source, r.surface
-                ),
-            });
-            let e = &r.eyes[shown];
-            ui.small(format!(
-                "eye point {} shown: relative luminance {:.4}, veiling ratio {}, {:.3e} sr",
-                shown + 1,
-                e.max_luminance_factor,
-                specula_analyze::glare::veiling_text(e.max_veiling_ratio),
-                e.solid_angle_sr
-            ));
-            if r.eyes.len() > 1 && outcome.complete {
-                select = eyebox_map(ui, analysis, g, shown);
-                ui.small(
-                    "eye points as seen from the seat, coloured by the glare's solid angle \
-                     (grey: none); red: the worst, white: shown. Click one to show it.",
-                );
-            }
-            ui.small(format!(
-                "on the surface: the glare's relative luminance, log scale from {} (blue) to 1 \
-                 (yellow)",
-                analysis.settings.threshold
-            ));
-        }
+        Analysed::MirrorView { view, .. } => mirror_figures(ui, view),
+        Analysed::Lens(r) => lens_figures(ui, r),
+        Analysed::Glare(g) => select = glare_figures(ui, analysis, g, outcome.complete),
     }
     if let Some(k) = select {
         analysis.selected_eye = Some(k);
     }
+    lens_map_legend(ui, analysis);
+}
+
+/// A mirror view's figures over the eye points.
+fn mirror_figures(ui: &mut egui::Ui, view: &specula_analyze::mirror_view::MirrorView) {
+    let f = &view.report.figures;
+    egui::Grid::new("mirror figures")
+        .num_columns(2)
+        .show(ui, |ui| {
+            let mut row = |name: &str, value: String| {
+                ui.label(name);
+                ui.label(value);
+                ui.end_row();
+            };
+            row("horizontal", format!("{:.2}°", f.horizontal_deg));
+            row("vertical", format!("{:.2}°", f.vertical_deg));
+            row("solid angle", format!("{:.4} sr", f.solid_angle_sr));
+            row(
+                "ground",
+                format!(
+                    "{:.2} m² within {} m",
+                    f.ground_area_m2, view.report.range_m
+                ),
+            );
+            if let (Some(any), Some(blind)) = (f.region_seen_by_any, f.blind_area_m2) {
+                row(
+                    "region seen",
+                    format!("{:.1} % by any eye point", any * 100.0),
+                );
+                if let Some(all) = f.region_seen_by_all {
+                    row("", format!("{:.1} % by every one", all * 100.0));
+                }
+                row("blind", format!("{blind:.2} m²"));
+            }
+            let unconverged = view.report.eyes.iter().filter(|e| !e.converged).count();
+            if unconverged > 0 {
+                row(
+                    "not converged",
+                    format!("{unconverged} eye point(s): raise the tolerance"),
+                );
+            }
+        });
+    ui.small(
+        "on the ground: cyan seen (stronger: by every eye point); in the region green \
+         seen, red blind",
+    );
+}
+
+/// A lens's figures at the centre and over the gaze grid.
+fn lens_figures(ui: &mut egui::Ui, r: &specula_analyze::lens::Report) {
+    let c = &r.centre;
+    let number = |v: Option<f64>| {
+        v.map(|v| format!("{v:.3}"))
+            .unwrap_or_else(|| "outside".into())
+    };
+    egui::Grid::new("lens figures")
+        .num_columns(2)
+        .show(ui, |ui| {
+            let mut row = |name: &str, value: String| {
+                ui.label(name);
+                ui.label(value);
+                ui.end_row();
+            };
+            row(
+                "at the centre",
+                format!(
+                    "{} / {} × {}",
+                    number(c.sphere_d),
+                    number(c.cylinder_d),
+                    c.axis_deg.map(|a| format!("{a:.0}")).unwrap_or_default()
+                ),
+            );
+            row("mean power", format!("{} D", number(c.mean_power_d)));
+            if let Some([h, v]) = c.prism_d {
+                row("prism", format!("{h:.2} Δ out, {v:.2} Δ up"));
+            }
+            let largest = |f: &dyn Fn(&specula_analyze::lens::Cell) -> Option<f64>| {
+                r.grid
+                    .iter()
+                    .filter_map(f)
+                    .fold(0.0, |a: f64, v| a.max(v.abs()))
+            };
+            row(
+                "largest cylinder",
+                format!(
+                    "{:.3} D over ±{}° × ±{}°",
+                    largest(&|c| c.cylinder_d),
+                    r.gaze.h_max_deg,
+                    r.gaze.v_max_deg
+                ),
+            );
+            if r.prescription.is_some() {
+                row(
+                    "unwanted cylinder",
+                    format!("{:.3} D at most", largest(&|c| c.unwanted_cylinder_d)),
+                );
+            }
+            row(
+                "outside the lens",
+                format!(
+                    "{} of {} gazes",
+                    r.grid.iter().filter(|c| c.outside).count(),
+                    r.grid.len()
+                ),
+            );
+        });
+}
+
+/// The glare's figures for the eye point shown, and the eyebox map (returns the eye point
+/// clicked there).
+fn glare_figures(
+    ui: &mut egui::Ui,
+    analysis: &Analysis,
+    g: &specula_analyze::glare::Glare,
+    complete: bool,
+) -> Option<usize> {
+    let mut select = None;
+    let r = &g.report;
+    let shown = analysis.glare_eye().min(r.eyes.len() - 1);
+    ui.label(match r.worst_eye {
+        Some(k) => format!(
+            "glare from {:.0} % of the eye points; worst: eye point {}",
+            r.share_with_glare * 100.0,
+            k + 1
+        ),
+        None => format!(
+            "no glare: no eye point sees '{}' in '{}'",
+            r.source, r.surface
+        ),
+    });
+    let e = &r.eyes[shown];
+    ui.small(format!(
+        "eye point {} shown: relative luminance {:.4}, veiling ratio {}, {:.3e} sr",
+        shown + 1,
+        e.max_luminance_factor,
+        specula_analyze::glare::veiling_text(e.max_veiling_ratio),
+        e.solid_angle_sr
+    ));
+    if r.eyes.len() > 1 && complete {
+        select = eyebox_map(ui, analysis, g, shown);
+        ui.small(
+            "eye points as seen from the seat, coloured by the glare's solid angle \
+             (grey: none); red: the worst, white: shown. Click one to show it.",
+        );
+    }
+    ui.small(format!(
+        "on the surface: the glare's relative luminance, log scale from {} (blue) to 1 \
+         (yellow)",
+        analysis.settings.threshold
+    ));
+    select
+}
+
+/// What the lens map over the view shows, and its range.
+fn lens_map_legend(ui: &mut egui::Ui, analysis: &Analysis) {
     if let Some(Analysed::Lens(r)) = analysis.outcome().map(|o| &o.result) {
         let values: Vec<f64> = r
             .grid
