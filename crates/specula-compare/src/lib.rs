@@ -376,9 +376,12 @@ pub fn compare(
     })
 }
 
+/// The methods of a run, each made with its label's preset and settings.
+type Techniques = Vec<(Label, Box<dyn Technique>)>;
+
 /// Every method of the run, made with its preset and settings (an unknown name or setting
 /// fails here, before any long work).
-fn techniques_for(options: &Options) -> Result<Vec<(Label, Box<dyn Technique>)>, CompareError> {
+fn techniques_for(options: &Options) -> Result<Techniques, CompareError> {
     let labels = Label::parse_list(&options.methods)?;
     check_settings(&labels, &options.parameters)?;
     let techniques = labels
