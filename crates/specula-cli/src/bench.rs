@@ -147,6 +147,81 @@ fn spread(values: Vec<f64>) -> Spread {
     Spread::of(values)
 }
 
+/// One method (and mode) being timed.
+struct Timed {
+    label: Label,
+    mode: &'static str,
+    technique: Box<dyn specula_methods::Technique>,
+    prepare_ms: f64,
+    totals: Vec<f64>,
+    stages: Vec<(String, Vec<f64>)>,
+    timing: String,
+    created: u64,
+    rays: Option<u64>,
+    counters: Vec<(String, u64)>,
+}
+
+impl Timed {
+    /// A warm frame's time, stages, counters and what it created.
+    fn record(&mut self, frame: &specula_methods::Frame) {
+        let count = |name: &str| frame.counters.iter().find(|(n, _)| n == name).map(|c| c.1);
+        if let (Some(closest), Some(shadow)) = (
+            count(specula_methods::COUNTER_RAYS_TRACED),
+            count(specula_methods::COUNTER_SHADOW_RAYS),
+        ) {
+            self.rays = Some(closest + shadow);
+        }
+        self.created += frame.created().total();
+        self.counters = frame.counters.clone();
+        self.timing = format!("{:?}", frame.timing);
+        self.totals.push(frame.total_milliseconds());
+        for s in &frame.stages {
+            match self.stages.iter_mut().find(|(n, _)| *n == s.stage) {
+                Some((_, v)) => v.push(s.milliseconds),
+                None => self.stages.push((s.stage.clone(), vec![s.milliseconds])),
+            }
+        }
+    }
+
+    /// The method's figures over its warm frames.
+    fn into_bench(
+        self,
+        scene_name: &str,
+        adapter: &str,
+        frames: u32,
+        width: u32,
+        height: u32,
+    ) -> MethodBench {
+        let t = self;
+        let frame = spread(t.totals);
+        let rays_per_second = t
+            .rays
+            .filter(|_| frame.median_ms > 0.0)
+            .map(|r| r as f64 / (frame.median_ms * 1e-3));
+        MethodBench {
+            scene: scene_name.to_string(),
+            label: t.label.to_string(),
+            method: t.label.info.name.to_string(),
+            preset: t.label.preset.map(|p| p.name.to_string()),
+            mode: t.mode.to_string(),
+            parameters: t.technique.parameters(),
+            frames,
+            width,
+            height,
+            adapter: adapter.to_string(),
+            timing: t.timing,
+            prepare_ms: t.prepare_ms,
+            frame,
+            stages: t.stages.into_iter().map(|(n, v)| (n, spread(v))).collect(),
+            created: t.created,
+            counters: t.counters,
+            speedup_over_reference: None,
+            speedup_over_gpu_trace: None,
+            rays_per_second,
+        }
+    }
+}
+
 /// Times the labels `methods` on `scene`; a method that fails to prepare or to render a frame
 /// is a failure with its error, and the others are timed on. The `parameters` (checked beforehand with
 /// `specula_methods::check_settings`) go to the labels in `asked` they reach, after their
@@ -163,19 +238,6 @@ pub fn run(
     height: u32,
     frames: u32,
 ) -> Result<(Vec<MethodBench>, Vec<BenchFailure>)> {
-    /// One method (and mode) being timed.
-    struct Timed {
-        label: Label,
-        mode: &'static str,
-        technique: Box<dyn specula_methods::Technique>,
-        prepare_ms: f64,
-        totals: Vec<f64>,
-        stages: Vec<(String, Vec<f64>)>,
-        timing: String,
-        created: u64,
-        rays: Option<u64>,
-        counters: Vec<(String, u64)>,
-    }
     let scene_name = scene.name.clone();
     let live = LiveScene::new(scene);
     let camera = live.scene().camera.clone();
@@ -248,23 +310,7 @@ pub fn run(
             if round < WARM_UP_FRAMES {
                 continue;
             }
-            let count = |name: &str| frame.counters.iter().find(|(n, _)| n == name).map(|c| c.1);
-            if let (Some(closest), Some(shadow)) = (
-                count(specula_methods::COUNTER_RAYS_TRACED),
-                count(specula_methods::COUNTER_SHADOW_RAYS),
-            ) {
-                t.rays = Some(closest + shadow);
-            }
-            t.created += frame.created().total();
-            t.counters = frame.counters.clone();
-            t.timing = format!("{:?}", frame.timing);
-            t.totals.push(frame.total_milliseconds());
-            for s in &frame.stages {
-                match t.stages.iter_mut().find(|(n, _)| *n == s.stage) {
-                    Some((_, v)) => v.push(s.milliseconds),
-                    None => t.stages.push((s.stage.clone(), vec![s.milliseconds])),
-                }
-            }
+            t.record(&frame);
         }
         for k in failed_now.into_iter().rev() {
             timed.remove(k);
@@ -273,34 +319,7 @@ pub fn run(
     bar.finish_and_clear();
     let runs = timed
         .into_iter()
-        .map(|t| {
-            let frame = spread(t.totals);
-            let rays_per_second = t
-                .rays
-                .filter(|_| frame.median_ms > 0.0)
-                .map(|r| r as f64 / (frame.median_ms * 1e-3));
-            MethodBench {
-                scene: scene_name.clone(),
-                label: t.label.to_string(),
-                method: t.label.info.name.to_string(),
-                preset: t.label.preset.map(|p| p.name.to_string()),
-                mode: t.mode.to_string(),
-                parameters: t.technique.parameters(),
-                frames,
-                width,
-                height,
-                adapter: adapter.clone(),
-                timing: t.timing,
-                prepare_ms: t.prepare_ms,
-                frame,
-                stages: t.stages.into_iter().map(|(n, v)| (n, spread(v))).collect(),
-                created: t.created,
-                counters: t.counters,
-                speedup_over_reference: None,
-                speedup_over_gpu_trace: None,
-                rays_per_second,
-            }
-        })
+        .map(|t| t.into_bench(&scene_name, &adapter, frames, width, height))
         .collect();
     Ok((runs, failed))
 }
