@@ -792,8 +792,7 @@ fn regulation(
     mut options: mirror_view::Options,
     camera_eyes: Vec<Vec3>,
 ) -> Result<()> {
-    use specula_analyze::mirror_surface::MirrorSurface;
-    use specula_analyze::regulation::{self as reg, EyeRule, EyeSets, Side, Vehicle};
+    use specula_analyze::regulation::{self as reg, EyeRule};
     let regulation = reg::by_name(name)?;
     let frame = options.frame;
     let vehicle_parts = args
@@ -810,22 +809,97 @@ fn regulation(
             regulation.name
         );
     }
-    let (eyes, eye_sets, eyes_option, reference) =
-        if let Some((centre, axes, count)) = args.eyellipse {
-            let points = reg::eyellipse_points(&frame, centre, axes, args.eyellipse_tilt, count)?;
-            (points, EyeSets::EachAlone, "--eyellipse", centre)
-        } else if let Some(r) = args.r_point {
-            let ocular = reg::ocular_points(&frame, r);
-            (
-                ocular.to_vec(),
-                EyeSets::Together,
-                "--r-point",
-                r + frame.up * reg::OCULAR_HEIGHT_M,
-            )
-        } else {
-            let centre = camera_eyes.iter().copied().sum::<Vec3>() / camera_eyes.len() as f32;
-            (camera_eyes, EyeSets::Together, "--eye", centre)
-        };
+    let (eyes, eye_sets, eyes_option, reference) = regulation_eyes(args, &frame, camera_eyes)?;
+    let vehicle = regulation_vehicle(args, scene, &options, &vehicle_parts, reference)?;
+    let request = reg::Request {
+        regulation,
+        vehicle: vehicle.clone(),
+        eyes: eyes.clone(),
+        eye_sets,
+        eyes_option,
+        view: options,
+    };
+    let accel = SceneAccel::new(scene);
+    let bar = eye_bar(eyes.len());
+    let judged = reg::evaluate(scene, &accel, &request, &|done| {
+        bar.set_position(done as u64)
+    })?;
+    bar.finish_and_clear();
+    let adjustment = args
+        .adjust
+        .map(|pivot| adjust_mirror(scene, &request, pivot, args.adjust_step))
+        .transpose()?;
+    print_verdict(&judged.verdict, &vehicle, args.median.is_none());
+    if let Some(a) = &adjustment {
+        print_adjustment(a);
+    }
+    let report = RegulationReport {
+        view: &judged.view.report,
+        vehicle: VehicleReport {
+            reference: vehicle.reference.to_array(),
+            side: vehicle.side,
+            outermost: vehicle.outermost.map(|p| p.to_array()),
+            median: vehicle.median.to_array(),
+            eyes_from: eyes_option,
+            vehicle_parts: args.vehicle.clone(),
+        },
+        regulation: &judged.verdict,
+        adjustment: adjustment.as_ref(),
+    };
+    write_json(args.json.as_deref(), &report)?;
+    if let Some(dir) = &args.report {
+        let mirror = request.view.mirror;
+        let html =
+            specula_analyze::report::write_mirror_view(dir, &judged.view, scene, &accel, mirror)?;
+        println!("report: {}", html.display());
+    }
+    Ok(())
+}
+
+/// The eye points a regulation judges from: an eyellipse's (each alone), R46's ocular points
+/// above the R point, or the given eyes (together); the option they came from and the
+/// reference point of the vehicle frame.
+fn regulation_eyes(
+    args: &MirrorViewArgs,
+    frame: &VehicleFrame,
+    camera_eyes: Vec<Vec3>,
+) -> Result<(
+    Vec<Vec3>,
+    specula_analyze::regulation::EyeSets,
+    &'static str,
+    Vec3,
+)> {
+    use specula_analyze::regulation::{self as reg, EyeSets};
+    let frame = *frame;
+    Ok(if let Some((centre, axes, count)) = args.eyellipse {
+        let points = reg::eyellipse_points(&frame, centre, axes, args.eyellipse_tilt, count)?;
+        (points, EyeSets::EachAlone, "--eyellipse", centre)
+    } else if let Some(r) = args.r_point {
+        let ocular = reg::ocular_points(&frame, r);
+        (
+            ocular.to_vec(),
+            EyeSets::Together,
+            "--r-point",
+            r + frame.up * reg::OCULAR_HEIGHT_M,
+        )
+    } else {
+        let centre = camera_eyes.iter().copied().sum::<Vec3>() / camera_eyes.len() as f32;
+        (camera_eyes, EyeSets::Together, "--eye", centre)
+    })
+}
+
+/// The vehicle the fields are laid out for: its side (given, or the mirror's), its outermost
+/// point (given, or its parts'), its median plane and ground.
+fn regulation_vehicle(
+    args: &MirrorViewArgs,
+    scene: &specula_scene::Scene,
+    options: &mirror_view::Options,
+    vehicle_parts: &[usize],
+    reference: Vec3,
+) -> Result<specula_analyze::regulation::Vehicle> {
+    use specula_analyze::mirror_surface::MirrorSurface;
+    use specula_analyze::regulation::{self as reg, Side, Vehicle};
+    let frame = options.frame;
     let surface =
         MirrorSurface::new(scene, options.mirror, options.surface).expect("options were validated");
     let (mirror_centre, _) = reg::mirror_centre_and_normal(&surface);
@@ -853,67 +927,35 @@ fn regulation(
         ground_y: options.ground_y,
     };
     vehicle.validate()?;
-    let request = reg::Request {
-        regulation,
-        vehicle: vehicle.clone(),
-        eyes: eyes.clone(),
-        eye_sets,
-        eyes_option,
-        view: options,
+    vehicle.validate()?;
+    Ok(vehicle)
+}
+
+/// The poses of the mirror about `pivot` that pass, with a progress bar.
+fn adjust_mirror(
+    scene: &specula_scene::Scene,
+    request: &specula_analyze::regulation::Request,
+    pivot: Vec3,
+    step_deg: f32,
+) -> Result<specula_analyze::regulation::Adjustment> {
+    use specula_analyze::regulation as reg;
+    reg::check_pivot(scene, request.view.mirror, pivot)?;
+    let bar = ProgressBar::new(1);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:30} {pos}/{len} mirror poses ({elapsed})")
+            .expect("valid template"),
+    );
+    let adjust = reg::AdjustRequest {
+        pivot,
+        step_deg,
+        limit_deg: 20.0,
     };
-    let accel = SceneAccel::new(scene);
-    let bar = eye_bar(eyes.len());
-    let judged = reg::evaluate(scene, &accel, &request, &|done| {
+    let adjustment = reg::adjust(scene, request, &adjust, &|done, total| {
+        bar.set_length(total as u64);
         bar.set_position(done as u64)
     })?;
     bar.finish_and_clear();
-    let adjustment = match args.adjust {
-        Some(pivot) => {
-            reg::check_pivot(scene, request.view.mirror, pivot)?;
-            let bar = ProgressBar::new(1);
-            bar.set_style(
-                ProgressStyle::with_template("{bar:30} {pos}/{len} mirror poses ({elapsed})")
-                    .expect("valid template"),
-            );
-            let adjust = reg::AdjustRequest {
-                pivot,
-                step_deg: args.adjust_step,
-                limit_deg: 20.0,
-            };
-            let a = reg::adjust(scene, &request, &adjust, &|done, total| {
-                bar.set_length(total as u64);
-                bar.set_position(done as u64)
-            })?;
-            bar.finish_and_clear();
-            Some(a)
-        }
-        None => None,
-    };
-    print_verdict(&judged.verdict, &vehicle, args.median.is_none());
-    if let Some(a) = &adjustment {
-        print_adjustment(a);
-    }
-    let report = RegulationReport {
-        view: &judged.view.report,
-        vehicle: VehicleReport {
-            reference: vehicle.reference.to_array(),
-            side: vehicle.side,
-            outermost: vehicle.outermost.map(|p| p.to_array()),
-            median: vehicle.median.to_array(),
-            eyes_from: eyes_option,
-            vehicle_parts: args.vehicle.clone(),
-        },
-        regulation: &judged.verdict,
-        adjustment: adjustment.as_ref(),
-    };
-    write_json(args.json.as_deref(), &report)?;
-    if let Some(dir) = &args.report {
-        let mirror = request.view.mirror;
-        let html =
-            specula_analyze::report::write_mirror_view(dir, &judged.view, scene, &accel, mirror)?;
-        println!("report: {}", html.display());
-    }
-    Ok(())
+    Ok(adjustment)
 }
 
 #[derive(serde::Serialize)]
