@@ -338,25 +338,7 @@ fn step(table: toml::Table) -> Result<Step, String> {
 fn analysis(a: RawAnalysis) -> Result<Option<Request>, String> {
     let kind = match a.kind.as_str() {
         "off" => {
-            let others = a.object.is_some()
-                || a.source.is_some()
-                || a.sun.is_some()
-                || a.display.is_some()
-                || a.eye.is_some()
-                || a.eyes.is_some()
-                || a.eyebox.is_some()
-                || a.region.is_some()
-                || a.range.is_some()
-                || a.ground.is_some()
-                || a.tolerance.is_some()
-                || a.map.is_some()
-                || a.regulation.is_some()
-                || a.forward.is_some()
-                || a.r_point.is_some()
-                || a.outermost.is_some()
-                || a.side.is_some()
-                || a.vehicle.is_some();
-            if others {
+            if a.has_other_keys() {
                 return Err("analysis: kind = \"off\" takes no other key".into());
             }
             return Ok(None);
@@ -372,23 +354,12 @@ fn analysis(a: RawAnalysis) -> Result<Option<Request>, String> {
     };
     let object = a
         .object
+        .clone()
         .ok_or("analysis needs object = \"NAME\" (the mirror, or the glaring surface)")?;
     if let Some(eye) = a.eye {
         finite(&eye, "analysis.eye")?;
     }
-    let eyes = match (a.eyes.as_deref(), a.eyebox) {
-        (Some(_), Some(_)) => return Err("analysis: give eyes or eyebox, not both".into()),
-        (None | Some("centre"), None) => Eyes::Camera,
-        (Some("ocular"), None) => Eyes::Ocular,
-        (Some(other), None) => {
-            return Err(format!(
-            "analysis.eyes = \"{other}\": expected centre or ocular (or eyebox = [W, H, NX, NY])"
-        ))
-        }
-        (None, Some(eyebox)) => {
-            Eyes::eyebox(eyebox).map_err(|e| format!("analysis.eyebox = [W, H, NX, NY]: {e}"))?
-        }
-    };
+    let eyes = analysis_eyes(&a)?;
     let region = a
         .region
         .map(|[x0, z0, x1, z1]| {
@@ -406,13 +377,86 @@ fn analysis(a: RawAnalysis) -> Result<Option<Request>, String> {
         }
         (Some(_), _) => return Err("analysis.map: only a lens analysis draws a map".into()),
     };
+    let regulation = regulation_request(&a)?;
+    Ok(Some(Request {
+        regulation,
+        kind,
+        lens_map,
+        object,
+        sun: a.sun,
+        display: match (a.display, a.display_luminance) {
+            (Some(name), Some(luminances)) => Some((name, luminances)),
+            (None, None) => None,
+            _ => {
+                return Err(
+                    "display and display_luminance = [symbol, background, min contrast] \
+                            come together"
+                        .into(),
+                )
+            }
+        },
+        source: a.source,
+        eye: a.eye.map(Vec3::from_array),
+        eyes,
+        region,
+        range_m: a.range,
+        ground_y: a.ground,
+        tolerance: a.tolerance,
+    }))
+}
+
+impl RawAnalysis {
+    /// Whether any key but `kind` is given.
+    fn has_other_keys(&self) -> bool {
+        let a = self;
+        a.object.is_some()
+            || a.source.is_some()
+            || a.sun.is_some()
+            || a.display.is_some()
+            || a.eye.is_some()
+            || a.eyes.is_some()
+            || a.eyebox.is_some()
+            || a.region.is_some()
+            || a.range.is_some()
+            || a.ground.is_some()
+            || a.tolerance.is_some()
+            || a.map.is_some()
+            || a.regulation.is_some()
+            || a.forward.is_some()
+            || a.r_point.is_some()
+            || a.outermost.is_some()
+            || a.side.is_some()
+            || a.vehicle.is_some()
+    }
+}
+
+/// The eye points: the camera's, the ocular points or an eyebox (checked as the command
+/// checks it).
+fn analysis_eyes(a: &RawAnalysis) -> Result<Eyes, String> {
+    Ok(match (a.eyes.as_deref(), a.eyebox) {
+        (Some(_), Some(_)) => return Err("analysis: give eyes or eyebox, not both".into()),
+        (None | Some("centre"), None) => Eyes::Camera,
+        (Some("ocular"), None) => Eyes::Ocular,
+        (Some(other), None) => {
+            return Err(format!(
+            "analysis.eyes = \"{other}\": expected centre or ocular (or eyebox = [W, H, NX, NY])"
+        ))
+        }
+        (None, Some(eyebox)) => {
+            Eyes::eyebox(eyebox).map_err(|e| format!("analysis.eyebox = [W, H, NX, NY]: {e}"))?
+        }
+    })
+}
+
+/// The regulation a mirror view is judged against, and the vehicle keys that lay it out
+/// (refused without one).
+fn regulation_request(a: &RawAnalysis) -> Result<Option<RegulationRequest>, String> {
     let vehicle_keys = a.forward.is_some()
         || a.r_point.is_some()
         || a.outermost.is_some()
         || a.side.is_some()
         || a.vehicle.is_some();
-    let regulation =
-        match a.regulation {
+    Ok(match a.regulation.clone() {
             None if vehicle_keys => return Err(
                 "analysis: forward, r_point, outermost, side and vehicle lay out a regulation's fields: \
                  give regulation = \"NAME\" too"
@@ -445,35 +489,10 @@ fn analysis(a: RawAnalysis) -> Result<Option<Request>, String> {
                     r_point: a.r_point.map(Vec3::from_array),
                     outermost: a.outermost.map(Vec3::from_array),
                     side,
-                    vehicle: a.vehicle.unwrap_or_default(),
+                    vehicle: a.vehicle.clone().unwrap_or_default(),
                 })
             }
-        };
-    Ok(Some(Request {
-        regulation,
-        kind,
-        lens_map,
-        object,
-        sun: a.sun,
-        display: match (a.display, a.display_luminance) {
-            (Some(name), Some(luminances)) => Some((name, luminances)),
-            (None, None) => None,
-            _ => {
-                return Err(
-                    "display and display_luminance = [symbol, background, min contrast] \
-                            come together"
-                        .into(),
-                )
-            }
-        },
-        source: a.source,
-        eye: a.eye.map(Vec3::from_array),
-        eyes,
-        region,
-        range_m: a.range,
-        ground_y: a.ground,
-        tolerance: a.tolerance,
-    }))
+        })
 }
 
 #[cfg(test)]
