@@ -790,49 +790,7 @@ fn field_figures(
     };
     let within = far > near;
     if within {
-        // The share on a grid over the field alone; the margins on one that reaches beyond its
-        // outer edge and before its near end.
-        let grid = FieldGrid {
-            s0: s_lo,
-            d0: near,
-            ds: (s_hi - s_lo) / 600.0,
-            dd: (far - near) / 1200.0,
-            columns: 600,
-            rows: 1200,
-        };
-        let cells = grid.columns * grid.rows;
-        let (mut seen, mut clear, mut before) =
-            (vec![false; cells], vec![false; cells], vec![false; cells]);
-        for &k in set {
-            grid.fill(&mut seen, &view.footprints[k], to_field);
-            grid.fill(&mut clear, &view.clear_footprints[k], to_field);
-            grid.fill(&mut before, &view.previous_footprints[k], to_field);
-        }
-        let count = |cells: &[bool]| cells.iter().filter(|c| **c).count() as f64;
-        let hidden = seen.iter().zip(&clear).filter(|(s, c)| **c && !**s).count() as f64;
-        // The grid's own error: twice the share's change on a grid of half the resolution
-        // (a centre-sampled grid's error halves with its cells, so the change is about the
-        // coarse grid's error, twice the fine one's: the factor 2 is a safety margin).
-        let coarse = FieldGrid {
-            ds: grid.ds * 2.0,
-            dd: grid.dd * 2.0,
-            columns: grid.columns / 2,
-            rows: grid.rows / 2,
-            ..grid
-        };
-        let mut coarse_seen = vec![false; coarse.columns * coarse.rows];
-        for &k in set {
-            coarse.fill(&mut coarse_seen, &view.footprints[k], to_field);
-        }
-        let total = cells as f64;
-        figures.seen_share = count(&seen) / total;
-        figures.hidden_by_vehicle_share = hidden / total;
-        figures.seen_share_uncertainty = 2.0
-            * (figures.seen_share - count(&coarse_seen) / coarse_seen.len() as f64).abs()
-            + (count(&seen) - count(&before)).abs() / total;
-        figures.blind_area_m2 = (s_hi - s_lo) * (far - near) * (1.0 - figures.seen_share);
-        (figures.outer_margin_m, figures.near_margin_m) =
-            margins(&view.footprints, set, to_field, (s_lo, s_hi), (near, far));
+        seen_within_range(&mut figures, view, set, to_field, (s_lo, s_hi), (near, far));
     }
     // Beyond the range: directions from the mirror's centre to the field's far ground.
     let beyond_from = near.max(range);
@@ -846,27 +804,16 @@ fn field_figures(
     let seen_direction =
         |d: Vec3, strict: bool| set.iter().any(|&k| cones[k].contains(angles_of(d), strict));
     if beyond_to > beyond_from {
-        let (n, mut covered, mut loose) = (48usize, 0usize, 0usize);
-        let w_far = if beyond_to.is_finite() {
-            1.0 / beyond_to
-        } else {
-            0.0
-        };
-        let w_near = 1.0 / beyond_from;
-        for i in 0..n {
-            for j in 0..n {
-                let s = s_lo + (s_hi - s_lo) * (i as f64 + 0.5) / n as f64;
-                let w = w_far + (w_near - w_far) * (j as f64 + 0.5) / n as f64;
-                let g = origin + out * s as f32 + back * (1.0 / w) as f32;
-                let p = Vec3::new(g.x, vehicle.ground_y, g.y);
-                let d = (p - mirror_centre).normalize();
-                covered += usize::from(seen_direction(d, true));
-                loose += usize::from(seen_direction(d, false));
-            }
-        }
-        let total = (n * n) as f64;
-        figures.beyond_range_seen_share = Some(covered as f64 / total);
-        figures.beyond_range_uncertainty = Some((loose - covered) as f64 / total);
+        let (share, uncertainty) = beyond_range_share(
+            &seen_direction,
+            vehicle,
+            (s_lo, s_hi),
+            (beyond_from, beyond_to),
+            (origin, out, back),
+            mirror_centre,
+        );
+        figures.beyond_range_seen_share = Some(share);
+        figures.beyond_range_uncertainty = Some(uncertainty);
     }
     if spec.to_m.is_none() {
         figures.horizon_seen = Some(seen_direction(-vehicle.frame.forward, true));
@@ -885,6 +832,95 @@ fn field_figures(
             .is_none_or(|(s, u)| whole(s, u))
         && figures.horizon_seen.unwrap_or(true);
     figures
+}
+
+/// The field's seen share within the range on a grid over it (with the grid's own error and
+/// the last refinement's change as its uncertainty), the share the vehicle hides, the blind
+/// area and the margins.
+fn seen_within_range(
+    figures: &mut FieldFigures,
+    view: &MirrorView,
+    set: &[usize],
+    to_field: &impl Fn(Vec2) -> (f64, f64),
+    (s_lo, s_hi): (f64, f64),
+    (near, far): (f64, f64),
+) {
+    // The share on a grid over the field alone; the margins on one that reaches beyond its
+    // outer edge and before its near end.
+    let grid = FieldGrid {
+        s0: s_lo,
+        d0: near,
+        ds: (s_hi - s_lo) / 600.0,
+        dd: (far - near) / 1200.0,
+        columns: 600,
+        rows: 1200,
+    };
+    let cells = grid.columns * grid.rows;
+    let (mut seen, mut clear, mut before) =
+        (vec![false; cells], vec![false; cells], vec![false; cells]);
+    for &k in set {
+        grid.fill(&mut seen, &view.footprints[k], to_field);
+        grid.fill(&mut clear, &view.clear_footprints[k], to_field);
+        grid.fill(&mut before, &view.previous_footprints[k], to_field);
+    }
+    let count = |cells: &[bool]| cells.iter().filter(|c| **c).count() as f64;
+    let hidden = seen.iter().zip(&clear).filter(|(s, c)| **c && !**s).count() as f64;
+    // The grid's own error: twice the share's change on a grid of half the resolution
+    // (a centre-sampled grid's error halves with its cells, so the change is about the
+    // coarse grid's error, twice the fine one's: the factor 2 is a safety margin).
+    let coarse = FieldGrid {
+        ds: grid.ds * 2.0,
+        dd: grid.dd * 2.0,
+        columns: grid.columns / 2,
+        rows: grid.rows / 2,
+        ..grid
+    };
+    let mut coarse_seen = vec![false; coarse.columns * coarse.rows];
+    for &k in set {
+        coarse.fill(&mut coarse_seen, &view.footprints[k], to_field);
+    }
+    let total = cells as f64;
+    figures.seen_share = count(&seen) / total;
+    figures.hidden_by_vehicle_share = hidden / total;
+    figures.seen_share_uncertainty = 2.0
+        * (figures.seen_share - count(&coarse_seen) / coarse_seen.len() as f64).abs()
+        + (count(&seen) - count(&before)).abs() / total;
+    figures.blind_area_m2 = (s_hi - s_lo) * (far - near) * (1.0 - figures.seen_share);
+    (figures.outer_margin_m, figures.near_margin_m) =
+        margins(&view.footprints, set, to_field, (s_lo, s_hi), (near, far));
+}
+
+/// The share of the field beyond the range whose directions from the mirror's centre some eye
+/// point's cone holds (strictly), on a 48 × 48 grid even in lateral position and in inverse
+/// distance; its uncertainty, the share held only loosely.
+fn beyond_range_share(
+    seen_direction: &impl Fn(Vec3, bool) -> bool,
+    vehicle: &Vehicle,
+    (s_lo, s_hi): (f64, f64),
+    (beyond_from, beyond_to): (f64, f64),
+    (origin, out, back): (Vec2, Vec2, Vec2),
+    mirror_centre: Vec3,
+) -> (f64, f64) {
+    let (n, mut covered, mut loose) = (48usize, 0usize, 0usize);
+    let w_far = if beyond_to.is_finite() {
+        1.0 / beyond_to
+    } else {
+        0.0
+    };
+    let w_near = 1.0 / beyond_from;
+    for i in 0..n {
+        for j in 0..n {
+            let s = s_lo + (s_hi - s_lo) * (i as f64 + 0.5) / n as f64;
+            let w = w_far + (w_near - w_far) * (j as f64 + 0.5) / n as f64;
+            let g = origin + out * s as f32 + back * (1.0 / w) as f32;
+            let p = Vec3::new(g.x, vehicle.ground_y, g.y);
+            let d = (p - mirror_centre).normalize();
+            covered += usize::from(seen_direction(d, true));
+            loose += usize::from(seen_direction(d, false));
+        }
+    }
+    let total = (n * n) as f64;
+    (covered as f64 / total, (loose - covered) as f64 / total)
 }
 
 /// How much farther out, and how much nearer the eyes, the field (lateral `s`, longitudinal
