@@ -283,21 +283,7 @@ impl SagGrid {
             SceneError::invalid(source, format!("row {row}, column {column}: {message}"))
         };
         let number = |cell: &str, row: usize, column: usize, what: &str| {
-            let cell = cell.trim();
-            if cell.is_empty() {
-                return Err(bad(
-                    row,
-                    column,
-                    format!("{what} is missing (an empty cell)"),
-                ));
-            }
-            let value: f64 = cell
-                .parse()
-                .map_err(|_| bad(row, column, format!("{what} '{cell}' is not a number")))?;
-            if !value.is_finite() {
-                return Err(bad(row, column, format!("{what} is {value}: not finite")));
-            }
-            Ok(value)
+            csv_number(source, cell, row, column, what)
         };
         let lines: Vec<(usize, &str)> = text
             .lines()
@@ -315,28 +301,7 @@ impl SagGrid {
             .map(|(c, cell)| number(cell, header_row, c + 1, "the x value"))
             .collect::<Result<Vec<f64>, _>>()?;
         let increasing = |values: &[f64], what: &str, at: &dyn Fn(usize) -> (usize, usize)| {
-            if let Some(k) = (1..values.len()).find(|&k| values[k] <= values[k - 1]) {
-                let (row, column) = at(k);
-                return Err(bad(
-                    row,
-                    column,
-                    format!(
-                        "{what} {} mm does not increase from {} mm: the {what}s must increase",
-                        values[k],
-                        values[k - 1]
-                    ),
-                ));
-            }
-            if values.len() < 4 {
-                return Err(SceneError::invalid(
-                    source,
-                    format!(
-                        "{} {what}s: the bicubic interpolation needs at least 4",
-                        values.len()
-                    ),
-                ));
-            }
-            Ok(())
+            increasing(source, values, what, at)
         };
         increasing(&xs_mm, "x value", &|k| (header_row, k + 2))?;
         let mut ys_mm = Vec::new();
@@ -729,6 +694,70 @@ impl Progressive {
             - 3.0 * c5 * y * y / k5;
         Some([a, a_y, a_yy])
     }
+}
+
+/// A grid cell `row`, `column` of `source` saying why it is bad.
+fn bad_cell(source: &str, row: usize, column: usize, message: String) -> SceneError {
+    SceneError::invalid(source, format!("row {row}, column {column}: {message}"))
+}
+
+/// The number in a CSV cell, or why it is none (empty, not a number, not finite).
+fn csv_number(
+    source: &str,
+    cell: &str,
+    row: usize,
+    column: usize,
+    what: &str,
+) -> Result<f64, SceneError> {
+    let bad = |row: usize, column: usize, message: String| bad_cell(source, row, column, message);
+    let cell = cell.trim();
+    if cell.is_empty() {
+        return Err(bad(
+            row,
+            column,
+            format!("{what} is missing (an empty cell)"),
+        ));
+    }
+    let value: f64 = cell
+        .parse()
+        .map_err(|_| bad(row, column, format!("{what} '{cell}' is not a number")))?;
+    if !value.is_finite() {
+        return Err(bad(row, column, format!("{what} is {value}: not finite")));
+    }
+    Ok(value)
+}
+
+/// The axis values increase, and there are at least 4 of them; else the first cell (`at`
+/// gives its row and column) that does not.
+fn increasing(
+    source: &str,
+    values: &[f64],
+    what: &str,
+    at: &dyn Fn(usize) -> (usize, usize),
+) -> Result<(), SceneError> {
+    let bad = |row: usize, column: usize, message: String| bad_cell(source, row, column, message);
+    if let Some(k) = (1..values.len()).find(|&k| values[k] <= values[k - 1]) {
+        let (row, column) = at(k);
+        return Err(bad(
+            row,
+            column,
+            format!(
+                "{what} {} mm does not increase from {} mm: the {what}s must increase",
+                values[k],
+                values[k - 1]
+            ),
+        ));
+    }
+    if values.len() < 4 {
+        return Err(SceneError::invalid(
+            source,
+            format!(
+                "{} {what}s: the bicubic interpolation needs at least 4",
+                values.len()
+            ),
+        ));
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -193,6 +193,40 @@ pub fn parse(shown: &str, bytes: &[u8], warnings: &mut Vec<String>) -> Result<Me
             ),
         ));
     }
+    let (positions, normals, uvs) = vertex_attributes(shown, vertices)?;
+    let triangles = fan_triangles(shown, &ply, positions.len())?;
+    let mut mesh = Mesh {
+        exact: None,
+        name: shown.to_string(),
+        normals: if normals.len() == positions.len() {
+            normals
+        } else {
+            vec![]
+        },
+        uvs: if uvs.len() == positions.len() {
+            uvs
+        } else {
+            vec![]
+        },
+        positions,
+        triangles,
+        material: 0,
+    };
+    if mesh.normals.is_empty() {
+        mesh.compute_smooth_normals();
+    }
+    Ok(mesh)
+}
+
+/// Each vertex's position, and its normal and texture coordinate where it has them.
+type VertexAttributes = (Vec<Vec3>, Vec<Vec3>, Vec<Vec2>);
+
+/// The vertices' positions, normals and texture coordinates (the last two empty or partial
+/// where the file has none).
+fn vertex_attributes(
+    shown: &str,
+    vertices: &[ply_rs::ply::DefaultElement],
+) -> Result<VertexAttributes, SceneError> {
     let get = |element: &ply_rs::ply::DefaultElement, names: &[&str]| -> Option<f64> {
         names.iter().find_map(|n| element.get(*n).and_then(scalar))
     };
@@ -222,6 +256,16 @@ pub fn parse(shown: &str, bytes: &[u8], warnings: &mut Vec<String>) -> Result<Me
             uvs.push(Vec2::new(u as f32, 1.0 - t as f32));
         }
     }
+    Ok((positions, normals, uvs))
+}
+
+/// The faces' corner lists, checked against the header's count and the vertices, fan-
+/// triangulated.
+fn fan_triangles(
+    shown: &str,
+    ply: &ply_rs::ply::Ply<ply_rs::ply::DefaultElement>,
+    vertex_count: usize,
+) -> Result<Vec<[u32; 3]>, SceneError> {
     let faces = ply
         .payload
         .get("face")
@@ -258,39 +302,16 @@ pub fn parse(shown: &str, bytes: &[u8], warnings: &mut Vec<String>) -> Result<Me
         }
         if let Some(&bad) = indices
             .iter()
-            .find(|&&i| i < 0 || i as usize >= positions.len())
+            .find(|&&i| i < 0 || i as usize >= vertex_count)
         {
             return Err(SceneError::invalid(
                 shown,
-                format!(
-                    "face {f} uses vertex index {bad}, but there are {} vertices",
-                    positions.len()
-                ),
+                format!("face {f} uses vertex index {bad}, but there are {vertex_count} vertices"),
             ));
         }
         for k in 1..indices.len() - 1 {
             triangles.push([indices[0] as u32, indices[k] as u32, indices[k + 1] as u32]);
         }
     }
-    let mut mesh = Mesh {
-        exact: None,
-        name: shown.to_string(),
-        normals: if normals.len() == positions.len() {
-            normals
-        } else {
-            vec![]
-        },
-        uvs: if uvs.len() == positions.len() {
-            uvs
-        } else {
-            vec![]
-        },
-        positions,
-        triangles,
-        material: 0,
-    };
-    if mesh.normals.is_empty() {
-        mesh.compute_smooth_normals();
-    }
-    Ok(mesh)
+    Ok(triangles)
 }
