@@ -931,53 +931,14 @@ fn listed_scene(shown: &str, file: &SceneFile, base: &Path) -> Result<Scene, Sce
         let prescription = prescription_of(&object.shape, base)
             .map_err(|e| at(format!("{path}.shape"), e))?
             .map(|(p, _, _)| p);
-        let material = match (&object.material, &prescription) {
-            (Some(name), _) => {
-                let Some(&material) = material_index.get(name) else {
-                    let known: Vec<&str> = material_index.keys().map(String::as_str).collect();
-                    return Err(SceneError::invalid(
-                        shown,
-                        format!(
-                            "{path}.material: unknown material '{name}' (defined: {})",
-                            if known.is_empty() {
-                                "none".to_string()
-                            } else {
-                                known.join(", ")
-                            }
-                        ),
-                    ));
-                };
-                if let Some(p) = &prescription {
-                    lens_glass_agrees(&materials[material], p)
-                        .map_err(|e| SceneError::invalid(shown, format!("{path}.material: {e}")))?;
-                }
-                material
-            }
-            (None, Some(p)) => {
-                let name = object
-                    .name
-                    .clone()
-                    .unwrap_or_else(|| "spectacle lens".into());
-                materials.push(Material::new(
-                    format!("{name} glass"),
-                    MaterialKind::Dielectric {
-                        ior: p.indices(),
-                        thin_walled: false,
-                    },
-                    Vec3::ONE,
-                ));
-                materials.len() - 1
-            }
-            (None, None) => {
-                return Err(SceneError::invalid(
-                    shown,
-                    format!(
-                        "{path}.material: missing (only a spectacle-lens shape makes its own \
-                         glass)"
-                    ),
-                ))
-            }
-        };
+        let material = object_material(
+            shown,
+            &path,
+            object,
+            prescription.as_ref(),
+            &material_index,
+            &mut materials,
+        )?;
         if prescription.is_some() && object.scale.is_some() {
             return Err(SceneError::invalid(
                 shown,
@@ -1009,10 +970,96 @@ fn listed_scene(shown: &str, file: &SceneFile, base: &Path) -> Result<Scene, Sce
             meshes.push(mesh);
         }
     }
-    let lights = file
-        .lights
-        .iter()
-        .map(|l| match *l {
+    let lights = file.lights.iter().map(LightSpec::light).collect::<Vec<_>>();
+    let background = background(shown, file, base, &mut textures)?;
+    let mut scene = Scene::new(file.name.clone().unwrap_or_else(|| shown.to_string()));
+    scene.meshes = meshes;
+    scene.materials = materials;
+    scene.textures = textures;
+    scene.lights = lights;
+    scene.background = background;
+    scene.ambient = file.ambient.map(Color::vec3).unwrap_or(Vec3::ZERO);
+    scene.warnings = warnings;
+    scene.prescriptions = prescriptions;
+    match &file.camera {
+        Some(c) => scene.camera = camera_from_spec(c),
+        None => scene.use_default_camera(shown),
+    }
+    if scene.lights.is_empty()
+        && scene
+            .materials
+            .iter()
+            .any(|m| m.kind == MaterialKind::Diffuse)
+    {
+        scene.warnings.push(format!(
+            "{shown}: no [[lights]]: diffuse surfaces receive only the ambient light"
+        ));
+    }
+    Ok(scene)
+}
+
+/// An object's material: the named one (which must agree with a spectacle lens's glass), or
+/// the glass a spectacle lens's prescription makes.
+fn object_material(
+    shown: &str,
+    path: &str,
+    object: &ObjectSpec,
+    prescription: Option<&Prescription>,
+    material_index: &BTreeMap<String, usize>,
+    materials: &mut Vec<Material>,
+) -> Result<usize, SceneError> {
+    Ok(match (&object.material, prescription) {
+        (Some(name), _) => {
+            let Some(&material) = material_index.get(name) else {
+                let known: Vec<&str> = material_index.keys().map(String::as_str).collect();
+                return Err(SceneError::invalid(
+                    shown,
+                    format!(
+                        "{path}.material: unknown material '{name}' (defined: {})",
+                        if known.is_empty() {
+                            "none".to_string()
+                        } else {
+                            known.join(", ")
+                        }
+                    ),
+                ));
+            };
+            if let Some(p) = &prescription {
+                lens_glass_agrees(&materials[material], p)
+                    .map_err(|e| SceneError::invalid(shown, format!("{path}.material: {e}")))?;
+            }
+            material
+        }
+        (None, Some(p)) => {
+            let name = object
+                .name
+                .clone()
+                .unwrap_or_else(|| "spectacle lens".into());
+            materials.push(Material::new(
+                format!("{name} glass"),
+                MaterialKind::Dielectric {
+                    ior: p.indices(),
+                    thin_walled: false,
+                },
+                Vec3::ONE,
+            ));
+            materials.len() - 1
+        }
+        (None, None) => {
+            return Err(SceneError::invalid(
+                shown,
+                format!(
+                    "{path}.material: missing (only a spectacle-lens shape makes its own \
+                     glass)"
+                ),
+            ))
+        }
+    })
+}
+
+impl LightSpec {
+    fn light(&self) -> Light {
+        match *self {
             LightSpec::Point {
                 position,
                 intensity,
@@ -1040,9 +1087,19 @@ fn listed_scene(shown: &str, file: &SceneFile, base: &Path) -> Result<Scene, Sce
                 inner_cone: inner_cone_deg.to_radians(),
                 outer_cone: outer_cone_deg.to_radians(),
             },
-        })
-        .collect::<Vec<_>>();
-    let background = match &file.background {
+        }
+    }
+}
+
+/// The background: a colour (black by default) or an equirectangular image, loaded into
+/// `textures`.
+fn background(
+    shown: &str,
+    file: &SceneFile,
+    base: &Path,
+    textures: &mut Vec<Texture>,
+) -> Result<Background, SceneError> {
+    Ok(match &file.background {
         None => Background::Color(Vec3::ZERO),
         Some(BackgroundSpec {
             image: Some(image),
@@ -1057,7 +1114,7 @@ fn listed_scene(shown: &str, file: &SceneFile, base: &Path) -> Result<Scene, Sce
             }
             textures.push(
                 Texture::load(&base.join(image), true)
-                    .map_err(|e| at("background.image".into(), e))?,
+                    .map_err(|e| SceneError::invalid(shown, format!("background.image: {e}")))?,
             );
             Background::Equirect {
                 texture: textures.len() - 1,
@@ -1067,31 +1124,7 @@ fn listed_scene(shown: &str, file: &SceneFile, base: &Path) -> Result<Scene, Sce
         Some(BackgroundSpec { color, .. }) => {
             Background::Color(color.map(Color::vec3).unwrap_or(Vec3::ZERO))
         }
-    };
-    let mut scene = Scene::new(file.name.clone().unwrap_or_else(|| shown.to_string()));
-    scene.meshes = meshes;
-    scene.materials = materials;
-    scene.textures = textures;
-    scene.lights = lights;
-    scene.background = background;
-    scene.ambient = file.ambient.map(Color::vec3).unwrap_or(Vec3::ZERO);
-    scene.warnings = warnings;
-    scene.prescriptions = prescriptions;
-    match &file.camera {
-        Some(c) => scene.camera = camera_from_spec(c),
-        None => scene.use_default_camera(shown),
-    }
-    if scene.lights.is_empty()
-        && scene
-            .materials
-            .iter()
-            .any(|m| m.kind == MaterialKind::Diffuse)
-    {
-        scene.warnings.push(format!(
-            "{shown}: no [[lights]]: diffuse surfaces receive only the ambient light"
-        ));
-    }
-    Ok(scene)
+    })
 }
 
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
