@@ -62,7 +62,9 @@ enum Command {
     /// each method's speed-up over the CPU reference and over gpu-trace (both always timed too).
     Bench(BenchArgs),
     /// Answer a design question with exact rays: `mirror-view` (what a mirror shows from the
-    /// eye points: field of view, ground footprint, a required region's blind part).
+    /// eye points, or its verdict against UN R46 / FMVSS 111), `glare` (a source or the sun
+    /// reflected in a cover, in cd/m², and the display's contrast under it), `lens` (a
+    /// spectacle lens as worn, against ANSI Z80.1 / ISO 8980).
     #[command(subcommand)]
     Analyze(analyze::Kind),
 }
@@ -1019,4 +1021,56 @@ fn write_sequence(
         }
     }
     unreachable!("the loop returns")
+}
+
+#[cfg(test)]
+mod cli_reference_tests {
+    use super::Cli;
+
+    /// docs/cli.md: every command's and subcommand's help, as clap renders it from the definitions
+    /// above. A test holds the file to them; `SPECULA_REGENERATE=1` writes it again.
+    fn cli_reference() -> String {
+        use clap::CommandFactory;
+        fn section(out: &mut String, command: &mut clap::Command, path: &str) {
+            let help = command.render_long_help().to_string();
+            out.push_str(&format!(
+                "\n## `{path}`\n\n```text\n{}\n```\n",
+                help.trim_end()
+            ));
+            let names: Vec<String> = command
+                .get_subcommands()
+                .filter(|c| c.get_name() != "help")
+                .map(|c| c.get_name().to_string())
+                .collect();
+            for name in names {
+                let sub = command.find_subcommand_mut(&name).expect("listed above");
+                section(out, sub, &format!("{path} {name}"));
+            }
+        }
+        let mut out = String::from(
+            "# specula's commands\n\nEvery command and option, as `specula help` prints them \
+             (generated from the command's definitions: `SPECULA_REGENERATE=1 cargo test -p \
+             specula-cli --bin specula cli_reference` writes this file again; a test holds it \
+             current).\n",
+        );
+        let mut command = Cli::command().term_width(100);
+        command.build();
+        section(&mut out, &mut command, "specula");
+        out
+    }
+
+    /// docs/cli.md is what the command's definitions print now.
+    #[test]
+    fn docs_cli_md_is_the_commands_help_as_it_is_now() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/cli.md");
+        let now = cli_reference();
+        if std::env::var_os("SPECULA_REGENERATE").is_some() {
+            std::fs::write(&path, &now).unwrap();
+        }
+        let written = std::fs::read_to_string(&path).unwrap_or_default();
+        assert!(
+            written == now,
+            "docs/cli.md is out of date: run SPECULA_REGENERATE=1 cargo test -p specula-cli --bin specula cli_reference"
+        );
+    }
 }
