@@ -353,19 +353,27 @@ fn print_methods() {
         if m.progressive {
             traits.push("progressive");
         }
-        println!("{} ({}): {}", m.name, traits.join(", "), m.summary);
+        print!(
+            "{}",
+            wrap(
+                &format!("{} ({}): {}", m.name, traits.join(", "), m.summary),
+                4
+            )
+        );
         for p in m.params {
-            println!(
+            let takes = format!(
                 "    {:<18} {} (default {}); change redoes: {}",
                 p.name,
                 p.kind.describe(),
                 p.default,
                 p.invalidates.describe()
             );
-            println!("    {:<18} {}", "", p.doc);
+            print!("{}", wrap(&takes, 23));
+            print!("{}", wrap(&format!("    {:<18} {}", "", p.doc), 23));
         }
         for preset in m.presets {
-            println!("  preset {}:{}: {}", m.name, preset.name, preset.summary);
+            let line = format!("  preset {}:{}: {}", m.name, preset.name, preset.summary);
+            print!("{}", wrap(&line, 6));
             for setting in preset.settings {
                 let name = setting.split_once('=').map_or(*setting, |(n, _)| n);
                 let default = m.param(name).map_or("?", |p| p.default);
@@ -541,24 +549,59 @@ fn print_scenes() {
         } else {
             ""
         };
-        println!("{name:<22}{description}{marker}");
+        print!("{}", wrap(&format!("{name:<22}{description}{marker}"), 22));
     }
+}
+
+/// The width the listings fit in.
+const LISTING_COLUMNS: usize = 100;
+
+/// `line` broken at spaces into lines of at most [`LISTING_COLUMNS`] characters (a word longer
+/// than that stands alone), the lines after the first indented by `indent` spaces; each line
+/// ends with a newline.
+fn wrap(line: &str, indent: usize) -> String {
+    let body = line.trim_start();
+    let mut out = String::new();
+    let mut current = line[..line.len() - body.len()].to_string();
+    let mut first = true;
+    // Split on single spaces so that padding (runs of spaces) is kept within a line.
+    for word in body.split(' ') {
+        let fits = current.chars().count() + 1 + word.chars().count() <= LISTING_COLUMNS;
+        if !first && !fits && !word.is_empty() && !current.trim().is_empty() {
+            out.push_str(current.trim_end());
+            out.push('\n');
+            current = " ".repeat(indent);
+        } else if !first {
+            current.push(' ');
+        }
+        current.push_str(word);
+        first = false;
+    }
+    out.push_str(current.trim_end());
+    out.push('\n');
+    out
 }
 
 /// The end of `specula methods`: the GPU, and whether it offers hardware ray queries
 /// (reported, not used: gpu_trace's module doc says why).
 fn print_ray_queries() {
     match GpuContext::new() {
-        Ok(gpu) => println!(
-            "\nGPU: {}; hardware ray queries: {}",
-            gpu.describe(),
-            if specula_methods::gpu_trace::ray_queries_supported(&gpu) {
-                "offered (gpu-trace still traverses its BVH in compute shaders)"
-            } else {
-                "not offered (gpu-trace traverses its BVH in compute shaders)"
-            }
+        Ok(gpu) => print!(
+            "\n{}",
+            wrap(
+                &format!(
+                    "GPU: {}; hardware ray queries: {}",
+                    gpu.describe(),
+                    if specula_methods::gpu_trace::ray_queries_supported(&gpu) {
+                        "offered (gpu-trace still traverses its BVH in compute shaders)"
+                    } else {
+                        "not offered (gpu-trace traverses its BVH in compute shaders)"
+                    }
+                ),
+                4
+            )
         ),
-        Err(e) => println!("\nno GPU: {e}"),
+        Err(e) => print!("\n{}", wrap(&format!("no GPU: {e}"), 4)),
     }
 }
 

@@ -6,13 +6,27 @@ fn specula() -> Command {
     Command::new(env!("CARGO_BIN_EXE_specula"))
 }
 
+/// Every line of a listing fits in 100 columns.
+fn fits_in_100_columns(text: &str) {
+    for line in text.lines() {
+        assert!(
+            line.chars().count() <= 100,
+            "{} columns: {line}",
+            line.chars().count()
+        );
+    }
+}
+
 #[test]
 fn scenes_lists_every_built_in_scene_one_line_each() {
     let out = specula().arg("scenes").output().unwrap();
     assert!(out.status.success());
     let text = String::from_utf8(out.stdout).unwrap();
     let names = specula_scene::builtin::names();
-    assert_eq!(text.lines().count(), names.len());
+    // One entry a scene, its description wrapped (indented) to fit 100 columns.
+    let entries = text.lines().filter(|l| !l.starts_with(' ')).count();
+    assert_eq!(entries, names.len());
+    fits_in_100_columns(&text);
     for name in names {
         assert!(
             text.lines().any(|l| l.starts_with(name)),
@@ -588,28 +602,41 @@ fn methods_lists_every_method_with_its_parameters_from_the_registry() {
     let out = specula().arg("methods").output().unwrap();
     assert!(out.status.success());
     let text = String::from_utf8_lossy(&out.stdout);
+    fits_in_100_columns(&text);
+    // Lines wrapped to fit are read joined: every run of white space as one space.
+    let words = |t: &str| t.split_whitespace().collect::<Vec<_>>().join(" ");
+    let joined = words(&text);
     for info in specula_methods::METHODS {
-        assert!(text.contains(&format!("{} (", info.name)), "{text}");
+        assert!(
+            text.lines()
+                .any(|l| l.starts_with(&format!("{} (", info.name))),
+            "{text}"
+        );
         for p in info.params {
-            let line = text
-                .lines()
-                .find(|l| {
-                    l.trim_start().starts_with(&format!("{} ", p.name))
-                        && l.contains(&format!("(default {})", p.default))
-                })
-                .unwrap_or_else(|| panic!("{}.{} missing: {text}", info.name, p.name));
-            assert!(line.contains(&p.kind.describe()), "{line}");
-            assert!(text.contains(p.doc), "{}", p.doc);
+            let takes = format!(
+                "{} {} (default {}); change redoes: {}",
+                p.name,
+                p.kind.describe(),
+                p.default,
+                p.invalidates.describe()
+            );
+            assert!(
+                joined.contains(&words(&takes)),
+                "{}.{} missing: {text}",
+                info.name,
+                p.name
+            );
+            assert!(joined.contains(&words(p.doc)), "{}", p.doc);
         }
     }
     assert!(text.contains("reference (exact, CPU, progressive)"));
     for info in specula_methods::METHODS {
         for preset in info.presets {
             assert!(
-                text.contains(&format!(
+                joined.contains(&words(&format!(
                     "preset {}:{}: {}",
                     info.name, preset.name, preset.summary
-                )),
+                ))),
                 "{}:{} missing: {text}",
                 info.name,
                 preset.name
