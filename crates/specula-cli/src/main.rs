@@ -20,7 +20,8 @@ mod bench;
 #[command(
     name = "specula",
     version,
-    about = "Accurate, measured reflections and refractions on curved mirrors and lenses"
+    about = "Accurate, measured reflections and refractions on curved mirrors and lenses",
+    after_help = "Examples:\n  specula render                      # the default scene with the exact reference -> out.png\n  specula compare door-mirror         # every technique against the reference -> specula-report/\n  specula analyze lens spectacle-lens --lens \"spectacle lens\" --prescription -3.00 --standard iso-8980-1\n\nEvery command and option: docs/cli.md"
 )]
 struct Cli {
     #[command(subcommand)]
@@ -30,16 +31,25 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// List the built-in scenes.
+    #[command(after_help = "Example:\n  specula scenes")]
     Scenes,
     /// List every method with its parameters: kind and range, default, what a change redoes.
+    #[command(after_help = "Example:\n  specula methods")]
     Methods,
     /// Render a scene to PNG (sRGB, clamped) and optionally EXR (linear float).
+    #[command(
+        after_help = "Example:\n  specula render door-mirror --method pvrr -W 640 -o pvrr.png --exr pvrr.exr"
+    )]
     Render(RenderArgs),
     /// Render the reference and each method from the same camera; report error and speed.
     /// Several scenes, or a folder of .toml scenes, give one report with a methods × scenes table.
+    #[command(
+        after_help = "Example:\n  specula compare door-mirror --methods envmap,pvrr,pvrr:paper --report report"
+    )]
     Compare(CompareArgs),
     /// Open the interactive viewer: move the eye and objects, switch techniques, compare with
     /// the reference (split and FLIP error views). `--script FILE` runs TOML steps and exits.
+    #[command(after_help = "Example:\n  specula view truck-cover --method vertex-tracing")]
     View {
         #[arg(default_value = DEFAULT_SCENE)]
         scene: String,
@@ -60,12 +70,18 @@ enum Command {
     },
     /// Time each method: warm-up, then N frames; median and spread per method and stage, and
     /// each method's speed-up over the CPU reference and over gpu-trace (both always timed too).
+    #[command(
+        after_help = "Example:\n  specula bench door-mirror --methods envmap,pvrr --frames 20 --markdown bench.md"
+    )]
     Bench(BenchArgs),
     /// Answer a design question with exact rays: `mirror-view` (what a mirror shows from the
     /// eye points, or its verdict against UN R46 / FMVSS 111), `glare` (a source or the sun
     /// reflected in a cover, in cd/m², and the display's contrast under it), `lens` (a
     /// spectacle lens as worn, against ANSI Z80.1 / ISO 8980).
-    #[command(subcommand)]
+    #[command(
+        subcommand,
+        after_help = "Example:\n  specula analyze mirror-view door-mirror --mirror \"door mirror\" --eyebox 0.3,0.15,5,3 --report report"
+    )]
     Analyze(analyze::Kind),
 }
 
@@ -78,34 +94,34 @@ struct RenderArgs {
     #[arg(default_value = DEFAULT_SCENE)]
     scene: String,
     /// Method to render with, or METHOD:PRESET (`specula methods` lists them).
-    #[arg(long, short, default_value = "reference")]
+    #[arg(help_heading = "Method", long, short, default_value = "reference")]
     method: String,
     /// Image width in pixels.
-    #[arg(short = 'W', long, default_value_t = 640, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    #[arg(help_heading = "Image", short = 'W', long, default_value_t = 640, value_parser = clap::value_parser!(u32).range(1..=16384))]
     width: u32,
     /// Image height in pixels (default: from the width and the camera's aspect ratio, else 480).
-    #[arg(short = 'H', long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    #[arg(help_heading = "Image", short = 'H', long, value_parser = clap::value_parser!(u32).range(1..=16384))]
     height: Option<u32>,
     /// Samples per pixel of the reference: 1 = one ray through each pixel centre; more =
     /// stratified jitter (the reference's `spp` parameter).
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    #[arg(help_heading = "Image", long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4096))]
     spp: u32,
     /// Maximum number of specular bounces on a reference path (its `max_depth` parameter).
-    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(0..=64))]
+    #[arg(help_heading = "Image", long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(0..=64))]
     max_depth: u32,
     /// A technique parameter, NAME=VALUE (repeatable), e.g. `-p resolution=512`.
-    #[arg(short = 'p', long = "param")]
+    #[arg(help_heading = "Method", short = 'p', long = "param")]
     params: Vec<String>,
     /// PNG output file.
-    #[arg(short, long, default_value = "out.png")]
+    #[arg(help_heading = "Output", short, long, default_value = "out.png")]
     output: PathBuf,
     /// Also write linear float RGB to this OpenEXR file.
-    #[arg(long)]
+    #[arg(help_heading = "Output", long)]
     exr: Option<PathBuf>,
     /// A progressive method's steps as an image sequence: DIR/step-000.png, ... and
     /// DIR/steps.csv with the time and rays of each step (the step time is the method's
     /// `budget_ms`, 100 unless `-p budget_ms=N` says otherwise).
-    #[arg(long, value_name = "DIR")]
+    #[arg(help_heading = "Output", long, value_name = "DIR")]
     sequence: Option<PathBuf>,
     #[command(flatten)]
     distributed: DistributedArgs,
@@ -118,35 +134,35 @@ struct CompareArgs {
     scenes: Vec<String>,
     /// Comma-separated methods (default: every method); a method may run several times under
     /// labels METHOD:PRESET, e.g. `c3rc,c3rc:paper` (`specula methods` lists the presets).
-    #[arg(long, value_delimiter = ',')]
+    #[arg(help_heading = "Methods", long, value_delimiter = ',')]
     methods: Option<Vec<String>>,
     /// Run each method's published algorithm (its `paper` preset) beside it, as METHOD:paper.
-    #[arg(long)]
+    #[arg(help_heading = "Methods", long)]
     paper: bool,
     /// Folder for report.html, report.json and the images.
-    #[arg(long, default_value = "specula-report")]
+    #[arg(help_heading = "Output", long, default_value = "specula-report")]
     report: PathBuf,
     /// A technique parameter, NAME=VALUE (repeatable), e.g. `-p resolution=512`: applied after
     /// the presets to every method that has it; LABEL.NAME=VALUE (`-p c3rc:paper.points=5000`)
     /// to that label only.
-    #[arg(short = 'p', long = "param")]
+    #[arg(help_heading = "Methods", short = 'p', long = "param")]
     params: Vec<String>,
     /// Also write the JSON report here.
-    #[arg(long)]
+    #[arg(help_heading = "Output", long)]
     json: Option<PathBuf>,
-    #[arg(short = 'W', long, default_value_t = 320, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    #[arg(help_heading = "Images and timing", short = 'W', long, default_value_t = 320, value_parser = clap::value_parser!(u32).range(1..=16384))]
     width: u32,
-    #[arg(short = 'H', long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    #[arg(help_heading = "Images and timing", short = 'H', long, value_parser = clap::value_parser!(u32).range(1..=16384))]
     height: Option<u32>,
     /// Samples per pixel of the reference.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    #[arg(help_heading = "Images and timing", long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4096))]
     spp: u32,
-    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(0..=64))]
+    #[arg(help_heading = "Images and timing", long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(0..=64))]
     max_depth: u32,
     /// Warm frames timed per method, the reference's included, after a first frame timed apart:
     /// each time is their median (with the spread), each speed-up a warm median over a warm
     /// median.
-    #[arg(long, default_value_t = specula_compare::DEFAULT_FRAMES, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    #[arg(help_heading = "Images and timing", long, default_value_t = specula_compare::DEFAULT_FRAMES, value_parser = clap::value_parser!(u32).range(1..=1000))]
     frames: u32,
 }
 
@@ -157,26 +173,26 @@ struct BenchArgs {
     scenes: Vec<String>,
     /// Comma-separated methods (default: every method), or labels METHOD:PRESET as in
     /// `compare`.
-    #[arg(long, value_delimiter = ',')]
+    #[arg(help_heading = "Methods", long, value_delimiter = ',')]
     methods: Option<Vec<String>>,
     /// Time each method's published algorithm (its `paper` preset) beside it, as METHOD:paper.
-    #[arg(long)]
+    #[arg(help_heading = "Methods", long)]
     paper: bool,
-    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=100000))]
+    #[arg(help_heading = "Frames", long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=100000))]
     frames: u32,
     /// A technique parameter, NAME=VALUE (repeatable), e.g. `-p resolution=512`; LABEL.NAME=VALUE
     /// for one label only, as in `compare`.
-    #[arg(short = 'p', long = "param")]
+    #[arg(help_heading = "Methods", short = 'p', long = "param")]
     params: Vec<String>,
     /// Write the report (adapter, driver, date, every run) as JSON here.
-    #[arg(long)]
+    #[arg(help_heading = "Output", long)]
     json: Option<PathBuf>,
     /// Write the runs as a markdown table here.
-    #[arg(long)]
+    #[arg(help_heading = "Output", long)]
     markdown: Option<PathBuf>,
-    #[arg(short = 'W', long, default_value_t = 640, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    #[arg(help_heading = "Frames", short = 'W', long, default_value_t = 640, value_parser = clap::value_parser!(u32).range(1..=16384))]
     width: u32,
-    #[arg(short = 'H', long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    #[arg(help_heading = "Frames", short = 'H', long, value_parser = clap::value_parser!(u32).range(1..=16384))]
     height: Option<u32>,
 }
 
@@ -185,27 +201,34 @@ struct BenchArgs {
 #[derive(clap::Args)]
 struct DistributedArgs {
     /// Run vertex-tracing as MPI master (rank 0) and workers.
-    #[arg(long)]
+    #[arg(
+        help_heading = "Distributed vertex tracing (MPI; built with --features mpi)",
+        long
+    )]
     distributed: bool,
     /// Frames to render (packages are re-sized after each from the workers' measured speeds).
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100000))]
+    #[arg(help_heading = "Distributed vertex tracing (MPI; built with --features mpi)", long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100000))]
     frames: u32,
     /// JSON report of the distributed run: per frame, each worker's packages, triangles, busy
     /// time and speed, the imbalance, and lost ranks.
-    #[arg(long, value_name = "FILE")]
+    #[arg(
+        help_heading = "Distributed vertex tracing (MPI; built with --features mpi)",
+        long,
+        value_name = "FILE"
+    )]
     report: Option<PathBuf>,
     /// A worker that leaves a package unanswered this long is lost (its packages go to the
     /// others).
-    #[arg(long, default_value_t = 30000, value_parser = clap::value_parser!(u64).range(1..))]
+    #[arg(help_heading = "Distributed vertex tracing (MPI; built with --features mpi)", long, default_value_t = 30000, value_parser = clap::value_parser!(u64).range(1..))]
     worker_timeout_ms: u64,
     /// Packages each worker asks for per frame at the frame's start.
-    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u64).range(1..=10000))]
+    #[arg(help_heading = "Distributed vertex tracing (MPI; built with --features mpi)", long, default_value_t = 4, value_parser = clap::value_parser!(u64).range(1..=10000))]
     packages_per_worker: u64,
     /// Testing aid: RANK:FACTOR makes that worker FACTOR times slower (it sleeps).
-    #[arg(long, value_name = "RANK:FACTOR", value_parser = parse_slow_rank)]
+    #[arg(help_heading = "Distributed vertex tracing (MPI; built with --features mpi)", long, value_name = "RANK:FACTOR", value_parser = parse_slow_rank)]
     slow_rank: Option<(usize, f64)>,
     /// Testing aid: RANK:N makes that worker die on receiving its N-th package.
-    #[arg(long, value_name = "RANK:N", value_parser = parse_fail_rank)]
+    #[arg(help_heading = "Distributed vertex tracing (MPI; built with --features mpi)", long, value_name = "RANK:N", value_parser = parse_fail_rank)]
     fail_rank: Option<(usize, u32)>,
 }
 

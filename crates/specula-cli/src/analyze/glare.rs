@@ -23,78 +23,88 @@ pub struct GlareArgs {
     #[arg(long)]
     surface: String,
     /// The source (an unlit or lit surface: a window, a lamp), as the scene names it.
-    #[arg(long, required_unless_present_any = ["sun", "sun_sweep"], conflicts_with_all = ["sun", "sun_sweep"])]
+    #[arg(help_heading = "Source", long, required_unless_present_any = ["sun", "sun_sweep"], conflicts_with_all = ["sun", "sun_sweep"])]
     source: Option<String>,
     /// The source's luminance in cd/m² (its radiance scaled so that its Y equals it): the glare
     /// then in cd/m² too.
-    #[arg(long)]
+    #[arg(help_heading = "Source", long)]
     source_luminance: Option<f64>,
     /// The sun as the source, at AZ,EL degrees in the vehicle frame: azimuth from the vehicle's
     /// forward axis, positive to its right (90 = right, 180 = behind); elevation above the
     /// ground plane, above 0.
-    #[arg(long, value_parser = parse_sun, allow_hyphen_values = true, conflicts_with = "sun_sweep")]
+    #[arg(help_heading = "Source", long, value_parser = parse_sun, allow_hyphen_values = true, conflicts_with = "sun_sweep")]
     sun: Option<(f64, f64)>,
     /// The sun's direct-normal illuminance, lux (100,000 lx is an upper bound, a high sun in a
     /// clear sky; the fall at low sun is not modelled: give less).
-    #[arg(long, default_value_t = glare::sun::DEFAULT_ILLUMINANCE_LX)]
+    #[arg(help_heading = "Source", long, default_value_t = glare::sun::DEFAULT_ILLUMINANCE_LX)]
     sun_illuminance: f64,
     /// Sweep the sun over AZ0,AZ1,EL0,EL1,STEP degrees (vehicle frame), each eye point traced
     /// once and every position looked up.
-    #[arg(long, value_parser = parse_sweep, allow_hyphen_values = true)]
+    #[arg(help_heading = "Sun sweep and solar day", long, value_parser = parse_sweep, allow_hyphen_values = true)]
     sun_sweep: Option<sweep::SweepSpec>,
     /// With --sun-sweep: the site's latitude, degrees north, for the solar day.
-    #[arg(long, requires_all = ["sun_sweep", "heading", "date"], allow_hyphen_values = true)]
+    #[arg(help_heading = "Sun sweep and solar day", long, requires_all = ["sun_sweep", "heading", "date"], allow_hyphen_values = true)]
     latitude: Option<f64>,
     /// The vehicle's heading, a compass bearing of its forward axis (0 = north, 90 = east).
-    #[arg(long, requires = "latitude", allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Sun sweep and solar day",
+        long,
+        requires = "latitude",
+        allow_hyphen_values = true
+    )]
     heading: Option<f64>,
     /// The date of the solar day, YYYY-MM-DD.
-    #[arg(long, requires = "latitude")]
+    #[arg(help_heading = "Sun sweep and solar day", long, requires = "latitude")]
     date: Option<String>,
     /// Minutes between the solar day's looked-up times.
-    #[arg(long, default_value_t = 5.0)]
+    #[arg(help_heading = "Sun sweep and solar day", long, default_value_t = 5.0)]
     time_step: f64,
     /// A display behind the surface (an unlit or lit mesh, as the scene names it): its contrast
     /// under the glare, per pixel.
-    #[arg(long, requires_all = ["symbol_luminance", "background_luminance", "min_contrast"])]
+    #[arg(help_heading = "Display", long, requires_all = ["symbol_luminance", "background_luminance", "min_contrast"])]
     display: Option<String>,
     /// The display's symbols' luminance, cd/m².
-    #[arg(long, requires = "display")]
+    #[arg(help_heading = "Display", long, requires = "display")]
     symbol_luminance: Option<f64>,
     /// The display's background luminance, cd/m².
-    #[arg(long, requires = "display")]
+    #[arg(help_heading = "Display", long, requires = "display")]
     background_luminance: Option<f64>,
     /// The contrast ratio below which a display pixel is washed out. ISO 15008:2017 §4.3.2
     /// sets a daylight minimum for passenger cars (its value could not be confirmed here, and
     /// its contrast clauses exclude heavy vehicles): give the figure you certify against.
-    #[arg(long, requires = "display")]
+    #[arg(help_heading = "Display", long, requires = "display")]
     min_contrast: Option<f64>,
     #[command(flatten)]
     eyes: EyeArgs,
     /// Eye points on an eyellipse CX,CY,CZ,AX,AY,AZ[,N]: centre and semi-axes along the
     /// vehicle's forward, lateral and up axes (metres), N points on its surface (default 26).
-    #[arg(long, value_parser = parse_eyellipse, allow_hyphen_values = true, conflicts_with_all = ["eyebox", "ocular", "eyes"])]
+    #[arg(help_heading = "Eye points", long, value_parser = parse_eyellipse, allow_hyphen_values = true, conflicts_with_all = ["eyebox", "ocular", "eyes"])]
     eyellipse: Option<(Vec3, Vec3, usize)>,
     /// The eyellipse's side-view tilt, degrees (its forward axis turned up).
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Eye points",
+        long,
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
     eyellipse_tilt: f32,
     /// Each eye point's image, WIDTHxHEIGHT (aimed at the surface, fitted to it).
-    #[arg(long, default_value = "320x240", value_parser = crate::parse_size)]
+    #[arg(help_heading = "Images", long, default_value = "320x240", value_parser = crate::parse_size)]
     size: (u32, u32),
     /// Luminance factor (the glare's luminance over the source's, dimensionless) above which a
     /// pixel counts as glare.
-    #[arg(long, default_value_t = glare::DEFAULT_THRESHOLD)]
+    #[arg(help_heading = "Images", long, default_value_t = glare::DEFAULT_THRESHOLD)]
     threshold: f64,
     /// Specular bounces a path may take (as the reference's --max-depth).
-    #[arg(long, default_value_t = glare::DEFAULT_MAX_DEPTH)]
+    #[arg(help_heading = "Images", long, default_value_t = glare::DEFAULT_MAX_DEPTH)]
     max_depth: u32,
     /// Write the report as JSON here (schema: docs/analyze-glare.schema.json).
-    #[arg(long)]
+    #[arg(help_heading = "Output", long)]
     json: Option<PathBuf>,
     /// Write a report folder: report.html, report.json, the eye points' map and the worst eye
     /// point's view with its glare outlined (a sweep adds its map and polar plot), as PNG and
     /// SVG.
-    #[arg(long)]
+    #[arg(help_heading = "Output", long)]
     report: Option<PathBuf>,
 }
 

@@ -19,15 +19,24 @@ pub enum Kind {
     /// What is seen in a mirror from the eye points: its field of view (horizontal and
     /// vertical extent, solid angle), its footprint on the ground within a range, and the
     /// share of a required region seen by any and by every eye point (its blind part).
+    #[command(
+        after_help = "Example (R46 class III on the example car):\n  specula analyze mirror-view scenes/car-door-mirror.toml --mirror \"door mirror\" --regulation r46-iii --forward 0,0,-1 --r-point -0.37,0.55,0 --outermost -0.95,0.6,1.5 --vehicle \"car body\" --vehicle \"A-pillar\" --report report"
+    )]
     MirrorView(MirrorViewArgs),
     /// Whether and how brightly a source (a named surface or the sun) is seen reflected in a
     /// surface, per eye point: the glare's luminance factor and luminance in cd/m², its veiling
     /// ratio, solid angle and centroid, the contrast of a display behind the cover under it;
     /// sun sweeps and solar days by lookup.
+    #[command(
+        after_help = "Example:\n  specula analyze glare truck-cover --surface \"cover glass\" --source \"side window\" --source-luminance 8000 --eyebox 0.2,0.1,5,3 --display dial --symbol-luminance 300 --background-luminance 10 --min-contrast 3 --report report"
+    )]
     Glare(Box<glare::GlareArgs>),
     /// A spectacle lens as worn, per gaze direction: sphere, cylinder and axis at the vertex
     /// sphere, mean power, prism, lateral colour and distortion, from exact rays (Listing's
     /// law about the eye's centre of rotation).
+    #[command(
+        after_help = "Example:\n  specula analyze lens scenes/spectacles-wrap.toml --lens \"right lens\" --pantoscopic 10 --wrap 5 --compensate --standard iso-8980-1 --focimeter"
+    )]
     Lens(LensArgs),
 }
 
@@ -40,99 +49,121 @@ pub struct LensArgs {
     #[arg(long)]
     lens: String,
     /// The eye behind the lens: it decides which way is base in and base out.
-    #[arg(long, value_enum, default_value = "right")]
+    #[arg(help_heading = "The eye", long, value_enum, default_value = "right")]
     eye: EyeSide,
     /// The eye's centre of rotation X,Y,Z (default: --vertex-distance and
     /// --rotation-behind-cornea behind the lens's back vertex along the camera's view axis).
-    #[arg(long, value_parser = parse_point, allow_hyphen_values = true, conflicts_with = "vertex_distance")]
+    #[arg(help_heading = "The eye", long, value_parser = parse_point, allow_hyphen_values = true, conflicts_with = "vertex_distance")]
     rotation_centre: Option<Vec3>,
     /// From the cornea to the lens's back surface along the primary line of sight, mm.
-    #[arg(long)]
+    #[arg(help_heading = "The eye", long)]
     vertex_distance: Option<f64>,
     /// From the cornea to the eye's centre of rotation, mm (the entrance pupil, for spectacle
     /// magnification, is 3 mm behind the cornea).
-    #[arg(long, default_value_t = 15.0)]
+    #[arg(help_heading = "The eye", long, default_value_t = 15.0)]
     rotation_behind_cornea: f64,
     /// Pantoscopic tilt, degrees: the lens turned about the horizontal through the fitting
     /// point, its lower edge towards the face (at most 30).
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "The eye",
+        long,
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
     pantoscopic: f64,
     /// Face-form wrap, degrees: the lens turned about the vertical through the fitting point,
     /// its temporal edge towards the face (at most 30).
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "The eye",
+        long,
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
     wrap: f64,
     /// The gaze grid H_MAX,V_MAX,STEP in degrees (cells at 0 included).
-    #[arg(long, default_value = "30,30,2.5", value_parser = parse_gaze)]
+    #[arg(help_heading = "The eye", long, default_value = "30,30,2.5", value_parser = parse_gaze)]
     gaze: [f64; 3],
     /// The object's distance from the eye's centre of rotation, metres (default: infinity;
     /// e.g. 0.4 for near vision).
-    #[arg(long)]
+    #[arg(help_heading = "The eye", long)]
     object_distance: Option<f64>,
     /// The prescription SPHERE[,CYLINDER,AXIS][,PRISM...] (prisms such as 1.5BO, 0.5BU): what
     /// the power error and unwanted cylinder are taken against and what --standard checks
     /// (default: the one a spectacle-lens shape was made from, if any).
-    #[arg(long, value_parser = parse_rx, allow_hyphen_values = true)]
+    #[arg(help_heading = "Prescription and standard", long, value_parser = parse_rx, allow_hyphen_values = true)]
     prescription: Option<specula_analyze::lens::Rx>,
     /// The vertex distance the prescription was refracted at, mm: it is re-referenced to the
     /// lens's by F / (1 − d F) per meridian, d the distance the lens moved towards the eye.
-    #[arg(long)]
+    #[arg(help_heading = "Prescription and standard", long)]
     refraction_vertex: Option<f64>,
     /// Solve the prescription to order (sphere, cylinder, axis) whose lens, on the same blank
     /// and worn the same way, gives the prescription at the fitting point; --standard then
     /// checks against it.
-    #[arg(long)]
+    #[arg(help_heading = "Prescription and standard", long)]
     compensate: bool,
     /// Check the focimeter reading against a standard's tolerances: ansi-z80.1, iso-8980-1, or
     /// iso-8980-2 (progressive lenses; with --add, ansi-z80.1 uses its progressive table).
-    #[arg(long, value_parser = parse_standard)]
+    #[arg(help_heading = "Prescription and standard", long, value_parser = parse_standard)]
     standard: Option<&'static specula_analyze::lens::standard::Table>,
     /// Print the focimeter's readings (they are always in the JSON).
-    #[arg(long)]
+    #[arg(help_heading = "Prescription and standard", long)]
     focimeter: bool,
     /// The distance reference point X,Y, mm from the back vertex (the lens's right and up;
     /// default: a spectacle-lens shape's, else 0,0).
-    #[arg(long, value_parser = parse_pair, allow_hyphen_values = true)]
+    #[arg(help_heading = "Prescription and standard", long, value_parser = parse_pair, allow_hyphen_values = true)]
     distance_reference: Option<[f64; 2]>,
     /// The prism reference point X,Y, mm from the back vertex.
-    #[arg(long, value_parser = parse_pair, allow_hyphen_values = true, default_value = "0,0")]
+    #[arg(help_heading = "Prescription and standard", long, value_parser = parse_pair, allow_hyphen_values = true, default_value = "0,0")]
     prism_reference: [f64; 2],
     /// A progressive lens's ordered addition, dioptres: reads the add on the progressive
     /// surface's side and reports the corridor, the zones and the largest unwanted cylinder
     /// (default: a spectacle-lens shape's `add`).
-    #[arg(long)]
+    #[arg(help_heading = "Progressive lenses and near vision", long)]
     add: Option<f64>,
     /// A progressive lens's near reference point X,Y, mm from the back vertex (default: a
     /// spectacle-lens shape's).
-    #[arg(long, value_parser = parse_pair, allow_hyphen_values = true)]
+    #[arg(help_heading = "Progressive lenses and near vision", long, value_parser = parse_pair, allow_hyphen_values = true)]
     near_reference: Option<[f64; 2]>,
     /// Turn both eyes to a near point on the midline this many metres away (convergence) and
     /// report the near zone's power, prism and inset.
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Progressive lenses and near vision",
+        long,
+        allow_hyphen_values = true
+    )]
     near: Option<f64>,
     /// The interpupillary distance for --near, mm.
-    #[arg(long, default_value_t = 64.0)]
+    #[arg(
+        help_heading = "Progressive lenses and near vision",
+        long,
+        default_value_t = 64.0
+    )]
     pd: f64,
     /// The near point's depression below the primary gaze, degrees (default: so that the line
     /// of sight crosses the near reference point's height, else 0).
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Progressive lenses and near vision",
+        long,
+        allow_hyphen_values = true
+    )]
     near_down: Option<f64>,
     /// The lens map's spacing, mm: the clear zones and the progressive figures come from it.
-    #[arg(long, default_value_t = specula_analyze::lens::DEFAULT_LENS_STEP_MM)]
+    #[arg(help_heading = "Progressive lenses and near vision", long, default_value_t = specula_analyze::lens::DEFAULT_LENS_STEP_MM)]
     lens_step: f64,
     /// The lens's surface: its exact one (the default where the scene made it from a `lens` or
     /// `spectacle-lens` shape), its triangles (mesh) or a smooth fit to them.
-    #[arg(long, value_enum)]
+    #[arg(help_heading = "Surface", long, value_enum)]
     surface: Option<SurfaceArg>,
     /// The bundle's half-width at the lens, millimetres (each figure is also taken at half of
     /// it, and the change reported).
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(help_heading = "Surface", long, default_value_t = 0.5)]
     step_mm: f64,
     /// Write the report as JSON here (schema: docs/analyze-lens.schema.json).
-    #[arg(long)]
+    #[arg(help_heading = "Output", long)]
     json: Option<PathBuf>,
     /// Write a report folder: report.html, report.json, the maps (mean power, cylinder, prism,
     /// lateral colour) and the distortion picture as PNG and SVG.
-    #[arg(long)]
+    #[arg(help_heading = "Output", long)]
     report: Option<PathBuf>,
 }
 
@@ -177,19 +208,19 @@ fn parse_gaze(text: &str) -> Result<[f64; 3], String> {
 #[derive(clap::Args)]
 pub struct EyeArgs {
     /// An eye point X,Y,Z in metres (repeatable; default: the camera's eye).
-    #[arg(long = "eye", value_parser = parse_point, allow_hyphen_values = true, conflicts_with_all = ["eyebox", "ocular"])]
+    #[arg(help_heading = "Eye points", long = "eye", value_parser = parse_point, allow_hyphen_values = true, conflicts_with_all = ["eyebox", "ocular"])]
     eyes: Vec<Vec3>,
     /// A grid of NX × NY eye points spanning W × H metres, centred on the camera's eye,
     /// horizontal and vertical in the vehicle frame: W,H,NX,NY.
-    #[arg(long, value_parser = parse_eyebox, conflicts_with = "ocular")]
+    #[arg(help_heading = "Eye points", long, value_parser = parse_eyebox, conflicts_with = "ocular")]
     eyebox: Option<Eyes>,
     /// UN ECE R46's two ocular points: 65 mm apart across the vehicle, centred on the
     /// camera's eye.
-    #[arg(long)]
+    #[arg(help_heading = "Eye points", long)]
     ocular: bool,
     /// The vehicle's longitudinal axis X,Y,Z (default: the camera's view direction projected on
     /// the ground plane); up is +Y.
-    #[arg(long, value_parser = parse_point, allow_hyphen_values = true)]
+    #[arg(help_heading = "Eye points", long, value_parser = parse_point, allow_hyphen_values = true)]
     forward: Option<Vec3>,
 }
 
@@ -218,69 +249,91 @@ pub struct MirrorViewArgs {
     #[command(flatten)]
     eyes: EyeArgs,
     /// The ground plane's height Y in metres (default: the lowest point of the scene).
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Ground and precision",
+        long,
+        allow_hyphen_values = true
+    )]
     ground: Option<f32>,
     /// Ground farther than this from an eye point, horizontally, is not counted (metres).
-    #[arg(long, default_value_t = mirror_view::DEFAULT_RANGE_M)]
+    #[arg(help_heading = "Ground and precision", long, default_value_t = mirror_view::DEFAULT_RANGE_M)]
     range: f32,
     /// A required region on the ground, X0,Z0,X1,Z1 in metres.
-    #[arg(long, value_parser = parse_region, allow_hyphen_values = true)]
+    #[arg(help_heading = "Ground and precision", long, value_parser = parse_region, allow_hyphen_values = true)]
     region: Option<Region>,
     /// Refinement stops when the solid angle and the areas change by less than this share.
-    #[arg(long, default_value_t = mirror_view::Precision::REPORT.tolerance)]
+    #[arg(help_heading = "Ground and precision", long, default_value_t = mirror_view::Precision::REPORT.tolerance)]
     tolerance: f64,
     /// ... and the extents by less than this many degrees.
-    #[arg(long, default_value_t = mirror_view::Precision::REPORT.tolerance_deg)]
+    #[arg(help_heading = "Ground and precision", long, default_value_t = mirror_view::Precision::REPORT.tolerance_deg)]
     tolerance_deg: f64,
     /// Judge the mirror against a regulation's prescribed fields and mirror rules: r46-i,
     /// r46-ii, r46-iii, r46-iv, r46-v or fmvss111 (see docs/analyses.md).
-    #[arg(long)]
+    #[arg(help_heading = "Regulation (UN R46, FMVSS 111)", long)]
     regulation: Option<String>,
     /// The driver's R point X,Y,Z: R46's ocular points lie 635 mm above it, 65 mm apart across
     /// the vehicle.
-    #[arg(long, value_parser = parse_point, allow_hyphen_values = true, requires = "regulation")]
+    #[arg(help_heading = "Regulation (UN R46, FMVSS 111)", long, value_parser = parse_point, allow_hyphen_values = true, requires = "regulation")]
     r_point: Option<Vec3>,
     /// The vehicle's outermost point X,Y,Z on the mirror's side: the fields' inner boundary
     /// plane passes through it, parallel to the median plane (default: the outermost point of
     /// the --vehicle parts).
-    #[arg(long, value_parser = parse_point, allow_hyphen_values = true, requires = "regulation")]
+    #[arg(help_heading = "Regulation (UN R46, FMVSS 111)", long, value_parser = parse_point, allow_hyphen_values = true, requires = "regulation")]
     outermost: Option<Vec3>,
     /// A point X,Y,Z of the vehicle's median longitudinal plane (class I's field is centred on
     /// it; default: the plane through the ocular points).
-    #[arg(long, value_parser = parse_point, allow_hyphen_values = true, requires = "regulation")]
+    #[arg(help_heading = "Regulation (UN R46, FMVSS 111)", long, value_parser = parse_point, allow_hyphen_values = true, requires = "regulation")]
     median: Option<Vec3>,
     /// The side of the vehicle the mirror serves (default: the side it lies on).
-    #[arg(long, value_enum, requires = "regulation")]
+    #[arg(
+        help_heading = "Regulation (UN R46, FMVSS 111)",
+        long,
+        value_enum,
+        requires = "regulation"
+    )]
     side: Option<SideArg>,
     /// An eyellipse CX,CY,CZ,AX,AY,AZ[,N]: centre and semi-axes along the vehicle's forward,
     /// lateral and up axes (metres), N points on its surface (default 26), each judged alone.
-    #[arg(long, value_parser = parse_eyellipse, allow_hyphen_values = true, requires = "regulation", conflicts_with = "r_point")]
+    #[arg(help_heading = "Regulation (UN R46, FMVSS 111)", long, value_parser = parse_eyellipse, allow_hyphen_values = true, requires = "regulation", conflicts_with = "r_point")]
     eyellipse: Option<(Vec3, Vec3, usize)>,
     /// The eyellipse's side-view tilt, degrees (its forward axis turned up).
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Regulation (UN R46, FMVSS 111)",
+        long,
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
     eyellipse_tilt: f32,
     /// A part of the vehicle's own body or fittings (repeatable): with --regulation only these
     /// hide the mirror and the road, and what they hide is reported apart.
-    #[arg(long = "vehicle", requires = "regulation")]
+    #[arg(
+        help_heading = "Regulation (UN R46, FMVSS 111)",
+        long = "vehicle",
+        requires = "regulation"
+    )]
     vehicle: Vec<String>,
     /// Turn the mirror about this pivot X,Y,Z (yaw and pitch within ±20°) and report the poses
     /// that pass, the widest-margin one and, failing all, the most seen.
-    #[arg(long, value_parser = parse_point, allow_hyphen_values = true, requires = "regulation")]
+    #[arg(help_heading = "Regulation (UN R46, FMVSS 111)", long, value_parser = parse_point, allow_hyphen_values = true, requires = "regulation")]
     adjust: Option<Vec3>,
     /// The pose grid's step, degrees.
-    #[arg(long, default_value_t = 5.0)]
+    #[arg(
+        help_heading = "Regulation (UN R46, FMVSS 111)",
+        long,
+        default_value_t = 5.0
+    )]
     adjust_step: f32,
     /// The surface the samples lie on: the mirror's exact one (a generated patch, sphere or
     /// cap; the default where there is one), its triangles as the renderer shades them, or a
     /// smooth surface fitted to them.
-    #[arg(long, value_enum)]
+    #[arg(help_heading = "Ground and precision", long, value_enum)]
     surface: Option<SurfaceArg>,
     /// Write the report as JSON here (schema: docs/analyze-mirror-view.schema.json).
-    #[arg(long)]
+    #[arg(help_heading = "Output", long)]
     json: Option<PathBuf>,
     /// Write a report folder: report.html (figures, parameters, plots), report.json, the
     /// ground map and the mirror seen from the first eye point as PNG and SVG.
-    #[arg(long)]
+    #[arg(help_heading = "Output", long)]
     report: Option<PathBuf>,
 }
 
