@@ -82,7 +82,7 @@ shape = { type = "mesh", file = "dragon.obj", fit = 0.9 }
 TOML
 
 export NODEVICE_SELECT=1
-mapfile -t scenes < <("$SPECULA" scenes | awk '{print $1}')
+mapfile -t scenes < <("$SPECULA" scenes | awk '/^[^ ]/ {print $1}')
 echo "every method on ${#scenes[@]} built-in scenes at ${size[1]}x${size[3]}, $frames timed frames" >&2
 "$SPECULA" bench "${scenes[@]}" --frames "$frames" "${size[@]}" \
   --json "$work/scenes.json" --markdown "$work/scenes.md"

@@ -17,7 +17,7 @@ render() {
   cargo build --release --bin specula --quiet
   local specula=target/release/specula
   local scenes labels
-  scenes="$($specula scenes | awk '{print $1}') $(ls scenes/suite/*.toml)"
+  scenes="$($specula scenes | awk '/^[^ ]/ {print $1}') $(ls scenes/suite/*.toml)"
   # Each method, and each of its presets, as `specula methods` lists them.
   labels="$($specula methods | sed -n 's/^\([a-z0-9-]*\) (.*/\1/p')"
   labels="$labels $($specula methods | sed -n 's/^  preset \([a-z0-9-]*:[a-z0-9-]*\):.*/\1/p')"
