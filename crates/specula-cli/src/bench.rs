@@ -192,29 +192,32 @@ impl Timed {
         width: u32,
         height: u32,
     ) -> MethodBench {
-        let t = self;
-        let frame = spread(t.totals);
-        let rays_per_second = t
+        let frame = spread(self.totals);
+        let rays_per_second = self
             .rays
             .filter(|_| frame.median_ms > 0.0)
             .map(|r| r as f64 / (frame.median_ms * 1e-3));
         MethodBench {
             scene: scene_name.to_string(),
-            label: t.label.to_string(),
-            method: t.label.info.name.to_string(),
-            preset: t.label.preset.map(|p| p.name.to_string()),
-            mode: t.mode.to_string(),
-            parameters: t.technique.parameters(),
+            label: self.label.to_string(),
+            method: self.label.info.name.to_string(),
+            preset: self.label.preset.map(|p| p.name.to_string()),
+            mode: self.mode.to_string(),
+            parameters: self.technique.parameters(),
             frames,
             width,
             height,
             adapter: adapter.to_string(),
-            timing: t.timing,
-            prepare_ms: t.prepare_ms,
+            timing: self.timing,
+            prepare_ms: self.prepare_ms,
             frame,
-            stages: t.stages.into_iter().map(|(n, v)| (n, spread(v))).collect(),
-            created: t.created,
-            counters: t.counters,
+            stages: self
+                .stages
+                .into_iter()
+                .map(|(n, v)| (n, spread(v)))
+                .collect(),
+            created: self.created,
+            counters: self.counters,
             speedup_over_reference: None,
             speedup_over_gpu_trace: None,
             rays_per_second,

@@ -147,7 +147,11 @@ pub fn read_rgba32f(ctx: &GpuContext, texture: &wgpu::Texture) -> Result<Image, 
 /// Bind groups that read a pooled G-buffer, kept per pool slot ([`GBuffer::slot`]) so that a
 /// steady-state frame makes none.
 #[derive(Default)]
-pub struct BindGroupsBySlot(Vec<(usize, wgpu::BindGroup)>);
+pub struct BindGroupsBySlot {
+    groups: Vec<(usize, wgpu::BindGroup)>,
+    /// The pool's [`RasterPass::drops`] when these were last pruned.
+    pruned_at: u64,
+}
 
 impl BindGroupsBySlot {
     /// The bind group of `g`'s slot, made by `make` the first time. Those of G-buffers `pass`
@@ -158,31 +162,34 @@ impl BindGroupsBySlot {
         g: &GBuffer,
         make: impl FnOnce() -> wgpu::BindGroup,
     ) -> &wgpu::BindGroup {
-        self.keep_pooled(pass);
-        let index = match self.0.iter().position(|(s, _)| *s == g.slot) {
+        if self.pruned_at != pass.drops.get() {
+            self.keep_pooled(pass);
+            self.pruned_at = pass.drops.get();
+        }
+        let index = match self.groups.iter().position(|(s, _)| *s == g.slot) {
             Some(index) => index,
             None => {
-                self.0.push((g.slot, make()));
-                self.0.len() - 1
+                self.groups.push((g.slot, make()));
+                self.groups.len() - 1
             }
         };
-        &self.0[index].1
+        &self.groups[index].1
     }
 
     /// The bind group made for `slot`, if any.
     pub fn get(&self, slot: usize) -> Option<&wgpu::BindGroup> {
-        self.0.iter().find(|(s, _)| *s == slot).map(|(_, g)| g)
+        self.groups.iter().find(|(s, _)| *s == slot).map(|(_, g)| g)
     }
 
     /// Forgets every bind group (what they bind was replaced).
     pub fn clear(&mut self) {
-        self.0.clear();
+        self.groups.clear();
     }
 
     /// Forgets the bind groups of G-buffers `pass` no longer pools.
     fn keep_pooled(&mut self, pass: &RasterPass) {
         let pool = pass.pool.borrow();
-        self.0
+        self.groups
             .retain(|(slot, _)| pool.iter().any(|entry| entry.g.slot == *slot));
     }
 }
@@ -417,6 +424,9 @@ pub struct RasterPass {
     /// G-buffers kept across frames, and whether each is handed out this frame.
     pool: RefCell<Vec<PoolEntry>>,
     next_slot: Cell<usize>,
+    /// How many times `begin_frame` dropped G-buffers from the pool: bind groups kept per slot
+    /// prune theirs only when it changes.
+    drops: Cell<u64>,
     /// The scene version the shadow maps were drawn at.
     shadows_at: Cell<u64>,
 }
@@ -810,6 +820,7 @@ impl RasterPass {
             selected: selected_meshes(scene, spec.meshes),
             pool: RefCell::new(Vec::new()),
             next_slot: Cell::new(0),
+            drops: Cell::new(0),
             shadows_at: Cell::new(0),
         }
     }
@@ -918,7 +929,11 @@ impl RasterPass {
         // G-buffers the last frame did not use (another size: a resized window, a view that
         // moved at reduced resolution) are dropped, so the pool holds one frame's worth.
         let mut pool = self.pool.borrow_mut();
+        let pooled = pool.len();
         pool.retain(|entry| entry.used);
+        if pool.len() != pooled {
+            self.drops.set(self.drops.get() + 1);
+        }
         for entry in pool.iter_mut() {
             entry.in_use = false;
             entry.used = false;

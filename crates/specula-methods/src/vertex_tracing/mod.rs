@@ -476,9 +476,8 @@ struct ViewKey {
     width: u32,
     height: u32,
     scene: (u64, u64),
+    /// Every parameter (the package size and depth among them).
     settings: Params,
-    package_triangles: usize,
-    max_depth: u32,
     gpu_visibility: bool,
 }
 
@@ -1258,8 +1257,6 @@ impl VertexTracing {
             height,
             scene: (live.id(), live.version()),
             settings: self.params,
-            package_triangles: self.params.package_triangles,
-            max_depth: self.params.max_depth,
             gpu_visibility: gpu.is_some(),
         };
         // Without a budget every call is a whole fresh frame (as bench times it).
