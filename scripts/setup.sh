@@ -11,8 +11,9 @@
 #   openmpi-bin libopenmpi-dev libclang-dev
 #                        OpenMPI (mpirun, mpicc, headers) and libclang for the `mpi` crate's
 #                        bindings: distributed vertex tracing (specula-cli's `mpi` feature)
+#   chromium             headless Chromium, which opens the HTML reports in the browser tests
 #
-# A requirement that SPECULA_ALLOW_SKIP names (gpu, xvfb, mpi, corpus) is not installed: the
+# A requirement that SPECULA_ALLOW_SKIP names (gpu, xvfb, mpi, corpus, browser) is not installed: the
 # tests that need it are skipped, and counted, instead (scripts/test.sh). The list is read by
 # the testkit's rule (scripts/allow-skip.sh).
 set -euo pipefail
@@ -24,6 +25,7 @@ allowed gpu || packages+=(mesa-vulkan-drivers libvulkan1)
 allowed xvfb || packages+=(xvfb xauth libxkbcommon-x11-0 libxcursor1 libxrandr2 libxi6 libx11-xcb1)
 allowed corpus || packages+=(assimp-testmodels)
 allowed mpi || packages+=(openmpi-bin libopenmpi-dev libclang-dev)
+allowed browser || packages+=(chromium)
 missing=()
 for p in "${packages[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")

@@ -325,7 +325,13 @@ camera = "analysis"
 [[step]]
 screenshot = "{before}"
 [[step]]
+panel = true
+[[step]]
+frames = 1
+[[step]]
 window_screenshot = "{window}"
+[[step]]
+panel = false
 [[step]]
 rotate = {{ object = "door mirror", axis = [0, 1, 0], degrees = 6 }}
 [[step]]
@@ -391,7 +397,7 @@ screenshot = "{plain}"
     );
     let after_line = log
         .lines()
-        .find(|l| l.starts_with("step 7: mirror-view"))
+        .find(|l| l.starts_with("step 10: mirror-view"))
         .unwrap_or_else(|| panic!("the turned mirror's figures: {log}"));
     assert!(
         !after_line.contains(&expected),
@@ -412,7 +418,19 @@ screenshot = "{plain}"
     );
     eprintln!("the overlay covers {blind:.4} of the view in red, {seen:.4} in green");
     assert!(blind > 0.02 && seen > 0.02, "{blind}, {seen}");
-    // The window as shown: the view and its overlay under the panels.
+    // With the panel docked, the view keeps two thirds of the window at least.
+    let technique_width: u32 = log
+        .lines()
+        .find(|l| l.starts_with("step 6: 1 frames"))
+        .and_then(|l| l.split("(technique at ").nth(1))
+        .and_then(|rest| rest.split('x').next())
+        .and_then(|w| w.parse().ok())
+        .unwrap_or_else(|| panic!("the frame's line names the technique's size: {log}"));
+    assert!(
+        3 * technique_width >= 2 * 320,
+        "the view keeps {technique_width} of 320 pixels"
+    );
+    // The window as shown: the view and its overlay under the panel.
     let window = image::open(dir.path().join("window.png"))
         .unwrap()
         .to_rgb8();

@@ -3,7 +3,7 @@
 //! does not matter.
 //!
 //! A developer on a machine without one of the requirements opts out explicitly, naming it:
-//! `SPECULA_ALLOW_SKIP=gpu,xvfb,mpi,corpus,avx` (any subset, comma-separated; each word trimmed,
+//! `SPECULA_ALLOW_SKIP=gpu,xvfb,mpi,corpus,avx,browser` (any subset, comma-separated; each word trimmed,
 //! case ignored: [`allowed`], the rule scripts/allow-skip.sh applies too). A test skipped that way
 //! returns early and appends one line, `requirement<TAB>test<TAB>why`, to the file named by
 //! `SPECULA_SKIP_LOG` (scripts/test.sh names one and prints how many tests were skipped, per
@@ -29,15 +29,18 @@ pub enum Requirement {
     Corpus,
     /// A CPU with AVX, for the ray kernel's AVX traversal.
     Avx,
+    /// Debian's headless `chromium`, to open the HTML reports in a real browser.
+    Browser,
 }
 
 impl Requirement {
-    pub const ALL: [Requirement; 5] = [
+    pub const ALL: [Requirement; 6] = [
         Requirement::Gpu,
         Requirement::Xvfb,
         Requirement::Mpi,
         Requirement::Corpus,
         Requirement::Avx,
+        Requirement::Browser,
     ];
 
     /// The word `SPECULA_ALLOW_SKIP` and the skip log use.
@@ -48,6 +51,7 @@ impl Requirement {
             Requirement::Mpi => "mpi",
             Requirement::Corpus => "corpus",
             Requirement::Avx => "avx",
+            Requirement::Browser => "browser",
         }
     }
 
@@ -59,6 +63,7 @@ impl Requirement {
             Requirement::Mpi => "apt-get install openmpi-bin libopenmpi-dev libclang-dev",
             Requirement::Corpus => "apt-get install assimp-testmodels",
             Requirement::Avx => "an x86-64 CPU with AVX (no package brings it)",
+            Requirement::Browser => "apt-get install chromium",
         }
     }
 }
@@ -138,7 +143,10 @@ mod tests {
         assert!(allowed(Some("xvfb, GPU"), Requirement::Gpu));
         assert!(!allowed(Some("gpus"), Requirement::Gpu));
         for requirement in Requirement::ALL {
-            assert!(allowed(Some("gpu,xvfb,mpi,corpus,avx"), requirement));
+            assert!(allowed(
+                Some("gpu,xvfb,mpi,corpus,avx,browser"),
+                requirement
+            ));
         }
     }
 

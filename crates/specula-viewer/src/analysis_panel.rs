@@ -50,21 +50,19 @@ pub fn show(ui: &mut egui::Ui, session: &mut Session, state: &mut UiState) {
              is seen reflected in a surface, drawn on it; lens: a spectacle lens's mean power or \
              cylinder as worn, drawn on the lens. All follow every move."
         }
-        Some(_) => "its settings and figures are in the analysis window",
+        Some(_) => "its settings and figures follow",
     });
 }
 
-/// The analysis window (top right, while an analysis is on): what is analysed, the eye
+/// The analysis's details (below its kind, while one is on): what is analysed, the eye
 /// points, the figures as they arrive, the glare's eye point map, and a button to the view
 /// that shows the result whole.
-pub fn window(ctx: &egui::Context, session: &mut Session, state: &mut UiState) {
+pub fn details(ui: &mut egui::Ui, session: &mut Session, state: &mut UiState) {
     if session.analysis.is_none() {
         return;
     }
-    egui::Window::new("analysis")
-        .default_width(300.0)
-        .anchor(egui::Align2::RIGHT_TOP, egui::vec2(-8.0, 8.0))
-        .show(ctx, |ui| contents(ui, session, state));
+    ui.separator();
+    contents(ui, session, state);
 }
 
 fn contents(ui: &mut egui::Ui, session: &mut Session, state: &mut UiState) {

@@ -100,6 +100,8 @@ pub struct UiState {
     /// The technique must render again (camera, scene, parameter, size or method changed).
     pub dirty: bool,
     pub last_input: Instant,
+    /// Where the scene begins, right of the docked panel, in egui points (last frame's).
+    pub scene_left_points: f32,
 }
 
 struct Mouse {
@@ -231,6 +233,10 @@ impl App {
         let presenter = Presenter::new(&gpu, format);
         let egui_renderer = egui_wgpu::Renderer::new(&gpu.device, format, Default::default());
         let egui_ctx = egui::Context::default();
+        if self.script.is_some() {
+            // A scripted frame shows the panel where it ends, not where it slides.
+            egui_ctx.all_styles_mut(|style| style.animation_time = 0.0);
+        }
         let egui = egui_winit::State::new(
             egui_ctx,
             egui::ViewportId::ROOT,
@@ -253,6 +259,8 @@ impl App {
             ui: UiState {
                 settings: Settings {
                     interaction_scale: self.options.interaction_scale,
+                    // A script's view fills the window until it shows the panel.
+                    show_panel: self.script.is_none(),
                     ..Settings::default()
                 },
                 stats: None,
@@ -262,6 +270,7 @@ impl App {
                 message: self.startup_message.take().map(|m| (true, m)),
                 dirty: true,
                 last_input: Instant::now() - INTERACTION_LINGER,
+                scene_left_points: 0.0,
             },
             session,
             presenter,
@@ -380,10 +389,11 @@ impl ApplicationHandler for App {
                         && button == MouseButton::Left
                     {
                         let (x, y) = state.mouse.position;
+                        let scene = state.scene_area();
                         let picked =
                             state
                                 .session
-                                .pick(x, y, state.config.width, state.config.height);
+                                .pick(x - scene.x as f32, y, scene.width, scene.height);
                         state.session.selected = picked;
                     }
                     state.mouse.pressed = None;
@@ -449,7 +459,7 @@ fn interacting(state: &WindowState, script: Option<&ScriptRun>) -> bool {
 fn wants_another_frame(state: &WindowState, scripted: bool) -> bool {
     let technique_reduced = state.session.view.needs_technique()
         && state.session.failure.is_none()
-        && state.stats_size() != Some((state.config.width, state.config.height));
+        && state.stats_size() != Some(state.scene_area().size());
     scripted
         || technique_reduced
         || state.egui_repaint
@@ -620,7 +630,7 @@ fn screenshot(state: &mut WindowState) {
 }
 
 fn save_view(state: &mut WindowState, path: &std::path::Path) -> Result<(), ViewerError> {
-    let (w, h) = (state.config.width, state.config.height);
+    let (w, h) = state.scene_area().size();
     let split = state.ui.settings.split;
     let image = state.session.view_image(w, h, split)?;
     image
@@ -698,6 +708,11 @@ fn advance_script(state: &mut WindowState, script: &mut ScriptRun) -> Result<(),
                 state.capture = Some(path);
                 script.frames_left = 1;
                 script.drag_step = None;
+            }
+            Step::Panel(shown) => {
+                state.ui.settings.show_panel = shown;
+                // One frame lays the panel out; the view takes the rest of the window after it.
+                script.frames_left = 1;
             }
             Step::Analysis(None) => state.session.analysis = None,
             Step::Camera { eye, target } => {
@@ -781,7 +796,8 @@ fn redraw(state: &mut WindowState, mut script: Option<&mut ScriptRun>) -> Result
         (now - state.last_redraw).as_secs_f64() * 1e3,
     );
     state.last_redraw = now;
-    let (width, height) = (state.config.width, state.config.height);
+    let window = (state.config.width, state.config.height);
+    let scene = state.scene_area();
     let technique_size = technique_size(state, script.as_deref());
     let ctx = state.session.ctx.clone();
     let gpu = ctx.gpu.as_ref().expect("the viewer opens a GPU");
@@ -802,7 +818,7 @@ fn redraw(state: &mut WindowState, mut script: Option<&mut ScriptRun>) -> Result
     }
     let needs_reference = view.needs_reference() || state.session.failure.is_some();
     if needs_reference {
-        render_reference(state, width, height)?;
+        render_reference(state, scene.width, scene.height)?;
     }
     let split = (view == ViewMode::Split && show_technique).then_some(state.ui.settings.split);
     show_reference(state, gpu, view, needs_reference, show_technique);
@@ -811,8 +827,8 @@ fn redraw(state: &mut WindowState, mut script: Option<&mut ScriptRun>) -> Result
     }
 
     update_overlay(state);
-    let egui = run_egui(state, gpu, &mut encoder, (width, height));
-    if !present(state, gpu, encoder, egui, (width, height), split) {
+    let egui = run_egui(state, gpu, &mut encoder, window);
+    if !present(state, gpu, encoder, egui, scene, split) {
         return Ok(());
     }
     if let Some(failure) = state.capture_failure.take() {
@@ -835,7 +851,7 @@ fn redraw(state: &mut WindowState, mut script: Option<&mut ScriptRun>) -> Result
 /// The technique's size: the window's, or while the view moves the window's times the
 /// interaction scale.
 fn technique_size(state: &WindowState, script: Option<&ScriptRun>) -> (u32, u32) {
-    let (width, height) = (state.config.width, state.config.height);
+    let (width, height) = state.scene_area().size();
     let reduced = interacting(state, script);
     let scale = if reduced {
         state.ui.settings.interaction_scale
@@ -999,9 +1015,10 @@ fn update_overlay(state: &mut WindowState) {
         return;
     };
     let camera = state.session.camera.camera();
+    let scene = state.scene_area();
     let size = (
-        state.config.width.div_ceil(OVERLAY_SCALE),
-        state.config.height.div_ceil(OVERLAY_SCALE),
+        scene.width.div_ceil(OVERLAY_SCALE),
+        scene.height.div_ceil(OVERLAY_SCALE),
     );
     let key = OverlayKey {
         revision: analysis.revision,
@@ -1067,12 +1084,15 @@ fn run_egui(
     let egui_ctx = state.egui.egui_ctx().clone();
     let mut load_request = None;
     let overlay = state.overlay.as_ref().map(|(_, texture)| texture.id());
+    let scene_left = state.ui.scene_left_points;
     let mut output = egui_ctx.run_pass(raw_input, |ctx| {
         if let Some(texture) = overlay {
-            // Under the panels, over the view.
+            // Under the panel, over the scene's part of the window.
+            let mut scene = ctx.content_rect();
+            scene.min.x = scene_left;
             ctx.layer_painter(egui::LayerId::background()).image(
                 texture,
-                ctx.content_rect(),
+                scene,
                 egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)),
                 egui::Color32::WHITE,
             );
@@ -1115,17 +1135,18 @@ fn run_egui(
     }
 }
 
-/// Draws the images (cut at `split`) and egui over them into the window's surface, submits
-/// `encoder` and presents. Returns false, drawing nothing, when the surface was lost or
+/// Draws the images (cut at `split`) into the scene's part of the window and egui over the
+/// whole window's surface, submits `encoder` and presents. Returns false, drawing nothing, when the surface was lost or
 /// outdated: it is configured again and another redraw asked for.
 fn present(
     state: &mut WindowState,
     gpu: &GpuContext,
     mut encoder: wgpu::CommandEncoder,
     mut egui: EguiFrame,
-    (width, height): (u32, u32),
+    scene: SceneArea,
     split: Option<f32>,
 ) -> bool {
+    let (width, height) = (state.config.width, state.config.height);
     let surface_texture = match state.surface.get_current_texture() {
         wgpu::CurrentSurfaceTexture::Success(t) | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
         other => {
@@ -1166,7 +1187,7 @@ fn present(
     for target in std::iter::once(&target).chain(capture_view.as_ref()) {
         state
             .presenter
-            .draw(gpu, &mut encoder, target, (width, height), split);
+            .draw(gpu, &mut encoder, target, scene.viewport(), split);
         let pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("egui"),
             color_attachments: &[specula_gpu::util::color_attachment(
@@ -1233,7 +1254,43 @@ fn count_script_frame(state: &WindowState, script: &mut ScriptRun) {
     }
 }
 
+/// The part of the window the scene is drawn in: right of the docked panel, in pixels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct SceneArea {
+    x: u32,
+    width: u32,
+    height: u32,
+}
+
+impl SceneArea {
+    fn size(self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    fn viewport(self) -> crate::present::Viewport {
+        crate::present::Viewport {
+            x: self.x,
+            width: self.width,
+            height: self.height,
+        }
+    }
+}
+
 impl WindowState {
+    /// The scene's part of the window: all of it right of the panel as egui laid it out last.
+    fn scene_area(&self) -> SceneArea {
+        let pixels_per_point = self.egui.egui_ctx().pixels_per_point();
+        let left = (self.ui.scene_left_points * pixels_per_point)
+            .round()
+            .max(0.0) as u32;
+        let x = left.min(self.config.width.saturating_sub(1));
+        SceneArea {
+            x,
+            width: self.config.width - x,
+            height: self.config.height,
+        }
+    }
+
     fn stats_size(&self) -> Option<(u32, u32)> {
         self.ui
             .stats

@@ -1,4 +1,4 @@
-//! The egui panel: scene, technique picker, the parameter controls built from the registry's
+//! The egui panel, docked on the left (a third of the window at most, H hides it): scene, technique picker, the parameter controls built from the registry's
 //! specs, the view, the selected object's move controls, the analysis
 //! ([`crate::analysis_panel`]), per-stage timings, the frame-time graph, and the key help.
 
@@ -61,37 +61,52 @@ pub fn show(ctx: &egui::Context, session: &mut Session, ui_state: &mut UiState) 
                 });
             });
     }
-    if !ui_state.settings.show_panel {
-        return None;
-    }
-    crate::analysis_panel::window(ctx, session, ui_state);
-    egui::Window::new("specula")
-        .default_width(260.0)
-        .default_pos((8.0, 8.0))
-        .show(ctx, |ui| {
-            egui::ScrollArea::vertical().show(ui, |ui| {
-                // Only the technique is open at first, so the panel covers little of the view.
-                egui::CollapsingHeader::new("scene").show(ui, |ui| {
-                    load = scene_section(ui, session, ui_state);
+    let max_width = (ctx.content_rect().width() * MAX_PANEL_SHARE).floor();
+    let mut expanded = ui_state.settings.show_panel;
+    ctx.root_ui(|root| {
+        egui::Panel::left("specula")
+            .resizable(true)
+            .default_size(DEFAULT_PANEL_WIDTH.min(max_width))
+            .size_range(MIN_PANEL_WIDTH.min(max_width)..=max_width)
+            .show_collapsible(root, &mut expanded, |ui| {
+                egui::ScrollArea::vertical().show(ui, |ui| {
+                    load = sections(ui, session, ui_state);
                 });
-                egui::CollapsingHeader::new("technique")
-                    .default_open(true)
-                    .show(ui, |ui| technique_section(ui, session, ui_state));
-                egui::CollapsingHeader::new("view")
-                    .default_open(true)
-                    .show(ui, |ui| view_section(ui, session, ui_state));
-                egui::CollapsingHeader::new("object")
-                    .show(ui, |ui| object_section(ui, session, ui_state));
-                egui::CollapsingHeader::new("analysis")
-                    .default_open(true)
-                    .show(ui, |ui| crate::analysis_panel::show(ui, session, ui_state));
-                egui::CollapsingHeader::new("timings")
-                    .show(ui, |ui| timing_section(ui, session, ui_state));
+                if let Some((true, message)) = &ui_state.message {
+                    ui.label(RichText::new(message).color(Color32::LIGHT_RED));
+                }
             });
-            if let Some((true, message)) = &ui_state.message {
-                ui.label(RichText::new(message).color(Color32::LIGHT_RED));
-            }
+        ui_state.scene_left_points = root.available_rect_before_wrap().left();
+    });
+    ui_state.settings.show_panel = expanded;
+    load
+}
+
+/// The panel's widest share of the window, so that the scene keeps two thirds of it.
+const MAX_PANEL_SHARE: f32 = 1.0 / 3.0;
+const DEFAULT_PANEL_WIDTH: f32 = 280.0;
+const MIN_PANEL_WIDTH: f32 = 160.0;
+
+/// The panel's sections; only the technique, view and analysis are open at first.
+fn sections(ui: &mut egui::Ui, session: &mut Session, ui_state: &mut UiState) -> Option<String> {
+    let mut load = None;
+    egui::CollapsingHeader::new("scene").show(ui, |ui| {
+        load = scene_section(ui, session, ui_state);
+    });
+    egui::CollapsingHeader::new("technique")
+        .default_open(true)
+        .show(ui, |ui| technique_section(ui, session, ui_state));
+    egui::CollapsingHeader::new("view")
+        .default_open(true)
+        .show(ui, |ui| view_section(ui, session, ui_state));
+    egui::CollapsingHeader::new("object").show(ui, |ui| object_section(ui, session, ui_state));
+    egui::CollapsingHeader::new("analysis")
+        .default_open(true)
+        .show(ui, |ui| {
+            crate::analysis_panel::show(ui, session, ui_state);
+            crate::analysis_panel::details(ui, session, ui_state);
         });
+    egui::CollapsingHeader::new("timings").show(ui, |ui| timing_section(ui, session, ui_state));
     load
 }
 

@@ -17,7 +17,17 @@ struct Params {
     split: f32,
     mode: u32,
     encode_srgb: u32,
-    pad: [u32; 3],
+    offset_x: f32,
+    pad: [u32; 2],
+}
+
+/// Where on the window the images go: `width` × `height` pixels from `x` (the panel is left
+/// of it), the whole height.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Viewport {
+    pub x: u32,
+    pub width: u32,
+    pub height: u32,
 }
 
 /// Which of the two images a source goes to.
@@ -158,15 +168,16 @@ impl Presenter {
         gpu: &GpuContext,
         encoder: &mut wgpu::CommandEncoder,
         target: &wgpu::TextureView,
-        size: (u32, u32),
+        viewport: Viewport,
         split: Option<f32>,
     ) {
         let params = Params {
-            size: [size.0 as f32, size.1 as f32],
+            size: [viewport.width as f32, viewport.height as f32],
             split: split.unwrap_or(1.0),
             mode: split.is_some() as u32,
             encode_srgb: self.encode_srgb as u32,
-            pad: [0; 3],
+            offset_x: viewport.x as f32,
+            pad: [0; 2],
         };
         gpu.queue
             .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
@@ -178,6 +189,14 @@ impl Presenter {
             )],
             ..Default::default()
         });
+        pass.set_viewport(
+            viewport.x as f32,
+            0.0,
+            viewport.width as f32,
+            viewport.height as f32,
+            0.0,
+            1.0,
+        );
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &self.bind_group, &[]);
         pass.draw(0..3, 0..1);

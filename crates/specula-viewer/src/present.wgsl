@@ -9,9 +9,10 @@ struct Params {
     // 0: left only, 1: split.
     mode: u32,
     encode_srgb: u32,
+    // Where the viewport begins on the window (the panel is left of it), pixels.
+    offset_x: f32,
     _pad0: u32,
     _pad1: u32,
-    _pad2: u32,
 }
 
 @group(0) @binding(0) var left_image: texture_2d<f32>;
@@ -38,15 +39,17 @@ fn srgb(c: vec3<f32>) -> vec3<f32> {
 
 @fragment
 fn fs_main(@builtin(position) position: vec4<f32>) -> @location(0) vec4<f32> {
-    let uv = position.xy / params.size;
+    // The fragment's position is the window's; the images fill the viewport.
+    let local = position.xy - vec2<f32>(params.offset_x, 0.0);
+    let uv = local / params.size;
     let cut = params.split * params.size.x;
     var color: vec3<f32>;
-    if params.mode == 1u && position.x >= cut {
+    if params.mode == 1u && local.x >= cut {
         color = texel(right_image, uv);
     } else {
         color = texel(left_image, uv);
     }
-    if params.mode == 1u && abs(position.x - cut) < 1.0 {
+    if params.mode == 1u && abs(local.x - cut) < 1.0 {
         color = vec3<f32>(1.0);
     }
     color = clamp(color, vec3<f32>(0.0), vec3<f32>(1.0));

@@ -30,10 +30,15 @@
 //! [[step]]
 //! camera = "analysis"                               # the analysis's overview (its panel button)
 //! [[step]]
-//! screenshot = "mirror.png"                         # the view at the window size, no UI
+//! panel = true                                      # show the docked panel (H); false hides it
+//! [[step]]
+//! screenshot = "mirror.png"                         # the view as shown, no UI
 //! [[step]]
 //! window_screenshot = "window.png"                  # the window as shown: panel, overlay
 //! ```
+//!
+//! A script starts with the panel hidden, so that the view fills the window (`--size`) until a
+//! `panel = true` step shows it; the view then fills what the panel leaves.
 //!
 //! An `analysis` step also takes `eye = [x, y, z]` (the centre eye point; a lens's centre of
 //! rotation), `range`, `ground` and `tolerance`; `eyes` is "centre" or "ocular", `eyebox` is
@@ -92,6 +97,8 @@ pub enum Step {
     AnalysisCamera,
     /// Draws a frame and saves the window as shown (the panel, the overlay) to this file.
     WindowScreenshot(PathBuf),
+    /// Shows (true) or hides the docked panel.
+    Panel(bool),
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -129,6 +136,7 @@ struct RawStep {
     analysis: Option<RawAnalysis>,
     camera: Option<toml::Value>,
     window_screenshot: Option<PathBuf>,
+    panel: Option<bool>,
 }
 
 #[derive(Deserialize)]
@@ -180,7 +188,7 @@ struct RawRotate {
 
 const STEP_KEYS: &str =
     "method, reference, param, orbit, translate, rotate, frames, drag, view, analysis, camera, \
-     screenshot or window_screenshot";
+     panel, screenshot or window_screenshot";
 
 /// Reads a script; relative screenshot paths resolve against the current directory.
 pub fn load(path: &Path) -> Result<Vec<Step>, ScriptError> {
@@ -307,6 +315,8 @@ fn step(table: toml::Table) -> Result<Step, String> {
             return Err("window_screenshot needs a file name".into());
         }
         Step::WindowScreenshot(path)
+    } else if let Some(shown) = raw.panel {
+        Step::Panel(shown)
     } else if let Some(a) = raw.analysis {
         Step::Analysis(analysis(a)?.map(Box::new))
     } else if let Some(c) = raw.camera {
@@ -534,10 +544,12 @@ camera = { eye = [3, 18, -4], target = [3, -1, 10] }
 camera = "analysis"
 [[step]]
 window_screenshot = "w.png"
+[[step]]
+panel = true
 "#,
         )
         .unwrap();
-        assert_eq!(steps.len(), 15);
+        assert_eq!(steps.len(), 16);
         assert_eq!(steps[0], Step::Method("envmap".into()));
         assert_eq!(
             steps[4],
@@ -582,6 +594,7 @@ window_screenshot = "w.png"
         );
         assert_eq!(steps[13], Step::AnalysisCamera);
         assert_eq!(steps[14], Step::WindowScreenshot("w.png".into()));
+        assert_eq!(steps[15], Step::Panel(true));
     }
 
     #[test]
@@ -663,6 +676,7 @@ window_screenshot = "w.png"
             ),
             ("[[step]]\ncamera = \"above\"", "step 1", "expected \"analysis\""),
             ("[[step]]\nwindow_screenshot = \"\"", "step 1", "file name"),
+            ("[[step]]\npanel = \"left\"", "step 1", "expected a boolean"),
             ("title = \"x\"", "s.toml", "unknown field"),
             ("", "s.toml", "no [[step]]"),
         ];
