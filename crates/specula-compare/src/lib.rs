@@ -653,8 +653,10 @@ td, th {{ border: 1px solid #bbb; padding: 4px 8px; text-align: right; vertical-
 td:first-child, th:first-child {{ text-align: left; }}
 tr.delegated td {{ color: #666; font-style: italic; }}
 tr.failed td {{ color: #a00; text-align: left; }}
-figure {{ display: inline-block; margin: 0.5em; }}
-img {{ image-rendering: pixelated; width: {display_width}px; }}
+#figures {{ display: flex; flex-wrap: wrap; gap: 1em; align-items: flex-start; }}
+#figures > div {{ width: {display_width}px; }}
+#figures small {{ overflow-wrap: anywhere; }}
+img {{ image-rendering: pixelated; width: {display_width}px; display: block; margin: 0.3em 0; }}
 </style></head><body>
 <h1>specula compare: {scene}</h1>
 <p>{width}×{height} pixels on {adapter}. Errors are measured on the {mask} pixels whose visible surface is a mirror or
@@ -670,7 +672,8 @@ the method's ({gpu_trace}).</p>
 <table>
 <tr><th>method</th><th>RMSE</th><th>PSNR (dB)</th><th>mean FLIP</th><th>FLIP &gt; 0.1</th><th>frame (ms)</th><th>prepare (ms)</th><th>speed-up over reference (warm / warm)</th><th>vs gpu-trace (warm / warm)</th><th>stages (ms)</th><th>timing</th></tr>
 {rows}</table>
-{figures}
+<div id="figures">
+{figures}</div>
 </body></html>
 "#,
             scene = escape(&r.scene),
@@ -750,8 +753,9 @@ the method's ({gpu_trace}).</p>
     /// The reference, then each method's image and its FLIP heat map.
     fn figures(&self) -> String {
         let r = &self.report;
+        // One column each: the reference, then each method's image above its FLIP map.
         let mut figures = format!(
-            "<figure><img src=\"{}\"><figcaption>reference ({} spp, depth {}; warm frame {:.1} ms, BVH build {:.1} ms, first frame {:.1} ms)</figcaption></figure>\n",
+            "<div><b>reference</b><img src=\"{}\"><small>{} spp, depth {}; warm frame {:.1} ms, BVH build {:.1} ms, first frame {:.1} ms</small></div>\n",
             data_uri(&self.reference.to_srgb8()),
             r.reference.spp,
             r.reference.max_depth,
@@ -766,12 +770,11 @@ the method's ({gpu_trace}).</p>
                 .map(|(k, v)| format!("{}={}", escape(k), escape(v)))
                 .collect();
             figures.push_str(&format!(
-                "<figure><img src=\"{}\"><figcaption>{} ({})</figcaption></figure>\n<figure><img src=\"{}\"><figcaption>{}: FLIP error (black = none, yellow = large)</figcaption></figure>\n",
-                data_uri(&img.to_srgb8()),
+                "<div><b>{}</b><img src=\"{}\"><img src=\"{}\"><small>above: its FLIP error (black = none, yellow = large); {}</small></div>\n",
                 escape(&m.label),
-                params.join(", "),
+                data_uri(&img.to_srgb8()),
                 data_uri(heat),
-                escape(&m.label)
+                params.join(", "),
             ));
         }
         figures
