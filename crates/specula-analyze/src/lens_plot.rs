@@ -1,15 +1,14 @@
 //! The lens analysis's plots: contour maps over the gaze grid (mean power, cylinder with its
 //! axis, prism with its base, lateral colour) and the distortion picture. Each map is drawn as
-//! the wearer looks through the lens: h to the wearer's right, v up. Iso-lines come from
-//! marching squares over the grid's cells, values between cell centres from bilinear
-//! interpolation; cells outside the lens are grey.
+//! the wearer looks through the lens: h to the wearer's right, v up. Iso-lines come from the
+//! `contour` crate ([`crate::figure::iso_lines`]) and carry their values; values between cell
+//! centres come from bilinear interpolation; cells outside the lens are grey.
 
-use glam::Vec2;
 use image::{Rgb, RgbImage};
 
+use crate::figure::{iso_labels, iso_lines, round_step, Axis, ColourBar, Figure, Mark, Plot};
 use crate::lens::zones::LensMap;
 use crate::lens::{Cell, Eye, Report};
-use crate::plot::{draw_line, plot_around, scale_colour, Extent, Plot};
 
 /// What a map shows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -73,65 +72,7 @@ impl Map {
 }
 
 const OUTSIDE: Rgb<u8> = Rgb([200, 200, 200]);
-const INK: Rgb<u8> = Rgb([0, 0, 0]);
-
-/// The segments of the iso-line at `level` over a `columns` × `rows` grid of values (row-major,
-/// row 0 first), in grid coordinates (column, row); cells with a missing corner have none.
-pub fn iso_segments(
-    values: &[Option<f64>],
-    columns: usize,
-    rows: usize,
-    level: f64,
-) -> Vec<[[f64; 2]; 2]> {
-    let mut segments = Vec::new();
-    for j in 0..rows.saturating_sub(1) {
-        for i in 0..columns.saturating_sub(1) {
-            let corner = |di: usize, dj: usize| values[(j + dj) * columns + i + di];
-            let (Some(a), Some(b), Some(c), Some(d)) =
-                (corner(0, 0), corner(1, 0), corner(1, 1), corner(0, 1))
-            else {
-                continue;
-            };
-            // Corners counter-clockwise from (i, j): a (0,0), b (1,0), c (1,1), d (0,1).
-            let corners = [
-                ([0.0, 0.0], a),
-                ([1.0, 0.0], b),
-                ([1.0, 1.0], c),
-                ([0.0, 1.0], d),
-            ];
-            let mut crossings = Vec::with_capacity(4);
-            for k in 0..4 {
-                let (p, u) = corners[k];
-                let (q, w) = corners[(k + 1) % 4];
-                if (u < level) != (w < level) {
-                    let t = (level - u) / (w - u);
-                    crossings.push([
-                        i as f64 + p[0] + (q[0] - p[0]) * t,
-                        j as f64 + p[1] + (q[1] - p[1]) * t,
-                    ]);
-                }
-            }
-            match crossings.len() {
-                2 => segments.push([crossings[0], crossings[1]]),
-                4 => {
-                    // A saddle: the centre's value says which pairs join.
-                    let centre = 0.25 * (a + b + c + d);
-                    // With the centre on a's (and c's) side, a and c join: the lines cut off
-                    // b (edges 0 and 1) and d (edges 2 and 3).
-                    if (centre < level) == (a < level) {
-                        segments.push([crossings[0], crossings[1]]);
-                        segments.push([crossings[2], crossings[3]]);
-                    } else {
-                        segments.push([crossings[0], crossings[3]]);
-                        segments.push([crossings[1], crossings[2]]);
-                    }
-                }
-                _ => {}
-            }
-        }
-    }
-    segments
-}
+const INK: [u8; 3] = [0, 0, 0];
 
 /// The grid's layout on a map: pixels per cell and the gaze extent.
 struct Layout {
@@ -158,15 +99,6 @@ impl Layout {
         }
     }
 
-    /// A grid coordinate (column, row; cell centres at whole numbers) as a pixel (row 0 at the
-    /// bottom: v up).
-    fn pixel(&self, at: [f64; 2]) -> Vec2 {
-        Vec2::new(
-            (at[0] as f32 + 0.5) * self.cell_px,
-            self.height as f32 - (at[1] as f32 + 0.5) * self.cell_px,
-        )
-    }
-
     /// The grid coordinate of a pixel's centre.
     fn grid(&self, x: u32, y: u32) -> [f64; 2] {
         [
@@ -174,15 +106,50 @@ impl Layout {
             f64::from((self.height as f32 - y as f32 - 0.5) / self.cell_px - 0.5),
         ]
     }
+}
 
-    fn extent(&self, report: &Report) -> Extent {
-        let half = (report.gaze.step_deg * 0.5) as f32;
-        let (h, v) = (report.gaze.horizontal(), report.gaze.vertical());
-        Extent {
-            min: Vec2::new(h[0] as f32 - half, v[0] as f32 - half),
-            max: Vec2::new(h[h.len() - 1] as f32 + half, v[v.len() - 1] as f32 + half),
-        }
+type Axes = (Axis, Axis);
+
+/// The gaze axes of a map over `report`'s grid, and its grid coordinates in gaze degrees.
+fn gaze_axes(report: &Report) -> (Axes, impl Fn([f64; 2]) -> (f64, f64)) {
+    let step = report.gaze.step_deg;
+    let half = step * 0.5;
+    let (h, v) = (report.gaze.horizontal(), report.gaze.vertical());
+    let axes = (
+        Axis::new(
+            "gaze h (°, the wearer's right)",
+            (h[0] - half, h[h.len() - 1] + half),
+        ),
+        Axis::new("gaze v (°, up)", (v[0] - half, v[v.len() - 1] + half)),
+    );
+    let (h0, v0) = (h[0], v[0]);
+    (axes, move |at: [f64; 2]| {
+        (h0 + at[0] * step, v0 + at[1] * step)
+    })
+}
+
+/// `values`' iso-line at `level` as marks: the lines in `colour`, `width` pixels wide, and
+/// their value written on them when `labelled`.
+fn iso_marks(
+    values: &[Option<f64>],
+    (columns, rows): (usize, usize),
+    level: f64,
+    to_axes: &impl Fn([f64; 2]) -> (f64, f64),
+    (colour, width, labelled): ([u8; 3], u32, bool),
+) -> Vec<Mark> {
+    let lines = iso_lines(values, columns, rows, level);
+    let mut marks: Vec<Mark> = lines
+        .iter()
+        .map(|line| Mark::Line {
+            points: line.iter().map(|p| to_axes(*p)).collect(),
+            colour,
+            width,
+        })
+        .collect();
+    if labelled {
+        marks.extend(iso_labels(&lines, level, to_axes));
     }
+    marks
 }
 
 /// `values` bilinearly at grid coordinate `at` (clamped to the grid); None where a corner is
@@ -217,22 +184,6 @@ pub fn value_at(report: &Report, values: &[Option<f64>], h_deg: f64, v_deg: f64)
         return None;
     }
     sample(values, report.columns, report.rows, at)
-}
-
-/// 1, 2 or 5 times a power of ten, the nearest at or above `raw`.
-fn round_step(raw: f64) -> f64 {
-    let power = 10f64.powf(raw.max(1e-9).log10().floor());
-    let m = raw / power;
-    power
-        * if m <= 1.0 {
-            1.0
-        } else if m <= 2.0 {
-            2.0
-        } else if m <= 5.0 {
-            5.0
-        } else {
-            10.0
-        }
 }
 
 /// A round contour interval for values spanning `lo`..`hi` (about eight lines).
@@ -274,25 +225,64 @@ fn value_range(values: &[Option<f64>]) -> (f64, f64) {
 /// A map of one quantity over the gaze grid (module doc).
 pub fn lens_map(report: &Report, map: Map) -> Plot {
     let layout = Layout::new(report);
+    let grid = (layout.columns, layout.rows);
     let values: Vec<Option<f64>> = report.grid.iter().map(|c| map.value(c)).collect();
     let (lo, hi) = value_range(&values);
-    let mut png = RgbImage::from_fn(layout.width, layout.height, |x, y| {
+    let bar = ColourBar {
+        label: map.what().to_string(),
+        range: (lo, hi),
+        log: false,
+    };
+    let png = RgbImage::from_fn(layout.width, layout.height, |x, y| {
         match sample(&values, layout.columns, layout.rows, layout.grid(x, y)) {
-            Some(v) => Rgb(scale_colour((v - lo) / (hi - lo))),
+            Some(v) => Rgb(bar.colour(v)),
             None => OUTSIDE,
         }
     });
+    let (axes, to_gaze) = gaze_axes(report);
     let step = map_interval(report, map, lo, hi);
+    let mut marks = Vec::new();
     let mut level = (lo / step).ceil() * step;
     while level <= hi {
-        for [a, b] in iso_segments(&values, layout.columns, layout.rows, level) {
-            draw_line(&mut png, layout.pixel(a), layout.pixel(b), INK);
-        }
+        marks.extend(iso_marks(&values, grid, level, &to_gaze, (INK, 1, true)));
         level += step;
     }
-    // Ticks and arrows on every few cells, so that they do not crowd.
+    marks.extend(axis_and_base_marks(report, map, step, &layout, &to_gaze));
+    let mut figure = Figure::new(
+        format!(
+            "'{}', {} eye: {} over the gaze, as the wearer looks; iso-lines every {step}",
+            report.lens,
+            match report.eye {
+                Eye::Right => "right",
+                Eye::Left => "left",
+            },
+            map.what()
+        ),
+        png,
+    );
+    figure.axes = Some(axes);
+    figure.marks = marks;
+    figure.colour_bar = Some(bar);
+    figure.legend = match map {
+        Map::Cylinder => vec![("the cylinder's axis (ticks)".into(), MARK.0)],
+        Map::Prism => vec![("towards the prism's base (arrows)".into(), MARK.0)],
+        _ => Vec::new(),
+    };
+    figure.legend.push(("outside the lens".into(), OUTSIDE.0));
+    figure.plot()
+}
+
+/// The cylinder's axis as a tick, or the prism's base as an arrow, on every few cells so that
+/// they do not crowd; in gaze degrees.
+fn axis_and_base_marks(
+    report: &Report,
+    map: Map,
+    step: f64,
+    layout: &Layout,
+    to_gaze: &impl Fn([f64; 2]) -> (f64, f64),
+) -> Vec<Mark> {
     let every = layout.columns.max(layout.rows).div_ceil(12).max(1);
-    let reach = 0.42 * every as f32 * layout.cell_px;
+    let reach = 0.42 * every as f64 * report.gaze.step_deg;
     let side = match report.eye {
         Eye::Right => 1.0,
         Eye::Left => -1.0,
@@ -302,12 +292,18 @@ pub fn lens_map(report: &Report, map: Map) -> Plot {
         .iter()
         .filter_map(|c| c.prism_d.map(|[h, v]| h.hypot(v)))
         .fold(0.0, f64::max);
+    let line = |points: Vec<(f64, f64)>| Mark::Line {
+        points,
+        colour: MARK.0,
+        width: 2,
+    };
+    let mut marks = Vec::new();
     for (k, cell) in report.grid.iter().enumerate() {
         let (i, j) = (k % layout.columns, k / layout.columns);
         if i % every != 0 || j % every != 0 {
             continue;
         }
-        let centre = layout.pixel([i as f64, j as f64]);
+        let (cx, cy) = to_gaze([i as f64, j as f64]);
         match map {
             Map::Cylinder => {
                 if let (Some(axis), Some(cylinder)) = (cell.axis_deg, cell.cylinder_d) {
@@ -315,10 +311,10 @@ pub fn lens_map(report: &Report, map: Map) -> Plot {
                         continue;
                     }
                     // TABO from the examiner's right (the wearer's left), on a map as the
-                    // wearer looks: (−cos θ, sin θ), y down the page.
-                    let a = axis.to_radians() as f32;
-                    let d = Vec2::new(-a.cos(), -a.sin()) * reach;
-                    draw_line(&mut png, centre - d, centre + d, INK);
+                    // wearer looks: (−cos θ, sin θ), v up.
+                    let a = axis.to_radians();
+                    let (dx, dy) = (-a.cos() * reach, a.sin() * reach);
+                    marks.push(line(vec![(cx - dx, cy - dy), (cx + dx, cy + dy)]));
                 }
             }
             Map::Prism => {
@@ -328,45 +324,25 @@ pub fn lens_map(report: &Report, map: Map) -> Plot {
                         continue;
                     }
                     // Base out is towards the temple: the wearer's right for the right eye.
-                    let base = Vec2::new((h * side) as f32, -(v as f32)).normalize();
-                    let tip = centre + base * reach * (magnitude / largest_prism) as f32;
-                    draw_line(&mut png, centre, tip, INK);
-                    let back = -base * 0.35 * reach;
-                    let across = Vec2::new(-base.y, base.x) * 0.2 * reach;
-                    draw_line(&mut png, tip, tip + back + across, INK);
-                    draw_line(&mut png, tip, tip + back - across, INK);
+                    let base = (h * side / magnitude, v / magnitude);
+                    let length = reach * magnitude / largest_prism;
+                    let tip = (cx + base.0 * length, cy + base.1 * length);
+                    let (back, across) = (
+                        (-base.0 * 0.35 * reach, -base.1 * 0.35 * reach),
+                        (-base.1 * 0.2 * reach, base.0 * 0.2 * reach),
+                    );
+                    marks.push(line(vec![
+                        (tip.0 + back.0 + across.0, tip.1 + back.1 + across.1),
+                        tip,
+                        (tip.0 + back.0 - across.0, tip.1 + back.1 - across.1),
+                    ]));
+                    marks.push(line(vec![(cx, cy), tip]));
                 }
             }
             Map::MeanPower | Map::LateralColour | Map::UnwantedCylinder => {}
         }
     }
-    let title = format!(
-        "'{}', {} eye: {} over the gaze, as the wearer looks",
-        report.lens,
-        match report.eye {
-            Eye::Right => "right",
-            Eye::Left => "left",
-        },
-        map.what()
-    );
-    let legend = vec![
-        (format!("{lo:.3}"), scale_colour(0.0)),
-        (
-            format!("{hi:.3}; iso-lines every {step}"),
-            scale_colour(1.0),
-        ),
-        (
-            "outside the lens".into(),
-            [OUTSIDE.0[0], OUTSIDE.0[1], OUTSIDE.0[2]],
-        ),
-    ];
-    plot_around(
-        png,
-        &title,
-        ("gaze h (°, the wearer's right)", "gaze v (°, up)"),
-        Some((layout.extent(report), false)),
-        &legend,
-    )
+    marks
 }
 
 /// A map over the lens's own coordinates ([`crate::lens::zones::LensMap`]).
@@ -418,25 +394,35 @@ pub fn lens_coordinate_map(report: &Report, kind: LensCoordinateMap) -> Option<P
             LensCoordinateMap::UnwantedCylinder => deviation(&p.cell).map(|d| d.1),
         })
         .collect();
-    let (columns, rows) = (map.columns, map.rows);
-    let layout = Layout::sized(columns, rows);
+    let grid = (map.columns, map.rows);
+    let layout = Layout::sized(map.columns, map.rows);
     let (lo, hi) = value_range(&values);
-    let mut png = RgbImage::from_fn(layout.width, layout.height, |x, y| {
-        match sample(&values, columns, rows, layout.grid(x, y)) {
-            Some(v) => Rgb(scale_colour((v - lo) / (hi - lo))),
+    let (what, lines) = match kind {
+        LensCoordinateMap::MeanPower => (
+            "mean power (D)",
+            "iso-lines every 0.25 D; white: |power error| 0.25 D",
+        ),
+        LensCoordinateMap::UnwantedCylinder => (
+            "unwanted cylinder (D)",
+            "iso-lines at 0.25, 0.50 (thick), 1.00 (thick), then every 0.50 D",
+        ),
+    };
+    let bar = ColourBar {
+        label: what.to_string(),
+        range: (lo, hi),
+        log: false,
+    };
+    let png = RgbImage::from_fn(layout.width, layout.height, |x, y| {
+        match sample(&values, map.columns, map.rows, layout.grid(x, y)) {
+            Some(v) => Rgb(bar.colour(v)),
             None => OUTSIDE,
         }
     });
-    let line = |png: &mut RgbImage, values: &[Option<f64>], level: f64, colour, thick: bool| {
-        for [a, b] in iso_segments(values, columns, rows, level) {
-            let (a, b) = (layout.pixel(a), layout.pixel(b));
-            draw_line(png, a, b, colour);
-            if thick {
-                for d in [Vec2::X, Vec2::Y] {
-                    draw_line(png, a + d, b + d, colour);
-                }
-            }
-        }
+    let to_mm = |at: [f64; 2]| {
+        (
+            map.origin_mm[0] + at[0] * map.step_mm,
+            map.origin_mm[1] + at[1] * map.step_mm,
+        )
     };
     let levels: Vec<f64> = match kind {
         LensCoordinateMap::MeanPower => {
@@ -449,9 +435,11 @@ pub fn lens_coordinate_map(report: &Report, kind: LensCoordinateMap) -> Option<P
             .chain((1..).map(|k| k as f64 * 0.5).take_while(|l| *l <= hi))
             .collect(),
     };
+    let mut marks = Vec::new();
     for &level in &levels {
         let thick = kind == LensCoordinateMap::UnwantedCylinder && (level == 0.5 || level == 1.0);
-        line(&mut png, &values, level, INK, thick);
+        let width = if thick { 2 } else { 1 };
+        marks.extend(iso_marks(&values, grid, level, &to_mm, (INK, width, true)));
     }
     if kind == LensCoordinateMap::MeanPower {
         let error: Vec<Option<f64>> = map
@@ -459,101 +447,97 @@ pub fn lens_coordinate_map(report: &Report, kind: LensCoordinateMap) -> Option<P
             .iter()
             .map(|p| deviation(&p.cell).map(|d| d.0.abs()))
             .collect();
-        line(&mut png, &error, 0.25, CORRIDOR, true);
-    }
-    draw_marks(&mut png, &layout, map, report);
-    let half = 0.5 * map.step_mm as f32;
-    let extent = Extent {
-        min: Vec2::new(
-            map.origin_mm[0] as f32 - half,
-            map.origin_mm[1] as f32 - half,
-        ),
-        max: Vec2::new(
-            (map.origin_mm[0] + (columns - 1) as f64 * map.step_mm) as f32 + half,
-            (map.origin_mm[1] + (rows - 1) as f64 * map.step_mm) as f32 + half,
-        ),
-    };
-    let (what, lines) = match kind {
-        LensCoordinateMap::MeanPower => (
-            "mean power (D)",
-            "every 0.25 D; white: |power error| 0.25 D",
-        ),
-        LensCoordinateMap::UnwantedCylinder => (
-            "unwanted cylinder (D)",
-            "lines at 0.25, 0.50 (thick), 1.00 (thick), …",
-        ),
-    };
-    let title = format!(
-        "'{}': {what} over the lens (as worn, from the eye's side)",
-        report.lens
-    );
-    let mut legend = vec![
-        (format!("{lo:.2}"), scale_colour(0.0)),
-        (format!("{hi:.2}; {lines}"), scale_colour(1.0)),
-    ];
-    if report.progressive.is_some() {
-        legend.push((
-            "corridor (white line)".into(),
-            [CORRIDOR.0[0], CORRIDOR.0[1], CORRIDOR.0[2]],
+        marks.extend(iso_marks(
+            &error,
+            grid,
+            0.25,
+            &to_mm,
+            (CORRIDOR.0, 2, false),
         ));
     }
-    legend.extend([
-        (
-            "fitting point +; references, near point o".into(),
-            [MARK.0[0], MARK.0[1], MARK.0[2]],
+    marks.extend(lens_marks(map, report, &layout));
+    let half = 0.5 * map.step_mm;
+    let mut figure = Figure::new(
+        format!(
+            "'{}': {what} over the lens (as worn, from the eye's side); {lines}",
+            report.lens
         ),
-        (
-            "off the lens".into(),
-            [OUTSIDE.0[0], OUTSIDE.0[1], OUTSIDE.0[2]],
-        ),
-    ]);
-    Some(plot_around(
         png,
-        &title,
-        ("x (mm, the wearer's right)", "y (mm, up)"),
-        Some((extent, false)),
-        &legend,
-    ))
+    );
+    figure.axes = Some((
+        Axis::new(
+            "x (mm, the wearer's right)",
+            (
+                map.origin_mm[0] - half,
+                map.origin_mm[0] + (map.columns - 1) as f64 * map.step_mm + half,
+            ),
+        ),
+        Axis::new(
+            "y (mm, up)",
+            (
+                map.origin_mm[1] - half,
+                map.origin_mm[1] + (map.rows - 1) as f64 * map.step_mm + half,
+            ),
+        ),
+    ));
+    figure.marks = marks;
+    figure.colour_bar = Some(bar);
+    if report.progressive.is_some() {
+        figure
+            .legend
+            .push(("corridor (white line)".into(), CORRIDOR.0));
+    }
+    figure.legend.extend([
+        (
+            "fitting point +; reference points, near point o".into(),
+            MARK.0,
+        ),
+        ("off the lens".into(), OUTSIDE.0),
+    ]);
+    Some(figure.plot())
 }
 
 /// The corridor (white), the fitting point (a cross), the reference points and the near
-/// crossing (circles) on a map over the lens.
-fn draw_marks(png: &mut RgbImage, layout: &Layout, map: &LensMap, report: &Report) {
-    let to_grid = |at: [f64; 2]| {
-        [
-            (at[0] - map.origin_mm[0]) / map.step_mm,
-            (at[1] - map.origin_mm[1]) / map.step_mm,
-        ]
-    };
+/// crossing (circles) on a map over the lens, in mm.
+fn lens_marks(map: &LensMap, report: &Report, layout: &Layout) -> Vec<Mark> {
+    let mut marks = Vec::new();
     if let Some(p) = &report.progressive {
-        for w in p.corridor_mm.windows(2) {
-            let (a, b) = (layout.pixel(to_grid(w[0])), layout.pixel(to_grid(w[1])));
-            draw_line(png, a, b, CORRIDOR);
-            draw_line(png, a + Vec2::X, b + Vec2::X, CORRIDOR);
-        }
+        marks.push(Mark::Line {
+            points: p.corridor_mm.iter().map(|q| (q[0], q[1])).collect(),
+            colour: CORRIDOR.0,
+            width: 2,
+        });
     }
-    let r = 0.6 * layout.cell_px.max(6.0);
-    let circle = |png: &mut RgbImage, at: [f64; 2]| {
-        let c = layout.pixel(to_grid(at));
-        for k in 0..24 {
-            let (a, b) = (
-                k as f32 / 24.0 * std::f32::consts::TAU,
-                (k + 1) as f32 / 24.0 * std::f32::consts::TAU,
-            );
-            let p = |t: f32| c + Vec2::new(t.cos(), t.sin()) * r;
-            draw_line(png, p(a), p(b), MARK);
-        }
+    let r = 0.6 * f64::from(layout.cell_px.max(6.0)) / f64::from(layout.cell_px) * map.step_mm;
+    let circle = |at: [f64; 2]| Mark::Line {
+        points: (0..=24)
+            .map(|k| {
+                let a = f64::from(k) / 24.0 * std::f64::consts::TAU;
+                (at[0] + r * a.cos(), at[1] + r * a.sin())
+            })
+            .collect(),
+        colour: MARK.0,
+        width: 2,
     };
-    let fitting = layout.pixel(to_grid(report.fitting_point_mm));
-    draw_line(png, fitting - Vec2::X * r, fitting + Vec2::X * r, MARK);
-    draw_line(png, fitting - Vec2::Y * r, fitting + Vec2::Y * r, MARK);
+    let [fx, fy] = report.fitting_point_mm;
+    for points in [
+        vec![(fx - r, fy), (fx + r, fy)],
+        vec![(fx, fy - r), (fx, fy + r)],
+    ] {
+        marks.push(Mark::Line {
+            points,
+            colour: MARK.0,
+            width: 2,
+        });
+    }
     if let Some(p) = &report.progressive {
-        circle(png, p.distance_reference_mm);
-        circle(png, p.near_reference_mm);
+        marks.push(circle(p.distance_reference_mm));
+        marks.push(circle(p.near_reference_mm));
     }
     if let Some(n) = &report.near {
-        circle(png, n.point_on_lens_mm);
+        marks.push(circle(n.point_on_lens_mm));
     }
+    marks
 }
 
 /// The distortion picture: straight object-space lines (constant horizontal or vertical
@@ -562,6 +546,7 @@ fn draw_marks(png: &mut RgbImage, layout: &Layout, map: &LensMap, report: &Repor
 /// and evenly spaced. Grey: outside the lens.
 pub fn distortion(report: &Report) -> Plot {
     let layout = Layout::new(report);
+    let grid = (layout.columns, layout.rows);
     let (h, v) = (report.gaze.horizontal(), report.gaze.vertical());
     let half = report.gaze.step_deg.to_radians() * 0.5;
     let tan_range = |values: &[f64]| {
@@ -576,24 +561,25 @@ pub fn distortion(report: &Report) -> Plot {
         (((x1 - x0) * scale).round() as u32).max(8),
         (((y1 - y0) * scale).round() as u32).max(8),
     );
-    // Tangent-screen coordinates to grid coordinates and pixels.
+    // Tangent-screen coordinates to grid coordinates, and back.
     let grid_of = |tx: f64, ty: f64| {
         [
             (tx.atan().to_degrees() - h[0]) / report.gaze.step_deg,
             (ty.atan().to_degrees() - v[0]) / report.gaze.step_deg,
         ]
     };
-    let pixel_of = |at: [f64; 2]| {
-        let gh = (h[0] + at[0] * report.gaze.step_deg).to_radians().tan();
-        let gv = (v[0] + at[1] * report.gaze.step_deg).to_radians().tan();
-        Vec2::new(((gh - x0) * scale) as f32, ((y1 - gv) * scale) as f32)
+    let tangent_of = |at: [f64; 2]| {
+        (
+            (h[0] + at[0] * report.gaze.step_deg).to_radians().tan(),
+            (v[0] + at[1] * report.gaze.step_deg).to_radians().tan(),
+        )
     };
     let inside: Vec<Option<f64>> = report
         .grid
         .iter()
         .map(|c| (!c.outside).then_some(1.0))
         .collect();
-    let mut png = RgbImage::from_fn(width, height, |x, y| {
+    let png = RgbImage::from_fn(width, height, |x, y| {
         let tx = x0 + (f64::from(x) + 0.5) / scale;
         let ty = y1 - (f64::from(y) + 0.5) / scale;
         match sample(&inside, layout.columns, layout.rows, grid_of(tx, ty)) {
@@ -601,16 +587,14 @@ pub fn distortion(report: &Report) -> Plot {
             None => OUTSIDE,
         }
     });
-    let object_x: Vec<Option<f64>> = report
-        .grid
-        .iter()
-        .map(|c| c.object_tangent.map(|t| t[0]))
-        .collect();
-    let object_y: Vec<Option<f64>> = report
-        .grid
-        .iter()
-        .map(|c| c.object_tangent.map(|t| t[1]))
-        .collect();
+    let object = |axis: usize| -> Vec<Option<f64>> {
+        report
+            .grid
+            .iter()
+            .map(|c| c.object_tangent.map(|t| t[axis]))
+            .collect()
+    };
+    let (object_x, object_y) = (object(0), object(1));
     let span = |values: &[Option<f64>]| {
         values
             .iter()
@@ -626,70 +610,30 @@ pub fn distortion(report: &Report) -> Plot {
     } else {
         1.0
     };
+    let mut marks = Vec::new();
     for (values, (lo, hi)) in [(&object_x, (ax, bx)), (&object_y, (ay, by))] {
         if !lo.is_finite() {
             continue;
         }
         let mut level = (lo / step).ceil() * step;
         while level <= hi {
-            for [a, b] in iso_segments(values, layout.columns, layout.rows, level) {
-                draw_line(&mut png, pixel_of(a), pixel_of(b), INK);
-            }
+            marks.extend(iso_marks(values, grid, level, &tangent_of, (INK, 1, false)));
             level += step;
         }
     }
-    let title = format!(
-        "'{}': straight object lines (every {step} in tangent) as the wearer sees them, on the \
-         gaze's tangent screen",
-        report.lens
-    );
-    plot_around(
+    let mut figure = Figure::new(
+        format!(
+            "'{}': straight object lines (every {step} in tangent) as the wearer sees them, on \
+             the gaze's tangent screen",
+            report.lens
+        ),
         png,
-        &title,
-        ("tan h (the wearer's right)", "tan v (up)"),
-        Some((
-            Extent {
-                min: Vec2::new(x0 as f32, y0 as f32),
-                max: Vec2::new(x1 as f32, y1 as f32),
-            },
-            false,
-        )),
-        &[(
-            "outside the lens".into(),
-            [OUTSIDE.0[0], OUTSIDE.0[1], OUTSIDE.0[2]],
-        )],
-    )
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn iso_lines_of_a_plane_are_straight_where_the_level_lies() {
-        // v = column: the level 1.5 runs down the middle of columns 1 and 2.
-        let (columns, rows) = (4, 3);
-        let values: Vec<Option<f64>> = (0..rows)
-            .flat_map(|_| (0..columns).map(|i| Some(i as f64)))
-            .collect();
-        let segments = iso_segments(&values, columns, rows, 1.5);
-        assert_eq!(segments.len(), 2);
-        for [a, b] in segments {
-            assert!((a[0] - 1.5).abs() < 1e-12 && (b[0] - 1.5).abs() < 1e-12);
-        }
-        // A saddle whose centre sides with a and c: the lines cut off b and d.
-        // Row 0: a = 1, b = 0; row 1: d = 0, c = 1.
-        let saddle = [Some(1.0), Some(0.0), Some(0.0), Some(1.0)];
-        let lines = iso_segments(&saddle, 2, 2, 0.4);
-        assert_eq!(lines.len(), 2);
-        for [p, q] in lines {
-            // Each line runs near b = (1, 0) or near d = (0, 1), never across the a–c diagonal.
-            let mid = [(p[0] + q[0]) * 0.5, (p[1] + q[1]) * 0.5];
-            assert!((mid[0] - mid[1]).abs() > 0.2, "{p:?} {q:?}");
-        }
-        // A missing corner drops its cells.
-        let mut holed = values.clone();
-        holed[1] = None;
-        assert_eq!(iso_segments(&holed, columns, rows, 1.5).len(), 1);
-    }
+    );
+    figure.axes = Some((
+        Axis::new("tan h (the wearer's right)", (x0, x1)),
+        Axis::new("tan v (up)", (y0, y1)),
+    ));
+    figure.marks = marks;
+    figure.legend = vec![("outside the lens".into(), OUTSIDE.0)];
+    figure.plot()
 }

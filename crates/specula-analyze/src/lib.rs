@@ -17,6 +17,7 @@
 //! Objects are named as the scene names them (`NAME#k` for a component split on load); an
 //! unknown name is an error listing the valid ones ([`object`]).
 
+pub mod figure;
 pub mod frame;
 pub mod glare;
 pub mod lens;

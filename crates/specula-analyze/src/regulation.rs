@@ -113,7 +113,7 @@ impl Regulation {
 const R46: &str = "UN Regulation No. 46, 04 series of amendments";
 
 /// The regulations `--regulation` knows. Every figure is the one the cited paragraph states as
-/// we read it; docs/analyses.md says which were checked against the text and which not.
+/// we read it; docs/analyses/mirror-view.md says which were checked against the text and which not.
 pub const REGULATIONS: &[Regulation] = &[
     Regulation {
         name: "r46-i",

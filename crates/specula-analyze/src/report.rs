@@ -111,7 +111,7 @@ pub fn write_mirror_view(
 <style>{style}</style></head><body>
 <h1>What '{mirror}' shows: {scene}</h1>
 <p>Exact rays from each eye point to points of the mirror, reflected about its shading normals and
-followed through the scene (docs/analyses.md). Vehicle frame: forward ({fx:.3}, {fy:.3}, {fz:.3}),
+followed through the scene (docs/analyses/mirror-view.md). Vehicle frame: forward ({fx:.3}, {fy:.3}, {fz:.3}),
 up +Y. Ground: y = {ground} m, counted within {range} m of an eye point where no object hides it.
 Required region: {region}. Refinement stopped when the solid angle and the ground area changed by
 less than {tol} and the extents by less than {tol_deg}°. "All eye points": a point counts when any
@@ -177,7 +177,7 @@ pub fn write_glare(
 <style>{style}</style></head><body>
 <h1>Glare of '{source}' in '{surface}': {scene}</h1>
 <p>Each eye point's image ({width}×{height}, aimed at the surface), its paths followed as the
-reference follows them, the Fresnel factors per polarisation (docs/analyses.md). A pixel's glare is
+reference follows them, the Fresnel factors per polarisation (docs/analyses/glare.md). A pixel's glare is
 what its paths bring from the source after at least one specular reflection on the surface.
 Luminance factor: the glare's luminance over the source's; luminance: the glare's image in cd/m²;
 mean: over the solid angle the glare covers; veiling ratio: the glare over what the pixel shows
@@ -576,7 +576,7 @@ pub fn write_lens(dir: &Path, r: &crate::lens::Report) -> Result<PathBuf, Analyz
 <p>The {eye} eye turns about its centre of rotation ({cx:.4}, {cy:.4}, {cz:.4}) by Listing's law;
 at each gaze the chief ray from the centre is traced through the lens with Snell's law at its own
 normals, and a narrow bundle ({step} mm) from the object ({object}) around it gives the
-vergences at the vertex sphere (radius {radius:.1} mm), docs/analyses.md. Indices (red, green,
+vergences at the vertex sphere (radius {radius:.1} mm), docs/analyses/lens.md. Indices (red, green,
 blue): {n0}, {n1}, {n2}. Gaze grid ±{hmax}° × ±{vmax}° every {gstep}°. The finite differences
 changed by at most {fd:.1e} D between the bundle and half of it. {prescription}</p>
 <table>

@@ -8,7 +8,7 @@
 //!
 //!   cargo bench -p specula-compare --bench distance_maps_figures
 //!
-//! Prints Markdown tables (recorded in docs/benchmarks.md). Errors as `compare` measures them:
+//! Prints Markdown tables (recorded in docs/methods/distance-maps.md). Errors as `compare` measures them:
 //! linear radiance clamped to [0, 1], over the pixels whose primary ray hits the teapot. Frame
 //! time: median of 3 frames after 1 warm-up frame, from the technique's own stage timings;
 //! reference: its CPU render time (all cores) for the same image, BVH build included.

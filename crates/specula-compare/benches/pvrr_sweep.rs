@@ -3,7 +3,7 @@
 //!
 //!   cargo bench -p specula-compare --bench pvrr_sweep
 //!
-//! Prints a Markdown table (recorded in docs/benchmarks.md); RMSE and PSNR as `compare` measures
+//! Prints a Markdown table (recorded in docs/methods/pvrr.md); RMSE and PSNR as `compare` measures
 //! them (linear radiance clamped to [0, 1]), over the pixels whose primary ray hits the mirror. Frame time: median of 5 frames after
 //! 2 warm-up frames, from the technique's own stage timings.
 

@@ -66,7 +66,7 @@ const PAPER_METHODS: [&str; 5] = [
 /// pairs 0.1093 -> 0.1089). pvrr runs with depth=1, as these figures were first measured
 /// (before its frame budget, nested reflections took ~18 s a frame on the merged scenes here;
 /// bounded, depth 2 takes 0.67–1.13× depth 1's time at the same or better FLIP,
-/// docs/benchmarks.md). c3rc's column was measured again the same day after its exact hits,
+/// docs/methods/pvrr.md). c3rc's column was measured again the same day after its exact hits,
 /// the far field's depth and a camera for every triangle (issue 29): concave-mirror 0.0575 ->
 /// 0.0315, lit-room 0.1417 -> 0.0482, mirror-bunny 0.0955 -> 0.0542, mirror-sphere-nearby
 /// 0.1034 -> 0.0351, mirror-sphere 0.0931 -> 0.0188, the mirror pairs 0.1338 -> 0.0379. No
@@ -101,7 +101,7 @@ const MEASURED: &[(&str, [Option<f64>; 6])] = &[
 /// `depth=1` the run sets is written `pvrr.depth=1`, for specula's pvrr only). image-space
 /// shades mirrors with envmap's cube maps; without parallax (the paper's lookup) that is
 /// envmap's figure exactly. vertex-tracing's published algorithm is more accurate than its
-/// defaults here, at more rays: docs/benchmarks.md has why. Measured again 2026-12-03 (issue
+/// defaults here, at more rays: docs/methods/vertex-tracing.md has why. Measured again 2026-12-03 (issue
 /// 38) with two-level cube maps off in the paper presets: image-space:paper on mirrors-merged
 /// 0.1751 -> 0.1822 (envmap's maps with one level), c3rc:paper unchanged; vertex-tracing:paper
 /// 0.0022 -> 0.0020, 0.0036 -> 0.0033, 0.0016 -> 0.0011 (since the per-pixel choice of issue
@@ -571,7 +571,7 @@ fn the_bound_is_one_and_a_half_times_the_measurement_capped() {
 /// the suite's size with pvrr's defaults (depth 2), measured 2026-12-02 on lavapipe with
 /// `cargo test -p specula-compare --test suite zooming -- --nocapture`: (scene file under
 /// `scenes/`, the issue's goal, measured). Before the zooming view and view volumes fitted to
-/// the hits, at 320 × 240: 0.204, 0.277, 0.154, 0.242 (docs/benchmarks.md).
+/// the hits, at 320 × 240: 0.204, 0.277, 0.154, 0.242 (CHANGELOG.md).
 #[rustfmt::skip]
 const ZOOMING_MEASURED: &[(&str, Option<f64>, f64)] = &[
     ("zooming/concave-magnifier.toml", Some(0.12), 0.0184),
@@ -650,7 +650,7 @@ fn pvrr_meets_its_zooming_region_goals() {
 /// compare's default size, 320 × 240, measured 2026-12-02 on lavapipe with `specula compare
 /// SCENE --methods c3rc,c3rc:paper` (the test prints its own figures): (scene file under
 /// `scenes/`, the issue's goal, measured). Before exact hits and the far field's depth: 0.1033,
-/// 0.0707, 0.0858, 0.2261, 0.1700, 0.1221 (docs/benchmarks.md).
+/// 0.0707, 0.0858, 0.2261, 0.1700, 0.1221 (CHANGELOG.md).
 #[rustfmt::skip]
 const C3RC_MEASURED: &[(&str, Option<f64>, f64)] = &[
     ("c3rc/closed-room.toml",          Some(0.06), 0.0008),

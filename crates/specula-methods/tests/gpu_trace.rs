@@ -1,7 +1,7 @@
 //! `gpu-trace` renders what the CPU reference renders: PSNR (on radiance clamped to [0, 1], as
 //! `compare` computes it) against the CPU reference, one sample per pixel, on every built-in
 //! and suite scene, in both of its modes. `GPU_TRACE_TEST_SIZE=320x240` runs the every-scene
-//! test at the size (docs/benchmarks.md has its figures); the default is 80×60.
+//! test at the size (docs/methods/gpu-trace.md has its figures); the default is 80×60.
 
 mod common;
 
@@ -85,7 +85,7 @@ fn gpu_trace_equals_the_cpu_reference_on_every_scene() {
     // At 80×60, measured 2026-12-01 on lavapipe: worst 84.8 dB (glass-dragon), every other
     // scene >= 110 dB; the bound allows twice that RMSE (6 dB less). At other sizes a pixel at
     // the edge of a glare can see another surface in single precision (truck-cover: 50.3 dB at
-    // 320×240, docs/benchmarks.md), so there the bound is the 45 dB.
+    // 320×240, docs/methods/gpu-trace.md), so there the bound is the 45 dB.
     let floor = if every_scene_size() == (WIDTH, HEIGHT) {
         79.0
     } else {

@@ -300,7 +300,7 @@ fn nearby_visibility_counts_surfaces_hidden_from_the_eye() {
 }
 
 /// The paper's fourth limitation measured on the scenes with a refractor and nearby geometry
-/// (docs/benchmarks.md quotes these figures: `cargo test -p specula-methods --test image_space
+/// (docs/methods/image-space.md quotes these figures: `cargo test -p specula-methods --test image_space
 /// visibility_on_the_scenes -- --nocapture`).
 #[test]
 fn visibility_on_the_scenes() {

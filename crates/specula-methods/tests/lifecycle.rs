@@ -80,7 +80,7 @@ fn every_parameter_the_parser_accepts_is_listed_and_every_listed_one_is_accepted
             assert!(error.contains(spec.name), "{}: {error}", info.name);
         }
     }
-    // The README's example is accepted.
+    // docs/usage.md's example is accepted.
     let mut pvrr = by_name("pvrr").unwrap();
     apply_setting(pvrr.as_mut(), "markers=true").unwrap();
     assert_eq!(pvrr.parameter("markers"), "true");

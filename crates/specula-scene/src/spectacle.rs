@@ -26,7 +26,7 @@
 //! normals exactly in direction (the normalised mix of (p_i − c) / R is the normal at the mixed
 //! point), so a spherical surface's power is right at any tessellation; a torus's normals are
 //! only approximated between the vertices, so a toric lens's cylinder converges as the
-//! tessellation grows (docs/analyses.md measures it).
+//! tessellation grows (docs/analyses/lens.md measures it).
 
 use std::f64::consts::TAU;
 

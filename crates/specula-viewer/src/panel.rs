@@ -9,7 +9,7 @@ use specula_methods::{ParamKind, ParamSpec};
 use crate::app::UiState;
 use crate::session::{Session, ViewMode};
 
-/// The keys, for the help window and the README.
+/// The keys, for the help window and docs/viewer.md.
 pub const KEYS: &[(&str, &str)] = &[
     ("left drag", "orbit the eye about the target"),
     ("right / middle drag, Shift + left drag", "pan"),

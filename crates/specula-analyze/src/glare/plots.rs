@@ -1,31 +1,19 @@
 //! The sweep's pictures: a map of the sun positions (azimuth × elevation) coloured by the worst
-//! eye point's glare luminance, washed-out positions crossed; and a polar plot of the sky seen
-//! from above (the vehicle's forward axis up, the zenith in the centre) with the positions that
-//! glare or wash out and, with a solar day, the sun's path through it.
+//! eye point's glare luminance on a log colour bar, washed-out positions crossed; and a polar
+//! plot of the sky seen from above (the vehicle's forward axis up, the zenith in the centre)
+//! with the positions that glare or wash out and, with a solar day, the sun's path through it.
 
 use image::{Rgb, RgbImage};
 
 use super::sweep::{SunEffect, SweepReport};
-use crate::plot::{plot_around, scale_colour, Extent, Plot};
+use crate::figure::{Axis, ColourBar, Figure, Mark, Plot};
 
 const NONE: [u8; 3] = [215, 215, 215];
 const WASHED: [u8; 3] = [220, 20, 60];
+const GUIDE: [u8; 3] = [150, 150, 150];
 
-/// A position's colour: the glare luminance on a log scale over the sweep's range (grey: none).
-fn colour(effect: &SunEffect, range: (f64, f64)) -> [u8; 3] {
-    if !effect.glare() {
-        return NONE;
-    }
-    let (lo, hi) = range;
-    let t = if hi > lo {
-        (effect.max_luminance_cd_m2.max(lo).log10() - lo.log10()) / (hi.log10() - lo.log10())
-    } else {
-        1.0
-    };
-    scale_colour(t.clamp(0.0, 1.0))
-}
-
-fn luminance_range(sweep: &SweepReport) -> (f64, f64) {
+/// The glare luminance's scale: logarithmic over the sweep's range.
+fn luminance_bar(sweep: &SweepReport) -> ColourBar {
     let lit = sweep
         .positions
         .iter()
@@ -35,36 +23,37 @@ fn luminance_range(sweep: &SweepReport) -> (f64, f64) {
         .map(|p| p.max_luminance_cd_m2)
         .fold(f64::INFINITY, f64::min);
     let hi = lit.map(|p| p.max_luminance_cd_m2).fold(0.0, f64::max);
-    if lo.is_finite() {
-        (lo, hi)
-    } else {
-        (1.0, 1.0)
+    let range = match lo.is_finite() {
+        true if hi > lo => (lo, hi),
+        true => (lo * 0.5, lo * 2.0),
+        false => (1.0, 10.0),
+    };
+    ColourBar {
+        label: "the worst eye point's glare luminance (cd/m², log scale)".into(),
+        range,
+        log: true,
     }
 }
 
-fn legend(range: (f64, f64), display: bool) -> Vec<(String, [u8; 3])> {
-    let mut legend = vec![
-        ("no glare from any eye point".to_string(), NONE),
-        (
-            format!("glare, the worst eye point's {:.2e} cd/m²", range.0),
-            scale_colour(0.0),
-        ),
-        (format!("glare, {:.2e} cd/m²", range.1), scale_colour(1.0)),
-    ];
+/// A position's colour on `bar` (grey: no glare).
+fn colour(effect: &SunEffect, bar: &ColourBar) -> [u8; 3] {
+    if effect.glare() {
+        bar.colour(effect.max_luminance_cd_m2)
+    } else {
+        NONE
+    }
+}
+
+fn legend(sweep: &SweepReport) -> Vec<(String, [u8; 3])> {
+    let mut legend = vec![("no glare from any eye point".to_string(), NONE)];
+    let display = sweep
+        .positions
+        .iter()
+        .any(|p| p.max_washed_out_share.is_some());
     if display {
         legend.push(("some of the display washed out (crossed)".into(), WASHED));
     }
     legend
-}
-
-fn cross(png: &mut RgbImage, x0: u32, y0: u32, side: u32) {
-    for k in 0..side {
-        for (x, y) in [(x0 + k, y0 + k), (x0 + side - 1 - k, y0 + k)] {
-            if x < png.width() && y < png.height() {
-                png.put_pixel(x, y, Rgb(WASHED));
-            }
-        }
-    }
 }
 
 /// The sweep as a map: azimuth across, elevation up, one cell per position.
@@ -73,114 +62,154 @@ pub fn sweep_map(sweep: &SweepReport, title: &str) -> Plot {
     let columns = ((sweep.azimuth_deg[1] - sweep.azimuth_deg[0]) / step + 1e-9).floor() as u32 + 1;
     let rows = ((sweep.elevation_deg[1] - sweep.elevation_deg[0]) / step + 1e-9).floor() as u32 + 1;
     let cell = (640 / columns.max(rows)).clamp(3, 48);
+    let bar = luminance_bar(sweep);
     let mut png = RgbImage::from_pixel(columns * cell, rows * cell, Rgb([255, 255, 255]));
-    let range = luminance_range(sweep);
-    let display = sweep
-        .positions
-        .iter()
-        .any(|p| p.max_washed_out_share.is_some());
+    let mut crosses = Vec::new();
+    let half = step * 0.5;
     for (k, p) in sweep.positions.iter().enumerate() {
         let (i, j) = (k as u32 % columns, k as u32 / columns);
         let (x0, y0) = (i * cell, (rows - 1 - j) * cell);
         for y in y0..y0 + cell {
             for x in x0..x0 + cell {
-                png.put_pixel(x, y, Rgb(colour(p, range)));
+                png.put_pixel(x, y, Rgb(colour(p, &bar)));
             }
         }
         if p.washed_out() {
-            cross(&mut png, x0, y0, cell);
+            let (az, el) = (p.azimuth_deg, p.elevation_deg);
+            for (from, to) in [
+                ((-half, -half), (half, half)),
+                ((-half, half), (half, -half)),
+            ] {
+                crosses.push(Mark::Line {
+                    points: vec![(az + from.0, el + from.1), (az + to.0, el + to.1)],
+                    colour: WASHED,
+                    width: 2,
+                });
+            }
         }
     }
-    let half = step as f32 * 0.5;
-    let extent = Extent {
-        min: glam::Vec2::new(
-            sweep.azimuth_deg[0] as f32 - half,
-            sweep.elevation_deg[0] as f32 - half,
-        ),
-        max: glam::Vec2::new(
-            sweep.azimuth_deg[0] as f32 + (columns as f32 - 0.5) * step as f32,
-            sweep.elevation_deg[0] as f32 + (rows as f32 - 0.5) * step as f32,
-        ),
-    };
-    plot_around(
-        png,
-        title,
-        (
+    let mut figure = Figure::new(title, png);
+    figure.axes = Some((
+        Axis::new(
             "sun azimuth from the vehicle's forward axis, right positive (°)",
-            "sun elevation (°)",
+            (
+                sweep.azimuth_deg[0] - half,
+                sweep.azimuth_deg[0] + (f64::from(columns) - 0.5) * step,
+            ),
         ),
-        Some((extent, false)),
-        &legend(range, display),
-    )
+        Axis::new(
+            "sun elevation (°)",
+            (
+                sweep.elevation_deg[0] - half,
+                sweep.elevation_deg[0] + (f64::from(rows) - 0.5) * step,
+            ),
+        ),
+    ));
+    figure.marks = crosses;
+    figure.legend = legend(sweep);
+    figure.colour_bar = Some(bar);
+    figure.plot()
 }
 
 /// The sky from above: forward up, right to the right, the zenith in the centre and the horizon
-/// on the rim (radius ∝ 90° − elevation); rings every 30°; the day's path in black, a dot each
-/// hour.
+/// on the rim (radius ∝ 90° − elevation); rings every 30°; the day's path in black, a larger
+/// dot each solar hour.
 pub fn polar(sweep: &SweepReport, title: &str) -> Plot {
     let size = 480u32;
-    let centre = size as f64 * 0.5;
-    let radius = centre - 8.0;
-    let mut png = RgbImage::from_pixel(size, size, Rgb([255, 255, 255]));
+    let centre = f64::from(size) * 0.5;
+    let radius = centre - 24.0;
+    // Raster pixels, y down.
     let at = |az: f64, el: f64| {
         let r = radius * (90.0 - el) / 90.0;
         let a = az.to_radians();
         (centre + r * a.sin(), centre - r * a.cos())
     };
-    let dot = |png: &mut RgbImage, (x, y): (f64, f64), half: i64, ink: [u8; 3]| {
-        for dy in -half..=half {
-            for dx in -half..=half {
-                let (px, py) = (x.round() as i64 + dx, y.round() as i64 + dy);
-                if px >= 0 && py >= 0 && (px as u32) < size && (py as u32) < size {
-                    png.put_pixel(px as u32, py as u32, Rgb(ink));
-                }
-            }
-        }
-    };
+    let mut marks = Vec::new();
     for ring in [0.0, 30.0, 60.0] {
-        for k in 0..720 {
-            dot(&mut png, at(f64::from(k) * 0.5, ring), 0, [160, 160, 160]);
-        }
+        marks.push(Mark::Line {
+            points: (0..=360).map(|k| at(f64::from(k), ring)).collect(),
+            colour: GUIDE,
+            width: 1,
+        });
+        marks.push(Mark::Text {
+            at: at(45.0, ring + 4.0),
+            text: format!("{ring}°"),
+            colour: [90, 90, 90],
+            halo: [255, 255, 255],
+        });
     }
-    for k in 0..=90 {
-        dot(&mut png, at(0.0, f64::from(k)), 0, [160, 160, 160]);
+    marks.push(Mark::Line {
+        points: vec![at(0.0, 90.0), at(0.0, 0.0)],
+        colour: GUIDE,
+        width: 1,
+    });
+    for (az, word) in [
+        (0.0, "ahead"),
+        (90.0, "right"),
+        (180.0, "behind"),
+        (270.0, "left"),
+    ] {
+        marks.push(Mark::Text {
+            at: at(az, -9.0),
+            text: word.into(),
+            colour: [0, 0, 0],
+            halo: [255, 255, 255],
+        });
     }
-    let range = luminance_range(sweep);
-    let half = ((radius * sweep.step_deg / 90.0) * 0.35).clamp(1.0, 6.0) as i64;
+    let bar = luminance_bar(sweep);
+    let half = ((radius * sweep.step_deg / 90.0) * 0.35).clamp(1.5, 6.0);
     for p in &sweep.positions {
+        if !(p.glare() || p.washed_out()) {
+            continue;
+        }
         let ink = if p.washed_out() {
             WASHED
         } else {
-            colour(p, range)
+            colour(p, &bar)
         };
-        if p.glare() || p.washed_out() {
-            dot(&mut png, at(p.azimuth_deg, p.elevation_deg), half, ink);
-        }
+        let (x, y) = at(p.azimuth_deg, p.elevation_deg);
+        marks.push(Mark::Box {
+            corners: [(x - half, y - half), (x + half, y + half)],
+            colour: ink,
+        });
     }
     if let Some(day) = &sweep.day {
+        marks.push(Mark::Line {
+            points: day
+                .times
+                .iter()
+                .map(|t| at(t.effect.azimuth_deg, t.effect.elevation_deg))
+                .collect(),
+            colour: [0, 0, 0],
+            width: 1,
+        });
         for t in &day.times {
             let on_hour = (t.hours * 60.0).round() as i64 % 60 == 0;
+            if !(on_hour || t.effect.washed_out()) {
+                continue;
+            }
             let ink = if t.effect.washed_out() {
                 WASHED
             } else {
                 [0, 0, 0]
             };
-            dot(
-                &mut png,
-                at(t.effect.azimuth_deg, t.effect.elevation_deg),
-                i64::from(on_hour) * 2,
-                ink,
-            );
+            let (x, y) = at(t.effect.azimuth_deg, t.effect.elevation_deg);
+            let r = if on_hour { 3.0 } else { 1.5 };
+            marks.push(Mark::Box {
+                corners: [(x - r, y - r), (x + r, y + r)],
+                colour: ink,
+            });
         }
     }
-    let display = sweep
-        .positions
-        .iter()
-        .any(|p| p.max_washed_out_share.is_some());
-    let mut legend = legend(range, display);
+    let mut figure = Figure::new(
+        title,
+        RgbImage::from_pixel(size, size, Rgb([255, 255, 255])),
+    );
+    figure.marks = marks;
+    let mut legend = legend(sweep);
     legend.push((
         "rings: elevation 0°, 30°, 60°; the line to the top: ahead".into(),
-        [160, 160, 160],
+        GUIDE,
     ));
     if sweep.day.is_some() {
         legend.push((
@@ -188,5 +217,7 @@ pub fn polar(sweep: &SweepReport, title: &str) -> Plot {
             [0, 0, 0],
         ));
     }
-    plot_around(png, title, ("", ""), None, &legend)
+    figure.legend = legend;
+    figure.colour_bar = Some(bar);
+    figure.plot()
 }

@@ -1,6 +1,6 @@
 //! A lens's focimeter reading against the tolerances of a spectacle-lens standard, for a
 //! finished uncut single-vision lens. The tables are data ([`STANDARDS`]), each value with the
-//! edition it comes from; docs/analyses.md says which of them could be checked against a text
+//! edition it comes from; docs/analyses/lens.md says which of them could be checked against a text
 //! and which could not.
 //!
 //! - **ANSI Z80.1-2015** (its published quick reference; the standard's own table numbers

@@ -92,7 +92,7 @@
 //!
 //! Every switch but `exact_hits` acts on both projection paths (`projection=cpu` and `gpu`):
 //! the culling, the cameras and the per-vertex and traced pixels are the CPU's on both; the
-//! GPU's passes read the splat switches from each camera and skip the hole filling. docs/benchmarks.md has what
+//! GPU's passes read the splat switches from each camera and skip the hole filling. docs/methods/c3rc.md has what
 //! `trace_self` and `level_of_detail` bought.
 //!
 //! Implementation (changes no pixel): four planes bounding each camera's volume cull boxes and

@@ -92,7 +92,7 @@
 //!   FLIP, against a missed ray meeting the background) and hurts in open ones where the missed ray
 //!   did leave the scene (mirror-teapot-bunny 0.046 → 0.060, truck-cover 0.148 → 0.183): a ray that
 //!   passes behind an object as seen from the reference point looks, in the map, like one that
-//!   stepped over it (docs/benchmarks.md).
+//!   stepped over it (docs/methods/distance-maps.md).
 //!
 //! Implementation (changes no pixel): with `dynamic=false` the maps and their min-max ranges are
 //! kept until an object moves instead of being redrawn every frame (they would come out the same);

@@ -58,7 +58,7 @@
 //! What they change:
 //! - `max_depth`: the most specular bounces on a path, as the CPU reference's.
 //!   Cost grows with the paths that need it.
-//! - `mode` (docs/benchmarks.md): the form of
+//! - `mode` (docs/methods/gpu-trace.md): the form of
 //!   the tracing, above.
 //! - `queue_factor`: wavefront queue capacity in rays per pixel. More memory, fewer
 //!   drops on deep glass.

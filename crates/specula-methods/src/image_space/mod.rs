@@ -31,7 +31,7 @@
 //! - `exit_iterations` moves P̃2 along T1 to the depth of the back face under it,
 //!   the §4.3 iteration applied to the back-face texture (0.240 → 0.118 with the cube maps
 //!   looked up along the direction alone; the suite's glass sphere unless named, as in
-//!   docs/benchmarks.md) (paper: `exit_iterations=0`).
+//!   docs/methods/image-space.md) (paper: `exit_iterations=0`).
 //! - `bracket`: the iterative mode skips seeds over empty NG texels, refines by secant where
 //!   two consecutive seeds bracket the NG surface (the ray passes from in front of it to
 //!   behind it) and keeps the best-agreeing point met, so that it cannot run off the screen

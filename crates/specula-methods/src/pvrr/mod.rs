@@ -203,7 +203,7 @@
 //!   level's 1st passes and map texels and trace a quarter of that times its per-vertex rays
 //!   (0: depth 1's frame). Higher shows reflections in reflectors in more of the picture; on
 //!   the scene suite at 160 × 120 a depth-2 frame took 0.67–1.13 times depth 1's with 8
-//!   (docs/benchmarks.md), where unbounded it took up to 24 times (the lit room).
+//!   (docs/methods/pvrr.md), where unbounded it took up to 24 times (the lit room).
 //! - `frame_patches`, `frame_texels`: the most 1st passes
 //!   and map texels of a frame, all levels together; the top level's reflectors share them
 //!   first (each at most `frame_patches` / (2 × reflectors) patches and a map of

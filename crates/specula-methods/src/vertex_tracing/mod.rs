@@ -187,7 +187,7 @@
 //! - `tracing` (auto): per reflector as above; `vertices` for all (the paper); `pixels` for all
 //!   (the reference's image, at the reference's cost).
 //! - `vertex_ratio` (0.05): seen vertices per pixel above which `auto` traces a reflector per
-//!   pixel. Measured on the scene suite (docs/benchmarks.md): at 320 × 240 its reflectors above
+//!   pixel. Measured on the scene suite (docs/methods/vertex-tracing.md): at 320 × 240 its reflectors above
 //!   0.05 show 0.11–0.42 and took 0.96–1.72× the reference's frame by their vertices; at
 //!   1024 × 768 they show 0.01–0.04.
 //! - `min_path_rays` (6): rays per sampled pixel path below which `auto` traces per pixel
@@ -196,7 +196,7 @@
 //! - `composition` (auto): `gpu` draws the refined faces with the GPU raster, `cpu` locates and
 //!   interpolates each pixel on the CPU, `auto` uses a GPU where the run has one that is not a
 //!   software rasterizer. On lavapipe the raster took 16.8 ms where the CPU took 6.6 ms
-//!   (truck-cover, 1024 × 768, docs/benchmarks.md): uploading the ID buffer and reading the
+//!   (truck-cover, 1024 × 768, docs/methods/vertex-tracing.md): uploading the ID buffer and reading the
 //!   frame back cost more than locating on two cores.
 //! - `visibility` (auto): `gpu` draws the ID buffer with the scene raster pass, `cpu` traces it,
 //!   `auto` uses a GPU where the run has one that is not a software rasterizer (on lavapipe
