@@ -19,6 +19,8 @@ use serde_json::{json, Value};
 use tungstenite::{Message, WebSocket};
 
 const CHROMIUM: &str = "chromium";
+/// Every technique (the exact methods run in every compare anyway).
+const TECHNIQUES: &str = "envmap,pvrr,distance-maps,image-space,c3rc,vertex-tracing";
 /// Longest wait for any one answer of the browser.
 const PATIENCE: Duration = Duration::from_secs(60);
 
@@ -179,12 +181,18 @@ impl Browser {
         result["result"]["value"].clone()
     }
 
-    /// The whole page as PNG.
-    fn screenshot(&mut self) -> image::RgbImage {
-        let shot = self.call(
-            "Page.captureScreenshot",
-            json!({ "format": "png", "captureBeyondViewport": true }),
-        );
+    /// The whole page as PNG, or the element with id `element` alone.
+    fn screenshot(&mut self, element: Option<&str>) -> image::RgbImage {
+        let mut params = json!({ "format": "png", "captureBeyondViewport": true });
+        if let Some(id) = element {
+            let rect = self.evaluate(&format!(
+                "(() => {{ const r = document.getElementById('{id}').getBoundingClientRect(); \
+                 return {{ x: r.x + scrollX, y: r.y + scrollY, width: r.width, height: r.height, \
+                 scale: 1 }}; }})()"
+            ));
+            params["clip"] = rect;
+        }
+        let shot = self.call("Page.captureScreenshot", params);
         let bytes = base64::engine::general_purpose::STANDARD
             .decode(shot["data"].as_str().unwrap())
             .unwrap();
@@ -301,7 +309,7 @@ fn open(browser: &mut Browser, page: &Path, shot: &str) -> Opened {
         .evaluate("document.body ? document.body.innerText.trim().length : 0")
         .as_u64()
         .unwrap() as usize;
-    let png = browser.screenshot();
+    let png = browser.screenshot(None);
     let colours: std::collections::HashSet<[u8; 3]> = png.pixels().map(|p| p.0).collect();
     let dir = std::env::var_os("SPECULA_BROWSER_SHOTS")
         .map(PathBuf::from)
@@ -332,7 +340,7 @@ fn the_reports_open_in_chromium_with_every_image_and_no_error() {
     let small = ["-W", "96", "-H", "72"];
     let mut command = specula();
     command
-        .args(["compare", "door-mirror", "--methods", "envmap,pvrr"])
+        .args(["compare", "door-mirror", "--methods", TECHNIQUES])
         .args(small)
         .arg("--report")
         .arg(&compare);
@@ -361,7 +369,11 @@ fn the_reports_open_in_chromium_with_every_image_and_no_error() {
     // The compare report shows the reference, and each method's image and FLIP map; the
     // suite's table links to each scene's report; the analysis shows its two plots.
     for (folder, shot, least_images) in [
-        (&compare, "report-compare.png", 5),
+        (
+            &compare,
+            "report-compare.png",
+            1 + 2 * TECHNIQUES.split(',').count(),
+        ),
         (&suite, "report-suite.png", 0),
         (&suite.join("glass-lens"), "report-suite-scene.png", 3),
         (&analysis, "report-analysis.png", 2),
@@ -370,6 +382,19 @@ fn the_reports_open_in_chromium_with_every_image_and_no_error() {
         let opened = open(&mut browser, &page, shot);
         eprintln!("{shot}: {opened:?}");
         opened.assert_sound(&page.display().to_string(), least_images);
+    }
+
+    // The compare report's pictures alone: the README's picture.
+    browser.open(&compare.join("report.html"));
+    let grid = browser.screenshot(Some("figures"));
+    assert!(
+        grid.width() > 500 && grid.height() > 200,
+        "{:?}",
+        grid.dimensions()
+    );
+    if let Some(dir) = std::env::var_os("SPECULA_BROWSER_SHOTS") {
+        grid.save(PathBuf::from(dir).join("readme-compare.png"))
+            .unwrap();
     }
 
     // The checks can fail: a report whose image is missing is caught.

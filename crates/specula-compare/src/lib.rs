@@ -770,7 +770,7 @@ the method's ({gpu_trace}).</p>
                 .map(|(k, v)| format!("{}={}", escape(k), escape(v)))
                 .collect();
             figures.push_str(&format!(
-                "<div><b>{}</b><img src=\"{}\"><img src=\"{}\"><small>above: its FLIP error (black = none, yellow = large); {}</small></div>\n",
+                "<div><b>{}</b><img src=\"{}\"><img src=\"{}\"><small>above: its FLIP error (black = none, yellow = large)</small><details><summary><small>parameters</small></summary><small>{}</small></details></div>\n",
                 escape(&m.label),
                 data_uri(&img.to_srgb8()),
                 data_uri(heat),
