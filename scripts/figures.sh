@@ -43,7 +43,11 @@ if [ "$measure" = 1 ]; then
     echo "figures: $embree_command"
     scripts/bench-bvh.sh > "$runs/embree.txt"
   fi
-  commit=$(git describe --always --dirty --abbrev=10)
+  # The commit of what was measured: the last to change the code, the scenes or the scripts
+  # (committing the runs and the tables does not change it).
+  measured=(crates scenes scripts Cargo.toml Cargo.lock)
+  commit=$(git log -1 --format=%h --abbrev=10 -- "${measured[@]}")
+  git diff --quiet HEAD -- "${measured[@]}" || commit="$commit with uncommitted changes"
   cpu=$(lscpu | sed -n 's/^Model name: *//p' | head -1)
   memory=$(awk '/MemTotal/ {printf "%.0f GiB", $2 / 1048576}' /proc/meminfo)
   python3 - "$runs/meta.json" "$commit" "$cpu, $(nproc) cores, $memory" "$suite" "$scenes" \
