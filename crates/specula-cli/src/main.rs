@@ -44,7 +44,7 @@ enum Command {
     /// Render the reference and each method from the same camera; report error and speed.
     /// Several scenes, or a folder of .toml scenes, give one report with a methods × scenes table.
     #[command(
-        after_help = "Example:\n  specula compare door-mirror --methods envmap,pvrr,pvrr:paper --report report"
+        after_help = "Example:\n  specula compare door-mirror --methods envmap,pvrr,pvrr:paper --report compare-report"
     )]
     Compare(CompareArgs),
     /// Open the interactive viewer: move the eye and objects, switch techniques, compare with
@@ -80,7 +80,7 @@ enum Command {
     /// spectacle lens as worn, against ANSI Z80.1 / ISO 8980).
     #[command(
         subcommand,
-        after_help = "Example:\n  specula analyze mirror-view door-mirror --mirror \"door mirror\" --eyebox 0.3,0.15,5,3 --report report"
+        after_help = "Example:\n  specula analyze mirror-view door-mirror --mirror \"door mirror\" --eyebox 0.3,0.15,5,3 --report mirror-report"
     )]
     Analyze(analyze::Kind),
 }

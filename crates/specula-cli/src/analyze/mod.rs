@@ -20,7 +20,7 @@ pub enum Kind {
     /// vertical extent, solid angle), its footprint on the ground within a range, and the
     /// share of a required region seen by any and by every eye point (its blind part).
     #[command(
-        after_help = "Example (R46 class III on the example car):\n  specula analyze mirror-view scenes/car-door-mirror.toml --mirror \"door mirror\" --regulation r46-iii --forward 0,0,-1 --r-point -0.37,0.55,0 --outermost -0.95,0.6,1.5 --vehicle \"car body\" --vehicle \"A-pillar\" --report report"
+        after_help = "Example (R46 class III on the example car):\n  specula analyze mirror-view scenes/car-door-mirror.toml --mirror \"door mirror\" --regulation r46-iii --forward 0,0,-1 --r-point -0.37,0.55,0 --outermost -0.95,0.6,1.5 --vehicle \"car body\" --vehicle \"A-pillar\" --report r46-report"
     )]
     MirrorView(MirrorViewArgs),
     /// Whether and how brightly a source (a named surface or the sun) is seen reflected in a
@@ -28,7 +28,7 @@ pub enum Kind {
     /// ratio, solid angle and centroid, the contrast of a display behind the cover under it;
     /// sun sweeps and solar days by lookup.
     #[command(
-        after_help = "Example:\n  specula analyze glare truck-cover --surface \"cover glass\" --source \"side window\" --source-luminance 8000 --eyebox 0.2,0.1,5,3 --display dial --symbol-luminance 300 --background-luminance 10 --min-contrast 3 --report report"
+        after_help = "Example:\n  specula analyze glare truck-cover --surface \"cover glass\" --source \"side window\" --source-luminance 8000 --eyebox 0.2,0.1,5,3 --display dial --symbol-luminance 300 --background-luminance 10 --min-contrast 3 --report glare-report"
     )]
     Glare(Box<glare::GlareArgs>),
     /// A spectacle lens as worn, per gaze direction: sphere, cylinder and axis at the vertex
