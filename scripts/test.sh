@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Runs the whole test suite (after installing system packages if needed).
 #
-# A test whose requirement (Vulkan adapter, xvfb-run, mpirun, the assimp corpus) is missing
+# A test whose requirement (Vulkan adapter, xvfb-run, mpirun, the assimp corpus, chromium) is missing
 # fails. On a machine without one, opt out explicitly, e.g.
 #   SPECULA_ALLOW_SKIP=gpu,xvfb scripts/test.sh
 # and the run ends by saying how many tests were skipped, for which requirement.
