@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Regenerates the analysis plots in docs/images from the commands docs/analyses/*.md names
-# (release build). The two Tscherning maps come from a test's lenses, not a command: they are
-# left as they are.
+# (release build), and the two Tscherning maps from two scenes written here with the lenses of
+# crates/specula-analyze/tests/lens.rs's Tscherning test (base 0 and +5 D).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release -q -p specula-cli
@@ -51,4 +51,21 @@ run progressive lens scenes/progressive.toml --lens "right lens" --standard ansi
   --near 0.4 --focimeter
 take progressive lens-mean-power analyze-lens-progressive-mean-power
 take progressive lens-cylinder analyze-lens-progressive-unwanted-cylinder
+# Tscherning: a −4 D lens (n 1.523, t 2 mm, 60 mm), its back vertex 12 mm before the eye, the
+# centre of rotation 27 mm behind the back vertex; front base curve 0 and +5 D.
+for base in 0 5; do
+  cat > "$out/tscherning-$base.toml" <<TOML
+name = "Tscherning: -4.00 D, front base $base D"
+[camera]
+eye = [0.0, 0.0, 0.0]
+target = [0.0, 0.0, -1.0]
+fov_y_deg = 60
+[[objects]]
+name = "lens"
+translate = [0.0, 0.0, -0.014]
+shape = { type = "spectacle-lens", sphere = -4.0, cylinder = 0.0, axis = 0, index = 1.523, abbe = 58, center_thickness = 0.002, base_curve = $base.0, diameter = 0.06 }
+TOML
+  run "tscherning-$base" lens "$out/tscherning-$base.toml" --lens lens --rotation-centre 0,0,0.015
+  take "tscherning-$base" cylinder "analyze-lens-tscherning-base$base-cylinder"
+done
 echo "doc-images: done ($images)"
