@@ -184,10 +184,7 @@ impl Figure {
             let label = TextStyle::from((FONT, TEXT_PX).into_font()).color(&BLACK);
             // About one tick per 70 pixels across, 40 up.
             let (x_ticks, y_ticks) = (((w / 70).max(3)) as usize, ((h / 32).max(3)) as usize);
-            let (x_step, y_step) = (
-                round_step((x.ends.1 - x.ends.0).abs() / x_ticks as f64),
-                round_step((y.ends.1 - y.ends.0).abs() / y_ticks as f64),
-            );
+            let (x_step, y_step) = (tick_step(x.ends, x_ticks), tick_step(y.ends, y_ticks));
             chart
                 .configure_mesh()
                 .disable_mesh()
@@ -293,6 +290,19 @@ fn wrap(text: &str, per_line: usize) -> Vec<String> {
         }
     }
     lines
+}
+
+/// The spacing of the ticks plotters puts on an axis between `ends` when asked for `count`.
+fn tick_step(ends: (f64, f64), count: usize) -> f64 {
+    use plotters::coord::ranged1d::Ranged;
+    let range =
+        plotters::coord::types::RangedCoordf64::from(ends.0.min(ends.1)..ends.0.max(ends.1));
+    let ticks = range.key_points(count);
+    ticks
+        .windows(2)
+        .map(|pair| (pair[1] - pair[0]).abs())
+        .fold(f64::INFINITY, f64::min)
+        .min((ends.1 - ends.0).abs())
 }
 
 /// A tick's label: as many decimals as the ticks' `step` needs, and no "-0".
@@ -423,8 +433,11 @@ fn draw_colour_bar<DB: DrawingBackend>(
 /// over a log one.
 fn bar_ticks(bar: &ColourBar) -> Vec<f64> {
     let (lo, hi) = bar.range;
-    if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
+    if !(lo.is_finite() && hi.is_finite()) || hi <= lo {
         return vec![lo];
+    }
+    if bar.log && lo <= 0.0 {
+        return vec![lo, hi];
     }
     if bar.log {
         let decades = lo.log10().floor() as i32..=hi.log10().ceil() as i32;
@@ -613,6 +626,9 @@ fn fill_missing(values: &[Option<f64>], columns: usize, rows: usize) -> Vec<f64>
     let mut filled: Vec<Option<f64>> = values.to_vec();
     while filled.iter().any(Option::is_none) {
         let before = filled.clone();
+        if before.iter().all(Option::is_none) {
+            return vec![0.0; values.len()];
+        }
         for j in 0..rows {
             for i in 0..columns {
                 if before[j * columns + i].is_some() {
@@ -726,6 +742,8 @@ mod tests {
         assert_eq!(tick(-0.0, 0.2), "0.0");
         assert_eq!(tick(-2.0, 2.0), "−2");
         assert_eq!(tick(20.0, 10.0), "20");
+        // The ticks' own spacing sets the decimals: plotters puts 0.5, 1.0, 1.5 on this axis.
+        assert_eq!(tick(1.5, tick_step((0.05, 1.65), 3)), "1.5");
         assert_eq!(format_value(0.25), "0.25");
         assert_eq!(format_value(12000.0), "12000");
         assert_eq!(format_value(1e6), "1e6");

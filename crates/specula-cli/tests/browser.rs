@@ -39,22 +39,27 @@ fn run_ok(mut command: Command) {
     );
 }
 
+/// A child process killed when dropped, so that a failing test leaves no browser behind.
+struct Killed(Child);
+
+impl Drop for Killed {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
 /// A headless Chromium and the DevTools session of its one page.
 struct Browser {
-    child: Child,
+    _child: Killed,
     socket: WebSocket<tungstenite::stream::MaybeTlsStream<TcpStream>>,
     session: String,
     next_id: u64,
     /// Script errors, console errors and failed loads, as they arrive.
     errors: Vec<String>,
+    /// The names of the events seen since the last `open`.
+    events: Vec<String>,
     _profile: tempfile::TempDir,
-}
-
-impl Drop for Browser {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
 }
 
 impl Browser {
@@ -70,7 +75,7 @@ impl Browser {
         }
         let profile = tempfile::tempdir().unwrap();
         // The flags keep a closed network quiet: no background connections, no updates.
-        let mut child = Command::new(CHROMIUM)
+        let child = Command::new(CHROMIUM)
             .args([
                 "--headless",
                 "--no-sandbox",
@@ -91,22 +96,25 @@ impl Browser {
             .stderr(Stdio::piped())
             .spawn()
             .unwrap();
-        let endpoint = devtools_endpoint(&mut child);
-        let (socket, _) = tungstenite::connect(endpoint.as_str()).unwrap();
+        let mut child = Killed(child);
+        let endpoint = devtools_endpoint(&mut child.0);
+        let (mut socket, _) = tungstenite::connect(endpoint.as_str()).unwrap();
+        // A silent browser fails the test after PATIENCE instead of blocking it forever.
+        if let tungstenite::stream::MaybeTlsStream::Plain(stream) = socket.get_mut() {
+            stream
+                .set_read_timeout(Some(Duration::from_secs(1)))
+                .unwrap();
+        }
         let mut browser = Browser {
-            child,
+            _child: child,
             socket,
             session: String::new(),
             next_id: 0,
             errors: Vec::new(),
+            events: Vec::new(),
             _profile: profile,
         };
-        let targets = browser.call("Target.getTargets", json!({}));
-        let page = targets["targetInfos"]
-            .as_array()
-            .and_then(|t| t.iter().find(|t| t["type"] == "page"))
-            .unwrap_or_else(|| panic!("Chromium shows a page: {targets}"))["targetId"]
-            .clone();
+        let page = browser.first_page();
         let attached = browser.call(
             "Target.attachToTarget",
             json!({ "targetId": page, "flatten": true }),
@@ -116,6 +124,25 @@ impl Browser {
             browser.call(domain, json!({}));
         }
         Some(browser)
+    }
+
+    /// The first page's target id; the browser may list it a moment after it listens.
+    fn first_page(&mut self) -> Value {
+        let start = Instant::now();
+        loop {
+            let targets = self.call("Target.getTargets", json!({}));
+            let page = targets["targetInfos"]
+                .as_array()
+                .and_then(|t| t.iter().find(|t| t["type"] == "page"));
+            if let Some(page) = page {
+                return page["targetId"].clone();
+            }
+            assert!(
+                start.elapsed() < PATIENCE,
+                "Chromium shows no page: {targets}"
+            );
+            std::thread::sleep(Duration::from_millis(100));
+        }
     }
 
     /// Sends `method` (to the page once attached) and returns its result; events that arrive
@@ -145,13 +172,25 @@ impl Browser {
                 start.elapsed() < PATIENCE,
                 "no answer to {waiting_for} in {PATIENCE:?}"
             );
-            let text = match self.socket.read().unwrap() {
-                Message::Text(text) => text.to_string(),
-                _ => continue,
+            let text = match self.socket.read() {
+                Ok(Message::Text(text)) => text.to_string(),
+                Ok(_) => continue,
+                Err(tungstenite::Error::Io(e))
+                    if matches!(
+                        e.kind(),
+                        std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                    ) =>
+                {
+                    continue
+                }
+                Err(e) => panic!("the DevTools connection, waiting for {waiting_for}: {e}"),
             };
             let message: Value = serde_json::from_str(&text).unwrap();
             if let Some(error) = reported_error(&message) {
                 self.errors.push(error);
+            }
+            if let Some(event) = message["method"].as_str() {
+                self.events.push(event.to_string());
             }
             if wanted(&message) {
                 return message;
@@ -162,8 +201,12 @@ impl Browser {
     /// Opens `page` and waits for its load event and for every image to settle.
     fn open(&mut self, page: &Path) {
         let url = format!("file://{}", page.canonicalize().unwrap().display());
+        self.events.clear();
         self.call("Page.navigate", json!({ "url": url }));
-        self.until(|m| m["method"] == "Page.loadEventFired", "the load event");
+        // The load event may come before the navigation's reply.
+        if !self.events.iter().any(|e| e == "Page.loadEventFired") {
+            self.until(|m| m["method"] == "Page.loadEventFired", "the load event");
+        }
         self.evaluate(
             "Promise.all(Array.from(document.images).map(i => i.complete ? null : \
              new Promise(r => { i.onload = r; i.onerror = r; })))",
@@ -245,6 +288,29 @@ fn reported_error(message: &Value) -> Option<String> {
     }
 }
 
+/// A file URL's path with its %XX escapes decoded.
+fn percent_decoded(path: &str) -> String {
+    let bytes = path.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut k = 0;
+    while k < bytes.len() {
+        let hex = bytes
+            .get(k + 1..k + 3)
+            .and_then(|h| u8::from_str_radix(std::str::from_utf8(h).ok()?, 16).ok());
+        match (bytes[k], hex) {
+            (b'%', Some(byte)) => {
+                out.push(byte);
+                k += 3;
+            }
+            (byte, _) => {
+                out.push(byte);
+                k += 1;
+            }
+        }
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
 /// What a page showed: its images that did not load, its errors, whether it is blank.
 #[derive(Debug)]
 struct Opened {
@@ -302,8 +368,8 @@ fn open(browser: &mut Browser, page: &Path, shot: &str) -> Opened {
         .unwrap()
         .iter()
         .filter_map(|l| l.as_str()?.strip_prefix("file://"))
+        .map(|link| percent_decoded(link.split(['#', '?']).next().unwrap_or(link)))
         .filter(|path| !Path::new(path).exists())
-        .map(str::to_string)
         .collect();
     let text_chars = browser
         .evaluate("document.body ? document.body.innerText.trim().length : 0")

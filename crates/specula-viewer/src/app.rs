@@ -432,12 +432,17 @@ impl ApplicationHandler for App {
     }
 }
 
-/// Whether the cursor is over one of egui's windows. Asked of the last frame's layers at the
+/// Whether the cursor is over the docked panel or one of egui's windows. Asked of the last frame's layers at the
 /// cursor's current position: egui's own `consumed` uses the pointer position of its last frame,
 /// which is stale when a press follows a move before any frame ran.
 fn over_panel(state: &WindowState) -> bool {
     let ctx = state.egui.egui_ctx();
     let (x, y) = state.mouse.position;
+    // The docked panel is drawn on the background layer with the view: tell it by the scene's
+    // edge.
+    if x < state.scene_area().x as f32 {
+        return true;
+    }
     let points = egui::pos2(x, y) / ctx.pixels_per_point();
     ctx.layer_id_at(points)
         .is_some_and(|layer| layer.order != egui::Order::Background)
