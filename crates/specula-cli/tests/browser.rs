@@ -288,29 +288,6 @@ fn reported_error(message: &Value) -> Option<String> {
     }
 }
 
-/// A file URL's path with its %XX escapes decoded.
-fn percent_decoded(path: &str) -> String {
-    let bytes = path.as_bytes();
-    let mut out = Vec::with_capacity(bytes.len());
-    let mut k = 0;
-    while k < bytes.len() {
-        let hex = bytes
-            .get(k + 1..k + 3)
-            .and_then(|h| u8::from_str_radix(std::str::from_utf8(h).ok()?, 16).ok());
-        match (bytes[k], hex) {
-            (b'%', Some(byte)) => {
-                out.push(byte);
-                k += 3;
-            }
-            (byte, _) => {
-                out.push(byte);
-                k += 1;
-            }
-        }
-    }
-    String::from_utf8_lossy(&out).into_owned()
-}
-
 /// What a page showed: its images that did not load, its errors, whether it is blank.
 #[derive(Debug)]
 struct Opened {
@@ -368,7 +345,12 @@ fn open(browser: &mut Browser, page: &Path, shot: &str) -> Opened {
         .unwrap()
         .iter()
         .filter_map(|l| l.as_str()?.strip_prefix("file://"))
-        .map(|link| percent_decoded(link.split(['#', '?']).next().unwrap_or(link)))
+        .map(|link| {
+            let path = link.split(['#', '?']).next().unwrap_or(link);
+            percent_encoding::percent_decode_str(path)
+                .decode_utf8_lossy()
+                .into_owned()
+        })
         .filter(|path| !Path::new(path).exists())
         .collect();
     let text_chars = browser

@@ -601,45 +601,49 @@ fn figures_section(ui: &mut egui::Ui, analysis: &mut Analysis) {
     lens_map_legend(ui, analysis);
 }
 
+/// A two-column grid of named figures: `add` calls `row(name, value)` once for each.
+fn figure_grid(ui: &mut egui::Ui, id: &str, add: impl FnOnce(&mut dyn FnMut(&str, String))) {
+    egui::Grid::new(id).num_columns(2).show(ui, |ui| {
+        add(&mut |name: &str, value: String| {
+            ui.label(name);
+            ui.label(value);
+            ui.end_row();
+        })
+    });
+}
+
 /// A mirror view's figures over the eye points.
 fn mirror_figures(ui: &mut egui::Ui, view: &specula_analyze::mirror_view::MirrorView) {
     let f = &view.report.figures;
-    egui::Grid::new("mirror figures")
-        .num_columns(2)
-        .show(ui, |ui| {
-            let mut row = |name: &str, value: String| {
-                ui.label(name);
-                ui.label(value);
-                ui.end_row();
-            };
-            row("horizontal", format!("{:.2}°", f.horizontal_deg));
-            row("vertical", format!("{:.2}°", f.vertical_deg));
-            row("solid angle", format!("{:.4} sr", f.solid_angle_sr));
+    figure_grid(ui, "mirror figures", |row| {
+        row("horizontal", format!("{:.2}°", f.horizontal_deg));
+        row("vertical", format!("{:.2}°", f.vertical_deg));
+        row("solid angle", format!("{:.4} sr", f.solid_angle_sr));
+        row(
+            "ground",
+            format!(
+                "{:.2} m² within {} m",
+                f.ground_area_m2, view.report.range_m
+            ),
+        );
+        if let (Some(any), Some(blind)) = (f.region_seen_by_any, f.blind_area_m2) {
             row(
-                "ground",
-                format!(
-                    "{:.2} m² within {} m",
-                    f.ground_area_m2, view.report.range_m
-                ),
+                "region seen",
+                format!("{:.1} % by any eye point", any * 100.0),
             );
-            if let (Some(any), Some(blind)) = (f.region_seen_by_any, f.blind_area_m2) {
-                row(
-                    "region seen",
-                    format!("{:.1} % by any eye point", any * 100.0),
-                );
-                if let Some(all) = f.region_seen_by_all {
-                    row("", format!("{:.1} % by every one", all * 100.0));
-                }
-                row("blind", format!("{blind:.2} m²"));
+            if let Some(all) = f.region_seen_by_all {
+                row("", format!("{:.1} % by every one", all * 100.0));
             }
-            let unconverged = view.report.eyes.iter().filter(|e| !e.converged).count();
-            if unconverged > 0 {
-                row(
-                    "not converged",
-                    format!("{unconverged} eye point(s): raise the tolerance"),
-                );
-            }
-        });
+            row("blind", format!("{blind:.2} m²"));
+        }
+        let unconverged = view.report.eyes.iter().filter(|e| !e.converged).count();
+        if unconverged > 0 {
+            row(
+                "not converged",
+                format!("{unconverged} eye point(s): raise the tolerance"),
+            );
+        }
+    });
     ui.small(
         "on the ground: cyan seen (stronger: by every eye point); in the region green \
          seen, red blind",
@@ -653,57 +657,50 @@ fn lens_figures(ui: &mut egui::Ui, r: &specula_analyze::lens::Report) {
         v.map(|v| format!("{v:.3}"))
             .unwrap_or_else(|| "outside".into())
     };
-    egui::Grid::new("lens figures")
-        .num_columns(2)
-        .show(ui, |ui| {
-            let mut row = |name: &str, value: String| {
-                ui.label(name);
-                ui.label(value);
-                ui.end_row();
-            };
+    figure_grid(ui, "lens figures", |row| {
+        row(
+            "at the centre",
+            format!(
+                "{} / {} × {}",
+                number(c.sphere_d),
+                number(c.cylinder_d),
+                c.axis_deg.map(|a| format!("{a:.0}")).unwrap_or_default()
+            ),
+        );
+        row("mean power", format!("{} D", number(c.mean_power_d)));
+        if let Some([h, v]) = c.prism_d {
+            row("prism", format!("{h:.2} Δ out, {v:.2} Δ up"));
+        }
+        let largest = |f: &dyn Fn(&specula_analyze::lens::Cell) -> Option<f64>| {
+            r.grid
+                .iter()
+                .filter_map(f)
+                .fold(0.0, |a: f64, v| a.max(v.abs()))
+        };
+        row(
+            "largest cylinder",
+            format!(
+                "{:.3} D over ±{}° × ±{}°",
+                largest(&|c| c.cylinder_d),
+                r.gaze.h_max_deg,
+                r.gaze.v_max_deg
+            ),
+        );
+        if r.prescription.is_some() {
             row(
-                "at the centre",
-                format!(
-                    "{} / {} × {}",
-                    number(c.sphere_d),
-                    number(c.cylinder_d),
-                    c.axis_deg.map(|a| format!("{a:.0}")).unwrap_or_default()
-                ),
+                "unwanted cylinder",
+                format!("{:.3} D at most", largest(&|c| c.unwanted_cylinder_d)),
             );
-            row("mean power", format!("{} D", number(c.mean_power_d)));
-            if let Some([h, v]) = c.prism_d {
-                row("prism", format!("{h:.2} Δ out, {v:.2} Δ up"));
-            }
-            let largest = |f: &dyn Fn(&specula_analyze::lens::Cell) -> Option<f64>| {
-                r.grid
-                    .iter()
-                    .filter_map(f)
-                    .fold(0.0, |a: f64, v| a.max(v.abs()))
-            };
-            row(
-                "largest cylinder",
-                format!(
-                    "{:.3} D over ±{}° × ±{}°",
-                    largest(&|c| c.cylinder_d),
-                    r.gaze.h_max_deg,
-                    r.gaze.v_max_deg
-                ),
-            );
-            if r.prescription.is_some() {
-                row(
-                    "unwanted cylinder",
-                    format!("{:.3} D at most", largest(&|c| c.unwanted_cylinder_d)),
-                );
-            }
-            row(
-                "outside the lens",
-                format!(
-                    "{} of {} gazes",
-                    r.grid.iter().filter(|c| c.outside).count(),
-                    r.grid.len()
-                ),
-            );
-        });
+        }
+        row(
+            "outside the lens",
+            format!(
+                "{} of {} gazes",
+                r.grid.iter().filter(|c| c.outside).count(),
+                r.grid.len()
+            ),
+        );
+    });
 }
 
 /// The glare's figures for the eye point shown, and the eyebox map (returns the eye point

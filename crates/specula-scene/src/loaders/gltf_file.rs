@@ -288,16 +288,8 @@ impl Loader<'_> {
                     .name()
                     .map(str::to_string)
                     .unwrap_or_else(|| path.clone()),
-                normals: if normals.len() == positions.len() {
-                    normals
-                } else {
-                    vec![]
-                },
-                uvs: if uvs.len() == positions.len() {
-                    uvs
-                } else {
-                    vec![]
-                },
+                normals: super::per_vertex(normals, positions.len()),
+                uvs: super::per_vertex(uvs, positions.len()),
                 positions,
                 triangles: indices
                     .chunks_exact(3)

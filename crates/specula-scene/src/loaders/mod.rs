@@ -97,6 +97,16 @@ fn gunzip(shown: &str, bytes: &[u8]) -> Result<Vec<u8>, SceneError> {
     Ok(out)
 }
 
+/// A vertex attribute kept where the file gives one value per vertex; otherwise none, and the
+/// mesh derives it.
+fn per_vertex<T>(attribute: Vec<T>, vertices: usize) -> Vec<T> {
+    if attribute.len() == vertices {
+        attribute
+    } else {
+        Vec::new()
+    }
+}
+
 pub fn default_material() -> Material {
     Material::diffuse("default", Vec3::splat(0.8))
 }

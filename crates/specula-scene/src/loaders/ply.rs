@@ -198,16 +198,8 @@ pub fn parse(shown: &str, bytes: &[u8], warnings: &mut Vec<String>) -> Result<Me
     let mut mesh = Mesh {
         exact: None,
         name: shown.to_string(),
-        normals: if normals.len() == positions.len() {
-            normals
-        } else {
-            vec![]
-        },
-        uvs: if uvs.len() == positions.len() {
-            uvs
-        } else {
-            vec![]
-        },
+        normals: super::per_vertex(normals, positions.len()),
+        uvs: super::per_vertex(uvs, positions.len()),
         positions,
         triangles,
         material: 0,
