@@ -22,11 +22,14 @@ pub mod frame;
 pub mod glare;
 pub mod lens;
 pub mod lens_plot;
+pub mod mirror_rules;
 pub mod mirror_surface;
 pub mod mirror_view;
+pub mod outcome;
 pub mod plot;
 pub mod regulation;
 pub mod report;
+pub mod spherometer;
 
 use specula_scene::Scene;
 

@@ -20,7 +20,7 @@
 //! cut into triangles) with barycentric coordinates within each: the analyses refine cells and
 //! ask for the point and normals at a cell's barycentric coordinates.
 
-use glam::{DMat2, DVec2, DVec3, Vec2, Vec3};
+use glam::{DVec2, DVec3, Vec2, Vec3};
 use specula_scene::{ExactSurface, Mesh, Scene};
 
 /// Which surface the samples lie on.
@@ -108,7 +108,7 @@ impl<'a> MirrorSurface<'a> {
     }
 
     /// The parameters of the exact surface at barycentric `b` of cell `cell`.
-    fn exact_uv(cell: usize, b: Vec2) -> DVec2 {
+    pub(crate) fn exact_uv(cell: usize, b: Vec2) -> DVec2 {
         let square = cell / 2;
         let (i, j) = ((square % EXACT_CELLS) as f64, (square / EXACT_CELLS) as f64);
         let corners = if cell.is_multiple_of(2) {
@@ -141,9 +141,31 @@ impl<'a> MirrorSurface<'a> {
         }
     }
 
+    /// Corner `k` of `cell`: a mesh's own vertex (shared by its neighbours, so that the cells
+    /// tile the surface without gaps), or the exact surface's point at the corner.
+    pub fn corner(&self, cell: usize, k: usize) -> DVec3 {
+        let b = [Vec2::ZERO, Vec2::X, Vec2::Y][k];
+        match self {
+            MirrorSurface::Exact(exact) => exact.at(Self::exact_uv(cell, b)).p_world,
+            _ => {
+                let mesh = self.mesh().expect("a mesh model");
+                mesh.positions[mesh.triangles[cell][k] as usize].as_dvec3()
+            }
+        }
+    }
+
+    /// The mesh the model's cells are the triangles of (None: the exact surface's).
+    pub fn mesh(&self) -> Option<&Mesh> {
+        match self {
+            MirrorSurface::Mesh { scene, mesh } => Some(&scene.meshes[*mesh]),
+            MirrorSurface::Exact(_) => None,
+            MirrorSurface::Smooth { mesh, .. } => Some(mesh),
+        }
+    }
+
     /// The point, its shading normal and its geometric normal at barycentric `b` of `cell`,
     /// the normals on the side the surface's normals face.
-    fn raw(&self, cell: usize, b: Vec2) -> (DVec3, DVec3, DVec3) {
+    pub(crate) fn raw(&self, cell: usize, b: Vec2) -> (DVec3, DVec3, DVec3) {
         match self {
             MirrorSurface::Mesh { scene, mesh } => {
                 let m = &scene.meshes[*mesh];
@@ -206,41 +228,6 @@ impl<'a> MirrorSurface<'a> {
     /// then they are what may hide a sample; the other models replace them.
     pub fn is_the_mesh(&self) -> bool {
         matches!(self, MirrorSurface::Mesh { .. })
-    }
-
-    /// The surface's principal radii of curvature (smaller first, metres; infinite where flat)
-    /// at barycentric `b` of `cell`, from the change of the shading normal over a small step in
-    /// two directions of the cell (the shape operator dn = −S dp, solved in the tangent plane).
-    pub fn principal_radii(&self, cell: usize, b: Vec2) -> Option<[f64; 2]> {
-        let h = 1e-3f32;
-        let b = b.clamp(Vec2::splat(h), Vec2::splat(1.0 - 3.0 * h));
-        let (p0, n0, _) = self.raw(cell, b);
-        let (p1, n1, _) = self.raw(cell, b + Vec2::new(h, 0.0));
-        let (p2, n2, _) = self.raw(cell, b + Vec2::new(0.0, h));
-        let (dp1, dp2) = (p1 - p0, p2 - p0);
-        let e1 = dp1.try_normalize()?;
-        let e2 = n0.cross(e1).try_normalize()?;
-        let in_plane = |v: DVec3| DVec2::new(v.dot(e1), v.dot(e2));
-        let dp = DMat2::from_cols(in_plane(dp1), in_plane(dp2));
-        let dn = DMat2::from_cols(in_plane(n1 - n0), in_plane(n2 - n0));
-        if dp.determinant().abs() < 1e-24 {
-            return None;
-        }
-        let s = -(dn * dp.inverse());
-        // The shape operator is symmetric in an orthonormal frame; symmetrise what rounding left.
-        let (a, c) = (s.x_axis.x, s.y_axis.y);
-        let off = 0.5 * (s.y_axis.x + s.x_axis.y);
-        let mean = 0.5 * (a + c);
-        let spread = (0.25 * (a - c) * (a - c) + off * off).sqrt();
-        let mut radii = [mean + spread, mean - spread].map(|k| {
-            if k.abs() < 1e-6 {
-                f64::INFINITY
-            } else {
-                1.0 / k.abs()
-            }
-        });
-        radii.sort_by(f64::total_cmp);
-        Some(radii)
     }
 }
 

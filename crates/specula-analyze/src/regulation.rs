@@ -36,8 +36,10 @@ use specula_scene::Scene;
 use specula_trace::SceneAccel;
 
 use crate::frame::VehicleFrame;
+pub use crate::mirror_rules::{ConvexRule, MirrorCheck, RectangleRule, SphericalRule, SurfaceRule};
 use crate::mirror_surface::{MirrorSurface, SurfaceModel};
 use crate::mirror_view::{self, MirrorView};
+use crate::outcome::Outcome;
 use crate::AnalyzeError;
 
 /// How a field's lateral extent is measured.
@@ -60,19 +62,6 @@ pub struct FieldSpec {
     pub from_m: f64,
     pub to_m: Option<f64>,
     /// The paragraph that prescribes it.
-    pub source: &'static str,
-}
-
-/// What a regulation asks of the mirror's own surface.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SurfaceRule {
-    /// The least radius of curvature, metres (None: no rule here).
-    pub min_radius_m: Option<f64>,
-    /// The surface must be flat (unit magnification).
-    pub flat: bool,
-    /// A rectangle 40 mm high and a = `a_numerator_mm` / (1 + 1000 / r) mm long, and a segment
-    /// `segment_mm` long parallel to its height, must fit in the reflecting surface.
-    pub rectangle: Option<(f64, f64)>,
     pub source: &'static str,
 }
 
@@ -128,12 +117,16 @@ pub const REGULATIONS: &[Regulation] = &[
             to_m: None,
             source: "R46 §15.2.4.1; 71/127/EEC Annex III §5.2",
         }],
-        surface: SurfaceRule {
-            min_radius_m: Some(1.2),
-            flat: false,
-            rectangle: None,
-            source: "R46 §6.1.2.2",
-        },
+        surface: r46_surface(
+            1.2,
+            false,
+            Some(RectangleRule {
+                a_numerator_mm: 150.0,
+                segment_mm: None,
+                either_way: true,
+            }),
+            "R46 §6.1.2.1.1, §6.1.2.2",
+        ),
     },
     Regulation {
         name: "r46-ii",
@@ -163,12 +156,16 @@ pub const REGULATIONS: &[Regulation] = &[
                 source: "R46 §15.2.4.2",
             },
         ],
-        surface: SurfaceRule {
-            min_radius_m: Some(1.2),
-            flat: false,
-            rectangle: Some((170.0, 200.0)),
-            source: "R46 §6.1.2.1.2.1, §6.1.2.2",
-        },
+        surface: r46_surface(
+            1.2,
+            true,
+            Some(RectangleRule {
+                a_numerator_mm: 170.0,
+                segment_mm: Some(200.0),
+                either_way: false,
+            }),
+            "R46 §6.1.2.1.2.1, §6.1.2.2",
+        ),
     },
     Regulation {
         name: "r46-iii",
@@ -198,12 +195,16 @@ pub const REGULATIONS: &[Regulation] = &[
                 source: "R46 §15.2.4.3",
             },
         ],
-        surface: SurfaceRule {
-            min_radius_m: Some(1.2),
-            flat: false,
-            rectangle: Some((130.0, 70.0)),
-            source: "R46 §6.1.2.1.2.2, §6.1.2.2",
-        },
+        surface: r46_surface(
+            1.2,
+            true,
+            Some(RectangleRule {
+                a_numerator_mm: 130.0,
+                segment_mm: Some(70.0),
+                either_way: false,
+            }),
+            "R46 §6.1.2.1.2.2, §6.1.2.2",
+        ),
     },
     Regulation {
         name: "r46-iv",
@@ -233,12 +234,7 @@ pub const REGULATIONS: &[Regulation] = &[
                 source: "R46 §15.2.4.4",
             },
         ],
-        surface: SurfaceRule {
-            min_radius_m: Some(0.3),
-            flat: false,
-            rectangle: None,
-            source: "R46 §6.1.2.2",
-        },
+        surface: r46_surface(0.3, true, None, "R46 §6.1.2.2"),
     },
     Regulation {
         name: "r46-v",
@@ -256,12 +252,7 @@ pub const REGULATIONS: &[Regulation] = &[
             to_m: Some(1.75),
             source: "R46 §15.2.4.5",
         }],
-        surface: SurfaceRule {
-            min_radius_m: Some(0.3),
-            flat: false,
-            rectangle: None,
-            source: "R46 §6.1.2.2",
-        },
+        surface: r46_surface(0.3, true, None, "R46 §6.1.2.2"),
     },
     Regulation {
         name: "fmvss111",
@@ -280,13 +271,54 @@ pub const REGULATIONS: &[Regulation] = &[
             source: "FMVSS 111 S5.2.1 (read as a field: the 2.4 m line at 10.7 m, to the horizon)",
         }],
         surface: SurfaceRule {
-            min_radius_m: None,
+            spherical: None,
             flat: true,
+            convex: None,
             rectangle: None,
             source: "FMVSS 111 S5.2.1 (unit magnification)",
         },
     },
+    Regulation {
+        name: "fmvss111-convex",
+        title: "FMVSS No. 111, passenger car, passenger's side convex outside mirror",
+        edition: "49 CFR 571.111 (FMVSS No. 111)",
+        eyes: EyeRule::DriversEyes,
+        interior: false,
+        // S5.4 prescribes no field for the convex mirror: its surface is what is judged.
+        fields: &[],
+        surface: SurfaceRule {
+            spherical: None,
+            flat: false,
+            convex: Some(ConvexRule {
+                min_average_m: 0.889,
+                max_average_m: 1.651,
+                max_deviation_share: 0.125,
+            }),
+            rectangle: None,
+            source: "FMVSS 111 S5.4.1, S12",
+        },
+    },
 ];
+
+/// R46's rule for a spherical mirror's surface: r at least `min_radius_m`, an aspherical part
+/// allowed on `exterior` mirrors, and the rectangle.
+const fn r46_surface(
+    min_radius_m: f64,
+    exterior: bool,
+    rectangle: Option<RectangleRule>,
+    source: &'static str,
+) -> SurfaceRule {
+    SurfaceRule {
+        spherical: Some(SphericalRule {
+            min_radius_m,
+            aspherical_part_allowed: exterior,
+        }),
+        flat: false,
+        convex: None,
+        rectangle,
+        source,
+    }
+}
 
 /// The regulation named `name`; an unknown name lists the valid ones.
 pub fn by_name(name: &str) -> Result<&'static Regulation, AnalyzeError> {
@@ -447,14 +479,61 @@ pub struct FieldFigures {
     /// beyond the range).
     pub beyond_range_seen_share: Option<f64>,
     pub beyond_range_uncertainty: Option<f64>,
-    /// Whether the field's vanishing direction is seen (None: the field ends before the horizon).
+    /// Whether the field's vanishing direction is seen (None: the field ends before the
+    /// horizon): in an eye's cone of reflected directions, and with a cell of the cone's grid
+    /// around it (loosely: where only that holds, it is undecided).
     pub horizon_seen: Option<bool>,
+    pub horizon_loosely_seen: Option<bool>,
     /// How much farther out, and how much nearer the eyes, the field could reach and still be
     /// seen whole (0 where it is not), metres, up to 5 m, exact to 1/2000 of the field's size
     /// plus 5 m.
     pub outer_margin_m: f64,
     pub near_margin_m: f64,
+    /// Pass when the share seen (or excused) is whole beyond its uncertainty (the grid's,
+    /// the sampling's and, for a mesh mirror, the surface's), the part beyond the range
+    /// likewise and the vanishing direction seen; fail when any is short by more than its
+    /// uncertainty; else undecided.
+    pub verdict: Outcome,
     pub passed: bool,
+}
+
+impl FieldFigures {
+    /// The field's verdict from its figures, with `surface_uncertainty` (a mesh mirror's)
+    /// added to each share's.
+    fn decide(&mut self, allowance: f64, surface_uncertainty: f64) {
+        let excused = if self.hidden_by_vehicle_share < allowance {
+            self.hidden_by_vehicle_share
+        } else {
+            0.0
+        };
+        let within = Outcome::of_margin(
+            self.seen_share + excused - 1.0,
+            self.seen_share_uncertainty + surface_uncertainty,
+        );
+        let beyond = self
+            .beyond_range_seen_share
+            .zip(self.beyond_range_uncertainty)
+            .map_or(Outcome::Pass, |(s, u)| {
+                Outcome::of_margin(s - 1.0, u + surface_uncertainty)
+            });
+        let horizon = match (self.horizon_seen, self.horizon_loosely_seen) {
+            (None, _) | (Some(true), _) => Outcome::Pass,
+            (Some(false), Some(true)) => Outcome::Undecided,
+            (Some(false), _) => Outcome::Fail,
+        };
+        self.verdict = Outcome::all([within, beyond, horizon]);
+        self.passed = self.verdict.passed();
+    }
+
+    /// Worst first: fail, undecided, pass; then by the share seen or hidden.
+    fn rank(&self) -> (u8, f64) {
+        let order = match self.verdict {
+            Outcome::Fail => 0,
+            Outcome::Undecided => 1,
+            Outcome::Pass => 2,
+        };
+        (order, self.seen_share + self.hidden_by_vehicle_share)
+    }
 }
 
 /// A field and its verdict.
@@ -472,7 +551,8 @@ pub struct FieldVerdict {
     pub figures: FieldFigures,
     /// With eye points judged alone: the worst one and its seen share.
     pub worst_eye: Option<WorstEye>,
-    /// The change of the seen share from the mesh to a smooth fit of it (mesh mirrors only).
+    /// The change of the seen shares (within and beyond the range) from the mesh to a smooth
+    /// fit of it (mesh mirrors only): added to each share's uncertainty in the verdict.
     pub surface_uncertainty: Option<f64>,
 }
 
@@ -482,22 +562,14 @@ pub struct WorstEye {
     pub seen_share: f64,
 }
 
-/// A rule for the mirror's own surface and how it fares.
-#[derive(Clone, Debug, Serialize)]
-pub struct MirrorCheck {
-    pub name: String,
-    pub source: String,
-    pub required: String,
-    pub measured: String,
-    pub passed: bool,
-}
-
 /// The regulation's part of the report.
 #[derive(Clone, Debug, Serialize)]
 pub struct Verdict {
     pub name: String,
     pub title: String,
     pub edition: String,
+    /// The worst of the fields' and the mirror checks' verdicts.
+    pub verdict: Outcome,
     pub passed: bool,
     /// Whether every field that runs to the horizon shows its vanishing direction.
     pub horizon_seen: bool,
@@ -505,6 +577,20 @@ pub struct Verdict {
     pub allowance_share: f64,
     pub mirror_checks: Vec<MirrorCheck>,
     pub fields: Vec<FieldVerdict>,
+}
+
+impl Verdict {
+    /// The verdict from the fields' and the checks' (after a field's surface uncertainty was
+    /// added).
+    fn decide(&mut self) {
+        self.verdict = Outcome::all(
+            self.fields
+                .iter()
+                .map(|f| f.figures.verdict)
+                .chain(self.mirror_checks.iter().map(|c| c.verdict)),
+        );
+        self.passed = self.verdict.passed();
+    }
 }
 
 /// A grid over a field's own frame: lateral s (columns) × longitudinal d (rows).
@@ -715,8 +801,7 @@ pub fn judge(
             .collect();
         let worst = (0..per_set.len())
             .min_by(|&a, &b| {
-                let key = |f: &FieldFigures| (f.passed, f.seen_share + f.hidden_by_vehicle_share);
-                let (ka, kb) = (key(&per_set[a]), key(&per_set[b]));
+                let (ka, kb) = (per_set[a].rank(), per_set[b].rank());
                 ka.0.cmp(&kb.0).then(ka.1.total_cmp(&kb.1))
             })
             .expect("at least one eye point");
@@ -738,24 +823,31 @@ pub fn judge(
             surface_uncertainty: None,
         });
     }
-    let mirror_checks = mirror_checks(regulation, surface, &vehicle.frame);
+    let facing = mean(view.report.eyes.iter().map(|e| Vec3::from(e.position)));
+    let mirror_checks =
+        crate::mirror_rules::mirror_checks(&regulation.surface, surface, &vehicle.frame, facing);
     let horizon_seen = fields
         .iter()
         .all(|f| f.figures.horizon_seen.unwrap_or(true));
-    let passed = fields.iter().all(|f| f.figures.passed)
-        && horizon_seen
-        && mirror_checks.iter().all(|c| c.passed);
-    Ok(Verdict {
+    let mut verdict = Verdict {
         name: regulation.name.to_string(),
         title: regulation.title.to_string(),
         edition: regulation.edition.to_string(),
-        passed,
+        verdict: Outcome::Pass,
+        passed: true,
         horizon_seen,
         side: vehicle.side,
         allowance_share: regulation.allowance(),
         mirror_checks,
         fields,
-    })
+    };
+    verdict.decide();
+    Ok(verdict)
+}
+
+fn mean(points: impl Iterator<Item = Vec3>) -> Vec3 {
+    let (sum, count) = points.fold((Vec3::ZERO, 0.0), |(s, n), p| (s + p, n + 1.0));
+    sum / f32::max(count, 1.0)
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -784,8 +876,10 @@ fn field_figures(
         beyond_range_seen_share: None,
         beyond_range_uncertainty: None,
         horizon_seen: None,
+        horizon_loosely_seen: None,
         outer_margin_m: 0.0,
         near_margin_m: 0.0,
+        verdict: Outcome::Pass,
         passed: true,
     };
     let within = far > near;
@@ -817,20 +911,9 @@ fn field_figures(
     }
     if spec.to_m.is_none() {
         figures.horizon_seen = Some(seen_direction(-vehicle.frame.forward, true));
+        figures.horizon_loosely_seen = Some(seen_direction(-vehicle.frame.forward, false));
     }
-    let excused = if figures.hidden_by_vehicle_share < regulation.allowance() {
-        figures.hidden_by_vehicle_share
-    } else {
-        0.0
-    };
-    let whole = |share: f64, uncertainty: f64| 1.0 - share <= uncertainty + 1e-12;
-    figures.passed = (!within
-        || whole(figures.seen_share + excused, figures.seen_share_uncertainty))
-        && figures
-            .beyond_range_seen_share
-            .zip(figures.beyond_range_uncertainty)
-            .is_none_or(|(s, u)| whole(s, u))
-        && figures.horizon_seen.unwrap_or(true);
+    figures.decide(regulation.allowance(), 0.0);
     figures
 }
 
@@ -976,229 +1059,6 @@ fn margins(
         0.0
     };
     (outer, nearer)
-}
-
-/// The mirror's radius of curvature and size against the regulation's rules.
-fn mirror_checks(
-    regulation: &Regulation,
-    surface: &MirrorSurface,
-    frame: &VehicleFrame,
-) -> Vec<MirrorCheck> {
-    let rule = &regulation.surface;
-    let mut checks = Vec::new();
-    let radii = radii(surface);
-    let r_min = radii.iter().map(|[r, _]| *r).fold(f64::INFINITY, f64::min);
-    // R46's r is an average over the surface of the mean of two perpendicular radii (r_p =
-    // (r_i + r'_i) / 2): here, of the two principal radii at each sample point.
-    let r_mean = {
-        let finite: Vec<f64> = radii
-            .iter()
-            .map(|[a, b]| 0.5 * (a + b))
-            .filter(|r| r.is_finite())
-            .collect();
-        if finite.len() < radii.len() / 2 || finite.is_empty() {
-            f64::INFINITY
-        } else {
-            finite.iter().sum::<f64>() / finite.len() as f64
-        }
-    };
-    let mm = |r: f64| {
-        if r.is_finite() {
-            format!("{:.0} mm", r * 1e3)
-        } else {
-            "flat".to_string()
-        }
-    };
-    if let Some(min) = rule.min_radius_m {
-        checks.push(MirrorCheck {
-            name: "radius of curvature".into(),
-            source: rule.source.into(),
-            required: format!("at least {:.0} mm (or flat) everywhere", min * 1e3),
-            measured: format!(
-                "smallest principal radius {}, mean {}",
-                mm(r_min),
-                mm(r_mean)
-            ),
-            passed: r_min >= min,
-        });
-    }
-    if rule.flat {
-        checks.push(MirrorCheck {
-            name: "flat (unit magnification)".into(),
-            source: rule.source.into(),
-            required: "flat: radius of curvature over 1000 m everywhere".into(),
-            measured: format!("smallest principal radius {}", mm(r_min)),
-            passed: r_min > 1000.0,
-        });
-    }
-    if let Some((numerator, segment_mm)) = rule.rectangle {
-        let r_mm = r_mean * 1e3;
-        let a = if r_mm.is_finite() {
-            numerator / (1.0 + 1000.0 / r_mm)
-        } else {
-            numerator
-        };
-        let outline = Outline::of(surface, frame);
-        let longest = outline.longest_rectangle_mm(40.0);
-        checks.push(MirrorCheck {
-            name: "rectangle 40 mm high".into(),
-            source: rule.source.into(),
-            required: format!(
-                "a = {numerator:.0} / (1 + 1000 / r) = {a:.1} mm long (r = {})",
-                mm(r_mean)
-            ),
-            measured: format!(
-                "at most {longest:.1} mm long fits (±{:.1} mm)",
-                outline.cell_mm
-            ),
-            passed: longest >= a,
-        });
-        let segment = outline.longest_vertical_mm();
-        checks.push(MirrorCheck {
-            name: "segment parallel to the height".into(),
-            source: rule.source.into(),
-            required: format!("{segment_mm:.0} mm"),
-            measured: format!("{segment:.1} mm (±{:.1} mm)", outline.cell_mm),
-            passed: segment >= segment_mm,
-        });
-    }
-    checks
-}
-
-/// The principal radii at a few points of every cell.
-fn radii(surface: &MirrorSurface) -> Vec<[f64; 2]> {
-    let points = [
-        Vec2::new(1.0 / 3.0, 1.0 / 3.0),
-        Vec2::new(0.1, 0.1),
-        Vec2::new(0.8, 0.1),
-        Vec2::new(0.1, 0.8),
-    ];
-    (0..surface.cells())
-        .flat_map(|cell| {
-            points
-                .iter()
-                .filter_map(move |b| surface.principal_radii(cell, *b))
-        })
-        .collect()
-}
-
-/// The reflecting surface projected onto the plane through its centre, perpendicular to its
-/// mean normal, on a grid of 0.5 mm: columns along the horizontal, rows up.
-struct Outline {
-    columns: usize,
-    rows: usize,
-    covered: Vec<bool>,
-    cell_mm: f64,
-}
-
-impl Outline {
-    fn of(surface: &MirrorSurface, frame: &VehicleFrame) -> Outline {
-        let cell_mm = 0.5;
-        let mut triangles = Vec::new();
-        let mut normal = DVec3::ZERO;
-        for cell in 0..surface.cells() {
-            let corners = [Vec2::ZERO, Vec2::X, Vec2::Y];
-            let p = corners.map(|b| surface.position(cell, b).as_dvec3());
-            normal += (p[1] - p[0]).cross(p[2] - p[0]);
-            triangles.push(p);
-        }
-        let n = normal.normalize_or_zero();
-        let h = frame
-            .up
-            .as_dvec3()
-            .cross(n)
-            .try_normalize()
-            .unwrap_or(frame.right.as_dvec3());
-        let v = n.cross(h);
-        let flat: Vec<[Vec2; 3]> = triangles
-            .iter()
-            .map(|t| t.map(|p| Vec2::new((p.dot(h) * 1e3) as f32, (p.dot(v) * 1e3) as f32)))
-            .collect();
-        let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
-        for p in flat.iter().flatten() {
-            lo = lo.min(*p);
-            hi = hi.max(*p);
-        }
-        let size = ((hi - lo) / cell_mm as f32).ceil();
-        let (columns, rows) = (
-            size.x.clamp(1.0, 4000.0) as usize,
-            size.y.clamp(1.0, 4000.0) as usize,
-        );
-        let mut covered = vec![false; columns * rows];
-        let edge = |a: Vec2, b: Vec2, p: Vec2| (b - a).perp_dot(p - a);
-        for t in &flat {
-            let area = edge(t[0], t[1], t[2]);
-            if area == 0.0 {
-                continue;
-            }
-            let tlo = ((t[0].min(t[1]).min(t[2]) - lo) / cell_mm as f32)
-                .floor()
-                .max(Vec2::ZERO);
-            let thi = ((t[0].max(t[1]).max(t[2]) - lo) / cell_mm as f32).ceil();
-            for row in tlo.y as usize..(thi.y as usize).min(rows) {
-                for column in tlo.x as usize..(thi.x as usize).min(columns) {
-                    let p = lo + Vec2::new(column as f32 + 0.5, row as f32 + 0.5) * cell_mm as f32;
-                    let w = [
-                        edge(t[1], t[2], p),
-                        edge(t[2], t[0], p),
-                        edge(t[0], t[1], p),
-                    ];
-                    if w.iter().all(|w| w * area >= 0.0) {
-                        covered[row * columns + column] = true;
-                    }
-                }
-            }
-        }
-        Outline {
-            columns,
-            rows,
-            covered,
-            cell_mm,
-        }
-    }
-
-    /// The longest rectangle `height_mm` high (sides horizontal and vertical) that fits, mm.
-    fn longest_rectangle_mm(&self, height_mm: f64) -> f64 {
-        let tall = (height_mm / self.cell_mm).ceil() as usize;
-        if tall > self.rows {
-            return 0.0;
-        }
-        // Per column, the run of covered cells ending at each row.
-        let mut run = vec![0usize; self.columns];
-        let mut best = 0usize;
-        for row in 0..self.rows {
-            for (column, r) in run.iter_mut().enumerate() {
-                *r = if self.covered[row * self.columns + column] {
-                    *r + 1
-                } else {
-                    0
-                };
-            }
-            let mut length = 0;
-            for r in &run {
-                length = if *r >= tall { length + 1 } else { 0 };
-                best = best.max(length);
-            }
-        }
-        best as f64 * self.cell_mm
-    }
-
-    /// The longest vertical segment that fits, mm.
-    fn longest_vertical_mm(&self) -> f64 {
-        let mut best = 0usize;
-        for column in 0..self.columns {
-            let mut run = 0;
-            for row in 0..self.rows {
-                run = if self.covered[row * self.columns + column] {
-                    run + 1
-                } else {
-                    0
-                };
-                best = best.max(run);
-            }
-        }
-        best as f64 * self.cell_mm
-    }
 }
 
 /// Eye points on an eyellipse: centre, semi-axes along forward, lateral (right) and up, a
@@ -1386,9 +1246,16 @@ pub fn evaluate(
             centre,
         )?;
         for (field, other) in verdict.fields.iter_mut().zip(&smooth.fields) {
-            field.surface_uncertainty =
-                Some((field.figures.seen_share - other.figures.seen_share).abs());
+            let (a, b) = (&field.figures, &other.figures);
+            let beyond = a
+                .beyond_range_seen_share
+                .zip(b.beyond_range_seen_share)
+                .map_or(0.0, |(x, y)| (x - y).abs());
+            let u = (a.seen_share - b.seen_share).abs().max(beyond);
+            field.surface_uncertainty = Some(u);
+            field.figures.decide(request.regulation.allowance(), u);
         }
+        verdict.decide();
     }
     Ok(Judged { verdict, view })
 }
@@ -1406,7 +1273,13 @@ pub struct AdjustRequest {
 pub struct Pose {
     pub yaw_deg: f32,
     pub pitch_deg: f32,
-    /// Every field passes (the mirror's own checks do not change with its pose).
+    /// The fields' verdict at the search's tolerances.
+    pub search_verdict: Outcome,
+    /// The fields' verdict at the command's tolerances, for each pose the search did not fail
+    /// (None: the search failed it).
+    pub confirmed_verdict: Option<Outcome>,
+    /// The fields pass at the command's tolerances (the mirror's own checks do not change with
+    /// its pose).
     pub fields_passed: bool,
     /// The least, over the fields, of the share seen or excused.
     pub least_share: f64,
@@ -1424,10 +1297,11 @@ pub struct Adjustment {
     pub pitch_axis: [f32; 3],
     pub step_deg: f32,
     pub limit_deg: f32,
-    /// The tolerances the search ran at (the chosen pose is judged again at the command's).
+    /// The tolerances the search ran at; every pose it did not fail is judged again at the
+    /// command's, and only those confirmed there count as passing.
     pub search_tolerance: f64,
     pub poses: Vec<Pose>,
-    /// The yaw and pitch ranges of the poses that pass (None: none passes).
+    /// The yaw and pitch ranges of the poses confirmed to pass (None: none passes).
     pub passing_yaw_deg: Option<[f32; 2]>,
     pub passing_pitch_deg: Option<[f32; 2]>,
     pub passing_poses: usize,
@@ -1470,7 +1344,8 @@ pub fn pose_transform(
 }
 
 /// Turns the mirror over a grid of yaw × pitch within ±`limit_deg`, judging each pose at the
-/// viewer's tolerances (2 %, 0.1°), and the chosen one again at the request's.
+/// viewer's tolerances (2 %, 0.1°), and every pose that search does not fail again at the
+/// request's: the passing ranges are of poses confirmed at full precision.
 pub fn adjust(
     scene: &Scene,
     request: &Request,
@@ -1514,17 +1389,41 @@ pub fn adjust(
         scene.meshes[mirror].transform(pose_transform(adjust.pivot, up, pitch_axis, yaw, pitch));
         scene
     };
-    let done = std::sync::atomic::AtomicUsize::new(0);
     let mut poses = Vec::with_capacity(grid.len());
-    for &(yaw, pitch) in &grid {
+    for (k, &(yaw, pitch)) in grid.iter().enumerate() {
         let scene = posed(yaw, pitch);
         let accel = SceneAccel::new(&scene);
         let judged = evaluate_quietly(&scene, &accel, &search)?;
         poses.push(pose_of(yaw, pitch, &judged.verdict, request.regulation));
-        progress(
-            done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1,
-            grid.len(),
+        progress(k + 1, grid.len());
+    }
+    let to_confirm = poses
+        .iter()
+        .filter(|p| p.search_verdict != Outcome::Fail)
+        .count();
+    let total = grid.len() + to_confirm;
+    let mut confirmed = grid.len();
+    for pose in poses
+        .iter_mut()
+        .filter(|p| p.search_verdict != Outcome::Fail)
+    {
+        let scene = posed(pose.yaw_deg, pose.pitch_deg);
+        let accel = SceneAccel::new(&scene);
+        let judged = evaluate_quietly(&scene, &accel, request)?;
+        let full = pose_of(
+            pose.yaw_deg,
+            pose.pitch_deg,
+            &judged.verdict,
+            request.regulation,
         );
+        *pose = Pose {
+            search_verdict: pose.search_verdict,
+            confirmed_verdict: Some(full.search_verdict),
+            fields_passed: full.search_verdict.passed(),
+            ..full
+        };
+        confirmed += 1;
+        progress(confirmed, total);
     }
     let passing: Vec<&Pose> = poses.iter().filter(|p| p.fields_passed).collect();
     let range = |f: fn(&Pose) -> f32| {
@@ -1601,14 +1500,16 @@ fn pose_of(yaw: f32, pitch: f32, verdict: &Verdict, regulation: &Regulation) -> 
     let least = verdict
         .fields
         .iter()
-        .min_by(|a, b| share(a).total_cmp(&share(b)))
-        .expect("a regulation has fields");
+        .min_by(|a, b| share(a).total_cmp(&share(b)));
+    let fields = Outcome::all(verdict.fields.iter().map(|f| f.figures.verdict));
     Pose {
         yaw_deg: yaw,
         pitch_deg: pitch,
-        fields_passed: verdict.fields.iter().all(|f| f.figures.passed),
-        least_share: share(least),
-        least_share_field: least.name.clone(),
+        search_verdict: fields,
+        confirmed_verdict: None,
+        fields_passed: false,
+        least_share: least.map_or(1.0, share),
+        least_share_field: least.map_or_else(String::new, |f| f.name.clone()),
         least_margin_m: verdict
             .fields
             .iter()

@@ -422,9 +422,9 @@ fn lens_sections(r: &crate::lens::Report) -> String {
     html.push_str(&zone_sections(r));
     if let Some(v) = &r.verdict {
         html.push_str(&format!(
-            "<p>{}: <b>{}</b></p>\n<table>\n<tr><th>check</th><th>measured</th><th>ordered</th><th>tolerance</th><th>margin</th><th></th></tr>\n",
+            "<p>{}: <b>{}</b></p>\n<table>\n<tr><th>check</th><th>measured</th><th>ordered</th><th>tolerance</th><th>margin</th><th>uncertainty</th><th></th></tr>\n",
             plot::html_escape(v.edition),
-            if v.passed { "PASS" } else { "FAIL" }
+            v.verdict.word()
         ));
         for c in &v.checks {
             let name = match c.meridian {
@@ -432,12 +432,14 @@ fn lens_sections(r: &crate::lens::Report) -> String {
                 None => c.quantity.into(),
             };
             html.push_str(&format!(
-                "<tr><td>{name}</td><td>{:.3}</td><td>{:.3}</td><td>±{:.3}</td><td>{:.3}</td><td>{}</td></tr>\n",
+                "<tr><td>{name}</td><td>{:.3} {unit}</td><td>{:.3} {unit}</td><td>±{:.3} {unit}</td><td>{:.3} {unit}</td><td>±{:.3} {unit}</td><td>{}</td></tr>\n",
                 c.measured,
                 c.ordered,
                 c.tolerance,
                 c.margin,
-                if c.passed { "pass" } else { "fail" }
+                c.uncertainty,
+                c.verdict.lower(),
+                unit = c.unit,
             ));
         }
         html.push_str("</table>\n");

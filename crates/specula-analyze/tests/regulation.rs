@@ -9,8 +9,10 @@ use glam::{Vec2, Vec3};
 use specula_analyze::frame::VehicleFrame;
 use specula_analyze::mirror_surface::{MirrorSurface, SurfaceModel};
 use specula_analyze::mirror_view::{analyze, MirrorView, Obstacles, Options};
+use specula_analyze::outcome::Outcome;
 use specula_analyze::regulation::{
-    judge, EyeRule, EyeSets, FieldSpec, Lateral, Regulation, Side, SurfaceRule, Vehicle, Verdict,
+    judge, EyeRule, EyeSets, FieldSpec, Lateral, RectangleRule, Regulation, Side, SphericalRule,
+    SurfaceRule, Vehicle, Verdict,
 };
 use specula_scene::{generators, Camera, Material, Mesh, Scene};
 use specula_trace::SceneAccel;
@@ -77,8 +79,9 @@ fn regulation(fields: &'static [FieldSpec], surface: SurfaceRule) -> Regulation 
 }
 
 const NO_RULE: SurfaceRule = SurfaceRule {
-    min_radius_m: None,
+    spherical: None,
     flat: false,
+    convex: None,
     rectangle: None,
     source: "",
 };
@@ -245,6 +248,53 @@ fn a_flat_mirror_passes_a_field_inside_its_trapezoid_with_its_margins() {
     );
 }
 
+/// The field INSIDE with its outer edge pushed `beyond` metres past the trapezoid's at its near
+/// end: a blind corner of beyond² / 2.4 m² (the trapezoid's edge runs 1.2 m out per metre back).
+const fn past_the_edge(beyond: f64) -> [FieldSpec; 1] {
+    [FieldSpec {
+        name: "past the edge",
+        lateral: Lateral::FromSide {
+            inner: 1.55,
+            outer: 1.9 + beyond,
+        },
+        from_m: 1.0,
+        to_m: Some(1.5),
+        source: "",
+    }]
+}
+
+static SLIVER: [FieldSpec; 1] = past_the_edge(0.0008);
+static CORNER: [FieldSpec; 1] = past_the_edge(0.1);
+
+#[test]
+fn a_field_short_by_less_than_its_uncertainty_is_undecided() {
+    let scene = flat_mirror(MIRROR_X, MIRROR_Y);
+    for (fields, beyond, expected) in [
+        (&SLIVER, 0.0008f64, Outcome::Undecided),
+        (&CORNER, 0.1, Outcome::Fail),
+    ] {
+        let v = verdict(
+            &scene,
+            &[EYE],
+            &regulation(fields, NO_RULE),
+            EYE,
+            Vec3::NEG_Z,
+        );
+        let f = &v.fields[0].figures;
+        let blind = beyond * beyond / 2.4 / ((0.35 + beyond) * 0.5);
+        println!(
+            "{beyond} m past: blind {:.2e} (exact {blind:.2e}) ± {:.2e}: {:?}",
+            1.0 - f.seen_share,
+            f.seen_share_uncertainty,
+            f.verdict
+        );
+        assert!((1.0 - f.seen_share - blind).abs() <= f.seen_share_uncertainty);
+        assert_eq!(f.verdict, expected);
+        assert_eq!(v.verdict, expected);
+        assert!(!v.passed && !f.passed);
+    }
+}
+
 #[test]
 fn a_flat_mirror_fails_a_field_by_the_share_polygon_clipping_gives() {
     let scene = flat_mirror(MIRROR_X, MIRROR_Y);
@@ -398,9 +448,17 @@ fn the_mirror_rules_flip_at_their_edges() {
     // Class III as R46 §6.1.2 reads: r at least 1200 mm; a rectangle 40 mm high and
     // a = 130 / (1 + 1000 / r) mm long (130 mm when flat), a 70 mm segment parallel to its height.
     let class_iii = SurfaceRule {
-        min_radius_m: Some(1.2),
+        spherical: Some(SphericalRule {
+            min_radius_m: 1.2,
+            aspherical_part_allowed: true,
+        }),
         flat: false,
-        rectangle: Some((130.0, 70.0)),
+        convex: None,
+        rectangle: Some(RectangleRule {
+            a_numerator_mm: 130.0,
+            segment_mm: Some(70.0),
+            either_way: false,
+        }),
         source: "",
     };
     let regulation = regulation(&INSIDE, class_iii);
@@ -408,23 +466,35 @@ fn the_mirror_rules_flip_at_their_edges() {
         let v = verdict(scene, &[EYE], &regulation, EYE, Vec3::NEG_Z);
         v.mirror_checks
             .iter()
-            .map(|c| (c.name.clone(), c.passed))
+            .map(|c| (c.name.clone(), c.verdict))
             .collect::<Vec<_>>()
+    };
+    let verdict_of = |c: &[(String, Outcome)], name: &str| {
+        c.iter()
+            .find(|(n, _)| n == name)
+            .unwrap_or_else(|| panic!("{name} in {c:?}"))
+            .1
     };
     let flat = |w: f32, h: f32| flat_mirror([-0.1, -0.1 + w], [0.9 - h, 0.9]);
     let all_pass = checks(&flat(0.1315, 0.0715));
-    assert!(all_pass.iter().all(|(_, p)| *p), "{all_pass:?}");
-    let narrow = checks(&flat(0.1285, 0.0715));
-    assert_eq!(
-        narrow[1],
-        ("rectangle 40 mm high".into(), false),
-        "{narrow:?}"
+    assert!(
+        all_pass.iter().all(|(_, v)| *v == Outcome::Pass),
+        "{all_pass:?}"
     );
-    assert!(narrow[2].1);
+    let narrow = checks(&flat(0.1285, 0.0715));
+    assert_eq!(verdict_of(&narrow, "rectangle 40 mm high"), Outcome::Fail);
+    assert_eq!(
+        verdict_of(&narrow, "segment parallel to the height"),
+        Outcome::Pass
+    );
     let low = checks(&flat(0.1315, 0.0685));
-    assert!(low[1].1 && !low[2].1, "{low:?}");
+    assert_eq!(verdict_of(&low, "rectangle 40 mm high"), Outcome::Pass);
+    assert_eq!(
+        verdict_of(&low, "segment parallel to the height"),
+        Outcome::Fail
+    );
     // The radius on the exact cap, either side of 1200 mm.
-    for (radius, passes) in [(1.21f32, true), (1.19, false)] {
+    for (radius, expected) in [(1.21f32, Outcome::Pass), (1.19, Outcome::Fail)] {
         let mut scene = Scene::new("cap");
         scene.materials.push(Material::mirror("mirror", Vec3::ONE));
         let mut cap = generators::spherical_cap(radius, 0.2, false, 8, 32).unwrap();
@@ -433,8 +503,8 @@ fn the_mirror_rules_flip_at_their_edges() {
         scene.meshes.push(cap);
         let c = checks(&scene);
         assert_eq!(
-            c[0],
-            ("radius of curvature".into(), passes),
+            verdict_of(&c, "radius of curvature r"),
+            expected,
             "r = {radius}: {c:?}"
         );
     }

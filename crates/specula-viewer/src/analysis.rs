@@ -1226,7 +1226,7 @@ pub fn summary(analysis: &Analysis, scene: &Scene) -> String {
                         f.figures.seen_share_uncertainty * 100.0,
                         f.figures.hidden_by_vehicle_share * 100.0,
                         f.figures.outer_margin_m.min(f.figures.near_margin_m),
-                        if f.figures.passed { "pass" } else { "FAIL" }
+                        f.figures.verdict.word()
                     )
                 })
                 .collect();
@@ -1234,13 +1234,10 @@ pub fn summary(analysis: &Analysis, scene: &Scene) -> String {
                 "{} of '{}': {}; {}; mirror checks {}; {timing}",
                 v.name,
                 scene.meshes[analysis.settings.object].name,
-                if v.passed { "PASSES" } else { "FAILS" },
+                v.verdict.word(),
                 fields.join("; "),
-                if v.mirror_checks.iter().all(|c| c.passed) {
-                    "pass"
-                } else {
-                    "FAIL"
-                }
+                specula_analyze::outcome::Outcome::all(v.mirror_checks.iter().map(|c| c.verdict))
+                    .word()
             )
         }
         Analysed::MirrorView { view, .. } => {

@@ -5,6 +5,7 @@
 use egui::{Color32, RichText};
 use glam::Vec3;
 use specula_analyze::frame::Eyes;
+use specula_analyze::outcome::Outcome;
 use specula_analyze::regulation::{Side, Verdict, REGULATIONS};
 
 use crate::analysis::{Analysed, Analysis, Kind, RegulationSettings, Settings};
@@ -844,21 +845,12 @@ fn eyebox_map(
 /// The verdict: each field's seen share with its uncertainty, the body's share, the margin and
 /// whether it passes; the mirror's own checks.
 fn verdict_section(ui: &mut egui::Ui, v: &Verdict) {
-    let colour = |passed: bool| {
-        if passed {
-            Color32::LIGHT_GREEN
-        } else {
-            Color32::LIGHT_RED
-        }
+    let colour = |outcome: Outcome| match outcome {
+        Outcome::Pass => Color32::LIGHT_GREEN,
+        Outcome::Fail => Color32::LIGHT_RED,
+        Outcome::Undecided => Color32::from_rgb(240, 200, 90),
     };
-    ui.label(
-        RichText::new(format!(
-            "{}: {}",
-            v.title,
-            if v.passed { "passes" } else { "fails" }
-        ))
-        .color(colour(v.passed)),
-    );
+    ui.label(RichText::new(format!("{}: {}", v.title, v.verdict.word())).color(colour(v.verdict)));
     egui::Grid::new("fields").num_columns(5).show(ui, |ui| {
         for h in ["field", "seen", "body", "margin", ""] {
             ui.small(h);
@@ -874,14 +866,20 @@ fn verdict_section(ui: &mut egui::Ui, v: &Verdict) {
             ));
             ui.label(format!("{:.2} %", g.hidden_by_vehicle_share * 100.0));
             ui.label(format!("{:.2} m", g.outer_margin_m.min(g.near_margin_m)));
-            ui.label(RichText::new(if g.passed { "pass" } else { "fail" }).color(colour(g.passed)));
+            ui.label(RichText::new(g.verdict.lower()).color(colour(g.verdict)));
             ui.end_row();
         }
     });
     for c in &v.mirror_checks {
         ui.label(
-            RichText::new(format!("{}: {} ({})", c.name, c.measured, c.required))
-                .color(colour(c.passed)),
+            RichText::new(format!(
+                "{}: {} ({}): {}",
+                c.name,
+                c.measured,
+                c.required,
+                c.verdict.lower()
+            ))
+            .color(colour(c.verdict)),
         )
         .on_hover_text(&c.source);
     }

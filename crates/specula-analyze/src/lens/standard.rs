@@ -12,17 +12,21 @@
 //! - **ISO 8980-1:2017**, Table 1 as commonly reproduced: tolerance A on each principal
 //!   meridian and B on the cylinder, by the highest meridian's absolute power (B also by the
 //!   cylinder); the axis by cylinder (±16 / 9 / 6 / 4 / 3°); prism ±(0.25 + 0.1 S_max) Δ up
-//!   to 2 Δ (S_max the highest meridian's absolute power). None of these could be confirmed
-//!   against the standard's text.
+//!   to 2 Δ, ±(0.37 + 0.1 S_max) Δ over 2 to 10 Δ, ±(0.50 + 0.1 S_max) Δ over 10 Δ, by the
+//!   ordered prism (S_max the highest meridian's absolute power). None of these could be
+//!   confirmed against the standard's text.
 //!
-//! Bands are taken by the ordered values, each including its upper edge. A check passes when
-//! |measured − ordered| ≤ tolerance; its margin is tolerance − |measured − ordered| (negative:
-//! failed by that much). Prism is checked as the magnitude of the prism vector's error.
+//! Bands are taken by the ordered values, each including its upper edge. A check's value is
+//! |measured − ordered|, its limit the tolerance, its margin tolerance − value (negative:
+//! failed by that much); it passes when the margin is at least the measurement's uncertainty,
+//! fails when it is below minus it, and is undecided between ([`Outcome`]). Prism is checked
+//! as the magnitude of the prism vector's error.
 
 use serde::Serialize;
 
 use super::focimeter::Reading;
 use super::wear::Rx;
+use crate::outcome::Outcome;
 
 /// A tolerance: a fixed value, or a share of the ordered value's magnitude.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -136,9 +140,15 @@ pub enum PrismRule {
     /// A fixed tolerance, or the point with the ordered prism within `within_mm` of the
     /// prism reference point.
     FixedOrWithin { prism_d: f64, within_mm: f64 },
-    /// base + per_dioptre × S_max.
-    ByPower { base_d: f64, per_dioptre: f64 },
+    /// base + per_dioptre × S_max, the base by the ordered prism's magnitude.
+    ByPower {
+        base_d: Bands<f64>,
+        per_dioptre: f64,
+    },
 }
+
+/// ISO 8980-1's prism tolerance's base by the ordered prism (Δ).
+const ISO_PRISM_BASE: Bands<f64> = &[(2.00, 0.25), (10.00, 0.37), (INF, 0.50)];
 
 const INF: f64 = f64::INFINITY;
 
@@ -182,7 +192,7 @@ pub const STANDARDS: &[Table] = &[
         axis_from_cylinder_d: 0.12,
         axis_deg: ISO_AXIS,
         prism: PrismRule::ByPower {
-            base_d: 0.25,
+            base_d: ISO_PRISM_BASE,
             per_dioptre: 0.1,
         },
         add: &[],
@@ -201,7 +211,7 @@ pub const STANDARDS: &[Table] = &[
         axis_from_cylinder_d: 0.12,
         axis_deg: ISO_AXIS,
         prism: PrismRule::ByPower {
-            base_d: 0.25,
+            base_d: ISO_PRISM_BASE,
             per_dioptre: 0.1,
         },
         add: &[
@@ -308,7 +318,13 @@ pub struct Check {
     pub measured: f64,
     pub ordered: f64,
     pub tolerance: f64,
+    /// The value held to the limit, |measured − ordered| (prism: the prism vector's error), and
+    /// the limit, the tolerance; all in `unit`: D, ° or Δ.
+    pub value: f64,
+    pub limit: f64,
+    pub unit: &'static str,
     pub margin: f64,
+    pub verdict: Outcome,
     pub passed: bool,
     /// How far the measured value may be off (the focimeter's finite differences and, for a
     /// mesh, its surface), in the check's unit.
@@ -322,8 +338,29 @@ pub struct Check {
 pub struct Verdict {
     pub standard: &'static str,
     pub edition: &'static str,
+    /// The worst of the checks' verdicts.
+    pub verdict: Outcome,
     pub passed: bool,
     pub checks: Vec<Check>,
+}
+
+impl Verdict {
+    fn new(table: &Table, checks: Vec<Check>) -> Verdict {
+        let verdict = Outcome::all(checks.iter().map(|c| c.verdict));
+        Verdict {
+            standard: table.id,
+            edition: table.edition,
+            verdict,
+            passed: verdict.passed(),
+            checks,
+        }
+    }
+}
+
+/// A check's verdict: the tables are to 0.01 D and 1°, so a margin rounding left a hair below
+/// zero is on the edge.
+fn decide(margin: f64, uncertainty: f64) -> Outcome {
+    Outcome::of_margin(margin + 1e-9, uncertainty)
 }
 
 fn check(
@@ -334,16 +371,25 @@ fn check(
     tolerance: f64,
     uncertainty: f64,
 ) -> Check {
-    let margin = tolerance - (measured - ordered).abs();
+    let value = (measured - ordered).abs();
+    let margin = tolerance - value;
+    let verdict = decide(margin, uncertainty);
     Check {
         quantity,
         meridian,
         measured,
         ordered,
         tolerance,
+        value,
+        limit: tolerance,
+        unit: match quantity {
+            "axis" => "°",
+            "prism" => "Δ",
+            _ => "D",
+        },
         margin,
-        // The tables are to 0.01 D and 1°: a rounding on the edge is on it.
-        passed: margin >= -1e-9,
+        verdict,
+        passed: verdict.passed(),
         uncertainty,
         note: None,
     }
@@ -420,12 +466,7 @@ pub fn judge(table: &Table, distance: &Reading, prism: &Reading, ordered: &Rx) -
         ));
     }
     checks.push(prism_check(table, prism, &ordered, s_max));
-    Verdict {
-        standard: table.id,
-        edition: table.edition,
-        passed: checks.iter().all(|c| c.passed),
-        checks,
-    }
+    Verdict::new(table, checks)
 }
 
 /// A progressive lens's verdict: [`judge`] on the distance power and prism, and the measured
@@ -439,9 +480,9 @@ pub fn judge_progressive(
     ordered_add_d: f64,
     add_uncertainty_d: f64,
 ) -> Verdict {
-    let mut verdict = judge(table, distance, prism, ordered);
+    let mut checks = judge(table, distance, prism, ordered).checks;
     let tolerance = band(table.add, ordered_add_d).of(ordered_add_d);
-    verdict.checks.push(check(
+    checks.push(check(
         "add",
         None,
         measured_add_d,
@@ -449,8 +490,7 @@ pub fn judge_progressive(
         tolerance,
         add_uncertainty_d,
     ));
-    verdict.passed = verdict.checks.iter().all(|c| c.passed);
-    verdict
+    Verdict::new(table, checks)
 }
 
 fn prism_check(table: &Table, prism: &Reading, ordered: &Rx, s_max: f64) -> Check {
@@ -464,7 +504,7 @@ fn prism_check(table: &Table, prism: &Reading, ordered: &Rx, s_max: f64) -> Chec
         PrismRule::ByPower {
             base_d,
             per_dioptre,
-        } => base_d + per_dioptre * s_max,
+        } => band(base_d, magnitude(ordered.prism_d)) + per_dioptre * s_max,
     };
     let mut c = check(
         "prism",
@@ -474,11 +514,14 @@ fn prism_check(table: &Table, prism: &Reading, ordered: &Rx, s_max: f64) -> Chec
         tolerance,
         prism.prism_uncertainty_d,
     );
-    c.margin = tolerance - magnitude(error);
-    c.passed = c.margin >= -1e-9;
+    c.value = magnitude(error);
+    c.margin = tolerance - c.value;
+    c.verdict = decide(c.margin, c.uncertainty);
+    c.passed = c.verdict.passed();
     if let (false, PrismRule::FixedOrWithin { within_mm, .. }) = (c.passed, table.prism) {
         if let Some(offset) = prism.ordered_prism_offset_mm(ordered.prism_d) {
             if offset <= within_mm + 1e-9 {
+                c.verdict = Outcome::Pass;
                 c.passed = true;
                 c.note = Some(format!(
                     "the ordered prism is {offset:.2} mm from the prism reference point (within \

@@ -11,6 +11,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use specula_analyze::frame::{Eyes, VehicleFrame};
 use specula_analyze::mirror_surface::SurfaceModel;
 use specula_analyze::mirror_view::{self, Region};
+use specula_analyze::outcome::Outcome;
 use specula_scene::builtin::DEFAULT_SCENE;
 use specula_trace::SceneAccel;
 
@@ -651,19 +652,22 @@ fn print_lens_checks(r: &specula_analyze::lens::Report, focimeter: bool) {
     }
     print_zones(r);
     if let Some(v) = &r.verdict {
-        println!("{}: {}", v.edition, if v.passed { "PASS" } else { "FAIL" });
+        println!("{}: {}", v.edition, v.verdict.word());
         for c in &v.checks {
             println!(
-                "  {:<10}{:>12}  measured {:>8.3}  ordered {:>8.3}  ± {:.3}  margin {:>7.3}  {}{}",
+                "  {:<10}{:>12}  measured {:>8.3}  ordered {:>8.3}  off by {:.3} of ± {:.3} {}  margin {:>7.3} ± {:.3}  {}{}",
                 c.quantity,
                 c.meridian
                     .map(|m| format!("at {m:.0}°"))
                     .unwrap_or_default(),
                 c.measured,
                 c.ordered,
-                c.tolerance,
+                c.value,
+                c.limit,
+                c.unit,
                 c.margin,
-                if c.passed { "pass" } else { "FAIL" },
+                c.uncertainty,
+                c.verdict.word(),
                 c.note
                     .as_deref()
                     .map(|n| format!(" ({n})"))
@@ -1040,7 +1044,11 @@ fn print_verdict(
         "{} ({}): {}",
         v.title,
         v.edition,
-        if v.passed { "PASSES" } else { "FAILS" }
+        match v.verdict {
+            Outcome::Pass => "PASSES",
+            Outcome::Fail => "FAILS",
+            Outcome::Undecided => "UNDECIDED (a margin within its uncertainty)",
+        }
     );
     let [x, y, z] = vehicle.reference.to_array();
     println!(
@@ -1079,7 +1087,7 @@ fn print_verdict(
                 .map(|h| if h { "seen" } else { "NOT" }.to_string())
                 .unwrap_or_else(|| "-".into()),
             format!("{:.2} m", g.outer_margin_m.min(g.near_margin_m)),
-            if g.passed { "pass" } else { "FAIL" }
+            g.verdict.word()
         );
         if let Some(w) = &f.worst_eye {
             let [x, y, z] = w.position;
@@ -1090,13 +1098,20 @@ fn print_verdict(
         }
     }
     for c in &v.mirror_checks {
+        let number = |x: Option<f64>| x.map_or_else(|| "-".to_string(), |x| format!("{x:.4}"));
         println!(
-            "mirror: {} ({}): required {}; measured {}: {}",
+            "mirror: {} ({}): required {}; measured {}; value {} {unit}, limit {:.4} {unit}, \
+             margin {} ± {} {unit}: {}",
             c.name,
             c.source,
             c.required,
             c.measured,
-            if c.passed { "pass" } else { "FAIL" }
+            number(c.value),
+            c.limit,
+            number(c.margin),
+            number(c.uncertainty),
+            c.verdict.word(),
+            unit = c.unit,
         );
     }
 }
@@ -1107,7 +1122,7 @@ fn print_adjustment(a: &specula_analyze::regulation::Adjustment) {
             .unwrap_or_else(|| "none".into())
     };
     println!(
-        "adjustment about ({:.3}, {:.3}, {:.3}), ±{}° in steps of {}°: {} of {} poses pass the fields; yaw {}, pitch {}",
+        "adjustment about ({:.3}, {:.3}, {:.3}), ±{}° in steps of {}°: {} of {} poses pass the fields (confirmed at the command's tolerances); yaw {}, pitch {}",
         a.pivot[0],
         a.pivot[1],
         a.pivot[2],
@@ -1127,10 +1142,6 @@ fn print_adjustment(a: &specula_analyze::regulation::Adjustment) {
         b.least_share * 100.0,
         b.least_share_field,
         b.least_margin_m,
-        if a.best_verdict.fields.iter().all(|f| f.figures.passed) {
-            "pass"
-        } else {
-            "fail"
-        }
+        Outcome::all(a.best_verdict.fields.iter().map(|f| f.figures.verdict)).lower()
     );
 }
