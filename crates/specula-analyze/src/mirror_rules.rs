@@ -376,7 +376,7 @@ fn spherical_checks(
         "radius of curvature r",
         source,
         format!("r at least {:.0} mm (or flat)", rule.min_radius_m * 1e3),
-        format!("r = {} ± {:.0} mm; {arc}", mm(r), ur * 1e3),
+        format!("r = {} ± {:.2} mm; {arc}", mm(r), ur * 1e3),
         (r, rule.min_radius_m, margin, ur),
         "m",
         if annex7.flat {
@@ -694,7 +694,7 @@ fn convex_checks(rule: &ConvexRule, source: &str, readings: &[Curvature]) -> Vec
             rule.max_average_m * 1e3
         ),
         format!(
-            "{} ± {:.0} mm over 10 readings: {listed}",
+            "{} ± {:.2} mm over 10 readings: {listed}",
             mm(average),
             average_u * 1e3
         ),

@@ -473,6 +473,11 @@ const MARGIN_REACH_M: f64 = 5.0;
 pub struct FieldFigures {
     pub seen_share: f64,
     pub seen_share_uncertainty: f64,
+    /// The uncertainty of the share seen or hidden only by the vehicle (what the mirror's own
+    /// edge leaves): twice its change on a grid of half the resolution. Where the body's share
+    /// is excused, the field is judged on that share: the boundary between what is seen and
+    /// what the body hides moves both shares, not their sum.
+    pub clear_share_uncertainty: f64,
     pub blind_area_m2: f64,
     pub hidden_by_vehicle_share: f64,
     /// The share of the part beyond the range seen, by its directions (None: nothing lies
@@ -506,10 +511,15 @@ impl FieldFigures {
         } else {
             0.0
         };
-        let within = Outcome::of_margin(
-            self.seen_share + excused - 1.0,
-            self.seen_share_uncertainty + surface_uncertainty,
-        );
+        // Shares are counts of the grid's cells: a sum within rounding of 1 is 1.
+        let short = self.seen_share + excused - 1.0;
+        let short = if short.abs() < 1e-12 { 0.0 } else { short };
+        let grid = if excused > 0.0 {
+            self.clear_share_uncertainty
+        } else {
+            self.seen_share_uncertainty
+        };
+        let within = Outcome::of_margin(short, grid + surface_uncertainty);
         let beyond = self
             .beyond_range_seen_share
             .zip(self.beyond_range_uncertainty)
@@ -871,6 +881,7 @@ fn field_figures(
     let mut figures = FieldFigures {
         seen_share: 1.0,
         seen_share_uncertainty: 0.0,
+        clear_share_uncertainty: 0.0,
         blind_area_m2: 0.0,
         hidden_by_vehicle_share: 0.0,
         beyond_range_seen_share: None,
@@ -959,10 +970,17 @@ fn seen_within_range(
         ..grid
     };
     let mut coarse_seen = vec![false; coarse.columns * coarse.rows];
+    let mut coarse_clear = coarse_seen.clone();
     for &k in set {
         coarse.fill(&mut coarse_seen, &view.footprints[k], to_field);
+        coarse.fill(&mut coarse_clear, &view.clear_footprints[k], to_field);
     }
+    let either = |a: &[bool], b: &[bool]| a.iter().zip(b).filter(|(x, y)| **x || **y).count();
     let total = cells as f64;
+    figures.clear_share_uncertainty = 2.0
+        * (either(&seen, &clear) as f64 / total
+            - either(&coarse_seen, &coarse_clear) as f64 / coarse_seen.len() as f64)
+            .abs();
     figures.seen_share = count(&seen) / total;
     figures.hidden_by_vehicle_share = hidden / total;
     figures.seen_share_uncertainty = 2.0

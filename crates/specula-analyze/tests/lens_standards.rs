@@ -5,9 +5,10 @@
 
 use glam::{DVec3, Mat4, Vec3};
 use specula_analyze::lens::focimeter::Reading;
-use specula_analyze::lens::standard::{find, judge};
+use specula_analyze::lens::standard::{find, judge, judge_progressive};
 use specula_analyze::lens::{analyze, default_options, Options, Report, Rx, Wear};
 use specula_analyze::mirror_surface::SurfaceModel;
+use specula_analyze::outcome::Outcome;
 use specula_scene::generators::{self, LensSpec};
 use specula_scene::{Prescription, Scene};
 
@@ -216,6 +217,175 @@ fn verdicts_flip_exactly_at_the_tolerance_tables_edges() {
         error.contains("ansi-z80.1") && error.contains("iso-8980-1"),
         "{error}"
     );
+}
+
+/// The verdict of `quantity` (the worst over its checks) for a lens reading `measured` with
+/// `uncertainty_d` on its powers and prism, ordered `ordered`.
+fn outcome_of(
+    standard: &str,
+    quantity: &str,
+    ordered: Rx,
+    measured: Rx,
+    uncertainty_d: f64,
+) -> Outcome {
+    let table = find(standard).unwrap();
+    let mut r = reading(measured);
+    r.uncertainty_d = uncertainty_d;
+    r.prism_uncertainty_d = uncertainty_d;
+    let verdict = judge(table, &r, &r, &ordered);
+    Outcome::all(
+        verdict
+            .checks
+            .iter()
+            .filter(|c| c.quantity == quantity)
+            .map(|c| c.verdict),
+    )
+}
+
+#[test]
+fn a_margin_within_the_reading_s_uncertainty_is_undecided() {
+    // ANSI sphere ±0.13 D at −3 D, the reading known to ±0.02 D.
+    for (error, expected) in [
+        (0.10, Outcome::Pass),
+        (0.12, Outcome::Undecided),
+        (0.14, Outcome::Undecided),
+        (0.16, Outcome::Fail),
+    ] {
+        let got = outcome_of(
+            "ansi-z80.1",
+            "sphere",
+            rx(-3.0, 0.0, 0.0),
+            rx(-3.0 - error, 0.0, 0.0),
+            0.02,
+        );
+        assert_eq!(got, expected, "error {error}");
+    }
+    let table = find("iso-8980-1").unwrap();
+    let mut r = reading(rx(-3.12, 0.0, 0.0));
+    r.uncertainty_d = 0.02;
+    let verdict = judge(table, &r, &r, &rx(-3.0, 0.0, 0.0));
+    assert_eq!(verdict.verdict, Outcome::Undecided);
+    assert!(!verdict.passed);
+    let sphere = &verdict.checks[0];
+    assert_eq!((sphere.unit, sphere.limit), ("D", 0.12));
+    assert!((sphere.value - 0.12).abs() < 1e-9 && sphere.margin.abs() < 1e-9);
+}
+
+#[test]
+fn the_bands_and_orders_the_edge_table_leaves_out() {
+    let iso = "iso-8980-1";
+    // ISO 8980-1's prism over 2 Δ: 0.37 + 0.1 S_max; over 10 Δ: 0.50 + 0.1 S_max (S_max 2 D).
+    for (ordered, error, expected) in [
+        (1.5, 0.45, Outcome::Pass),
+        (1.5, 0.4501, Outcome::Fail),
+        (3.0, 0.57, Outcome::Pass),
+        (3.0, 0.5701, Outcome::Fail),
+        (12.0, 0.70, Outcome::Pass),
+        (12.0, 0.7001, Outcome::Fail),
+    ] {
+        let prism = |p: f64| Rx {
+            prism_d: [p, 0.0],
+            ..rx(-2.0, 0.0, 0.0)
+        };
+        let got = outcome_of(iso, "prism", prism(ordered), prism(ordered + error), 0.0);
+        assert_eq!(got, expected, "{ordered} Δ off by {error}");
+    }
+    // Base out, in, up and down: the error is the prism vector's, so 2 Δ BI read as 2 Δ BO is
+    // 4 Δ off; read as 2 Δ BI it is on.
+    let with = |p: [f64; 2]| Rx {
+        prism_d: p,
+        ..rx(-1.0, 0.0, 0.0)
+    };
+    for ordered in [[-2.0, 0.0], [2.0, 0.0], [0.0, 2.0], [0.0, -2.0]] {
+        let flipped = [-ordered[0], -ordered[1]];
+        for standard in ["ansi-z80.1", iso] {
+            let on = outcome_of(standard, "prism", with(ordered), with(ordered), 0.0);
+            let off = outcome_of(standard, "prism", with(ordered), with(flipped), 0.0);
+            assert_eq!((on, off), (Outcome::Pass, Outcome::Fail), "{ordered:?}");
+        }
+    }
+    // A plus-cylinder order is the same lens as its minus-cylinder transposition.
+    let plus = Rx {
+        sphere_d: -1.0,
+        cylinder_d: 1.5,
+        axis_deg: 30.0,
+        prism_d: [0.0; 2],
+    };
+    let minus = rx(0.5, -1.5, 120.0);
+    for standard in ["ansi-z80.1", iso] {
+        let table = find(standard).unwrap();
+        let verdict = judge(table, &reading(minus), &reading(minus), &plus);
+        assert_eq!(verdict.verdict, Outcome::Pass, "{verdict:#?}");
+        assert!(
+            verdict.checks.iter().all(|c| c.value < 1e-9),
+            "{verdict:#?}"
+        );
+    }
+}
+
+#[test]
+fn progressive_tables_flip_at_their_edges() {
+    let ansi = find("ansi-z80.1").unwrap().progressive.unwrap();
+    let iso2 = find("iso-8980-2").unwrap();
+    let verdict = |table, ordered: Rx, measured: Rx, add: f64, measured_add: f64| {
+        judge_progressive(
+            table,
+            &reading(measured),
+            &reading(measured),
+            &ordered,
+            measured_add,
+            add,
+            0.0,
+        )
+    };
+    let check = |v: &specula_analyze::lens::standard::Verdict, q: &str| {
+        v.checks.iter().find(|c| c.quantity == q).unwrap().verdict
+    };
+    // ANSI PAL sphere: ±0.16 D to 8.00 D, 2 % beyond (0.1602 D at 8.01).
+    for (sphere, expected) in [(-8.00, Outcome::Fail), (-8.01, Outcome::Pass)] {
+        let v = verdict(
+            ansi,
+            rx(sphere, 0.0, 0.0),
+            rx(sphere - 0.1601, 0.0, 0.0),
+            2.0,
+            2.0,
+        );
+        assert_eq!(check(&v, "sphere"), expected, "{sphere}");
+    }
+    // ANSI PAL cylinder: ±0.16 to 2.00 D, ±0.18 to 3.50 D, 5 % beyond (0.1755 at 3.51).
+    for (cylinder, error, expected) in [
+        (-2.00, 0.17, Outcome::Fail),
+        (-2.01, 0.17, Outcome::Pass),
+        (-3.50, 0.179, Outcome::Pass),
+        (-3.51, 0.179, Outcome::Fail),
+    ] {
+        let v = verdict(
+            ansi,
+            rx(0.0, cylinder, 90.0),
+            rx(0.0, cylinder - error, 90.0),
+            2.0,
+            2.0,
+        );
+        assert_eq!(check(&v, "cylinder"), expected, "{cylinder}");
+    }
+    // The add: ±0.12 D to 4.00 D, ±0.18 D beyond, in both ANSI's and ISO 8980-2's table.
+    for table in [ansi, iso2] {
+        for (add, error, expected) in [
+            (4.00, 0.12, Outcome::Pass),
+            (4.00, 0.1201, Outcome::Fail),
+            (4.01, 0.18, Outcome::Pass),
+            (4.01, 0.1801, Outcome::Fail),
+        ] {
+            let v = verdict(
+                table,
+                rx(-1.0, 0.0, 0.0),
+                rx(-1.0, 0.0, 0.0),
+                add,
+                add + error,
+            );
+            assert_eq!(check(&v, "add"), expected, "{} add {add}", table.id);
+        }
+    }
 }
 
 #[test]

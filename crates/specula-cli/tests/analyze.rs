@@ -220,8 +220,19 @@ fn the_car_example_s_a_pillar_takes_a_share_of_the_fields_and_the_allowance_deci
     );
     assert_eq!(verdict["passed"], false);
     // r = 1.6 m by construction (the control points' parabola): the exact patch says so.
-    let radius = &verdict["mirror_checks"][0];
+    let check = |name: &str| {
+        verdict["mirror_checks"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|c| c["name"] == name)
+            .unwrap_or_else(|| panic!("no check '{name}' in {verdict}"))
+            .clone()
+    };
+    let radius = check("radius of curvature r");
     assert_eq!(radius["passed"], true);
+    assert_eq!(radius["verdict"], "pass");
+    assert_eq!(radius["unit"], "m");
     assert!(
         radius["measured"].as_str().unwrap().contains("1600 mm"),
         "{radius}"
@@ -274,7 +285,20 @@ fn the_door_mirror_s_pose_search_finds_poses_whose_fields_pass() {
     }
     // Its radius (about 0.4 m) is below class III's 1.2 m: no pose makes the mirror pass.
     assert_eq!(json["regulation"]["passed"], false);
-    assert_eq!(json["regulation"]["mirror_checks"][0]["passed"], false);
+    assert_eq!(json["regulation"]["verdict"], "fail");
+    let radius = json["regulation"]["mirror_checks"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["name"] == "radius of curvature r")
+        .unwrap();
+    assert_eq!(radius["verdict"], "fail", "{radius}");
+    // Every pose counted as passing was confirmed at the command's tolerances.
+    for pose in a["poses"].as_array().unwrap() {
+        if pose["fields_passed"] == true {
+            assert_eq!(pose["confirmed_verdict"], "pass", "{pose}");
+        }
+    }
 }
 
 #[test]
@@ -294,7 +318,7 @@ fn bad_regulation_input_is_a_clear_error() {
     let cases: Vec<(Vec<&str>, &str)> = vec![
         (
             with(&["r46-vii", "--r-point", "0.28,-0.575,0.75"]),
-            "unknown regulation 'r46-vii'; valid: r46-i, r46-ii, r46-iii, r46-iv, r46-v, fmvss111",
+            "unknown regulation 'r46-vii'; valid: r46-i, r46-ii, r46-iii, r46-iv, r46-v, fmvss111, fmvss111-convex",
         ),
         // Eyes behind the mirror (it faces +Z).
         (

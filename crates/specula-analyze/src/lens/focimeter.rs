@@ -81,6 +81,8 @@ pub struct Reading {
     /// surface's uncertainty for a mesh, dioptres.
     pub uncertainty_d: f64,
     pub axis_uncertainty_deg: f64,
+    /// How far the prism may be off: its change when the central ray starts elsewhere (the
+    /// trace's numerical error), plus the surface's change for a mesh, Δ.
     pub prism_uncertainty_d: f64,
     /// ∂prism / ∂position (Δ per mm; columns: right, up): where the ordered prism lies.
     #[serde(skip)]
@@ -121,6 +123,23 @@ pub struct Focimeter<'a> {
     pub eye: Eye,
 }
 
+/// How far before the back vertex's plane the central ray starts, metres; the prism's
+/// uncertainty is its change when the ray starts [`STANDOFF_CHECK_M`] before it instead (the
+/// trace's own numerical error: the prism of one ray does not depend on where it starts).
+const STANDOFF_M: f64 = 0.05;
+const STANDOFF_CHECK_M: f64 = 0.08;
+
+/// The central ray at a reading point.
+struct CentralRay {
+    point: DVec3,
+    normal: DVec3,
+    right: DVec3,
+    up: DVec3,
+    front: DVec3,
+    out: DVec3,
+    prism: [f64; 2],
+}
+
 /// The prism and the beam's vergence matrices (beam, half beam) at one point.
 struct Raw {
     prism: [f64; 2],
@@ -145,6 +164,10 @@ impl Focimeter<'_> {
                 column[k] = plus[row] - minus[row];
             }
         }
+        let again = self.central(at_mm, STANDOFF_CHECK_M)?.prism;
+        let prism_uncertainty = (raw.prism[0] - again[0])
+            .abs()
+            .max((raw.prism[1] - again[1]).abs());
         let power = Power::from_matrix(raw.fine[0], raw.fine[1], raw.fine[2]);
         let coarse = Power::from_matrix(raw.coarse[0], raw.coarse[1], raw.coarse[2]);
         let change = (0..3)
@@ -165,17 +188,20 @@ impl Focimeter<'_> {
             prism_d: raw.prism,
             uncertainty_d: change,
             axis_uncertainty_deg: axis_change,
-            prism_uncertainty_d: 0.0,
+            prism_uncertainty_d: prism_uncertainty,
             prism_per_mm,
         })
     }
 
-    fn raw(&self, at_mm: [f64; 2]) -> Result<Raw, Failure> {
+    /// The central ray at `at_mm`, launched `standoff` metres before the back vertex's plane:
+    /// where it meets the back surface, the lens's right and up across the instrument's axis
+    /// there, and the ray through the lens.
+    fn central(&self, at_mm: [f64; 2], standoff: f64) -> Result<CentralRay, Failure> {
         let f = &self.frame;
         let start = f.back_vertex
             + f.right * (at_mm[0] * 1e-3)
             + f.up * (at_mm[1] * 1e-3)
-            + f.towards_eye * 0.05;
+            + f.towards_eye * standoff;
         let (point, normal) = self
             .tracer
             .next_hit(start, -f.towards_eye)
@@ -197,14 +223,33 @@ impl Focimeter<'_> {
             Eye::Right => 1.0,
             Eye::Left => -1.0,
         };
-        let prism = [
-            side * 100.0 * out.dot(right) / along,
-            100.0 * out.dot(up) / along,
-        ];
+        Ok(CentralRay {
+            point,
+            normal,
+            right,
+            up,
+            front: back.points[1],
+            out,
+            prism: [
+                side * 100.0 * out.dot(right) / along,
+                100.0 * out.dot(up) / along,
+            ],
+        })
+    }
+
+    fn raw(&self, at_mm: [f64; 2]) -> Result<Raw, Failure> {
+        let CentralRay {
+            point,
+            normal,
+            right,
+            up,
+            front,
+            out,
+            prism,
+        } = self.central(at_mm, STANDOFF_M)?;
         let light = -out;
         let a = (right - light * right.dot(light)).normalize();
         let b = light.cross(a);
-        let front = back.points[1];
         let vergence = |step: f64| {
             let launch = |s1: f64, s2: f64| (front + out * 0.01 + (a * s1 + b * s2) * step, light);
             bundle_vergence(self.tracer, self.ior, launch, point, normal, [right, up])

@@ -717,7 +717,7 @@ pub fn analyze(
     let clear_zones = lens_map.as_ref().map_or_else(Vec::new, |map| {
         zones::clear_zones(map, &grid, options.gaze.step_deg, fitting_mm)
     });
-    let (add_focimeter, progressive) = progressive_figures(
+    let (mut add_focimeter, progressive) = progressive_figures(
         &placed,
         lens,
         options,
@@ -736,6 +736,7 @@ pub fn analyze(
         &mut focimeter,
         fitting_point,
     )?;
+    add_surface_uncertainty(lens, options, indices.y, &mut add_focimeter)?;
     let compensated = compensated_of(scene, &setup, &worn, target)?;
     let verdict = verdict_of(
         options,
@@ -788,6 +789,30 @@ pub fn analyze(
         centre,
         grid,
     })
+}
+
+/// A mesh lens's add readings, their powers' uncertainties grown by their change when the
+/// other of the mesh and its smooth fit is read (the add is their difference, so its
+/// uncertainty, the sum of theirs, takes in the surface's).
+fn add_surface_uncertainty(
+    lens: &Mesh,
+    options: &Options,
+    ior: f64,
+    add_focimeter: &mut [focimeter::Reading],
+) -> Result<(), AnalyzeError> {
+    let other = match options.surface {
+        _ if add_focimeter.is_empty() => return Ok(()),
+        SurfaceModel::Exact => return Ok(()),
+        SurfaceModel::Mesh => SurfaceModel::Smooth,
+        SurfaceModel::Smooth => SurfaceModel::Mesh,
+    };
+    let (others, _) = read_add(&tracer(lens, other)?, lens, options, ior)?;
+    for (reading, other) in add_focimeter.iter_mut().zip(&others) {
+        reading.uncertainty_d += (reading.sphere_d - other.sphere_d)
+            .abs()
+            .max((reading.cylinder_d - other.cylinder_d).abs());
+    }
+    Ok(())
 }
 
 /// A mesh lens's surface uncertainty (the `surface_uncertainty_d` of [`Report`]; None on the

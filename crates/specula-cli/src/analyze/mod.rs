@@ -1098,21 +1098,34 @@ fn print_verdict(
         }
     }
     for c in &v.mirror_checks {
-        let number = |x: Option<f64>| x.map_or_else(|| "-".to_string(), |x| format!("{x:.4}"));
+        let number = |x: Option<f64>| x.map_or_else(|| "-".to_string(), significant);
         println!(
-            "mirror: {} ({}): required {}; measured {}; value {} {unit}, limit {:.4} {unit}, \
+            "mirror: {} ({}): required {}; measured {}; value {} {unit}, limit {} {unit}, \
              margin {} ± {} {unit}: {}",
             c.name,
             c.source,
             c.required,
             c.measured,
             number(c.value),
-            c.limit,
+            significant(c.limit),
             number(c.margin),
             number(c.uncertainty),
             c.verdict.word(),
             unit = c.unit,
         );
+    }
+}
+
+/// `x` to four significant digits, in plain decimals between 0.001 and 100 000.
+fn significant(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    let magnitude = x.abs().log10().floor() as i32;
+    if (-3..5).contains(&magnitude) {
+        format!("{x:.*}", (3 - magnitude).max(0) as usize)
+    } else {
+        format!("{x:.3e}")
     }
 }
 
