@@ -360,6 +360,30 @@ fn lens_sections(r: &crate::lens::Report) -> String {
             None => r.surface.name().into(),
         },
     );
+    if let Some(g) = &r.sag_grid {
+        row(
+            &mut html,
+            "sag grid",
+            match g.marked_box_mm {
+                Some([lo, hi]) => format!(
+                    "<b>coarse for the surface's curvature over {:.1} % of the lens map</b>, \
+                     from ({:.1}, {:.1}) to ({:.1}, {:.1}) mm: the power there is uncertain by \
+                     more than {:.3} D (up to {:.3} D), carried into the figures and the verdict",
+                    g.marked_share * 100.0,
+                    lo[0],
+                    lo[1],
+                    hi[0],
+                    hi[1],
+                    g.marked_above_d,
+                    g.largest_d
+                ),
+                None => format!(
+                    "fine enough everywhere: the power uncertain by at most {:.4} D",
+                    g.largest_d
+                ),
+            },
+        );
+    }
     row(
         &mut html,
         "as worn",

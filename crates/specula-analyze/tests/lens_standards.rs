@@ -86,8 +86,8 @@ fn a_toric_lens_s_focimeter_reading_is_its_construction_however_the_scene_holds_
         }
     }
     eprintln!("largest: {:.1e} D, {:.1e}°", worst.0, worst.1);
-    // The issue's bounds: 0.005 D and 0.05°. Measured 2026-12-04: 8.0e-5 D, 1.4e-4°.
-    assert!(worst.0 < 0.005 && worst.1 < 0.05);
+    // Measured: 8.0e-5 D, 1.4e-4°; bounds twice that.
+    assert!(worst.0 < 1.6e-4 && worst.1 < 3e-4, "{worst:?}");
 }
 
 /// A focimeter reading of `rx` with no prism gradient.
@@ -417,6 +417,21 @@ fn ansi_s_prism_passes_where_the_ordered_prism_lies_within_a_millimetre() {
 /// positive), thickness `t`, index `n`: the chief ray traced back through the spheres in
 /// closed form, then Coddington's equations at each surface, forwards.
 fn coddington(r1: f64, r2: f64, t: f64, n: f64, theta: f64) -> (f64, f64) {
+    coddington_sections((r1, r2), (r1, r2), t, n, theta)
+}
+
+/// [`coddington`] for a lens whose surfaces have radii `tangential` (front, back) in the plane
+/// of the chief ray and `sagittal` across it (a toric lens tilted about a principal meridian):
+/// the ray's path sees the tangential sections, each surface's oblique power
+/// (n' cos i' − n cos i) / r takes the section's own radius.
+fn coddington_sections(
+    tangential: (f64, f64),
+    sagittal: (f64, f64),
+    t: f64,
+    n: f64,
+    theta: f64,
+) -> (f64, f64) {
+    let (r1, r2) = tangential;
     let refract = |d: DVec3, normal: DVec3, eta: f64| {
         // `normal` against d.
         let cos_i = -d.dot(normal);
@@ -452,15 +467,115 @@ fn coddington(r1: f64, r2: f64, t: f64, n: f64, theta: f64) -> (f64, f64) {
     let cos_i1p = forward_in_glass.dot(normal1);
     let sin_i1 = n * (1.0 - cos_i1p * cos_i1p).sqrt();
     let cos_i1 = (1.0 - sin_i1 * sin_i1).sqrt();
-    let power1 = (n * cos_i1p - cos_i1) / r1;
-    let power2 = (cos_i2p - n * cos_i2) / r2;
-    // Object at infinity: n / s1' = Φ1, n cos² i1' / t1' = Φ1.
-    let s1 = n / power1;
-    let t1 = n * cos_i1p * cos_i1p / power1;
+    let oblique = |radius: f64, cos_in: f64, cos_out: f64, n_in: f64, n_out: f64| {
+        (n_out * cos_out - n_in * cos_in) / radius
+    };
+    let (power1_t, power1_s) = (
+        oblique(r1, cos_i1, cos_i1p, 1.0, n),
+        oblique(sagittal.0, cos_i1, cos_i1p, 1.0, n),
+    );
+    let (power2_t, power2_s) = (
+        oblique(r2, cos_i2, cos_i2p, n, 1.0),
+        oblique(sagittal.1, cos_i2, cos_i2p, n, 1.0),
+    );
+    // Object at infinity: n / s1' = Φ1s, n cos² i1' / t1' = Φ1t.
+    let s1 = n / power1_s;
+    let t1 = n * cos_i1p * cos_i1p / power1_t;
     let (s2, t2) = (s1 - d_glass, t1 - d_glass);
-    let sagittal = n / s2 + power2;
-    let tangential = (n * cos_i2 * cos_i2 / t2 + power2) / (cos_i2p * cos_i2p);
+    let sagittal = n / s2 + power2_s;
+    let tangential = (n * cos_i2 * cos_i2 / t2 + power2_t) / (cos_i2p * cos_i2p);
     (sagittal, tangential)
+}
+
+/// A surface's curvature in the section along `direction` (a unit vector across the lens) at
+/// its vertex (Euler's formula on a torus).
+fn section_curvature(surface: &specula_scene::LensSurface, direction: glam::DVec2) -> f64 {
+    match &surface.shape {
+        specula_scene::exact_lens::SurfaceShape::Toric {
+            curvature_axis,
+            curvature_across,
+            axis,
+        } => {
+            let along = direction.dot(*axis).powi(2);
+            curvature_axis * along + curvature_across * (1.0 - along)
+        }
+        other => panic!("a toric or spherical surface, not {other:?}"),
+    }
+}
+
+/// The compensated order checked by a model written apart from the one `compensate` iterates
+/// on: the ordered toric lens, tilted 10° pantoscopically about its cylinder's axis meridian,
+/// traced by Coddington's equations per principal section, gives the target's meridian powers.
+#[test]
+fn the_compensated_order_meets_its_target_by_coddington_s_equations() {
+    let p = blank(-4.0, -1.0, 180.0);
+    let tilt = 10.0f64;
+    let as_worn = |o: &mut Options| {
+        o.wear = Wear {
+            pantoscopic_deg: tilt,
+            wrap_deg: 0.0,
+        };
+        o.refraction_vertex_m = Some(0.013);
+    };
+    let report = run(&spectacles(&p, Mat4::IDENTITY), |o| {
+        as_worn(o);
+        o.compensate = true;
+    });
+    let target = report.target.unwrap();
+    let ordered = report.compensated.unwrap().ordered;
+    let made = Prescription {
+        sphere: ordered.sphere_d,
+        cylinder: ordered.cylinder_d,
+        axis_deg: ordered.axis_deg,
+        ..p.clone()
+    };
+    let lens = made.exact_lens();
+    let radii = |direction: glam::DVec2| {
+        (
+            1.0 / section_curvature(&lens.front, direction),
+            1.0 / section_curvature(&lens.back, direction),
+        )
+    };
+    // Tilted about the horizontal: the chief ray's plane is the vertical.
+    let (vertical, horizontal) = (radii(glam::DVec2::Y), radii(glam::DVec2::X));
+    let n = p.index;
+    let (horizontal_power, vertical_power) = coddington_sections(
+        vertical,
+        horizontal,
+        p.center_thickness,
+        n,
+        tilt.to_radians(),
+    );
+    // Untilted, the same model gives the order back: it reads these lenses as they are made.
+    let (h0, v0) = coddington_sections(vertical, horizontal, p.center_thickness, n, 0.0);
+    let meridian = |rx: &Rx, angle: f64| {
+        rx.meridians()
+            .into_iter()
+            .find(|(a, _)| axis_apart(*a, angle) < 1.0)
+            .unwrap()
+            .1
+    };
+    eprintln!(
+        "ordered {:.4} / {:.4} × {:.1}: untilted {h0:.5} (0°), {v0:.5} (90°); tilted {:.5} (0°), \
+         {:.5} (90°); target {:.5} (0°), {:.5} (90°)",
+        ordered.sphere_d,
+        ordered.cylinder_d,
+        ordered.axis_deg,
+        horizontal_power,
+        vertical_power,
+        meridian(&target, 0.0),
+        meridian(&target, 90.0)
+    );
+    assert!((h0 - meridian(&ordered, 0.0)).abs() < 1e-6, "{h0}");
+    assert!((v0 - meridian(&ordered, 90.0)).abs() < 1e-6, "{v0}");
+    let apart = (horizontal_power - meridian(&target, 0.0))
+        .abs()
+        .max((vertical_power - meridian(&target, 90.0)).abs());
+    eprintln!("Coddington against the target: {apart:.1e} D");
+    // The order differs from the prescription by more than this: the check can fail.
+    assert!(axis_apart(ordered.axis_deg, 180.0) < 0.01);
+    assert!((ordered.sphere_d - target.sphere_d).abs() > 0.02);
+    assert!(apart < 2e-4, "{apart}");
 }
 
 #[test]
@@ -579,8 +694,10 @@ fn the_compensated_prescription_traced_as_worn_gives_back_the_prescription() {
         .map(|k| (got.power_vector()[k] - target.power_vector()[k]).abs())
         .fold(0.0, f64::max);
     eprintln!("as worn, the ordered lens is {apart:.1e} D from the target");
-    // The issue's bound, 0.01 D; measured 2026-12-04: 7.3e-11 D.
-    assert!(apart < 0.01, "{apart}");
+    // The analysis against itself (the model `compensate` iterates on): measured 7.3e-11 D,
+    // rounding. The check against a model written apart is
+    // the_compensated_order_meets_its_target_by_coddington_s_equations.
+    assert!(apart < 1e-9, "{apart}");
     // Uncompensated, the tilt shows: the lens made to the prescription misses it as worn.
     let uncompensated = report.centre.unwanted_cylinder_d.unwrap();
     assert!(uncompensated > 0.02, "{uncompensated}");
@@ -612,8 +729,12 @@ fn the_built_in_lens_on_its_exact_surface_and_on_its_mesh() {
     assert!(none.is_none());
     assert!((exact - -0.138).abs() < 0.001, "{exact}");
     assert!((mesh - -0.175).abs() < 0.001, "{mesh}");
-    // The uncertainty covers the mesh's own error at this gaze.
-    // Measured 2026-12-04: 0.0433 D against the mesh's 0.0367 D error here.
+    // The uncertainty covers the mesh's own error at this gaze, and is at most 3 times it.
+    // Measured: 0.0433 D against the mesh's 0.0367 D error here.
     let uncertainty = uncertainty.unwrap();
-    assert!(uncertainty > 0.5 * (mesh - exact).abs(), "{uncertainty}");
+    let error = (mesh - exact).abs();
+    assert!(
+        error <= uncertainty && uncertainty <= 3.0 * error,
+        "{uncertainty} for {error}"
+    );
 }

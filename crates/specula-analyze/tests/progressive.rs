@@ -187,11 +187,16 @@ fn the_measured_add_is_the_construction_s() {
     let report = run(&example, |_| {}).unwrap();
     let curved_back = report.progressive.as_ref().unwrap();
     println!(
-        "measured add {:.4} D (plane back), {:.4} D (the example, its back −4 D) for {} D",
+        "measured add {:.6} D (plane back), {:.4} D (the example, its back −4 D) for {} D",
         measured.add_d, curved_back.add_d, example_design.add_d
     );
-    // Measured: 2.0000 (plane back) and 1.9746 D; the issue asks for 0.02 D.
-    assert!((measured.add_d - 2.0).abs() < 0.005, "{}", measured.add_d);
+    // Measured: 2.0000 (plane back: ADD_PLANE_OFF_D off) and 1.9759 D (the back's share,
+    // docs/analyses/lens.md); the issue asks for 0.02 D.
+    assert!(
+        (measured.add_d - 2.0).abs() < 2.0 * ADD_PLANE_OFF_D,
+        "{}",
+        measured.add_d
+    );
     assert!(
         (curved_back.add_d - 2.0).abs() < 0.05,
         "{}",
@@ -234,16 +239,27 @@ fn the_grid_example_analyses_like_the_design() {
     assert!(worst < 0.01, "{worst}");
     let (pa, pb) = (a.progressive.unwrap(), b.progressive.unwrap());
     println!("design: {pa:?}\ngrid: {pb:?}");
-    // Measured: 4e-6 D and 5e-4 D apart, the lengths and widths within 0.002 mm.
-    assert!((pa.add_d - pb.add_d).abs() < 1e-4);
+    // Measured: the maps 6.5e-3 D apart, the adds 6.5e-6 D, the lengths and widths within
+    // 0.004 mm.
+    assert!(
+        (pa.add_d - pb.add_d).abs() < 1.5e-5,
+        "{}",
+        pa.add_d - pb.add_d
+    );
     for (x, y) in [
         (pa.corridor_length_mm_85, pb.corridor_length_mm_85),
         (pa.corridor_length_mm_95, pb.corridor_length_mm_95),
     ] {
-        assert!((x.unwrap() - y.unwrap()).abs() < 0.01);
+        println!("length apart {:.1e} mm", (x.unwrap() - y.unwrap()).abs());
+        assert!((x.unwrap() - y.unwrap()).abs() < 8e-4);
     }
-    assert!((pa.corridor_width_mm_100.unwrap() - pb.corridor_width_mm_100.unwrap()).abs() < 0.01);
-    assert!((pa.near_zone_width_mm_050 - pb.near_zone_width_mm_050).abs() < 0.01);
+    assert!((pa.corridor_width_mm_100.unwrap() - pb.corridor_width_mm_100.unwrap()).abs() < 9e-3);
+    println!(
+        "widths apart {:.1e}, {:.1e} mm",
+        (pa.corridor_width_mm_100.unwrap() - pb.corridor_width_mm_100.unwrap()).abs(),
+        (pa.near_zone_width_mm_050 - pb.near_zone_width_mm_050).abs()
+    );
+    assert!((pa.near_zone_width_mm_050 - pb.near_zone_width_mm_050).abs() < 9e-3);
 }
 
 /// Prentice's rule: looking through a lens of power F at c cm from its centre the eye gets
@@ -380,6 +396,7 @@ fn a_single_vision_lens_s_clear_zones_agree_with_its_gaze_grid() {
     })
     .unwrap();
     let row: Vec<_> = report.grid.iter().filter(|c| !c.outside).collect();
+    let mut checked = 0;
     for (zone, value) in report.clear_zones.iter().zip([
         |c: &specula_analyze::lens::Cell| 0.25 - c.unwanted_cylinder_d.unwrap(),
         |c: &specula_analyze::lens::Cell| 0.50 - c.unwanted_cylinder_d.unwrap(),
@@ -398,20 +415,82 @@ fn a_single_vision_lens_s_clear_zones_agree_with_its_gaze_grid() {
                 );
                 xa + (xb - xa) * a / (a - b)
             });
-        let Some(right) = right else {
-            println!("{}: no edge within 40°", zone.criterion);
-            continue;
-        };
+        // Each criterion's edge lies within the 40° row (the lens is chosen so).
+        let right = right.unwrap_or_else(|| panic!("{}: no edge within 40°", zone.criterion));
         let disc = std::f64::consts::PI * right * right;
+        let (width_off, area_off) = (
+            (zone.horizontal_width_mm - 2.0 * right).abs(),
+            (zone.lens_area_mm2 / disc - 1.0).abs(),
+        );
         println!(
-            "{}: width {:.2} mm (gaze grid {:.2}), area {:.0} mm² (disc {:.0})",
+            "{}: width {:.3} mm (gaze grid {:.3}: {width_off:.1e} mm apart), area {:.1} mm² \
+             (disc {:.1}: {area_off:.1e} apart)",
             zone.criterion,
             zone.horizontal_width_mm,
             2.0 * right,
             zone.lens_area_mm2,
             disc
         );
-        assert!((zone.horizontal_width_mm - 2.0 * right).abs() < 0.3);
-        assert!((zone.lens_area_mm2 / disc - 1.0).abs() < 0.05);
+        assert!(width_off < WIDTH_BOUND_MM, "{width_off}");
+        assert!(area_off < AREA_BOUND, "{area_off}");
+        checked += 1;
+    }
+    assert_eq!(checked, 3);
+}
+
+/// The progressive example's front resampled as a lab sends it, every 1 mm and 2 mm, written
+/// as CSV and read back: it loads, and its add is within 0.02 D of the 0.5 mm grid's, the
+/// stated uncertainty (the grid's interpolation with the focimeter's) covering the difference.
+#[test]
+fn a_lab_s_coarser_sag_grid_loads_and_states_its_uncertainty() {
+    let (scene, design) = example();
+    let ordered = scene.prescriptions[0].1.clone();
+    let add_of = |step_mm: f64| {
+        let reach = (32.0 / step_mm).round() as i32;
+        let nodes: Vec<f64> = (-reach..=reach)
+            .map(|k| f64::from(k) * step_mm * 1e-3)
+            .collect();
+        let sampled = SagGrid::sampled("lab.csv", nodes.clone(), nodes, |x, y| {
+            design.local(x, y).unwrap().sag
+        });
+        let grid = SagGrid::parse(&sampled.to_csv(), "lab.csv").unwrap();
+        let p = Prescription {
+            front: Some(Freeform::SagGrid(Arc::new(grid))),
+            ..ordered.clone()
+        };
+        let at = Mat4::from_translation(glam::Vec3::new(0.0, 0.0, -0.015));
+        let report = run(&spectacles(&p, at), |_| {}).unwrap();
+        let add = report.progressive.as_ref().unwrap().add_d;
+        let u: f64 = report.add_focimeter.iter().map(|r| r.uncertainty_d).sum();
+        let g = report.sag_grid.clone().unwrap();
+        println!(
+            "{step_mm} mm grid: add {add:.5} D ± {u:.2e}; power uncertain by up to {:.2e} D, \
+             {:.1} % of the map marked",
+            g.largest_d,
+            g.marked_share * 100.0
+        );
+        (add, u, g)
+    };
+    let (fine, fine_u, _) = add_of(0.5);
+    for step_mm in [1.0, 2.0] {
+        let (add, u, grid) = add_of(step_mm);
+        let difference = (add - fine).abs();
+        println!(
+            "{step_mm} mm against 0.5 mm: {difference:.2e} D (stated ± {:.2e})",
+            u + fine_u
+        );
+        assert!(difference < 0.02, "{step_mm} mm: {difference}");
+        assert!(
+            difference <= u + fine_u,
+            "{step_mm} mm: {difference} > ±{}",
+            u + fine_u
+        );
+        assert!(grid.largest_d > 0.0);
     }
 }
+
+/// The clear zones against the gaze grid, twice the largest measured (1.6e-2 mm, 5.7e-4).
+const WIDTH_BOUND_MM: f64 = 0.035;
+const AREA_BOUND: f64 = 1.2e-3;
+/// The plane-backed progressive lens's measured add off its construction's 2 D (measured).
+const ADD_PLANE_OFF_D: f64 = 5e-6;

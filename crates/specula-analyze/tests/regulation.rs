@@ -319,10 +319,10 @@ fn a_flat_mirror_fails_a_field_by_the_share_polygon_clipping_gives() {
         "{error} > {}",
         f.seen_share_uncertainty
     );
-    // Measured 9.7e-5, stated 4.0e-3.
+    // Measured 9.7e-5, stated 1.9e-4: at most 3 times the error.
     assert!(error < 2e-4, "{error}");
     assert!(
-        f.seen_share_uncertainty < 8e-3,
+        f.seen_share_uncertainty <= 3.0 * error,
         "{}",
         f.seen_share_uncertainty
     );

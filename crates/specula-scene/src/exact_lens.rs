@@ -102,6 +102,15 @@ pub fn toric_sag(cu: f64, cv: f64, u: f64, v: f64) -> Option<(f64, f64, f64)> {
 }
 
 impl LensSurface {
+    /// How far the surface's curvature at (x, y) may be off, 1 / metres: a sag grid's
+    /// interpolation error there, 0 for a surface in closed form.
+    pub fn curvature_uncertainty(&self, x: f64, y: f64) -> f64 {
+        match &self.shape {
+            SurfaceShape::Freeform(f) => f.curvature_uncertainty(x, y),
+            SurfaceShape::Toric { .. } => 0.0,
+        }
+    }
+
     pub fn sphere(curvature: f64, vertex_z: f64) -> LensSurface {
         LensSurface {
             vertex_z,
@@ -212,6 +221,14 @@ impl LensSurface {
 }
 
 impl ExactLens {
+    /// How far the lens's power through (x, y) may be off for its surfaces' uncertain
+    /// curvatures, dioptres: (n − 1) times the sum of the two surfaces' (each surface's power is
+    /// (n − 1) times its curvature, to first order).
+    pub fn power_uncertainty_d(&self, x: f64, y: f64, ior: f64) -> f64 {
+        (ior - 1.0)
+            * (self.front.curvature_uncertainty(x, y) + self.back.curvature_uncertainty(x, y))
+    }
+
     pub fn rim(&self) -> f64 {
         self.diameter * 0.5
     }

@@ -17,10 +17,12 @@
 //! and ignored); each further row starts with its y value in mm, increasing down the file,
 //! then one sag in mm per x. Refused, naming the row and column (1-based, as a spreadsheet
 //! numbers them): a missing or unreadable cell, a value that is not finite, an axis that does
-//! not increase, fewer than 4 values on an axis, a sag at (0, 0) that is not 0, and a grid too
-//! coarse for its curvature: where the sag's fourth differences say the interpolated curvature
-//! is uncertain by more than [`MAX_CURVATURE_ERROR`] (the spline's second derivative errs by
-//! about h² |s''''| / 12).
+//! not increase, fewer than 4 values on an axis, a sag at (0, 0) that is not 0. A grid coarse
+//! for its curvature loads: at each node the sag's fourth differences estimate how far the
+//! interpolated curvature may be off (the spline's second derivative errs by about
+//! h² |s''''| / 12), and [`SagGrid::curvature_uncertainty`] carries that into every figure that
+//! uses the surface there; regions uncertain by more than [`MAX_CURVATURE_ERROR`] are the ones a
+//! report marks.
 
 use std::sync::Arc;
 
@@ -53,8 +55,9 @@ impl Local {
     }
 }
 
-/// The largest curvature error a sag grid's interpolation may carry, 1 / metres (0.024 D of
-/// surface power at n = 1.6: a fifth of the standards' tightest tolerance, 0.12 D).
+/// A sag grid's interpolated curvature uncertain by more than this, 1 / metres (0.024 D of
+/// surface power at n = 1.6: a fifth of the standards' tightest tolerance, 0.12 D), is what a
+/// report marks as a region the grid is too coarse for.
 pub const MAX_CURVATURE_ERROR: f64 = 0.04;
 
 /// A free-form surface (module doc).
@@ -72,6 +75,15 @@ impl Freeform {
             Freeform::SagGrid(grid) => grid.local(x, y),
             Freeform::Polynomial(p) => p.local(x, y),
             Freeform::Progressive(p) => p.local(x, y),
+        }
+    }
+
+    /// How far the surface's curvature at (x, y) may be off, 1 / metres: a sag grid's
+    /// interpolation error there (0 for the surfaces defined in closed form).
+    pub fn curvature_uncertainty(&self, x: f64, y: f64) -> f64 {
+        match self {
+            Freeform::SagGrid(grid) => grid.curvature_uncertainty(x, y).unwrap_or(0.0),
+            _ => 0.0,
         }
     }
 
@@ -190,6 +202,8 @@ pub struct SagGrid {
     sxx: Vec<f64>,
     syy: Vec<f64>,
     sxxyy: Vec<f64>,
+    /// At each node, how far the interpolated curvature may be off, 1 / metres.
+    uncertainty: Vec<f64>,
 }
 
 impl SagGrid {
@@ -219,6 +233,7 @@ impl SagGrid {
         let sxx = along_x(&sag);
         let syy = along_y(&sag);
         let sxxyy = along_y(&sxx);
+        let uncertainty = curvature_uncertainty(&xs, &ys, &sag);
         SagGrid {
             source,
             xs,
@@ -227,7 +242,30 @@ impl SagGrid {
             sxx,
             syy,
             sxxyy,
+            uncertainty,
         }
+    }
+
+    /// How far the interpolated curvature at (x, y) may be off, 1 / metres: the largest of the
+    /// four nodes around it (None outside the grid).
+    pub fn curvature_uncertainty(&self, x: f64, y: f64) -> Option<f64> {
+        let cell = |nodes: &[f64], t: f64| {
+            (nodes[0] <= t && t <= nodes[nodes.len() - 1])
+                .then(|| nodes.partition_point(|n| *n <= t).clamp(1, nodes.len() - 1) - 1)
+        };
+        let (i, j) = (cell(&self.xs, x)?, cell(&self.ys, y)?);
+        let nx = self.xs.len();
+        Some(
+            [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)]
+                .iter()
+                .map(|&(a, b)| self.uncertainty[b * nx + a])
+                .fold(0.0, f64::max),
+        )
+    }
+
+    /// The largest curvature uncertainty over the grid's nodes, 1 / metres.
+    pub fn largest_curvature_uncertainty(&self) -> f64 {
+        self.uncertainty.iter().copied().fold(0.0, f64::max)
     }
 
     /// A grid sampled from `sag(x, y)` (metres) at the given nodes (metres).
@@ -327,19 +365,6 @@ impl SagGrid {
         let rows: Vec<usize> = lines[1..].iter().map(|&(row, _)| row).collect();
         increasing(&ys_mm, "y value", &|k| (rows[k], 1))?;
         let nx = xs_mm.len();
-        let coarse = too_coarse(&xs_mm, &ys_mm, &sag_mm);
-        if let Some((j, i, error)) = coarse {
-            return Err(bad(
-                rows[j],
-                i + 2,
-                format!(
-                    "the grid is too coarse for the surface's curvature here: its fourth \
-                     differences make the interpolated curvature uncertain by {:.3} 1/m (more \
-                     than {MAX_CURVATURE_ERROR} 1/m); sample the surface more finely",
-                    error
-                ),
-            ));
-        }
         let to_m = |v: &Vec<f64>| v.iter().map(|v| v * 1e-3).collect::<Vec<f64>>();
         let grid = SagGrid::build(
             source.to_string(),
@@ -390,12 +415,11 @@ fn round_mm(v: f64) -> f64 {
     (v * 1e6).round() / 1e6
 }
 
-/// Where the grid's fourth differences say the interpolated curvature is uncertain by more
-/// than [`MAX_CURVATURE_ERROR`]: (row, column) of the middle node and the estimate, 1/m. The
-/// fourth divided difference times 24 estimates s''''; the spline's curvature errs by about
-/// h² |s''''| / 12.
-fn too_coarse(xs_mm: &[f64], ys_mm: &[f64], sag_mm: &[f64]) -> Option<(usize, usize, f64)> {
-    let nx = xs_mm.len();
+/// At each node (row by row), the interpolated curvature's uncertainty, 1 / metres: the
+/// larger of the estimates along x and along y from the fourth divided differences on the five
+/// nodes centred on it (the nearest five at an edge). The fourth divided difference times 24
+/// estimates s''''; the spline's curvature errs by about h² |s''''| / 12.
+fn curvature_uncertainty(xs: &[f64], ys: &[f64], sag: &[f64]) -> Vec<f64> {
     let fourth = |t: &[f64], f: &[f64]| {
         // Divided differences of order 4 on five nodes.
         let mut d: Vec<f64> = f.to_vec();
@@ -406,30 +430,28 @@ fn too_coarse(xs_mm: &[f64], ys_mm: &[f64], sag_mm: &[f64]) -> Option<(usize, us
         }
         24.0 * d[4]
     };
-    let mut worst: Option<(usize, usize, f64)> = None;
-    let mut note = |j: usize, i: usize, error: f64| {
-        if error > MAX_CURVATURE_ERROR && worst.is_none_or(|w| error > w.2) {
-            worst = Some((j, i, error));
-        }
+    let estimate = |t: &[f64], f: &[f64]| {
+        let h = (t[4] - t[0]) / 4.0;
+        fourth(t, f).abs() * h * h / 12.0
     };
-    for j in 0..ys_mm.len() {
-        for i in 2..nx.saturating_sub(2) {
-            let t = &xs_mm[i - 2..=i + 2];
-            let f = &sag_mm[j * nx + i - 2..=j * nx + i + 2];
-            let h = (t[4] - t[0]) / 4.0;
-            // mm⁻³ times mm² is 1/mm: ×1e3 for 1/m.
-            note(j, i, fourth(t, f).abs() * h * h / 12.0 * 1e3);
+    let (nx, ny) = (xs.len(), ys.len());
+    // The five nodes' first index for node k of n (with 4 nodes there is no estimate).
+    let window = |k: usize, n: usize| (n >= 5).then(|| k.saturating_sub(2).min(n - 5));
+    let mut out = vec![0.0; nx * ny];
+    for j in 0..ny {
+        for i in 0..nx {
+            let mut worst: f64 = 0.0;
+            if let Some(a) = window(i, nx) {
+                worst = worst.max(estimate(&xs[a..a + 5], &sag[j * nx + a..j * nx + a + 5]));
+            }
+            if let Some(b) = window(j, ny) {
+                let f: Vec<f64> = (b..b + 5).map(|k| sag[k * nx + i]).collect();
+                worst = worst.max(estimate(&ys[b..b + 5], &f));
+            }
+            out[j * nx + i] = worst;
         }
     }
-    for i in 0..nx {
-        for j in 2..ys_mm.len().saturating_sub(2) {
-            let t = &ys_mm[j - 2..=j + 2];
-            let f: Vec<f64> = (j - 2..=j + 2).map(|k| sag_mm[k * nx + i]).collect();
-            let h = (t[4] - t[0]) / 4.0;
-            note(j, i, fourth(t, &f).abs() * h * h / 12.0 * 1e3);
-        }
-    }
-    worst
+    out
 }
 
 /// s = Σ c x^i y^j with x, y and s in millimetres.
@@ -905,10 +927,6 @@ mod tests {
             ),
             (good.replace("\n1,0,0,0,0,0", "\n1,0,0,0,0"), "row 5"),
             (
-                good.replace("\n0,0,0,0,0,0", "\n0,0,0,0.5,0,0"),
-                "too coarse",
-            ),
-            (
                 good.replace("y\\x,-2,-1,0,1,2", "y\\x,-2,-1,0"),
                 "3 x values: the bicubic interpolation needs at least 4",
             ),
@@ -921,6 +939,14 @@ mod tests {
                 "{message:?} should say {wanted:?}"
             );
         }
+        // A grid too coarse for a spike loads, its curvature there uncertain by the fourth
+        // differences' estimate, not refused.
+        let spiked =
+            SagGrid::parse(&good.replace("\n0,0,0,0,0,0", "\n0,0,0,0,0.5,0"), "g.csv").unwrap();
+        let flat = SagGrid::parse(&good, "g.csv").unwrap();
+        assert!(spiked.curvature_uncertainty(0.001, 0.0).unwrap() > MAX_CURVATURE_ERROR);
+        assert_eq!(flat.curvature_uncertainty(0.001, 0.0), Some(0.0));
+        assert_eq!(flat.curvature_uncertainty(0.003, 0.0), None);
         let lifted = good.replace(",0,0,0,0,0\n", ",0.01,0.01,0.01,0.01,0.01\n");
         let message = SagGrid::parse(&lifted, "g.csv").unwrap_err().to_string();
         assert!(message.contains("the sag at (0, 0)"), "{message}");

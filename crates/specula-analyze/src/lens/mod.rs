@@ -382,6 +382,9 @@ pub struct Report {
     /// the focimeter's readings when the triangles are replaced by their smooth fit (the
     /// other of mesh and smooth), dioptres; None on the exact surface.
     pub surface_uncertainty_d: Option<f64>,
+    /// A lens with a sag-grid surface: how far its power may be off where the grid is coarse
+    /// for the surface's curvature (None: no sag grid).
+    pub sag_grid: Option<SagGridUncertainty>,
     pub rotation_centre: [f64; 3],
     pub forward: [f64; 3],
     pub up: [f64; 3],
@@ -737,6 +740,12 @@ pub fn analyze(
         fitting_point,
     )?;
     add_surface_uncertainty(lens, options, indices.y, &mut add_focimeter)?;
+    let sag_grid = sag_grid_uncertainty(
+        lens,
+        indices.y,
+        [&mut focimeter, &mut add_focimeter],
+        lens_map.as_ref(),
+    );
     let compensated = compensated_of(scene, &setup, &worn, target)?;
     let verdict = verdict_of(
         options,
@@ -756,6 +765,7 @@ pub fn analyze(
         eye: options.eye,
         surface: options.surface,
         surface_uncertainty_d,
+        sag_grid,
         rotation_centre: options.rotation_centre.to_array(),
         forward: options.forward.to_array(),
         up: options.up.to_array(),
@@ -788,6 +798,74 @@ pub fn analyze(
         near,
         centre,
         grid,
+    })
+}
+
+/// Where a sag grid is coarse for its surface's curvature: the power uncertainty it brings.
+#[derive(Clone, Debug, Serialize)]
+pub struct SagGridUncertainty {
+    /// The largest power uncertainty over the lens map's points (the focimeter's readings where
+    /// there is no map), dioptres.
+    pub largest_d: f64,
+    /// Points are marked where it exceeds this: (n − 1) × the sag grid's curvature limit
+    /// ([`specula_scene::freeform::MAX_CURVATURE_ERROR`]), dioptres.
+    pub marked_above_d: f64,
+    /// The share of the lens map's points marked, and the box around them (lens frame, mm;
+    /// None: none marked).
+    pub marked_share: f64,
+    pub marked_box_mm: Option<[[f64; 2]; 2]>,
+}
+
+/// A sag-grid lens: each focimeter reading's power uncertainty grows by the grid's there
+/// (into every verdict that uses it), and the lens map's points where it exceeds the grid's
+/// limit are marked (None for a lens without a sag grid).
+fn sag_grid_uncertainty(
+    lens: &Mesh,
+    ior: f64,
+    readings: [&mut [focimeter::Reading]; 2],
+    lens_map: Option<&zones::LensMap>,
+) -> Option<SagGridUncertainty> {
+    use specula_scene::exact_lens::SurfaceShape;
+    let exact = lens.exact.as_ref()?.lens()?;
+    let gridded = [&exact.front, &exact.back].iter().any(|s| {
+        matches!(
+            &s.shape,
+            SurfaceShape::Freeform(specula_scene::freeform::Freeform::SagGrid(_))
+        )
+    });
+    if !gridded {
+        return None;
+    }
+    let at = |mm: [f64; 2]| exact.power_uncertainty_d(mm[0] * 1e-3, mm[1] * 1e-3, ior);
+    let mut largest: f64 = 0.0;
+    for reading in readings.into_iter().flatten() {
+        let u = at(reading.at_mm);
+        reading.uncertainty_d += u;
+        largest = largest.max(u);
+    }
+    let marked_above_d = (ior - 1.0) * specula_scene::freeform::MAX_CURVATURE_ERROR;
+    let (mut marked, mut total) = (0usize, 0usize);
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for point in lens_map.iter().flat_map(|m| &m.points) {
+        if point.cell.outside {
+            continue;
+        }
+        total += 1;
+        let u = at(point.at_mm);
+        largest = largest.max(u);
+        if u > marked_above_d {
+            marked += 1;
+            for k in 0..2 {
+                lo[k] = lo[k].min(point.at_mm[k]);
+                hi[k] = hi[k].max(point.at_mm[k]);
+            }
+        }
+    }
+    Some(SagGridUncertainty {
+        largest_d: largest,
+        marked_above_d,
+        marked_share: marked as f64 / total.max(1) as f64,
+        marked_box_mm: (marked > 0).then_some([lo, hi]),
     })
 }
 
