@@ -361,28 +361,7 @@ fn lens_sections(r: &crate::lens::Report) -> String {
         },
     );
     if let Some(g) = &r.sag_grid {
-        row(
-            &mut html,
-            "sag grid",
-            match g.marked_box_mm {
-                Some([lo, hi]) => format!(
-                    "<b>coarse for the surface's curvature over {:.1} % of the lens map</b>, \
-                     from ({:.1}, {:.1}) to ({:.1}, {:.1}) mm: the power there is uncertain by \
-                     more than {:.3} D (up to {:.3} D), carried into the figures and the verdict",
-                    g.marked_share * 100.0,
-                    lo[0],
-                    lo[1],
-                    hi[0],
-                    hi[1],
-                    g.marked_above_d,
-                    g.largest_d
-                ),
-                None => format!(
-                    "fine enough everywhere: the power uncertain by at most {:.4} D",
-                    g.largest_d
-                ),
-            },
-        );
+        row(&mut html, "sag grid", sag_grid_row(g));
     }
     row(
         &mut html,
@@ -469,6 +448,28 @@ fn lens_sections(r: &crate::lens::Report) -> String {
         html.push_str("</table>\n");
     }
     html
+}
+
+/// A sag-grid lens's row: where the grid is coarse for the surface, and by how much.
+fn sag_grid_row(g: &crate::lens::SagGridUncertainty) -> String {
+    match g.marked_box_mm {
+        Some([lo, hi]) => format!(
+            "<b>coarse for the surface's curvature over {:.1} % of the lens map</b>, from \
+             ({:.1}, {:.1}) to ({:.1}, {:.1}) mm: the power there is uncertain by more than \
+             {:.3} D (up to {:.3} D), carried into the figures and the verdict",
+            g.marked_share * 100.0,
+            lo[0],
+            lo[1],
+            hi[0],
+            hi[1],
+            g.marked_above_d,
+            g.largest_d
+        ),
+        None => format!(
+            "fine enough everywhere: the power uncertain by at most {:.4} D",
+            g.largest_d
+        ),
+    }
 }
 
 /// The clear zones, a progressive lens's figures and the near figures as tables.

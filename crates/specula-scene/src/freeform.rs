@@ -943,7 +943,7 @@ mod tests {
         // differences' estimate, not refused.
         let spiked =
             SagGrid::parse(&good.replace("\n0,0,0,0,0,0", "\n0,0,0,0,0.5,0"), "g.csv").unwrap();
-        let flat = SagGrid::parse(&good, "g.csv").unwrap();
+        let flat = SagGrid::parse(good, "g.csv").unwrap();
         assert!(spiked.curvature_uncertainty(0.001, 0.0).unwrap() > MAX_CURVATURE_ERROR);
         assert_eq!(flat.curvature_uncertainty(0.001, 0.0), Some(0.0));
         assert_eq!(flat.curvature_uncertainty(0.003, 0.0), None);

@@ -689,12 +689,8 @@ pub fn analyze(
             .wear
             .world_from_placed(fitting_point, options.forward, options.up, options.eye);
     let worn = wear::moved(lens, world_from_placed);
-    let setup = Setup::new(
-        tracer(&worn, options.surface)?,
-        options,
-        indices,
-        &lens.name,
-    )?;
+    let worn_tracer = tracer(&worn, options.surface)?;
+    let setup = Setup::new(worn_tracer, options, indices, &lens.name)?;
     let rotating = setup.tangent_derivative(options.rotation_centre, &lens.name)?;
     let pupil = options.rotation_centre
         + options.forward * (options.rotation_behind_cornea_m - ENTRANCE_PUPIL_BEHIND_CORNEA_M);
@@ -739,7 +735,6 @@ pub fn analyze(
         &mut focimeter,
         fitting_point,
     )?;
-    add_surface_uncertainty(lens, options, indices.y, &mut add_focimeter)?;
     let sag_grid = sag_grid_uncertainty(
         lens,
         indices.y,
@@ -754,10 +749,7 @@ pub fn analyze(
         &add_focimeter,
         progressive.as_ref(),
     )?;
-    let finite_difference_change_d = std::iter::once(&centre)
-        .chain(&grid)
-        .map(|c| c.fd_change_d)
-        .fold(0.0, f64::max);
+    let finite_difference_change_d = largest_fd_change(&centre, &grid);
     Ok(Report {
         schema_version: SCHEMA_VERSION,
         scene: scene.name.clone(),
@@ -799,6 +791,15 @@ pub fn analyze(
         centre,
         grid,
     })
+}
+
+/// The largest change of a vergence between the bundle's step and half of it over the centre
+/// and the grid, dioptres.
+fn largest_fd_change(centre: &Cell, grid: &[Cell]) -> f64 {
+    std::iter::once(centre)
+        .chain(grid)
+        .map(|c| c.fd_change_d)
+        .fold(0.0, f64::max)
 }
 
 /// Where a sag grid is coarse for its surface's curvature: the power uncertainty it brings.
@@ -1097,7 +1098,8 @@ fn progressive_figures(
     let Some(add) = options.add_d else {
         return Ok((Vec::new(), None));
     };
-    let (readings, side) = read_add(placed, lens, options, ior)?;
+    let (mut readings, side) = read_add(placed, lens, options, ior)?;
+    add_surface_uncertainty(lens, options, ior, &mut readings)?;
     let map = lens_map.ok_or_else(|| AnalyzeError::BadOption {
         option: "--add",
         reason: "a progressive lens's figures come from the lens map: give --lens-step".into(),
