@@ -11,9 +11,10 @@
 //!   z = a x² + b xy + c y² + d x + e y + f is fitted by least squares, in the frame of the
 //!   point's normal, to the positions of the vertices around it and, where the file's normals
 //!   are one per welded vertex (smooth shading), to the slopes those normals give. The fit
-//!   over the 1-ring of the point's triangle is the measurement; its change from the fit over the
-//!   2-ring (what the neighbourhood's size moves it by), plus its standard error from the
-//!   residuals (what the positions' rounding moves it by), is its uncertainty. Such a fit
+//!   over the 1-ring of the point's triangle is the measurement. Its uncertainty: its truncation
+//!   error, which grows as the square of the neighbourhood's size ρ, estimated from its change
+//!   to the fit over the 2-ring as that change × ρ1² / (ρ2² − ρ1²) (Richardson), plus its
+//!   standard error from the residuals (what the positions' rounding moves it by). Such a fit
 //!   does not see the facets: a tessellated sphere reads its radius, not its triangles'.
 //!
 //! Curvatures are signed convex-positive: positive where the surface bulges towards the
@@ -433,7 +434,7 @@ impl MeshFit {
     }
 
     /// The shape at barycentric `b` of triangle `cell`: the 1-ring fit, its uncertainty its
-    /// change to the 2-ring fit plus its standard error.
+    /// truncation error (from its change to the 2-ring fit) plus its standard error.
     fn shape(
         &self,
         surface: &MirrorSurface,
@@ -461,7 +462,11 @@ impl MeshFit {
         let y = n.cross(x);
         let near = self.fit(&self.rings(&corners, 1), origin, x, y, n)?;
         let far = self.fit(&self.rings(&corners, 2), origin, x, y, n)?;
-        let uncertainty = [0, 1, 2].map(|k| (near.c[k] - far.c[k]).abs() + near.se[k]);
+        // A fit's truncation error grows as the square of its neighbourhood's size: the 1-ring
+        // fit's is its change to the 2-ring fit times ρ1² / (ρ2² − ρ1²) (Richardson).
+        let share = near.spread2 / (far.spread2 - near.spread2).max(1e-30);
+        let uncertainty =
+            [0, 1, 2].map(|k| (near.c[k] - far.c[k]).abs() * share.min(1.0) + near.se[k]);
         // At the origin: gradient (d, e), Hessian [[2a, b], [b, 2c]]; z = height along n, so a
         // surface bulging towards n (convex) has a negative Hessian: convex-positive is −II.
         let (a, bb, c, d, e) = (near.c[0], near.c[1], near.c[2], near.c[3], near.c[4]);
@@ -514,12 +519,18 @@ impl MeshFit {
             }
         }
         let (c, se) = least_squares(&rows)?;
+        let spread2 = vertices
+            .iter()
+            .map(|&k| (self.positions[k] - origin).length_squared())
+            .sum::<f64>()
+            / vertices.len() as f64;
         // Back from the unit reach: z/L = a (x/L)² + ... so a_metres = a / L, d unchanged,
         // f_metres = f L.
         let per_length = [1.0 / reach, 1.0 / reach, 1.0 / reach, 1.0, 1.0, reach];
         Some(Fit {
             c: [0, 1, 2, 3, 4, 5].map(|k| c[k] * per_length[k]),
             se: [0, 1, 2, 3, 4, 5].map(|k| se[k] * per_length[k]),
+            spread2,
         })
     }
 }
@@ -527,6 +538,8 @@ impl MeshFit {
 struct Fit {
     c: [f64; 6],
     se: [f64; 6],
+    /// The mean squared distance of the fit's vertices from its origin, m².
+    spread2: f64,
 }
 
 /// The least-squares solution of `rows` and each coefficient's standard error (from the

@@ -738,3 +738,36 @@ fn the_built_in_lens_on_its_exact_surface_and_on_its_mesh() {
         "{uncertainty} for {error}"
     );
 }
+
+/// Prism's base direction follows the eye: a −4.00 D lens read 2 mm to the wearer's right of
+/// its optical centre has c F = 0.8 Δ (Prentice) with its base towards the lens's edge there:
+/// out for the right eye (whose temporal side is the wearer's right), in for the left; 2 mm to
+/// the left, the reverse.
+#[test]
+fn prism_base_out_and_in_follow_the_eye() {
+    use specula_analyze::lens::Eye;
+    let scene = spectacles(&blank(-4.0, 0.0, 0.0), Mat4::IDENTITY);
+    for (eye, x, base_out) in [
+        (Eye::Right, 2.0, true),
+        (Eye::Right, -2.0, false),
+        (Eye::Left, -2.0, true),
+        (Eye::Left, 2.0, false),
+    ] {
+        let report = run(&scene, |o| {
+            o.eye = eye;
+            o.reference_points_mm = [[x, 0.0], [x, 0.0]];
+        });
+        let prism = report.focimeter[1].prism_d;
+        eprintln!(
+            "{eye:?} eye at x = {x} mm: {:.5} Δ out, {:.1e} Δ up",
+            prism[0], prism[1]
+        );
+        assert_eq!(prism[0] > 0.0, base_out, "{eye:?} at {x}: {prism:?}");
+        assert!((prism[0].abs() - 0.8).abs() < PRENTICE_OFF_D, "{prism:?}");
+        assert!(prism[1].abs() < 1e-6, "{prism:?}");
+    }
+}
+
+/// The thick lens's prism 2 mm off its centre against Prentice's thin-lens c F: measured
+/// 0.78276 Δ against 0.8 Δ; twice that difference.
+const PRENTICE_OFF_D: f64 = 0.035;

@@ -270,7 +270,8 @@ fn an_aspherical_rim_is_allowed_on_exterior_mirrors_only() {
     assert!((part.value.unwrap() - r1).abs() < 0.05 * r1, "{part:#?}");
 }
 
-/// FMVSS 111 S5.4.1: a sphere's average radius flips at 889 mm and 1651 mm; a surface with
+/// FMVSS 111 S5.4.1: a sphere's average radius flips at 889 mm and 1651 mm (on the limit it is
+/// undecided); a surface with
 /// different radii across flips at 12.5 % deviation (the readings along the horizontal read
 /// rh, those along the vertical rv: each deviates (rv − rh) / (rv + rh) from the average).
 #[test]
@@ -278,6 +279,8 @@ fn fmvss_111_s_convex_mirror_rule_flips_at_its_limits() {
     let average = |c: &[MirrorCheck]| named(c, "average radius of curvature").verdict;
     for (r, expected) in [
         (0.87, Outcome::Fail),
+        // On the limit: the measurement cannot tell.
+        (0.889, Outcome::Undecided),
         (0.91, Outcome::Pass),
         (1.62, Outcome::Pass),
         (1.68, Outcome::Fail),
