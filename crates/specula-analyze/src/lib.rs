@@ -30,6 +30,7 @@ pub mod plot;
 pub mod regulation;
 pub mod report;
 pub mod spherometer;
+pub mod verdict_page;
 
 use specula_scene::Scene;
 

@@ -12,11 +12,12 @@ use specula_trace::{Ray, SceneAccel};
 pub use crate::figure::{png_bytes, scale_colour, Plot};
 use crate::figure::{Axis, ColourBar, Figure, Mark};
 use crate::mirror_view::{MirrorView, Region};
+use crate::outcome::Outcome;
 
-/// Eye points' colours, in order (then again).
+/// Eye points' colours, in order (then again): no green or red, which are the verdicts'.
 const PALETTE: [[u8; 3]; 6] = [
     [31, 119, 180],
-    [44, 160, 44],
+    [227, 119, 194],
     [148, 103, 189],
     [255, 127, 14],
     [23, 190, 207],
@@ -70,11 +71,74 @@ pub fn ground_extent(view: &MirrorView) -> Extent {
     Extent { min, max }.grow(0.05)
 }
 
+/// A regulation's fields on the ground, for the ground map: each one's corners (x, z), its
+/// verdict and the legend's words for it.
+pub struct RegulationFields {
+    pub fields: Vec<([Vec2; 4], Outcome, String)>,
+}
+
+impl RegulationFields {
+    pub fn of(
+        verdict: &crate::regulation::Verdict,
+        regulation: &crate::regulation::Regulation,
+        vehicle: &crate::regulation::Vehicle,
+        range_m: f32,
+    ) -> Result<RegulationFields, crate::AnalyzeError> {
+        let mut fields = Vec::new();
+        for (spec, f) in regulation.fields.iter().zip(&verdict.fields) {
+            let g = &f.figures;
+            let words = match g.verdict {
+                Outcome::Pass => format!(
+                    "{}: PASS, reaches {:.2} m farther",
+                    f.name,
+                    g.outer_margin_m.min(g.near_margin_m)
+                ),
+                outcome => format!(
+                    "{}: {}, {:.2} % of it unseen",
+                    f.name,
+                    outcome.word(),
+                    (1.0 - g.seen_share) * 100.0
+                ),
+            };
+            fields.push((vehicle.field_corners(spec, range_m)?, g.verdict, words));
+        }
+        Ok(RegulationFields { fields })
+    }
+}
+
+/// A verdict's colour on a plot.
+pub fn outcome_colour(outcome: Outcome) -> [u8; 3] {
+    match outcome {
+        Outcome::Pass => [46, 125, 50],
+        Outcome::Fail => [198, 40, 40],
+        Outcome::Undecided => [183, 121, 31],
+    }
+}
+
+/// More eye points than this are drawn as a count map (how many see each point) rather than
+/// in a colour each.
+const EYES_IN_COLOUR: usize = PALETTE.len();
+
 /// The ground map, `longest` pixels along its longer side: each eye point's footprint (within
-/// range) in its colour, blended where several overlap; the region outlined; its blind part (no
-/// eye sees it) in red.
-pub fn ground_map(view: &MirrorView, longest: u32) -> Plot {
-    let extent = ground_extent(view);
+/// range) in its colour, blended where several overlap (with more eye points than the palette
+/// has colours, how many eye points see each point); the region outlined; its blind part (no
+/// eye sees it) in red; a regulation's fields outlined in their verdicts' colours.
+pub fn ground_map(view: &MirrorView, fields: Option<&RegulationFields>, longest: u32) -> Plot {
+    let mut extent = ground_extent(view);
+    for (corners, ..) in fields.iter().flat_map(|f| &f.fields) {
+        for c in corners {
+            extent.min = extent.min.min(*c);
+            extent.max = extent.max.max(*c);
+        }
+    }
+    // No narrower than 1 : 1.6 either way, so that the legend below it has room.
+    let size = extent.max - extent.min;
+    let pad = Vec2::new(
+        (size.y / 1.6 - size.x).max(0.0),
+        (size.x / 1.6 - size.y).max(0.0),
+    ) * 0.5;
+    extent.min -= pad;
+    extent.max += pad;
     let size = extent.max - extent.min;
     let scale = longest as f32 / size.max_element();
     let width = ((size.x * scale).round() as u32).max(16);
@@ -116,6 +180,10 @@ pub fn ground_map(view: &MirrorView, longest: u32) -> Plot {
                 _ => Rgb([235, 235, 235]),
             };
         }
+        if covered.len() > EYES_IN_COLOUR {
+            let c = colorous::VIRIDIS.eval_rational(eyes.len(), covered.len());
+            return Rgb([c.r, c.g, c.b]);
+        }
         let mut sum = [0u32; 3];
         for k in &eyes {
             for (c, v) in sum.iter_mut().zip(PALETTE[k % PALETTE.len()]) {
@@ -142,19 +210,42 @@ pub fn ground_map(view: &MirrorView, longest: u32) -> Plot {
             width: 2,
         });
     }
-    let mut legend: Vec<(String, [u8; 3])> = view
-        .report
-        .eyes
-        .iter()
-        .enumerate()
-        .map(|(k, e)| {
-            let [x, y, z] = e.position;
-            (
-                format!("eye {} ({x:.3}, {y:.3}, {z:.3})", k + 1),
-                PALETTE[k % PALETTE.len()],
-            )
-        })
-        .collect();
+    let n = covered.len();
+    let mut legend: Vec<(String, [u8; 3])> = if n > EYES_IN_COLOUR {
+        [1, n.div_ceil(2), n]
+            .iter()
+            .map(|&k| {
+                let c = colorous::VIRIDIS.eval_rational(k, n);
+                (format!("seen by {k} of {n} eye points"), [c.r, c.g, c.b])
+            })
+            .collect()
+    } else {
+        view.report
+            .eyes
+            .iter()
+            .enumerate()
+            .map(|(k, e)| {
+                let [x, y, z] = e.position;
+                (
+                    format!("eye {} ({x:.3}, {y:.3}, {z:.3})", k + 1),
+                    PALETTE[k % PALETTE.len()],
+                )
+            })
+            .collect()
+    };
+    for (corners, outcome, words) in fields.iter().flat_map(|f| &f.fields) {
+        let mut points: Vec<(f64, f64)> = corners
+            .iter()
+            .map(|c| (f64::from(c.x), f64::from(c.y)))
+            .collect();
+        points.push(points[0]);
+        figure.marks.push(Mark::Line {
+            points,
+            colour: outcome_colour(*outcome),
+            width: 3,
+        });
+        legend.push((words.clone(), outcome_colour(*outcome)));
+    }
     if region.is_some() {
         legend.push((
             "the required region (outlined): blind, no eye sees it".into(),

@@ -1212,6 +1212,58 @@ pub struct Request {
     pub view: mirror_view::Options,
 }
 
+/// What `--json` writes for a regulation run, and the report's report.json: the mirror view's
+/// figures, the vehicle as laid out, the verdict and the pose search.
+#[derive(Serialize)]
+pub struct Document<'a> {
+    #[serde(flatten)]
+    pub view: &'a mirror_view::Report,
+    pub vehicle: VehicleReport,
+    pub regulation: &'a Verdict,
+    pub adjustment: Option<&'a Adjustment>,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct VehicleReport {
+    /// The fields' longitudinal origin: the ocular points' middle (or the eyes').
+    pub reference: [f32; 3],
+    pub side: Side,
+    pub outermost: Option<[f32; 3]>,
+    pub median: [f32; 3],
+    pub eyes_from: &'static str,
+    pub vehicle_parts: Vec<String>,
+}
+
+impl Document<'_> {
+    /// Where the verdict was judged from, in words.
+    pub fn judged_from(&self) -> String {
+        let eyes: Vec<String> = self
+            .view
+            .eyes
+            .iter()
+            .map(|e| {
+                let [x, y, z] = e.position;
+                format!("({x:.3}, {y:.3}, {z:.3})")
+            })
+            .collect();
+        let who = match self.vehicle.eyes_from {
+            "--r-point" => "R46's ocular points",
+            "--eyellipse" => "the eyellipse's points",
+            _ => "the eye points",
+        };
+        let how = if self.vehicle.eyes_from == "--eyellipse" {
+            "each alone, the worst reported"
+        } else {
+            "together: a point counts when any sees it"
+        };
+        if eyes.len() > 4 {
+            format!("judged from {} {who}, {how}", eyes.len())
+        } else {
+            format!("judged from {who} {}, {how}", eyes.join(" and "))
+        }
+    }
+}
+
 /// The figures and the verdict from one pose of the mirror.
 pub struct Judged {
     pub verdict: Verdict,

@@ -60,26 +60,59 @@ fn cells(f: &Figures) -> String {
     )
 }
 
-/// Writes the mirror-view report into `dir`: the JSON, the ground map and the mirror seen from
-/// the first eye point (PNG and SVG each), and the HTML page; returns the page's path.
-pub fn write_mirror_view(
-    dir: &Path,
-    view: &MirrorView,
-    scene: &Scene,
-    accel: &SceneAccel,
-    mirror: usize,
-) -> Result<PathBuf, AnalyzeError> {
+/// A mirror-view report's parts: the view, the scene it was traced in, and, for a regulation
+/// run, the document `--json` writes with the regulation and the vehicle it was laid out for.
+pub struct MirrorViewPage<'a> {
+    pub view: &'a MirrorView,
+    pub scene: &'a Scene,
+    pub accel: &'a SceneAccel,
+    pub mirror: usize,
+    pub regulation: Option<(
+        &'a crate::regulation::Document<'a>,
+        &'static crate::regulation::Regulation,
+        &'a crate::regulation::Vehicle,
+    )>,
+}
+
+/// Writes the mirror-view report into `dir`: the JSON (`--json`'s document), the ground map
+/// (with a regulation's fields in their verdicts' colours) and the mirror seen from the eye
+/// point that sees the most ground (PNG and SVG each), and the HTML page, led by the verdict
+/// where a regulation was judged; returns the page's path.
+pub fn write_mirror_view(dir: &Path, page: &MirrorViewPage) -> Result<PathBuf, AnalyzeError> {
+    let (view, scene, accel, mirror) = (page.view, page.scene, page.accel, page.mirror);
     std::fs::create_dir_all(dir).map_err(|e| write_error(dir, e))?;
     let r = &view.report;
-    let json = serde_json::to_string_pretty(r).map_err(|e| write_error(dir, e))?;
+    let json = match page.regulation {
+        Some((document, ..)) => serde_json::to_string_pretty(document),
+        None => serde_json::to_string_pretty(r),
+    }
+    .map_err(|e| write_error(dir, e))?;
     write(&dir.join("report.json"), json.as_bytes())?;
-    write_plot(dir, "ground", &plot::ground_map(view, 640))?;
-    let eye = Vec3::from_array(r.eyes[0].position);
+    let fields = page
+        .regulation
+        .map(|(document, regulation, vehicle)| {
+            plot::RegulationFields::of(document.regulation, regulation, vehicle, r.range_m)
+        })
+        .transpose()?;
+    write_plot(dir, "ground", &plot::ground_map(view, fields.as_ref(), 640))?;
+    let shown = r
+        .eyes
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1.figures.ground_area_m2.total_cmp(&b.1.figures.ground_area_m2))
+        .map_or(0, |(k, _)| k);
+    let eye = Vec3::from_array(r.eyes[shown].position);
     write_plot(
         dir,
         "mirror",
         &plot::mirror_from_eye(scene, accel, mirror, eye, r.ground_y, 480),
     )?;
+    let verdict = page
+        .regulation
+        .map(|(document, ..)| {
+            crate::verdict_page::regulation_html(document.regulation, &document.judged_from())
+        })
+        .unwrap_or_default();
     let mut rows = String::new();
     for (k, e) in r.eyes.iter().enumerate() {
         let [x, y, z] = e.position;
@@ -108,8 +141,9 @@ pub fn write_mirror_view(
     let html = format!(
         r#"<!DOCTYPE html>
 <html><head><meta charset="utf-8"><title>specula analyze mirror-view: {scene}</title>
-<style>{style}</style></head><body>
+<style>{style}{verdict_style}</style></head><body>
 <h1>What '{mirror}' shows: {scene}</h1>
+{verdict}<h2>What the mirror shows</h2>
 <p>Exact rays from each eye point to points of the mirror, reflected about its shading normals and
 followed through the scene (docs/analyses/mirror-view.md). Vehicle frame: forward ({fx:.3}, {fy:.3}, {fz:.3}),
 up +Y. Ground: y = {ground} m, counted within {range} m of an eye point where no object hides it.
@@ -121,10 +155,12 @@ eye sees it (R46's ambinocular view); grids: ground {ground_cell:.3} m, directio
 <tr><th>eye point</th><th>horizontal °</th><th>vertical °</th><th>solid angle sr</th><th>ground m²</th><th>region seen (any)</th><th>region seen (all)</th><th>blind m²</th><th>sampling</th></tr>
 {rows}</table>
 <figure><img src="ground.svg"><figcaption>The ground seen in the mirror, per eye point (ground.png: the same map)</figcaption></figure>
-<figure><img src="mirror.svg"><figcaption>The mirror from eye 1, with the ground's grid where it shows the ground</figcaption></figure>
+<figure><img src="mirror.svg"><figcaption>The mirror from eye {shown_eye} (the eye point that sees the most ground), with the ground's 1 m grid where it shows the ground</figcaption></figure>
 </body></html>
 "#,
         style = STYLE,
+        verdict_style = crate::verdict_page::STYLE,
+        shown_eye = shown + 1,
         scene = plot::html_escape(&r.scene),
         mirror = plot::html_escape(&r.mirror),
         fx = r.forward[0],
@@ -248,15 +284,16 @@ fn glare_source_line(r: &crate::glare::Report) -> String {
 }
 
 fn glare_verdict(r: &crate::glare::Report) -> String {
-    let washed = r
-        .share_washed_out
-        .map(|s| format!(" The display is washed out for {:.0} % of them.", s * 100.0))
+    let washed = crate::glare::washed_out_text(r)
+        .map(|w| format!(" With the display: {w}."))
         .unwrap_or_default();
     match r.worst_eye {
         Some(k) => format!(
-            "Glare is seen from {:.0} % of the eye points; the worst is eye {} (shown below).{washed}",
+            "Glare is seen from {:.0} % of the eye points; the worst is eye {} (shown below).{washed} \
+             ({})",
             r.share_with_glare * 100.0,
-            k + 1
+            k + 1,
+            crate::glare::VEILING_MEANS
         ),
         None => format!("No glare: no eye point sees the source reflected in the surface.{washed}"),
     }
@@ -423,30 +460,6 @@ fn lens_sections(r: &crate::lens::Report) -> String {
     }
     html.push_str("</table>\n");
     html.push_str(&zone_sections(r));
-    if let Some(v) = &r.verdict {
-        html.push_str(&format!(
-            "<p>{}: <b>{}</b></p>\n<table>\n<tr><th>check</th><th>measured</th><th>ordered</th><th>tolerance</th><th>margin</th><th>uncertainty</th><th></th></tr>\n",
-            plot::html_escape(v.edition),
-            v.verdict.word()
-        ));
-        for c in &v.checks {
-            let name = match c.meridian {
-                Some(m) => format!("{} (meridian {m:.0}°)", c.quantity),
-                None => c.quantity.into(),
-            };
-            html.push_str(&format!(
-                "<tr><td>{name}</td><td>{:.3} {unit}</td><td>{:.3} {unit}</td><td>±{:.3} {unit}</td><td>{:.3} {unit}</td><td>±{:.3} {unit}</td><td>{}</td></tr>\n",
-                c.measured,
-                c.ordered,
-                c.tolerance,
-                c.margin,
-                c.uncertainty,
-                c.verdict.lower(),
-                unit = c.unit,
-            ));
-        }
-        html.push_str("</table>\n");
-    }
     html
 }
 
@@ -598,13 +611,13 @@ pub fn write_lens(dir: &Path, r: &crate::lens::Report) -> Result<PathBuf, Analyz
     let html = format!(
         r#"<!DOCTYPE html>
 <html><head><meta charset="utf-8"><title>specula analyze lens: {scene}</title>
-<style>{style}</style></head><body>
+<style>{style}{verdict_style}</style></head><body>
 <h1>'{lens}' as worn: {scene}</h1>
-<p>The {eye} eye turns about its centre of rotation ({cx:.4}, {cy:.4}, {cz:.4}) by Listing's law;
+{verdict}<p>The {eye} eye turns about its centre of rotation ({cx:.4}, {cy:.4}, {cz:.4}) by Listing's law;
 at each gaze the chief ray from the centre is traced through the lens with Snell's law at its own
 normals, and a narrow bundle ({step} mm) from the object ({object}) around it gives the
 vergences at the vertex sphere (radius {radius:.1} mm), docs/analyses/lens.md. Indices (red, green,
-blue): {n0}, {n1}, {n2}. Gaze grid ±{hmax}° × ±{vmax}° every {gstep}°. The finite differences
+blue): {n0:.4}, {n1:.4}, {n2:.4}. Gaze grid ±{hmax}° × ±{vmax}° every {gstep}°. The finite differences
 changed by at most {fd:.1e} D between the bundle and half of it. {prescription}</p>
 <table>
 <tr><th>at the centre</th><th></th></tr>
@@ -616,7 +629,7 @@ changed by at most {fd:.1e} D between the bundle and half of it. {prescription}<
 <tr><th>over the lens, the largest</th><th></th></tr>
 <tr><td>cylinder</td><td>{max_cyl} D</td></tr>
 <tr><td>prism</td><td>{max_prism} Δ</td></tr>
-<tr><td>lateral colour</td><td>{max_colour}′</td></tr>
+<tr><td>lateral colour</td><td>{max_colour} arcmin</td></tr>
 <tr><td>distortion</td><td>{max_distortion} %</td></tr>
 <tr><td>unwanted cylinder</td><td>{max_unwanted} D</td></tr>
 <tr><td>power error</td><td>{max_error} D</td></tr>
@@ -626,6 +639,12 @@ changed by at most {fd:.1e} D between the bundle and half of it. {prescription}<
 </body></html>
 "#,
         style = STYLE,
+        verdict_style = crate::verdict_page::STYLE,
+        verdict = r
+            .verdict
+            .as_ref()
+            .map(|v| crate::verdict_page::lens_html(v, r))
+            .unwrap_or_default(),
         sections = sections,
         scene = plot::html_escape(&r.scene),
         lens = plot::html_escape(&r.lens),

@@ -31,6 +31,17 @@ fn assert_each_fails_naming(command: &[&str], cases: &[(Vec<&str>, &str)]) {
     }
 }
 
+/// The report folder's report.json is `--json`'s document.
+fn assert_report_json_is(report: &std::path::Path, json: &serde_json::Value) {
+    let text = std::fs::read_to_string(report.join("report.json")).unwrap();
+    let same: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert!(
+        &same == json,
+        "{}/report.json is not --json's document",
+        report.display()
+    );
+}
+
 #[test]
 fn mirror_view_from_the_ocular_points_writes_json_that_matches_the_schema() {
     let dir = tempfile::tempdir().unwrap();
@@ -176,10 +187,13 @@ const CAR: &[&str] = &[
 fn the_car_example_s_a_pillar_takes_a_share_of_the_fields_and_the_allowance_decides() {
     let dir = tempfile::tempdir().unwrap();
     let json_path = dir.path().join("car.json");
+    let report = dir.path().join("car-report");
     let out = specula()
         .args(CAR)
         .arg("--json")
         .arg(&json_path)
+        .arg("--report")
+        .arg(&report)
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
@@ -191,6 +205,21 @@ fn the_car_example_s_a_pillar_takes_a_share_of_the_fields_and_the_allowance_deci
         include_str!("../../../docs/analyze-mirror-view.schema.json"),
     );
     assert_eq!(json["surface"], "exact");
+    assert_report_json_is(&report, &json);
+    // The page leads with the verdict and names each field with its own.
+    let html = std::fs::read_to_string(report.join("report.html")).unwrap();
+    let banner = html.find("<div class=\"verdict fail\"><b>FAIL</b>").unwrap();
+    assert!(banner < html.find("What the mirror shows").unwrap());
+    for name in [
+        "4 m wide from 20 m behind to the horizon",
+        "1 m wide from 4 m behind to the horizon",
+    ] {
+        assert!(html.contains(name), "{name}");
+    }
+    assert!(html.contains("<h2>Why</h2>") && html.contains("not less than the 10.00 %"));
+    // The terminal's first line is the verdict.
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.lines().next().unwrap().ends_with("FAILS"), "{stdout}");
     let verdict = &json["regulation"];
     let fields = verdict["fields"].as_array().unwrap();
     assert_eq!(fields.len(), 2);
@@ -433,6 +462,7 @@ fn glare_over_an_eyebox_writes_json_that_matches_the_schema() {
     let eyes = json["eyes"].as_array().unwrap();
     assert_eq!(eyes.len(), 6);
     let report = dir.path().join("report");
+    assert_report_json_is(&report, &json);
     for plot in ["eyebox", "worst"] {
         let png = image::open(report.join(format!("{plot}.png"))).unwrap();
         assert!(png.width() >= 8 && png.height() >= 8);
@@ -649,6 +679,7 @@ fn lens_writes_json_that_matches_the_schema_and_a_report() {
     );
     assert_eq!(json["grid"].as_array().unwrap().len(), 13 * 9);
     assert_eq!(json["eye"], "left");
+    assert_report_json_is(&dir.path().join("report"), &json);
     // Looking out (to the wearer's left, the left eye's temple) through a minus lens: base out.
     let out_cell = json["grid"]
         .as_array()

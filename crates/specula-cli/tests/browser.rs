@@ -461,3 +461,77 @@ fn the_reports_open_in_chromium_with_every_image_and_no_error() {
         "the failed load is reported: {opened:?}"
     );
 }
+
+/// The reports a user keeps lead with the verdict: an R46 report on the example car, the
+/// README's lens example (judged against the compensated order) and a glare report with a
+/// display; each opened in Chromium, sound, its verdict on the page; screenshots kept.
+#[test]
+fn the_verdict_leads_the_regulation_lens_and_glare_reports() {
+    let test = "the_verdict_leads_the_regulation_lens_and_glare_reports";
+    let Some(mut browser) = Browser::start(test) else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let (r46, lens, glare) = (
+        dir.path().join("r46"),
+        dir.path().join("lens"),
+        dir.path().join("glare"),
+    );
+    let scenes = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes");
+    let mut command = specula();
+    command
+        .args(["analyze", "mirror-view"])
+        .arg(format!("{scenes}/car-door-mirror.toml"))
+        .args(["--mirror", "door mirror", "--regulation", "r46-iii"])
+        .args(["--forward", "0,0,-1", "--r-point", "-0.37,0.55,0"])
+        .args(["--outermost", "-0.95,0.6,1.5"])
+        .args(["--vehicle", "car body", "--vehicle", "A-pillar", "--report"])
+        .arg(&r46);
+    run_ok(command);
+    let mut command = specula();
+    command
+        .args(["analyze", "lens"])
+        .arg(format!("{scenes}/spectacles-wrap.toml"))
+        .args(["--lens", "right lens", "--pantoscopic", "10", "--wrap", "5"])
+        .args(["--compensate", "--standard", "iso-8980-1", "--focimeter", "--report"])
+        .arg(&lens);
+    run_ok(command);
+    let mut command = specula();
+    command
+        .args(["analyze", "glare", "truck-cover", "--surface", "cover glass"])
+        .args(["--source", "side window", "--source-luminance", "8000"])
+        .args(["--eyebox", "0.2,0.1,3,2", "--size", "96x72", "--display", "dial"])
+        .args(["--symbol-luminance", "300", "--background-luminance", "10"])
+        .args(["--min-contrast", "3", "--report"])
+        .arg(&glare);
+    run_ok(command);
+    for (folder, shot, least_images, expected) in [
+        (&r46, "report-r46.png", 2, vec!["FAIL", "4 m wide from 20 m behind", "Why"]),
+        (&lens, "report-lens.png", 3, vec!["FAIL", "ISO 8980-1:2017", "compensated order"]),
+        (
+            &glare,
+            "report-glare.png",
+            2,
+            vec!["Glare is seen from", "washed out over", "veiling:"],
+        ),
+    ] {
+        let page = folder.join("report.html");
+        let opened = open(&mut browser, &page, shot);
+        eprintln!("{shot}: {opened:?}");
+        opened.assert_sound(&page.display().to_string(), least_images);
+        let text = browser.evaluate("document.body.innerText");
+        let text = text.as_str().unwrap();
+        for words in expected {
+            assert!(text.contains(words), "{shot}: '{words}' is not on the page");
+        }
+        // Where there is a verdict, it comes first, large.
+        let banner = browser.evaluate(
+            "(() => { const v = document.querySelector('.verdict'); \
+             return v ? v.innerText : ''; })()",
+        );
+        let banner = banner.as_str().unwrap();
+        if shot != "report-glare.png" {
+            assert!(banner.starts_with("FAIL"), "{shot}: banner '{banner}'");
+        }
+    }
+}

@@ -62,19 +62,51 @@ pub const MAX_VEILING_RATIO: f64 = 1e6;
 /// Contrast ratios are capped here (a display whose dark level is 0, without glare).
 pub const MAX_CONTRAST: f64 = 1e6;
 
+/// What a veiling ratio means, said once under each table that prints one.
+pub const VEILING_MEANS: &str = "veiling: the glare's luminance over the luminance of what it \
+     veils at the same pixel (the largest over the eye point's glare); \"over black\" where what \
+     it veils is (nearly) black, so the ratio has no finite value";
+
+/// The washed-out share of the display per eye point and over them, in words: the largest
+/// (and which eye point), the mean over all eye points, and how many see any of it washed out.
+pub fn washed_out_text(r: &Report) -> Option<String> {
+    r.display.as_ref()?;
+    let shares: Vec<f64> = r
+        .eyes
+        .iter()
+        .map(|e| e.display.as_ref().map_or(0.0, |d| d.washed_out_share))
+        .collect();
+    let (worst, largest) = shares
+        .iter()
+        .enumerate()
+        .fold((0, 0.0f64), |a, (k, s)| if *s > a.1 { (k, *s) } else { a });
+    let mean = shares.iter().sum::<f64>() / shares.len().max(1) as f64;
+    let some = shares.iter().filter(|s| **s > 0.0).count();
+    Some(format!(
+        "the display is washed out over {:.1} % of its area on average over the {} eye points, \
+         at most {:.1} % (eye {}); {some} of the {} eye points see some of it washed out",
+        mean * 100.0,
+        shares.len(),
+        largest * 100.0,
+        worst + 1,
+        shares.len()
+    ))
+}
+
 /// A veiling ratio as reports print it: "over black" where the glare veils (nearly) nothing,
 /// "–" where there is none (the sun's).
 pub fn veiling_text(ratio: Option<f64>) -> String {
     match ratio {
         None => "–".into(),
         Some(ratio) if ratio >= MAX_VEILING_RATIO => "over black".into(),
-        Some(ratio) => format!("{ratio:.4}"),
+        Some(ratio) => crate::verdict_page::number(ratio, ""),
     }
 }
 
-/// A luminance in cd/m² as reports print it (3 significant figures), "–" where not known.
+/// A luminance in cd/m² as reports print it (4 significant figures, plain decimals), "–"
+/// where not known.
 pub fn luminance_text(value: Option<f64>) -> String {
-    value.map_or_else(|| "–".into(), |v| format!("{v:.3e}"))
+    value.map_or_else(|| "–".into(), |v| crate::verdict_page::number(v, ""))
 }
 
 /// Rec. 709 luminance of linear RGB.

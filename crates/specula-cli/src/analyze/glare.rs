@@ -229,9 +229,8 @@ fn print_report(r: &glare::Report) {
         );
     }
     print_eyes(r);
-    let washed = r
-        .share_washed_out
-        .map(|s| format!("; display washed out for {:.0} % of them", s * 100.0))
+    let washed = glare::washed_out_text(r)
+        .map(|w| format!("; {w}"))
         .unwrap_or_default();
     match r.worst_eye {
         Some(k) => println!(
@@ -251,7 +250,7 @@ fn print_report(r: &glare::Report) {
 
 fn print_eyes(r: &glare::Report) {
     println!(
-        "{:<28}{:>6}{:>11}{:>11}{:>11}{:>12}{:>11}{}",
+        "{:<36}{:>6}{:>11}{:>11}{:>11}{:>12}{:>11}{}",
         "eye point",
         "glare",
         "factor",
@@ -268,7 +267,7 @@ fn print_eyes(r: &glare::Report) {
             String::new()
         }
     );
-    for e in &r.eyes {
+    for (k, e) in r.eyes.iter().enumerate() {
         let [x, y, z] = e.position;
         let display = e
             .display
@@ -284,8 +283,8 @@ fn print_eyes(r: &glare::Report) {
             })
             .unwrap_or_default();
         println!(
-            "{:<28}{:>6}{:>11.5}{:>11}{:>11}{:>12}{:>11.3e}{display}",
-            format!("({x:.3}, {y:.3}, {z:.3})"),
+            "{:<36}{:>6}{:>11.5}{:>11}{:>11}{:>12}{:>11.3e}{display}",
+            format!("eye {} ({x:.3}, {y:.3}, {z:.3})", k + 1),
             if e.glare { "yes" } else { "no" },
             e.max_luminance_factor,
             glare::luminance_text(e.max_luminance_cd_m2),
@@ -294,6 +293,7 @@ fn print_eyes(r: &glare::Report) {
             e.solid_angle_sr,
         );
     }
+    println!("{}", glare::VEILING_MEANS);
 }
 
 fn print_sweep(s: &sweep::SweepReport) {

@@ -511,6 +511,10 @@ fn lens(args: LensArgs) -> Result<()> {
     );
     let report = lens::analyze(&scene, &options, &|done| bar.set_position(done as u64))?;
     bar.finish_and_clear();
+    if let Some(v) = &report.verdict {
+        println!("{}: {}", v.edition, v.verdict.word());
+        print_reasons(&specula_analyze::verdict_page::lens_reasons(v, &report));
+    }
     print_lens(&report);
     print_lens_checks(&report, args.focimeter);
     write_json(args.json.as_deref(), &report)?;
@@ -767,7 +771,14 @@ fn mirror_view(args: MirrorViewArgs) -> Result<()> {
     print_mirror_view(&view.report);
     write_json(args.json.as_deref(), &view.report)?;
     if let Some(dir) = &args.report {
-        let html = specula_analyze::report::write_mirror_view(dir, &view, &scene, &accel, mirror)?;
+        let page = specula_analyze::report::MirrorViewPage {
+            view: &view,
+            scene: &scene,
+            accel: &accel,
+            mirror,
+            regulation: None,
+        };
+        let html = specula_analyze::report::write_mirror_view(dir, &page)?;
         println!("report: {}", html.display());
     }
     Ok(())
@@ -886,13 +897,9 @@ fn regulation(
         .adjust
         .map(|pivot| adjust_mirror(scene, &request, pivot, args.adjust_step))
         .transpose()?;
-    print_verdict(&judged.verdict, &vehicle, args.median.is_none());
-    if let Some(a) = &adjustment {
-        print_adjustment(a);
-    }
-    let report = RegulationReport {
+    let report = reg::Document {
         view: &judged.view.report,
-        vehicle: VehicleReport {
+        vehicle: reg::VehicleReport {
             reference: vehicle.reference.to_array(),
             side: vehicle.side,
             outermost: vehicle.outermost.map(|p| p.to_array()),
@@ -903,11 +910,20 @@ fn regulation(
         regulation: &judged.verdict,
         adjustment: adjustment.as_ref(),
     };
+    print_verdict(&report, &vehicle, args.median.is_none());
+    if let Some(a) = &adjustment {
+        print_adjustment(a);
+    }
     write_json(args.json.as_deref(), &report)?;
     if let Some(dir) = &args.report {
-        let mirror = request.view.mirror;
-        let html =
-            specula_analyze::report::write_mirror_view(dir, &judged.view, scene, &accel, mirror)?;
+        let page = specula_analyze::report::MirrorViewPage {
+            view: &judged.view,
+            scene,
+            accel: &accel,
+            mirror: request.view.mirror,
+            regulation: Some((&report, request.regulation, &vehicle)),
+        };
+        let html = specula_analyze::report::write_mirror_view(dir, &page)?;
         println!("report: {}", html.display());
     }
     Ok(())
@@ -1015,31 +1031,12 @@ fn adjust_mirror(
     Ok(adjustment)
 }
 
-#[derive(serde::Serialize)]
-struct RegulationReport<'a> {
-    #[serde(flatten)]
-    view: &'a mirror_view::Report,
-    vehicle: VehicleReport,
-    regulation: &'a specula_analyze::regulation::Verdict,
-    adjustment: Option<&'a specula_analyze::regulation::Adjustment>,
-}
-
-#[derive(serde::Serialize)]
-struct VehicleReport {
-    /// The fields' longitudinal origin: the ocular points' middle (or the eyes').
-    reference: [f32; 3],
-    side: specula_analyze::regulation::Side,
-    outermost: Option<[f32; 3]>,
-    median: [f32; 3],
-    eyes_from: &'static str,
-    vehicle_parts: Vec<String>,
-}
-
 fn print_verdict(
-    v: &specula_analyze::regulation::Verdict,
+    document: &specula_analyze::regulation::Document,
     vehicle: &specula_analyze::regulation::Vehicle,
     median_assumed: bool,
 ) {
+    let v = document.regulation;
     println!(
         "{} ({}): {}",
         v.title,
@@ -1050,6 +1047,7 @@ fn print_verdict(
             Outcome::Undecided => "UNDECIDED (a margin within its uncertainty)",
         }
     );
+    println!("{}", document.judged_from());
     let [x, y, z] = vehicle.reference.to_array();
     println!(
         "fields from ({x:.3}, {y:.3}, {z:.3}), {} side{}; the body may hide {:.0} % unexcused",
@@ -1113,6 +1111,17 @@ fn print_verdict(
             c.verdict.word(),
             unit = c.unit,
         );
+    }
+    print_reasons(&specula_analyze::verdict_page::regulation_reasons(v));
+}
+
+/// Why a verdict is not a pass, a line each.
+fn print_reasons(reasons: &[String]) {
+    if !reasons.is_empty() {
+        println!("why:");
+        for reason in reasons {
+            println!("  - {reason}");
+        }
     }
 }
 
