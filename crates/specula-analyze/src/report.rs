@@ -99,7 +99,11 @@ pub fn write_mirror_view(dir: &Path, page: &MirrorViewPage) -> Result<PathBuf, A
         .eyes
         .iter()
         .enumerate()
-        .max_by(|a, b| a.1.figures.ground_area_m2.total_cmp(&b.1.figures.ground_area_m2))
+        .max_by(|a, b| {
+            a.1.figures
+                .ground_area_m2
+                .total_cmp(&b.1.figures.ground_area_m2)
+        })
         .map_or(0, |(k, _)| k);
     let eye = Vec3::from_array(r.eyes[shown].position);
     write_plot(

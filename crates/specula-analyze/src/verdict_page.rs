@@ -32,11 +32,7 @@ pub fn banner(outcome: Outcome, against: &str, judged_from: &str) -> String {
 }
 
 fn cell(outcome: Outcome) -> String {
-    format!(
-        "<td class=\"{}\">{}</td>",
-        outcome.lower(),
-        outcome.word()
-    )
+    format!("<td class=\"{}\">{}</td>", outcome.lower(), outcome.word())
 }
 
 /// A number with its unit, four significant digits, plain decimals where they read well.
@@ -71,7 +67,12 @@ fn percent(share: f64) -> String {
 fn field_figures(f: &FieldVerdict, allowance: f64) -> (f64, f64, f64) {
     let g = &f.figures;
     let excused = g.hidden_by_vehicle_share < allowance;
-    let share = g.seen_share + if excused { g.hidden_by_vehicle_share } else { 0.0 };
+    let share = g.seen_share
+        + if excused {
+            g.hidden_by_vehicle_share
+        } else {
+            0.0
+        };
     let grid = if excused && g.hidden_by_vehicle_share > 0.0 {
         g.clear_share_uncertainty
     } else {
@@ -164,7 +165,11 @@ fn reasons_html(reasons: &[String]) -> String {
 /// Each field and check that does not pass, and why, in words.
 pub fn regulation_reasons(v: &Verdict) -> Vec<String> {
     let mut reasons = Vec::new();
-    for f in v.fields.iter().filter(|f| f.figures.verdict != Outcome::Pass) {
+    for f in v
+        .fields
+        .iter()
+        .filter(|f| f.figures.verdict != Outcome::Pass)
+    {
         reasons.push(field_reason(f, v.allowance_share));
     }
     for c in v
@@ -209,6 +214,11 @@ fn field_reason(f: &FieldVerdict, allowance: f64) -> String {
         _ => String::new(),
     };
     let verdict = match g.verdict {
+        Outcome::Undecided if margin >= 0.0 => format!(
+            "undecided: all of it is seen, but the share is known only to ± {} (the sampling's \
+             last refinement moved it by that much): a smaller --tolerance may decide it",
+            percent(uncertainty)
+        ),
         Outcome::Undecided => format!(
             "undecided: {} of it is judged seen, short by {}, within the measurement's ± {}",
             percent(share),

@@ -208,7 +208,9 @@ fn the_car_example_s_a_pillar_takes_a_share_of_the_fields_and_the_allowance_deci
     assert_report_json_is(&report, &json);
     // The page leads with the verdict and names each field with its own.
     let html = std::fs::read_to_string(report.join("report.html")).unwrap();
-    let banner = html.find("<div class=\"verdict fail\"><b>FAIL</b>").unwrap();
+    let banner = html
+        .find("<div class=\"verdict fail\"><b>FAIL</b>")
+        .unwrap();
     assert!(banner < html.find("What the mirror shows").unwrap());
     for name in [
         "4 m wide from 20 m behind to the horizon",
@@ -219,7 +221,10 @@ fn the_car_example_s_a_pillar_takes_a_share_of_the_fields_and_the_allowance_deci
     assert!(html.contains("<h2>Why</h2>") && html.contains("not less than the 10.00 %"));
     // The terminal's first line is the verdict.
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(stdout.lines().next().unwrap().ends_with("FAILS"), "{stdout}");
+    assert!(
+        stdout.lines().next().unwrap().ends_with("FAILS"),
+        "{stdout}"
+    );
     let verdict = &json["regulation"];
     let fields = verdict["fields"].as_array().unwrap();
     assert_eq!(fields.len(), 2);
@@ -975,5 +980,88 @@ fn a_progressive_lens_gets_its_add_corridor_zones_near_figures_and_verdict() {
         "lens-mean-power.png",
     ] {
         assert!(dir.path().join("report").join(name).is_file(), "{name}");
+    }
+}
+
+/// A simple car (a box) with a flat 250 × 130 mm mirror on its left, turned `yaw_deg` about
+/// the vertical: 21.26° aims the mirror's view 5.5° outward from straight back, 2.5° down.
+fn simple_car_with_a_flat_mirror(yaw_deg: f32) -> String {
+    format!(
+        r#"name = "simple car with a flat mirror"
+[camera]
+eye = [-3.0, 2.0, 3.0]
+target = [-0.9, 0.9, -0.6]
+[materials.mirror]
+type = "mirror"
+color = 0.9
+[materials.paint]
+type = "diffuse"
+color = [0.6, 0.08, 0.06]
+[[objects]]
+name = "road"
+material = "paint"
+shape = {{ type = "plane", size = [60.0, 200.0] }}
+[[objects]]
+name = "car body"
+material = "paint"
+translate = [0.0, 0.625, 0.25]
+shape = {{ type = "box", size = [1.8, 0.65, 4.5] }}
+[[objects]]
+name = "mirror"
+material = "mirror"
+translate = [-1.05, 1.0, -0.6]
+rotate_deg = [84.93, {yaw_deg}, 0.0]
+shape = {{ type = "plane", size = [0.25, 0.13] }}
+"#
+    )
+}
+
+/// A pair of flat mirrors on a simple car against FMVSS 111's driver's-side field, one aimed
+/// to see it whole and one turned 3° too far out: each report's report.json says whether it
+/// passed, and its page leads with PASS or FAIL and names the field.
+#[test]
+fn a_flat_mirror_that_passes_fmvss_111_and_one_that_fails_say_so_in_their_reports() {
+    let dir = tempfile::tempdir().unwrap();
+    for (yaw, passes) in [(21.26f32, true), (24.26, false)] {
+        let scene = dir.path().join(format!("car-{yaw}.toml"));
+        std::fs::write(&scene, simple_car_with_a_flat_mirror(yaw)).unwrap();
+        let report = dir.path().join(format!("report-{yaw}"));
+        let out = specula()
+            .args(["analyze", "mirror-view"])
+            .arg(&scene)
+            .args(["--mirror", "mirror", "--regulation", "fmvss111"])
+            .args(["--forward", "0,0,-1", "--eye", "-0.37,1.185,0"])
+            .args(["--outermost", "-0.9,0.6,0", "--vehicle", "car body"])
+            .args(["--tolerance", "0.001", "--report"])
+            .arg(&report)
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(report.join("report.json")).unwrap())
+                .unwrap();
+        let regulation = &json["regulation"];
+        assert_eq!(regulation["passed"], passes, "yaw {yaw}: {stdout}");
+        let word = if passes { "PASS" } else { "FAIL" };
+        assert_eq!(regulation["verdict"], word.to_lowercase());
+        let html = std::fs::read_to_string(report.join("report.html")).unwrap();
+        assert!(
+            html.contains(&format!(
+                "<div class=\"verdict {}\"><b>{word}</b>",
+                word.to_lowercase()
+            )),
+            "yaw {yaw}"
+        );
+        assert!(html.contains("2.4 m wide from 10.7 m behind the eyes to the horizon"));
+        assert!(stdout
+            .lines()
+            .next()
+            .unwrap()
+            .ends_with(if passes { "PASSES" } else { "FAILS" }));
     }
 }

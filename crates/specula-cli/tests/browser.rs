@@ -493,21 +493,50 @@ fn the_verdict_leads_the_regulation_lens_and_glare_reports() {
         .args(["analyze", "lens"])
         .arg(format!("{scenes}/spectacles-wrap.toml"))
         .args(["--lens", "right lens", "--pantoscopic", "10", "--wrap", "5"])
-        .args(["--compensate", "--standard", "iso-8980-1", "--focimeter", "--report"])
+        .args([
+            "--compensate",
+            "--standard",
+            "iso-8980-1",
+            "--focimeter",
+            "--report",
+        ])
         .arg(&lens);
     run_ok(command);
     let mut command = specula();
     command
-        .args(["analyze", "glare", "truck-cover", "--surface", "cover glass"])
+        .args([
+            "analyze",
+            "glare",
+            "truck-cover",
+            "--surface",
+            "cover glass",
+        ])
         .args(["--source", "side window", "--source-luminance", "8000"])
-        .args(["--eyebox", "0.2,0.1,3,2", "--size", "96x72", "--display", "dial"])
+        .args([
+            "--eyebox",
+            "0.2,0.1,3,2",
+            "--size",
+            "96x72",
+            "--display",
+            "dial",
+        ])
         .args(["--symbol-luminance", "300", "--background-luminance", "10"])
         .args(["--min-contrast", "3", "--report"])
         .arg(&glare);
     run_ok(command);
     for (folder, shot, least_images, expected) in [
-        (&r46, "report-r46.png", 2, vec!["FAIL", "4 m wide from 20 m behind", "Why"]),
-        (&lens, "report-lens.png", 3, vec!["FAIL", "ISO 8980-1:2017", "compensated order"]),
+        (
+            &r46,
+            "report-r46.png",
+            2,
+            vec!["FAIL", "4 m wide from 20 m behind", "Why"],
+        ),
+        (
+            &lens,
+            "report-lens.png",
+            3,
+            vec!["FAIL", "ISO 8980-1:2017", "compensated order"],
+        ),
         (
             &glare,
             "report-glare.png",

@@ -76,10 +76,11 @@ pub fn washed_out_text(r: &Report) -> Option<String> {
         .iter()
         .map(|e| e.display.as_ref().map_or(0.0, |d| d.washed_out_share))
         .collect();
-    let (worst, largest) = shares
-        .iter()
-        .enumerate()
-        .fold((0, 0.0f64), |a, (k, s)| if *s > a.1 { (k, *s) } else { a });
+    let (worst, largest) =
+        shares
+            .iter()
+            .enumerate()
+            .fold((0, 0.0f64), |a, (k, s)| if *s > a.1 { (k, *s) } else { a });
     let mean = shares.iter().sum::<f64>() / shares.len().max(1) as f64;
     let some = shares.iter().filter(|s| **s > 0.0).count();
     Some(format!(
