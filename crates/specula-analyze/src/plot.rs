@@ -115,6 +115,53 @@ pub fn outcome_colour(outcome: Outcome) -> [u8; 3] {
     }
 }
 
+/// The ground map's extent: the footprints' (or the region's) and the fields', no narrower than
+/// 1 : 1.6 either way so that the legend below it has room.
+fn map_extent(view: &MirrorView, fields: Option<&RegulationFields>) -> Extent {
+    let mut extent = ground_extent(view);
+    for (corners, ..) in fields.iter().flat_map(|f| &f.fields) {
+        for c in corners {
+            extent.min = extent.min.min(*c);
+            extent.max = extent.max.max(*c);
+        }
+    }
+    let size = extent.max - extent.min;
+    let pad = Vec2::new(
+        (size.y / 1.6 - size.x).max(0.0),
+        (size.x / 1.6 - size.y).max(0.0),
+    ) * 0.5;
+    Extent {
+        min: extent.min - pad,
+        max: extent.max + pad,
+    }
+}
+
+/// The eye points' legend: a colour each, or with many of them the count map's colours.
+fn eyes_legend(view: &MirrorView) -> Vec<(String, [u8; 3])> {
+    let n = view.footprints.len();
+    if n > EYES_IN_COLOUR {
+        return [1, n.div_ceil(2), n]
+            .iter()
+            .map(|&k| {
+                let c = colorous::VIRIDIS.eval_rational(k, n);
+                (format!("seen by {k} of {n} eye points"), [c.r, c.g, c.b])
+            })
+            .collect();
+    }
+    view.report
+        .eyes
+        .iter()
+        .enumerate()
+        .map(|(k, e)| {
+            let [x, y, z] = e.position;
+            (
+                format!("eye {} ({x:.3}, {y:.3}, {z:.3})", k + 1),
+                PALETTE[k % PALETTE.len()],
+            )
+        })
+        .collect()
+}
+
 /// More eye points than this are drawn as a count map (how many see each point) rather than
 /// in a colour each.
 const EYES_IN_COLOUR: usize = PALETTE.len();
@@ -124,21 +171,7 @@ const EYES_IN_COLOUR: usize = PALETTE.len();
 /// has colours, how many eye points see each point); the region outlined; its blind part (no
 /// eye sees it) in red; a regulation's fields outlined in their verdicts' colours.
 pub fn ground_map(view: &MirrorView, fields: Option<&RegulationFields>, longest: u32) -> Plot {
-    let mut extent = ground_extent(view);
-    for (corners, ..) in fields.iter().flat_map(|f| &f.fields) {
-        for c in corners {
-            extent.min = extent.min.min(*c);
-            extent.max = extent.max.max(*c);
-        }
-    }
-    // No narrower than 1 : 1.6 either way, so that the legend below it has room.
-    let size = extent.max - extent.min;
-    let pad = Vec2::new(
-        (size.y / 1.6 - size.x).max(0.0),
-        (size.x / 1.6 - size.y).max(0.0),
-    ) * 0.5;
-    extent.min -= pad;
-    extent.max += pad;
+    let extent = map_extent(view, fields);
     let size = extent.max - extent.min;
     let scale = longest as f32 / size.max_element();
     let width = ((size.x * scale).round() as u32).max(16);
@@ -210,29 +243,7 @@ pub fn ground_map(view: &MirrorView, fields: Option<&RegulationFields>, longest:
             width: 2,
         });
     }
-    let n = covered.len();
-    let mut legend: Vec<(String, [u8; 3])> = if n > EYES_IN_COLOUR {
-        [1, n.div_ceil(2), n]
-            .iter()
-            .map(|&k| {
-                let c = colorous::VIRIDIS.eval_rational(k, n);
-                (format!("seen by {k} of {n} eye points"), [c.r, c.g, c.b])
-            })
-            .collect()
-    } else {
-        view.report
-            .eyes
-            .iter()
-            .enumerate()
-            .map(|(k, e)| {
-                let [x, y, z] = e.position;
-                (
-                    format!("eye {} ({x:.3}, {y:.3}, {z:.3})", k + 1),
-                    PALETTE[k % PALETTE.len()],
-                )
-            })
-            .collect()
-    };
+    let mut legend = eyes_legend(view);
     for (corners, outcome, words) in fields.iter().flat_map(|f| &f.fields) {
         let mut points: Vec<(f64, f64)> = corners
             .iter()
