@@ -322,14 +322,14 @@ fn glare_rows(r: &crate::glare::Report) -> String {
             })
             .unwrap_or_default();
         rows.push_str(&format!(
-            "<tr><td>eye {} ({x:.3}, {y:.3}, {z:.3})</td><td>{}</td><td>{:.5}</td><td>{}</td><td>{}</td><td>{}</td><td>{:.3e}</td><td>{}</td>{display}</tr>\n",
+            "<tr><td>eye {} ({x:.3}, {y:.3}, {z:.3})</td><td>{}</td><td>{:.5}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>{display}</tr>\n",
             k + 1,
             if e.glare { "yes" } else { "no" },
             e.max_luminance_factor,
             luminance_text(e.max_luminance_cd_m2),
             luminance_text(e.mean_luminance_cd_m2),
             veiling_text(e.max_veiling_ratio),
-            e.solid_angle_sr,
+            crate::verdict_page::number(e.solid_angle_sr, ""),
             e.centroid_px
                 .map(|[cx, cy]| format!("{cx:.0}, {cy:.0}"))
                 .unwrap_or_else(|| "–".into()),
@@ -450,16 +450,16 @@ fn lens_sections(r: &crate::lens::Report) -> String {
     html.push_str("</table>\n<table>\n<tr><th>focimeter</th><th>at (mm)</th><th>sphere D</th><th>cylinder D</th><th>axis °</th><th>prism Δ (out, up)</th><th>± D</th></tr>\n");
     for f in &r.focimeter {
         html.push_str(&format!(
-            "<tr><td>{}</td><td>{:.1}, {:.1}</td><td>{:.3}</td><td>{:.3}</td><td>{:.1}</td><td>{:.3}, {:.3}</td><td>{:.1e}</td></tr>\n",
+            "<tr><td>{}</td><td>{:.1}, {:.1}</td><td>{:.3}</td><td>{:.3}</td><td>{:.1}</td><td>{:.3}, {:.3}</td><td>{}</td></tr>\n",
             f.point, f.at_mm[0], f.at_mm[1], f.sphere_d, f.cylinder_d, f.axis_deg,
-            f.prism_d[0], f.prism_d[1], f.uncertainty_d
+            f.prism_d[0], f.prism_d[1], crate::verdict_page::number(f.uncertainty_d, "")
         ));
     }
     for f in &r.add_focimeter {
         html.push_str(&format!(
-            "<tr><td>{} (add, on the progressive side)</td><td>{:.1}, {:.1}</td><td>{:.3}</td><td>{:.3}</td><td>{:.1}</td><td>–</td><td>{:.1e}</td></tr>\n",
+            "<tr><td>{} (add, on the progressive side)</td><td>{:.1}, {:.1}</td><td>{:.3}</td><td>{:.3}</td><td>{:.1}</td><td>–</td><td>{}</td></tr>\n",
             f.point, f.at_mm[0], f.at_mm[1], f.sphere_d, f.cylinder_d, f.axis_deg,
-            f.uncertainty_d
+            crate::verdict_page::number(f.uncertainty_d, "")
         ));
     }
     html.push_str("</table>\n");

@@ -364,3 +364,19 @@ pub fn lens_reasons(v: &LensVerdict, r: &crate::lens::Report) -> Vec<String> {
     }
     reasons
 }
+
+#[cfg(test)]
+mod tests {
+    use super::number;
+
+    #[test]
+    fn numbers_read_as_plain_decimals_with_their_units() {
+        assert_eq!(number(653.5, "cd/m²"), "653.5 cd/m²");
+        assert_eq!(number(0.005974, "sr"), "0.005974 sr");
+        assert_eq!(number(1.2, "m"), "1.200 m");
+        assert_eq!(number(-0.05255, "D"), "-0.05255 D");
+        assert_eq!(number(0.0, "mm"), "0.000 mm");
+        assert_eq!(number(1.6e9, "cd/m²"), "1.600e9 cd/m²");
+        assert_eq!(number(f64::INFINITY, "m"), "–");
+    }
+}

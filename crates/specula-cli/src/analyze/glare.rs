@@ -283,14 +283,14 @@ fn print_eyes(r: &glare::Report) {
             })
             .unwrap_or_default();
         println!(
-            "{:<36}{:>6}{:>11.5}{:>11}{:>11}{:>12}{:>11.3e}{display}",
+            "{:<36}{:>6}{:>11.5}{:>11}{:>11}{:>12}{:>11}{display}",
             format!("eye {} ({x:.3}, {y:.3}, {z:.3})", k + 1),
             if e.glare { "yes" } else { "no" },
             e.max_luminance_factor,
             glare::luminance_text(e.max_luminance_cd_m2),
             glare::luminance_text(e.mean_luminance_cd_m2),
             glare::veiling_text(e.max_veiling_ratio),
-            e.solid_angle_sr,
+            specula_analyze::verdict_page::number(e.solid_angle_sr, ""),
         );
     }
     println!("{}", glare::VEILING_MEANS);

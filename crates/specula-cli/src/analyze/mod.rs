@@ -269,7 +269,8 @@ pub struct MirrorViewArgs {
     #[arg(help_heading = "Ground and precision", long, default_value_t = mirror_view::Precision::REPORT.tolerance_deg)]
     tolerance_deg: f64,
     /// Judge the mirror against a regulation's prescribed fields and mirror rules: r46-i,
-    /// r46-ii, r46-iii, r46-iv, r46-v or fmvss111 (see docs/analyses/mirror-view.md).
+    /// r46-ii, r46-iii, r46-iv, r46-v, fmvss111 (the driver's flat mirror) or fmvss111-convex
+    /// (the passenger's convex mirror) (see docs/analyses/mirror-view.md).
     #[arg(help_heading = "Regulation (UN R46, FMVSS 111)", long)]
     regulation: Option<String>,
     /// The driver's R point X,Y,Z: R46's ocular points lie 635 mm above it, 65 mm apart across
