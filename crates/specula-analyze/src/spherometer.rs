@@ -11,10 +11,13 @@
 //!   z = a x² + b xy + c y² + d x + e y + f is fitted by least squares, in the frame of the
 //!   point's normal, to the positions of the vertices around it and, where the file's normals
 //!   are one per welded vertex (smooth shading), to the slopes those normals give. The fit
-//!   over the 1-ring of the point's triangle is the measurement. Its uncertainty: its truncation
-//!   error, which grows as the square of the neighbourhood's size ρ, estimated from its change
-//!   to the fit over the 2-ring as that change × ρ1² / (ρ2² − ρ1²) (Richardson), plus its
-//!   standard error from the residuals (what the positions' rounding moves it by). Such a fit
+//!   over the 1-ring of the point's triangle is the measurement, each row weighted by its own
+//!   rounding (an f32's unit in the last place / √12: heights from positions, slopes from
+//!   normals). Its uncertainty: its truncation error, which grows as the square of the
+//!   neighbourhood's size ρ, estimated from its change to the fit over the 2-ring as that change
+//!   × ρ1² / (ρ2² − ρ1²) (Richardson), plus its standard error, from the rounding, or from the
+//!   residuals where they show more than the rounding (normals computed from faces, a surface
+//!   the quadric does not follow). Such a fit
 //!   does not see the facets: a tessellated sphere reads its radius, not its triangles'.
 //!
 //! Curvatures are signed convex-positive: positive where the surface bulges towards the
@@ -504,17 +507,35 @@ impl MeshFit {
             .map(|&k| (self.positions[k] - origin).length())
             .fold(0.0, f64::max)
             .max(1e-9);
+        // Each row weighted by its rounding: an f32 rounded to the nearest carries a uniform
+        // error of a unit in its last place / √12 (heights here in units of the reach; slopes
+        // from normals whose components are at most 1).
+        let rounding = |x: f64| f32_ulp(x) / 12f64.sqrt();
         let mut rows: Vec<([f64; 6], f64)> = Vec::new();
+        let mut weighted = |a: [f64; 6], y: f64, sigma: f64| {
+            rows.push((a.map(|a| a / sigma), y / sigma));
+        };
         for &k in vertices {
-            let d = self.positions[k] - origin;
+            let p = self.positions[k];
+            let d = p - origin;
             let (u, v, z) = (d.dot(x) / reach, d.dot(y) / reach, d.dot(n) / reach);
-            rows.push(([u * u, u * v, v * v, u, v, 1.0], z));
+            let height_sigma = rounding(p.abs().max_element().max(reach)) / reach;
+            weighted([u * u, u * v, v * v, u, v, 1.0], z, height_sigma);
             if let Some(normals) = &self.normals {
                 let m = normals[k];
                 let mz = m.dot(n);
                 if mz.abs() > 1e-6 {
-                    rows.push(([2.0 * u, v, 0.0, 1.0, 0.0, 0.0], -m.dot(x) / mz));
-                    rows.push(([0.0, u, 2.0 * v, 0.0, 1.0, 0.0], -m.dot(y) / mz));
+                    let slope_sigma = rounding(1.0) / mz.abs();
+                    weighted(
+                        [2.0 * u, v, 0.0, 1.0, 0.0, 0.0],
+                        -m.dot(x) / mz,
+                        slope_sigma,
+                    );
+                    weighted(
+                        [0.0, u, 2.0 * v, 0.0, 1.0, 0.0],
+                        -m.dot(y) / mz,
+                        slope_sigma,
+                    );
                 }
             }
         }
@@ -533,6 +554,12 @@ impl MeshFit {
             spread2,
         })
     }
+}
+
+/// The spacing of f32 values at `x`'s size.
+fn f32_ulp(x: f64) -> f64 {
+    let x = (x.abs() as f32).max(f32::MIN_POSITIVE);
+    f64::from(f32::from_bits(x.to_bits() + 1) - x)
 }
 
 struct Fit {
@@ -570,7 +597,9 @@ fn least_squares(rows: &[([f64; 6], f64)]) -> Option<([f64; 6], [f64; 6])> {
             (fit - y).powi(2)
         })
         .sum();
-    let variance = residual / (rows.len() - 6) as f64;
+    // Rows weighted by their rounding: a reduced χ² of 1 is rounding alone; more is what the
+    // data show beyond it (a surface the quadric does not follow, normals computed from faces).
+    let variance = (residual / (rows.len() - 6) as f64).max(1.0);
     let se = [0, 1, 2, 3, 4, 5].map(|k| (variance * inverse[k][k].max(0.0)).sqrt());
     Some((c, se))
 }

@@ -179,8 +179,12 @@ fn a_convex_cap_mesh_reads_its_radius_within_one_percent() {
             );
             assert!(error < 0.01 * r, "{name}: r = {value}");
             assert!(error <= u, "{name}: error {error} beyond the stated ±{u}");
-            // Stated 1.2e-4 to 1.1e-3 m for errors of 1.5e-5 to 1.6e-4 m: a millimetre at most.
-            assert!(u < 2.5e-3, "{name}: ±{u}");
+            // Stated 4.0e-5 to 1.8e-3 m for errors of 1.8e-5 to 1.8e-4 m: two millimetres at
+            // most; with the file's normals at most 3 times the error (measured 1.3).
+            assert!(u < 3.5e-3, "{name}: ±{u}");
+            if name == "file normals" {
+                assert!(u <= 3.0 * error, "{name}: ±{u} for {error}");
+            }
             assert_eq!(radius.verdict, Outcome::Pass, "{radius:#?}");
             for check in [
                 "flat or spherically convex",
