@@ -243,7 +243,11 @@ pub struct Annex7 {
     pub points: [Annex7Point; 3],
     pub r: f64,
     pub r_uncertainty: f64,
+    /// No section's curvature told from zero.
     pub flat: bool,
+    /// The largest |curvature| + uncertainty over the sections: how curved the surface may be
+    /// at most, 1/m.
+    pub greatest_curvature: f64,
 }
 
 impl Annex7 {
@@ -265,6 +269,11 @@ impl Annex7 {
         }
         let points: [Annex7Point; 3] = points.try_into().expect("three points");
         let flat = points.iter().all(Annex7Point::is_flat);
+        let greatest_curvature = points
+            .iter()
+            .flat_map(|p| [p.along, p.across])
+            .map(|c| c.value.abs() + c.uncertainty)
+            .fold(0.0, f64::max);
         let (r, r_uncertainty) = if flat {
             (f64::INFINITY, 0.0)
         } else {
@@ -281,6 +290,7 @@ impl Annex7 {
             r,
             r_uncertainty,
             flat,
+            greatest_curvature,
         })
     }
 }
@@ -358,8 +368,18 @@ fn spherical_checks(
     probe: &Probe,
     annex7: &Annex7,
 ) -> Vec<MirrorCheck> {
-    let mut checks = vec![convex_or_flat(source, probe)];
+    let mut checks = vec![convex_or_flat(source, probe, rule.min_radius_m)];
     let (r, ur) = (annex7.r, annex7.r_uncertainty);
+    // Flat: no section told from zero, and even at its uncertainty's edge none curved beyond
+    // the least radius allowed; flat within a wider uncertainty cannot be told from too curved.
+    let flat = annex7
+        .flat
+        .then_some(annex7.greatest_curvature <= 1.0 / rule.min_radius_m);
+    let judged = |outcome: Outcome| match flat {
+        Some(true) => Outcome::Pass,
+        Some(false) => Outcome::Undecided,
+        None => outcome,
+    };
     let listed = annex7
         .points
         .iter()
@@ -379,19 +399,16 @@ fn spherical_checks(
         format!("r = {} ± {:.2} mm; {arc}", mm(r), ur * 1e3),
         (r, rule.min_radius_m, margin, ur),
         "m",
-        if annex7.flat {
-            Outcome::Pass
-        } else {
-            Outcome::of_margin(margin, ur)
-        },
+        judged(Outcome::of_margin(margin, ur)),
     ));
-    let share = deviation_share(r);
+    // The limit's share by r's least value: 0.25 only where r is surely 3000 mm or more.
+    let share = deviation_share(r - ur);
     let limit = share * r;
     let (worst, worst_u) = annex7
         .points
         .iter()
         .map(Annex7Point::spread)
-        .fold((0.0f64, 0.0f64), |a, b| if b.0 >= a.0 { b } else { a });
+        .fold((0.0f64, 0.0f64), worse);
     let u = worst_u + share * ur;
     checks.push(MirrorCheck::new(
         "r_i, r'_i within the limit of r_p",
@@ -400,11 +417,7 @@ fn spherical_checks(
         format!("largest {} (limit {})", mm(worst), mm(limit)),
         (worst, limit, limit - worst, u),
         "m",
-        if annex7.flat {
-            Outcome::Pass
-        } else {
-            Outcome::of_margin(limit - worst, u)
-        },
+        judged(Outcome::of_margin(limit - worst, u)),
     ));
     let (worst, worst_u) = annex7
         .points
@@ -413,7 +426,7 @@ fn spherical_checks(
             let (rp, u) = p.r_p();
             ((rp - r).abs(), u + ur)
         })
-        .fold((0.0f64, 0.0f64), |a, b| if b.0 >= a.0 { b } else { a });
+        .fold((0.0f64, 0.0f64), worse);
     let u = worst_u + share * ur;
     checks.push(MirrorCheck::new(
         "r_p1, r_p2, r_p3 within the limit of r",
@@ -422,16 +435,22 @@ fn spherical_checks(
         format!("largest {} (limit {})", mm(worst), mm(limit)),
         (worst, limit, limit - worst, u),
         "m",
-        if annex7.flat {
-            Outcome::Pass
-        } else {
-            Outcome::of_margin(limit - worst, u)
-        },
+        judged(Outcome::of_margin(limit - worst, u)),
     ));
-    if !annex7.flat {
+    if flat != Some(true) {
         checks.push(aspherical_part(rule, source, probe, annex7));
     }
     checks
+}
+
+/// Of two (value, uncertainty) pairs held below a limit, the one that may reach higher (an
+/// unknown one, NaN, first: it leaves its check undecided).
+fn worse(a: (f64, f64), b: (f64, f64)) -> (f64, f64) {
+    if (b.0 + b.1).total_cmp(&(a.0 + a.1)).is_ge() || (b.0 + b.1).is_nan() {
+        b
+    } else {
+        a
+    }
 }
 
 /// The surface's shapes over a grid of plane points (15 × 15 over its outline's bounds,
@@ -474,7 +493,7 @@ fn extremes(shape: &LocalShape) -> Option<(Curvature, Curvature)> {
 /// R46 §6.1.2.2: flat or spherically convex: the least normal curvature over the surface
 /// (convex-positive) is not below zero; a surface whose every curvature is zero within its
 /// uncertainty is flat.
-fn convex_or_flat(source: &str, probe: &Probe) -> MirrorCheck {
+fn convex_or_flat(source: &str, probe: &Probe, min_radius_m: f64) -> MirrorCheck {
     let shapes = shapes_over(probe);
     let least = shapes
         .iter()
@@ -488,10 +507,14 @@ fn convex_or_flat(source: &str, probe: &Probe) -> MirrorCheck {
             "no point of the surface could be measured".into(),
         );
     };
-    let flat = shapes
-        .iter()
-        .filter_map(extremes)
-        .all(|(a, b)| a.is_flat() && b.is_flat());
+    // Flat: no curvature told from zero, and none that at its uncertainty's edge passes the
+    // least radius allowed either way.
+    let flat = shapes.iter().filter_map(extremes).all(|(a, b)| {
+        a.is_flat()
+            && b.is_flat()
+            && (a.value.abs() + a.uncertainty).max(b.value.abs() + b.uncertainty)
+                <= 1.0 / min_radius_m
+    });
     let (r, _) = least.radius();
     MirrorCheck::new(
         "flat or spherically convex",
@@ -543,12 +566,12 @@ fn aspherical_part(
         for c in [point.along, point.across] {
             let (radius, u) = c.radius();
             let excess = (radius - r).abs() - limit;
-            if excess > worst_excess {
+            if excess + u + ur > worst_excess + worst_u || (excess + u).is_nan() {
                 (worst_excess, worst_u) = (excess, u + ur);
             }
             if excess > 0.0 {
                 aspherical += 1;
-                if radius < least_radius {
+                if radius - u < least_radius - least_u || (radius - u).is_nan() {
                     (least_radius, least_u) = (radius, u);
                 }
             }
@@ -684,6 +707,26 @@ fn convex_checks(rule: &ConvexRule, source: &str, readings: &[Curvature]) -> Vec
     let average = radii.iter().map(|r| r.0).sum::<f64>() / n;
     let average_u = radii.iter().map(|r| r.1).sum::<f64>() / n;
     let margin = (average - rule.min_average_m).min(rule.max_average_m - average);
+    // The average's bounds from each reading's curvature interval: a reading that may be flat
+    // has no upper bound, one surely concave fails the convex mirror outright.
+    let concave = readings.iter().any(|c| c.value + c.uncertainty < 0.0);
+    let bound = |c: &Curvature, sign: f64| {
+        let k = c.value + sign * c.uncertainty;
+        if k > 0.0 {
+            1.0 / k
+        } else {
+            f64::INFINITY
+        }
+    };
+    let low = readings.iter().map(|c| bound(c, 1.0)).sum::<f64>() / n;
+    let high = readings.iter().map(|c| bound(c, -1.0)).sum::<f64>() / n;
+    let average_verdict = if concave || high < rule.min_average_m || low > rule.max_average_m {
+        Outcome::Fail
+    } else if low >= rule.min_average_m && high <= rule.max_average_m {
+        Outcome::Pass
+    } else {
+        Outcome::Undecided
+    };
     let listed = radii.iter().map(|r| mm(r.0)).collect::<Vec<_>>().join(", ");
     let mut checks = vec![MirrorCheck::new(
         "average radius of curvature",
@@ -709,7 +752,7 @@ fn convex_checks(rule: &ConvexRule, source: &str, readings: &[Curvature]) -> Vec
             average_u,
         ),
         "m",
-        Outcome::of_margin(margin, average_u),
+        average_verdict,
     )];
     let (worst, worst_u) = radii
         .iter()
@@ -717,7 +760,7 @@ fn convex_checks(rule: &ConvexRule, source: &str, readings: &[Curvature]) -> Vec
             let share = (r - average).abs() / average;
             (share, (u + average_u) / average)
         })
-        .fold((0.0f64, 0.0f64), |a, b| if b.0 >= a.0 { b } else { a });
+        .fold((0.0f64, 0.0f64), worse);
     let limit = rule.max_deviation_share;
     checks.push(MirrorCheck::new(
         "readings' deviation from the average",
@@ -731,7 +774,11 @@ fn convex_checks(rule: &ConvexRule, source: &str, readings: &[Curvature]) -> Vec
             worst_u * 100.0,
         ),
         "%",
-        Outcome::of_margin(limit - worst, worst_u),
+        if concave || average <= 0.0 {
+            Outcome::Fail
+        } else {
+            Outcome::of_margin(limit - worst, worst_u)
+        },
     ));
     checks
 }
@@ -755,7 +802,7 @@ fn rectangle_checks(
         }
     };
     let a = a_of(r);
-    let a_u = if ur.is_finite() && ur > 0.0 {
+    let a_u = if ur > 0.0 {
         0.5 * (a_of(r + ur) - a_of((r - ur).max(1e-9))).abs()
     } else {
         0.0

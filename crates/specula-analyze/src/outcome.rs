@@ -22,7 +22,8 @@ impl Outcome {
     /// the standards' limits include their edges.
     pub fn of_margin(margin: f64, uncertainty: f64) -> Outcome {
         let uncertainty = uncertainty.abs();
-        if margin.is_nan() || uncertainty.is_nan() {
+        // An unknown or unbounded uncertainty decides nothing.
+        if margin.is_nan() || !uncertainty.is_finite() {
             Outcome::Undecided
         } else if margin >= uncertainty {
             Outcome::Pass
@@ -89,6 +90,8 @@ mod tests {
         assert_eq!(Outcome::of_margin(0.0, 0.0), Pass);
         assert_eq!(Outcome::of_margin(-1e-12, 0.0), Fail);
         assert_eq!(Outcome::of_margin(f64::NAN, 0.0), Undecided);
+        assert_eq!(Outcome::of_margin(f64::INFINITY, f64::INFINITY), Undecided);
+        assert_eq!(Outcome::of_margin(-1.0, f64::NAN), Undecided);
         assert_eq!(Outcome::all([Pass, Undecided, Pass]), Undecided);
         assert_eq!(Outcome::all([Pass, Undecided, Fail]), Fail);
         assert_eq!(Outcome::all([]), Pass);

@@ -506,20 +506,34 @@ impl FieldFigures {
     /// The field's verdict from its figures, with `surface_uncertainty` (a mesh mirror's)
     /// added to each share's.
     fn decide(&mut self, allowance: f64, surface_uncertainty: f64) {
-        let excused = if self.hidden_by_vehicle_share < allowance {
-            self.hidden_by_vehicle_share
-        } else {
-            0.0
+        let within_if = |excused: bool| {
+            let excused_share = if excused {
+                self.hidden_by_vehicle_share
+            } else {
+                0.0
+            };
+            // Shares are counts of the grid's cells: a sum within rounding of 1 is 1.
+            let short = self.seen_share + excused_share - 1.0;
+            let short = if short.abs() < 1e-12 { 0.0 } else { short };
+            let grid = if excused_share > 0.0 {
+                self.clear_share_uncertainty
+            } else {
+                self.seen_share_uncertainty
+            };
+            Outcome::of_margin(short, grid + surface_uncertainty)
         };
-        // Shares are counts of the grid's cells: a sum within rounding of 1 is 1.
-        let short = self.seen_share + excused - 1.0;
-        let short = if short.abs() < 1e-12 { 0.0 } else { short };
-        let grid = if excused > 0.0 {
-            self.clear_share_uncertainty
-        } else {
-            self.seen_share_uncertainty
+        // Whether the body's share is under the allowance is itself measured: where it lies
+        // within its uncertainty of the allowance, the field is decided only if both readings
+        // agree.
+        let hidden_uncertainty =
+            self.seen_share_uncertainty + self.clear_share_uncertainty + surface_uncertainty;
+        let margin = allowance - self.hidden_by_vehicle_share;
+        let within = match Outcome::of_margin(margin, hidden_uncertainty) {
+            Outcome::Pass => within_if(true),
+            Outcome::Fail => within_if(false),
+            Outcome::Undecided if within_if(true) == within_if(false) => within_if(true),
+            Outcome::Undecided => Outcome::Undecided,
         };
-        let within = Outcome::of_margin(short, grid + surface_uncertainty);
         let beyond = self
             .beyond_range_seen_share
             .zip(self.beyond_range_uncertainty)
@@ -1423,13 +1437,7 @@ pub fn adjust(
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Adjustment, AnalyzeError> {
     let mirror = request.view.mirror;
-    check_pivot(scene, mirror, adjust.pivot)?;
-    if !(adjust.step_deg.is_finite() && adjust.step_deg > 0.0) {
-        return Err(AnalyzeError::BadOption {
-            option: "--adjust-step",
-            reason: format!("{}°: the step must be a positive angle", adjust.step_deg),
-        });
-    }
+    check_adjust(scene, request, adjust)?;
     let surface = MirrorSurface::new(scene, mirror, request.view.surface).expect("validated");
     let (_, normal) = mirror_centre_and_normal(&surface);
     let up = request.vehicle.frame.up;
@@ -1467,34 +1475,7 @@ pub fn adjust(
         poses.push(pose_of(yaw, pitch, &judged.verdict, request.regulation));
         progress(k + 1, grid.len());
     }
-    let to_confirm = poses
-        .iter()
-        .filter(|p| p.search_verdict != Outcome::Fail)
-        .count();
-    let total = grid.len() + to_confirm;
-    let mut confirmed = grid.len();
-    for pose in poses
-        .iter_mut()
-        .filter(|p| p.search_verdict != Outcome::Fail)
-    {
-        let scene = posed(pose.yaw_deg, pose.pitch_deg);
-        let accel = SceneAccel::new(&scene);
-        let judged = evaluate_quietly(&scene, &accel, request)?;
-        let full = pose_of(
-            pose.yaw_deg,
-            pose.pitch_deg,
-            &judged.verdict,
-            request.regulation,
-        );
-        *pose = Pose {
-            search_verdict: pose.search_verdict,
-            confirmed_verdict: Some(full.search_verdict),
-            fields_passed: full.search_verdict.passed(),
-            ..full
-        };
-        confirmed += 1;
-        progress(confirmed, total);
-    }
+    confirm(&mut poses, &posed, request, progress)?;
     let passing: Vec<&Pose> = poses.iter().filter(|p| p.fields_passed).collect();
     let range = |f: fn(&Pose) -> f32| {
         (!passing.is_empty()).then(|| {
@@ -1534,6 +1515,72 @@ pub fn adjust(
         best,
         best_verdict,
     })
+}
+
+/// `--adjust`'s own inputs: a regulation with fields, a pivot at the mirror, a positive step.
+fn check_adjust(
+    scene: &Scene,
+    request: &Request,
+    adjust: &AdjustRequest,
+) -> Result<(), AnalyzeError> {
+    if request.regulation.fields.is_empty() {
+        return Err(AnalyzeError::BadOption {
+            option: "--adjust",
+            reason: format!(
+                "{} prescribes no field: there is nothing for a pose search to find (the \
+                 mirror's own rules do not change with its pose)",
+                request.regulation.name
+            ),
+        });
+    }
+    check_pivot(scene, request.view.mirror, adjust.pivot)?;
+    if !(adjust.step_deg.is_finite() && adjust.step_deg > 0.0) {
+        return Err(AnalyzeError::BadOption {
+            option: "--adjust-step",
+            reason: format!("{}°: the step must be a positive angle", adjust.step_deg),
+        });
+    }
+    Ok(())
+}
+
+/// Judges every pose the search did not fail again as the command judges (the request's
+/// tolerances, a mesh mirror's surface uncertainty included): only those confirmed pass.
+fn confirm(
+    poses: &mut [Pose],
+    posed: &impl Fn(f32, f32) -> Scene,
+    request: &Request,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<(), AnalyzeError> {
+    let searched = poses.len();
+    let total = searched
+        + poses
+            .iter()
+            .filter(|p| p.search_verdict != Outcome::Fail)
+            .count();
+    let mut done = searched;
+    for pose in poses
+        .iter_mut()
+        .filter(|p| p.search_verdict != Outcome::Fail)
+    {
+        let scene = posed(pose.yaw_deg, pose.pitch_deg);
+        let accel = SceneAccel::new(&scene);
+        let judged = evaluate(&scene, &accel, request, &|_| {})?;
+        let full = pose_of(
+            pose.yaw_deg,
+            pose.pitch_deg,
+            &judged.verdict,
+            request.regulation,
+        );
+        *pose = Pose {
+            search_verdict: pose.search_verdict,
+            confirmed_verdict: Some(full.search_verdict),
+            fields_passed: full.search_verdict.passed(),
+            ..full
+        };
+        done += 1;
+        progress(done, total);
+    }
+    Ok(())
 }
 
 /// One pose judged, without the smooth-fit rerun (the pose search compares poses on one surface).

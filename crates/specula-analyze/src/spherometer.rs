@@ -339,7 +339,17 @@ impl Bins {
     }
 
     fn candidates(&self, q: DVec2) -> std::slice::Iter<'_, usize> {
-        let c = ((q - self.lo) / self.size).floor();
+        let g = (q - self.lo) / self.size;
+        // A point on the bounds' far edge belongs to the last bin.
+        let bin = |g: f64, count: usize| {
+            let last = count as f64;
+            if (last..=last + 1e-9).contains(&g) {
+                last - 1.0
+            } else {
+                g.floor()
+            }
+        };
+        let c = DVec2::new(bin(g.x, self.count[0]), bin(g.y, self.count[1]));
         let inside = c.x >= 0.0
             && c.y >= 0.0
             && (c.x as usize) < self.count[0]

@@ -307,6 +307,14 @@ fn fmvss_111_s_convex_mirror_rule_flips_at_its_limits() {
         assert_eq!(deviation.verdict, expected, "{deviation:#?}");
         assert_eq!(deviation.unit, "%");
     }
+    // A flat mirror is no convex one: its average radius is unbounded, so it fails.
+    let flat = scene_of(grid_mesh(11, 8, (0.2, 0.13), |_, _| (0.0, DVec3::Z)));
+    let c = checks(&flat, SurfaceModel::Mesh, &FMVSS_CONVEX);
+    assert_eq!(average(&c), Outcome::Fail, "{c:#?}");
+    // A concave one fails both.
+    let concave = scene_of(grid_mesh(61, 41, (0.2, 0.13), sphere(-1.2)));
+    let c = checks(&concave, SurfaceModel::Mesh, &FMVSS_CONVEX);
+    assert!(c.iter().all(|c| c.verdict == Outcome::Fail), "{c:#?}");
     // Too small for S12's end readings: refused as undecided, saying why.
     let small = scene_of(grid_mesh(11, 11, (0.04, 0.04), sphere(1.2)));
     let c = checks(&small, SurfaceModel::Mesh, &FMVSS_CONVEX);

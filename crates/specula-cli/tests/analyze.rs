@@ -354,6 +354,17 @@ fn bad_regulation_input_is_a_clear_error() {
             with(&["r46-vii", "--r-point", "0.28,-0.575,0.75"]),
             "unknown regulation 'r46-vii'; valid: r46-i, r46-ii, r46-iii, r46-iv, r46-v, fmvss111, fmvss111-convex",
         ),
+        // A rule with no field has no pose to search for.
+        (
+            with(&[
+                "fmvss111-convex",
+                "--r-point",
+                "0.28,-0.575,0.75",
+                "--adjust",
+                "0,0,-0.03",
+            ]),
+            "--adjust: fmvss111-convex prescribes no field",
+        ),
         // Eyes behind the mirror (it faces +Z).
         (
             with(&[
