@@ -358,8 +358,8 @@ fn bad_regulation_input_is_a_clear_error() {
         (
             with(&[
                 "fmvss111-convex",
-                "--r-point",
-                "0.28,-0.575,0.75",
+                "--eye",
+                "0.28,0.06,0.75",
                 "--adjust",
                 "0,0,-0.03",
             ]),
