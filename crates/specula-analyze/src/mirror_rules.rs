@@ -32,7 +32,8 @@
 //! has one, else on a local fit to the mesh that does not see its facets; every radius carries
 //! its measured uncertainty, which enters every check that uses it. "Flat" has no figure in
 //! either text: a surface is read as flat where no curvature can be told from zero within the
-//! measurement's uncertainty.
+//! measurement's uncertainty and, for R46, none at its uncertainty's edge is sharper than the
+//! class's least radius (else the surface checks are undecided).
 
 use glam::{DVec2, DVec3, Vec3};
 use serde::Serialize;
