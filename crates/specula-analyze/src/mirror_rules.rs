@@ -405,38 +405,38 @@ fn spherical_checks(
     // The limit's share by r's least value: 0.25 only where r is surely 3000 mm or more.
     let share = deviation_share(r - ur);
     let limit = share * r;
-    let (worst, worst_u) = annex7
-        .points
-        .iter()
-        .map(Annex7Point::spread)
-        .fold((0.0f64, 0.0f64), worse);
-    let u = worst_u + share * ur;
-    checks.push(MirrorCheck::new(
+    let limit_check = |name: &str, required: String, (worst, worst_u): (f64, f64)| {
+        let u = worst_u + share * ur;
+        MirrorCheck::new(
+            name,
+            source,
+            required,
+            format!("largest {} (limit {})", mm(worst), mm(limit)),
+            (worst, limit, limit - worst, u),
+            "m",
+            judged(Outcome::of_margin(limit - worst, u)),
+        )
+    };
+    checks.push(limit_check(
         "r_i, r'_i within the limit of r_p",
-        source,
         format!("|r_i − r_p| and |r'_i − r_p| at most {share} r at each point"),
-        format!("largest {} (limit {})", mm(worst), mm(limit)),
-        (worst, limit, limit - worst, u),
-        "m",
-        judged(Outcome::of_margin(limit - worst, u)),
+        annex7
+            .points
+            .iter()
+            .map(Annex7Point::spread)
+            .fold((0.0f64, 0.0f64), worse),
     ));
-    let (worst, worst_u) = annex7
-        .points
-        .iter()
-        .map(|p| {
-            let (rp, u) = p.r_p();
-            ((rp - r).abs(), u + ur)
-        })
-        .fold((0.0f64, 0.0f64), worse);
-    let u = worst_u + share * ur;
-    checks.push(MirrorCheck::new(
+    checks.push(limit_check(
         "r_p1, r_p2, r_p3 within the limit of r",
-        source,
         format!("|r_pk − r| at most {share} r"),
-        format!("largest {} (limit {})", mm(worst), mm(limit)),
-        (worst, limit, limit - worst, u),
-        "m",
-        judged(Outcome::of_margin(limit - worst, u)),
+        annex7
+            .points
+            .iter()
+            .map(|p| {
+                let (rp, u) = p.r_p();
+                ((rp - r).abs(), u + ur)
+            })
+            .fold((0.0f64, 0.0f64), worse),
     ));
     if flat != Some(true) {
         checks.push(aspherical_part(rule, source, probe, annex7));

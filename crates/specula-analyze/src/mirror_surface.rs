@@ -349,16 +349,7 @@ impl LocalQuadric {
 /// (scaled to the triangle's size) so that a flat or under-determined neighbourhood gives the
 /// plane rather than noise.
 fn least_squares(rows: &[([f64; 6], f64)], scale: f64) -> [f64; 6] {
-    let mut ata = [[0.0f64; 6]; 6];
-    let mut aty = [0.0f64; 6];
-    for (a, y) in rows {
-        for i in 0..6 {
-            aty[i] += a[i] * y;
-            for j in 0..6 {
-                ata[i][j] += a[i] * a[j];
-            }
-        }
-    }
+    let (mut ata, aty) = crate::spherometer::normal_equations(rows);
     let ridge = 1e-9 * scale.powi(4);
     for (i, row) in ata.iter_mut().enumerate().take(3) {
         row[i] += ridge;

@@ -114,7 +114,12 @@ pub fn write_mirror_view(dir: &Path, page: &MirrorViewPage) -> Result<PathBuf, A
     let verdict = page
         .regulation
         .map(|(document, ..)| {
-            crate::verdict_page::regulation_html(document.regulation, &document.judged_from())
+            let mut html =
+                crate::verdict_page::regulation_html(document.regulation, &document.judged_from());
+            if let Some(a) = document.adjustment {
+                html.push_str(&crate::verdict_page::adjustment_html(a));
+            }
+            html
         })
         .unwrap_or_default();
     let mut rows = String::new();

@@ -585,16 +585,7 @@ fn least_squares(rows: &[([f64; 6], f64)]) -> Option<([f64; 6], [f64; 6])> {
     if rows.len() <= 6 {
         return None;
     }
-    let mut ata = [[0.0f64; 6]; 6];
-    let mut aty = [0.0f64; 6];
-    for (a, y) in rows {
-        for i in 0..6 {
-            aty[i] += a[i] * y;
-            for j in 0..6 {
-                ata[i][j] += a[i] * a[j];
-            }
-        }
-    }
+    let (ata, aty) = normal_equations(rows);
     let inverse = invert6(&ata)?;
     let mut c = [0.0f64; 6];
     for i in 0..6 {
@@ -612,6 +603,21 @@ fn least_squares(rows: &[([f64; 6], f64)]) -> Option<([f64; 6], [f64; 6])> {
     let variance = (residual / (rows.len() - 6) as f64).max(1.0);
     let se = [0, 1, 2, 3, 4, 5].map(|k| (variance * inverse[k][k].max(0.0)).sqrt());
     Some((c, se))
+}
+
+/// The normal equations AᵀA c = Aᵀy of the rows' system A c = y.
+pub(crate) fn normal_equations(rows: &[([f64; 6], f64)]) -> ([[f64; 6]; 6], [f64; 6]) {
+    let mut ata = [[0.0f64; 6]; 6];
+    let mut aty = [0.0f64; 6];
+    for (a, y) in rows {
+        for i in 0..6 {
+            aty[i] += a[i] * y;
+            for j in 0..6 {
+                ata[i][j] += a[i] * a[j];
+            }
+        }
+    }
+    (ata, aty)
 }
 
 /// The inverse of a symmetric 6 × 6 matrix by Gauss–Jordan elimination with partial pivoting.

@@ -151,6 +151,40 @@ pub fn regulation_html(v: &Verdict, judged_from: &str) -> String {
     html
 }
 
+/// The pose search's part of a report: what the terminal prints of it.
+pub fn adjustment_html(a: &crate::regulation::Adjustment) -> String {
+    let range =
+        |r: Option<[f32; 2]>| r.map_or("none".into(), |[lo, hi]| format!("{lo:+.1}° to {hi:+.1}°"));
+    let b = &a.best;
+    let best = Outcome::all(a.best_verdict.fields.iter().map(|f| f.figures.verdict));
+    format!(
+        "<h2>Poses that pass</h2>\n<p>Turning the mirror about ({:.3}, {:.3}, {:.3}), ±{}° in \
+         steps of {}°: {} of {} poses pass the fields, confirmed at the command's tolerances; yaw \
+         {}, pitch {}. The {} pose: yaw {:+.1}°, pitch {:+.1}°, least share {} ('{}'), least \
+         margin {}; its fields at the command's tolerances: <b>{}</b>.</p>\n",
+        a.pivot[0],
+        a.pivot[1],
+        a.pivot[2],
+        a.limit_deg,
+        a.step_deg,
+        a.passing_poses,
+        a.poses.len(),
+        range(a.passing_yaw_deg),
+        range(a.passing_pitch_deg),
+        if a.passing_poses > 0 {
+            "widest-margin"
+        } else {
+            "most-seen"
+        },
+        b.yaw_deg,
+        b.pitch_deg,
+        percent(b.least_share),
+        html_escape(&b.least_share_field),
+        number(b.least_margin_m, "m"),
+        best.word()
+    )
+}
+
 fn reasons_html(reasons: &[String]) -> String {
     if reasons.is_empty() {
         return String::new();

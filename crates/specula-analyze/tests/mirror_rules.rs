@@ -6,9 +6,7 @@
 
 use glam::{DVec3, Mat4, Vec3};
 use specula_analyze::frame::VehicleFrame;
-use specula_analyze::mirror_rules::{
-    mirror_checks, ConvexRule, MirrorCheck, RectangleRule, SphericalRule, SurfaceRule,
-};
+use specula_analyze::mirror_rules::{mirror_checks, MirrorCheck, SurfaceRule};
 use specula_analyze::mirror_surface::{MirrorSurface, SurfaceModel};
 use specula_analyze::outcome::Outcome;
 use specula_scene::{generators, Camera, Material, Mesh, Scene};
@@ -107,47 +105,11 @@ fn named<'a>(checks: &'a [MirrorCheck], name: &str) -> &'a MirrorCheck {
         .unwrap_or_else(|| panic!("no check '{name}' in {checks:#?}"))
 }
 
-const R46_III: SurfaceRule = SurfaceRule {
-    spherical: Some(SphericalRule {
-        min_radius_m: 1.2,
-        aspherical_part_allowed: true,
-    }),
-    flat: false,
-    convex: None,
-    rectangle: Some(RectangleRule {
-        a_numerator_mm: 130.0,
-        segment_mm: Some(70.0),
-        either_way: false,
-    }),
-    source: "R46 §6.1.2",
-};
-
-const R46_I: SurfaceRule = SurfaceRule {
-    spherical: Some(SphericalRule {
-        min_radius_m: 1.2,
-        aspherical_part_allowed: false,
-    }),
-    flat: false,
-    convex: None,
-    rectangle: Some(RectangleRule {
-        a_numerator_mm: 150.0,
-        segment_mm: None,
-        either_way: true,
-    }),
-    source: "R46 §6.1.2",
-};
-
-const FMVSS_CONVEX: SurfaceRule = SurfaceRule {
-    spherical: None,
-    flat: false,
-    convex: Some(ConvexRule {
-        min_average_m: 0.889,
-        max_average_m: 1.651,
-        max_deviation_share: 0.125,
-    }),
-    rectangle: None,
-    source: "FMVSS 111 S5.4.1",
-};
+/// A regulation's surface rule as the table holds it (the tests below pin its figures: 1200 mm,
+/// 130 / (1 + 1000 / r), 70 mm, 889–1651 mm, 12.5 %).
+fn rule(name: &str) -> SurfaceRule {
+    specula_analyze::regulation::by_name(name).unwrap().surface
+}
 
 /// A 41 × 27 vertex cap of R 1.25 m, 200 × 130 mm, read with the file's normals, with normals
 /// computed from the faces, and flat shaded (each triangle's corners apart, the face normals):
@@ -167,7 +129,7 @@ fn a_convex_cap_mesh_reads_its_radius_within_one_percent() {
     ] {
         let scene = scene_of(mesh);
         for model in [SurfaceModel::Mesh, SurfaceModel::Smooth] {
-            let c = checks(&scene, model, &R46_III);
+            let c = checks(&scene, model, &rule("r46-iii"));
             let radius = named(&c, "radius of curvature r");
             let (value, u) = (radius.value.unwrap(), radius.uncertainty.unwrap());
             let error = (value - r).abs();
@@ -202,7 +164,7 @@ fn an_exact_cap_reads_its_radius() {
     for r in [0.5f32, 1.25, 4.0] {
         let mut cap = generators::spherical_cap(r, 0.2, false, 8, 32).unwrap();
         cap.transform(Mat4::from_translation(OFFSET));
-        let c = checks(&scene_of(cap), SurfaceModel::Exact, &R46_III);
+        let c = checks(&scene_of(cap), SurfaceModel::Exact, &rule("r46-iii"));
         let radius = named(&c, "radius of curvature r");
         let (value, u) = (radius.value.unwrap(), radius.uncertainty.unwrap());
         let error = (value - f64::from(r)).abs();
@@ -228,7 +190,7 @@ fn a_concave_mirror_fails_the_surface_rule() {
         (scene_of(exact), SurfaceModel::Exact),
         (scene_of(mesh), SurfaceModel::Mesh),
     ] {
-        let c = checks(&scene, model, &R46_III);
+        let c = checks(&scene, model, &rule("r46-iii"));
         let shape = named(&c, "flat or spherically convex");
         println!("{model:?}: {shape:#?}");
         assert_eq!(shape.verdict, Outcome::Fail, "{shape:#?}");
@@ -243,7 +205,7 @@ fn a_concave_mirror_fails_the_surface_rule() {
 #[test]
 fn a_flat_mirror_passes_as_flat() {
     let mesh = grid_mesh(11, 8, (0.2, 0.13), |_, _| (0.0, DVec3::Z));
-    let c = checks(&scene_of(mesh), SurfaceModel::Mesh, &R46_III);
+    let c = checks(&scene_of(mesh), SurfaceModel::Mesh, &rule("r46-iii"));
     for check in &c {
         assert_eq!(check.verdict, Outcome::Pass, "{check:#?}");
     }
@@ -264,10 +226,10 @@ fn an_aspherical_rim_is_allowed_on_exterior_mirrors_only() {
         (z, DVec3::new(-zx, y / r0, 1.0).normalize())
     };
     let scene = scene_of(grid_mesh(81, 41, (0.2, 0.1), surface));
-    let interior = checks(&scene, SurfaceModel::Mesh, &R46_I);
+    let interior = checks(&scene, SurfaceModel::Mesh, &rule("r46-i"));
     let whole = named(&interior, "spherical over the whole surface");
     assert_eq!(whole.verdict, Outcome::Fail, "{whole:#?}");
-    let exterior = checks(&scene, SurfaceModel::Mesh, &R46_III);
+    let exterior = checks(&scene, SurfaceModel::Mesh, &rule("r46-iii"));
     let part = named(&exterior, "aspherical part's r_i");
     println!("{part:#?}");
     assert_eq!(part.verdict, Outcome::Pass, "{part:#?}");
@@ -290,7 +252,7 @@ fn fmvss_111_s_convex_mirror_rule_flips_at_its_limits() {
         (1.68, Outcome::Fail),
     ] {
         let scene = scene_of(grid_mesh(61, 41, (0.2, 0.13), sphere(r)));
-        let c = checks(&scene, SurfaceModel::Mesh, &FMVSS_CONVEX);
+        let c = checks(&scene, SurfaceModel::Mesh, &rule("fmvss111-convex"));
         println!("R {r}: {:#?}", named(&c, "average radius of curvature"));
         assert_eq!(average(&c), expected, "R {r}");
         assert_eq!(
@@ -301,7 +263,7 @@ fn fmvss_111_s_convex_mirror_rule_flips_at_its_limits() {
     // (rv − rh) / (rv + rh) = 0.110 and 0.140 about 1.2 m.
     for (rh, rv, expected) in [(1.08, 1.347, Outcome::Pass), (1.05, 1.392, Outcome::Fail)] {
         let scene = scene_of(grid_mesh(61, 41, (0.2, 0.13), paraboloid(rh, rv)));
-        let c = checks(&scene, SurfaceModel::Mesh, &FMVSS_CONVEX);
+        let c = checks(&scene, SurfaceModel::Mesh, &rule("fmvss111-convex"));
         let deviation = named(&c, "readings' deviation from the average");
         println!("{rh} × {rv}: {deviation:#?}");
         assert_eq!(deviation.verdict, expected, "{deviation:#?}");
@@ -309,15 +271,15 @@ fn fmvss_111_s_convex_mirror_rule_flips_at_its_limits() {
     }
     // A flat mirror is no convex one: its average radius is unbounded, so it fails.
     let flat = scene_of(grid_mesh(11, 8, (0.2, 0.13), |_, _| (0.0, DVec3::Z)));
-    let c = checks(&flat, SurfaceModel::Mesh, &FMVSS_CONVEX);
+    let c = checks(&flat, SurfaceModel::Mesh, &rule("fmvss111-convex"));
     assert_eq!(average(&c), Outcome::Fail, "{c:#?}");
     // A concave one fails both.
     let concave = scene_of(grid_mesh(61, 41, (0.2, 0.13), sphere(-1.2)));
-    let c = checks(&concave, SurfaceModel::Mesh, &FMVSS_CONVEX);
+    let c = checks(&concave, SurfaceModel::Mesh, &rule("fmvss111-convex"));
     assert!(c.iter().all(|c| c.verdict == Outcome::Fail), "{c:#?}");
     // Too small for S12's end readings: refused as undecided, saying why.
     let small = scene_of(grid_mesh(11, 11, (0.04, 0.04), sphere(1.2)));
-    let c = checks(&small, SurfaceModel::Mesh, &FMVSS_CONVEX);
+    let c = checks(&small, SurfaceModel::Mesh, &rule("fmvss111-convex"));
     assert_eq!(c[0].verdict, Outcome::Undecided);
     assert!(c[0].measured.contains("25.4 mm"), "{}", c[0].measured);
 }
@@ -328,7 +290,7 @@ fn fmvss_111_s_convex_mirror_rule_flips_at_its_limits() {
 fn a_rectangle_within_its_uncertainty_is_undecided() {
     let flat = |w: f64, h: f64| {
         let mesh = grid_mesh(2, 2, (w, h), |_, _| (0.0, DVec3::Z));
-        checks(&scene_of(mesh), SurfaceModel::Mesh, &R46_III)
+        checks(&scene_of(mesh), SurfaceModel::Mesh, &rule("r46-iii"))
     };
     // Flat: a = 130 mm exactly.
     for (w, expected) in [
@@ -350,7 +312,7 @@ fn a_rectangle_within_its_uncertainty_is_undecided() {
     // Class I's rectangle may lie either way: 45 mm wide and 160 mm tall holds 40 × 150.
     let c = {
         let mesh = grid_mesh(2, 2, (0.045, 0.16), |_, _| (0.0, DVec3::Z));
-        checks(&scene_of(mesh), SurfaceModel::Mesh, &R46_I)
+        checks(&scene_of(mesh), SurfaceModel::Mesh, &rule("r46-i"))
     };
     assert_eq!(
         named(&c, "rectangle with a 40 mm side").verdict,
@@ -364,8 +326,8 @@ fn a_rectangle_within_its_uncertainty_is_undecided() {
 #[test]
 fn the_smooth_model_keeps_the_outline() {
     let scene = scene_of(grid_mesh(41, 27, (0.2, 0.13), sphere(1.4)));
-    let mesh = checks(&scene, SurfaceModel::Mesh, &R46_III);
-    let smooth = checks(&scene, SurfaceModel::Smooth, &R46_III);
+    let mesh = checks(&scene, SurfaceModel::Mesh, &rule("r46-iii"));
+    let smooth = checks(&scene, SurfaceModel::Smooth, &rule("r46-iii"));
     let width = |c: &[MirrorCheck]| named(c, "rectangle 40 mm high").value.unwrap();
     println!("mesh {} mm, smooth {} mm", width(&mesh), width(&smooth));
     assert!((width(&mesh) - width(&smooth)).abs() < 1.0);

@@ -11,8 +11,7 @@ use specula_analyze::mirror_surface::{MirrorSurface, SurfaceModel};
 use specula_analyze::mirror_view::{analyze, MirrorView, Obstacles, Options};
 use specula_analyze::outcome::Outcome;
 use specula_analyze::regulation::{
-    judge, EyeRule, EyeSets, FieldSpec, Lateral, RectangleRule, Regulation, Side, SphericalRule,
-    SurfaceRule, Vehicle, Verdict,
+    judge, EyeRule, EyeSets, FieldSpec, Lateral, Regulation, Side, SurfaceRule, Vehicle, Verdict,
 };
 use specula_scene::{generators, Camera, Material, Mesh, Scene};
 use specula_trace::SceneAccel;
@@ -447,20 +446,9 @@ fn a_convex_spherical_mirror_s_cone_ends_at_its_rim_s_reflection() {
 fn the_mirror_rules_flip_at_their_edges() {
     // Class III as R46 §6.1.2 reads: r at least 1200 mm; a rectangle 40 mm high and
     // a = 130 / (1 + 1000 / r) mm long (130 mm when flat), a 70 mm segment parallel to its height.
-    let class_iii = SurfaceRule {
-        spherical: Some(SphericalRule {
-            min_radius_m: 1.2,
-            aspherical_part_allowed: true,
-        }),
-        flat: false,
-        convex: None,
-        rectangle: Some(RectangleRule {
-            a_numerator_mm: 130.0,
-            segment_mm: Some(70.0),
-            either_way: false,
-        }),
-        source: "",
-    };
+    let class_iii = specula_analyze::regulation::by_name("r46-iii")
+        .unwrap()
+        .surface;
     let regulation = regulation(&INSIDE, class_iii);
     let checks = |scene: &Scene| {
         let v = verdict(scene, &[EYE], &regulation, EYE, Vec3::NEG_Z);

@@ -263,11 +263,6 @@ impl SagGrid {
         )
     }
 
-    /// The largest curvature uncertainty over the grid's nodes, 1 / metres.
-    pub fn largest_curvature_uncertainty(&self) -> f64 {
-        self.uncertainty.iter().copied().fold(0.0, f64::max)
-    }
-
     /// A grid sampled from `sag(x, y)` (metres) at the given nodes (metres).
     pub fn sampled(
         source: &str,

@@ -12,6 +12,7 @@ use specula_analyze::frame::{Eyes, VehicleFrame};
 use specula_analyze::mirror_surface::SurfaceModel;
 use specula_analyze::mirror_view::{self, Region};
 use specula_analyze::outcome::Outcome;
+use specula_analyze::verdict_page;
 use specula_scene::builtin::DEFAULT_SCENE;
 use specula_trace::SceneAccel;
 
@@ -514,7 +515,7 @@ fn lens(args: LensArgs) -> Result<()> {
     bar.finish_and_clear();
     if let Some(v) = &report.verdict {
         println!("{}: {}", v.edition, v.verdict.word());
-        print_reasons(&specula_analyze::verdict_page::lens_reasons(v, &report));
+        print_reasons(&verdict_page::lens_reasons(v, &report));
     }
     print_lens(&report);
     print_lens_checks(&report, args.focimeter);
@@ -1097,7 +1098,8 @@ fn print_verdict(
         }
     }
     for c in &v.mirror_checks {
-        let number = |x: Option<f64>| x.map_or_else(|| "-".to_string(), significant);
+        let number =
+            |x: Option<f64>| x.map_or_else(|| "-".to_string(), |x| verdict_page::number(x, ""));
         println!(
             "mirror: {} ({}): required {}; measured {}; value {} {unit}, limit {} {unit}, \
              margin {} ± {} {unit}: {}",
@@ -1106,14 +1108,14 @@ fn print_verdict(
             c.required,
             c.measured,
             number(c.value),
-            significant(c.limit),
+            verdict_page::number(c.limit, ""),
             number(c.margin),
             number(c.uncertainty),
             c.verdict.word(),
             unit = c.unit,
         );
     }
-    print_reasons(&specula_analyze::verdict_page::regulation_reasons(v));
+    print_reasons(&verdict_page::regulation_reasons(v));
 }
 
 /// Why a verdict is not a pass, a line each.
@@ -1123,19 +1125,6 @@ fn print_reasons(reasons: &[String]) {
         for reason in reasons {
             println!("  - {reason}");
         }
-    }
-}
-
-/// `x` to four significant digits, in plain decimals between 0.001 and 100 000.
-fn significant(x: f64) -> String {
-    if x == 0.0 || !x.is_finite() {
-        return format!("{x}");
-    }
-    let magnitude = x.abs().log10().floor() as i32;
-    if (-3..5).contains(&magnitude) {
-        format!("{x:.*}", (3 - magnitude).max(0) as usize)
-    } else {
-        format!("{x:.3e}")
     }
 }
 
