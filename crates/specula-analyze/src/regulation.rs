@@ -507,20 +507,8 @@ impl FieldFigures {
     /// added to each share's.
     fn decide(&mut self, allowance: f64, surface_uncertainty: f64) {
         let within_if = |excused: bool| {
-            let excused_share = if excused {
-                self.hidden_by_vehicle_share
-            } else {
-                0.0
-            };
-            // Shares are counts of the grid's cells: a sum within rounding of 1 is 1.
-            let short = self.seen_share + excused_share - 1.0;
-            let short = if short.abs() < 1e-12 { 0.0 } else { short };
-            let grid = if excused_share > 0.0 {
-                self.clear_share_uncertainty
-            } else {
-                self.seen_share_uncertainty
-            };
-            Outcome::of_margin(short, grid + surface_uncertainty)
+            let (_, short, uncertainty) = self.judged(excused, surface_uncertainty);
+            Outcome::of_margin(short, uncertainty)
         };
         // Whether the body's share is under the allowance is itself measured: where it lies
         // within its uncertainty of the allowance, the field is decided only if both readings
@@ -547,6 +535,26 @@ impl FieldFigures {
         };
         self.verdict = Outcome::all([within, beyond, horizon]);
         self.passed = self.verdict.passed();
+    }
+
+    /// The share judged within the range (seen, with the body's share where `excused`), its
+    /// margin to the whole field and the uncertainty that enters its verdict.
+    pub fn judged(&self, excused: bool, surface_uncertainty: f64) -> (f64, f64, f64) {
+        let excused_share = if excused {
+            self.hidden_by_vehicle_share
+        } else {
+            0.0
+        };
+        let share = self.seen_share + excused_share;
+        // Shares are counts of the grid's cells: a sum within rounding of 1 is 1.
+        let short = share - 1.0;
+        let short = if short.abs() < 1e-12 { 0.0 } else { short };
+        let grid = if excused_share > 0.0 {
+            self.clear_share_uncertainty
+        } else {
+            self.seen_share_uncertainty
+        };
+        (share, short, grid + surface_uncertainty)
     }
 
     /// Worst first: fail, undecided, pass; then by the share seen or hidden.

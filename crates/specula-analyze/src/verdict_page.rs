@@ -62,26 +62,13 @@ fn percent(share: f64) -> String {
     format!("{:.2} %", share * 100.0)
 }
 
-/// A field's share judged (seen, with the body's share where excused), its margin and the
-/// uncertainty that entered its verdict.
+/// A field's share judged (seen, with the body's share where it is under the allowance), its
+/// margin and the uncertainty that entered its verdict.
 fn field_figures(f: &FieldVerdict, allowance: f64) -> (f64, f64, f64) {
     let g = &f.figures;
-    let excused = g.hidden_by_vehicle_share < allowance;
-    let share = g.seen_share
-        + if excused {
-            g.hidden_by_vehicle_share
-        } else {
-            0.0
-        };
-    let grid = if excused && g.hidden_by_vehicle_share > 0.0 {
-        g.clear_share_uncertainty
-    } else {
-        g.seen_share_uncertainty
-    };
-    (
-        share,
-        share - 1.0,
-        grid + f.surface_uncertainty.unwrap_or(0.0),
+    g.judged(
+        g.hidden_by_vehicle_share < allowance,
+        f.surface_uncertainty.unwrap_or(0.0),
     )
 }
 
