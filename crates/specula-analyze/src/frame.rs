@@ -31,10 +31,10 @@ impl VehicleFrame {
             .try_normalize()
             .filter(|f| f.is_finite())
             .ok_or_else(|| AnalyzeError::BadOption {
-                option: "--forward",
+                option: "forward",
                 reason: format!(
                     "the vehicle's forward axis {given} has no horizontal part (it is vertical \
-                     or zero); give a horizontal direction, e.g. --forward 0,0,-1"
+                     or zero); give a horizontal direction, e.g. forward 0,0,-1"
                 ),
             })?;
         Ok(VehicleFrame {
@@ -136,7 +136,7 @@ impl Eyes {
     /// The eye points, about the camera's eye `centre`.
     pub fn points(&self, centre: Vec3, frame: &VehicleFrame) -> Result<Vec<Vec3>, AnalyzeError> {
         let bad = |reason: String| AnalyzeError::BadOption {
-            option: "--eyebox",
+            option: "eyebox",
             reason,
         };
         let points = match self {
@@ -183,13 +183,13 @@ impl Eyes {
         };
         if points.is_empty() {
             return Err(AnalyzeError::BadOption {
-                option: "--eye",
+                option: "eye",
                 reason: "no eye point".into(),
             });
         }
         if let Some(p) = points.iter().find(|p| !p.is_finite()) {
             return Err(AnalyzeError::BadOption {
-                option: "--eye",
+                option: "eye",
                 reason: format!("{p} is not a finite point"),
             });
         }
@@ -217,7 +217,7 @@ mod tests {
         assert!(frame.forward.abs_diff_eq(Vec3::NEG_Z, 1e-6));
         assert!(frame.right.abs_diff_eq(Vec3::X, 1e-6));
         let vertical = VehicleFrame::new(&camera(), Some(Vec3::Y)).unwrap_err();
-        assert!(vertical.to_string().contains("--forward"), "{vertical}");
+        assert!(vertical.to_string().contains("forward"), "{vertical}");
     }
 
     #[test]
@@ -229,7 +229,7 @@ mod tests {
         let one = VehicleFrame::for_eyes(&down, None, &Eyes::Camera).unwrap();
         assert!(one.forward.abs_diff_eq(Vec3::NEG_Z, 1e-6));
         let ocular = VehicleFrame::for_eyes(&down, None, &Eyes::Ocular).unwrap_err();
-        assert!(ocular.to_string().contains("--forward"), "{ocular}");
+        assert!(ocular.to_string().contains("forward"), "{ocular}");
         let given = VehicleFrame::for_eyes(&down, Some(Vec3::X), &Eyes::Ocular).unwrap();
         assert!(given.forward.abs_diff_eq(Vec3::X, 1e-6));
     }

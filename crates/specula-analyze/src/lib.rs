@@ -17,6 +17,18 @@
 //! Objects are named as the scene names them (`NAME#k` for a component split on load); an
 //! unknown name is an error listing the valid ones ([`object`]).
 
+/// Writes a line of a report's text into `out` (a `String`).
+macro_rules! say {
+    ($out:expr) => {
+        $out.push('\n')
+    };
+    ($out:expr, $($arg:tt)*) => {{
+        use std::fmt::Write as _;
+        writeln!($out, $($arg)*).expect("writing to a String")
+    }};
+}
+
+pub mod analysis;
 pub mod figure;
 pub mod frame;
 pub mod glare;
@@ -30,6 +42,8 @@ pub mod plot;
 pub mod regulation;
 pub mod report;
 pub mod spherometer;
+#[cfg(any(test, feature = "toy"))]
+pub mod toy_analysis;
 pub mod verdict_page;
 
 use specula_scene::Scene;
@@ -57,11 +71,18 @@ pub enum AnalyzeError {
     },
     #[error("{path}: {message}")]
     Write { path: String, message: String },
+    /// An option's value the analysis cannot use: the option's name (front ends show it in
+    /// their own words: the command as `--name`, a script as its key) and why.
     #[error("{option}: {reason}")]
     BadOption {
         option: &'static str,
         reason: String,
     },
+    /// An option's value its declaration refuses (kind, range).
+    #[error("{}: {}", .0.name, .0.reason)]
+    Option(#[from] specula_params::ParamError),
+    #[error("the analysis was cancelled")]
+    Cancelled,
 }
 
 /// The mesh the scene names `name`, for the analysis's `role` (`--mirror`, `--surface`...): an

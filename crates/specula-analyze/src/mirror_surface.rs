@@ -32,6 +32,12 @@ pub enum SurfaceModel {
     Smooth,
 }
 
+specula_params::choice!(SurfaceModel {
+    Exact = "exact",
+    Mesh = "mesh",
+    Smooth = "smooth",
+});
+
 impl SurfaceModel {
     pub fn name(self) -> &'static str {
         match self {

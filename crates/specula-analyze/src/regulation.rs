@@ -103,6 +103,18 @@ const R46: &str = "UN Regulation No. 46, 04 series of amendments";
 
 /// The regulations `--regulation` knows. Every figure is the one the cited paragraph states as
 /// we read it; docs/analyses/mirror-view.md says which were checked against the text and which not.
+/// The names of [`REGULATIONS`], in order (the `regulation` option's choices; a test holds the
+/// two lists equal).
+pub const REGULATION_NAMES: &[&str] = &[
+    "r46-i",
+    "r46-ii",
+    "r46-iii",
+    "r46-iv",
+    "r46-v",
+    "fmvss111",
+    "fmvss111-convex",
+];
+
 pub const REGULATIONS: &[Regulation] = &[
     Regulation {
         name: "r46-i",
@@ -326,7 +338,7 @@ pub fn by_name(name: &str) -> Result<&'static Regulation, AnalyzeError> {
         .iter()
         .find(|r| r.name == name)
         .ok_or_else(|| AnalyzeError::BadOption {
-            option: "--regulation",
+            option: "regulation",
             reason: format!(
                 "unknown regulation '{name}'; valid: {}",
                 REGULATIONS
@@ -338,8 +350,7 @@ pub fn by_name(name: &str) -> Result<&'static Regulation, AnalyzeError> {
         })
 }
 
-/// R46's ocular points are this far above the R point, metres.
-pub const OCULAR_HEIGHT_M: f32 = 0.635;
+pub use crate::analysis::eye_points::{eyellipse_points, ocular_points, OCULAR_HEIGHT_M};
 
 /// Which side of the vehicle the mirror serves.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -348,6 +359,11 @@ pub enum Side {
     Left,
     Right,
 }
+
+specula_params::choice!(Side {
+    Left = "left",
+    Right = "right",
+});
 
 /// The vehicle as the fields are laid out in it.
 #[derive(Clone, Debug)]
@@ -388,7 +404,7 @@ impl Vehicle {
             let out = (o - self.reference).dot(self.outward());
             if out <= 0.0 {
                 return Err(AnalyzeError::BadOption {
-                    option: "--outermost",
+                    option: "outermost",
                     reason: format!(
                         "{o} lies {:.3} m towards the other side of the ocular points, not on the \
                          {} side the mirror serves: the outermost point is the vehicle's widest \
@@ -414,11 +430,11 @@ impl Vehicle {
         let lateral_origin = match spec.lateral {
             Lateral::FromSide { .. } => {
                 let o = self.outermost.ok_or_else(|| AnalyzeError::BadOption {
-                    option: "--outermost",
+                    option: "outermost",
                     reason: format!(
                         "the field '{}' is bounded by the plane through the vehicle's outermost \
-                         point on the mirror's side: give it (--outermost X,Y,Z) or name the \
-                         vehicle's parts (--vehicle)",
+                         point on the mirror's side: give it (outermost X,Y,Z) or name the \
+                         vehicle's parts (vehicle)",
                         spec.name
                     ),
                 })?;
@@ -1101,79 +1117,6 @@ fn margins(
     (outer, nearer)
 }
 
-/// Eye points on an eyellipse: centre, semi-axes along forward, lateral (right) and up, a
-/// side-view tilt (degrees, turning forward towards up about the lateral axis), `count` points
-/// on its surface: the 26 directions to a cube's faces, edges and corners for 26, else a
-/// Fibonacci lattice.
-pub fn eyellipse_points(
-    frame: &VehicleFrame,
-    centre: Vec3,
-    semi_axes: Vec3,
-    tilt_deg: f32,
-    count: usize,
-) -> Result<Vec<Vec3>, AnalyzeError> {
-    let bad = |reason: String| AnalyzeError::BadOption {
-        option: "--eyellipse",
-        reason,
-    };
-    if !(semi_axes.is_finite() && semi_axes.min_element() > 0.0) {
-        return Err(bad(format!(
-            "semi-axes {semi_axes} m: each must be a positive length (a flat or empty eyellipse \
-             has no surface to put eye points on)"
-        )));
-    }
-    if !centre.is_finite() || !tilt_deg.is_finite() {
-        return Err(bad(format!(
-            "centre {centre} and tilt {tilt_deg}° must be finite"
-        )));
-    }
-    if !(2..=1000).contains(&count) {
-        return Err(bad(format!("{count} points: between 2 and 1000")));
-    }
-    let directions: Vec<Vec3> = if count == 26 {
-        let mut d = Vec::new();
-        for i in -1..=1 {
-            for j in -1..=1 {
-                for k in -1..=1 {
-                    if (i, j, k) != (0, 0, 0) {
-                        d.push(Vec3::new(i as f32, j as f32, k as f32).normalize());
-                    }
-                }
-            }
-        }
-        d
-    } else {
-        let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
-        (0..count)
-            .map(|k| {
-                let z = 1.0 - 2.0 * (k as f32 + 0.5) / count as f32;
-                let r = (1.0 - z * z).sqrt();
-                let phi = golden * k as f32;
-                Vec3::new(r * phi.cos(), r * phi.sin(), z)
-            })
-            .collect()
-    };
-    let (c, s) = (tilt_deg.to_radians().cos(), tilt_deg.to_radians().sin());
-    let forward = frame.forward * c + frame.up * s;
-    let up = frame.up * c - frame.forward * s;
-    Ok(directions
-        .iter()
-        .map(|d| {
-            centre
-                + forward * (d.x * semi_axes.x)
-                + frame.right * (d.y * semi_axes.y)
-                + up * (d.z * semi_axes.z)
-        })
-        .collect())
-}
-
-/// R46's ocular points from the R point: 635 mm above it, 65 mm apart across the vehicle.
-pub fn ocular_points(frame: &VehicleFrame, r_point: Vec3) -> [Vec3; 2] {
-    let middle = r_point + frame.up * OCULAR_HEIGHT_M;
-    let half = frame.right * (0.5 * crate::frame::OCULAR_SEPARATION_M);
-    [middle - half, middle + half]
-}
-
 /// The mirror's centre and mean unit normal (area-weighted over its cells).
 pub fn mirror_centre_and_normal(surface: &MirrorSurface) -> (Vec3, Vec3) {
     let (mut centre, mut normal, mut area) = (DVec3::ZERO, DVec3::ZERO, 0.0);
@@ -1269,11 +1212,11 @@ impl Document<'_> {
             })
             .collect();
         let who = match self.vehicle.eyes_from {
-            "--r-point" => "R46's ocular points",
-            "--eyellipse" => "the eyellipse's points",
+            "r_point" => "R46's ocular points",
+            "eyellipse" => "the eyellipse's points",
             _ => "the eye points",
         };
-        let how = if self.vehicle.eyes_from == "--eyellipse" {
+        let how = if self.vehicle.eyes_from == "eyellipse" {
             "each alone, the worst reported"
         } else {
             "together: a point counts when any sees it"
@@ -1410,7 +1353,7 @@ pub fn check_pivot(scene: &Scene, mirror: usize, pivot: Vec3) -> Result<(), Anal
     let distance = pivot.distance(nearest);
     if !pivot.is_finite() || distance > 0.5 {
         return Err(AnalyzeError::BadOption {
-            option: "--adjust",
+            option: "adjust",
             reason: format!(
                 "the pivot {pivot} is {distance:.2} m from the mirror's bounds ({} to {}): a \
                  mirror turns about its own mounting, within 0.5 m of it",
@@ -1533,7 +1476,7 @@ fn check_adjust(
 ) -> Result<(), AnalyzeError> {
     if request.regulation.fields.is_empty() {
         return Err(AnalyzeError::BadOption {
-            option: "--adjust",
+            option: "adjust",
             reason: format!(
                 "{} prescribes no field: there is nothing for a pose search to find (the \
                  mirror's own rules do not change with its pose)",
@@ -1544,7 +1487,7 @@ fn check_adjust(
     check_pivot(scene, request.view.mirror, adjust.pivot)?;
     if !(adjust.step_deg.is_finite() && adjust.step_deg > 0.0) {
         return Err(AnalyzeError::BadOption {
-            option: "--adjust-step",
+            option: "adjust_step",
             reason: format!("{}°: the step must be a positive angle", adjust.step_deg),
         });
     }

@@ -21,6 +21,7 @@ pub use params::{
     apply_known_parameters, apply_parameters, apply_setting, bad_value, Invalidates, NoParams,
     Param, ParamKind, ParamSet, ParamSpec, ParamType, ParamValue,
 };
+pub use specula_params::{choice, params};
 pub use technique::{test_context, RenderStill, Still};
 pub use technique::{
     Context, Delegation, Drawn, Frame, MethodInfo, Pixels, Preset, StageTime, SurfaceClass,

@@ -4,7 +4,7 @@
 
 use egui::{Color32, RichText};
 use glam::Vec3;
-use specula_methods::{ParamKind, ParamSpec};
+use specula_methods::ParamKind;
 
 use crate::app::UiState;
 use crate::session::{Session, ViewMode};
@@ -198,7 +198,7 @@ fn technique_section(ui: &mut egui::Ui, session: &mut Session, state: &mut UiSta
                 for spec in specs {
                     let value = technique.parameter(spec.name);
                     ui.label(spec.name).on_hover_text(spec.doc);
-                    if let Some(new) = control(ui, spec, &value) {
+                    if let Some(new) = control(ui, spec.name, spec.kind, spec.doc, &value) {
                         change = Some(format!("{}={new}", spec.name));
                     }
                     ui.end_row();
@@ -219,10 +219,16 @@ fn technique_section(ui: &mut egui::Ui, session: &mut Session, state: &mut UiSta
     ui.separator();
 }
 
-/// One parameter's control, from its spec; returns the new value as text when changed.
-fn control(ui: &mut egui::Ui, spec: &ParamSpec, value: &str) -> Option<String> {
-    let doc = spec.doc;
-    match spec.kind {
+/// One parameter's or analysis option's control, from its declaration (name, kind, doc);
+/// returns the new value as text when changed.
+pub fn control(
+    ui: &mut egui::Ui,
+    name: &str,
+    kind: ParamKind,
+    doc: &str,
+    value: &str,
+) -> Option<String> {
+    match kind {
         ParamKind::Integer { min, max } => {
             let mut v: i64 = value.parse().unwrap_or(min);
             let response = ui
@@ -237,8 +243,9 @@ fn control(ui: &mut egui::Ui, spec: &ParamSpec, value: &str) -> Option<String> {
             .filter(|s| s != value)
         }
         ParamKind::Number { min, max } => {
-            let mut v: f64 = value.parse().unwrap_or(min);
-            let speed = (max - min).abs().min(1e3) / 500.0;
+            let mut v: f64 = value.parse().unwrap_or(min.max(0.0).min(max));
+            // Unbounded numbers (an analysis's metres, degrees) step by hundredths.
+            let speed = ((max - min).abs().min(1e3) / 500.0).min(0.01 * v.abs().max(1.0));
             let response = ui
                 .add(egui::DragValue::new(&mut v).range(min..=max).speed(speed))
                 .on_hover_text(doc);
@@ -257,7 +264,7 @@ fn control(ui: &mut egui::Ui, spec: &ParamSpec, value: &str) -> Option<String> {
         }
         ParamKind::Choice(words) => {
             let mut chosen = None;
-            egui::ComboBox::from_id_salt(spec.name)
+            egui::ComboBox::from_id_salt(name)
                 .selected_text(value)
                 .show_ui(ui, |ui| {
                     for w in words {
@@ -268,8 +275,8 @@ fn control(ui: &mut egui::Ui, spec: &ParamSpec, value: &str) -> Option<String> {
                 });
             chosen.filter(|w| w != value)
         }
-        ParamKind::Text { expected } => {
-            let id = ui.scope_id().with(spec.name);
+        ParamKind::Text { expected } | ParamKind::Numbers { names: expected } => {
+            let id = ui.scope_id().with(name);
             let mut text = ui
                 .data_mut(|d| d.get_temp::<String>(id))
                 .unwrap_or_else(|| value.to_string());

@@ -36,8 +36,11 @@
 //! contrast and the washed-out share. Over the eye points: the share that see glare (and that
 //! see the display washed out) and the worst one. Sun sweeps and solar days: [`sweep`].
 
+pub mod analysis;
+pub use analysis::INFO;
 pub mod paths;
 pub mod plots;
+mod summary;
 pub mod sun;
 pub mod sweep;
 
@@ -217,7 +220,7 @@ impl Options {
         let emits = |mesh: usize| matches!(kind(mesh), MaterialKind::Unlit | MaterialKind::Diffuse);
         if emits(self.surface) {
             return Err(AnalyzeError::WrongMaterial {
-                role: "--surface",
+                role: "surface",
                 name: name(self.surface),
                 kind: describe(kind(self.surface)),
                 expected: "a mirror or a glass (a surface that reflects specularly)",
@@ -226,7 +229,7 @@ impl Options {
         match self.source {
             Source::Named(source) if !emits(source) => {
                 return Err(AnalyzeError::WrongMaterial {
-                    role: "--source",
+                    role: "source",
                     name: name(source),
                     kind: describe(kind(source)),
                     expected: "an emitting or lit surface (unlit or diffuse)",
@@ -237,21 +240,21 @@ impl Options {
                 sun.validate()?;
                 if self.source_luminance.is_some() {
                     return Err(AnalyzeError::BadOption {
-                        option: "--source-luminance",
-                        reason: "the sun's luminance is E/Ω, from --sun-illuminance".into(),
+                        option: "source_luminance",
+                        reason: "the sun's luminance is E/Ω, from sun_illuminance".into(),
                     });
                 }
             }
         }
         if let Some(l) = self.source_luminance {
-            positive_luminance("--source-luminance", l, false)?;
+            positive_luminance("source_luminance", l, false)?;
         }
         if let Some(display) = &self.display {
             self.validate_display(scene, display)?;
         }
         if !(self.threshold.is_finite() && self.threshold >= 0.0) {
             return Err(AnalyzeError::BadOption {
-                option: "--threshold",
+                option: "threshold",
                 reason: format!(
                     "{}: a luminance factor (glare over source luminance), finite and not negative",
                     self.threshold
@@ -260,7 +263,7 @@ impl Options {
         }
         if self.width == 0 || self.height == 0 {
             return Err(AnalyzeError::BadOption {
-                option: "--size",
+                option: "size",
                 reason: format!("{}x{}: the image needs pixels", self.width, self.height),
             });
         }
@@ -274,17 +277,17 @@ impl Options {
             || !matches!(kind, MaterialKind::Unlit | MaterialKind::Diffuse)
         {
             return Err(AnalyzeError::WrongMaterial {
-                role: "--display",
+                role: "display",
                 name: mesh.name.clone(),
                 kind: format!("{kind:?}").to_lowercase(),
                 expected: "an emitting or lit surface behind the cover (unlit or diffuse)",
             });
         }
-        positive_luminance("--symbol-luminance", display.symbol_cd_m2, true)?;
-        positive_luminance("--background-luminance", display.background_cd_m2, true)?;
+        positive_luminance("symbol_luminance", display.symbol_cd_m2, true)?;
+        positive_luminance("background_luminance", display.background_cd_m2, true)?;
         if display.symbol_cd_m2 == display.background_cd_m2 {
             return Err(AnalyzeError::BadOption {
-                option: "--symbol-luminance",
+                option: "symbol_luminance",
                 reason: format!(
                     "{} cd/m², the background's too: a display with no contrast to keep",
                     display.symbol_cd_m2
@@ -293,15 +296,15 @@ impl Options {
         }
         if !(display.min_contrast.is_finite() && display.min_contrast > 1.0) {
             return Err(AnalyzeError::BadOption {
-                option: "--min-contrast",
+                option: "min_contrast",
                 reason: format!("{}: a contrast ratio above 1", display.min_contrast),
             });
         }
         if matches!(self.source, Source::Named(_)) && self.source_luminance.is_none() {
             return Err(AnalyzeError::BadOption {
-                option: "--display",
+                option: "display",
                 reason: "the contrast under a named source's glare needs the source's luminance \
-                         in cd/m² (--source-luminance)"
+                         in cd/m² (source_luminance)"
                     .into(),
             });
         }
@@ -518,7 +521,7 @@ pub fn trace_eyes(
     for (k, eye) in eyes.iter().enumerate() {
         let camera = eye_camera(scene, options.surface, *eye, width, height).ok_or_else(|| {
             AnalyzeError::BadOption {
-                option: "--eye",
+                option: "eye",
                 reason: format!(
                     "{eye} is the centre of '{}': an eye point there has no direction to look",
                     scene.meshes[options.surface].name
@@ -545,7 +548,7 @@ pub fn trace_eyes(
     if let Some(display) = &options.display {
         if traces.iter().all(|t| t.display_pixels().next().is_none()) {
             return Err(AnalyzeError::BadOption {
-                option: "--display",
+                option: "display",
                 reason: format!(
                     "'{}' is not behind '{}': no eye point sees it through the surface",
                     scene.meshes[display.mesh].name, scene.meshes[options.surface].name

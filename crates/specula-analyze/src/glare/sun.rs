@@ -50,7 +50,7 @@ impl Sun {
 
     pub fn validate(&self) -> Result<(), AnalyzeError> {
         let bad = |reason: String| AnalyzeError::BadOption {
-            option: "--sun",
+            option: "sun",
             reason,
         };
         if !(self.azimuth_deg.is_finite() && self.elevation_deg.is_finite()) {
@@ -59,10 +59,10 @@ impl Sun {
                 self.azimuth_deg, self.elevation_deg
             )));
         }
-        validate_elevation("--sun", self.elevation_deg)?;
+        validate_elevation("sun", self.elevation_deg)?;
         if !(self.illuminance_lx.is_finite() && self.illuminance_lx > 0.0) {
             return Err(AnalyzeError::BadOption {
-                option: "--sun-illuminance",
+                option: "sun_illuminance",
                 reason: format!(
                     "{} lx: the sun's direct-normal illuminance must be a positive number of lux",
                     self.illuminance_lx
@@ -184,7 +184,7 @@ pub fn solar_position(latitude_deg: f64, day_of_year: u32, hours: f64) -> (f64, 
 /// Day of the year (1..=366) of a date `YYYY-MM-DD`.
 pub fn day_of_year(date: &str) -> Result<u32, AnalyzeError> {
     let bad = |reason: String| AnalyzeError::BadOption {
-        option: "--date",
+        option: "date",
         reason: format!("'{date}': {reason}"),
     };
     let parts: Vec<&str> = date.split('-').collect();

@@ -41,7 +41,7 @@ pub struct SweepSpec {
 impl SweepSpec {
     pub fn validate(&self) -> Result<(), AnalyzeError> {
         let bad = |reason: String| AnalyzeError::BadOption {
-            option: "--sun-sweep",
+            option: "sun_sweep",
             reason,
         };
         let [az0, az1] = self.azimuth;
@@ -68,8 +68,8 @@ impl SweepSpec {
                 "elevations {el0}..{el1}°: EL1 must not be below EL0"
             )));
         }
-        sun::validate_elevation("--sun-sweep", el0)?;
-        sun::validate_elevation("--sun-sweep", el1)?;
+        sun::validate_elevation("sun_sweep", el0)?;
+        sun::validate_elevation("sun_sweep", el1)?;
         let count = self.steps(self.azimuth) * self.steps(self.elevation);
         if count > 1_000_000 {
             return Err(bad(format!(
@@ -116,19 +116,19 @@ impl Day {
     pub fn validate(&self) -> Result<u32, AnalyzeError> {
         if !(self.latitude_deg.is_finite() && self.latitude_deg.abs() <= 90.0) {
             return Err(AnalyzeError::BadOption {
-                option: "--latitude",
+                option: "latitude",
                 reason: format!("{}°: a latitude in [−90°, 90°]", self.latitude_deg),
             });
         }
         if !self.heading_deg.is_finite() {
             return Err(AnalyzeError::BadOption {
-                option: "--heading",
+                option: "heading",
                 reason: format!("{}°: a finite compass bearing", self.heading_deg),
             });
         }
         if !(self.step_min.is_finite() && self.step_min > 0.0 && self.step_min <= 240.0) {
             return Err(AnalyzeError::BadOption {
-                option: "--time-step",
+                option: "time_step",
                 reason: format!("{} min: in (0, 240]", self.step_min),
             });
         }
@@ -305,8 +305,8 @@ pub fn sweep(
 ) -> Result<Glare, AnalyzeError> {
     let Source::Sun(base) = options.source else {
         return Err(AnalyzeError::BadOption {
-            option: "--sun-sweep",
-            reason: "a sweep moves the sun: it takes no --source".into(),
+            option: "sun_sweep",
+            reason: "a sweep moves the sun: it takes no source".into(),
         });
     };
     spec.validate()?;

@@ -50,9 +50,12 @@
 //! `spectacle_magnification` the same with J taken from the entrance pupil, 3 mm behind the
 //! cornea ([1 / (1 − (t/n) F1)] · [1 / (1 − h Fv)] for a thick lens).
 
+pub mod analysis;
+pub use analysis::INFO;
 pub mod focimeter;
 pub mod near;
 pub mod standard;
+mod summary;
 pub mod tracer;
 pub mod wear;
 pub mod zones;
@@ -97,6 +100,11 @@ pub enum Eye {
     Right,
     Left,
 }
+
+specula_params::choice!(Eye {
+    Right = "right",
+    Left = "left",
+});
 
 /// The gaze grid: h in [−h_max, h_max], v in [−v_max, v_max], every `step` degrees from 0.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -177,7 +185,7 @@ fn indices(scene: &Scene, lens: usize) -> Result<DVec3, AnalyzeError> {
             thin_walled: false,
         } => Ok(ior.as_dvec3()),
         ref kind => Err(AnalyzeError::WrongMaterial {
-            role: "--lens",
+            role: "lens",
             name: mesh.name.clone(),
             kind: match kind {
                 MaterialKind::Dielectric { .. } => "a thin-walled sheet (no power)".into(),
@@ -191,7 +199,7 @@ fn indices(scene: &Scene, lens: usize) -> Result<DVec3, AnalyzeError> {
 /// The mesh named `name`, for `--lens`: an unknown name lists the scene's refractors (solid
 /// dielectrics), the objects a lens analysis takes.
 pub fn find_lens(scene: &Scene, name: &str) -> Result<usize, AnalyzeError> {
-    crate::object(scene, "--lens", name).map_err(|e| match e {
+    crate::object(scene, "lens", name).map_err(|e| match e {
         AnalyzeError::UnknownObject { role, name, .. } => {
             let mut lenses: Vec<&str> = scene
                 .meshes
@@ -243,10 +251,10 @@ pub fn back_vertex(scene: &Scene, lens: usize, camera: &Camera) -> Result<DVec3,
         .next_hit(eye - forward * 1e-6, forward)
         .map(|(p, _)| p)
         .ok_or_else(|| AnalyzeError::BadOption {
-            option: "--rotation-centre",
+            option: "rotation_centre",
             reason: format!(
                 "the camera's view axis misses '{}', so its back vertex (and the centre of \
-                 rotation behind it) is unknown: give --rotation-centre X,Y,Z",
+                 rotation behind it) is unknown: give rotation_centre X,Y,Z",
                 mesh.name
             ),
         })
@@ -261,8 +269,8 @@ pub fn rotation_centre_behind(
     behind_cornea_m: f64,
 ) -> Result<DVec3, AnalyzeError> {
     for (option, value) in [
-        ("--vertex-distance", vertex_distance_m),
-        ("--rotation-behind-cornea", behind_cornea_m),
+        ("vertex_distance", vertex_distance_m),
+        ("rotation_behind_cornea", behind_cornea_m),
     ] {
         if !(value.is_finite() && value > 0.0) {
             return Err(AnalyzeError::BadOption {
@@ -474,7 +482,7 @@ impl<'a> Setup<'a> {
             let front = (primary.points[1] - options.rotation_centre).length();
             if distance < front + 0.01 {
                 return Err(AnalyzeError::BadOption {
-                    option: "--object-distance",
+                    option: "object_distance",
                     reason: format!(
                         "{distance} m from the centre of rotation puts the object at or behind \
                          the lens, whose front is {front:.4} m away: give more than {:.3} m",
@@ -540,7 +548,7 @@ impl<'a> Setup<'a> {
             let (plus, minus) = at(1.0)
                 .and_then(|p| Ok((p, at(-1.0)?)))
                 .map_err(|failure| AnalyzeError::BadOption {
-                    option: "--rotation-centre",
+                    option: "rotation_centre",
                     reason: format!(
                         "the primary gaze meets the edge of '{name}' ({failure:?}): the \
                          centre of rotation must look through the lens"
@@ -981,8 +989,8 @@ fn compensated_of(
         (false, _) => None,
         (true, None) => {
             return Err(AnalyzeError::BadOption {
-                option: "--compensate",
-                reason: "needs a prescription to compensate (--prescription, or a \
+                option: "compensate",
+                reason: "needs a prescription to compensate (prescription, or a \
                  spectacle-lens shape's)"
                     .into(),
             })
@@ -1005,8 +1013,8 @@ fn verdict_of(
         (None, _) => None,
         (Some(_), None) => {
             return Err(AnalyzeError::BadOption {
-                option: "--standard",
-                reason: "needs the ordered prescription (--prescription S,C,A, or a \
+                option: "standard",
+                reason: "needs the ordered prescription (prescription S,C,A, or a \
              spectacle-lens shape's)"
                     .into(),
             })
@@ -1021,7 +1029,7 @@ fn verdict_of(
                     let table = table.progressive.unwrap_or(table);
                     if !table.is_progressive() {
                         return Err(AnalyzeError::BadOption {
-                            option: "--standard",
+                            option: "standard",
                             reason: format!(
                                 "{} has no tolerance for an add: judge a progressive lens \
                              against {}",
@@ -1044,9 +1052,9 @@ fn verdict_of(
                 }
                 _ if table.is_progressive() => {
                     return Err(AnalyzeError::BadOption {
-                        option: "--standard",
+                        option: "standard",
                         reason: format!(
-                            "{} judges progressive lenses: give the ordered --add",
+                            "{} judges progressive lenses: give the ordered add",
                             table.id
                         ),
                     })
@@ -1073,7 +1081,7 @@ fn lens_map_of(
     let points = (2.0 * (rim / step).floor() + 1.0).powi(2);
     if step > 0.5 * rim || points > 1e6 {
         return Err(AnalyzeError::BadOption {
-            option: "--lens-step",
+            option: "lens_step",
             reason: format!(
                 "{step} mm over a lens {rim:.1} mm in radius: the lens map needs a step of at \
                  most half the radius and at most a million points"
@@ -1101,12 +1109,12 @@ fn progressive_figures(
     let (mut readings, side) = read_add(placed, lens, options, ior)?;
     add_surface_uncertainty(lens, options, ior, &mut readings)?;
     let map = lens_map.ok_or_else(|| AnalyzeError::BadOption {
-        option: "--add",
-        reason: "a progressive lens's figures come from the lens map: give --lens-step".into(),
+        option: "add",
+        reason: "a progressive lens's figures come from the lens map: give lens_step".into(),
     })?;
     let figures = zones::progressive(map, [&readings[0], &readings[1]], side, add, fitting_mm)
         .ok_or_else(|| AnalyzeError::BadOption {
-            option: "--distance-reference and --near-reference",
+            option: "distance_reference and near_reference",
             reason: format!(
                 "the reference points {:?} and {:?} mm must lie on the lens map, inside the \
                  lens",
@@ -1185,7 +1193,7 @@ fn read_add(
         }
         _ => {
             return Err(AnalyzeError::BadOption {
-                option: "--add",
+                option: "add",
                 reason: format!(
                     "an add without a progressive surface: '{}' has no free-form front or back (a spectacle-lens shape's `front` or `back` = a sag grid, a polynomial or a progressive design)",
                     lens.name
@@ -1195,9 +1203,9 @@ fn read_add(
     };
     let Some(near_at) = options.near_reference_mm else {
         return Err(AnalyzeError::BadOption {
-            option: "--add",
+            option: "add",
             reason: format!(
-                "the add is read at the near reference point, which '{}' does not give: pass --near-reference X,Y (mm) or set the spectacle-lens's near_reference",
+                "the add is read at the near reference point, which '{}' does not give: pass near_reference X,Y (mm) or set the spectacle-lens's near_reference",
                 lens.name
             ),
         });
@@ -1205,7 +1213,7 @@ fn read_add(
     let far_at = options.reference_points_mm[0];
     if near_at[1] >= far_at[1] {
         return Err(AnalyzeError::BadOption {
-            option: "--near-reference",
+            option: "near_reference",
             reason: format!(
                 "{near_at:?} mm is not below the distance reference point {far_at:?} mm: a \
                  progressive lens's near zone lies below its far zone"
@@ -1228,7 +1236,7 @@ fn read_add(
         instrument
             .read(name, at)
             .map_err(|failure| AnalyzeError::BadOption {
-                option: "--distance-reference and --near-reference",
+                option: "distance_reference and near_reference",
                 reason: format!(
                     "the focimeter cannot read '{}' at {at:?} mm on its {side} ({failure:?}): give a point on the lens",
                     lens.name
@@ -1242,10 +1250,10 @@ fn read_add(
 /// The lens in `model`, refused where it asks for an exact surface the lens lacks.
 fn tracer(mesh: &Mesh, model: SurfaceModel) -> Result<LensTracer<'_>, AnalyzeError> {
     LensTracer::with_model(mesh, model).ok_or_else(|| AnalyzeError::BadOption {
-        option: "--surface",
+        option: "surface",
         reason: format!(
             "'{}' has no exact surfaces (only `lens` and `spectacle-lens` shapes and the \
-             built-in lenses do); use --surface mesh or smooth",
+             built-in lenses do); use surface mesh or smooth",
             mesh.name
         ),
     })
@@ -1260,7 +1268,7 @@ fn primary_trace(
 ) -> Result<Traced, AnalyzeError> {
     if tracer.contains(options.rotation_centre) {
         return Err(AnalyzeError::BadOption {
-            option: "--rotation-centre",
+            option: "rotation_centre",
             reason: format!(
                 "{} lies inside '{name}': the eye's centre of rotation must be behind the lens",
                 options.rotation_centre
@@ -1270,7 +1278,7 @@ fn primary_trace(
     tracer
         .trace(options.rotation_centre, options.forward, ior)
         .map_err(|failure| AnalyzeError::BadOption {
-            option: "--rotation-centre",
+            option: "rotation_centre",
             reason: format!(
                 "looking straight ahead from {} the eye does not see through '{name}' \
                  ({failure:?}): put the centre of rotation behind the lens",
@@ -1331,7 +1339,7 @@ fn read_focimeter(
         instrument
             .read(name, at)
             .map_err(|failure| AnalyzeError::BadOption {
-                option: "--distance-reference and --prism-reference",
+                option: "distance_reference and prism_reference",
                 reason: format!(
                     "the focimeter cannot read '{}' at {at:?} mm from its back vertex \
                          ({failure:?}): give a point on the lens",
@@ -1369,7 +1377,7 @@ fn compensate(
         .map(|(_, p)| p.clone());
     let (Some(blank), Some(exact)) = (blank, worn.exact.as_ref()) else {
         return Err(AnalyzeError::BadOption {
-            option: "--compensate",
+            option: "compensate",
             reason: format!(
                 "'{name}' was not made from a prescription (a spectacle-lens shape): there is \
                  no blank to make the ordered lens on"
@@ -1383,7 +1391,7 @@ fn compensate(
         let matrix = trial
             .vergence(&frame, &trial.primary, options.step_m * 0.5)
             .map_err(|failure| AnalyzeError::BadOption {
-                option: "--compensate",
+                option: "compensate",
                 reason: format!("the ordered lens's fitting point fails ({failure:?})"),
             })?;
         let power = Power::from_matrix(matrix[0], matrix[1], matrix[2]);
@@ -1391,7 +1399,7 @@ fn compensate(
     })
 }
 
-fn validate(options: &Options) -> Result<(), AnalyzeError> {
+pub(crate) fn validate(options: &Options) -> Result<(), AnalyzeError> {
     let g = options.gaze;
     let fine = |v: f64| v.is_finite() && v >= 0.0;
     if !(fine(g.h_max_deg) && fine(g.v_max_deg) && g.step_deg.is_finite() && g.step_deg > 0.0)
@@ -1399,7 +1407,7 @@ fn validate(options: &Options) -> Result<(), AnalyzeError> {
         || g.v_max_deg >= 89.0
     {
         return Err(AnalyzeError::BadOption {
-            option: "--gaze",
+            option: "gaze",
             reason: format!(
                 "H_MAX,V_MAX,STEP = {},{},{}: the maxima must be between 0 and 89 degrees and \
                  the step positive",
@@ -1410,14 +1418,14 @@ fn validate(options: &Options) -> Result<(), AnalyzeError> {
     let cells = g.horizontal().len() as f64 * g.vertical().len() as f64;
     if cells > 1e6 {
         return Err(AnalyzeError::BadOption {
-            option: "--gaze",
+            option: "gaze",
             reason: format!("{cells} gaze directions: take a larger step"),
         });
     }
     if let Some(d) = options.object_distance_m {
         if !(d.is_finite() && d > 0.0) {
             return Err(AnalyzeError::BadOption {
-                option: "--object-distance",
+                option: "object_distance",
                 reason: format!("{d} m: give a positive distance (or leave it out: infinity)"),
             });
         }
@@ -1432,13 +1440,13 @@ fn validate(options: &Options) -> Result<(), AnalyzeError> {
     }
     if !(options.step_m.is_finite() && options.step_m > 0.0) {
         return Err(AnalyzeError::BadOption {
-            option: "--step-mm",
+            option: "step_mm",
             reason: format!("{} m: the bundle needs a positive width", options.step_m),
         });
     }
     if !options.rotation_centre.is_finite() {
         return Err(AnalyzeError::BadOption {
-            option: "--rotation-centre",
+            option: "rotation_centre",
             reason: "not a point".into(),
         });
     }
@@ -1446,10 +1454,10 @@ fn validate(options: &Options) -> Result<(), AnalyzeError> {
     validate_near_and_add(options)?;
     for (option, value) in [
         (
-            "--rotation-behind-cornea",
+            "rotation_behind_cornea",
             Some(options.rotation_behind_cornea_m),
         ),
-        ("--refraction-vertex", options.refraction_vertex_m),
+        ("refraction_vertex", options.refraction_vertex_m),
     ] {
         if value.is_some_and(|v| !(v.is_finite() && v > 0.0)) {
             return Err(AnalyzeError::BadOption {
@@ -1471,7 +1479,7 @@ fn validate(options: &Options) -> Result<(), AnalyzeError> {
         ];
         if values.iter().any(|v| !v.is_finite()) {
             return Err(AnalyzeError::BadOption {
-                option: "--prescription",
+                option: "prescription",
                 reason: format!("{values:?}: every value must be a number"),
             });
         }
@@ -1483,7 +1491,7 @@ fn validate(options: &Options) -> Result<(), AnalyzeError> {
         .any(|v| !v.is_finite())
     {
         return Err(AnalyzeError::BadOption {
-            option: "--distance-reference and --prism-reference",
+            option: "distance_reference and prism_reference",
             reason: "a reference point must be two numbers (mm)".into(),
         });
     }
@@ -1495,7 +1503,7 @@ fn validate_near_and_add(options: &Options) -> Result<(), AnalyzeError> {
     if let Some(near) = options.near {
         if !(near.distance_m.is_finite() && near.distance_m > 0.0) {
             return Err(AnalyzeError::BadOption {
-                option: "--near",
+                option: "near",
                 reason: format!(
                     "{} m: the near point must be in front of the eyes (a positive distance)",
                     near.distance_m
@@ -1504,7 +1512,7 @@ fn validate_near_and_add(options: &Options) -> Result<(), AnalyzeError> {
         }
         if !(near.half_pd_m.is_finite() && near.half_pd_m >= 0.0 && near.half_pd_m < 0.1) {
             return Err(AnalyzeError::BadOption {
-                option: "--pd",
+                option: "pd",
                 reason: format!(
                     "{} mm: the interpupillary distance must be between 0 and 200 mm",
                     near.half_pd_m * 2e3
@@ -1516,7 +1524,7 @@ fn validate_near_and_add(options: &Options) -> Result<(), AnalyzeError> {
             .is_some_and(|d| !(d.is_finite() && d.abs() < 80.0))
         {
             return Err(AnalyzeError::BadOption {
-                option: "--near-down",
+                option: "near_down",
                 reason: "the near point's depression must be between −80° and 80°".into(),
             });
         }
@@ -1524,7 +1532,7 @@ fn validate_near_and_add(options: &Options) -> Result<(), AnalyzeError> {
     if let Some(step) = options.lens_step_mm {
         if !(step.is_finite() && step >= 0.05) {
             return Err(AnalyzeError::BadOption {
-                option: "--lens-step",
+                option: "lens_step",
                 reason: format!("{step} mm: the lens map's spacing must be at least 0.05 mm"),
             });
         }
@@ -1532,7 +1540,7 @@ fn validate_near_and_add(options: &Options) -> Result<(), AnalyzeError> {
     if let Some(add) = options.add_d {
         if !(add.is_finite() && add > 0.0 && add <= 6.0) {
             return Err(AnalyzeError::BadOption {
-                option: "--add",
+                option: "add",
                 reason: format!("{add} D: an addition is between 0 and 6.00 D"),
             });
         }
@@ -1542,7 +1550,7 @@ fn validate_near_and_add(options: &Options) -> Result<(), AnalyzeError> {
         .is_some_and(|p| !p.iter().all(|v| v.is_finite()))
     {
         return Err(AnalyzeError::BadOption {
-            option: "--near-reference",
+            option: "near_reference",
             reason: "the near reference point must be two numbers (mm)".into(),
         });
     }

@@ -79,7 +79,7 @@ pub(super) fn near_figures(
         between + (o.forward * d.cos() - o.up * d.sin()) * near.distance_m
     };
     let refuse = |reason: String| AnalyzeError::BadOption {
-        option: "--near",
+        option: "near",
         reason,
     };
     let front = (setup.primary.points[1] - o.rotation_centre).length();

@@ -152,6 +152,10 @@ const ISO_PRISM_BASE: Bands<f64> = &[(2.00, 0.25), (10.00, 0.37), (INF, 0.50)];
 
 const INF: f64 = f64::INFINITY;
 
+/// The ids of [`STANDARDS`], in order (the `standard` option's choices; a test holds the two
+/// lists equal).
+pub const NAMES: &[&str] = &["ansi-z80.1", "iso-8980-1", "iso-8980-2"];
+
 pub const STANDARDS: &[Table] = &[
     Table {
         id: "ansi-z80.1",

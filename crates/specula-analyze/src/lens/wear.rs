@@ -45,8 +45,8 @@ impl Wear {
 
     pub(crate) fn check(&self) -> Result<(), AnalyzeError> {
         for (option, value) in [
-            ("--pantoscopic", self.pantoscopic_deg),
-            ("--wrap", self.wrap_deg),
+            ("pantoscopic", self.pantoscopic_deg),
+            ("wrap", self.wrap_deg),
         ] {
             if !(value.is_finite() && value.abs() <= MAX_TILT_DEG) {
                 return Err(AnalyzeError::BadOption {

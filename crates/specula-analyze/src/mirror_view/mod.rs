@@ -31,6 +31,10 @@
 //! the report (`ground_cell_m`, `direction_cell_deg`): a footprint's area is exact to about
 //! its perimeter × half a cell.
 
+pub mod analysis;
+pub use analysis::INFO;
+pub(crate) mod summary;
+
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -72,7 +76,7 @@ impl Region {
         };
         if ![x0, z0, x1, z1].iter().all(|v| v.is_finite()) || region.area() <= 0.0 {
             return Err(AnalyzeError::BadOption {
-                option: "--region",
+                option: "region",
                 reason: format!(
                     "X0,Z0,X1,Z1 = {x0},{z0},{x1},{z1} has no area: the corners must differ in \
                      x and in z"
@@ -190,7 +194,7 @@ impl Options {
         let material = &scene.materials[mesh.material];
         if !matches!(material.kind, MaterialKind::Mirror { .. }) {
             return Err(AnalyzeError::WrongMaterial {
-                role: "--mirror",
+                role: "mirror",
                 name: mesh.name.clone(),
                 kind: format!("{:?}", material.kind).to_lowercase(),
                 expected: "a mirror",
@@ -198,13 +202,13 @@ impl Options {
         }
         if !(self.range_m.is_finite() && self.range_m > 0.0) {
             return Err(AnalyzeError::BadOption {
-                option: "--range",
+                option: "range",
                 reason: format!("{} m: the range must be a positive distance", self.range_m),
             });
         }
         for (option, value) in [
-            ("--tolerance", self.tolerance),
-            ("--tolerance-deg", self.tolerance_deg),
+            ("tolerance", self.tolerance),
+            ("tolerance_deg", self.tolerance_deg),
         ] {
             if !(value.is_finite() && value > 0.0) {
                 return Err(AnalyzeError::BadOption {
@@ -217,10 +221,10 @@ impl Options {
             && crate::mirror_surface::mirror_exact(mesh).is_none()
         {
             return Err(AnalyzeError::BadOption {
-                option: "--surface",
+                option: "surface",
                 reason: format!(
                     "'{}' has no exact surface (only generated patches, spheres and caps do); \
-                     use --surface mesh or smooth",
+                     use surface mesh or smooth",
                     mesh.name
                 ),
             });
@@ -228,14 +232,14 @@ impl Options {
         if let Obstacles::Vehicle(parts) = &self.obstacles {
             if parts.contains(&self.mirror) {
                 return Err(AnalyzeError::BadOption {
-                    option: "--vehicle",
+                    option: "vehicle",
                     reason: format!("'{}' is the mirror, not a part of the body", mesh.name),
                 });
             }
         }
         if !self.ground_y.is_finite() {
             return Err(AnalyzeError::BadOption {
-                option: "--ground",
+                option: "ground",
                 reason: format!("{} is not a height", self.ground_y),
             });
         }
