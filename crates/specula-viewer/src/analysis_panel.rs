@@ -1,44 +1,36 @@
-//! The panel's analysis section: the kind (off, mirror view, glare), what is analysed, the eye
-//! points, the figures as they arrive, and for glare the eye points' heat map (click a cell to
-//! show that eye point's glare over the view).
+//! The panel's analysis section: the analysis (off, or any of the registry), its options (the
+//! controls made from their declarations, as the command's flags and a script's keys are),
+//! the figures as they arrive, the verdict, and for glare the eye points' heat map (click a
+//! cell to show that eye point's glare over the view).
 
 use egui::{Color32, RichText};
-use glam::Vec3;
-use specula_analyze::frame::Eyes;
 use specula_analyze::outcome::Outcome;
-use specula_analyze::regulation::{Side, Verdict, REGULATIONS};
+use specula_analyze::regulation::Verdict;
+use specula_params::{OptionSpec, ParamKind};
+use specula_scene::Scene;
 
-use crate::analysis::{Analysed, Analysis, Kind, RegulationSettings, Settings};
+use specula_analyze::glare::analysis::GlareResult;
+use specula_analyze::mirror_view::analysis::MirrorViewResult;
+
+use crate::analysis::{is_object, Analysis, Settings};
 use crate::app::UiState;
 use crate::session::Session;
 
-/// The main panel's section: the kind (off, mirror view, glare).
+/// The main panel's section: the analysis (off, or one of the registry's).
 pub fn show(ui: &mut egui::Ui, session: &mut Session, state: &mut UiState) {
-    let current = session.analysis.as_ref().map(|a| a.settings.kind);
-    ui.horizontal(|ui| {
+    let current = session.analysis.as_ref().map(|a| a.settings.name());
+    ui.horizontal_wrapped(|ui| {
         if ui.selectable_label(current.is_none(), "off").clicked() {
             session.analysis = None;
         }
-        for kind in [Kind::MirrorView, Kind::Glare, Kind::Lens] {
-            if ui
-                .selectable_label(current == Some(kind), kind.name())
-                .clicked()
-                && current != Some(kind)
-            {
-                match Settings::first(session.scene(), kind) {
+        for name in crate::analysis::names() {
+            if ui.selectable_label(current == Some(name), name).clicked() && current != Some(name) {
+                match Settings::first(session.scene(), name) {
                     Some(settings) => session.analysis = Some(Analysis::new(settings)),
                     None => {
                         state.message = Some((
                             true,
-                            format!(
-                                "{}: this scene has no {}",
-                                kind.name(),
-                                match kind {
-                                    Kind::MirrorView => "mirror",
-                                    Kind::Glare => "mirror or glass with a source to reflect",
-                                    Kind::Lens => "lens (solid glass)",
-                                }
-                            ),
+                            format!("{name}: this scene has nothing this analysis can take"),
                         ))
                     }
                 }
@@ -51,13 +43,12 @@ pub fn show(ui: &mut egui::Ui, session: &mut Session, state: &mut UiState) {
              is seen reflected in a surface, drawn on it; lens: a spectacle lens's mean power or \
              cylinder as worn, drawn on the lens. All follow every move."
         }
-        Some(_) => "its settings and figures follow",
+        Some(_) => "its options (as `specula analyze` takes them) and figures follow",
     });
 }
 
-/// The analysis's details (below its kind, while one is on): what is analysed, the eye
-/// points, the figures as they arrive, the glare's eye point map, and a button to the view
-/// that shows the result whole.
+/// The analysis's details (below its kind, while one is on): its options, the figures as they
+/// arrive, the glare's eye point map, and a button to the view that shows the result whole.
 pub fn details(ui: &mut egui::Ui, session: &mut Session, state: &mut UiState) {
     if session.analysis.is_none() {
         return;
@@ -67,56 +58,43 @@ pub fn details(ui: &mut egui::Ui, session: &mut Session, state: &mut UiState) {
 }
 
 fn contents(ui: &mut egui::Ui, session: &mut Session, state: &mut UiState) {
-    let scene = session.scene();
-    let names: Vec<String> = scene.meshes.iter().map(|m| m.name.clone()).collect();
-    let camera_eye = scene.camera.eye;
     let view_eye = session.camera.camera().eye;
-    let settings = &session.analysis.as_ref().expect("checked above").settings;
-    let objects = Settings::objects(scene, settings.kind);
-    let sources = Settings::sources(scene);
-    let first_layouts: Vec<Option<RegulationSettings>> = REGULATIONS
-        .iter()
-        .map(|r| RegulationSettings::first(scene, settings, r))
-        .collect();
-    let parts: Vec<usize> = (0..scene.meshes.len())
-        .filter(|&m| m != settings.object)
-        .collect();
-    let default_centre = (settings.kind == Kind::Lens).then(|| {
-        specula_analyze::lens::default_options(scene, settings.object)
-            .map(|o| o.rotation_centre.as_vec3())
-            .unwrap_or(camera_eye)
-    });
-    let analysis = session.analysis.as_mut().expect("checked above");
-    let mut edited = analysis.settings.clone();
-    what_section(ui, &mut edited, &names, &objects, &sources);
-    match default_centre {
-        Some(default) => lens_section(ui, &mut edited, &mut analysis.lens_map, default, view_eye),
-        None => eye_section(ui, &mut edited, camera_eye, view_eye),
-    }
-    if edited.kind == Kind::MirrorView {
-        ground_section(ui, &mut edited);
-        regulation_section(ui, &mut edited, &first_layouts, &names, &parts);
-    }
-    if edited != analysis.settings {
-        analysis.settings = edited;
-    }
-    ui.separator();
-    figures_section(ui, analysis);
-    let (label, hover) = match analysis.settings.kind {
-        Kind::MirrorView => (
-            "look at the ground",
-            "the view from above the regulation's fields (else the ground seen)",
-        ),
-        Kind::Glare => (
-            "look from the eye point",
-            "the view from the eye point shown, aimed at the surface",
-        ),
-        Kind::Lens => (
-            "look through the lens",
-            "the view from the eye's centre of rotation, along the primary gaze",
-        ),
+    let names: Vec<String> = {
+        let scene: &Scene = session.scene();
+        let mut names: Vec<String> = Vec::new();
+        for m in &scene.meshes {
+            if !names.contains(&m.name) {
+                names.push(m.name.clone());
+            }
+        }
+        names
     };
-    if ui.button(label).on_hover_text(hover).clicked() {
+    let analysis = session.analysis.as_mut().expect("checked above");
+    if analysis.busy() {
+        ui.horizontal(|ui| {
+            ui.spinner();
+            if ui
+                .button("cancel")
+                .on_hover_text("stop the running analysis; the figures shown stay")
+                .clicked()
+            {
+                analysis.cancel();
+            }
+        });
+    }
+    figures_section(ui, analysis);
+    ui.separator();
+    if let Some(message) = options_section(ui, analysis, &names, view_eye) {
+        state.message = Some((true, message));
+    }
+    if ui
+        .button("look at the result")
+        .on_hover_text(
+            "mirror view: from above the fields or the ground seen; glare: from the eye point \
+             shown; lens: from the eye's centre of rotation along the primary gaze",
+        )
+        .clicked()
+    {
         if let Some(camera) = analysis.overview(session.camera.fov_y_deg) {
             session.camera = crate::orbit::OrbitCamera::from_camera(&camera);
             state.dirty = true;
@@ -124,442 +102,150 @@ fn contents(ui: &mut egui::Ui, session: &mut Session, state: &mut UiState) {
     }
 }
 
-fn what_section(
+/// Every option of the analysis, grouped as the command's help groups them, each control made
+/// from its declaration; returns why a change was refused.
+fn options_section(
     ui: &mut egui::Ui,
-    settings: &mut Settings,
+    analysis: &mut Analysis,
     names: &[String],
-    objects: &[usize],
-    sources: &[usize],
-) {
-    let role = match settings.kind {
-        Kind::MirrorView => "mirror",
-        Kind::Glare => "surface",
-        Kind::Lens => "lens",
-    };
-    egui::Grid::new("analysed").num_columns(2).show(ui, |ui| {
-        ui.label(role);
-        egui::ComboBox::from_id_salt("analysis object")
-            .selected_text(&names[settings.object])
-            .show_ui(ui, |ui| {
-                for &m in objects {
-                    ui.selectable_value(&mut settings.object, m, &names[m]);
-                }
-            });
-        ui.end_row();
-        if let Some(source) = &mut settings.source {
-            ui.label("source");
-            egui::ComboBox::from_id_salt("analysis source")
-                .selected_text(&names[*source])
-                .show_ui(ui, |ui| {
-                    for &m in sources {
-                        ui.selectable_value(source, m, &names[m]);
-                    }
-                });
-            ui.end_row();
-            ui.label("threshold");
-            ui.add(
-                egui::DragValue::new(&mut settings.threshold)
-                    .range(1e-6..=1.0)
-                    .speed(1e-4),
-            )
-            .on_hover_text("luminance factor (glare over source luminance) above which a pixel counts as glare");
-            ui.end_row();
-            sun_and_display_controls(ui, settings, names, sources);
+    view_eye: glam::Vec3,
+) -> Option<String> {
+    let info = analysis.settings.info;
+    let mut groups: Vec<&str> = Vec::new();
+    for spec in info.all_options() {
+        if !groups.contains(&spec.group) {
+            groups.push(spec.group);
         }
-    });
-}
-
-/// The glare's sun (a direction dragged on a sky disc seen from above, forward up) and the
-/// display behind the surface.
-fn sun_and_display_controls(
-    ui: &mut egui::Ui,
-    settings: &mut Settings,
-    names: &[String],
-    sources: &[usize],
-) {
-    ui.label("the sun");
-    let mut on = settings.sun.is_some();
-    ui.checkbox(&mut on, "instead of the source")
-        .on_hover_text("glare from the sun at 100,000 lx; drag it on the sky disc below");
-    ui.end_row();
-    match (on, settings.sun) {
-        (true, None) => {
-            settings.sun = Some(specula_analyze::glare::Sun {
-                azimuth_deg: 180.0,
-                elevation_deg: 15.0,
-                illuminance_lx: specula_analyze::glare::sun::DEFAULT_ILLUMINANCE_LX,
-            })
-        }
-        (false, Some(_)) => settings.sun = None,
-        _ => {}
     }
-    if let Some(sun) = &mut settings.sun {
-        ui.label("sun position");
-        ui.vertical(|ui| {
-            sky_disc(ui, sun);
-            ui.horizontal(|ui| {
-                ui.add(
-                    egui::DragValue::new(&mut sun.azimuth_deg)
-                        .range(-180.0..=180.0)
-                        .suffix("° az"),
-                );
-                ui.add(
-                    egui::DragValue::new(&mut sun.elevation_deg)
-                        .range(0.5..=90.0)
-                        .suffix("° el"),
-                );
-            });
-        });
-        ui.end_row();
-    } else {
-        ui.label("source cd/m²");
-        ui.add(
-            egui::DragValue::new(&mut settings.source_luminance)
-                .range(1e-3..=1e10)
-                .speed(10.0),
-        )
-        .on_hover_text("the source's luminance: the glare in cd/m²");
-        ui.end_row();
-    }
-    ui.label("display");
-    let shown = settings
-        .display
-        .map_or("none".to_string(), |d| names[d.mesh].clone());
-    egui::ComboBox::from_id_salt("glare display")
-        .selected_text(shown)
-        .show_ui(ui, |ui| {
-            if ui
-                .selectable_label(settings.display.is_none(), "none")
-                .clicked()
-            {
-                settings.display = None;
-            }
-            for &m in sources {
-                let chosen = settings.display.is_some_and(|d| d.mesh == m);
-                if ui.selectable_label(chosen, &names[m]).clicked() {
-                    settings.display = Some(specula_analyze::glare::Display {
-                        mesh: m,
-                        symbol_cd_m2: 300.0,
-                        background_cd_m2: 10.0,
-                        min_contrast: 3.0,
+    let mut change: Option<(&'static str, String)> = None;
+    for (k, group) in groups.iter().enumerate() {
+        let title = if group.is_empty() { info.name } else { group };
+        egui::CollapsingHeader::new(title)
+            .id_salt(("analysis options", info.name, *group))
+            .default_open(k == 0)
+            .show(ui, |ui| {
+                egui::Grid::new(("options", info.name, *group))
+                    .num_columns(2)
+                    .show(ui, |ui| {
+                        for spec in info.all_options().filter(|s| s.group == *group) {
+                            let value = analysis.settings.value(spec.name);
+                            let label = match spec.unit {
+                                "" => spec.name.to_string(),
+                                unit => format!("{} ({unit})", spec.name),
+                            };
+                            ui.label(label).on_hover_text(spec.doc);
+                            if let Some(new) = option_control(ui, spec, &value, names, view_eye) {
+                                change = Some((spec.name, new));
+                            }
+                            ui.end_row();
+                        }
                     });
-                }
-            }
-        });
-    ui.end_row();
-    if let Some(display) = &mut settings.display {
-        ui.label("display cd/m²");
-        ui.horizontal(|ui| {
-            ui.add(egui::DragValue::new(&mut display.symbol_cd_m2).range(0.0..=1e5).prefix("symbols "));
-            ui.add(egui::DragValue::new(&mut display.background_cd_m2).range(0.0..=1e5).prefix("background "));
-            ui.add(egui::DragValue::new(&mut display.min_contrast).range(1.01..=1e3).speed(0.05).prefix("min contrast "))
-                .on_hover_text("washed out below this contrast ratio (the user's figure: ISO 15008's is for passenger cars)");
-        });
-        ui.end_row();
-    }
-}
-
-/// The sky seen from above, forward up, the zenith in the centre and the horizon on the rim:
-/// drag the sun across it.
-fn sky_disc(ui: &mut egui::Ui, sun: &mut specula_analyze::glare::Sun) {
-    let size = egui::vec2(120.0, 120.0);
-    let (rect, response) = ui.allocate_exact_size(size, egui::Sense::click_and_drag());
-    let centre = rect.center();
-    let radius = rect.width() * 0.5 - 4.0;
-    if let Some(p) = response.interact_pointer_pos() {
-        let d = p - centre;
-        let r = (d.length() / radius).min(1.0 - 0.5 / 90.0);
-        sun.elevation_deg = f64::from(90.0 * (1.0 - r));
-        sun.azimuth_deg = f64::from(d.x.atan2(-d.y).to_degrees());
-    }
-    let painter = ui.painter_at(rect);
-    let stroke = egui::Stroke::new(1.0, egui::Color32::GRAY);
-    for ring in [1.0, 2.0 / 3.0, 1.0 / 3.0] {
-        painter.circle_stroke(centre, radius * ring, stroke);
-    }
-    painter.line_segment([centre, centre - egui::vec2(0.0, radius)], stroke);
-    let (az, r) = (
-        sun.azimuth_deg.to_radians() as f32,
-        radius * (90.0 - sun.elevation_deg as f32) / 90.0,
-    );
-    let at = centre + egui::vec2(az.sin(), -az.cos()) * r;
-    painter.circle_filled(at, 5.0, egui::Color32::from_rgb(255, 200, 40));
-    response.on_hover_text("the sky from above, the vehicle's forward axis up: drag the sun");
-}
-
-/// How [`point_controls`] presents a point.
-struct PointControls {
-    label: &'static str,
-    /// What the point is (the fields' hover text).
-    what: &'static str,
-    /// Metres per pixel of drag.
-    speed: f64,
-    view_eye: Vec3,
-    view_hover: &'static str,
-    /// The reset button: its label, its hover text and the point it puts back.
-    reset: (&'static str, &'static str, Vec3),
-}
-
-/// A point's x, y, z fields, a button that puts it at the view's eye and one that resets it.
-fn point_controls(ui: &mut egui::Ui, point: &mut Vec3, c: PointControls) {
-    ui.horizontal(|ui| {
-        ui.label(c.label);
-        for (value, name) in [
-            (&mut point.x, "x"),
-            (&mut point.y, "y"),
-            (&mut point.z, "z"),
-        ] {
-            ui.add(
-                egui::DragValue::new(value)
-                    .speed(c.speed)
-                    .prefix(format!("{name} ")),
-            )
-            .on_hover_text(c.what);
-        }
-    });
-    ui.horizontal(|ui| {
-        if ui
-            .button("the view's eye")
-            .on_hover_text(c.view_hover)
-            .clicked()
-        {
-            *point = c.view_eye;
-        }
-        let (label, hover, value) = c.reset;
-        if ui.button(label).on_hover_text(hover).clicked() {
-            *point = value;
-        }
-    });
-}
-
-/// A lens's eye: its centre of rotation (dragged, the view's eye, or the default 27 mm behind
-/// the back vertex), which eye (base in and out), and what the overlay maps.
-fn lens_section(
-    ui: &mut egui::Ui,
-    settings: &mut Settings,
-    map: &mut crate::analysis::LensMap,
-    default_centre: Vec3,
-    view_eye: Vec3,
-) {
-    use specula_analyze::lens::Eye;
-    use specula_analyze::lens_plot::Map;
-    point_controls(
-        ui,
-        &mut settings.eye,
-        PointControls {
-            label: "centre of rotation",
-            what: "the eye's centre of rotation, world metres: drag to move it",
-            speed: 0.0005,
-            view_eye,
-            view_hover: "put the centre of rotation where the view's camera is",
-            reset: (
-                "27 mm behind the lens",
-                "the default: 27 mm behind the back vertex on the scene camera's view axis",
-                default_centre,
-            ),
-        },
-    );
-    ui.horizontal(|ui| {
-        ui.label("eye");
-        ui.selectable_value(&mut settings.lens_eye, Eye::Right, "right");
-        ui.selectable_value(&mut settings.lens_eye, Eye::Left, "left");
-        ui.separator();
-        ui.label("map");
-        ui.selectable_value(map, Map::MeanPower, "mean power");
-        ui.selectable_value(map, Map::Cylinder, "cylinder");
-    });
-}
-
-fn eye_section(ui: &mut egui::Ui, settings: &mut Settings, camera_eye: Vec3, view_eye: Vec3) {
-    point_controls(
-        ui,
-        &mut settings.eye,
-        PointControls {
-            label: "eye",
-            what: "the centre eye point, world metres: drag to move it",
-            speed: 0.002,
-            view_eye,
-            view_hover: "put the centre eye point where the view's camera is",
-            reset: (
-                "the scene's eye",
-                "put it back at the scene camera's eye",
-                camera_eye,
-            ),
-        },
-    );
-    let mut choice = match settings.eyes {
-        Eyes::Camera | Eyes::Points(_) => 0,
-        Eyes::Ocular => 1,
-        Eyes::Eyebox { .. } => 2,
-    };
-    ui.horizontal(|ui| {
-        ui.label("eye points");
-        ui.selectable_value(&mut choice, 0, "centre");
-        ui.selectable_value(&mut choice, 1, "ocular (R46)")
-            .on_hover_text("two points 65 mm apart across the vehicle");
-        ui.selectable_value(&mut choice, 2, "eyebox");
-    });
-    settings.eyes = match (choice, &settings.eyes) {
-        (0, _) => Eyes::Camera,
-        (1, _) => Eyes::Ocular,
-        (_, Eyes::Eyebox { .. }) => settings.eyes.clone(),
-        _ => Eyes::Eyebox {
-            width: 0.3,
-            height: 0.15,
-            columns: 5,
-            rows: 3,
-        },
-    };
-    if let Eyes::Eyebox {
-        width,
-        height,
-        columns,
-        rows,
-    } = &mut settings.eyes
-    {
-        ui.horizontal(|ui| {
-            ui.add(
-                egui::DragValue::new(width)
-                    .range(0.0..=2.0)
-                    .speed(0.005)
-                    .suffix(" m"),
-            );
-            ui.label("×");
-            ui.add(
-                egui::DragValue::new(height)
-                    .range(0.0..=2.0)
-                    .speed(0.005)
-                    .suffix(" m"),
-            );
-            ui.add(egui::DragValue::new(columns).range(1..=15));
-            ui.label("×");
-            ui.add(egui::DragValue::new(rows).range(1..=15));
-        })
-        .response
-        .on_hover_text("width × height in the vehicle frame, columns × rows of eye points");
-    }
-}
-
-fn ground_section(ui: &mut egui::Ui, settings: &mut Settings) {
-    egui::Grid::new("ground").num_columns(2).show(ui, |ui| {
-        ui.label("ground y");
-        ui.add(
-            egui::DragValue::new(&mut settings.ground_y)
-                .speed(0.01)
-                .suffix(" m"),
-        );
-        ui.end_row();
-        ui.label("range");
-        ui.add(
-            egui::DragValue::new(&mut settings.range_m)
-                .range(0.1..=10_000.0)
-                .speed(0.5)
-                .suffix(" m"),
-        );
-        ui.end_row();
-        ui.label("tolerance");
-        ui.add(
-            egui::DragValue::new(&mut settings.tolerance)
-                .range(1e-4..=0.5)
-                .speed(1e-3),
-        )
-        .on_hover_text("refinement stops when the figures change by less than this share");
-        ui.end_row();
-    });
-}
-
-/// The regulation the mirror is judged against and the vehicle's layout: its R point (the
-/// ocular points are 635 mm above it), the outermost point on the mirror's side, the side, and
-/// the parts of the body that may hide the mirror and the road.
-fn regulation_section(
-    ui: &mut egui::Ui,
-    settings: &mut Settings,
-    first_layouts: &[Option<RegulationSettings>],
-    names: &[String],
-    parts: &[usize],
-) {
-    let mut chosen = settings
-        .regulation
-        .as_ref()
-        .and_then(|r| REGULATIONS.iter().position(|x| x.name == r.regulation.name));
-    ui.horizontal(|ui| {
-        ui.label("regulation");
-        egui::ComboBox::from_id_salt("regulation")
-            .selected_text(chosen.map(|k| REGULATIONS[k].name).unwrap_or("none"))
-            .show_ui(ui, |ui| {
-                ui.selectable_value(&mut chosen, None, "none");
-                for (k, r) in REGULATIONS.iter().enumerate() {
-                    ui.selectable_value(&mut chosen, Some(k), r.name)
-                        .on_hover_text(r.title);
-                }
             });
-    });
-    match (chosen, &mut settings.regulation) {
-        (None, _) => settings.regulation = None,
-        (Some(k), Some(layout)) if layout.regulation.name == REGULATIONS[k].name => {}
-        (Some(k), Some(layout)) => layout.regulation = &REGULATIONS[k],
-        (Some(k), None) => settings.regulation = first_layouts[k].clone(),
     }
-    let Some(layout) = &mut settings.regulation else {
-        ui.small("a regulation lays its fields on the ground in the vehicle frame and judges them");
-        return;
-    };
-    let xyz = |ui: &mut egui::Ui, label: &str, p: &mut Vec3, hover: &str| {
+    let is_lens = analysis
+        .outcome()
+        .is_some_and(|o| o.report.result::<specula_analyze::lens::Report>().is_some());
+    if is_lens {
         ui.horizontal(|ui| {
-            ui.label(label);
-            for v in [&mut p.x, &mut p.y, &mut p.z] {
-                ui.add(egui::DragValue::new(v).speed(0.005).suffix(" m"));
-            }
-        })
-        .response
-        .on_hover_text(hover);
-    };
-    xyz(
-        ui,
-        "forward",
-        &mut layout.forward,
-        "the vehicle's forward axis (made horizontal); up is +Y",
-    );
-    xyz(
-        ui,
-        "R point",
-        &mut layout.r_point,
-        "the driver's R point: the ocular points are 635 mm above it, 65 mm apart",
-    );
-    xyz(
-        ui,
-        "outermost",
-        &mut layout.outermost,
-        "the vehicle's outermost point on the mirror's side: the fields' inner boundary",
-    );
-    ui.horizontal(|ui| {
-        ui.label("side");
-        ui.selectable_value(&mut layout.side, Side::Left, "left");
-        ui.selectable_value(&mut layout.side, Side::Right, "right");
-    });
-    egui::CollapsingHeader::new(format!("vehicle parts ({})", layout.vehicle.len()))
-        .id_salt("vehicle parts")
-        .show(ui, |ui| {
-            let mut shown: Vec<&str> = Vec::new();
-            for &m in parts {
-                if shown.contains(&names[m].as_str()) {
-                    continue;
+            use specula_analyze::lens_plot::Map;
+            ui.label("map");
+            ui.selectable_value(&mut analysis.lens_map, Map::MeanPower, "mean power");
+            ui.selectable_value(&mut analysis.lens_map, Map::Cylinder, "cylinder");
+        });
+    }
+    let (name, value) = change?;
+    analysis
+        .settings
+        .set(name, &value)
+        .err()
+        .map(|e| format!("{name}: {e}"))
+}
+
+/// One option's control: a scene object's name from a list, a point with a button to the view's
+/// eye, otherwise the control its kind makes (`panel::control`).
+fn option_control(
+    ui: &mut egui::Ui,
+    spec: &OptionSpec,
+    value: &str,
+    names: &[String],
+    view_eye: glam::Vec3,
+) -> Option<String> {
+    if is_object(spec) {
+        return object_control(ui, spec, value, names);
+    }
+    let optional_choice = matches!(spec.kind, ParamKind::Choice(_)) && spec.default.is_empty();
+    if let (true, ParamKind::Choice(words)) = (optional_choice, spec.kind) {
+        let mut chosen = None;
+        egui::ComboBox::from_id_salt(spec.name)
+            .selected_text(if value.is_empty() { "default" } else { value })
+            .show_ui(ui, |ui| {
+                if ui.selectable_label(value.is_empty(), "default").clicked() {
+                    chosen = Some(String::new());
                 }
-                shown.push(&names[m]);
-                let same: Vec<usize> = parts
-                    .iter()
-                    .copied()
-                    .filter(|&k| names[k] == names[m])
-                    .collect();
-                let mut on = same.iter().all(|k| layout.vehicle.contains(k));
-                if ui.checkbox(&mut on, &names[m]).changed() {
-                    layout.vehicle.retain(|k| !same.contains(k));
-                    if on {
-                        layout.vehicle.extend(&same);
+                for w in words {
+                    if ui.selectable_label(*w == value, *w).clicked() {
+                        chosen = Some(w.to_string());
                     }
                 }
+            });
+        return chosen.filter(|w| w != value);
+    }
+    let point = matches!(spec.kind, ParamKind::Numbers { names: "X,Y,Z" });
+    ui.horizontal(|ui| {
+        let mut new = crate::panel::control(ui, spec.name, spec.kind, spec.doc, value);
+        if point
+            && ui
+                .small_button("view's eye")
+                .on_hover_text("put it where the view's camera is")
+                .clicked()
+        {
+            new = Some(format!("{},{},{}", view_eye.x, view_eye.y, view_eye.z));
+        }
+        new
+    })
+    .inner
+}
+
+/// A scene object's name (several, as checkboxes, for a repeatable option).
+fn object_control(
+    ui: &mut egui::Ui,
+    spec: &OptionSpec,
+    value: &str,
+    names: &[String],
+) -> Option<String> {
+    if spec.repeatable {
+        let mut chosen: Vec<&str> = value.split(';').filter(|v| !v.is_empty()).collect();
+        let mut changed = false;
+        egui::CollapsingHeader::new(format!("{} chosen", chosen.len()))
+            .id_salt(("objects", spec.name))
+            .show(ui, |ui| {
+                for name in names {
+                    let mut on = chosen.contains(&name.as_str());
+                    if ui.checkbox(&mut on, name).changed() {
+                        changed = true;
+                        chosen.retain(|c| c != name);
+                        if on {
+                            chosen.push(name);
+                        }
+                    }
+                }
+            });
+        return changed.then(|| chosen.join(";"));
+    }
+    let mut picked = None;
+    egui::ComboBox::from_id_salt(("object", spec.name))
+        .selected_text(if value.is_empty() { "none" } else { value })
+        .show_ui(ui, |ui| {
+            if !spec.required && ui.selectable_label(value.is_empty(), "none").clicked() {
+                picked = Some(String::new());
+            }
+            for name in names {
+                if ui.selectable_label(name == value, name).clicked() {
+                    picked = Some(name.clone());
+                }
             }
         });
+    picked.filter(|p| p != value)
 }
 
 fn figures_section(ui: &mut egui::Ui, analysis: &mut Analysis) {
@@ -579,22 +265,29 @@ fn figures_section(ui: &mut egui::Ui, analysis: &mut Analysis) {
     ui.small(format!(
         "centre eye point {:.0} ms; {} eye point{} {:.0} ms{progress}",
         outcome.centre_milliseconds,
-        outcome.eyes.len(),
-        if outcome.eyes.len() == 1 { "" } else { "s" },
+        outcome.eyes().len(),
+        if outcome.eyes().len() == 1 { "" } else { "s" },
         outcome.milliseconds,
     ));
     if !outcome.complete {
         ui.small("the centre eye point's result; every eye point's follows");
     }
     let mut select = None;
-    match &outcome.result {
-        Analysed::MirrorView {
-            judged: Some(judged),
-            ..
-        } => verdict_section(ui, &judged.0),
-        Analysed::MirrorView { view, .. } => mirror_figures(ui, view),
-        Analysed::Lens(r) => lens_figures(ui, r),
-        Analysed::Glare(g) => select = glare_figures(ui, analysis, g, outcome.complete),
+    let report = &outcome.report;
+    if let Some(m) = report.result::<MirrorViewResult>() {
+        match &m.regulation {
+            Some(j) => verdict_section(ui, &j.verdict),
+            None => mirror_figures(ui, &m.view),
+        }
+    } else if let Some(r) = report.result::<specula_analyze::lens::Report>() {
+        lens_figures(ui, r);
+    } else if let Some(g) = report.result::<GlareResult>() {
+        select = glare_figures(ui, analysis, &g.glare, outcome.complete);
+    } else {
+        if let Some(verdict) = report.verdict {
+            ui.label(format!("{}: {}", report.analysis, verdict.word()));
+        }
+        ui.monospace(&report.json);
     }
     if let Some(k) = select {
         analysis.selected_eye = Some(k);
@@ -744,14 +437,17 @@ fn glare_figures(
     ui.small(format!(
         "on the surface: the glare's relative luminance, log scale from {} (blue) to 1 \
          (yellow)",
-        analysis.settings.threshold
+        g.report.threshold
     ));
     select
 }
 
 /// What the lens map over the view shows, and its range.
 fn lens_map_legend(ui: &mut egui::Ui, analysis: &Analysis) {
-    if let Some(Analysed::Lens(r)) = analysis.outcome().map(|o| &o.result) {
+    if let Some(r) = analysis
+        .outcome()
+        .and_then(|o| o.report.result::<specula_analyze::lens::Report>())
+    {
         let values: Vec<f64> = r
             .grid
             .iter()
@@ -786,10 +482,16 @@ fn eyebox_map(
     shown: usize,
 ) -> Option<usize> {
     let count = glare.report.eyes.len();
-    let (columns, rows) = match analysis.settings.eyes {
-        Eyes::Eyebox { columns, rows, .. } if (columns * rows) as usize == count => {
-            (columns as usize, rows as usize)
-        }
+    // An eyebox's columns and rows, as the eye points were laid out.
+    let grid: Vec<usize> = analysis
+        .settings
+        .value("eyebox")
+        .split(',')
+        .filter_map(|v| v.trim().parse::<f64>().ok())
+        .map(|v| v as usize)
+        .collect();
+    let (columns, rows) = match grid.as_slice() {
+        [_, _, columns, rows] if columns * rows == count => (*columns, *rows),
         _ => (count, 1),
     };
     let cell = (240.0 / columns as f32).min(24.0);

@@ -740,9 +740,8 @@ fn advance_script(state: &mut WindowState, script: &mut ScriptRun) -> Result<(),
                 state.session.camera = crate::orbit::OrbitCamera::from_camera(&camera);
             }
             Step::Analysis(Some(request)) => {
-                let settings = request
-                    .settings(state.session.scene())
-                    .map_err(|e| at(&e))?;
+                let settings = request.settings.clone();
+                settings.check(state.session.scene()).map_err(|e| at(&e))?;
                 let mut analysis = crate::analysis::Analysis::new(settings);
                 if let Some(map) = request.lens_map {
                     analysis.lens_map = map;
@@ -757,6 +756,25 @@ fn advance_script(state: &mut WindowState, script: &mut ScriptRun) -> Result<(),
                     crate::analysis::summary(&analysis, state.session.scene())
                 );
                 state.session.analysis = Some(analysis);
+            }
+            Step::AnalysisJson(path) => {
+                let mut analysis = state
+                    .session
+                    .analysis
+                    .take()
+                    .ok_or_else(|| at(&"analysis_json: no analysis is on"))?;
+                analysis.finish(state.session.live());
+                let written = match analysis.json() {
+                    Some(json) => std::fs::write(&path, json)
+                        .map_err(|e| format!("writing {}: {e}", path.display())),
+                    None => Err(format!(
+                        "analysis_json: the analysis has no result ({})",
+                        analysis.error.as_deref().unwrap_or("none yet")
+                    )),
+                };
+                state.session.analysis = Some(analysis);
+                written.map_err(|e| at(&e))?;
+                eprintln!("step {}: wrote {}", index + 1, path.display());
             }
             Step::View(mode) => state.session.view = mode,
         }

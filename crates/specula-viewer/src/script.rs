@@ -20,9 +20,11 @@
 //! [[step]]
 //! view = "split"                                    # technique | reference | split | error
 //! [[step]]
-//! analysis = { kind = "mirror-view", object = "door mirror", eyes = "ocular", region = [1, 2, 5, 20] }
+//! analysis = { kind = "mirror-view", mirror = "door mirror", ocular = true, region = [1, 2, 5, 20] }
 //! [[step]]
-//! analysis = { kind = "glare", object = "cover glass", source = "side window", eyebox = [0.3, 0.15, 5, 3] }
+//! analysis = { kind = "glare", surface = "cover glass", source = "side window", eyebox = [0.3, 0.15, 5, 3] }
+//! [[step]]
+//! analysis_json = "mirror-view.json"                # the finished analysis's JSON, as --json
 //! [[step]]
 //! analysis = { kind = "off" }
 //! [[step]]
@@ -40,25 +42,29 @@
 //! A script starts with the panel hidden, so that the view fills the window (`--size`) until a
 //! `panel = true` step shows it; the view then fills what the panel leaves.
 //!
-//! An `analysis` step also takes `eye = [x, y, z]` (the centre eye point; a lens's centre of
-//! rotation), `range`, `ground` and `tolerance`; `eyes` is "centre" or "ocular", `eyebox` is
-//! [W, H, NX, NY], `region` is [X0, Z0, X1, Z1]; `kind = "lens"` takes `map = "mean-power"` or
-//! `"cylinder"`. A mirror view takes `regulation = "r46-iii"` (any of `specula analyze
-//! mirror-view --regulation`'s) with `forward`, `r_point`, `outermost` ([x, y, z]), `side` ("left" or
-//! "right") and `vehicle` (the body's parts by name), as the command's options. The step waits for the analysis and prints its figures; so does each
-//! screenshot taken while one is on (the screenshot shows its overlay).
+//! An `analysis` step's keys are `kind` (an analysis of `specula analyze`, or "off") and that
+//! analysis's options by their declared names, as `specula analyze KIND` takes them as flags
+//! (`--tolerance-deg` is `tolerance_deg`): a point or a box as an array of numbers, a
+//! repeatable option (`vehicle`, `eye`) as an array, a flag as `true`; docs/viewer.md lists
+//! every key, made from the declarations. `kind = "lens"` also takes `map = "mean-power"` or
+//! `"cylinder"` (what the overlay draws). The step waits for the analysis and prints its
+//! figures; so does each screenshot taken while one is on (the screenshot shows its overlay).
 
 use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 use serde::Deserialize;
 
-use specula_analyze::frame::Eyes;
-use specula_analyze::mirror_view::Region;
-
-use crate::analysis::{Kind, LensMap, RegulationRequest, Request};
+use crate::analysis::{LensMap, Settings};
 use crate::session::ViewMode;
-use specula_analyze::regulation::Side;
+
+/// An analysis as a script asks for it: its settings (options by name, checked against their
+/// declarations) and what the lens overlay maps.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Request {
+    pub settings: Settings,
+    pub lens_map: Option<LensMap>,
+}
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Step {
@@ -88,6 +94,8 @@ pub enum Step {
     View(ViewMode),
     /// Turns the analysis on (or off: None).
     Analysis(Option<Box<Request>>),
+    /// Writes the finished analysis's JSON document (what `--json` writes) to this file.
+    AnalysisJson(PathBuf),
     /// Puts the view's camera here.
     Camera {
         eye: Vec3,
@@ -133,7 +141,8 @@ struct RawStep {
     drag: Option<[f32; 3]>,
     screenshot: Option<PathBuf>,
     view: Option<String>,
-    analysis: Option<RawAnalysis>,
+    analysis: Option<toml::Table>,
+    analysis_json: Option<PathBuf>,
     camera: Option<toml::Value>,
     window_screenshot: Option<PathBuf>,
     panel: Option<bool>,
@@ -144,31 +153,6 @@ struct RawStep {
 struct RawCamera {
     eye: [f32; 3],
     target: [f32; 3],
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RawAnalysis {
-    kind: String,
-    object: Option<String>,
-    source: Option<String>,
-    eye: Option<[f32; 3]>,
-    eyes: Option<String>,
-    eyebox: Option<[f32; 4]>,
-    region: Option<[f32; 4]>,
-    range: Option<f32>,
-    ground: Option<f32>,
-    tolerance: Option<f64>,
-    map: Option<String>,
-    regulation: Option<String>,
-    forward: Option<[f32; 3]>,
-    r_point: Option<[f32; 3]>,
-    outermost: Option<[f32; 3]>,
-    side: Option<String>,
-    vehicle: Option<Vec<String>>,
-    sun: Option<[f64; 2]>,
-    display: Option<String>,
-    display_luminance: Option<[f64; 3]>,
 }
 
 #[derive(Deserialize)]
@@ -187,8 +171,8 @@ struct RawRotate {
 }
 
 const STEP_KEYS: &str =
-    "method, reference, param, orbit, translate, rotate, frames, drag, view, analysis, camera, \
-     panel, screenshot or window_screenshot";
+    "method, reference, param, orbit, translate, rotate, frames, drag, view, analysis, \
+     analysis_json, camera, panel, screenshot or window_screenshot";
 
 /// Reads a script; relative screenshot paths resolve against the current directory.
 pub fn load(path: &Path) -> Result<Vec<Step>, ScriptError> {
@@ -319,6 +303,11 @@ fn step(table: toml::Table) -> Result<Step, String> {
         Step::Panel(shown)
     } else if let Some(a) = raw.analysis {
         Step::Analysis(analysis(a)?.map(Box::new))
+    } else if let Some(path) = raw.analysis_json {
+        if path.as_os_str().is_empty() {
+            return Err("analysis_json: expected a file name".into());
+        }
+        Step::AnalysisJson(path)
     } else if let Some(c) = raw.camera {
         if c.as_str() == Some("analysis") {
             Step::AnalysisCamera
@@ -345,164 +334,76 @@ fn step(table: toml::Table) -> Result<Step, String> {
     Ok(step)
 }
 
-fn analysis(a: RawAnalysis) -> Result<Option<Request>, String> {
-    let kind = match a.kind.as_str() {
-        "off" => {
-            if a.has_other_keys() {
-                return Err("analysis: kind = \"off\" takes no other key".into());
-            }
-            return Ok(None);
-        }
-        "mirror-view" => Kind::MirrorView,
-        "glare" => Kind::Glare,
-        "lens" => Kind::Lens,
-        other => {
-            return Err(format!(
-                "analysis.kind = \"{other}\": expected mirror-view, glare, lens or off"
-            ))
-        }
+fn analysis(mut table: toml::Table) -> Result<Option<Request>, String> {
+    let kind = match table.remove("kind") {
+        Some(toml::Value::String(kind)) => kind,
+        _ => return Err("analysis needs kind = \"NAME\" (an analysis, or \"off\")".into()),
     };
-    let object = a
-        .object
-        .clone()
-        .ok_or("analysis needs object = \"NAME\" (the mirror, or the glaring surface)")?;
-    if let Some(eye) = a.eye {
-        finite(&eye, "analysis.eye")?;
+    if kind == "off" {
+        return match table.is_empty() {
+            true => Ok(None),
+            false => Err("analysis: kind = \"off\" takes no other key".into()),
+        };
     }
-    let eyes = analysis_eyes(&a)?;
-    let region = a
-        .region
-        .map(|[x0, z0, x1, z1]| {
-            Region::new(x0, z0, x1, z1).map_err(|e| format!("analysis.region: {e}"))
-        })
-        .transpose()?;
-    let lens_map = match (a.map.as_deref(), kind) {
-        (None, _) => None,
-        (Some("mean-power"), Kind::Lens) => Some(LensMap::MeanPower),
-        (Some("cylinder"), Kind::Lens) => Some(LensMap::Cylinder),
-        (Some(other), Kind::Lens) => {
-            return Err(format!(
-                "analysis.map = \"{other}\": expected mean-power or cylinder"
-            ))
-        }
-        (Some(_), _) => return Err("analysis.map: only a lens analysis draws a map".into()),
-    };
-    let regulation = regulation_request(&a)?;
-    Ok(Some(Request {
-        regulation,
-        kind,
-        lens_map,
-        object,
-        sun: a.sun,
-        display: match (a.display, a.display_luminance) {
-            (Some(name), Some(luminances)) => Some((name, luminances)),
-            (None, None) => None,
+    let mut settings =
+        Settings::new(&kind).map_err(|e| format!("analysis.kind = \"{kind}\": {}", in_keys(e)))?;
+    let lens_map = match table.remove("map") {
+        None => None,
+        Some(map) if kind == "lens" => Some(match map.as_str() {
+            Some("mean-power") => LensMap::MeanPower,
+            Some("cylinder") => LensMap::Cylinder,
             _ => {
-                return Err(
-                    "display and display_luminance = [symbol, background, min contrast] \
-                            come together"
-                        .into(),
-                )
+                return Err(format!(
+                    "analysis.map = {map}: expected mean-power or cylinder"
+                ))
             }
-        },
-        source: a.source,
-        eye: a.eye.map(Vec3::from_array),
-        eyes,
-        region,
-        range_m: a.range,
-        ground_y: a.ground,
-        tolerance: a.tolerance,
-    }))
-}
-
-impl RawAnalysis {
-    /// Whether any key but `kind` is given.
-    fn has_other_keys(&self) -> bool {
-        let a = self;
-        a.object.is_some()
-            || a.source.is_some()
-            || a.sun.is_some()
-            || a.display.is_some()
-            || a.eye.is_some()
-            || a.eyes.is_some()
-            || a.eyebox.is_some()
-            || a.region.is_some()
-            || a.range.is_some()
-            || a.ground.is_some()
-            || a.tolerance.is_some()
-            || a.map.is_some()
-            || a.regulation.is_some()
-            || a.forward.is_some()
-            || a.r_point.is_some()
-            || a.outermost.is_some()
-            || a.side.is_some()
-            || a.vehicle.is_some()
+        }),
+        Some(_) => return Err("analysis.map: only a lens analysis draws a map".into()),
+    };
+    for (key, value) in &table {
+        let text = option_text(value).ok_or_else(|| {
+            format!(
+                "analysis.{key} = {value}: expected a string, a number, a boolean or an array \
+                 of them"
+            )
+        })?;
+        settings
+            .set(key, &text)
+            .map_err(|e| format!("analysis.{key}: {}", in_keys(e)))?;
     }
+    Ok(Some(Request { settings, lens_map }))
 }
 
-/// The eye points: the camera's, the ocular points or an eyebox (checked as the command
-/// checks it).
-fn analysis_eyes(a: &RawAnalysis) -> Result<Eyes, String> {
-    Ok(match (a.eyes.as_deref(), a.eyebox) {
-        (Some(_), Some(_)) => return Err("analysis: give eyes or eyebox, not both".into()),
-        (None | Some("centre"), None) => Eyes::Camera,
-        (Some("ocular"), None) => Eyes::Ocular,
-        (Some(other), None) => {
-            return Err(format!(
-            "analysis.eyes = \"{other}\": expected centre or ocular (or eyebox = [W, H, NX, NY])"
-        ))
-        }
-        (None, Some(eyebox)) => {
-            Eyes::eyebox(eyebox).map_err(|e| format!("analysis.eyebox = [W, H, NX, NY]: {e}"))?
-        }
+/// A TOML value as an option's text: the numbers of an array comma-separated (a point, a
+/// box), the items of a repeatable option's array semicolon-separated.
+fn option_text(value: &toml::Value) -> Option<String> {
+    use toml::Value;
+    Some(match value {
+        Value::String(s) => s.clone(),
+        Value::Integer(i) => i.to_string(),
+        Value::Float(f) => f.to_string(),
+        Value::Boolean(b) => b.to_string(),
+        Value::Array(items) if items.iter().all(|v| v.is_integer() || v.is_float()) => items
+            .iter()
+            .map(option_text)
+            .collect::<Option<Vec<_>>>()?
+            .join(","),
+        Value::Array(items) => items
+            .iter()
+            .map(option_text)
+            .collect::<Option<Vec<_>>>()?
+            .join(";"),
+        _ => return None,
     })
 }
 
-/// The regulation a mirror view is judged against, and the vehicle keys that lay it out
-/// (refused without one).
-fn regulation_request(a: &RawAnalysis) -> Result<Option<RegulationRequest>, String> {
-    let vehicle_keys = a.forward.is_some()
-        || a.r_point.is_some()
-        || a.outermost.is_some()
-        || a.side.is_some()
-        || a.vehicle.is_some();
-    Ok(match a.regulation.clone() {
-            None if vehicle_keys => return Err(
-                "analysis: forward, r_point, outermost, side and vehicle lay out a regulation's fields: \
-                 give regulation = \"NAME\" too"
-                    .into(),
-            ),
-            None => None,
-            Some(name) => {
-                for (key, p) in [
-                    ("analysis.forward", &a.forward),
-                    ("analysis.r_point", &a.r_point),
-                    ("analysis.outermost", &a.outermost),
-                ] {
-                    if let Some(p) = p {
-                        finite(p, key)?;
-                    }
-                }
-                let side = match a.side.as_deref() {
-                    None => None,
-                    Some("left") => Some(Side::Left),
-                    Some("right") => Some(Side::Right),
-                    Some(other) => {
-                        return Err(format!(
-                            "analysis.side = \"{other}\": expected left or right"
-                        ))
-                    }
-                };
-                Some(RegulationRequest {
-                    name,
-                    forward: a.forward.map(Vec3::from_array),
-                    r_point: a.r_point.map(Vec3::from_array),
-                    outermost: a.outermost.map(Vec3::from_array),
-                    side,
-                    vehicle: a.vehicle.clone().unwrap_or_default(),
-                })
-            }
-        })
+/// A library error in a script's words: the reason, the key being named by the caller.
+fn in_keys(e: specula_analyze::AnalyzeError) -> String {
+    match e {
+        specula_analyze::AnalyzeError::BadOption { reason, .. } => reason,
+        specula_analyze::AnalyzeError::Option(e) => format!("{}: {}", e.value, e.reason),
+        other => other.to_string(),
+    }
 }
 
 #[cfg(test)]
@@ -533,9 +434,9 @@ view = "split"
 [[step]]
 screenshot = "a.png"
 [[step]]
-analysis = { kind = "mirror-view", object = "door mirror", eyes = "ocular", region = [1, 2, 5, 20], range = 50 }
+analysis = { kind = "mirror-view", mirror = "door mirror", ocular = true, region = [1, 2, 5, 20], range = 50, vehicle = ["car body", "roof"], regulation = "r46-iii" }
 [[step]]
-analysis = { kind = "glare", object = "cover glass", source = "side window", eyebox = [0.3, 0.15, 5, 3] }
+analysis = { kind = "glare", surface = "cover glass", source = "side window", eyebox = [0.3, 0.15, 5, 3] }
 [[step]]
 analysis = { kind = "off" }
 [[step]]
@@ -563,26 +464,30 @@ panel = true
         let Step::Analysis(Some(mirror)) = &steps[9] else {
             panic!("{:?}", steps[9])
         };
-        assert_eq!(
-            (mirror.kind, &mirror.eyes, mirror.range_m),
-            (Kind::MirrorView, &Eyes::Ocular, Some(50.0))
-        );
-        assert_eq!(
-            mirror.region,
-            Some(Region::new(1.0, 2.0, 5.0, 20.0).unwrap())
-        );
+        // The keys are the options by name, their values as the command line writes them.
+        let m = &mirror.settings;
+        assert_eq!(m.name(), "mirror-view");
+        for (name, value) in [
+            ("mirror", "door mirror"),
+            ("ocular", "true"),
+            ("region", "1,2,5,20"),
+            ("range", "50"),
+            ("vehicle", "car body;roof"),
+            ("regulation", "r46-iii"),
+            ("tolerance", "0.005"),
+        ] {
+            assert_eq!(m.value(name), value, "{name}");
+        }
+        let (analysis, eyes) = m.build().unwrap();
+        assert!(eyes.ocular);
+        assert_eq!(analysis.options().get("vehicle").unwrap(), "car body;roof");
         let Step::Analysis(Some(glare)) = &steps[10] else {
             panic!("{:?}", steps[10])
         };
-        assert_eq!(glare.source.as_deref(), Some("side window"));
+        assert_eq!(glare.settings.value("source"), "side window");
         assert_eq!(
-            glare.eyes,
-            Eyes::Eyebox {
-                width: 0.3,
-                height: 0.15,
-                columns: 5,
-                rows: 3
-            }
+            glare.settings.build().unwrap().1.eyebox,
+            Some([0.3, 0.15, 5.0, 3.0])
         );
         assert_eq!(steps[11], Step::Analysis(None));
         assert_eq!(
@@ -630,45 +535,51 @@ panel = true
             ("[[step]]\ntranslate = { object = \"a\" }", "step 1", "by"),
             ("[[step]]\ndrag = [10, 0, 2.5]", "step 1", "whole number"),
             (
-                "[[step]]\nanalysis = { kind = \"fog\", object = \"m\" }",
+                "[[step]]\nanalysis = { kind = \"fog\", mirror = \"m\" }",
                 "step 1",
-                "mirror-view, glare, lens or off",
+                "the analyses are mirror-view, glare, lens",
             ),
             (
-                "[[step]]\nanalysis = { kind = \"lens\", object = \"l\", map = \"prism\" }",
+                "[[step]]\nanalysis = { kind = \"lens\", lens = \"l\", map = \"prism\" }",
                 "step 1",
                 "mean-power or cylinder",
             ),
             (
-                "[[step]]\nanalysis = { kind = \"glare\", object = \"c\", map = \"cylinder\" }",
+                "[[step]]\nanalysis = { kind = \"glare\", surface = \"c\", map = \"cylinder\" }",
                 "step 1",
                 "only a lens",
             ),
             (
-                "[[step]]\nanalysis = { kind = \"glare\" }",
+                "[[step]]\nanalysis = { mirror = \"m\" }",
                 "step 1",
-                "needs object",
+                "needs kind",
             ),
             (
-                "[[step]]\nanalysis = { kind = \"off\", object = \"m\" }",
+                "[[step]]\nanalysis = { kind = \"off\", mirror = \"m\" }",
                 "step 1",
                 "no other key",
             ),
             (
-                "[[step]]\nanalysis = { kind = \"mirror-view\", object = \"m\", eyes = \"ocular\", eyebox = [1, 1, 2, 2] }",
+                "[[step]]\nanalysis = { kind = \"mirror-view\", object = \"m\" }",
                 "step 1",
-                "not both",
+                "analysis.object: mirror-view takes no option 'object'; its options are mirror,",
             ),
             (
-                "[[step]]\nanalysis = { kind = \"mirror-view\", object = \"m\", eyebox = [1, 1, 2.5, 2] }",
+                "[[step]]\nanalysis = { kind = \"mirror-view\", mirror = \"m\", eyebox = [1, 1, 2] }",
                 "step 1",
-                "whole numbers",
+                "analysis.eyebox: 1,1,2: expected W,H,NX,NY",
             ),
             (
-                "[[step]]\nanalysis = { kind = \"mirror-view\", object = \"m\", region = [1, 2, 1, 5] }",
+                "[[step]]\nanalysis = { kind = \"mirror-view\", mirror = \"m\", side = \"up\" }",
                 "step 1",
-                "no area",
+                "expected one of left, right",
             ),
+            (
+                "[[step]]\nanalysis = { kind = \"mirror-view\", mirror = \"m\", range = { a = 1 } }",
+                "step 1",
+                "expected a string, a number",
+            ),
+            ("[[step]]\nanalysis_json = \"\"", "step 1", "file name"),
             (
                 "[[step]]\ncamera = { eye = [1, 2, 3], target = [1, 2, 3] }",
                 "step 1",

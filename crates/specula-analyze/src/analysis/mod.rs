@@ -41,6 +41,19 @@ pub struct AnalysisInfo {
     pub create: fn() -> Box<dyn Analysis>,
 }
 
+impl std::fmt::Debug for AnalysisInfo {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "AnalysisInfo({})", self.name)
+    }
+}
+
+/// An analysis is known by its name (the registry holds each once).
+impl PartialEq for AnalysisInfo {
+    fn eq(&self, other: &AnalysisInfo) -> bool {
+        self.name == other.name
+    }
+}
+
 impl AnalysisInfo {
     /// Every option it takes, its own then the eye points', in the order front ends list them.
     pub fn all_options(&self) -> impl Iterator<Item = &'static OptionSpec> {
@@ -102,7 +115,7 @@ pub struct Report {
     /// The eye points it looked from (empty where it has none).
     pub eyes: Vec<glam::Vec3>,
     /// The analysis's own result, for its summary, its report folder and the viewer.
-    pub result: Box<dyn Any + Send>,
+    pub result: Box<dyn Any + Send + Sync>,
 }
 
 /// `document` as the report's JSON text.

@@ -104,6 +104,8 @@ pub struct Plan {
 /// What a glare run found, and the frame its report's plots are drawn in.
 pub struct GlareResult {
     pub glare: Glare,
+    /// The reflecting surface's mesh.
+    pub surface: usize,
     pub frame: crate::frame::VehicleFrame,
 }
 
@@ -288,6 +290,7 @@ impl Analysis for GlareAnalysis {
             eyes: points.clone(),
             result: Box::new(GlareResult {
                 glare,
+                surface: plan.options.surface,
                 frame: *frame,
             }),
         })
