@@ -71,7 +71,9 @@ pub const SEED_TECHNIQUES: &[&str] = &[
 #[cfg(test)]
 mod tests {
     use super::*;
-    use specula_core::SurfaceClass;
+    use specula_core::lifecycle::GpuTechnique;
+    use specula_core::raster::RasterSpec;
+    use specula_core::{ParamSet, ParamValue, SurfaceClass};
 
     /// Each technique's module source (path in the crate's `src`), whose top doc is read.
     const SOURCES: &[(&str, &str, &str)] = &[
@@ -272,6 +274,28 @@ mod tests {
                 info.name
             );
         }
+    }
+
+    /// The lifecycle's scene raster by default: [`RasterSpec::scene`] at the technique's own
+    /// `shadow_resolution`; none for the technique that says it draws none (gpu-trace).
+    #[test]
+    fn gpu_techniques_draw_the_scene_raster_at_their_shadow_resolution() {
+        fn drawn<T: GpuTechnique + Default>() -> Option<String> {
+            let mut technique = T::default();
+            let value = ParamValue::Integer(77);
+            if let Some(set) = technique.params_mut().set("shadow_resolution", &value) {
+                set.unwrap();
+            }
+            technique.scene_raster().map(|spec| format!("{spec:?}"))
+        }
+        let scene = Some(format!("{:?}", RasterSpec::scene(77)));
+        assert_eq!(drawn::<crate::envmap::EnvMap>(), scene);
+        assert_eq!(drawn::<crate::pvrr::Pvrr>(), scene);
+        assert_eq!(drawn::<crate::distance_maps::DistanceMaps>(), scene);
+        assert_eq!(drawn::<crate::image_space::ImageSpace>(), scene);
+        assert_eq!(drawn::<crate::c3rc::C3rcMethod>(), scene);
+        assert_eq!(drawn::<crate::toy_normals::ToyNormals>(), scene);
+        assert_eq!(drawn::<crate::gpu_trace::GpuTrace>(), None);
     }
 
     #[test]
