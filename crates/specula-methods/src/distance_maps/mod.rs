@@ -376,7 +376,13 @@ pub fn ranges_shader_source() -> String {
 /// The tracing pass's full source.
 pub fn trace_shader_source() -> String {
     shaders::compose(
-        &["optics.wgsl", "camera.wgsl", "scene.wgsl", "cubemap.wgsl"],
+        &[
+            "optics.wgsl",
+            "camera.wgsl",
+            "scene.wgsl",
+            "cubemap.wgsl",
+            "specular_pixel.wgsl",
+        ],
         &format!("{CODES}\n{TRACE_SHADER}"),
     )
 }

@@ -216,7 +216,13 @@ const SHADER: &str = include_str!("image_space.wgsl");
 
 pub fn shader_source() -> String {
     shaders::compose(
-        &["optics.wgsl", "camera.wgsl", "scene.wgsl", "cubemap.wgsl"],
+        &[
+            "optics.wgsl",
+            "camera.wgsl",
+            "scene.wgsl",
+            "cubemap.wgsl",
+            "specular_pixel.wgsl",
+        ],
         &format!("{}\n{SHADER}", cube_maps::LOOKUP_SHADER),
     )
 }
