@@ -5,7 +5,7 @@
 //! rest of the frame, in this order:
 //! 1. the device lookup (a clear error where the run has no GPU);
 //! 2. the preparation, kept per scene id: the technique's, and the scene raster pass it
-//!    declares ([`GpuTechnique::scene_raster`]), rebuilt for another scene or after a change
+//!    declares ([`GpuTechnique::SCENE_RASTER`], [`GpuTechnique::scene_raster`]), rebuilt for another scene or after a change
 //!    that invalidates the scene's preparation;
 //! 3. the frame's start: the raster pass's G-buffer pool handed back (and its shadow maps drawn
 //!    again after a move), the stage timer started;
@@ -31,12 +31,26 @@ pub trait GpuTechnique: 'static {
     /// What it builds for a scene: pipelines, maps, bind groups.
     type Prepared;
 
-    fn info(&self) -> &'static MethodInfo;
-    fn params(&self) -> &dyn ParamSet;
-    fn params_mut(&mut self) -> &mut dyn ParamSet;
+    /// Its parameters: the `params!` struct it keeps (as its field `params`).
+    type Params: ParamSet;
 
-    /// The scene raster pass its frames start from, or None (it draws no G-buffer).
-    fn scene_raster(&self) -> Option<RasterSpec>;
+    /// What the registry lists for it: the [`Technique::info`] of its [`GpuMethod`].
+    const INFO: &'static MethodInfo;
+
+    /// Whether its frames start from the scene raster pass: [`RasterSpec::scene`] at its
+    /// parameter `shadow_resolution` ([`raster::SHADOW_RESOLUTION`]). False: it draws no
+    /// G-buffer.
+    const SCENE_RASTER: bool = true;
+
+    /// Its parameters, as [`Technique::params`] hands them out.
+    fn params(&self) -> &Self::Params;
+    fn params_mut(&mut self) -> &mut Self::Params;
+
+    /// The scene raster pass its frames start from, or None (it draws no G-buffer): by default
+    /// as [`GpuTechnique::SCENE_RASTER`] says.
+    fn scene_raster(&self) -> Option<RasterSpec> {
+        Self::SCENE_RASTER.then(|| RasterSpec::scene(raster::shadow_resolution(self.params())))
+    }
 
     /// Whether it draws the camera's G-buffer itself (from [`GpuFrame::raster`], in a stage of
     /// its own) instead of the lifecycle drawing it first, and shows that G-buffer's colour
@@ -220,7 +234,7 @@ impl<T: GpuTechnique> DerefMut for GpuMethod<T> {
 
 impl<T: GpuTechnique> Technique for GpuMethod<T> {
     fn info(&self) -> &'static MethodInfo {
-        self.technique.info()
+        T::INFO
     }
 
     fn params(&self) -> &dyn ParamSet {
@@ -240,7 +254,7 @@ impl<T: GpuTechnique> Technique for GpuMethod<T> {
     }
 
     fn prepare(&mut self, ctx: &Context, live: &LiveScene) -> Result<(), TechniqueError> {
-        self.ensure_prepared(ctx.gpu(self.technique.info().name)?, live)
+        self.ensure_prepared(ctx.gpu(T::INFO.name)?, live)
     }
 
     fn draw(
@@ -251,7 +265,7 @@ impl<T: GpuTechnique> Technique for GpuMethod<T> {
         width: u32,
         height: u32,
     ) -> Result<Drawn, TechniqueError> {
-        let gpu = ctx.gpu(self.technique.info().name)?;
+        let gpu = ctx.gpu(T::INFO.name)?;
         self.ensure_prepared(gpu, live)?;
         let prepared = self.prepared.as_mut().expect("prepared above");
         let raster = prepared.raster.as_ref();

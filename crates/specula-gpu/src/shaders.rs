@@ -10,6 +10,7 @@ pub const CAMERA: &str = include_str!("../../../shaders/common/camera.wgsl");
 pub const SCENE: &str = include_str!("../../../shaders/common/scene.wgsl");
 pub const CUBEMAP: &str = include_str!("../../../shaders/common/cubemap.wgsl");
 pub const LIGHTING: &str = include_str!("../../../shaders/common/lighting.wgsl");
+pub const SPECULAR_PIXEL: &str = include_str!("../../../shaders/common/specular_pixel.wgsl");
 
 /// Every common WGSL file, by name, for validation and composition.
 pub const COMMON: &[(&str, &str)] = &[
@@ -18,6 +19,7 @@ pub const COMMON: &[(&str, &str)] = &[
     ("scene.wgsl", SCENE),
     ("cubemap.wgsl", CUBEMAP),
     ("lighting.wgsl", LIGHTING),
+    ("specular_pixel.wgsl", SPECULAR_PIXEL),
 ];
 
 /// A shader's full source: the named common files, then the technique's own code.

@@ -8,14 +8,37 @@ fn validate(name: &str, source: &str) -> naga::Module {
     specula_gpu::util::validate_wgsl(name, source).unwrap_or_else(|e| panic!("{e}"))
 }
 
+/// What specular_pixel.wgsl reads from its including shader, declared as its comment lists it
+/// (each shader at bindings of its own).
+const SPECULAR_PIXEL_INCLUDER: &str = "
+@group(0) @binding(0) var<uniform> camera: Camera;
+@group(0) @binding(1) var g_color: texture_2d<f32>;
+@group(0) @binding(2) var g_position: texture_2d<f32>;
+@group(0) @binding(3) var g_normal: texture_2d<f32>;
+@group(0) @binding(4) var g_ids: texture_2d<u32>;
+@group(0) @binding(5) var<storage, read> mesh_reflector: array<i32>;
+";
+
 #[test]
 fn every_common_shader_validates() {
-    // Each file with the ones listed before it (lighting.wgsl builds on scene and cubemap).
+    // Each file with the ones listed before it (lighting.wgsl builds on scene and cubemap), and
+    // what a file leaves to its including shader.
     let mut prefix = String::new();
     for (name, source) in shaders::COMMON {
         prefix.push_str(source);
         prefix.push('\n');
-        validate(name, &prefix);
+        match *name {
+            "specular_pixel.wgsl" => validate(name, &format!("{prefix}{SPECULAR_PIXEL_INCLUDER}")),
+            _ => validate(name, &prefix),
+        };
+    }
+    // The includer's part is what the file's comment says it is.
+    for line in SPECULAR_PIXEL_INCLUDER.lines().filter(|l| !l.is_empty()) {
+        let declaration = line.split_once(") var").expect("a binding").1;
+        assert!(
+            shaders::SPECULAR_PIXEL.contains(&format!("//   var{declaration}")),
+            "specular_pixel.wgsl does not list{declaration}"
+        );
     }
 }
 

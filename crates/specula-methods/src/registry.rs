@@ -8,13 +8,26 @@ use specula_core::{MethodInfo, Technique, TechniqueError};
 use crate::METHODS;
 
 /// Declares each technique's module (`pub mod NAME;`, whose `INFO` describes it) and lists them
-/// all, in order, as `METHODS`. Attributes (e.g. `#[cfg(test)]`) apply to both.
+/// all, in order, as `METHODS`: first the techniques, each a folder `NAME/` with its `mod.rs`,
+/// then the test-only ones (`#[cfg(test)]`), each one file `NAME.rs`. For the tests it lists
+/// the techniques' `mod.rs` sources too, as `MODULE_SOURCES`.
 macro_rules! techniques {
-    ($($(#[$attr:meta])* $module:ident,)*) => {
-        $($(#[$attr])* pub mod $module;)*
+    ($($module:ident,)* $(#[cfg(test)] $test_only:ident,)*) => {
+        $(pub mod $module;)*
+        $(#[cfg(test)] pub mod $test_only;)*
 
         /// Every registered method: the exact reference first, then the techniques.
-        pub static METHODS: &[&specula_core::MethodInfo] = &[$($(#[$attr])* &$module::INFO,)*];
+        pub static METHODS: &[&specula_core::MethodInfo] =
+            &[$(&$module::INFO,)* $(#[cfg(test)] &$test_only::INFO,)*];
+
+        /// Each technique's `INFO`, its module's path in the crate's `src` and that source, whose
+        /// top doc the registry's tests read (the test-only ones have no such doc).
+        #[cfg(test)]
+        pub(crate) const MODULE_SOURCES: &[(&specula_core::MethodInfo, &str, &str)] = &[$((
+            &$module::INFO,
+            concat!(stringify!($module), "/mod.rs"),
+            include_str!(concat!(stringify!($module), "/mod.rs")),
+        ),)*];
     };
 }
 pub(crate) use techniques;
@@ -71,39 +84,10 @@ pub const SEED_TECHNIQUES: &[&str] = &[
 #[cfg(test)]
 mod tests {
     use super::*;
-    use specula_core::SurfaceClass;
-
-    /// Each technique's module source (path in the crate's `src`), whose top doc is read.
-    const SOURCES: &[(&str, &str, &str)] = &[
-        (
-            "reference",
-            "reference/mod.rs",
-            include_str!("reference/mod.rs"),
-        ),
-        (
-            "gpu-trace",
-            "gpu_trace/mod.rs",
-            include_str!("gpu_trace/mod.rs"),
-        ),
-        ("envmap", "envmap/mod.rs", include_str!("envmap/mod.rs")),
-        ("pvrr", "pvrr/mod.rs", include_str!("pvrr/mod.rs")),
-        (
-            "distance-maps",
-            "distance_maps/mod.rs",
-            include_str!("distance_maps/mod.rs"),
-        ),
-        (
-            "image-space",
-            "image_space/mod.rs",
-            include_str!("image_space/mod.rs"),
-        ),
-        ("c3rc", "c3rc/mod.rs", include_str!("c3rc/mod.rs")),
-        (
-            "vertex-tracing",
-            "vertex_tracing/mod.rs",
-            include_str!("vertex_tracing/mod.rs"),
-        ),
-    ];
+    use crate::MODULE_SOURCES;
+    use specula_core::lifecycle::GpuTechnique;
+    use specula_core::raster::RasterSpec;
+    use specula_core::{ParamSet, ParamValue, SurfaceClass};
 
     /// The lines that open and close the parameter table of a module's top doc.
     const TABLE_BEGIN: &str = "//! <!-- The parameter table: made from `Params::SPECS` by `specula_core::params::doc_table`;\n//! `SPECULA_REGENERATE=1 cargo test -p specula-methods --lib doc` writes it again. -->\n";
@@ -115,8 +99,7 @@ mod tests {
     fn every_module_doc_holds_its_parameter_table() {
         let regenerate = std::env::var_os("SPECULA_REGENERATE").is_some();
         let mut stale = Vec::new();
-        for (name, path, source) in SOURCES {
-            let info = method(name).unwrap();
+        for (info, path, source) in MODULE_SOURCES {
             let begin = source
                 .find(TABLE_BEGIN)
                 .unwrap_or_else(|| panic!("{path}: no table"));
@@ -143,21 +126,30 @@ mod tests {
         // Every method has its source listed (the test-only toy has no module doc table).
         for info in METHODS.iter().filter(|m| m.name != "toy-normals") {
             assert!(
-                SOURCES.iter().any(|(n, ..)| *n == info.name),
+                MODULE_SOURCES.iter().any(|(i, ..)| i.name == info.name),
                 "{}",
                 info.name
             );
         }
     }
 
-    /// Each seed technique's module source, whose top doc is read.
-    const SEED_SOURCES: &[(&str, &str)] = &[
-        ("pvrr", include_str!("pvrr/mod.rs")),
-        ("distance-maps", include_str!("distance_maps/mod.rs")),
-        ("c3rc", include_str!("c3rc/mod.rs")),
-        ("image-space", include_str!("image_space/mod.rs")),
-        ("vertex-tracing", include_str!("vertex_tracing/mod.rs")),
-    ];
+    /// Each seed technique's name and module source, whose top doc is read: every one of
+    /// [`SEED_TECHNIQUES`], in that order.
+    fn seed_sources() -> Vec<(&'static str, &'static str)> {
+        let sources: Vec<_> = SEED_TECHNIQUES
+            .iter()
+            .filter_map(|name| {
+                let (.., source) = MODULE_SOURCES.iter().find(|(i, ..)| i.name == *name)?;
+                Some((*name, *source))
+            })
+            .collect();
+        assert_eq!(
+            sources.len(),
+            SEED_TECHNIQUES.len(),
+            "a seed technique's source"
+        );
+        sources
+    }
 
     /// The module's top doc, one string per line (the `//!` stripped).
     fn top_doc(source: &str) -> Vec<&str> {
@@ -210,7 +202,7 @@ mod tests {
 
     #[test]
     fn every_step_beyond_the_paper_is_switched_off_by_the_paper_preset() {
-        for (name, source) in SEED_SOURCES {
+        for (name, source) in seed_sources() {
             let info = method(name).unwrap();
             let preset = info
                 .preset("paper")
@@ -272,6 +264,28 @@ mod tests {
                 info.name
             );
         }
+    }
+
+    /// The lifecycle's scene raster by default: [`RasterSpec::scene`] at the technique's own
+    /// `shadow_resolution`; none for the technique that says it draws none (gpu-trace).
+    #[test]
+    fn gpu_techniques_draw_the_scene_raster_at_their_shadow_resolution() {
+        fn drawn<T: GpuTechnique + Default>() -> Option<String> {
+            let mut technique = T::default();
+            let value = ParamValue::Integer(77);
+            if let Some(set) = technique.params_mut().set("shadow_resolution", &value) {
+                set.unwrap();
+            }
+            technique.scene_raster().map(|spec| format!("{spec:?}"))
+        }
+        let scene = Some(format!("{:?}", RasterSpec::scene(77)));
+        assert_eq!(drawn::<crate::envmap::EnvMap>(), scene);
+        assert_eq!(drawn::<crate::pvrr::Pvrr>(), scene);
+        assert_eq!(drawn::<crate::distance_maps::DistanceMaps>(), scene);
+        assert_eq!(drawn::<crate::image_space::ImageSpace>(), scene);
+        assert_eq!(drawn::<crate::c3rc::C3rcMethod>(), scene);
+        assert_eq!(drawn::<crate::toy_normals::ToyNormals>(), scene);
+        assert_eq!(drawn::<crate::gpu_trace::GpuTrace>(), None);
     }
 
     #[test]

@@ -3,9 +3,9 @@
 //! crate root's `techniques!` list; the frame lifecycle does the rest.
 
 use specula_core::lifecycle::{GpuFrame, GpuTechnique};
-use specula_core::raster::{self, BindGroupsBySlot, RasterPass, RasterSpec};
+use specula_core::raster::{self, BindGroupsBySlot, RasterPass};
 use specula_core::{
-    GpuMethod, GpuScene, Invalidates, LiveScene, MethodInfo, Param, ParamKind, ParamSet,
+    GpuMethod, GpuScene, Invalidates, LiveScene, MethodInfo, Param, ParamKind,
     TechniqueError,
 };
 use specula_gpu::shaders;
@@ -62,21 +62,15 @@ pub struct Prepared {
 
 impl GpuTechnique for ToyNormals {
     type Prepared = Prepared;
+    type Params = Params;
+    const INFO: &'static MethodInfo = &INFO;
 
-    fn info(&self) -> &'static MethodInfo {
-        &INFO
-    }
-
-    fn params(&self) -> &dyn ParamSet {
+    fn params(&self) -> &Params {
         &self.params
     }
 
-    fn params_mut(&mut self) -> &mut dyn ParamSet {
+    fn params_mut(&mut self) -> &mut Params {
         &mut self.params
-    }
-
-    fn scene_raster(&self) -> Option<RasterSpec> {
-        Some(RasterSpec::scene(self.params.shadow_resolution))
     }
 
     fn prepare(

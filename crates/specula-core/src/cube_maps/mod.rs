@@ -40,7 +40,13 @@ pub fn shader_source() -> String {
 /// `entry` (which defines `fs_shade`, calling `shade`) after the cube-map shading it calls.
 pub fn shading_shader_source(entry: &str) -> String {
     shaders::compose(
-        &["optics.wgsl", "camera.wgsl", "scene.wgsl", "cubemap.wgsl"],
+        &[
+            "optics.wgsl",
+            "camera.wgsl",
+            "scene.wgsl",
+            "cubemap.wgsl",
+            "specular_pixel.wgsl",
+        ],
         &format!("{LOOKUP_SHADER}\n{SHADE_SHADER}\n{entry}"),
     )
 }

@@ -1,6 +1,7 @@
 // The shading of envmap (and of the techniques that refine it): the specular pixels of the
 // G-buffer from per-reflector environment cube maps (six faces in a 2D array; see
-// cubemap.wgsl). Prepended: optics.wgsl, camera.wgsl, scene.wgsl, cubemap.wgsl, lookup.wgsl.
+// cubemap.wgsl). Prepended: optics.wgsl, camera.wgsl, scene.wgsl, cubemap.wgsl,
+// specular_pixel.wgsl, lookup.wgsl.
 
 @group(0) @binding(0) var<uniform> camera: Camera;
 @group(0) @binding(1) var g_color: texture_2d<f32>;
@@ -48,21 +49,15 @@ fn transmitted(r: Reflector, p: vec3<f32>, d: vec3<f32>, n: vec3<f32>, ior: f32,
 // refraction) looked up in the cube maps. A mirror pixel whose `near.a` is positive reflects
 // `near.rgb` instead (radiance a technique found along the reflected ray by other means).
 fn shade(pixel: vec2<i32>, near: vec4<f32>) -> vec4<f32> {
-    let base = textureLoad(g_color, pixel, 0);
-    let ids = textureLoad(g_ids, pixel, 0).xy;
-    if (ids.x == 0u) {
-        return base;
+    let s = specular_pixel(pixel);
+    if (s.reflector < 0) {
+        return s.base;
     }
-    let mesh = ids.x - 1u;
-    let reflector_index = mesh_reflector[mesh];
-    if (reflector_index < 0) {
-        return base;
-    }
-    let r = reflectors[reflector_index];
-    let material = materials[mesh_materials[mesh]];
-    let p = textureLoad(g_position, pixel, 0).xyz;
-    let n = textureLoad(g_normal, pixel, 0).xyz;
-    let d = normalize(p - camera.eye_world);
+    let r = reflectors[s.reflector];
+    let material = s.material;
+    let p = s.p;
+    let n = s.n;
+    let d = s.v;
     let cos_i = -dot(d, n);
     var reflected = env_lookup(r, reflect(d, n));
     if (material.kind == MATERIAL_MIRROR && near.a > 0.0) {

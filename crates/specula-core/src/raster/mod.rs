@@ -39,7 +39,7 @@ use specula_trace::Image;
 
 use crate::gpu_scene::{GpuScene, GpuVertex, LIGHT_DIRECTIONAL};
 use crate::live_scene::LiveScene;
-use crate::params::{Invalidates, Param, ParamKind};
+use crate::params::{Invalidates, Param, ParamKind, ParamSet};
 
 const SHADER: &str = include_str!("raster.wgsl");
 
@@ -59,6 +59,20 @@ pub const SHADOW_RESOLUTION: Param = Param {
     doc: "texels per side of the scene raster's shadow maps",
     invalidates: Invalidates::Scene,
 };
+
+/// The value of `params`' `shadow_resolution` ([`SHADOW_RESOLUTION`]): the scene raster pass's
+/// shadow maps of a technique that draws it.
+///
+/// # Panics
+/// Where `params` has no such parameter (a technique that draws the raster pass declares it).
+pub fn shadow_resolution(params: &dyn ParamSet) -> u32 {
+    let value = params
+        .get("shadow_resolution")
+        .expect("a technique that draws the scene raster declares shadow_resolution");
+    value
+        .parse()
+        .unwrap_or_else(|_| panic!("shadow_resolution is a whole number, not {value}"))
+}
 
 pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 pub const IDS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Uint;

@@ -233,9 +233,9 @@ use specula_core::cube_maps::{self, CubeMaps, Exit};
 use specula_core::gpu_scene::GpuScene;
 use specula_core::lifecycle::{GpuFrame, GpuMethod, GpuTechnique};
 use specula_core::live_scene::LiveScene;
-use specula_core::raster::{self, BindGroupsBySlot, RasterPass, RasterSpec};
+use specula_core::raster::{self, BindGroupsBySlot, RasterPass};
 use specula_core::screen::{PixelSurfaces, SurfaceReadback};
-use specula_core::{Invalidates, MethodInfo, Param, ParamKind, ParamSet, TechniqueError};
+use specula_core::{Invalidates, MethodInfo, Param, ParamKind, TechniqueError};
 
 const SHADER: &str = include_str!("c3rc.wgsl");
 
@@ -615,21 +615,15 @@ impl C3rcMethod {
 
 impl GpuTechnique for C3rcMethod {
     type Prepared = Prepared;
+    type Params = Params;
+    const INFO: &'static MethodInfo = &INFO;
 
-    fn info(&self) -> &'static MethodInfo {
-        &INFO
-    }
-
-    fn params(&self) -> &dyn ParamSet {
+    fn params(&self) -> &Params {
         &self.params
     }
 
-    fn params_mut(&mut self) -> &mut dyn ParamSet {
+    fn params_mut(&mut self) -> &mut Params {
         &mut self.params
-    }
-
-    fn scene_raster(&self) -> Option<RasterSpec> {
-        Some(RasterSpec::scene(self.params.shadow_resolution))
     }
 
     /// Its forward phase runs on the CPU (on lavapipe): every stage on the CPU's clock.

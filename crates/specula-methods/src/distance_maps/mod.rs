@@ -197,9 +197,9 @@ use specula_scene::Scene;
 use specula_core::gpu_scene::GpuScene;
 use specula_core::lifecycle::{GpuFrame, GpuMethod, GpuTechnique};
 use specula_core::live_scene::LiveScene;
-use specula_core::raster::{self, BindGroupsBySlot, RasterPass, RasterSpec, CUBE_FACES};
+use specula_core::raster::{self, BindGroupsBySlot, RasterPass, CUBE_FACES};
 use specula_core::{
-    Invalidates, MethodInfo, Param, ParamKind, ParamSet, ParamType, ParamValue, TechniqueError,
+    Invalidates, MethodInfo, Param, ParamKind, ParamType, ParamValue, TechniqueError,
 };
 
 /// The tracing pass's fallback counters, in trace.wgsl's order: counter name, and what the
@@ -376,7 +376,13 @@ pub fn ranges_shader_source() -> String {
 /// The tracing pass's full source.
 pub fn trace_shader_source() -> String {
     shaders::compose(
-        &["optics.wgsl", "camera.wgsl", "scene.wgsl", "cubemap.wgsl"],
+        &[
+            "optics.wgsl",
+            "camera.wgsl",
+            "scene.wgsl",
+            "cubemap.wgsl",
+            "specular_pixel.wgsl",
+        ],
         &format!("{CODES}\n{TRACE_SHADER}"),
     )
 }
@@ -1128,21 +1134,15 @@ impl Prepared {
 
 impl GpuTechnique for DistanceMaps {
     type Prepared = Prepared;
+    type Params = Params;
+    const INFO: &'static MethodInfo = &INFO;
 
-    fn info(&self) -> &'static MethodInfo {
-        &INFO
-    }
-
-    fn params(&self) -> &dyn ParamSet {
+    fn params(&self) -> &Params {
         &self.params
     }
 
-    fn params_mut(&mut self) -> &mut dyn ParamSet {
+    fn params_mut(&mut self) -> &mut Params {
         &mut self.params
-    }
-
-    fn scene_raster(&self) -> Option<RasterSpec> {
-        Some(RasterSpec::scene(self.params.shadow_resolution))
     }
 
     fn prepare(

@@ -1,7 +1,8 @@
 // distance-maps, steps 2 and 3: shades each reflector pixel of the G-buffer by tracing its
 // secondary rays in the reflector's layered distance map (linear search per layer, secant
 // search in each or in the nearest layer) and following the specular path to a diffuse surface.
-// Prepended: optics.wgsl, camera.wgsl, scene.wgsl, cubemap.wgsl, codes.wgsl.
+// Prepended: optics.wgsl, camera.wgsl, scene.wgsl, cubemap.wgsl, specular_pixel.wgsl,
+// codes.wgsl.
 
 const OUTPUT_RADIANCE: u32 = 0u;
 const OUTPUT_FIRST_HIT: u32 = 1u;
@@ -594,22 +595,16 @@ fn trace_paths(reflector: MapReflector, p_world: vec3<f32>, v: vec3<f32>, n: vec
 @fragment
 fn fs_shade(in: FullscreenOut) -> @location(0) vec4<f32> {
     let pixel = vec2<i32>(in.clip.xy);
-    let base = textureLoad(g_color, pixel, 0);
-    let ids = textureLoad(g_ids, pixel, 0).xy;
-    if (ids.x == 0u) {
-        return base;
+    let s = specular_pixel(pixel);
+    if (s.reflector < 0) {
+        return s.base;
     }
-    let mesh = ids.x - 1u;
-    let reflector_index = mesh_reflector[mesh];
-    if (reflector_index < 0) {
-        return base;
-    }
-    let reflector = reflectors[reflector_index];
-    let material = materials[mesh_materials[mesh]];
+    let reflector = reflectors[s.reflector];
+    let material = s.material;
     let first = specular_code(material);
-    let p = textureLoad(g_position, pixel, 0).xyz;
-    let n = textureLoad(g_normal, pixel, 0).xyz;
-    let v = normalize(p - camera.eye_world);
+    let p = s.p;
+    let n = s.n;
+    let v = s.v;
     if (settings.output == OUTPUT_FIRST_HIT) {
         return vec4<f32>(first_hit(reflector, p, v, n, first), 1.0);
     }

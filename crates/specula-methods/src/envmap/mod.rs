@@ -60,9 +60,9 @@
 
 use specula_core::cube_maps::{shading_bindings, shading_pass, CubeMaps, Exit, TWO_LEVEL_MAPS};
 use specula_core::lifecycle::{GpuFrame, GpuMethod, GpuTechnique};
-use specula_core::raster::{self, BindGroupsBySlot, RasterPass, RasterSpec};
+use specula_core::raster::{self, BindGroupsBySlot, RasterPass};
 use specula_core::{
-    Invalidates, LiveScene, MethodInfo, Param, ParamKind, ParamSet, TechniqueError,
+    Invalidates, LiveScene, MethodInfo, Param, ParamKind, TechniqueError,
 };
 use specula_gpu::shaders::CameraUniform;
 use specula_gpu::util::{bind_group, writable_buffer};
@@ -135,21 +135,15 @@ impl EnvMap {
 
 impl GpuTechnique for EnvMap {
     type Prepared = Prepared;
+    type Params = Params;
+    const INFO: &'static MethodInfo = &INFO;
 
-    fn info(&self) -> &'static MethodInfo {
-        &INFO
-    }
-
-    fn params(&self) -> &dyn ParamSet {
+    fn params(&self) -> &Params {
         &self.params
     }
 
-    fn params_mut(&mut self) -> &mut dyn ParamSet {
+    fn params_mut(&mut self) -> &mut Params {
         &mut self.params
-    }
-
-    fn scene_raster(&self) -> Option<RasterSpec> {
-        Some(RasterSpec::scene(self.params.shadow_resolution))
     }
 
     fn prepare(

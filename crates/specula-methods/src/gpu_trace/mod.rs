@@ -73,9 +73,9 @@ use specula_trace::SceneAccel;
 use specula_core::gpu_scene::GpuScene;
 use specula_core::lifecycle::{GpuFrame, GpuMethod, GpuTechnique};
 use specula_core::live_scene::LiveScene;
-use specula_core::raster::{self, RasterPass, RasterSpec};
+use specula_core::raster::{self, RasterPass};
 use specula_core::{
-    Invalidates, MethodInfo, Param, ParamKind, ParamSet, TechniqueError, COUNTER_RAYS_TRACED,
+    Invalidates, MethodInfo, Param, ParamKind, TechniqueError, COUNTER_RAYS_TRACED,
     COUNTER_SHADOW_RAYS,
 };
 
@@ -577,21 +577,17 @@ impl Prepared {
 
 impl GpuTechnique for GpuTrace {
     type Prepared = Prepared;
+    type Params = Params;
+    const INFO: &'static MethodInfo = &INFO;
+    /// It traces from the camera: no G-buffer.
+    const SCENE_RASTER: bool = false;
 
-    fn info(&self) -> &'static MethodInfo {
-        &INFO
-    }
-
-    fn params(&self) -> &dyn ParamSet {
+    fn params(&self) -> &Params {
         &self.params
     }
 
-    fn params_mut(&mut self) -> &mut dyn ParamSet {
+    fn params_mut(&mut self) -> &mut Params {
         &mut self.params
-    }
-
-    fn scene_raster(&self) -> Option<RasterSpec> {
-        None
     }
 
     fn prepare(

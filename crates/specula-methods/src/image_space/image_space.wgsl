@@ -2,7 +2,8 @@
 // A full-screen pass over the scene G-buffer: every refractor pixel is refracted twice with
 // the back-face textures and shown with what the nearby-geometry (NG) texture holds where the
 // refracted ray meets it; everything else keeps the raster's colour.
-// Prepended: optics.wgsl, camera.wgsl, scene.wgsl, cubemap.wgsl, envmap's lookup.wgsl.
+// Prepended: optics.wgsl, camera.wgsl, scene.wgsl, cubemap.wgsl, specular_pixel.wgsl,
+// envmap's lookup.wgsl.
 
 const MODE_KAY_GREENBERG: u32 = 0u;
 const MODE_RAY_PLANE: u32 = 1u;
@@ -808,21 +809,16 @@ fn refracted(r: Reflector, mesh: u32, pixel_q: vec3<f32>, p1: vec3<f32>, v: vec3
 @fragment
 fn fs_shade(in: FullscreenOut) -> @location(0) vec4<f32> {
     let pixel = vec2<i32>(in.clip.xy);
-    let base = textureLoad(g_color, pixel, 0);
-    let ids = textureLoad(g_ids, pixel, 0).xy;
-    if (ids.x == 0u) {
-        return base;
+    let s = specular_pixel(pixel);
+    if (s.reflector < 0) {
+        return s.base;
     }
-    let mesh = ids.x - 1u;
-    let reflector_index = mesh_reflector[mesh];
-    if (reflector_index < 0) {
-        return base;
-    }
-    let r = reflectors[reflector_index];
-    let material = materials[mesh_materials[mesh]];
-    let p = textureLoad(g_position, pixel, 0).xyz;
-    let n = textureLoad(g_normal, pixel, 0).xyz;
-    let v = normalize(p - camera.eye_world);
+    let r = reflectors[s.reflector];
+    let mesh = s.mesh;
+    let material = s.material;
+    let p = s.p;
+    let n = s.n;
+    let v = s.v;
     let cos_i = -dot(v, n);
     let reflected = env_along(r, p, reflect(v, n));
     if (material.kind == MATERIAL_MIRROR) {
@@ -847,7 +843,7 @@ fn fs_shade(in: FullscreenOut) -> @location(0) vec4<f32> {
         }
         return vec4<f32>(color, 1.0);
     }
-    let d_n = interpolated_normal_distance(mesh, ids.y, p);
+    let d_n = interpolated_normal_distance(mesh, s.triangle, p);
     if (settings.dispersion == 0u) {
         ior = vec3<f32>(ior.y);
     }

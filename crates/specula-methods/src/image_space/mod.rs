@@ -208,7 +208,7 @@ use specula_core::gpu_scene::GpuScene;
 use specula_core::lifecycle::{GpuFrame, GpuMethod, GpuTechnique};
 use specula_core::live_scene::LiveScene;
 use specula_core::raster::{self, MeshSelection, RasterPass, RasterSpec, Targets};
-use specula_core::{Invalidates, MethodInfo, Param, ParamKind, ParamSet, TechniqueError};
+use specula_core::{Invalidates, MethodInfo, Param, ParamKind, TechniqueError};
 
 pub mod peel;
 
@@ -216,7 +216,13 @@ const SHADER: &str = include_str!("image_space.wgsl");
 
 pub fn shader_source() -> String {
     shaders::compose(
-        &["optics.wgsl", "camera.wgsl", "scene.wgsl", "cubemap.wgsl"],
+        &[
+            "optics.wgsl",
+            "camera.wgsl",
+            "scene.wgsl",
+            "cubemap.wgsl",
+            "specular_pixel.wgsl",
+        ],
         &format!("{}\n{SHADER}", cube_maps::LOOKUP_SHADER),
     )
 }
@@ -959,21 +965,15 @@ fn refraction_layout_entries() -> Vec<wgpu::BindGroupLayoutEntry> {
 
 impl GpuTechnique for ImageSpace {
     type Prepared = Prepared;
+    type Params = Params;
+    const INFO: &'static MethodInfo = &INFO;
 
-    fn info(&self) -> &'static MethodInfo {
-        &INFO
-    }
-
-    fn params(&self) -> &dyn ParamSet {
+    fn params(&self) -> &Params {
         &self.params
     }
 
-    fn params_mut(&mut self) -> &mut dyn ParamSet {
+    fn params_mut(&mut self) -> &mut Params {
         &mut self.params
-    }
-
-    fn scene_raster(&self) -> Option<RasterSpec> {
-        Some(RasterSpec::scene(self.params.shadow_resolution))
     }
 
     fn prepare(

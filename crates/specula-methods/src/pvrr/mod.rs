@@ -252,9 +252,9 @@ use rays::{trace_hits, trace_paths, ChannelPaths};
 use specula_core::gpu_scene::GpuScene;
 use specula_core::lifecycle::{GpuFrame, GpuMethod, GpuTechnique};
 use specula_core::live_scene::LiveScene;
-use specula_core::raster::{self, BindGroupsBySlot, GBuffer, RasterPass, RasterSpec};
+use specula_core::raster::{self, BindGroupsBySlot, GBuffer, RasterPass};
 use specula_core::{
-    Invalidates, MethodInfo, Param, ParamKind, ParamSet, ParamType, ParamValue, TechniqueError,
+    Invalidates, MethodInfo, Param, ParamKind, ParamType, ParamValue, TechniqueError,
 };
 pub use passes::shader_source;
 use passes::*;
@@ -814,21 +814,15 @@ fn scene_extent(scene: &Scene) -> (Vec<Vec3>, f32) {
 
 impl GpuTechnique for Pvrr {
     type Prepared = Prepared;
+    type Params = Params;
+    const INFO: &'static MethodInfo = &INFO;
 
-    fn info(&self) -> &'static MethodInfo {
-        &INFO
-    }
-
-    fn params(&self) -> &dyn ParamSet {
+    fn params(&self) -> &Params {
         &self.params
     }
 
-    fn params_mut(&mut self) -> &mut dyn ParamSet {
+    fn params_mut(&mut self) -> &mut Params {
         &mut self.params
-    }
-
-    fn scene_raster(&self) -> Option<RasterSpec> {
-        Some(RasterSpec::scene(self.params.shadow_resolution))
     }
 
     /// Its G-buffer holds the markers too, drawn after the reflection maps.
