@@ -59,6 +59,7 @@ fn every_parameter_the_parser_accepts_is_listed_and_every_listed_one_is_accepted
                 ParamKind::Number { max, .. } => Some((max * 2.0 + 1.0).to_string()),
                 ParamKind::Flag => Some("maybe".into()),
                 ParamKind::Choice(_) => Some("no-such-choice".into()),
+                ParamKind::Numbers { .. } => Some("1,x".into()),
                 ParamKind::Text { .. } => None,
             };
             if let Some(bad) = bad {
