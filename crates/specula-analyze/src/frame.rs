@@ -34,7 +34,7 @@ impl VehicleFrame {
                 option: "forward",
                 reason: format!(
                     "the vehicle's forward axis {given} has no horizontal part (it is vertical \
-                     or zero); give a horizontal direction, e.g. forward 0,0,-1"
+                     or zero); give a horizontal direction, e.g. `forward` 0,0,-1"
                 ),
             })?;
         Ok(VehicleFrame {

@@ -79,7 +79,7 @@ pub enum AnalyzeError {
         reason: String,
     },
     /// An option's value its declaration refuses (kind, range).
-    #[error("{}: {}", .0.name, .0.reason)]
+    #[error("{}: {}: {}", .0.name, .0.value, .0.reason)]
     Option(#[from] specula_params::ParamError),
     #[error("the analysis was cancelled")]
     Cancelled,

@@ -433,8 +433,8 @@ impl Vehicle {
                     option: "outermost",
                     reason: format!(
                         "the field '{}' is bounded by the plane through the vehicle's outermost \
-                         point on the mirror's side: give it (outermost X,Y,Z) or name the \
-                         vehicle's parts (vehicle)",
+                         point on the mirror's side: give it (`outermost` X,Y,Z) or name the \
+                         vehicle's parts (`vehicle`)",
                         spec.name
                     ),
                 })?;
@@ -1212,7 +1212,7 @@ impl Document<'_> {
             })
             .collect();
         let who = match self.vehicle.eyes_from {
-            "r_point" => "R46's ocular points",
+            "r_point" | "ocular" => "R46's ocular points",
             "eyellipse" => "the eyellipse's points",
             _ => "the eye points",
         };

@@ -237,7 +237,7 @@ fn field_reason(f: &FieldVerdict, allowance: f64) -> String {
     let verdict = match g.verdict {
         Outcome::Undecided if margin >= 0.0 && horizon.is_empty() && beyond.is_empty() => format!(
             "undecided: all of it is seen, but the share is known only to ± {} (the sampling's \
-             last refinement moved it by that much): a smaller tolerance may decide it",
+             last refinement moved it by that much): a smaller `tolerance` may decide it",
             percent(uncertainty)
         ),
         Outcome::Undecided => format!(

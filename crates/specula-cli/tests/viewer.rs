@@ -255,12 +255,12 @@ fn bad_script_steps_fail_naming_the_step() {
         ),
         ("[[step]]\nparam = \"zoom=2\"\n", "step 1", "zoom"),
         (
-            "[[step]]\nanalysis = { kind = \"mirror-view\", object = \"wing mirror\" }\n",
+            "[[step]]\nanalysis = { kind = \"mirror-view\", mirror = \"wing mirror\" }\n",
             "step 1",
             "the scene's objects are: door mirror",
         ),
         (
-            "[[step]]\nanalysis = { kind = \"glare\", object = \"door mirror\" }\n",
+            "[[step]]\nanalysis = { kind = \"glare\", surface = \"door mirror\" }\n",
             "step 1",
             "glare needs a source",
         ),
@@ -319,7 +319,7 @@ fn the_analysis_panel_shows_the_command_s_figures_and_its_overlay_follows_a_turn
 [[step]]
 method = "reference"
 [[step]]
-analysis = {{ kind = "mirror-view", object = "door mirror", eyes = "ocular", region = [1, 2, 5, 20] }}
+analysis = {{ kind = "mirror-view", mirror = "door mirror", ocular = true, region = [1, 2, 5, 20] }}
 [[step]]
 camera = "analysis"
 [[step]]
@@ -352,7 +352,7 @@ screenshot = "{plain}"
         .arg(&script);
     let log = run_ok(view);
 
-    // The command, with the panel's tolerances, gives the figures the panel printed.
+    // The command, with the same options, gives the figures the panel printed.
     let json = dir.path().join("mirror-view.json");
     let out = specula()
         .args([
@@ -364,10 +364,6 @@ screenshot = "{plain}"
             "--ocular",
             "--region",
             "1,2,5,20",
-            "--tolerance",
-            "0.02",
-            "--tolerance-deg",
-            "0.1",
             "--json",
         ])
         .arg(&json)

@@ -158,7 +158,7 @@ fn options_section(
         .settings
         .set(name, &value)
         .err()
-        .map(|e| format!("{name}: {e}"))
+        .map(|e| format!("{name}: {}", crate::script::in_keys(e)))
 }
 
 /// One option's control: a scene object's name from a list, a point with a button to the view's

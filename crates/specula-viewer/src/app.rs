@@ -741,7 +741,9 @@ fn advance_script(state: &mut WindowState, script: &mut ScriptRun) -> Result<(),
             }
             Step::Analysis(Some(request)) => {
                 let settings = request.settings.clone();
-                settings.check(state.session.scene()).map_err(|e| at(&e))?;
+                settings
+                    .check(state.session.scene())
+                    .map_err(|e| at(&e.to_string().replace('`', "")))?;
                 let mut analysis = crate::analysis::Analysis::new(settings);
                 if let Some(map) = request.lens_map {
                     analysis.lens_map = map;

@@ -398,12 +398,14 @@ fn option_text(value: &toml::Value) -> Option<String> {
 }
 
 /// A library error in a script's words: the reason, the key being named by the caller.
-fn in_keys(e: specula_analyze::AnalyzeError) -> String {
-    match e {
+pub fn in_keys(e: specula_analyze::AnalyzeError) -> String {
+    let text = match e {
         specula_analyze::AnalyzeError::BadOption { reason, .. } => reason,
         specula_analyze::AnalyzeError::Option(e) => format!("{}: {}", e.value, e.reason),
         other => other.to_string(),
-    }
+    };
+    // The library names options `like_this`: a script's keys are those names.
+    text.replace('`', "")
 }
 
 #[cfg(test)]

@@ -119,8 +119,12 @@ impl EyePoints {
             return Err(AnalyzeError::BadOption {
                 option: given[1],
                 reason: format!(
-                    "give one of eye, eyebox, ocular, r_point and eyellipse, not {}",
-                    given.join(" and ")
+                    "give one of `eye`, `eyebox`, `ocular`, `r_point` and `eyellipse`, not {}",
+                    given
+                        .iter()
+                        .map(|g| format!("`{g}`"))
+                        .collect::<Vec<_>>()
+                        .join(" and ")
                 ),
             });
         }

@@ -137,7 +137,7 @@ impl GlareAnalysis {
             [] => {
                 return Err(needs(
                     "source",
-                    "glare needs a source: source, sun or sun_sweep",
+                    "glare needs a source: `source`, `sun` or `sun_sweep`",
                 ))
             }
             [_] => {}
@@ -145,8 +145,8 @@ impl GlareAnalysis {
                 return Err(needs(
                     second,
                     &format!(
-                        "give one of source, sun and sun_sweep, not {}",
-                        given.join(" and ")
+                        "give one of `source`, `sun` and `sun_sweep`, not `{}`",
+                        given.join("` and `")
                     ),
                 ))
             }
@@ -155,7 +155,7 @@ impl GlareAnalysis {
         if day.iter().any(|d| *d) && !(day.iter().all(|d| *d) && o.sun_sweep.is_some()) {
             return Err(needs(
                 "latitude",
-                "a solar day takes latitude, heading and date together, with sun_sweep",
+                "a solar day takes `latitude`, `heading` and `date` together, with `sun_sweep`",
             ));
         }
         let display = [
@@ -168,8 +168,8 @@ impl GlareAnalysis {
         {
             return Err(needs(
                 "display",
-                "a display takes display, symbol_luminance, background_luminance and min_contrast \
-                 together",
+                "a display takes `display`, `symbol_luminance`, `background_luminance` and \
+                 `min_contrast` together",
             ));
         }
         Ok(())

@@ -241,7 +241,7 @@ impl Options {
                 if self.source_luminance.is_some() {
                     return Err(AnalyzeError::BadOption {
                         option: "source_luminance",
-                        reason: "the sun's luminance is E/Ω, from sun_illuminance".into(),
+                        reason: "the sun's luminance is E/Ω, from `sun_illuminance`".into(),
                     });
                 }
             }
@@ -304,7 +304,7 @@ impl Options {
             return Err(AnalyzeError::BadOption {
                 option: "display",
                 reason: "the contrast under a named source's glare needs the source's luminance \
-                         in cd/m² (source_luminance)"
+                         in cd/m² (`source_luminance`)"
                     .into(),
             });
         }

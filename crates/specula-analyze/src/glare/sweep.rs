@@ -306,7 +306,7 @@ pub fn sweep(
     let Source::Sun(base) = options.source else {
         return Err(AnalyzeError::BadOption {
             option: "sun_sweep",
-            reason: "a sweep moves the sun: it takes no source".into(),
+            reason: "a sweep moves the sun: it takes no `source`".into(),
         });
     };
     spec.validate()?;

@@ -121,7 +121,7 @@ impl LensAnalysis {
         if o.rotation_centre.is_some() && o.vertex_distance.is_some() {
             return Err(AnalyzeError::BadOption {
                 option: "vertex_distance",
-                reason: "places the centre of rotation, which rotation_centre gives: not both"
+                reason: "places the centre of rotation, which `rotation_centre` gives: not both"
                     .into(),
             });
         }

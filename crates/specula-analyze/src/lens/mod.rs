@@ -254,7 +254,7 @@ pub fn back_vertex(scene: &Scene, lens: usize, camera: &Camera) -> Result<DVec3,
             option: "rotation_centre",
             reason: format!(
                 "the camera's view axis misses '{}', so its back vertex (and the centre of \
-                 rotation behind it) is unknown: give rotation_centre X,Y,Z",
+                 rotation behind it) is unknown: give `rotation_centre` X,Y,Z",
                 mesh.name
             ),
         })
@@ -990,7 +990,7 @@ fn compensated_of(
         (true, None) => {
             return Err(AnalyzeError::BadOption {
                 option: "compensate",
-                reason: "needs a prescription to compensate (prescription, or a \
+                reason: "needs a `prescription` to compensate (prescription, or a \
                  spectacle-lens shape's)"
                     .into(),
             })
@@ -1014,7 +1014,7 @@ fn verdict_of(
         (Some(_), None) => {
             return Err(AnalyzeError::BadOption {
                 option: "standard",
-                reason: "needs the ordered prescription (prescription S,C,A, or a \
+                reason: "needs the ordered `prescription` (prescription S,C,A, or a \
              spectacle-lens shape's)"
                     .into(),
             })
@@ -1054,7 +1054,7 @@ fn verdict_of(
                     return Err(AnalyzeError::BadOption {
                         option: "standard",
                         reason: format!(
-                            "{} judges progressive lenses: give the ordered add",
+                            "{} judges progressive lenses: give the ordered `add`",
                             table.id
                         ),
                     })
@@ -1110,11 +1110,11 @@ fn progressive_figures(
     add_surface_uncertainty(lens, options, ior, &mut readings)?;
     let map = lens_map.ok_or_else(|| AnalyzeError::BadOption {
         option: "add",
-        reason: "a progressive lens's figures come from the lens map: give lens_step".into(),
+        reason: "a progressive lens's figures come from the lens map: give `lens_step`".into(),
     })?;
     let figures = zones::progressive(map, [&readings[0], &readings[1]], side, add, fitting_mm)
         .ok_or_else(|| AnalyzeError::BadOption {
-            option: "distance_reference and near_reference",
+            option: "`distance_reference` and `near_reference`",
             reason: format!(
                 "the reference points {:?} and {:?} mm must lie on the lens map, inside the \
                  lens",
@@ -1205,7 +1205,7 @@ fn read_add(
         return Err(AnalyzeError::BadOption {
             option: "add",
             reason: format!(
-                "the add is read at the near reference point, which '{}' does not give: pass near_reference X,Y (mm) or set the spectacle-lens's near_reference",
+                "the add is read at the near reference point, which '{}' does not give: pass `near_reference` X,Y (mm) or set the spectacle-lens's near_reference",
                 lens.name
             ),
         });
@@ -1236,7 +1236,7 @@ fn read_add(
         instrument
             .read(name, at)
             .map_err(|failure| AnalyzeError::BadOption {
-                option: "distance_reference and near_reference",
+                option: "`distance_reference` and `near_reference`",
                 reason: format!(
                     "the focimeter cannot read '{}' at {at:?} mm on its {side} ({failure:?}): give a point on the lens",
                     lens.name
@@ -1253,7 +1253,7 @@ fn tracer(mesh: &Mesh, model: SurfaceModel) -> Result<LensTracer<'_>, AnalyzeErr
         option: "surface",
         reason: format!(
             "'{}' has no exact surfaces (only `lens` and `spectacle-lens` shapes and the \
-             built-in lenses do); use surface mesh or smooth",
+             built-in lenses do); use `surface` mesh or smooth",
             mesh.name
         ),
     })
@@ -1339,7 +1339,7 @@ fn read_focimeter(
         instrument
             .read(name, at)
             .map_err(|failure| AnalyzeError::BadOption {
-                option: "distance_reference and prism_reference",
+                option: "`distance_reference` and `prism_reference`",
                 reason: format!(
                     "the focimeter cannot read '{}' at {at:?} mm from its back vertex \
                          ({failure:?}): give a point on the lens",
@@ -1491,7 +1491,7 @@ pub(crate) fn validate(options: &Options) -> Result<(), AnalyzeError> {
         .any(|v| !v.is_finite())
     {
         return Err(AnalyzeError::BadOption {
-            option: "distance_reference and prism_reference",
+            option: "`distance_reference` and `prism_reference`",
             reason: "a reference point must be two numbers (mm)".into(),
         });
     }

@@ -151,7 +151,7 @@ impl MirrorViewAnalysis {
             {
                 return Err(AnalyzeError::BadOption {
                     option: name,
-                    reason: "lays out a regulation's fields: give regulation too".into(),
+                    reason: "lays out a regulation's fields: give `regulation` too".into(),
                 });
             }
         }
@@ -164,7 +164,7 @@ impl MirrorViewAnalysis {
                 return Err(AnalyzeError::BadOption {
                     option: "r_point",
                     reason: format!(
-                        "{} judges from the driver's eyes (eye or eyellipse), not from R46's \
+                        "{} judges from the driver's eyes (`eye` or `eyellipse`), not from R46's \
                          ocular points",
                         r.name
                     ),

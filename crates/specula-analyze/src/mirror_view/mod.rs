@@ -224,7 +224,7 @@ impl Options {
                 option: "surface",
                 reason: format!(
                     "'{}' has no exact surface (only generated patches, spheres and caps do); \
-                     use surface mesh or smooth",
+                     use `surface` mesh or smooth",
                     mesh.name
                 ),
             });

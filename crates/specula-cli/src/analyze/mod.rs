@@ -170,12 +170,43 @@ impl clap::Subcommand for Kind {
     }
 }
 
+/// `name` as the command line writes it.
+fn as_flag(name: &str) -> String {
+    format!("--{}", name.replace('_', "-"))
+}
+
+/// Library text in the command line's words: an option named `` `name` `` as its flag.
+fn flags_in(text: &str) -> String {
+    let mut out = String::new();
+    let mut parts = text.split('`');
+    out.push_str(parts.next().unwrap_or(""));
+    while let Some(quoted) = parts.next() {
+        let is_name = !quoted.is_empty()
+            && quoted
+                .chars()
+                .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_');
+        match is_name {
+            true => out.push_str(&as_flag(quoted)),
+            false => {
+                out.push('`');
+                out.push_str(quoted);
+                out.push('`');
+            }
+        }
+        out.push_str(parts.next().unwrap_or(""));
+    }
+    out
+}
+
 /// A library error in the command line's words: an option by its flag, a role by its flag.
 fn in_flags(e: AnalyzeError) -> anyhow::Error {
-    let as_flag = |name: &str| format!("--{}", name.replace('_', "-"));
+    let as_flag = |name: &str| match name.contains('`') {
+        true => flags_in(name),
+        false => as_flag(name),
+    };
     match e {
         AnalyzeError::BadOption { option, reason } => {
-            anyhow::anyhow!("{}: {reason}", as_flag(option))
+            anyhow::anyhow!("{}: {}", as_flag(option), flags_in(&reason))
         }
         AnalyzeError::Option(e) => {
             anyhow::anyhow!("{} {}: {}", as_flag(&e.name), e.value, e.reason)
@@ -238,7 +269,7 @@ pub fn run(kind: Kind) -> Result<()> {
         .run(&scene, &accel, &eyes, &context)
         .map_err(in_flags)?;
     bar.finish_and_clear();
-    print!("{}", analysis.summary(&report));
+    print!("{}", flags_in(&analysis.summary(&report)));
     if let Some(path) = &kind.json {
         std::fs::write(path, &report.json)
             .with_context(|| format!("writing {}", path.display()))?;

@@ -397,7 +397,7 @@ impl Analysis {
             match result {
                 Err(AnalyzeError::Cancelled) | Ok(()) => {}
                 Err(e) => {
-                    let _ = sender.send(Message::Error(e.to_string()));
+                    let _ = sender.send(Message::Error(e.to_string().replace('`', "")));
                 }
             }
         });
