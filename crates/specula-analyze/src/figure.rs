@@ -666,6 +666,13 @@ pub fn iso_labels(
         .collect()
 }
 
+/// `text` safe in HTML and SVG.
+pub fn html_escape(text: &str) -> String {
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

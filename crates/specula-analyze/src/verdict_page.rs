@@ -3,9 +3,9 @@
 //! margin, uncertainty and verdict, and the reason in words for each check that does not pass.
 //! The terminal prints the same reasons ([`regulation_reasons`], [`lens_reasons`]).
 
+use crate::figure::html_escape;
 use crate::lens::standard::{Check, Verdict as LensVerdict};
 use crate::outcome::Outcome;
-use crate::plot::html_escape;
 use crate::regulation::{FieldVerdict, MirrorCheck, Verdict};
 
 /// The page's style for the verdict: a large coloured word.

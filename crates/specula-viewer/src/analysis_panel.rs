@@ -147,7 +147,7 @@ fn options_section(
         .is_some_and(|o| o.report.result::<specula_analyze::lens::Report>().is_some());
     if is_lens {
         ui.horizontal(|ui| {
-            use specula_analyze::lens_plot::Map;
+            use specula_analyze::lens::plot::Map;
             ui.label("map");
             ui.selectable_value(&mut analysis.lens_map, Map::MeanPower, "mean power");
             ui.selectable_value(&mut analysis.lens_map, Map::Cylinder, "cylinder");
@@ -462,10 +462,10 @@ fn lens_map_legend(ui: &mut egui::Ui, analysis: &Analysis) {
             ui.small(format!(
                 "on the lens: {} from {lo:.3} D (blue) to {hi:.3} D (yellow), lines every {} D",
                 match analysis.lens_map {
-                    specula_analyze::lens_plot::Map::Cylinder => "cylinder",
+                    specula_analyze::lens::plot::Map::Cylinder => "cylinder",
                     _ => "mean power",
                 },
-                specula_analyze::lens_plot::map_interval(r, analysis.lens_map, lo, hi)
+                specula_analyze::lens::plot::map_interval(r, analysis.lens_map, lo, hi)
             ));
         }
     }
@@ -515,7 +515,7 @@ fn eyebox_map(
         .fold(0.0, f64::max);
     for (k, e) in glare.report.eyes.iter().enumerate() {
         let colour = if e.glare && widest > 0.0 {
-            let [r, g, b] = specula_analyze::plot::scale_colour(e.solid_angle_sr / widest);
+            let [r, g, b] = specula_analyze::figure::scale_colour(e.solid_angle_sr / widest);
             Color32::from_rgb(r, g, b)
         } else {
             Color32::from_gray(90)

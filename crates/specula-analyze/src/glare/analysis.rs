@@ -309,6 +309,6 @@ impl Analysis for GlareAnalysis {
         _accel: &SceneAccel,
     ) -> Result<PathBuf, AnalyzeError> {
         let result: &GlareResult = report.result().expect("a glare report");
-        crate::report::write_glare(dir, &result.glare, &result.frame)
+        super::report::write_glare(dir, &result.glare, &result.frame)
     }
 }

@@ -40,6 +40,7 @@ pub mod analysis;
 pub use analysis::INFO;
 pub mod paths;
 pub mod plots;
+pub mod report;
 mod summary;
 pub mod sun;
 pub mod sweep;

@@ -1,4 +1,5 @@
-//! The sweep's pictures: a map of the sun positions (azimuth × elevation) coloured by the worst
+//! The glare plots: the eye points' glare map and the worst eye point's view with its glare
+//! outlined; and the sweep's pictures: a map of the sun positions (azimuth × elevation) coloured by the worst
 //! eye point's glare luminance on a log colour bar, washed-out positions crossed; and a polar
 //! plot of the sky seen from above (the vehicle's forward axis up, the zenith in the centre)
 //! with the positions that glare or wash out and, with a solar day, the sun's path through it.
@@ -7,6 +8,7 @@ use image::{Rgb, RgbImage};
 
 use super::sweep::{SunEffect, SweepReport};
 use crate::figure::{Axis, ColourBar, Figure, Mark, Plot};
+use glam::{Vec2, Vec3};
 
 const NONE: [u8; 3] = [215, 215, 215];
 const WASHED: [u8; 3] = [220, 20, 60];
@@ -219,5 +221,140 @@ pub fn polar(sweep: &SweepReport, title: &str) -> Plot {
     }
     figure.legend = legend;
     figure.colour_bar = Some(bar);
+    figure.plot()
+}
+
+/// The eye points seen from behind the driver, each a square coloured by how much of its view
+/// the glare covers (its solid angle, on the colour bar; grey: no glare), with its largest
+/// luminance factor written in it.
+pub fn glare_eyebox(report: &super::Report, frame: &crate::frame::VehicleFrame) -> Plot {
+    let eyes: Vec<Vec3> = report
+        .eyes
+        .iter()
+        .map(|e| Vec3::from_array(e.position))
+        .collect();
+    let mean = eyes.iter().copied().sum::<Vec3>() / eyes.len() as f32;
+    let at: Vec<Vec2> = eyes
+        .iter()
+        .map(|e| Vec2::new((*e - mean).dot(frame.right), (*e - mean).dot(frame.up)))
+        .collect();
+    // The smallest spacing between eye points sets the squares' size.
+    let mut spacing = f32::INFINITY;
+    for (i, a) in at.iter().enumerate() {
+        for b in &at[i + 1..] {
+            let d = (*a - *b).abs().max_element();
+            if d > 1e-6 {
+                spacing = spacing.min(d);
+            }
+        }
+    }
+    if !spacing.is_finite() {
+        spacing = 0.05;
+    }
+    let lo = at.iter().fold(Vec2::splat(f32::INFINITY), |m, p| m.min(*p)) - spacing * 0.5;
+    let hi = at
+        .iter()
+        .fold(Vec2::splat(f32::NEG_INFINITY), |m, p| m.max(*p))
+        + spacing * 0.5;
+    let scale = 480.0 / (hi - lo).max_element();
+    let (width, height) = (
+        (((hi - lo).x * scale).round() as u32).max(8),
+        (((hi - lo).y * scale).round() as u32).max(8),
+    );
+    let widest = report
+        .eyes
+        .iter()
+        .map(|e| e.solid_angle_sr)
+        .fold(0.0f64, f64::max)
+        .max(1e-12);
+    let bar = ColourBar {
+        label: "the glare's solid angle seen from the eye point (sr)".into(),
+        range: (0.0, widest),
+        log: false,
+    };
+    let mut figure = Figure::new(
+        format!(
+            "'{}' in '{}' per eye point (seen from behind the driver): the glare's solid angle \
+             (colour) and largest luminance factor (figure)",
+            report.source, report.surface
+        ),
+        RgbImage::from_pixel(width, height, Rgb([255, 255, 255])),
+    );
+    let half = f64::from(spacing) * 0.45;
+    for (e, p) in report.eyes.iter().zip(&at) {
+        let (x, y) = (f64::from(p.x), f64::from(p.y));
+        let colour = if e.glare {
+            bar.colour(e.solid_angle_sr)
+        } else {
+            NO_GLARE
+        };
+        figure.marks.push(Mark::Box {
+            corners: [(x - half, y - half), (x + half, y + half)],
+            colour,
+        });
+        figure.marks.push(Mark::Text {
+            at: (x, y),
+            text: if e.glare {
+                format!("{:.4}", e.max_luminance_factor)
+            } else {
+                "none".into()
+            },
+            colour: [0, 0, 0],
+            halo: [255, 255, 255],
+        });
+    }
+    figure.axes = Some((
+        Axis::new("right of the eye (m)", (lo.x.into(), hi.x.into())),
+        Axis::new("up (m)", (lo.y.into(), hi.y.into())),
+    ));
+    figure.colour_bar = Some(bar);
+    figure.legend = vec![("no glare".to_string(), NO_GLARE)];
+    figure.plot()
+}
+
+const NO_GLARE: [u8; 3] = [200, 200, 200];
+const GLARE_OUTLINE: [u8; 3] = [255, 0, 255];
+
+/// Eye point `k`'s image as the reference renders it, its glare pixels outlined in magenta.
+pub fn glare_image(glare: &super::Glare, k: usize) -> Plot {
+    let (width, height) = (glare.report.width, glare.report.height);
+    let images = &glare.images[k];
+    let mut image = specula_trace::Image::new(width, height);
+    image.pixels.clone_from(&images.radiance);
+    let mut png = image.to_srgb8();
+    let threshold = glare.report.threshold;
+    let lit = |x: u32, y: u32| images.factor[(y * width + x) as usize] > threshold;
+    for y in 0..height {
+        for x in 0..width {
+            if !lit(x, y) {
+                continue;
+            }
+            let edge = x == 0
+                || y == 0
+                || x + 1 == width
+                || y + 1 == height
+                || !lit(x - 1, y)
+                || !lit(x + 1, y)
+                || !lit(x, y - 1)
+                || !lit(x, y + 1);
+            if edge {
+                png.put_pixel(x, y, Rgb(GLARE_OUTLINE));
+            }
+        }
+    }
+    let [x, y, z] = glare.report.eyes[k].position;
+    let mut figure = Figure::new(
+        format!(
+            "eye {} ({x:.3}, {y:.3}, {z:.3}): the glare of '{}' in '{}'",
+            k + 1,
+            glare.report.source,
+            glare.report.surface
+        ),
+        png,
+    );
+    figure.legend = vec![(
+        format!("where the luminance factor exceeds {threshold} (outline)"),
+        GLARE_OUTLINE,
+    )];
     figure.plot()
 }

@@ -120,8 +120,8 @@ fn sweep(out: &mut String, s: &super::sweep::SweepReport) {
             day.date,
             day.latitude_deg,
             day.heading_deg,
-            crate::report::solar_runs(&day.glare_hours),
-            crate::report::solar_runs(&day.washed_out_hours)
+            super::report::solar_runs(&day.glare_hours),
+            super::report::solar_runs(&day.washed_out_hours)
         );
     }
 }

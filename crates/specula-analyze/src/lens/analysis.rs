@@ -250,6 +250,6 @@ impl Analysis for LensAnalysis {
         _accel: &SceneAccel,
     ) -> Result<PathBuf, AnalyzeError> {
         let r: &super::Report = report.result().expect("a lens report");
-        crate::report::write_lens(dir, r)
+        super::report::write_lens(dir, r)
     }
 }

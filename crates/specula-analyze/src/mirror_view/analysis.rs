@@ -363,7 +363,7 @@ impl Analysis for MirrorViewAnalysis {
     ) -> Result<PathBuf, AnalyzeError> {
         let result: &MirrorViewResult = report.result().expect("a mirror-view report");
         let document = result.regulation.as_ref().map(|j| j.document(&result.view));
-        let page = crate::report::MirrorViewPage {
+        let page = super::report::MirrorViewPage {
             view: &result.view,
             scene,
             accel,
@@ -376,6 +376,6 @@ impl Analysis for MirrorViewAnalysis {
                 )
             }),
         };
-        crate::report::write_mirror_view(dir, &page)
+        super::report::write_mirror_view(dir, &page)
     }
 }

@@ -32,6 +32,8 @@
 //! its perimeter × half a cell.
 
 pub mod analysis;
+pub mod plot;
+pub mod report;
 pub use analysis::INFO;
 pub(crate) mod summary;
 

@@ -293,7 +293,7 @@ fn glare_colour(
     } else {
         (factor.log10() - threshold.log10()) / -threshold.log10()
     };
-    let [r, g, b] = specula_analyze::plot::scale_colour(t.clamp(0.0, 1.0));
+    let [r, g, b] = specula_analyze::figure::scale_colour(t.clamp(0.0, 1.0));
     [r, g, b, 190]
 }
 
@@ -301,7 +301,7 @@ fn glare_colour(
 pub(super) const WASHED_OUT: [u8; 4] = [230, 20, 60, 220];
 
 /// What the lens overlay maps (the two: the wearer's mean power or cylinder).
-pub type LensMap = specula_analyze::lens_plot::Map;
+pub type LensMap = specula_analyze::lens::plot::Map;
 
 /// The lens overlay: per view pixel whose first hit is the lens, the gaze through that point
 /// (its direction from the centre of rotation, on the gaze's tangent screen) and the map's
@@ -329,7 +329,7 @@ fn lens_overlay(
     } else {
         (lo - 0.5, lo + 0.5)
     };
-    let step = specula_analyze::lens_plot::map_interval(report, map, lo, hi);
+    let step = specula_analyze::lens::plot::map_interval(report, map, lo, hi);
     let centre = glam::DVec3::from_array(report.rotation_centre);
     let forward = glam::DVec3::from_array(report.forward);
     let up = glam::DVec3::from_array(report.up);
@@ -354,7 +354,7 @@ fn lens_overlay(
             }
             let h = (d.dot(right) / along).atan().to_degrees();
             let v = (d.dot(up) / along).atan().to_degrees();
-            specula_analyze::lens_plot::value_at(report, &values, h, v)
+            specula_analyze::lens::plot::value_at(report, &values, h, v)
         })
         .collect();
     let band = |v: f64| (v / step).floor();
@@ -376,7 +376,7 @@ fn lens_overlay(
             if on_line {
                 return [20, 20, 20, 230];
             }
-            let [r, g, b] = specula_analyze::plot::scale_colour((value - lo) / (hi - lo));
+            let [r, g, b] = specula_analyze::figure::scale_colour((value - lo) / (hi - lo));
             [r, g, b, 170]
         })
         .collect();

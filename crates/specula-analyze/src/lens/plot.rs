@@ -6,9 +6,9 @@
 
 use image::{Rgb, RgbImage};
 
+use super::zones::LensMap;
+use super::{Cell, Eye, Report};
 use crate::figure::{iso_labels, iso_lines, round_step, Axis, ColourBar, Figure, Mark, Plot};
-use crate::lens::zones::LensMap;
-use crate::lens::{Cell, Eye, Report};
 
 /// What a map shows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
