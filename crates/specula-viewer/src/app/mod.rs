@@ -23,6 +23,9 @@ use crate::script::Step;
 use crate::session::{error_image, Session, ViewMode};
 use crate::{Options, ViewerError};
 
+mod script_run;
+use script_run::{advance_script, count_script_frame, ScriptRun};
+
 /// Degrees of orbit per pixel of mouse drag.
 const ORBIT_DEG_PER_PIXEL: f32 = 0.3;
 /// The view counts as moving this long after the last input, so the technique stays at the
@@ -149,16 +152,6 @@ struct OverlayKey {
 
 /// The overlay is computed at this fraction of the window's side (a ray per pixel).
 const OVERLAY_SCALE: u32 = 3;
-
-/// A script being run: its steps, the one at hand, and the frames it still wants.
-struct ScriptRun {
-    steps: Vec<Step>,
-    next: usize,
-    frames_left: u32,
-    drag_step: Option<(f32, f32)>,
-    /// The step now drawing frames, its first frame's time and its technique frame times.
-    timing: Option<(usize, Instant, Vec<f64>)>,
-}
 
 pub struct App {
     options: Options,
@@ -644,173 +637,6 @@ fn save_view(state: &mut WindowState, path: &std::path::Path) -> Result<(), View
     Ok(())
 }
 
-/// Runs script steps up to the next one that draws frames; returns whether this frame is a
-/// scripted frame (the technique renders every scripted frame).
-fn advance_script(state: &mut WindowState, script: &mut ScriptRun) -> Result<(), ViewerError> {
-    if let Some((yaw, pitch)) = script.drag_step {
-        if script.frames_left > 0 {
-            state.session.camera.orbit(yaw, pitch);
-        }
-    }
-    while script.frames_left == 0 && script.next < script.steps.len() {
-        let index = script.next;
-        script.next += 1;
-        let at = |e: &dyn std::fmt::Display| ViewerError::Step {
-            step: index + 1,
-            message: e.to_string(),
-        };
-        match script.steps[index].clone() {
-            Step::Method(name) => state.session.set_method(&name).map_err(|e| at(&e))?,
-            Step::Reference(name) => state.session.set_reference(&name).map_err(|e| at(&e))?,
-            Step::Param(setting) => state.session.set_param(&setting).map_err(|e| at(&e))?,
-            Step::Orbit { yaw_deg, pitch_deg } => state.session.camera.orbit(yaw_deg, pitch_deg),
-            Step::Translate { object, by } => {
-                let mesh = state.session.object(&object).map_err(|e| at(&e))?;
-                state.session.translate(mesh, by).map_err(|e| at(&e))?;
-            }
-            Step::Rotate {
-                object,
-                axis,
-                degrees,
-            } => {
-                let mesh = state.session.object(&object).map_err(|e| at(&e))?;
-                state
-                    .session
-                    .rotate(mesh, axis, degrees)
-                    .map_err(|e| at(&e))?;
-            }
-            Step::Frames(n) => {
-                script.frames_left = n;
-                script.drag_step = None;
-                script.timing = Some((index, Instant::now(), Vec::new()));
-            }
-            Step::Drag {
-                yaw_deg,
-                pitch_deg,
-                frames,
-            } => {
-                script.frames_left = frames;
-                script.drag_step = Some((yaw_deg / frames as f32, pitch_deg / frames as f32));
-                script.timing = Some((index, Instant::now(), Vec::new()));
-                state
-                    .session
-                    .camera
-                    .orbit(yaw_deg / frames as f32, pitch_deg / frames as f32);
-            }
-            Step::Screenshot(path) => {
-                save_view(state, &path).map_err(|e| at(&e))?;
-                eprintln!("step {}: saved {}", index + 1, path.display());
-                if let Some(analysis) = &state.session.analysis {
-                    eprintln!(
-                        "step {}: {}",
-                        index + 1,
-                        crate::analysis::summary(analysis, state.session.scene())
-                    );
-                }
-            }
-            Step::WindowScreenshot(path) => {
-                // This frame is drawn, and kept, before any later step runs.
-                state.capture = Some(path);
-                script.frames_left = 1;
-                script.drag_step = None;
-            }
-            Step::Panel(shown) => {
-                state.ui.settings.show_panel = shown;
-                // One frame lays the panel out; the view takes the rest of the window after it.
-                script.frames_left = 1;
-            }
-            Step::Analysis(None) => state.session.analysis = None,
-            Step::Camera { eye, target } => {
-                state.session.camera = crate::orbit::OrbitCamera::from_camera(&Camera {
-                    eye,
-                    target,
-                    up: Vec3::Y,
-                    fov_y_deg: state.session.camera.fov_y_deg,
-                    aspect: None,
-                })
-            }
-            Step::AnalysisCamera => {
-                let fov = state.session.camera.fov_y_deg;
-                let camera = state
-                    .session
-                    .analysis
-                    .as_ref()
-                    .and_then(|a| a.overview(fov))
-                    .ok_or_else(|| at(&"camera = \"analysis\": no analysis is on"))?;
-                state.session.camera = crate::orbit::OrbitCamera::from_camera(&camera);
-            }
-            Step::Analysis(Some(request)) => {
-                let settings = request.settings.clone();
-                settings
-                    .check(state.session.scene())
-                    .map_err(|e| at(&e.to_string().replace('`', "")))?;
-                let mut analysis = crate::analysis::Analysis::new(settings);
-                if let Some(map) = request.lens_map {
-                    analysis.lens_map = map;
-                }
-                analysis.finish(state.session.live());
-                if let Some(error) = &analysis.error {
-                    return Err(at(error));
-                }
-                eprintln!(
-                    "step {}: {}",
-                    index + 1,
-                    crate::analysis::summary(&analysis, state.session.scene())
-                );
-                state.session.analysis = Some(analysis);
-            }
-            Step::AnalysisJson(path) => {
-                let mut analysis = state
-                    .session
-                    .analysis
-                    .take()
-                    .ok_or_else(|| at(&"analysis_json: no analysis is on"))?;
-                analysis.finish(state.session.live());
-                let written = match analysis.json() {
-                    Some(json) => std::fs::write(&path, json)
-                        .map_err(|e| format!("writing {}: {e}", path.display())),
-                    None => Err(format!(
-                        "analysis_json: the analysis has no result ({})",
-                        analysis.error.as_deref().unwrap_or("none yet")
-                    )),
-                };
-                state.session.analysis = Some(analysis);
-                written.map_err(|e| at(&e))?;
-                eprintln!("step {}: wrote {}", index + 1, path.display());
-            }
-            Step::View(mode) => state.session.view = mode,
-        }
-        state.ui.dirty = true;
-    }
-    Ok(())
-}
-
-/// Prints a finished `frames` or `drag` step's rates: window frames per second and the
-/// technique's median frame time.
-fn report_script_timing(state: &WindowState, script: &mut ScriptRun) {
-    if script.frames_left > 0 {
-        return;
-    }
-    if let Some((index, start, mut times)) = script.timing.take() {
-        let seconds = start.elapsed().as_secs_f64();
-        times.sort_by(f64::total_cmp);
-        let median = times.get(times.len() / 2).copied().unwrap_or(0.0);
-        let stats = state.ui.stats.as_ref();
-        eprintln!(
-            "step {}: {} frames of {} at {}x{} (technique at {}x{}): {:.1} fps; technique median {:.1} ms",
-            index + 1,
-            times.len(),
-            state.session.label(),
-            state.config.width,
-            state.config.height,
-            stats.map_or(0, |s| s.width),
-            stats.map_or(0, |s| s.height),
-            times.len() as f64 / seconds.max(1e-9),
-            median
-        );
-    }
-}
-
 fn redraw(state: &mut WindowState, mut script: Option<&mut ScriptRun>) -> Result<(), ViewerError> {
     if let Some(script) = script.as_deref_mut() {
         advance_script(state, script)?;
@@ -1265,18 +1091,6 @@ fn save_texture(
         .ok_or("the window's texture has an unexpected size")?
         .save(path)
         .map_err(|e| format!("{}: {e}", path.display()))
-}
-
-/// Counts a presented frame against the script's `frames` or `drag` step; the step's last
-/// frame reports its timing and ends its drag.
-fn count_script_frame(state: &WindowState, script: &mut ScriptRun) {
-    if script.frames_left > 0 {
-        script.frames_left -= 1;
-        if script.frames_left == 0 {
-            report_script_timing(state, script);
-            script.drag_step = None;
-        }
-    }
 }
 
 /// The part of the window the scene is drawn in: right of the docked panel, in pixels.
