@@ -444,3 +444,187 @@ screenshot = "{plain}"
         moved.differing_pixels
     );
 }
+
+/// One analysis as each front end is asked for it: its kind, the scene, and its options by
+/// name with their values as text (a repeatable one's values `;`-separated).
+struct Asked {
+    kind: &'static str,
+    scene: &'static str,
+    options: &'static [(&'static str, &'static str)],
+}
+
+impl Asked {
+    /// The scene as every front end is given it: a built-in name, or the file's full path.
+    fn scene(&self) -> String {
+        match self.scene.ends_with(".toml") {
+            true => Path::new(env!("CARGO_MANIFEST_DIR"))
+                .join("../..")
+                .join(self.scene)
+                .display()
+                .to_string(),
+            false => self.scene.to_string(),
+        }
+    }
+
+    /// The command line: `--name value` (repeated for each of a repeatable option's values).
+    fn command(&self, json: &Path) -> Command {
+        let mut command = specula();
+        command
+            .args(["analyze", self.kind])
+            .arg(self.scene())
+            .arg("--json")
+            .arg(json);
+        for (name, value) in self.options {
+            for v in value.split(';') {
+                command.arg(format!("--{}", name.replace('_', "-"))).arg(v);
+            }
+        }
+        command
+    }
+
+    /// A viewer script's `analysis` step: the same options by name, as TOML.
+    fn script_step(&self) -> String {
+        let values: Vec<String> = self
+            .options
+            .iter()
+            .map(|(name, value)| {
+                let items: Vec<String> = value.split(';').map(|v| format!("{v:?}")).collect();
+                match value.contains(';') || *name == "vehicle" {
+                    true => format!("{name} = [{}]", items.join(", ")),
+                    false => format!("{name} = {}", items[0]),
+                }
+            })
+            .collect();
+        format!(
+            "analysis = {{ kind = \"{}\", {} }}",
+            self.kind,
+            values.join(", ")
+        )
+    }
+
+    /// The library: the analysis by name, its options set by name, run.
+    fn library(&self) -> String {
+        use specula_analyze::analysis::{self, EyePoints, RunContext};
+        let scene = specula_scene::load(&self.scene()).unwrap();
+        let mut analysis = analysis::by_name(self.kind).unwrap();
+        let mut eyes = EyePoints::default();
+        for (name, value) in self.options {
+            analysis.set_option(&mut eyes, name, value).unwrap();
+        }
+        let accel = specula_trace::SceneAccel::new(&scene);
+        let cancel = std::sync::atomic::AtomicBool::new(false);
+        let context = RunContext {
+            progress: &|_| {},
+            cancel: &cancel,
+        };
+        analysis.run(&scene, &accel, &eyes, &context).unwrap().json
+    }
+}
+
+/// The three front ends on the one input model: the same analysis, asked with the defaults
+/// (no eye points, no outermost point, no side), gives the same JSON document (verdict and
+/// figures, byte for byte) from the command, a viewer script and the library.
+#[test]
+fn the_command_a_viewer_script_and_the_library_give_the_same_json() {
+    let test = "the_command_a_viewer_script_and_the_library_give_the_same_json";
+    let Some(_) = viewer(test) else {
+        return;
+    };
+    let cases = [
+        Asked {
+            kind: "mirror-view",
+            scene: "scenes/car-door-mirror.toml",
+            options: &[
+                ("mirror", "door mirror"),
+                ("regulation", "r46-iii"),
+                ("vehicle", "car body;A-pillar"),
+            ],
+        },
+        Asked {
+            kind: "glare",
+            scene: "truck-cover",
+            options: &[("surface", "cover glass"), ("source", "side window")],
+        },
+        Asked {
+            kind: "lens",
+            scene: "scenes/spectacles-wrap.toml",
+            options: &[("lens", "right lens"), ("standard", "iso-8980-1")],
+        },
+        // The test-only toy: one folder and one registry line reach every front end.
+        Asked {
+            kind: "toy",
+            scene: "door-mirror",
+            options: &[("height", "1"), ("least_share", "0.5")],
+        },
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    for (k, asked) in cases.iter().enumerate() {
+        let command_json = dir.path().join(format!("command-{k}.json"));
+        let out = asked.command(&command_json).output().unwrap();
+        assert!(
+            out.status.success(),
+            "{}: {}",
+            asked.kind,
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let script_json = dir.path().join(format!("script-{k}.json"));
+        let script = dir.path().join(format!("script-{k}.toml"));
+        std::fs::write(
+            &script,
+            format!(
+                "[[step]]\n{}\n[[step]]\nanalysis_json = {:?}\n",
+                asked.script_step(),
+                script_json.display().to_string()
+            ),
+        )
+        .unwrap();
+        let mut view = viewer(test).unwrap();
+        view.arg(asked.scene())
+            .args(["--size", "64x48", "-m", "envmap", "--script"])
+            .arg(&script);
+        run_ok(view);
+        let from_command = std::fs::read_to_string(&command_json).unwrap();
+        let from_script = std::fs::read_to_string(&script_json).unwrap();
+        let from_library = asked.library();
+        let value: serde_json::Value = serde_json::from_str(&from_command).unwrap();
+        eprintln!(
+            "{}: verdict {} from the command, the script and the library",
+            asked.kind,
+            value["regulation"]["verdict"]
+                .as_str()
+                .or(value["verdict"]["verdict"].as_str())
+                .or(value["verdict"].as_str())
+                .unwrap_or("none (figures only)")
+        );
+        assert_eq!(
+            from_command, from_script,
+            "{}: command and script",
+            asked.kind
+        );
+        assert_eq!(
+            from_command, from_library,
+            "{}: command and library",
+            asked.kind
+        );
+    }
+}
+
+/// The toy analysis's options reach the command's help with no code of its own there.
+#[test]
+fn the_toy_analysis_s_options_are_in_the_command_s_help() {
+    let out = specula()
+        .args(["analyze", "toy", "--help"])
+        .output()
+        .unwrap();
+    let help = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success());
+    for wanted in [
+        "--height <VALUE>",
+        "the height the eye points must lie above [unit: m]",
+        "--least-share <VALUE>",
+        "[default: 1]",
+        "--eyebox <W,H,NX,NY>",
+    ] {
+        assert!(help.contains(wanted), "{wanted:?} in\n{help}");
+    }
+}

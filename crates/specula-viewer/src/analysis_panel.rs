@@ -591,3 +591,56 @@ fn verdict_section(ui: &mut egui::Ui, v: &Verdict) {
         v.allowance_share * 100.0
     ));
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every text the panel's options section lays out for `analysis`.
+    fn texts(analysis: &mut Analysis, names: &[String]) -> Vec<String> {
+        let ctx = egui::Context::default();
+        let mut output = ctx.run_ui(egui::RawInput::default(), |ui| {
+            let _ = options_section(ui, analysis, names, glam::Vec3::ZERO);
+        });
+        fn collect(shape: &egui::Shape, out: &mut Vec<String>) {
+            match shape {
+                egui::Shape::Text(t) => out.push(t.galley.text().to_string()),
+                egui::Shape::Vec(shapes) => shapes.iter().for_each(|s| collect(s, out)),
+                _ => {}
+            }
+        }
+        let mut out = Vec::new();
+        for clipped in &output.shapes {
+            collect(&clipped.shape, &mut out);
+        }
+        // No renderer takes the font atlas here.
+        output.textures_delta.clear();
+        out
+    }
+
+    /// The panel's controls are made from the declarations: an analysis added by one folder
+    /// and one registry line (the test-only toy) gets its options' controls with no code here.
+    #[test]
+    fn every_option_of_an_analysis_gets_a_control_from_its_declaration() {
+        for name in ["toy", "mirror-view"] {
+            let mut analysis = Analysis::new(Settings::new(name).unwrap());
+            let shown = texts(&mut analysis, &["door mirror".to_string()]);
+            let first_group: Vec<&OptionSpec> = analysis
+                .settings
+                .info
+                .all_options()
+                .filter(|s| s.group == analysis.settings.info.options[0].group)
+                .collect();
+            for spec in first_group {
+                let label = match spec.unit {
+                    "" => spec.name.to_string(),
+                    unit => format!("{} ({unit})", spec.name),
+                };
+                assert!(
+                    shown.contains(&label),
+                    "{name}: no control labelled {label:?} in {shown:?}"
+                );
+            }
+        }
+    }
+}

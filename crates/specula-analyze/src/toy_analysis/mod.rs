@@ -85,7 +85,7 @@ impl Analysis for Toy {
             verdict: Some(verdict),
             json: crate::analysis::json_of(&serde_json::json!({
                 "share_above": share,
-                "verdict": verdict.word(),
+                "verdict": verdict.lower(),
             }))?,
             eyes: eyes.points,
             result: Box::new(share),
