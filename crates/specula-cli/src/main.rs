@@ -1105,7 +1105,7 @@ mod cli_reference_tests {
             ));
             let names: Vec<String> = command
                 .get_subcommands()
-                .filter(|c| c.get_name() != "help")
+                .filter(|c| c.get_name() != "help" && !c.is_hide_set())
                 .map(|c| c.get_name().to_string())
                 .collect();
             for name in names {

@@ -38,6 +38,8 @@ pub struct AnalysisInfo {
     pub options: &'static [OptionSpec],
     /// Whether it looks from eye points ([`EyePoints`]'s options apply).
     pub eye_points: bool,
+    /// Built for tests only: front ends run it by name but do not list it.
+    pub test_only: bool,
     pub create: fn() -> Box<dyn Analysis>,
 }
 

@@ -85,6 +85,7 @@ pub static INFO: AnalysisInfo = AnalysisInfo {
               --background-luminance 10 --min-contrast 3 --report glare-report",
     options: GlareOptions::SPECS,
     eye_points: true,
+    test_only: false,
     create: || Box::new(GlareAnalysis::default()),
 };
 

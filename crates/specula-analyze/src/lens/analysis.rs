@@ -104,6 +104,7 @@ pub static INFO: AnalysisInfo = AnalysisInfo {
               --pantoscopic 10 --wrap 5 --compensate --standard iso-8980-1 --focimeter",
     options: LensOptions::SPECS,
     eye_points: false,
+    test_only: false,
     create: || Box::new(LensAnalysis::default()),
 };
 

@@ -77,6 +77,7 @@ pub static INFO: AnalysisInfo = AnalysisInfo {
               -0.95,0.6,1.5 --vehicle \"car body\" --vehicle \"A-pillar\" --report r46-report",
     options: MirrorViewOptions::SPECS,
     eye_points: true,
+    test_only: false,
     create: || Box::new(MirrorViewAnalysis::default()),
 };
 

@@ -29,6 +29,7 @@ pub static INFO: AnalysisInfo = AnalysisInfo {
     example: "specula analyze toy --height 1",
     options: ToyOptions::SPECS,
     eye_points: true,
+    test_only: true,
     create: || Box::new(Toy::default()),
 };
 

@@ -29,6 +29,9 @@ pub struct Kind {
 /// The flag of one option: its help is the declaration's doc, unit and default.
 fn flag(spec: &'static OptionSpec) -> Arg {
     let mut help = spec.doc.to_string();
+    if spec.repeatable {
+        help.push_str(" (repeatable)");
+    }
     if !spec.unit.is_empty() {
         help.push_str(&format!(" [unit: {}]", spec.unit));
     }
@@ -59,6 +62,7 @@ fn flag(spec: &'static OptionSpec) -> Arg {
     }
     let names = match spec.kind {
         ParamKind::Numbers { names } => names,
+        ParamKind::Text { expected } if expected.contains("scene's objects") => "NAME",
         ParamKind::Text { expected } if expected.len() < 30 => expected,
         _ => "VALUE",
     };
@@ -72,12 +76,14 @@ fn flag(spec: &'static OptionSpec) -> Arg {
 fn command(info: &'static AnalysisInfo) -> Command {
     let mut command = Command::new(info.name)
         .about(info.summary)
+        .hide(info.test_only)
         .after_help(format!(
             "Example:\n  {}\n\nEvery option: docs/analyses/{}.md",
             info.example, info.name
         ))
         .arg(
             Arg::new("scene")
+                .value_name("SCENE")
                 .help("Built-in scene name, a .toml scene file, or a mesh/scene file")
                 .default_value(DEFAULT_SCENE),
         );
