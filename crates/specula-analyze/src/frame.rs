@@ -1,4 +1,4 @@
-//! The vehicle frame and the eye points an analysis runs from.
+//! The vehicle frame an analysis runs in (its eye points are `analysis::eye_points`').
 //!
 //! The vehicle frame has world +Y as up (docs/conventions.md), `forward` the vehicle's
 //! longitudinal axis (horizontal), and `right = forward × up`. Angles in it: a direction's
@@ -8,10 +8,8 @@
 use glam::Vec3;
 use specula_scene::Camera;
 
+use crate::analysis::eye_points::Eyes;
 use crate::AnalyzeError;
-
-/// UN ECE Regulation 46's ocular points are 65 mm apart.
-pub const OCULAR_SEPARATION_M: f32 = 0.065;
 
 /// The vehicle's axes in world space.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -83,120 +81,6 @@ impl VehicleFrame {
     }
 }
 
-/// Where the eyes are.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Eyes {
-    /// The scene camera's eye.
-    Camera,
-    /// These points (world space, metres).
-    Points(Vec<Vec3>),
-    /// A grid of `columns` × `rows` points spanning `width` × `height` metres, centred on the
-    /// camera's eye, horizontal along the vehicle's right axis and vertical along up.
-    Eyebox {
-        width: f32,
-        height: f32,
-        columns: u32,
-        rows: u32,
-    },
-    /// UN ECE R46's two ocular points: 65 mm apart on the horizontal line perpendicular to
-    /// the vehicle's longitudinal median plane, centred on the camera's eye.
-    Ocular,
-}
-
-/// The most eye points an eyebox may have each way.
-pub const MAX_EYEBOX_POINTS: u32 = 10_000;
-
-impl Eyes {
-    /// The eyebox `[W, H, NX, NY]` as a command or a script gives it: sizes in metres, finite
-    /// and not negative; NX and NY whole numbers from 1 to [`MAX_EYEBOX_POINTS`]. The error
-    /// says what is wrong.
-    pub fn eyebox(values: [f32; 4]) -> Result<Eyes, String> {
-        let [width, height, columns, rows] = values;
-        if !(width.is_finite() && height.is_finite() && width >= 0.0 && height >= 0.0) {
-            return Err(format!(
-                "{width} × {height} m: the size must be finite and not negative"
-            ));
-        }
-        let count = |v: f32| {
-            (v.fract() == 0.0 && (1.0..=MAX_EYEBOX_POINTS as f32).contains(&v))
-                .then_some(v as u32)
-                .ok_or(format!(
-                    "NX and NY must be whole numbers, at least one point each way and at most \
-                     {MAX_EYEBOX_POINTS}, got {v}"
-                ))
-        };
-        Ok(Eyes::Eyebox {
-            width,
-            height,
-            columns: count(columns)?,
-            rows: count(rows)?,
-        })
-    }
-
-    /// The eye points, about the camera's eye `centre`.
-    pub fn points(&self, centre: Vec3, frame: &VehicleFrame) -> Result<Vec<Vec3>, AnalyzeError> {
-        let bad = |reason: String| AnalyzeError::BadOption {
-            option: "eyebox",
-            reason,
-        };
-        let points = match self {
-            Eyes::Camera => vec![centre],
-            Eyes::Points(points) => points.clone(),
-            Eyes::Ocular => {
-                let half = frame.right * (0.5 * OCULAR_SEPARATION_M);
-                vec![centre - half, centre + half]
-            }
-            Eyes::Eyebox {
-                width,
-                height,
-                columns,
-                rows,
-            } => {
-                if *columns == 0 || *rows == 0 {
-                    return Err(bad(format!(
-                        "{columns} × {rows} points: an eyebox needs at least one point each way"
-                    )));
-                }
-                if !(width.is_finite() && height.is_finite() && *width >= 0.0 && *height >= 0.0) {
-                    return Err(bad(format!(
-                        "{width} × {height} m: the size must be finite and not negative"
-                    )));
-                }
-                // Evenly from one edge to the other; a single column or row sits at the centre.
-                let spread = |k: u32, n: u32, size: f32| {
-                    if n == 1 {
-                        0.0
-                    } else {
-                        size * (k as f32 / (n - 1) as f32 - 0.5)
-                    }
-                };
-                (0..*rows)
-                    .flat_map(|row| {
-                        (0..*columns).map(move |column| {
-                            centre
-                                + frame.right * spread(column, *columns, *width)
-                                + frame.up * spread(row, *rows, *height)
-                        })
-                    })
-                    .collect()
-            }
-        };
-        if points.is_empty() {
-            return Err(AnalyzeError::BadOption {
-                option: "eye",
-                reason: "no eye point".into(),
-            });
-        }
-        if let Some(p) = points.iter().find(|p| !p.is_finite()) {
-            return Err(AnalyzeError::BadOption {
-                option: "eye",
-                reason: format!("{p} is not a finite point"),
-            });
-        }
-        Ok(points)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -240,61 +124,5 @@ mod tests {
         let back = Vec3::Z;
         assert!((frame.horizontal_deg(Vec3::new(1.0, 0.0, 1.0), back) + 45.0).abs() < 1e-5);
         assert!((frame.elevation_deg(Vec3::new(0.0, 1.0, 1.0)) - 45.0).abs() < 1e-5);
-    }
-
-    #[test]
-    fn eye_points() {
-        let frame = VehicleFrame::new(&camera(), None).unwrap();
-        let centre = camera().eye;
-        let ocular = Eyes::Ocular.points(centre, &frame).unwrap();
-        assert!((ocular[0].distance(ocular[1]) - OCULAR_SEPARATION_M).abs() < 1e-6);
-        assert!(((ocular[0] + ocular[1]) * 0.5).abs_diff_eq(centre, 1e-6));
-        assert!((ocular[1] - ocular[0])
-            .normalize()
-            .abs_diff_eq(frame.right, 1e-6));
-        let grid = Eyes::Eyebox {
-            width: 0.3,
-            height: 0.15,
-            columns: 4,
-            rows: 3,
-        }
-        .points(centre, &frame)
-        .unwrap();
-        assert_eq!(grid.len(), 12);
-        assert!(grid[0].abs_diff_eq(centre + Vec3::new(-0.15, -0.075, 0.0), 1e-6));
-        assert!(grid[11].abs_diff_eq(centre + Vec3::new(0.15, 0.075, 0.0), 1e-6));
-        let empty = Eyes::Eyebox {
-            width: 0.3,
-            height: 0.1,
-            columns: 0,
-            rows: 3,
-        }
-        .points(centre, &frame)
-        .unwrap_err();
-        assert!(empty.to_string().contains("at least one point"), "{empty}");
-    }
-
-    /// The eyebox as a command or a script gives it: the same checks for both.
-    #[test]
-    fn an_eyebox_from_its_four_numbers_is_checked_once() {
-        assert_eq!(
-            Eyes::eyebox([0.3, 0.15, 4.0, 3.0]).unwrap(),
-            Eyes::Eyebox {
-                width: 0.3,
-                height: 0.15,
-                columns: 4,
-                rows: 3
-            }
-        );
-        for (values, says) in [
-            ([0.3, 0.1, 0.0, 3.0], "at least one point"),
-            ([0.3, 0.1, 2.5, 3.0], "whole numbers"),
-            ([0.3, 0.1, 3.0, 20_000.0], "at most 10000"),
-            ([f32::NAN, 0.1, 3.0, 3.0], "finite"),
-            ([0.3, -0.1, 3.0, 3.0], "not negative"),
-        ] {
-            let error = Eyes::eyebox(values).unwrap_err();
-            assert!(error.contains(says), "{values:?}: {error}");
-        }
     }
 }

@@ -103,7 +103,8 @@ fn run(name: &str, scene: &specula_scene::Scene, options: &[(&str, &str)]) -> St
 
 #[test]
 fn a_run_through_the_trait_gives_the_wrapped_function_s_report() {
-    use specula_analyze::frame::{Eyes, VehicleFrame};
+    use specula_analyze::analysis::eye_points::Eyes;
+    use specula_analyze::frame::VehicleFrame;
     use specula_analyze::mirror_view::{self, Precision};
     let scene = specula_scene::load("door-mirror").unwrap();
     let json = run(

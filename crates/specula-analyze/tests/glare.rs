@@ -5,7 +5,8 @@
 //! at the image's centre.
 
 use glam::{Mat4, Vec3};
-use specula_analyze::frame::{Eyes, VehicleFrame};
+use specula_analyze::analysis::eye_points::Eyes;
+use specula_analyze::frame::VehicleFrame;
 use specula_analyze::glare::{self, Glare, Options, Source};
 use specula_scene::{generators, Camera, Material, MaterialKind, Mesh, Scene};
 use specula_trace::SceneAccel;

@@ -92,21 +92,29 @@ pub enum Step {
     },
     Screenshot(PathBuf),
     View(ViewMode),
-    /// Turns the analysis on (or off: None).
-    Analysis(Option<Box<Request>>),
-    /// Writes the finished analysis's JSON document (what `--json` writes) to this file.
-    AnalysisJson(PathBuf),
+    /// An analysis step.
+    Analysis(AnalysisStep),
     /// Puts the view's camera here.
     Camera {
         eye: Vec3,
         target: Vec3,
     },
-    /// Puts the view's camera at the analysis's overview.
-    AnalysisCamera,
     /// Draws a frame and saves the window as shown (the panel, the overlay) to this file.
     WindowScreenshot(PathBuf),
     /// Shows (true) or hides the docked panel.
     Panel(bool),
+}
+
+/// What an analysis step does.
+#[derive(Clone, Debug, PartialEq)]
+pub enum AnalysisStep {
+    /// Turns the analysis on.
+    On(Box<Request>),
+    Off,
+    /// Puts the view's camera at the analysis's overview.
+    Camera,
+    /// Writes the finished analysis's JSON document (what `--json` writes) to this file.
+    Json(PathBuf),
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -302,15 +310,18 @@ fn step(table: toml::Table) -> Result<Step, String> {
     } else if let Some(shown) = raw.panel {
         Step::Panel(shown)
     } else if let Some(a) = raw.analysis {
-        Step::Analysis(analysis(a)?.map(Box::new))
+        Step::Analysis(match analysis(a)? {
+            Some(request) => AnalysisStep::On(Box::new(request)),
+            None => AnalysisStep::Off,
+        })
     } else if let Some(path) = raw.analysis_json {
         if path.as_os_str().is_empty() {
             return Err("analysis_json: expected a file name".into());
         }
-        Step::AnalysisJson(path)
+        Step::Analysis(AnalysisStep::Json(path))
     } else if let Some(c) = raw.camera {
         if c.as_str() == Some("analysis") {
-            Step::AnalysisCamera
+            Step::Analysis(AnalysisStep::Camera)
         } else {
             let c = RawCamera::deserialize(c).map_err(|e| {
                 format!(
@@ -463,7 +474,7 @@ panel = true
             }
         );
         assert_eq!(steps[7], Step::View(ViewMode::Split));
-        let Step::Analysis(Some(mirror)) = &steps[9] else {
+        let Step::Analysis(AnalysisStep::On(mirror)) = &steps[9] else {
             panic!("{:?}", steps[9])
         };
         // The keys are the options by name, their values as the command line writes them.
@@ -483,7 +494,7 @@ panel = true
         let (analysis, eyes) = m.build().unwrap();
         assert!(eyes.ocular);
         assert_eq!(analysis.options().get("vehicle").unwrap(), "car body;roof");
-        let Step::Analysis(Some(glare)) = &steps[10] else {
+        let Step::Analysis(AnalysisStep::On(glare)) = &steps[10] else {
             panic!("{:?}", steps[10])
         };
         assert_eq!(glare.settings.value("source"), "side window");
@@ -491,7 +502,7 @@ panel = true
             glare.settings.build().unwrap().1.eyebox,
             Some([0.3, 0.15, 5.0, 3.0])
         );
-        assert_eq!(steps[11], Step::Analysis(None));
+        assert_eq!(steps[11], Step::Analysis(AnalysisStep::Off));
         assert_eq!(
             steps[12],
             Step::Camera {
@@ -499,7 +510,7 @@ panel = true
                 target: Vec3::new(3.0, -1.0, 10.0)
             }
         );
-        assert_eq!(steps[13], Step::AnalysisCamera);
+        assert_eq!(steps[13], Step::Analysis(AnalysisStep::Camera));
         assert_eq!(steps[14], Step::WindowScreenshot("w.png".into()));
         assert_eq!(steps[15], Step::Panel(true));
     }

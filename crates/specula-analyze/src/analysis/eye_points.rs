@@ -11,12 +11,15 @@ use glam::Vec3;
 use specula_params::{options, Opt, ParamKind};
 use specula_scene::Scene;
 
-use crate::frame::{Eyes, VehicleFrame};
+use crate::frame::VehicleFrame;
 use crate::regulation::EyeSets;
 use crate::AnalyzeError;
 
 /// R46's ocular points are this far above the R point, metres.
 pub const OCULAR_HEIGHT_M: f32 = 0.635;
+
+/// UN ECE Regulation 46's ocular points are 65 mm apart.
+pub const OCULAR_SEPARATION_M: f32 = 0.065;
 
 options! {
     /// Where the eyes are; at most one of `eye`, `eyebox`, `ocular`, `r_point`, `eyellipse`.
@@ -288,6 +291,192 @@ pub fn eyellipse_points(
 /// R46's ocular points from the R point: 635 mm above it, 65 mm apart across the vehicle.
 pub fn ocular_points(frame: &VehicleFrame, r_point: Vec3) -> [Vec3; 2] {
     let middle = r_point + frame.up * OCULAR_HEIGHT_M;
-    let half = frame.right * (0.5 * crate::frame::OCULAR_SEPARATION_M);
+    let half = frame.right * (0.5 * OCULAR_SEPARATION_M);
     [middle - half, middle + half]
+}
+
+/// Where the eyes are.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Eyes {
+    /// The scene camera's eye.
+    Camera,
+    /// These points (world space, metres).
+    Points(Vec<Vec3>),
+    /// A grid of `columns` × `rows` points spanning `width` × `height` metres, centred on the
+    /// camera's eye, horizontal along the vehicle's right axis and vertical along up.
+    Eyebox {
+        width: f32,
+        height: f32,
+        columns: u32,
+        rows: u32,
+    },
+    /// UN ECE R46's two ocular points: 65 mm apart on the horizontal line perpendicular to
+    /// the vehicle's longitudinal median plane, centred on the camera's eye.
+    Ocular,
+}
+
+/// The most eye points an eyebox may have each way.
+pub const MAX_EYEBOX_POINTS: u32 = 10_000;
+
+impl Eyes {
+    /// The eyebox `[W, H, NX, NY]` as a command or a script gives it: sizes in metres, finite
+    /// and not negative; NX and NY whole numbers from 1 to [`MAX_EYEBOX_POINTS`]. The error
+    /// says what is wrong.
+    pub fn eyebox(values: [f32; 4]) -> Result<Eyes, String> {
+        let [width, height, columns, rows] = values;
+        if !(width.is_finite() && height.is_finite() && width >= 0.0 && height >= 0.0) {
+            return Err(format!(
+                "{width} × {height} m: the size must be finite and not negative"
+            ));
+        }
+        let count = |v: f32| {
+            (v.fract() == 0.0 && (1.0..=MAX_EYEBOX_POINTS as f32).contains(&v))
+                .then_some(v as u32)
+                .ok_or(format!(
+                    "NX and NY must be whole numbers, at least one point each way and at most \
+                     {MAX_EYEBOX_POINTS}, got {v}"
+                ))
+        };
+        Ok(Eyes::Eyebox {
+            width,
+            height,
+            columns: count(columns)?,
+            rows: count(rows)?,
+        })
+    }
+
+    /// The eye points, about the camera's eye `centre`.
+    pub fn points(&self, centre: Vec3, frame: &VehicleFrame) -> Result<Vec<Vec3>, AnalyzeError> {
+        let bad = |reason: String| AnalyzeError::BadOption {
+            option: "eyebox",
+            reason,
+        };
+        let points = match self {
+            Eyes::Camera => vec![centre],
+            Eyes::Points(points) => points.clone(),
+            Eyes::Ocular => {
+                let half = frame.right * (0.5 * OCULAR_SEPARATION_M);
+                vec![centre - half, centre + half]
+            }
+            Eyes::Eyebox {
+                width,
+                height,
+                columns,
+                rows,
+            } => {
+                if *columns == 0 || *rows == 0 {
+                    return Err(bad(format!(
+                        "{columns} × {rows} points: an eyebox needs at least one point each way"
+                    )));
+                }
+                if !(width.is_finite() && height.is_finite() && *width >= 0.0 && *height >= 0.0) {
+                    return Err(bad(format!(
+                        "{width} × {height} m: the size must be finite and not negative"
+                    )));
+                }
+                // Evenly from one edge to the other; a single column or row sits at the centre.
+                let spread = |k: u32, n: u32, size: f32| {
+                    if n == 1 {
+                        0.0
+                    } else {
+                        size * (k as f32 / (n - 1) as f32 - 0.5)
+                    }
+                };
+                (0..*rows)
+                    .flat_map(|row| {
+                        (0..*columns).map(move |column| {
+                            centre
+                                + frame.right * spread(column, *columns, *width)
+                                + frame.up * spread(row, *rows, *height)
+                        })
+                    })
+                    .collect()
+            }
+        };
+        if points.is_empty() {
+            return Err(AnalyzeError::BadOption {
+                option: "eye",
+                reason: "no eye point".into(),
+            });
+        }
+        if let Some(p) = points.iter().find(|p| !p.is_finite()) {
+            return Err(AnalyzeError::BadOption {
+                option: "eye",
+                reason: format!("{p} is not a finite point"),
+            });
+        }
+        Ok(points)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use specula_scene::Camera;
+
+    fn camera() -> Camera {
+        Camera {
+            eye: Vec3::new(1.0, 1.2, 3.0),
+            target: Vec3::new(1.0, 0.2, -7.0),
+            up: Vec3::Y,
+            fov_y_deg: 40.0,
+            aspect: None,
+        }
+    }
+
+    #[test]
+    fn eye_points() {
+        let frame = VehicleFrame::new(&camera(), None).unwrap();
+        let centre = camera().eye;
+        let ocular = Eyes::Ocular.points(centre, &frame).unwrap();
+        assert!((ocular[0].distance(ocular[1]) - OCULAR_SEPARATION_M).abs() < 1e-6);
+        assert!(((ocular[0] + ocular[1]) * 0.5).abs_diff_eq(centre, 1e-6));
+        assert!((ocular[1] - ocular[0])
+            .normalize()
+            .abs_diff_eq(frame.right, 1e-6));
+        let grid = Eyes::Eyebox {
+            width: 0.3,
+            height: 0.15,
+            columns: 4,
+            rows: 3,
+        }
+        .points(centre, &frame)
+        .unwrap();
+        assert_eq!(grid.len(), 12);
+        assert!(grid[0].abs_diff_eq(centre + Vec3::new(-0.15, -0.075, 0.0), 1e-6));
+        assert!(grid[11].abs_diff_eq(centre + Vec3::new(0.15, 0.075, 0.0), 1e-6));
+        let empty = Eyes::Eyebox {
+            width: 0.3,
+            height: 0.1,
+            columns: 0,
+            rows: 3,
+        }
+        .points(centre, &frame)
+        .unwrap_err();
+        assert!(empty.to_string().contains("at least one point"), "{empty}");
+    }
+
+    /// The eyebox as a command or a script gives it: the same checks for both.
+    #[test]
+    fn an_eyebox_from_its_four_numbers_is_checked_once() {
+        assert_eq!(
+            Eyes::eyebox([0.3, 0.15, 4.0, 3.0]).unwrap(),
+            Eyes::Eyebox {
+                width: 0.3,
+                height: 0.15,
+                columns: 4,
+                rows: 3
+            }
+        );
+        for (values, says) in [
+            ([0.3, 0.1, 0.0, 3.0], "at least one point"),
+            ([0.3, 0.1, 2.5, 3.0], "whole numbers"),
+            ([0.3, 0.1, 3.0, 20_000.0], "at most 10000"),
+            ([f32::NAN, 0.1, 3.0, 3.0], "finite"),
+            ([0.3, -0.1, 3.0, 3.0], "not negative"),
+        ] {
+            let error = Eyes::eyebox(values).unwrap_err();
+            assert!(error.contains(says), "{values:?}: {error}");
+        }
+    }
 }

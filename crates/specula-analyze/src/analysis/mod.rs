@@ -99,10 +99,6 @@ impl RunContext<'_> {
             Ok(())
         }
     }
-
-    pub fn cancelled(&self) -> bool {
-        self.cancel.load(Ordering::Relaxed)
-    }
 }
 
 /// What a run found.

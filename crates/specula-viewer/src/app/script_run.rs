@@ -2,6 +2,7 @@
 //! frames, and the timing of those frames.
 
 use super::*;
+use crate::script::AnalysisStep;
 
 /// A script being run: its steps, the one at hand, and the frames it still wants.
 pub(super) struct ScriptRun {
@@ -100,9 +101,7 @@ pub(super) fn advance_script(
                     aspect: None,
                 })
             }
-            step @ (Step::Analysis(_) | Step::AnalysisCamera | Step::AnalysisJson(_)) => {
-                analysis_step(state, step, index)?
-            }
+            Step::Analysis(step) => analysis_step(state, step, index)?,
             Step::View(mode) => state.session.view = mode,
         }
         state.ui.dirty = true;
@@ -111,14 +110,18 @@ pub(super) fn advance_script(
 }
 
 /// An analysis step: on or off, the camera at its overview, its JSON written.
-fn analysis_step(state: &mut WindowState, step: Step, index: usize) -> Result<(), ViewerError> {
+fn analysis_step(
+    state: &mut WindowState,
+    step: AnalysisStep,
+    index: usize,
+) -> Result<(), ViewerError> {
     let at = |e: &dyn std::fmt::Display| ViewerError::Step {
         step: index + 1,
         message: e.to_string(),
     };
     match step {
-        Step::Analysis(None) => state.session.analysis = None,
-        Step::AnalysisCamera => {
+        AnalysisStep::Off => state.session.analysis = None,
+        AnalysisStep::Camera => {
             let fov = state.session.camera.fov_y_deg;
             let camera = state
                 .session
@@ -128,7 +131,7 @@ fn analysis_step(state: &mut WindowState, step: Step, index: usize) -> Result<()
                 .ok_or_else(|| at(&"camera = \"analysis\": no analysis is on"))?;
             state.session.camera = crate::orbit::OrbitCamera::from_camera(&camera);
         }
-        Step::Analysis(Some(request)) => {
+        AnalysisStep::On(request) => {
             let settings = request.settings.clone();
             settings
                 .check(state.session.scene())
@@ -148,7 +151,7 @@ fn analysis_step(state: &mut WindowState, step: Step, index: usize) -> Result<()
             );
             state.session.analysis = Some(analysis);
         }
-        Step::AnalysisJson(path) => {
+        AnalysisStep::Json(path) => {
             let mut analysis = state
                 .session
                 .analysis
@@ -167,7 +170,6 @@ fn analysis_step(state: &mut WindowState, step: Step, index: usize) -> Result<()
             written.map_err(|e| at(&e))?;
             eprintln!("step {}: wrote {}", index + 1, path.display());
         }
-        _ => unreachable!("only analysis steps come here"),
     }
     Ok(())
 }
