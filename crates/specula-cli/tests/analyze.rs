@@ -1080,3 +1080,139 @@ fn a_flat_mirror_that_passes_fmvss_111_and_one_that_fails_say_so_in_their_report
             .ends_with(if passes { "PASSES" } else { "FAILS" }));
     }
 }
+
+/// `analyze KIND` over several scenes: a row per scene and check in `--csv`, each check's value
+/// the scene's own run's (its `--json` alone), a report folder per scene, one summary table;
+/// a scene that cannot be analysed is an error row and a failing exit status, the others still
+/// run.
+#[test]
+fn several_scenes_give_a_csv_row_per_scene_and_check_and_a_report_each() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    // A third scene: the built-in door mirror turned 5° about its centre.
+    let turned = dir.path().join("turned.toml");
+    std::fs::write(
+        &turned,
+        "base = \"door-mirror\"\n[[move]]\nobject = \"door mirror\"\nrotate = { axis = [0, 1, 0], degrees = 5 }\n",
+    )
+    .unwrap();
+    let scenes = [
+        root.join("scenes/car-door-mirror.toml")
+            .display()
+            .to_string(),
+        "door-mirror".to_string(),
+        turned.display().to_string(),
+    ];
+    let options = [
+        "--mirror",
+        "door mirror",
+        "--ocular",
+        "--region",
+        "1,2,5,20",
+    ];
+    let (csv, report) = (dir.path().join("out.csv"), dir.path().join("reports"));
+    let out = specula()
+        .args(["analyze", "mirror-view"])
+        .args(&scenes)
+        .args(options)
+        .arg("--csv")
+        .arg(&csv)
+        .arg("--report")
+        .arg(&report)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        stdout.contains("scene") && stdout.contains("5 figures"),
+        "{stdout}"
+    );
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let rows: Vec<Vec<&str>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    let checks = [
+        ("horizontal extent", "horizontal_deg", 1.0),
+        ("vertical extent", "vertical_deg", 1.0),
+        ("solid angle", "solid_angle_sr", 1.0),
+        ("ground area", "ground_area_m2", 1.0),
+        ("region seen by any eye point", "region_seen_by_any", 100.0),
+    ];
+    assert_eq!(rows.len(), scenes.len() * checks.len(), "{text}");
+    for (k, scene) in scenes.iter().enumerate() {
+        let json = dir.path().join(format!("{k}.json"));
+        let alone = specula()
+            .args(["analyze", "mirror-view", scene])
+            .args(options)
+            .arg("--json")
+            .arg(&json)
+            .output()
+            .unwrap();
+        assert!(alone.status.success());
+        let figures: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+        for (row, (check, key, scale)) in rows[k * checks.len()..].iter().zip(checks) {
+            assert_eq!(
+                (row[0], row[1], row[2]),
+                (scene.as_str(), "mirror-view", check)
+            );
+            let value: f64 = row[4].parse().unwrap();
+            assert_eq!(
+                value,
+                figures[key].as_f64().unwrap() * scale,
+                "{scene}: {check}"
+            );
+        }
+        let folder = match k {
+            0 => "car-door-mirror",
+            1 => "door-mirror",
+            _ => "turned",
+        };
+        assert!(report.join(folder).join("report.html").exists(), "{folder}");
+    }
+    // The turned mirror sees another field than the built-in one.
+    assert_ne!(rows[5][4], rows[10][4]);
+
+    // A scene without the mirror: an error row, the others run, the exit status fails.
+    let out = specula()
+        .args(["analyze", "mirror-view", "door-mirror", "truck-cover"])
+        .args(options)
+        .arg("--csv")
+        .arg(&csv)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        stderr.contains("truck-cover") && stderr.contains("1 of 2 scenes"),
+        "{stderr}"
+    );
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert!(text.contains("truck-cover,mirror-view,,error"), "{text}");
+    assert_eq!(
+        text.lines()
+            .filter(|l| l.starts_with("door-mirror,"))
+            .count(),
+        5
+    );
+
+    // Outputs that cannot be written are refused before anything runs.
+    let out = specula()
+        .args(["analyze", "mirror-view", "door-mirror"])
+        .args(options)
+        .args(["--csv", "/proc/nope/out.csv"])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("/proc/nope/out.csv"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("eye points ("), "{stderr}");
+}

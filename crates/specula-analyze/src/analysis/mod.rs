@@ -131,6 +131,35 @@ impl Report {
     }
 }
 
+/// One judged or measured check of a report, as a spreadsheet row takes it (`analyze --csv`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CheckRow {
+    /// What is checked: a field, a mirror rule, a standard's tolerance, a figure.
+    pub check: String,
+    /// Its verdict, where it is judged.
+    pub verdict: Option<Outcome>,
+    pub value: Option<f64>,
+    pub limit: Option<f64>,
+    pub margin: Option<f64>,
+    pub uncertainty: Option<f64>,
+    pub unit: &'static str,
+}
+
+impl CheckRow {
+    /// A figure that is not judged.
+    pub fn figure(check: &str, value: f64, unit: &'static str) -> CheckRow {
+        CheckRow {
+            check: check.to_string(),
+            verdict: None,
+            value: Some(value),
+            limit: None,
+            margin: None,
+            uncertainty: None,
+            unit,
+        }
+    }
+}
+
 /// An analysis: it holds its options, runs, and tells its report in words and in a folder.
 pub trait Analysis: Send {
     fn info(&self) -> &'static AnalysisInfo;
@@ -152,6 +181,10 @@ pub trait Analysis: Send {
 
     /// The report in words, as the terminal prints it.
     fn summary(&self, report: &Report) -> String;
+
+    /// The report's checks (what was judged) or, where nothing was, its key figures: a row
+    /// each, in the report's order.
+    fn checks(&self, report: &Report) -> Vec<CheckRow>;
 
     /// Writes the report folder (report.html, report.json, plots) into `dir`; returns the HTML
     /// page's path.

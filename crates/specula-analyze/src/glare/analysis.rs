@@ -302,6 +302,29 @@ impl Analysis for GlareAnalysis {
         super::summary::text(&result.glare.report)
     }
 
+    fn checks(&self, report: &Report) -> Vec<crate::analysis::CheckRow> {
+        use crate::analysis::CheckRow;
+        let result: &GlareResult = report.result().expect("a glare report");
+        let r = &result.glare.report;
+        let mut rows = vec![CheckRow::figure(
+            "eye points with glare",
+            r.share_with_glare * 100.0,
+            "%",
+        )];
+        if let Some(k) = r.worst_eye {
+            let e = &r.eyes[k];
+            rows.push(CheckRow::figure(
+                "worst eye point's luminance factor",
+                e.max_luminance_factor,
+                "",
+            ));
+            if let Some(l) = e.max_luminance_cd_m2 {
+                rows.push(CheckRow::figure("worst eye point's luminance", l, "cd/m²"));
+            }
+        }
+        rows
+    }
+
     fn write_report(
         &self,
         report: &Report,

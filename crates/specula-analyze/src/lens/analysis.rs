@@ -243,6 +243,38 @@ impl Analysis for LensAnalysis {
         super::summary::text(r, self.options.focimeter)
     }
 
+    fn checks(&self, report: &Report) -> Vec<crate::analysis::CheckRow> {
+        use crate::analysis::CheckRow;
+        let r: &super::Report = report.result().expect("a lens report");
+        let Some(v) = &r.verdict else {
+            let c = &r.centre;
+            let figures = [
+                ("sphere at the centre", c.sphere_d),
+                ("cylinder at the centre", c.cylinder_d),
+                ("mean power at the centre", c.mean_power_d),
+            ];
+            return figures
+                .into_iter()
+                .filter_map(|(name, value)| Some(CheckRow::figure(name, value?, "D")))
+                .collect();
+        };
+        v.checks
+            .iter()
+            .map(|c| CheckRow {
+                check: match c.meridian {
+                    Some(m) => format!("{} at {m:.0}°", c.quantity),
+                    None => c.quantity.to_string(),
+                },
+                verdict: Some(c.verdict),
+                value: Some(c.value),
+                limit: Some(c.limit),
+                margin: Some(c.margin),
+                uncertainty: Some(c.uncertainty),
+                unit: c.unit,
+            })
+            .collect()
+    }
+
     fn write_report(
         &self,
         report: &Report,

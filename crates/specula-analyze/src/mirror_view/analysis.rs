@@ -355,6 +355,49 @@ impl Analysis for MirrorViewAnalysis {
         super::summary::text(result, self.options.median.is_none())
     }
 
+    fn checks(&self, report: &Report) -> Vec<crate::analysis::CheckRow> {
+        use crate::analysis::CheckRow;
+        let result: &MirrorViewResult = report.result().expect("a mirror-view report");
+        let Some(j) = &result.regulation else {
+            let f = &result.view.report.figures;
+            let mut rows = vec![
+                CheckRow::figure("horizontal extent", f.horizontal_deg, "°"),
+                CheckRow::figure("vertical extent", f.vertical_deg, "°"),
+                CheckRow::figure("solid angle", f.solid_angle_sr, "sr"),
+                CheckRow::figure("ground area", f.ground_area_m2, "m²"),
+            ];
+            if let Some(any) = f.region_seen_by_any {
+                rows.push(CheckRow::figure(
+                    "region seen by any eye point",
+                    any * 100.0,
+                    "%",
+                ));
+            }
+            return rows;
+        };
+        let fields = j.verdict.fields.iter().map(|f| CheckRow {
+            check: f.name.clone(),
+            verdict: Some(f.figures.verdict),
+            value: Some(f.figures.seen_share * 100.0),
+            limit: Some(100.0),
+            margin: Some(f.figures.outer_margin_m.min(f.figures.near_margin_m)),
+            uncertainty: Some(
+                (f.figures.seen_share_uncertainty + f.surface_uncertainty.unwrap_or(0.0)) * 100.0,
+            ),
+            unit: "% seen",
+        });
+        let mirror = j.verdict.mirror_checks.iter().map(|c| CheckRow {
+            check: c.name.clone(),
+            verdict: Some(c.verdict),
+            value: c.value,
+            limit: Some(c.limit),
+            margin: c.margin,
+            uncertainty: c.uncertainty,
+            unit: c.unit,
+        });
+        fields.chain(mirror).collect()
+    }
+
     fn write_report(
         &self,
         report: &Report,

@@ -102,6 +102,19 @@ impl Analysis for Toy {
         )
     }
 
+    fn checks(&self, report: &Report) -> Vec<crate::analysis::CheckRow> {
+        let share: &f64 = report.result().expect("a toy report");
+        vec![crate::analysis::CheckRow {
+            check: "eye points above the height".into(),
+            verdict: report.verdict,
+            value: Some(share * 100.0),
+            limit: Some(self.options.least_share * 100.0),
+            margin: Some((share - self.options.least_share) * 100.0),
+            uncertainty: Some(0.0),
+            unit: "%",
+        }]
+    }
+
     fn write_report(
         &self,
         report: &Report,

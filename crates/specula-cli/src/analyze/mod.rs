@@ -1,7 +1,9 @@
-//! `specula analyze KIND SCENE ...`: every analysis of the registry
+//! `specula analyze KIND SCENE... ...`: every analysis of the registry
 //! (`specula_analyze::analysis::ANALYSES`), its flags made from its option declarations (name,
 //! kind, unit, default, help, group), run with a progress bar on all cores, its summary printed
-//! and its JSON and report folder written. Nothing here knows one analysis from another.
+//! and its JSON and report folder written. Several scenes (or a folder of them) run in turn: a
+//! report folder each, one summary table, and `--csv` a row per scene and check. Nothing here
+//! knows one analysis from another.
 
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
@@ -9,7 +11,10 @@ use std::sync::atomic::AtomicBool;
 use anyhow::{Context, Result};
 use clap::{Arg, ArgAction, ArgMatches, Command};
 use indicatif::{ProgressBar, ProgressStyle};
-use specula_analyze::analysis::{AnalysisInfo, EyePoints, Progress, RunContext, ANALYSES};
+use specula_analyze::analysis::{
+    AnalysisInfo, CheckRow, EyePoints, Progress, RunContext, ANALYSES,
+};
+use specula_analyze::outcome::Outcome;
 use specula_analyze::AnalyzeError;
 use specula_params::{OptionSpec, ParamKind};
 use specula_scene::builtin::DEFAULT_SCENE;
@@ -18,12 +23,13 @@ use specula_trace::SceneAccel;
 /// One analysis as the command line asked for it.
 pub struct Kind {
     info: &'static AnalysisInfo,
-    scene: String,
+    scenes: Vec<String>,
     /// Every option the command line gave (flags left out are not here: their defaults are the
     /// declaration's).
     values: Vec<(&'static str, String)>,
     json: Option<PathBuf>,
     report: Option<PathBuf>,
+    csv: Option<PathBuf>,
 }
 
 /// The flag of one option: its help is the declaration's doc, unit and default.
@@ -84,7 +90,11 @@ fn command(info: &'static AnalysisInfo) -> Command {
         .arg(
             Arg::new("scene")
                 .value_name("SCENE")
-                .help("Built-in scene name, a .toml scene file, or a mesh/scene file")
+                .help(
+                    "Built-in scene names, .toml scene files, mesh/scene files or folders of \
+                     them: each is analysed in turn",
+                )
+                .num_args(1..)
                 .default_value(DEFAULT_SCENE),
         );
     for spec in info.all_options() {
@@ -107,7 +117,19 @@ fn command(info: &'static AnalysisInfo) -> Command {
                 .help_heading("Output")
                 .value_parser(clap::value_parser!(PathBuf))
                 .help(
-                    "Write a report folder: report.html, report.json and the plots as PNG and SVG",
+                    "Write a report folder: report.html, report.json and the plots as PNG and \
+                     SVG (with several scenes, a folder per scene in it)",
+                ),
+        )
+        .arg(
+            Arg::new("csv")
+                .long("csv")
+                .help_heading("Output")
+                .value_parser(clap::value_parser!(PathBuf))
+                .help(
+                    "Write a CSV file with a row per scene and check (a field, a rule, a \
+                     tolerance; a key figure where nothing is judged): its verdict, value, \
+                     limit, margin, uncertainty and unit",
                 ),
         )
 }
@@ -144,13 +166,16 @@ impl clap::FromArgMatches for Kind {
         }
         Ok(Kind {
             info,
-            scene: sub
-                .get_one::<String>("scene")
+            scenes: sub
+                .get_many::<String>("scene")
+                .into_iter()
+                .flatten()
                 .cloned()
-                .unwrap_or_else(|| DEFAULT_SCENE.to_string()),
+                .collect(),
             values,
             json: sub.get_one::<PathBuf>("json").cloned(),
             report: sub.get_one::<PathBuf>("report").cloned(),
+            csv: sub.get_one::<PathBuf>("csv").cloned(),
         })
     }
 
@@ -246,8 +271,66 @@ fn progress_bar() -> ProgressBar {
     bar
 }
 
+/// What one scene's run gave: its verdict and its checks.
+struct SceneRun {
+    verdict: Option<Outcome>,
+    checks: Vec<CheckRow>,
+}
+
 pub fn run(kind: Kind) -> Result<()> {
-    let scene = crate::load_scene(&kind.scene)?;
+    let scenes = specula_compare::suite::expand_scenes(&kind.scenes)?;
+    let several = scenes.len() > 1;
+    if several && kind.json.is_some() {
+        anyhow::bail!(
+            "--json writes one scene's document: with {} scenes give --report DIR (a report per \
+             scene) or --csv FILE",
+            scenes.len()
+        );
+    }
+    // Outputs that cannot be written are refused before anything is computed.
+    if let Some(dir) = &kind.report {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    let mut csv = kind
+        .csv
+        .as_ref()
+        .map(|path| {
+            std::fs::File::create(path).with_context(|| format!("writing {}", path.display()))
+        })
+        .transpose()?;
+    let mut runs = Vec::new();
+    for scene in &scenes {
+        if several {
+            println!("== {scene} ==");
+        }
+        let result = analyse(&kind, scene, several);
+        if let Err(e) = &result {
+            eprintln!("error: {scene}: {e:#}");
+        }
+        runs.push((scene.clone(), result.ok()));
+    }
+    if several {
+        print_table(&runs);
+    }
+    if let (Some(file), Some(path)) = (csv.as_mut(), &kind.csv) {
+        write_csv(file, kind.info.name, &runs)
+            .with_context(|| format!("writing {}", path.display()))?;
+        println!("csv: {}", path.display());
+    }
+    let failed = runs.iter().filter(|(_, r)| r.is_none()).count();
+    if failed > 0 {
+        anyhow::bail!(
+            "{failed} of {} scenes could not be analysed (see above)",
+            runs.len()
+        );
+    }
+    Ok(())
+}
+
+/// One scene's run: the analysis with the command line's options, its summary printed, its
+/// JSON and report folder written (in a folder of the scene's own with several).
+fn analyse(kind: &Kind, scene_name: &str, several: bool) -> Result<SceneRun> {
+    let scene = crate::load_scene(scene_name)?;
     let mut analysis = (kind.info.create)();
     let mut eyes = EyePoints::default();
     for (name, value) in &kind.values {
@@ -256,9 +339,6 @@ pub fn run(kind: Kind) -> Result<()> {
             .map_err(in_flags)?;
     }
     analysis.check(&scene, &eyes).map_err(in_flags)?;
-    for dir in kind.report.iter() {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    }
     let accel = SceneAccel::new(&scene);
     let bar = progress_bar();
     let cancel = AtomicBool::new(false);
@@ -281,10 +361,93 @@ pub fn run(kind: Kind) -> Result<()> {
             .with_context(|| format!("writing {}", path.display()))?;
     }
     if let Some(dir) = &kind.report {
+        let dir = match several {
+            true => dir.join(folder_name(scene_name)),
+            false => dir.clone(),
+        };
         let html = analysis
-            .write_report(&report, dir, &scene, &accel)
+            .write_report(&report, &dir, &scene, &accel)
             .map_err(in_flags)?;
         println!("report: {}", html.display());
+    }
+    Ok(SceneRun {
+        verdict: report.verdict,
+        checks: analysis.checks(&report),
+    })
+}
+
+/// A scene's report folder: its file's stem, or its built-in name.
+fn folder_name(scene: &str) -> String {
+    std::path::Path::new(scene)
+        .file_stem()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_else(|| scene.to_string())
+}
+
+/// The runs in one table: scene, verdict, and how many checks pass, fail or are undecided.
+fn print_table(runs: &[(String, Option<SceneRun>)]) {
+    let width = runs.iter().map(|(s, _)| s.len()).max().unwrap_or(5).max(5);
+    println!("{:<width$}  {:<10}  checks", "scene", "verdict");
+    for (scene, run) in runs {
+        let Some(run) = run else {
+            println!("{scene:<width$}  {:<10}  -", "error");
+            continue;
+        };
+        let count = |o: Outcome| run.checks.iter().filter(|c| c.verdict == Some(o)).count();
+        let judged = count(Outcome::Pass) + count(Outcome::Fail) + count(Outcome::Undecided);
+        let checks = match judged {
+            0 => format!("{} figures", run.checks.len()),
+            _ => format!(
+                "{} pass, {} fail, {} undecided",
+                count(Outcome::Pass),
+                count(Outcome::Fail),
+                count(Outcome::Undecided)
+            ),
+        };
+        let verdict = run.verdict.map_or("-", |v| v.lower());
+        println!("{scene:<width$}  {verdict:<10}  {checks}");
+    }
+}
+
+/// A CSV cell: quoted where it holds a comma, a quote or a line break.
+fn cell(text: &str) -> String {
+    match text.contains([',', '"', '\n']) {
+        true => format!("\"{}\"", text.replace('"', "\"\"")),
+        false => text.to_string(),
+    }
+}
+
+/// A row per scene and check: scene, analysis, check, verdict, value, limit, margin,
+/// uncertainty, unit (a scene that could not be analysed: one row, verdict `error`).
+fn write_csv(
+    out: &mut impl std::io::Write,
+    analysis: &str,
+    runs: &[(String, Option<SceneRun>)],
+) -> std::io::Result<()> {
+    writeln!(
+        out,
+        "scene,analysis,check,verdict,value,limit,margin,uncertainty,unit"
+    )?;
+    let number = |v: Option<f64>| v.map(|v| v.to_string()).unwrap_or_default();
+    for (scene, run) in runs {
+        let Some(run) = run else {
+            writeln!(out, "{},{analysis},,error,,,,,", cell(scene))?;
+            continue;
+        };
+        for c in &run.checks {
+            writeln!(
+                out,
+                "{},{analysis},{},{},{},{},{},{},{}",
+                cell(scene),
+                cell(&c.check),
+                c.verdict.map_or("", |v| v.lower()),
+                number(c.value),
+                number(c.limit),
+                number(c.margin),
+                number(c.uncertainty),
+                cell(c.unit)
+            )?;
+        }
     }
     Ok(())
 }
