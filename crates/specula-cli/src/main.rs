@@ -524,12 +524,24 @@ fn spinner() -> ProgressBar {
 }
 
 fn main() -> std::process::ExitCode {
+    quiet_on_a_closed_pipe();
     match run(Cli::parse()) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
             std::process::ExitCode::FAILURE
         }
+    }
+}
+
+/// `specula methods | head`: output to a pipe its reader closed ends the program quietly, as
+/// other Unix tools do, instead of a panic on the next line printed. Rust ignores SIGPIPE by
+/// default; this puts the system's default action back.
+fn quiet_on_a_closed_pipe() {
+    #[cfg(unix)]
+    // SAFETY: signal() with SIG_DFL installs no handler of ours; it runs before any thread starts.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }
 

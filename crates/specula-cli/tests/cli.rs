@@ -724,3 +724,24 @@ fn gpu_methods_without_a_vulkan_adapter_say_what_to_install() {
         "{stderr}"
     );
 }
+
+/// `specula methods | head`: a reader that closes the pipe early ends the program quietly (by
+/// the pipe's signal, as other Unix tools end), not with a panic's message and backtrace. The
+/// reader here is gone before the first line is written.
+#[cfg(unix)]
+#[test]
+fn writing_to_a_closed_pipe_ends_quietly() {
+    use std::os::unix::process::ExitStatusExt;
+    let mut child = specula()
+        .arg("methods")
+        .env("NODEVICE_SELECT", "1")
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(out.status.signal(), Some(13), "{:?}: {stderr}", out.status);
+}
