@@ -1216,3 +1216,64 @@ fn several_scenes_give_a_csv_row_per_scene_and_check_and_a_report_each() {
     );
     assert!(!stderr.contains("eye points ("), "{stderr}");
 }
+
+/// An eye point that sees nothing of the mirror (here behind it) is a warning naming it, in
+/// the terminal and the JSON, and the run's verdict is undecided rather than silent zeros.
+#[test]
+fn an_eye_point_that_sees_nothing_of_the_mirror_is_a_warning_and_undecided() {
+    let dir = tempfile::tempdir().unwrap();
+    let (json, csv) = (
+        dir.path().join("behind.json"),
+        dir.path().join("behind.csv"),
+    );
+    let out = specula()
+        .args([
+            "analyze",
+            "mirror-view",
+            "door-mirror",
+            "--mirror",
+            "door mirror",
+        ])
+        .args(["--eye", "0,0,-5", "--eye", "0,0,0.5", "--json"])
+        .arg(&json)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        stdout.contains(
+            "warning: eye point (0.000, 0.000, -5.000) sees nothing of the mirror 'door mirror'"
+        ),
+        "{stdout}"
+    );
+    assert!(
+        !stdout.contains("(0.000, 0.000, 0.500) sees nothing"),
+        "{stdout}"
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_matches_schema(
+        &report,
+        include_str!("../../../docs/analyze-mirror-view.schema.json"),
+    );
+    let warnings = report["warnings"].as_array().unwrap();
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    // The run's verdict in the summary of several scenes.
+    let out = specula()
+        .args(["analyze", "mirror-view", "door-mirror", "door-mirror"])
+        .args(["--mirror", "door mirror", "--eye", "0,0,-5", "--csv"])
+        .arg(&csv)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout
+            .lines()
+            .any(|l| l.starts_with("door-mirror") && l.contains("undecided")),
+        "{stdout}"
+    );
+}

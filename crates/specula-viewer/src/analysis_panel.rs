@@ -275,6 +275,9 @@ fn figures_section(ui: &mut egui::Ui, analysis: &mut Analysis) {
     let mut select = None;
     let report = &outcome.report;
     if let Some(m) = report.result::<MirrorViewResult>() {
+        for warning in &m.view.report.warnings {
+            ui.label(RichText::new(warning).color(Color32::from_rgb(240, 200, 90)));
+        }
         match &m.regulation {
             Some(j) => verdict_section(ui, &j.verdict),
             None => mirror_figures(ui, &m.view),

@@ -341,9 +341,14 @@ impl Analysis for MirrorViewAnalysis {
             }
         };
         context.check()?;
+        // Figures from an eye point that sees nothing decide nothing.
+        let blind = !result.view.report.warnings.is_empty();
         Ok(Report {
             analysis: INFO.name,
-            verdict: result.regulation.as_ref().map(|j| j.verdict.verdict),
+            verdict: match &result.regulation {
+                Some(j) => Some(j.verdict.verdict),
+                None => blind.then_some(crate::outcome::Outcome::Undecided),
+            },
             json: result.json()?,
             eyes: plan.eyes.points.clone(),
             result: Box::new(result),

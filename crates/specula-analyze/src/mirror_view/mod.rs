@@ -50,7 +50,7 @@ use crate::mirror_surface::{MirrorSurface, SurfaceModel};
 use crate::AnalyzeError;
 
 /// The version of [`Report`]'s JSON (docs/analyze-mirror-view.schema.json).
-pub const SCHEMA_VERSION: u32 = 2;
+pub const SCHEMA_VERSION: u32 = 3;
 
 /// The most levels a sub-triangle on an edge of what is seen is cut in four.
 const MAX_DEPTH: u32 = 16;
@@ -721,6 +721,8 @@ pub struct Report {
     #[serde(flatten)]
     pub figures: Figures,
     pub eyes: Vec<EyeReport>,
+    /// What the figures cannot show: an eye point that sees nothing of the mirror, named.
+    pub warnings: Vec<String>,
 }
 
 /// The analysis's outcome: the report, and the footprints for plots.
@@ -983,6 +985,7 @@ pub fn analyze(
                 .zip(any_share)
                 .map(|(region, share)| region.area() * (1.0 - share)),
         },
+        warnings: blind_eye_warnings(&mirror.name, &eye_reports),
         eyes: eye_reports,
     };
     let mut view = MirrorView {
@@ -1068,6 +1071,22 @@ fn region_share(raster: &Raster) -> f64 {
 
 /// Each eye point's figures, and the region's cells every eye point sees (None without a
 /// region).
+/// A warning for each eye point that sees nothing of the mirror: its figures are zeros, which
+/// no one should read as a measured field of view.
+fn blind_eye_warnings(mirror: &str, eyes: &[EyeReport]) -> Vec<String> {
+    eyes.iter()
+        .filter(|e| e.seen_samples == 0)
+        .map(|e| {
+            let [x, y, z] = e.position;
+            format!(
+                "eye point ({x:.3}, {y:.3}, {z:.3}) sees nothing of the mirror '{mirror}': no ray \
+                 from it reaches the mirror's reflecting side (it is behind the mirror, or the \
+                 mirror faces away from it), so its figures are zero"
+            )
+        })
+        .collect()
+}
+
 fn eye_reports(
     mirror: &specula_scene::Mesh,
     refined: &[Refined],

@@ -9,6 +9,9 @@ use super::analysis::MirrorViewResult;
 /// The whole report as the terminal prints it (`median_assumed`: no median plane was given).
 pub fn text(result: &MirrorViewResult, median_assumed: bool) -> String {
     let mut out = String::new();
+    for warning in &result.view.report.warnings {
+        say!(out, "warning: {warning}");
+    }
     match &result.regulation {
         None => mirror_view(&mut out, &result.view.report),
         Some(j) => {
