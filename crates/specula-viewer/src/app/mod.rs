@@ -180,6 +180,7 @@ impl App {
                 frames_left: 0,
                 drag_step: None,
                 timing: None,
+                pending_capture: None,
             }),
             state: None,
             result: Ok(()),
@@ -339,10 +340,9 @@ impl ApplicationHandler for App {
                     self.fail(event_loop, e);
                     return;
                 }
-                let finished = self
-                    .script
-                    .as_ref()
-                    .is_some_and(|s| s.next >= s.steps.len() && s.frames_left == 0);
+                let finished = self.script.as_ref().is_some_and(|s| {
+                    s.next >= s.steps.len() && s.frames_left == 0 && s.pending_capture.is_none()
+                });
                 if finished {
                     event_loop.exit();
                 } else if wants_another_frame(state, self.script.is_some()) {

@@ -12,6 +12,46 @@ pub(super) struct ScriptRun {
     pub(super) drag_step: Option<(f32, f32)>,
     /// The step now drawing frames, its first frame's time and its technique frame times.
     pub(super) timing: Option<(usize, Instant, Vec<f64>)>,
+    /// A window screenshot waiting for the view to settle, and the frames drawn meanwhile.
+    pub(super) pending_capture: Option<(usize, PathBuf, u32)>,
+}
+
+/// The most frames a window screenshot waits for the view to settle.
+const SETTLE_FRAMES: u32 = 3_000;
+
+/// Whether what the window shows is final: the technique's frame converged (a progressive one
+/// has refined to the end), the reference too where the view shows it, and the analysis (if
+/// one is on) finished for the scene and options as they are.
+fn settled(state: &WindowState) -> bool {
+    let view = state.session.view;
+    let technique = !view.needs_technique() || !state.ui.dirty;
+    let reference = !view.needs_reference() || state.ui.reference_converged;
+    let analysis = state
+        .session
+        .analysis
+        .as_ref()
+        .is_none_or(|a| a.is_current(state.session.live()));
+    technique && reference && analysis
+}
+
+/// A window screenshot waits for a settled view: frames are drawn until it is, then the next
+/// one is captured.
+fn wait_to_capture(state: &mut WindowState, script: &mut ScriptRun) -> Result<(), ViewerError> {
+    let Some((index, path, waited)) = script.pending_capture.take() else {
+        return Ok(());
+    };
+    if settled(state) {
+        state.capture = Some(path);
+    } else if waited >= SETTLE_FRAMES {
+        return Err(ViewerError::Step {
+            step: index + 1,
+            message: format!("the view did not settle within {SETTLE_FRAMES} frames"),
+        });
+    } else {
+        script.pending_capture = Some((index, path, waited + 1));
+    }
+    script.frames_left = 1;
+    Ok(())
 }
 
 /// Runs script steps up to the next one that draws frames; returns whether this frame is a
@@ -24,6 +64,9 @@ pub(super) fn advance_script(
         if script.frames_left > 0 {
             state.session.camera.orbit(yaw, pitch);
         }
+    }
+    if script.frames_left == 0 {
+        wait_to_capture(state, script)?;
     }
     while script.frames_left == 0 && script.next < script.steps.len() {
         let index = script.next;
@@ -82,8 +125,8 @@ pub(super) fn advance_script(
                 }
             }
             Step::WindowScreenshot(path) => {
-                // This frame is drawn, and kept, before any later step runs.
-                state.capture = Some(path);
+                // Drawn, settled and kept before any later step runs.
+                script.pending_capture = Some((index, path, 0));
                 script.frames_left = 1;
                 script.drag_step = None;
             }
