@@ -20,6 +20,11 @@ fn specula() -> Command {
 /// `xvfb-run -a specula view ...`, or None where Xvfb or a GPU adapter is missing and the runner
 /// allowed the skip.
 fn viewer(test: &str) -> Option<Command> {
+    viewer_on(test, "1024x768x24")
+}
+
+/// The same on an Xvfb screen of `screen` (WIDTHxHEIGHTxDEPTH).
+fn viewer_on(test: &str, screen: &str) -> Option<Command> {
     // The viewer draws with wgpu: it needs an adapter as much as a display.
     specula_gpu::test_context(test)?;
     let found = Command::new("xvfb-run").arg("--help").output().is_ok();
@@ -33,7 +38,7 @@ fn viewer(test: &str) -> Option<Command> {
     }
     let mut command = Command::new("xvfb-run");
     command
-        .args(["-a", "-s", "-screen 0 1024x768x24"])
+        .args(["-a", "-s", &format!("-screen 0 {screen}")])
         .arg(env!("CARGO_BIN_EXE_specula"))
         .arg("view")
         .env("NODEVICE_SELECT", "1");
@@ -627,4 +632,114 @@ fn the_toy_analysis_s_options_are_in_the_command_s_help() {
     ] {
         assert!(help.contains(wanted), "{wanted:?} in\n{help}");
     }
+}
+
+/// The exact colour `rgb` in `shot`, counted in the columns `x0..x1`.
+fn count_colour(shot: &image::RgbImage, rgb: [u8; 3], columns: std::ops::Range<u32>) -> usize {
+    shot.enumerate_pixels()
+        .filter(|(x, _, p)| columns.contains(x) && p.0 == rgb)
+        .count()
+}
+
+/// At 1280 × 800 with the panel docked, an R46 verdict: the panel's verdict (its fail colour)
+/// is inside the window, the eye points it names are the JSON's, the overlay's legend shows
+/// each of its colours, and a window screenshot taken right after the mirror turns equals one
+/// taken after it settled.
+#[test]
+fn the_panel_shows_the_verdict_its_eye_points_and_the_overlay_s_legend() {
+    let test = "the_panel_shows_the_verdict_its_eye_points_and_the_overlay_s_legend";
+    let Some(mut view) = viewer_on(test, "1280x800x24") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).display().to_string();
+    let script = dir.path().join("panel.toml");
+    std::fs::write(
+        &script,
+        format!(
+            r#"
+[[step]]
+method = "reference"
+[[step]]
+analysis = {{ kind = "mirror-view", mirror = "door mirror", regulation = "r46-iii", forward = [0, 0, -1], r_point = [-0.37, 0.55, 0], outermost = [-0.95, 0.6, 1.5], vehicle = ["car body", "A-pillar"], tolerance = 0.02, tolerance_deg = 0.1 }}
+[[step]]
+analysis_json = "{json}"
+[[step]]
+camera = "analysis"
+[[step]]
+panel = true
+[[step]]
+window_screenshot = "{first}"
+[[step]]
+rotate = {{ object = "door mirror", axis = [0, 1, 0], degrees = 3 }}
+[[step]]
+window_screenshot = "{right_after}"
+[[step]]
+frames = 20
+[[step]]
+window_screenshot = "{settled}"
+"#,
+            json = path("r46.json"),
+            first = path("first.png"),
+            right_after = path("right-after.png"),
+            settled = path("settled.png"),
+        ),
+    )
+    .unwrap();
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/car-door-mirror.toml");
+    view.arg(&scene)
+        .args(["--size", "1280x800", "--script"])
+        .arg(&script);
+    let log = run_ok(view);
+
+    // The eye points the panel names are the JSON's.
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(path("r46.json")).unwrap()).unwrap();
+    let eyes: Vec<String> = report["eyes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| {
+            let p: Vec<f64> = e["position"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_f64().unwrap())
+                .collect();
+            format!("({:.3}, {:.3}, {:.3})", p[0], p[1], p[2])
+        })
+        .collect();
+    let shown = format!("eye points (r_point): {}", eyes.join(", "));
+    assert!(log.contains(&shown), "{shown:?} in\n{log}");
+    assert_eq!(report["regulation"]["verdict"], "fail");
+
+    let first = image::open(path("first.png")).unwrap().to_rgb8();
+    assert_eq!(first.dimensions(), (1280, 800));
+    // The panel is the window's left part: the verdict's fail colour (egui's light red) in it.
+    let verdict = count_colour(&first, [255, 128, 128], 0..400);
+    assert!(
+        verdict > 50,
+        "{verdict} pixels of the verdict's colour in the panel"
+    );
+    // The legend's swatches, each at full colour.
+    for (name, rgb) in [
+        ("seen", [23, 190, 207]),
+        ("region seen", [44, 190, 44]),
+        ("blind", [214, 39, 40]),
+    ] {
+        let n = count_colour(&first, rgb, 0..1280);
+        assert!(n >= 100, "the legend's {name} swatch: {n} pixels");
+    }
+    // Right after a change, the window shows the settled result.
+    let (right_after, settled) = (path("right-after.png"), path("settled.png"));
+    let d = difference(Path::new(&right_after), Path::new(&settled));
+    assert_eq!(
+        d.differing_pixels, 0,
+        "right after the turn and settled differ"
+    );
+    assert_ne!(
+        difference(Path::new(&path("first.png")), Path::new(&settled)).differing_pixels,
+        0,
+        "the turn changes the window"
+    );
 }

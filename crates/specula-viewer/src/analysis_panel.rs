@@ -270,8 +270,9 @@ fn figures_section(ui: &mut egui::Ui, analysis: &mut Analysis) {
         outcome.milliseconds,
     ));
     if !outcome.complete {
-        ui.small("the centre eye point's result; every eye point's follows");
+        ui.small("the eye points' middle alone (a preview); every eye point's follows");
     }
+    ui.label(eye_points_text(&outcome.report));
     let mut select = None;
     let report = &outcome.report;
     if let Some(m) = report.result::<MirrorViewResult>() {
@@ -296,6 +297,75 @@ fn figures_section(ui: &mut egui::Ui, analysis: &mut Analysis) {
         analysis.selected_eye = Some(k);
     }
     lens_map_legend(ui, analysis);
+}
+
+/// What the overlay's colours mean, and the verdict, in the view's bottom-left corner (so
+/// that a window screenshot carries its own key).
+pub fn legend(ctx: &egui::Context, scene: egui::Rect, analysis: &Analysis) {
+    let Some(outcome) = analysis.outcome() else {
+        return;
+    };
+    let report = &outcome.report;
+    let rgb = |c: [u8; 3]| Color32::from_rgb(c[0], c[1], c[2]);
+    let ends = |t: f64| rgb(specula_analyze::figure::scale_colour(t));
+    let keys: Vec<(Color32, &str)> = if report.result::<MirrorViewResult>().is_some() {
+        vec![
+            (rgb(crate::analysis::SEEN), "ground seen in the mirror"),
+            (
+                rgb(crate::analysis::REGION_SEEN),
+                "required region or field: seen",
+            ),
+            (
+                rgb(crate::analysis::BLIND),
+                "required region or field: blind",
+            ),
+        ]
+    } else if report.result::<GlareResult>().is_some() {
+        vec![
+            (ends(0.0), "glare, 1 cd/m² (or at the threshold)"),
+            (ends(1.0), "glare, 10⁹ cd/m² (or a luminance factor of 1)"),
+            (rgb(crate::analysis::WASHED_OUT_RGB), "display washed out"),
+        ]
+    } else if report.result::<specula_analyze::lens::Report>().is_some() {
+        vec![(ends(0.0), "least over the lens"), (ends(1.0), "largest")]
+    } else {
+        Vec::new()
+    };
+    egui::Area::new(egui::Id::unique("analysis legend"))
+        .fixed_pos(scene.left_bottom() + egui::vec2(8.0, -8.0))
+        .pivot(egui::Align2::LEFT_BOTTOM)
+        .interactable(false)
+        .show(ctx, |ui| {
+            egui::Frame::popup(ui.style()).show(ui, |ui| {
+                if let Some(verdict) = report.verdict {
+                    ui.label(
+                        RichText::new(format!("{}: {}", report.analysis, verdict.word())).strong(),
+                    );
+                }
+                for (colour, text) in keys {
+                    ui.horizontal(|ui| {
+                        let (rect, _) =
+                            ui.allocate_exact_size(egui::vec2(14.0, 14.0), egui::Sense::hover());
+                        ui.painter().rect_filled(rect, 0.0, colour);
+                        ui.small(text);
+                    });
+                }
+            });
+        });
+}
+
+/// The eye points a result was judged from, and the option they came from.
+pub fn eye_points_text(report: &specula_analyze::analysis::Report) -> String {
+    let points: Vec<String> = report
+        .eyes
+        .iter()
+        .map(|p| format!("({:.3}, {:.3}, {:.3})", p.x, p.y, p.z))
+        .collect();
+    let shown = match points.len() {
+        0..=4 => points.join(", "),
+        n => format!("{n} points from {} to {}", points[0], points[n - 1]),
+    };
+    format!("eye points ({}): {shown}", report.eyes_from)
 }
 
 /// A two-column grid of named figures: `add` calls `row(name, value)` once for each.
@@ -555,26 +625,28 @@ fn verdict_section(ui: &mut egui::Ui, v: &Verdict) {
         Outcome::Fail => Color32::LIGHT_RED,
         Outcome::Undecided => Color32::from_rgb(240, 200, 90),
     };
-    ui.label(RichText::new(format!("{}: {}", v.title, v.verdict.word())).color(colour(v.verdict)));
-    egui::Grid::new("fields").num_columns(5).show(ui, |ui| {
-        for h in ["field", "seen", "body", "margin", ""] {
-            ui.small(h);
-        }
-        ui.end_row();
-        for f in &v.fields {
-            let g = &f.figures;
-            ui.label(&f.name).on_hover_text(&f.source);
-            ui.label(format!(
-                "{:.2} ± {:.2} %",
+    ui.label(
+        RichText::new(format!("{}: {}", v.title, v.verdict.word()))
+            .strong()
+            .color(colour(v.verdict)),
+    );
+    // One wrapped line a field, so that nothing is cut at any panel width.
+    for f in &v.fields {
+        let g = &f.figures;
+        ui.label(
+            RichText::new(format!(
+                "{}: {:.2} ± {:.2} % seen, body {:.2} %, margin {:.2} m: {}",
+                f.name,
                 g.seen_share * 100.0,
-                (g.seen_share_uncertainty + f.surface_uncertainty.unwrap_or(0.0)) * 100.0
-            ));
-            ui.label(format!("{:.2} %", g.hidden_by_vehicle_share * 100.0));
-            ui.label(format!("{:.2} m", g.outer_margin_m.min(g.near_margin_m)));
-            ui.label(RichText::new(g.verdict.lower()).color(colour(g.verdict)));
-            ui.end_row();
-        }
-    });
+                (g.seen_share_uncertainty + f.surface_uncertainty.unwrap_or(0.0)) * 100.0,
+                g.hidden_by_vehicle_share * 100.0,
+                g.outer_margin_m.min(g.near_margin_m),
+                g.verdict.lower()
+            ))
+            .color(colour(g.verdict)),
+        )
+        .on_hover_text(&f.source);
+    }
     for c in &v.mirror_checks {
         ui.label(
             RichText::new(format!(

@@ -110,8 +110,10 @@ pub struct Report {
     /// `analysis_json`): written from the typed report, so that its numbers read as their own
     /// type writes them (an f32's shortest digits).
     pub json: String,
-    /// The eye points it looked from (empty where it has none).
+    /// The eye points it looked from (a lens: the eye's centre of rotation), and the option
+    /// they came from (`eye` for the camera's eye where none was given).
     pub eyes: Vec<glam::Vec3>,
+    pub eyes_from: &'static str,
     /// The analysis's own result, for its summary, its report folder and the viewer.
     pub result: Box<dyn Any + Send + Sync>,
 }

@@ -289,6 +289,7 @@ impl Analysis for GlareAnalysis {
             verdict: None,
             json,
             eyes: points.clone(),
+            eyes_from: plan.eyes.from,
             result: Box::new(GlareResult {
                 glare,
                 surface: plan.options.surface,

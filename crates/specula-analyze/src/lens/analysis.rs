@@ -234,6 +234,7 @@ impl Analysis for LensAnalysis {
             verdict: report.verdict.as_ref().map(|v| v.verdict),
             json,
             eyes: vec![options.rotation_centre.as_vec3()],
+            eyes_from: "rotation_centre",
             result: Box::new(report),
         })
     }

@@ -351,6 +351,7 @@ impl Analysis for MirrorViewAnalysis {
             },
             json: result.json()?,
             eyes: plan.eyes.points.clone(),
+            eyes_from: plan.eyes.from,
             result: Box::new(result),
         })
     }

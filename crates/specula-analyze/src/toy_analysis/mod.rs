@@ -88,6 +88,7 @@ impl Analysis for Toy {
                 "share_above": share,
                 "verdict": verdict.lower(),
             }))?,
+            eyes_from: eyes.from,
             eyes: eyes.points,
             result: Box::new(share),
         })

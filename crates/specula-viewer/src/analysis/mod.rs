@@ -36,7 +36,9 @@ use specula_params::{OptionSpec, ParamKind};
 use specula_scene::Scene;
 use specula_trace::SceneAccel;
 
-pub use overlay::{project, GroundGrid, LensMap, Overlay};
+pub use overlay::{
+    project, GroundGrid, LensMap, Overlay, BLIND, REGION_SEEN, SEEN, WASHED_OUT_RGB,
+};
 
 /// What is analysed: the analysis and the options given, each as text by its declared name
 /// (the command's flags and a script's keys). A change of any of it starts the analysis again.

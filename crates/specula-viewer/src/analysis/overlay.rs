@@ -224,12 +224,12 @@ fn ground_colour(
         .is_some_and(|r| p.x >= r.x0 && p.x <= r.x1 && p.y >= r.z0 && p.y <= r.z1)
         || fields.iter().any(in_field);
     match (in_region, seen) {
-        (true, 0) => [214, 39, 40, 150],
-        (true, n) if usize::from(n) == eyes => [44, 190, 44, 130],
-        (true, _) => [44, 190, 44, 80],
+        (true, 0) => with_alpha(BLIND, 150),
+        (true, n) if usize::from(n) == eyes => with_alpha(REGION_SEEN, 130),
+        (true, _) => with_alpha(REGION_SEEN, 80),
         (false, 0) => CLEAR,
-        (false, n) if usize::from(n) == eyes => [23, 190, 207, 120],
-        (false, _) => [23, 190, 207, 70],
+        (false, n) if usize::from(n) == eyes => with_alpha(SEEN, 120),
+        (false, _) => with_alpha(SEEN, 70),
     }
 }
 
@@ -298,7 +298,18 @@ fn glare_colour(
 }
 
 /// Display pixels washed out by the glare.
-pub(super) const WASHED_OUT: [u8; 4] = [230, 20, 60, 220];
+pub(super) const WASHED_OUT: [u8; 4] = with_alpha(WASHED_OUT_RGB, 220);
+
+/// The overlay's colours, which the panel's legend shows at full opacity: ground seen in the
+/// mirror, a required region's or a field's seen and blind parts, washed-out display pixels.
+pub const SEEN: [u8; 3] = [23, 190, 207];
+pub const REGION_SEEN: [u8; 3] = [44, 190, 44];
+pub const BLIND: [u8; 3] = [214, 39, 40];
+pub const WASHED_OUT_RGB: [u8; 3] = [230, 20, 60];
+
+const fn with_alpha([r, g, b]: [u8; 3], a: u8) -> [u8; 4] {
+    [r, g, b, a]
+}
 
 /// What the lens overlay maps (the two: the wearer's mean power or cylinder).
 pub type LensMap = specula_analyze::lens::plot::Map;

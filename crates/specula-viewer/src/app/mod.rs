@@ -949,6 +949,11 @@ fn run_egui(
             );
         }
         load_request = crate::panel::show(ctx, &mut state.session, &mut state.ui);
+        if let Some(analysis) = &state.session.analysis {
+            let mut scene = ctx.content_rect();
+            scene.min.x = scene_left;
+            crate::analysis_panel::legend(ctx, scene, analysis);
+        }
     });
     state
         .egui

@@ -192,6 +192,14 @@ fn analysis_step(
                 index + 1,
                 crate::analysis::summary(&analysis, state.session.scene())
             );
+            if let Some(outcome) = analysis.outcome() {
+                // What the panel shows as the eye points the result was judged from.
+                eprintln!(
+                    "step {}: {}",
+                    index + 1,
+                    crate::analysis_panel::eye_points_text(&outcome.report)
+                );
+            }
             state.session.analysis = Some(analysis);
         }
         AnalysisStep::Json(path) => {
