@@ -85,6 +85,58 @@ fn every_analysis_page_holds_its_option_table() {
     );
 }
 
+/// The lines that open and close the viewer's table of an `analysis` step's keys.
+const KEYS_BEGIN: &str = "<!-- The analysis step's keys: made from the declarations by `cargo test -p specula-analyze --test analysis`\n(`SPECULA_REGENERATE=1` writes it again). -->\n";
+const KEYS_END: &str = "<!-- end of the analysis step's keys -->\n";
+
+/// Every key an `analysis` step takes, for each analysis: the option names, kinds and units.
+fn script_keys_table() -> String {
+    let mut table = String::from(
+        "| key | analyses | takes | unit |\n|---|---|---|---|\n| `kind` | all | the analysis's name, or `off` | |\n",
+    );
+    let mut rows: Vec<(String, Vec<&str>, String, &str)> = Vec::new();
+    for info in ANALYSES.iter().filter(|a| !a.test_only) {
+        for spec in info.all_options() {
+            let mut takes = spec.kind.describe();
+            if spec.repeatable {
+                takes.push_str(", an array");
+            }
+            match rows.iter_mut().find(|r| r.0 == spec.name && r.2 == takes) {
+                Some(row) => row.1.push(info.name),
+                None => rows.push((spec.name.to_string(), vec![info.name], takes, spec.unit)),
+            }
+        }
+    }
+    for (key, analyses, takes, unit) in rows {
+        table.push_str(&format!(
+            "| `{key}` | {} | {} | {unit} |\n",
+            analyses.join(", "),
+            takes.replace('|', "\\|")
+        ));
+    }
+    table.push_str("| `map` | lens | `mean-power` or `cylinder`: what the overlay draws | |\n");
+    table
+}
+
+/// docs/viewer.md lists every key an `analysis` step takes, as the declarations make them.
+#[test]
+fn the_viewer_page_lists_every_analysis_step_key() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/viewer.md");
+    let page = std::fs::read_to_string(&path).unwrap();
+    let start = page.find(KEYS_BEGIN).expect("docs/viewer.md: no key table") + KEYS_BEGIN.len();
+    let end = start + page[start..].find(KEYS_END).expect("the table closes");
+    let table = script_keys_table();
+    if page[start..end] != table && std::env::var_os("SPECULA_REGENERATE").is_some() {
+        std::fs::write(&path, format!("{}{table}{}", &page[..start], &page[end..])).unwrap();
+        return;
+    }
+    assert!(
+        page[start..end] == table,
+        "docs/viewer.md's key table is out of date: run SPECULA_REGENERATE=1 cargo test -p \
+         specula-analyze --test analysis"
+    );
+}
+
 /// Runs analysis `name` with `options` on `scene` through the trait.
 fn run(name: &str, scene: &specula_scene::Scene, options: &[(&str, &str)]) -> String {
     let mut analysis = analysis::by_name(name).unwrap();
