@@ -1203,18 +1203,29 @@ fn several_scenes_give_a_csv_row_per_scene_and_check_and_a_report_each() {
     );
 
     // Outputs that cannot be written are refused before anything runs.
-    let out = specula()
-        .args(["analyze", "mirror-view", "door-mirror"])
-        .args(options)
-        .args(["--csv", "/proc/nope/out.csv"])
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        !out.status.success() && stderr.contains("/proc/nope/out.csv"),
-        "{stderr}"
-    );
-    assert!(!stderr.contains("eye points ("), "{stderr}");
+    for output in [
+        ["--csv", "/proc/nope/out.csv"],
+        ["--json", "/proc/nope/out.json"],
+        ["--report", "/proc/nope/report"],
+    ] {
+        let out = specula()
+            .args(["analyze", "mirror-view", "door-mirror"])
+            .args(options)
+            .args(output)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && stderr.contains(output[1]),
+            "{output:?}: {stderr}"
+        );
+        // Nothing was computed: no report's text was printed.
+        assert!(
+            out.stdout.is_empty(),
+            "{output:?}: {}",
+            String::from_utf8_lossy(&out.stdout)
+        );
+    }
 }
 
 /// An eye point that sees nothing of the mirror (here behind it) is a warning naming it, in

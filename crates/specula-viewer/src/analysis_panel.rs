@@ -120,26 +120,23 @@ fn options_section(
     let mut change: Option<(&'static str, String)> = None;
     for (k, group) in groups.iter().enumerate() {
         let title = if group.is_empty() { info.name } else { group };
-        egui::CollapsingHeader::new(title)
-            .id_salt(("analysis options", info.name, *group))
-            .default_open(k == 0)
-            .show(ui, |ui| {
-                egui::Grid::new(("options", info.name, *group))
-                    .num_columns(2)
-                    .show(ui, |ui| {
-                        for spec in info.all_options().filter(|s| s.group == *group) {
-                            let value = analysis.settings.value(spec.name);
-                            let label = match spec.unit {
-                                "" => spec.name.to_string(),
-                                unit => format!("{} ({unit})", spec.name),
-                            };
-                            ui.label(label).on_hover_text(spec.doc);
-                            if let Some(new) = option_control(ui, spec, &value, names, view_eye) {
-                                change = Some((spec.name, new));
-                            }
-                            ui.end_row();
-                        }
-                    });
+        let id = ui.make_persistent_id(("analysis options", info.name, *group));
+        egui::collapsing_header::CollapsingState::load_with_default_open(ui.ctx(), id, k == 0)
+            .show_header(ui, |ui| ui.add(egui::Label::new(title).wrap()))
+            .body(|ui| {
+                // Each option's name above its control, so that both fit any panel width.
+                for spec in info.all_options().filter(|s| s.group == *group) {
+                    let value = analysis.settings.value(spec.name);
+                    let label = match spec.unit {
+                        "" => spec.name.to_string(),
+                        unit => format!("{} ({unit})", spec.name),
+                    };
+                    ui.add(egui::Label::new(label).wrap())
+                        .on_hover_text(spec.doc);
+                    if let Some(new) = option_control(ui, spec, &value, names, view_eye) {
+                        change = Some((spec.name, new));
+                    }
+                }
             });
     }
     let is_lens = analysis
@@ -716,6 +713,77 @@ mod tests {
                     "{name}: no control labelled {label:?} in {shown:?}"
                 );
             }
+        }
+    }
+
+    /// At the narrowest panel the window allows, the verdict, its fields and checks and every
+    /// option's control lie within the panel's width: wrapped, none cut off at its right edge.
+    #[test]
+    fn the_verdict_and_the_options_fit_the_narrowest_panel() {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../scenes/car-door-mirror.toml"
+        );
+        let live = specula_methods::LiveScene::new(specula_scene::load(path).unwrap());
+        let mut settings = Settings::new("mirror-view").unwrap();
+        for (name, value) in [
+            ("mirror", "door mirror"),
+            ("regulation", "r46-iii"),
+            ("forward", "0,0,-1"),
+            ("r_point", "-0.37,0.55,0"),
+            ("outermost", "-0.95,0.6,1.5"),
+            ("vehicle", "car body;A-pillar"),
+            ("tolerance", "0.02"),
+        ] {
+            settings.set(name, value).unwrap();
+        }
+        let mut analysis = Analysis::new(settings);
+        analysis.finish(&live);
+        let width = crate::panel::MIN_PANEL_WIDTH;
+        let ctx = egui::Context::default();
+        let input = egui::RawInput {
+            screen_rect: Some(egui::Rect::from_min_size(
+                egui::Pos2::ZERO,
+                egui::vec2(1280.0, 800.0),
+            )),
+            ..Default::default()
+        };
+        let mut output = ctx.run_ui(input, |root| {
+            egui::Panel::left("narrow")
+                .resizable(false)
+                .exact_size(width)
+                .show(root, |ui| {
+                    egui::ScrollArea::vertical().show(ui, |ui| {
+                        figures_section(ui, &mut analysis);
+                        let _ = options_section(ui, &mut analysis, &[], glam::Vec3::ZERO);
+                    });
+                });
+        });
+        output.textures_delta.clear();
+        let mut texts = Vec::new();
+        fn collect(shape: &egui::Shape, out: &mut Vec<(String, egui::Rect)>) {
+            match shape {
+                egui::Shape::Text(t) => out.push((
+                    t.galley.text().to_string(),
+                    t.galley.rect.translate(t.pos.to_vec2()),
+                )),
+                egui::Shape::Vec(shapes) => shapes.iter().for_each(|s| collect(s, out)),
+                _ => {}
+            }
+        }
+        for clipped in &output.shapes {
+            collect(&clipped.shape, &mut texts);
+        }
+        assert!(
+            texts.iter().any(|(t, _)| t.contains("FAIL")),
+            "the verdict is laid out: {texts:?}"
+        );
+        for (text, rect) in &texts {
+            assert!(
+                rect.max.x <= width + 1.0,
+                "{text:?} reaches x = {} past the panel's {width}",
+                rect.max.x
+            );
         }
     }
 }

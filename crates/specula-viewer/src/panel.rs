@@ -85,7 +85,7 @@ pub fn show(ctx: &egui::Context, session: &mut Session, ui_state: &mut UiState) 
 /// The panel's widest share of the window, so that the scene keeps two thirds of it.
 const MAX_PANEL_SHARE: f32 = 1.0 / 3.0;
 const DEFAULT_PANEL_WIDTH: f32 = 280.0;
-const MIN_PANEL_WIDTH: f32 = 160.0;
+pub(crate) const MIN_PANEL_WIDTH: f32 = 160.0;
 
 /// The panel's sections; only the technique, view and analysis are open at first.
 fn sections(ui: &mut egui::Ui, session: &mut Session, ui_state: &mut UiState) -> Option<String> {

@@ -288,6 +288,16 @@ pub fn run(kind: Kind) -> Result<()> {
         );
     }
     // Outputs that cannot be written are refused before anything is computed.
+    if let Some(path) = &kind.json {
+        let folder = path.parent().filter(|p| !p.as_os_str().is_empty());
+        if folder.is_some_and(|f| !f.is_dir()) {
+            anyhow::bail!(
+                "writing {}: its folder {} does not exist",
+                path.display(),
+                folder.expect("checked").display()
+            );
+        }
+    }
     if let Some(dir) = &kind.report {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
