@@ -260,7 +260,7 @@ fn figures_section(ui: &mut egui::Ui, analysis: &mut Analysis) {
         ""
     };
     ui.small(format!(
-        "centre eye point {:.0} ms; {} eye point{} {:.0} ms{progress}",
+        "preview from the eye points' middle {:.0} ms; {} eye point{} {:.0} ms{progress}",
         outcome.centre_milliseconds,
         outcome.eyes().len(),
         if outcome.eyes().len() == 1 { "" } else { "s" },
