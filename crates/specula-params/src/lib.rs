@@ -316,10 +316,21 @@ pub fn default_of<T: ParamType>(spec: &ParamSpec) -> T {
 /// (named after the fields), `Default` from the specs' defaults, and [`ParamSet`].
 #[macro_export]
 macro_rules! params {
+    ($($declaration:tt)*) => {
+        $crate::declared_set!(ParamSpec, default_of, $($declaration)*);
+    };
+}
+
+/// What [`params!`](crate::params) and [`options!`](crate::options) both generate, from the
+/// spec type their declarations name themselves as and the function that parses a default.
+#[doc(hidden)]
+#[macro_export]
+macro_rules! declared_set {
     (
+        $spec:ident, $default_of:ident,
         $(#[$meta:meta])*
         $vis:vis struct $name:ident {
-            $($field:ident : $ty:ty = $param:expr),* $(,)?
+            $($field:ident : $ty:ty = $declared:expr),* $(,)?
         }
     ) => {
         $(#[$meta])*
@@ -329,15 +340,15 @@ macro_rules! params {
         }
 
         impl $name {
-            /// Every parameter's spec, in declaration order.
-            pub const SPECS: &'static [$crate::ParamSpec] =
-                &[$($param.named(stringify!($field))),*];
+            /// Every spec, in declaration order.
+            pub const SPECS: &'static [$crate::$spec] =
+                &[$($declared.named(stringify!($field))),*];
         }
 
         impl Default for $name {
             fn default() -> Self {
                 $name {
-                    $($field: $crate::default_of(&$param.named(stringify!($field))),)*
+                    $($field: $crate::$default_of(&$declared.named(stringify!($field))),)*
                 }
             }
         }

@@ -84,7 +84,7 @@ impl Opt {
     pub const fn object(doc: &'static str) -> Opt {
         Opt::new(
             ParamKind::Text {
-                expected: "a name of the scene's objects",
+                expected: OBJECT_NAME,
             },
             "",
             "",
@@ -150,7 +150,15 @@ impl Opt {
     }
 }
 
+/// What an option naming one of the scene's objects takes ([`Opt::object`]).
+const OBJECT_NAME: &str = "a name of the scene's objects";
+
 impl OptionSpec {
+    /// Whether it names one of the scene's objects (front ends offer the scene's names).
+    pub fn names_an_object(&self) -> bool {
+        matches!(self.kind, ParamKind::Text { expected } if expected == OBJECT_NAME)
+    }
+
     /// The command-line flag: `--` and the name, `-` for `_`.
     pub fn flag(&self) -> String {
         format!("--{}", self.name.replace('_', "-"))
@@ -326,51 +334,7 @@ pub fn option_default<T: ParamType>(spec: &OptionSpec) -> T {
 /// fields), `Default` from the specs' defaults, and [`ParamSet`].
 #[macro_export]
 macro_rules! options {
-    (
-        $(#[$meta:meta])*
-        $vis:vis struct $name:ident {
-            $($field:ident : $ty:ty = $opt:expr),* $(,)?
-        }
-    ) => {
-        $(#[$meta])*
-        #[derive(Clone, Debug, PartialEq)]
-        $vis struct $name {
-            $(pub $field: $ty,)*
-        }
-
-        impl $name {
-            /// Every option's spec, in declaration order.
-            pub const SPECS: &'static [$crate::OptionSpec] =
-                &[$($opt.named(stringify!($field))),*];
-        }
-
-        impl Default for $name {
-            fn default() -> Self {
-                $name {
-                    $($field: $crate::option_default(&$opt.named(stringify!($field))),)*
-                }
-            }
-        }
-
-        impl $crate::ParamSet for $name {
-            fn get(&self, name: &str) -> Option<String> {
-                match name {
-                    $(stringify!($field) => Some($crate::ParamType::to_param(&self.$field)),)*
-                    _ => None,
-                }
-            }
-            fn set(
-                &mut self,
-                name: &str,
-                value: &$crate::ParamValue,
-            ) -> Option<Result<(), String>> {
-                match name {
-                    $(stringify!($field) => Some(
-                        <$ty as $crate::ParamType>::from_param(value).map(|v| self.$field = v),
-                    ),)*
-                    _ => None,
-                }
-            }
-        }
+    ($($declaration:tt)*) => {
+        $crate::declared_set!(OptionSpec, option_default, $($declaration)*);
     };
 }

@@ -12,7 +12,7 @@ use specula_scene::Scene;
 use specula_analyze::glare::analysis::GlareResult;
 use specula_analyze::mirror_view::analysis::MirrorViewResult;
 
-use crate::analysis::{is_object, Analysis, Settings};
+use crate::analysis::{Analysis, Settings};
 use crate::app::UiState;
 use crate::session::Session;
 
@@ -167,7 +167,7 @@ fn option_control(
     names: &[String],
     view_eye: glam::Vec3,
 ) -> Option<String> {
-    if is_object(spec) {
+    if spec.names_an_object() {
         return object_control(ui, spec, value, names);
     }
     let optional_choice = matches!(spec.kind, ParamKind::Choice(_)) && spec.default.is_empty();
@@ -259,13 +259,7 @@ fn figures_section(ui: &mut egui::Ui, analysis: &mut Analysis) {
     } else {
         ""
     };
-    ui.small(format!(
-        "preview from the eye points' middle {:.0} ms; {} eye point{} {:.0} ms{progress}",
-        outcome.centre_milliseconds,
-        outcome.eyes().len(),
-        if outcome.eyes().len() == 1 { "" } else { "s" },
-        outcome.milliseconds,
-    ));
+    ui.small(format!("{}{progress}", outcome.timing()));
     if !outcome.complete {
         ui.small("the eye points' middle alone (a preview); every eye point's follows");
     }

@@ -92,6 +92,12 @@ impl RunContext<'_> {
         self.check()
     }
 
+    /// `total` steps of `stage` as the analyses' functions count them: called with how many
+    /// are done.
+    pub fn counter(&self, stage: &'static str, total: usize) -> impl Fn(usize) + Sync + '_ {
+        move |done| (self.progress)(Progress { stage, done, total })
+    }
+
     pub fn check(&self) -> Result<(), AnalyzeError> {
         if self.cancel.load(Ordering::Relaxed) {
             Err(AnalyzeError::Cancelled)

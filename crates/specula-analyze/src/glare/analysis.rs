@@ -11,7 +11,7 @@ use super::sweep::{self, Day, SweepSpec};
 use super::{Display, Glare, Options, Source, Sun};
 use crate::analysis::eye_points::DefaultEyes;
 use crate::analysis::{
-    json_of, Analysis, AnalysisInfo, EyePoints, Progress, Report, ResolvedEyes, RunContext,
+    json_of, Analysis, AnalysisInfo, EyePoints, Report, ResolvedEyes, RunContext,
 };
 use crate::AnalyzeError;
 
@@ -261,14 +261,7 @@ impl Analysis for GlareAnalysis {
     ) -> Result<Report, AnalyzeError> {
         let plan = self.plan(scene, eyes)?;
         let (points, frame) = (&plan.eyes.points, &plan.eyes.frame);
-        let total = points.len();
-        let progress = |done: usize| {
-            (context.progress)(Progress {
-                stage: "eye points",
-                done,
-                total,
-            })
-        };
+        let progress = context.counter("eye points", points.len());
         let glare = match &plan.sweep {
             Some((spec, day)) => sweep::sweep(
                 scene,

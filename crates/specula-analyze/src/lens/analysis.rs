@@ -10,7 +10,7 @@ use specula_scene::Scene;
 use specula_trace::SceneAccel;
 
 use super::{Eye, Gaze, Options, Rx, Wear};
-use crate::analysis::{json_of, Analysis, AnalysisInfo, EyePoints, Progress, Report, RunContext};
+use crate::analysis::{json_of, Analysis, AnalysisInfo, EyePoints, Report, RunContext};
 use crate::mirror_surface::SurfaceModel;
 use crate::AnalyzeError;
 
@@ -219,14 +219,8 @@ impl Analysis for LensAnalysis {
         context: &RunContext,
     ) -> Result<Report, AnalyzeError> {
         let options = self.plan(scene)?;
-        let total = options.gaze.vertical().len();
-        let report = super::analyze(scene, &options, &|done| {
-            (context.progress)(Progress {
-                stage: "gaze rows",
-                done,
-                total,
-            })
-        })?;
+        let rows = context.counter("gaze rows", options.gaze.vertical().len());
+        let report = super::analyze(scene, &options, &rows)?;
         context.check()?;
         let json = json_of(&report)?;
         Ok(Report {

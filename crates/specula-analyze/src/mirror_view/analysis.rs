@@ -298,14 +298,7 @@ impl Analysis for MirrorViewAnalysis {
         context: &RunContext,
     ) -> Result<Report, AnalyzeError> {
         let plan = self.plan(scene, eyes)?;
-        let total = plan.eyes.points.len();
-        let progress = |done: usize| {
-            (context.progress)(crate::analysis::Progress {
-                stage: "eye points",
-                done,
-                total,
-            })
-        };
+        let progress = context.counter("eye points", plan.eyes.points.len());
         let result = match &plan.regulation {
             None => MirrorViewResult {
                 mirror: plan.view.mirror,

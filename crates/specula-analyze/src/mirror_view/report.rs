@@ -122,12 +122,18 @@ pub fn write_mirror_view(dir: &Path, page: &MirrorViewPage) -> Result<PathBuf, A
         .region
         .map(|g| format!("x {} … {} m, z {} … {} m", g.x0, g.x1, g.z0, g.z1))
         .unwrap_or_else(|| "none".into());
+    // What the terminal warns of, the page says first too.
+    let warnings: String = r
+        .warnings
+        .iter()
+        .map(|w| format!("<p><strong>Warning:</strong> {}</p>\n", html_escape(w)))
+        .collect();
     let html = format!(
         r#"<!DOCTYPE html>
 <html><head><meta charset="utf-8"><title>specula analyze mirror-view: {scene}</title>
 <style>{style}{verdict_style}</style></head><body>
 <h1>What '{mirror}' shows: {scene}</h1>
-{verdict}<h2>What the mirror shows</h2>
+{warnings}{verdict}<h2>What the mirror shows</h2>
 <p>Exact rays from each eye point to points of the mirror, reflected about its shading normals and
 followed through the scene (docs/analyses/mirror-view.md). Vehicle frame: forward ({fx:.3}, {fy:.3}, {fz:.3}),
 up +Y. Ground: y = {ground} m, counted within {range} m of an eye point where no object hides it.

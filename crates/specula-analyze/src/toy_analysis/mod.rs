@@ -10,7 +10,7 @@ use specula_scene::Scene;
 use specula_trace::SceneAccel;
 
 use crate::analysis::eye_points::DefaultEyes;
-use crate::analysis::{Analysis, AnalysisInfo, EyePoints, Progress, Report, RunContext};
+use crate::analysis::{Analysis, AnalysisInfo, EyePoints, Report, RunContext};
 use crate::outcome::Outcome;
 use crate::AnalyzeError;
 
@@ -76,11 +76,6 @@ impl Analysis for Toy {
         } else {
             Outcome::Fail
         };
-        (context.progress)(Progress {
-            stage: "done",
-            done: total,
-            total,
-        });
         Ok(Report {
             analysis: INFO.name,
             verdict: Some(verdict),

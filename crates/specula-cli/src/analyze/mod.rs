@@ -68,7 +68,7 @@ fn flag(spec: &'static OptionSpec) -> Arg {
     }
     let names = match spec.kind {
         ParamKind::Numbers { names } => names,
-        ParamKind::Text { expected } if expected.contains("scene's objects") => "NAME",
+        _ if spec.names_an_object() => "NAME",
         ParamKind::Text { expected } if expected.len() < 30 => expected,
         _ => "VALUE",
     };

@@ -32,7 +32,6 @@ use specula_analyze::glare::analysis::GlareResult;
 use specula_analyze::mirror_view::analysis::MirrorViewResult;
 use specula_analyze::AnalyzeError;
 use specula_methods::LiveScene;
-use specula_params::{OptionSpec, ParamKind};
 use specula_scene::Scene;
 use specula_trace::SceneAccel;
 
@@ -47,11 +46,6 @@ pub struct Settings {
     pub info: &'static AnalysisInfo,
     /// The options given, in the order given; the rest take their declared defaults.
     pub given: Vec<(&'static str, String)>,
-}
-
-/// Whether `spec` names one of the scene's objects.
-pub fn is_object(spec: &OptionSpec) -> bool {
-    matches!(spec.kind, ParamKind::Text { expected } if expected == "a name of the scene's objects")
 }
 
 /// The option an error is about, by its declared name.
@@ -151,7 +145,7 @@ impl Settings {
             let spec = settings
                 .info
                 .all_options()
-                .find(|s| is_object(s) && Some(s.name) == option_of(&error))?;
+                .find(|s| s.names_an_object() && Some(s.name) == option_of(&error))?;
             let accepted = scene.meshes.iter().find(|m| {
                 let mut trial = settings.clone();
                 trial.set(spec.name, &m.name).is_ok()
@@ -177,8 +171,8 @@ pub struct Outcome {
     pub complete: bool,
     /// How long the job took to get here, from its start (scene copy and BVH included).
     pub milliseconds: f64,
-    /// How long the preview took (the whole's where there was none).
-    pub centre_milliseconds: f64,
+    /// How long the preview from the eye points' middle took, where there was one.
+    pub preview_milliseconds: Option<f64>,
 }
 
 impl Outcome {
@@ -187,7 +181,21 @@ impl Outcome {
         &self.report.eyes
     }
 
-    fn new(report: Report, complete: bool, milliseconds: f64, centre: f64) -> Outcome {
+    /// How long it took, in words: the preview's time where there was one.
+    pub fn timing(&self) -> String {
+        let eyes = self.eyes().len();
+        let whole = format!(
+            "{eyes} eye point{} in {:.0} ms",
+            if eyes == 1 { "" } else { "s" },
+            self.milliseconds
+        );
+        match self.preview_milliseconds {
+            Some(preview) => format!("the eye points' middle in {preview:.0} ms, {whole}"),
+            None => whole,
+        }
+    }
+
+    fn new(report: Report, complete: bool, milliseconds: f64, preview: Option<f64>) -> Outcome {
         let mirror = report.result::<MirrorViewResult>();
         let ground = mirror.map(|m| overlay::ground_grid(&m.view));
         let fields = mirror
@@ -209,7 +217,7 @@ impl Outcome {
             fields,
             complete,
             milliseconds,
-            centre_milliseconds: centre,
+            preview_milliseconds: preview,
         }
     }
 }
@@ -456,23 +464,17 @@ fn run(
         cancel,
     };
     let ms = || started.elapsed().as_secs_f64() * 1e3;
-    let mut centre_milliseconds = None;
+    let mut preview_milliseconds = None;
     if let Some(preview) = preview_eyes(scene, &*analysis, &eyes) {
         let report = analysis.run(scene, &accel, &preview, &context)?;
         if report.verdict.is_none() {
             let at = ms();
-            centre_milliseconds = Some(at);
-            deliver(Outcome::new(report, false, at, at));
+            preview_milliseconds = Some(at);
+            deliver(Outcome::new(report, false, at, Some(at)));
         }
     }
     let report = analysis.run(scene, &accel, &eyes, &context)?;
-    let at = ms();
-    deliver(Outcome::new(
-        report,
-        true,
-        at,
-        centre_milliseconds.unwrap_or(at),
-    ));
+    deliver(Outcome::new(report, true, ms(), preview_milliseconds));
     Ok(())
 }
 
@@ -503,14 +505,7 @@ pub fn summary(analysis: &Analysis, scene: &Scene) -> String {
             None => "analysis running".into(),
         };
     };
-    let eyes = outcome.eyes().len();
-    let timing = format!(
-        "centre eye point in {:.0} ms, {} eye point{} in {:.0} ms",
-        outcome.centre_milliseconds,
-        eyes,
-        if eyes == 1 { "" } else { "s" },
-        outcome.milliseconds
-    );
+    let timing = outcome.timing();
     let report = &outcome.report;
     let figures = if let Some(m) = report.result::<MirrorViewResult>() {
         mirror_line(m, scene)
