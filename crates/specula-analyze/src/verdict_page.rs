@@ -64,7 +64,7 @@ fn percent(share: f64) -> String {
 
 /// A field's share judged (seen, with the body's share where it is under the allowance), its
 /// margin and the uncertainty that entered its verdict.
-fn field_figures(f: &FieldVerdict, allowance: f64) -> (f64, f64, f64) {
+pub(crate) fn field_figures(f: &FieldVerdict, allowance: f64) -> (f64, f64, f64) {
     let g = &f.figures;
     g.judged(
         g.hidden_by_vehicle_share < allowance,

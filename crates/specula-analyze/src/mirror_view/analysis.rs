@@ -374,16 +374,20 @@ impl Analysis for MirrorViewAnalysis {
             }
             return rows;
         };
-        let fields = j.verdict.fields.iter().map(|f| CheckRow {
-            check: f.name.clone(),
-            verdict: Some(f.figures.verdict),
-            value: Some(f.figures.seen_share * 100.0),
-            limit: Some(100.0),
-            margin: Some(f.figures.outer_margin_m.min(f.figures.near_margin_m)),
-            uncertainty: Some(
-                (f.figures.seen_share_uncertainty + f.surface_uncertainty.unwrap_or(0.0)) * 100.0,
-            ),
-            unit: "% seen",
+        // The share the verdict judged, as the report's table gives it (seen, with the body's
+        // share where the allowance excuses it), its margin to the whole field and uncertainty.
+        let fields = j.verdict.fields.iter().map(|f| {
+            let (share, margin, uncertainty) =
+                crate::verdict_page::field_figures(f, j.verdict.allowance_share);
+            CheckRow {
+                check: f.name.clone(),
+                verdict: Some(f.figures.verdict),
+                value: Some(share * 100.0),
+                limit: Some(100.0),
+                margin: Some(margin * 100.0),
+                uncertainty: Some(uncertainty * 100.0),
+                unit: "%",
+            }
         });
         let mirror = j.verdict.mirror_checks.iter().map(|c| CheckRow {
             check: c.name.clone(),
