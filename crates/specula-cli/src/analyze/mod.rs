@@ -242,21 +242,14 @@ fn in_flags(e: AnalyzeError) -> anyhow::Error {
         AnalyzeError::Option(e) => {
             anyhow::anyhow!("{} {}: {}", as_flag(&e.name), e.value, e.reason)
         }
-        AnalyzeError::UnknownObject { role, name, valid } => anyhow::anyhow!(
-            "unknown {} '{name}'; the scene's objects are: {valid}",
-            as_flag(role)
-        ),
-        AnalyzeError::AmbiguousObject { role, name, count } => anyhow::anyhow!(
-            "{} '{name}' names {count} objects of the scene; an analysis takes one (rename them \
-             in the scene file)",
-            as_flag(role)
-        ),
-        AnalyzeError::WrongMaterial {
-            role,
-            name,
-            kind,
-            expected,
-        } => anyhow::anyhow!("{} '{name}' is {kind}, not {expected}", as_flag(role)),
+        // The library's words, with the object's role as its flag.
+        AnalyzeError::UnknownObject { role, ref name, .. }
+        | AnalyzeError::AmbiguousObject { role, ref name, .. }
+        | AnalyzeError::WrongMaterial { role, ref name, .. } => {
+            let named = format!("{role} '{name}'");
+            let flagged = format!("{} '{name}'", as_flag(role));
+            anyhow::anyhow!(e.to_string().replacen(&named, &flagged, 1))
+        }
         other => other.into(),
     }
 }
@@ -309,15 +302,25 @@ pub fn run(kind: Kind) -> Result<()> {
         })
         .transpose()?;
     let mut runs = Vec::new();
+    let mut only_error = None;
     for scene in &scenes {
         if several {
             println!("== {scene} ==");
         }
         let result = analyse(&kind, scene, several);
-        if let Err(e) = &result {
-            eprintln!("error: {scene}: {e:#}");
-        }
-        runs.push((scene.clone(), result.ok()));
+        let result = match result {
+            Ok(run) => Some(run),
+            // One scene: its error is the command's, as it stands.
+            Err(e) if !several => {
+                only_error = Some(e);
+                None
+            }
+            Err(e) => {
+                eprintln!("error: {scene}: {e:#}");
+                None
+            }
+        };
+        runs.push((scene.clone(), result));
     }
     if several {
         print_table(&runs);
@@ -326,6 +329,9 @@ pub fn run(kind: Kind) -> Result<()> {
         write_csv(file, kind.info.name, &runs)
             .with_context(|| format!("writing {}", path.display()))?;
         println!("csv: {}", path.display());
+    }
+    if let Some(e) = only_error {
+        return Err(e);
     }
     let failed = runs.iter().filter(|(_, r)| r.is_none()).count();
     if failed > 0 {
