@@ -20,6 +20,7 @@ pub mod mesh;
 pub mod scene;
 pub mod spectacle;
 pub mod texture;
+pub mod units;
 
 pub use camera::{Camera, PixelRays};
 pub use error::SceneError;
