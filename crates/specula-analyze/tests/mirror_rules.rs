@@ -56,6 +56,7 @@ fn grid_mesh(
     }
     Mesh {
         exact: None,
+        cad: None,
         name: "mirror".into(),
         positions,
         normals,

@@ -68,6 +68,7 @@ impl Rectangle {
         let c = self.corners();
         Mesh {
             exact: None,
+            cad: None,
             name: "mirror".into(),
             positions: c.to_vec(),
             normals: vec![self.normal; 4],

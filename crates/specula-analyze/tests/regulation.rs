@@ -22,6 +22,7 @@ fn flat_mirror(x: [f32; 2], y: [f32; 2]) -> Scene {
     scene.materials.push(Material::mirror("mirror", Vec3::ONE));
     scene.meshes.push(Mesh {
         exact: None,
+        cad: None,
         name: "mirror".into(),
         positions: vec![
             Vec3::new(x[0], y[0], 0.0),

@@ -90,7 +90,7 @@ enum Command {
 
 #[derive(clap::Args)]
 struct RenderArgs {
-    /// Built-in scene name, a .toml scene file, or a mesh/scene file (.gltf .glb .obj .ply .stl).
+    /// Built-in scene name, a .toml scene file, or a mesh/scene/CAD file (.gltf .glb .obj .ply .stl .step .stp).
     #[arg(default_value = DEFAULT_SCENE)]
     scene: String,
     /// Method to render with, or METHOD:PRESET (`specula methods` lists them).

@@ -43,6 +43,7 @@ fn a_point_seen_twice_through_one_triangle_is_splatted_where_its_rays_show_it() 
     let normals: [Vec3; 3] = std::array::from_fn(|i| (d[i] - (v[i] - eye).normalize()).normalize());
     let mirror = Mesh {
         exact: None,
+        cad: None,
         name: "mirror".into(),
         positions: v.to_vec(),
         normals: normals.to_vec(),
@@ -77,6 +78,7 @@ fn a_point_seen_twice_through_one_triangle_is_splatted_where_its_rays_show_it() 
     let centre = q.as_vec3();
     let patch = Mesh {
         exact: None,
+        cad: None,
         name: "patch".into(),
         positions: vec![
             centre + Vec3::new(-size, -size, 0.0),

@@ -12,7 +12,7 @@ pub enum SceneError {
     },
     #[error("{path}: {message}")]
     Invalid { path: String, message: String },
-    #[error("'{name}' is neither a built-in scene ({available}) nor a file with a known extension (.toml, .gltf, .glb, .obj, .ply, .stl)")]
+    #[error("'{name}' is neither a built-in scene ({available}) nor a file with a known extension (.toml, .gltf, .glb, .obj, .ply, .stl, .step, .stp)")]
     UnknownScene { name: String, available: String },
 }
 

@@ -7,6 +7,7 @@
 //! counter-clockwise around their outward normal.
 
 pub mod builtin;
+pub mod cad;
 pub mod camera;
 pub mod error;
 pub mod exact;

@@ -80,6 +80,10 @@ pub struct Mesh {
     /// (a bicubic patch, a sphere, a spherical cap): what analyses sample instead of the
     /// triangles. Moves with the mesh; gone once its triangles are changed otherwise.
     pub exact: Option<crate::exact::ExactSurface>,
+    /// The CAD faces these triangles tessellate, where a STEP file gave them: each triangle's
+    /// face and each vertex's (u, v) on it. Moves with the mesh and follows a subset; gone once
+    /// its triangles are changed otherwise.
+    pub cad: Option<crate::cad::CadFaces>,
 }
 
 impl Mesh {
@@ -117,6 +121,7 @@ impl Mesh {
     pub fn make_flat(&mut self) {
         // Faceted on purpose: the triangles are the surface now.
         self.exact = None;
+        self.cad = None;
         let mut positions = Vec::with_capacity(self.triangles.len() * 3);
         let mut normals = Vec::with_capacity(self.triangles.len() * 3);
         let mut uvs = Vec::new();
@@ -145,6 +150,8 @@ impl Mesh {
     /// Appends `other`'s vertices and triangles (renumbered), keeping this mesh's name and
     /// material. UVs stay one per position: the side without them gets (0, 0).
     pub fn append(&mut self, other: &Mesh) {
+        // A joined mesh's triangles no longer index one body's faces.
+        self.cad = None;
         let base = self.positions.len() as u32;
         let with_uvs = !self.uvs.is_empty() || !other.uvs.is_empty();
         if with_uvs {
@@ -168,6 +175,9 @@ impl Mesh {
     pub fn transform(&mut self, world_from_object: Mat4) {
         if let Some(exact) = &mut self.exact {
             exact.transform(world_from_object);
+        }
+        if let Some(cad) = &mut self.cad {
+            cad.world_from_object = world_from_object.as_dmat4() * cad.world_from_object;
         }
         let normal_matrix = Mat3::from_mat4(world_from_object).inverse().transpose();
         for p in &mut self.positions {
@@ -209,6 +219,10 @@ impl Mesh {
         if let Some(i) = self.uvs.iter().position(|uv| !uv.is_finite()) {
             return Err(what(format!("texture coordinate {i} is not finite")));
         }
+        if let Some(cad) = &self.cad {
+            cad.validate(self.triangles.len(), self.positions.len())
+                .map_err(what)?;
+        }
         Ok(())
     }
 
@@ -238,19 +252,30 @@ impl Mesh {
     pub fn drop_degenerate_triangles(&mut self) -> usize {
         let before = self.triangles.len();
         let positions = &self.positions;
-        self.triangles.retain(|&[a, b, c]| {
-            if a == b || b == c || a == c {
-                return false;
-            }
-            let (pa, pb, pc) = (
-                positions[a as usize],
-                positions[b as usize],
-                positions[c as usize],
-            );
-            let scale = (pb - pa).length_squared().max((pc - pa).length_squared());
-            let area2 = (pb - pa).cross(pc - pa).length_squared();
-            area2 > scale * scale * 1e-12
-        });
+        let keep: Vec<bool> = self
+            .triangles
+            .iter()
+            .map(|&[a, b, c]| {
+                if a == b || b == c || a == c {
+                    return false;
+                }
+                let (pa, pb, pc) = (
+                    positions[a as usize],
+                    positions[b as usize],
+                    positions[c as usize],
+                );
+                let scale = (pb - pa).length_squared().max((pc - pa).length_squared());
+                let area2 = (pb - pa).cross(pc - pa).length_squared();
+                area2 > scale * scale * 1e-12
+            })
+            .collect();
+        let mut kept = keep.iter();
+        self.triangles.retain(|_| *kept.next().unwrap_or(&false));
+        if let Some(cad) = &mut self.cad {
+            let mut kept = keep.iter();
+            cad.face_of_triangle
+                .retain(|_| *kept.next().unwrap_or(&false));
+        }
         before - self.triangles.len()
     }
 }
@@ -382,6 +407,20 @@ impl Mesh {
             });
             mesh.triangles.push(tri);
         }
+        mesh.cad = self.cad.as_ref().map(|cad| {
+            let mut uv = vec![glam::DVec2::ZERO; mesh.positions.len()];
+            for (old, &new) in remap.iter().enumerate() {
+                if new != u32::MAX {
+                    uv[new as usize] = cad.uv[old];
+                }
+            }
+            crate::cad::CadFaces {
+                faces: cad.faces.clone(),
+                world_from_object: cad.world_from_object,
+                face_of_triangle: triangles.iter().map(|&t| cad.face_of_triangle[t]).collect(),
+                uv,
+            }
+        });
         mesh
     }
 }

@@ -85,6 +85,7 @@ pub fn prism() -> Mesh {
     }
     let mut mesh = Mesh {
         exact: None,
+        cad: None,
         name: "prism".into(),
         positions,
         normals: Vec::new(),

@@ -284,6 +284,7 @@ impl Loader<'_> {
             let material = self.material(primitive.material())?;
             let mut m = Mesh {
                 exact: None,
+                cad: None,
                 name: mesh
                     .name()
                     .map(str::to_string)

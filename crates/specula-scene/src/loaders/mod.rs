@@ -5,6 +5,7 @@ pub mod gltf_check;
 pub mod gltf_file;
 pub mod obj;
 pub mod ply;
+pub mod step;
 pub mod stl;
 pub mod toml_scene;
 
@@ -29,7 +30,7 @@ pub fn load_file(path: &Path) -> Result<Scene, SceneError> {
     let extension = lowercase_extension(path);
     if !matches!(
         extension.as_str(),
-        "toml" | "gltf" | "glb" | "obj" | "ply" | "stl"
+        "toml" | "gltf" | "glb" | "obj" | "ply" | "stl" | "step" | "stp"
     ) {
         return Err(SceneError::UnknownScene {
             name: shown,
@@ -45,6 +46,7 @@ pub fn load_file(path: &Path) -> Result<Scene, SceneError> {
     match extension.as_str() {
         "toml" => toml_scene::load(path),
         "gltf" | "glb" => gltf_file::load(path),
+        "step" | "stp" => step::load(path),
         _ => {
             let (meshes, materials, textures, mut warnings) = load_mesh_file(path)?;
             let mut scene = scene_from_meshes(&shown, meshes, materials, textures);
@@ -113,7 +115,7 @@ pub fn default_material() -> Material {
 
 /// Wraps bare meshes in a scene: default framing and, since mesh files carry no lights, a
 /// directional key light from over the viewer's shoulder plus a little ambient. Both are said.
-fn scene_from_meshes(
+pub(crate) fn scene_from_meshes(
     shown: &str,
     meshes: Vec<Mesh>,
     materials: Vec<Material>,

@@ -152,6 +152,7 @@ fn mesh_from_model(model: tobj::Model, material: Option<usize>) -> Mesh {
         .collect();
     let mut mesh = Mesh {
         exact: None,
+        cad: None,
         name: model.name,
         positions,
         normals,

@@ -197,6 +197,7 @@ pub fn parse(shown: &str, bytes: &[u8], warnings: &mut Vec<String>) -> Result<Me
     let triangles = fan_triangles(shown, &ply, positions.len())?;
     let mut mesh = Mesh {
         exact: None,
+        cad: None,
         name: shown.to_string(),
         normals: super::per_vertex(normals, positions.len()),
         uvs: super::per_vertex(uvs, positions.len()),

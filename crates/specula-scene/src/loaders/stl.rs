@@ -49,6 +49,7 @@ pub fn parse(shown: &str, bytes: &[u8]) -> Result<Mesh, SceneError> {
         .collect();
     let mut mesh = Mesh {
         exact: None,
+        cad: None,
         name: shown.to_string(),
         positions,
         normals: vec![],

@@ -1,0 +1,214 @@
+//! STEP files (ISO 10303-21 exchange structures of AP203, AP214 and AP242): a designer's
+//! B-rep bodies, tessellated for rendering, with each triangle's face and each vertex's (u, v)
+//! on it kept ([`crate::cad`]).
+//!
+//! Steps: parse the exchange structure (truck's `ruststep`); index its instances; find the
+//! bodies and their products' names and length unit ([`structure`]); read each body's faces,
+//! edges and vertices, converting the geometry with truck and naming every instance that
+//! cannot be read ([`brep`]); tessellate each face to the chord tolerance ([`tessellate`]);
+//! scale to metres and turn the up axis ([`crate::units`]).
+//!
+//! Read: planes, spheres, cylinders, cones, tori, B-spline surfaces (rational ones as the
+//! complex instance), Bézier, uniform and quasi-uniform surfaces, surfaces of revolution and
+//! of linear extrusion; `ADVANCED_FACE` (and `FACE_SURFACE`, `ORIENTED_FACE`) with their
+//! trimming loops; open and closed shells, solids (with voids), shell-based surface models;
+//! products' names. Refused with an error naming the instance: any other surface
+//! (`OFFSET_SURFACE`, `RECTANGULAR_TRIMMED_SURFACE`, ...), a reference to a missing
+//! instance, a face that does not tessellate. Not applied: assembly placements
+//! (`ITEM_DEFINED_TRANSFORMATION`); a file that has them gets a warning.
+
+mod brep;
+mod entities;
+mod structure;
+mod tessellate;
+pub mod write;
+
+use std::path::Path;
+
+use truck_stepio::r#in::ruststep;
+use truck_stepio::r#in::Table;
+
+use crate::units::{world_from_file, LengthUnit, UpAxis};
+use crate::{Mesh, SceneError};
+use entities::Entities;
+
+/// The tessellation's default chord tolerance: the most a triangle strays from its face.
+pub const DEFAULT_TOLERANCE_MM: f64 = 0.05;
+
+/// How to read a STEP file.
+#[derive(Clone, Debug)]
+pub struct StepOptions {
+    /// One body (product, solid, surface model or shell, by name or `#id`); all when `None`.
+    pub body: Option<String>,
+    /// Chord tolerance of the tessellation, millimetres.
+    pub tolerance_mm: f64,
+    /// The file's length unit, overriding the one it states.
+    pub unit: Option<LengthUnit>,
+    pub up: UpAxis,
+}
+
+impl Default for StepOptions {
+    fn default() -> Self {
+        StepOptions {
+            body: None,
+            tolerance_mm: DEFAULT_TOLERANCE_MM,
+            unit: None,
+            up: UpAxis::Y,
+        }
+    }
+}
+
+/// A STEP file's bodies, one world-space mesh each, named after them.
+#[derive(Debug)]
+pub struct StepFile {
+    pub meshes: Vec<Mesh>,
+    pub warnings: Vec<String>,
+    /// Faces the bodies' shells list, every one of them tessellated.
+    pub faces: usize,
+}
+
+/// A STEP file as a scene: its bodies in the default grey, framed by the default camera and
+/// lit by the default key light (all said in the scene's warnings).
+pub fn load(path: &Path) -> Result<crate::Scene, SceneError> {
+    let shown = path.display().to_string();
+    let file = read(path, &StepOptions::default())?;
+    let meshes = file.meshes;
+    let mut scene =
+        super::scene_from_meshes(&shown, meshes, vec![super::default_material()], vec![]);
+    scene.warnings.extend(file.warnings);
+    scene.finalize(&shown)?;
+    Ok(scene)
+}
+
+/// Reads `path` (a `.step` or `.stp` file).
+pub fn read(path: &Path, options: &StepOptions) -> Result<StepFile, SceneError> {
+    let shown = path.display().to_string();
+    let bytes = std::fs::read(path).map_err(|e| SceneError::io(&shown, e))?;
+    let text = String::from_utf8(bytes).map_err(|e| {
+        SceneError::invalid(
+            &shown,
+            format!(
+                "not a STEP file: byte {} is not text (STEP files are ASCII)",
+                e.utf8_error().valid_up_to()
+            ),
+        )
+    })?;
+    parse(&shown, &text, options)
+}
+
+/// Reads a STEP file's text; `shown` names it in messages.
+pub fn parse(shown: &str, text: &str, options: &StepOptions) -> Result<StepFile, SceneError> {
+    let invalid = |message: String| SceneError::invalid(shown, message);
+    if !(options.tolerance_mm.is_finite() && options.tolerance_mm > 0.0) {
+        return Err(invalid(format!(
+            "tolerance_mm must be a positive number of millimetres, got {}",
+            options.tolerance_mm
+        )));
+    }
+    if !text.trim_start().starts_with("ISO-10303-21") {
+        return Err(invalid(
+            "not a STEP file: it does not begin with ISO-10303-21;".into(),
+        ));
+    }
+    let exchange =
+        ruststep::parser::parse(text).map_err(|e| invalid(syntax_error(text, &e.to_string())))?;
+    let entities = Entities::new(&exchange.data).map_err(&invalid)?;
+    let mut table = Table::default();
+    for (id, instance) in entities.instances() {
+        table
+            .push_instance(instance)
+            .map_err(|e| invalid(format!("{}: {e}", entities.describe(id))))?;
+    }
+    let mut bodies = structure::bodies(&entities).map_err(&invalid)?;
+    if bodies.is_empty() {
+        return Err(invalid(format!(
+            "no solid, surface model or shell among its {} instances: nothing to draw",
+            entities.len()
+        )));
+    }
+    if let Some(wanted) = &options.body {
+        let names: Vec<String> = bodies.iter().map(|b| b.name.clone()).collect();
+        bodies.retain(|b| &b.name == wanted || b.aliases.contains(wanted));
+        if bodies.is_empty() {
+            return Err(invalid(format!(
+                "no body named '{wanted}'; its bodies are: {}",
+                names.join(", ")
+            )));
+        }
+    }
+    let mut file = StepFile {
+        meshes: vec![],
+        warnings: vec![],
+        faces: 0,
+    };
+    for body in &bodies {
+        let metres_per_unit = match (options.unit, body.metres_per_unit) {
+            (Some(unit), _) => unit.metres(),
+            (None, Some(metres)) => metres,
+            (None, None) => {
+                file.warnings.push(format!(
+                    "{shown}: body '{}' states no length unit; taken as millimetres (set unit = \"mm\"|\"cm\"|\"m\"|\"in\" on its shape to say)",
+                    body.name
+                ));
+                LengthUnit::Mm.metres()
+            }
+        };
+        let brep = brep::read_body(&entities, &table, &body.shells).map_err(&invalid)?;
+        let faces: usize = brep.faces.iter().map(Vec::len).sum();
+        let tolerance = options.tolerance_mm * 1e-3 / metres_per_unit;
+        let mesh = tessellate::tessellate(
+            &entities,
+            &body.name,
+            brep,
+            tolerance,
+            world_from_file(metres_per_unit, options.up),
+        )
+        .map_err(&invalid)?;
+        let tessellated = mesh.cad.as_ref().map_or(0, |cad| cad.faces.len());
+        if tessellated != faces {
+            return Err(invalid(format!(
+                "body '{}': {faces} faces in, {tessellated} tessellated",
+                body.name
+            )));
+        }
+        file.faces += faces;
+        file.meshes.push(mesh);
+    }
+    file.warnings.extend(unplaced_assembly(shown, &entities));
+    Ok(file)
+}
+
+/// A warning where the file places parts in an assembly: specula draws each part in its own
+/// coordinates.
+fn unplaced_assembly(shown: &str, entities: &Entities) -> Option<String> {
+    let placements = entities
+        .instances()
+        .filter(|(id, _)| {
+            entities
+                .record(*id, "ITEM_DEFINED_TRANSFORMATION")
+                .is_some()
+        })
+        .count();
+    (placements > 0).then(|| {
+        format!(
+            "{shown}: an assembly with {placements} part placement(s) (ITEM_DEFINED_TRANSFORMATION); specula draws each part in its own coordinates, not placed. Export the parts as one part, or place them with one `step` shape each in a scene file"
+        )
+    })
+}
+
+/// ruststep's message cut to what a user can act on: the line where parsing stopped.
+fn syntax_error(text: &str, message: &str) -> String {
+    let complete = text.contains("END-ISO-10303-21");
+    let first = message
+        .lines()
+        .filter(|l| !l.trim().is_empty())
+        .take(4)
+        .collect::<Vec<_>>()
+        .join(" | ");
+    let first: String = first.chars().take(300).collect();
+    if complete {
+        format!("not a valid STEP exchange structure: {first}")
+    } else {
+        format!("the file is cut short (no END-ISO-10303-21;) or not a valid STEP exchange structure: {first}")
+    }
+}
