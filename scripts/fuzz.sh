@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Coverage-guided fuzzing of every scene loader with cargo-fuzz (libFuzzer, nightly toolchain):
-# glTF/GLB, OBJ, PLY, STL and TOML scene files, each for SECONDS (default 600), seeded with the
+# glTF/GLB, OBJ, PLY, STL, STEP and TOML scene files, each for SECONDS (default 600), seeded with the
 # meshes in ../shared/meshes and scenes/ and, where installed, the assimp-testmodels corpus.
 # A run fails on a panic, a hang over 10 s or an allocation over 2 GB; the input that caused it
 # is written to fuzz/artifacts/TARGET/ (make it a regression test in
@@ -11,7 +11,7 @@ cd "$(dirname "$0")/.."
 seconds=${1:-600}
 [ $# -gt 0 ] && shift
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(gltf obj ply stl toml_scene)
+[ ${#targets[@]} -gt 0 ] || targets=(gltf obj ply stl step toml_scene)
 command -v cargo-fuzz >/dev/null || cargo install cargo-fuzz --locked
 shared=../shared/meshes
 assimp=/usr/share/assimp/models
@@ -25,6 +25,7 @@ for target in "${targets[@]}"; do
     obj) seeds="$(ls "$shared"/*.obj scenes/meshes/*.obj 2>/dev/null || true) $(find "$assimp/OBJ" -name '*.obj' 2>/dev/null || true)" ;;
     ply) seeds=$(find "$assimp/PLY" -name '*.ply' 2>/dev/null || true) ;;
     stl) seeds=$(find "$assimp/STL" -name '*.stl' 2>/dev/null || true) ;;
+    step) seeds="$(ls scenes/cad/*.step crates/specula-scene/tests/data/step/*.step)" ;;
     toml_scene) seeds=scenes/example.toml ;;
     *) echo "unknown target $target" >&2; exit 2 ;;
   esac

@@ -396,3 +396,67 @@ fn broken_files_are_errors_naming_the_file_and_the_instance() {
         "{no_bodies}"
     );
 }
+
+/// The CAD examples in scenes/cad/ are what `loaders::step::examples` writes
+/// (`SPECULA_REGENERATE=1` rewrites them), and load with all their faces, at their size.
+#[test]
+fn the_cad_examples_are_the_writers_and_load_with_every_face() {
+    use specula_scene::loaders::step::examples;
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cad");
+    for (name, text, faces, size_mm) in [
+        (
+            "door-mirror.step",
+            examples::door_mirror(),
+            4,
+            [200.0, 130.0],
+        ),
+        (
+            "spectacle-lens.step",
+            examples::spectacle_lens(),
+            6,
+            [50.0, 36.0],
+        ),
+    ] {
+        let path = root.join(name);
+        if std::env::var_os("SPECULA_REGENERATE").is_some() {
+            std::fs::create_dir_all(&root).unwrap();
+            std::fs::write(&path, &text).unwrap();
+        }
+        let committed = std::fs::read_to_string(&path).unwrap();
+        assert!(
+            committed == text,
+            "{name} is not what the writer writes: run with SPECULA_REGENERATE=1"
+        );
+        let file = step::read(&path, &StepOptions::default()).unwrap();
+        assert_eq!(file.faces, faces, "{name}");
+        assert_eq!(file.meshes.len(), 1, "{name}");
+        let mesh = &file.meshes[0];
+        assert_eq!(mesh.cad.as_ref().unwrap().faces.len(), faces, "{name}");
+        let extent = mesh.bounds().extent();
+        for (axis, want) in size_mm.iter().enumerate() {
+            let got = extent[axis] as f64 * 1e3;
+            assert!(
+                (got - want).abs() < 0.5,
+                "{name}: {got} mm along axis {axis}, want {want}"
+            );
+        }
+        assert_faces_out(mesh);
+    }
+    // The lens is a closed solid: with every face's outside out, its triangles enclose a
+    // positive volume, about its 50 mm × 36 mm times its mean thickness (1.2 mm at the
+    // corners, 2.2 mm at the centre).
+    let lens = step::read(&root.join("spectacle-lens.step"), &StepOptions::default()).unwrap();
+    let mesh = &lens.meshes[0];
+    let volume_mm3: f64 = mesh
+        .triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| mesh.positions[i as usize].as_dvec3() * 1e3);
+            a.dot(b.cross(c)) / 6.0
+        })
+        .sum();
+    assert!(
+        (50.0 * 36.0 * 1.2..50.0 * 36.0 * 2.2).contains(&volume_mm3),
+        "lens volume {volume_mm3} mm³"
+    );
+}

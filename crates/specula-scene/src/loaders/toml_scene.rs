@@ -337,6 +337,17 @@ pub enum ShapeSpec {
         file: String,
         fit: Option<f32>,
     },
+    /// A STEP file's bodies (crate::loaders::step), relative to the scene file: all of them, or
+    /// the one `body` names (a product, solid, surface model or shell, or `#id`). `tolerance_mm`
+    /// is the tessellation's chord tolerance; `unit` overrides the file's own length unit and
+    /// `up = "z"` turns a +Z-up file's +Z onto the world's +Y.
+    Step {
+        file: String,
+        body: Option<String>,
+        tolerance_mm: Option<f64>,
+        unit: Option<crate::units::LengthUnit>,
+        up: Option<crate::units::UpAxis>,
+    },
 }
 
 /// Moves and scales meshes together so their joint bounding box is centred over the origin in
@@ -633,6 +644,23 @@ fn shape_meshes(
                 return Err(SceneError::invalid("parts", "no part has a triangle"));
             }
             vec![joined]
+        }
+        ShapeSpec::Step {
+            file,
+            body,
+            tolerance_mm,
+            unit,
+            up,
+        } => {
+            let options = super::step::StepOptions {
+                body: body.clone(),
+                tolerance_mm: tolerance_mm.unwrap_or(super::step::DEFAULT_TOLERANCE_MM),
+                unit: *unit,
+                up: up.unwrap_or_default(),
+            };
+            let mut step = super::step::read(&base.join(file), &options)?;
+            warnings.append(&mut step.warnings);
+            step.meshes
         }
         ShapeSpec::Mesh { file, fit } => {
             let (mut meshes, _, _, mut file_warnings) = super::load_mesh_file(&base.join(file))?;

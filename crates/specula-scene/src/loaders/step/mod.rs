@@ -19,6 +19,7 @@
 
 mod brep;
 mod entities;
+pub mod examples;
 mod structure;
 mod tessellate;
 pub mod write;
