@@ -460,3 +460,64 @@ fn the_cad_examples_are_the_writers_and_load_with_every_face() {
         "lens volume {volume_mm3} mm³"
     );
 }
+
+/// A scene file places a STEP file's bodies: the unit it gives overrides the file's, `up = "z"`
+/// turns +Z onto +Y, `body` picks one; what is wrong names the scene's key and the file.
+#[test]
+fn a_scene_file_places_a_step_file_with_its_unit_axis_and_body() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut writer = StepWriter::new();
+    let a = writer.patch_face(&cylinder_patch(40.0, 60.0));
+    writer.body("tube", &[a], false);
+    let b = writer.patch_face(&sphere_patch(50.0, DVec3::new(0.0, 0.0, 200.0)));
+    writer.body("ball", &[b], false);
+    std::fs::write(dir.path().join("part.step"), writer.finish(LengthUnit::Mm)).unwrap();
+    let scene_with = |shape: &str| {
+        let text = format!("[materials.grey]\ntype = \"diffuse\"\n\n[[objects]]\nname = \"part\"\nmaterial = \"grey\"\ntranslate = [1.0, 0.0, 0.0]\nshape = {{ type = \"step\", file = \"part.step\"{shape} }}\n");
+        specula_scene::loaders::toml_scene::parse("scene.toml", &text, dir.path())
+    };
+    let scene = scene_with(", body = \"tube\", up = \"z\"").unwrap();
+    assert_eq!(scene.meshes.len(), 1);
+    let bounds = scene.meshes[0].bounds();
+    // The tube's axis was +Z, 60 mm long: now +Y, moved 1 m along X.
+    assert!(
+        (bounds.extent().y - 0.06).abs() < 1e-6 && (bounds.center().x - 1.0).abs() < 0.03,
+        "{bounds:?}"
+    );
+    let cad = scene.meshes[0]
+        .cad
+        .as_ref()
+        .expect("the placed mesh keeps its faces");
+    let moved = cad.point_world(0, 0);
+    assert!(
+        (moved - scene.meshes[0].positions[0].as_dvec3()).length() < 1e-7,
+        "the faces move with the mesh"
+    );
+
+    let both = scene_with(", unit = \"cm\"").unwrap();
+    let names: Vec<&str> = both.meshes.iter().map(|m| m.name.as_str()).collect();
+    assert_eq!(names, ["part/tube", "part/ball"]);
+    assert!(
+        (both.meshes[0].bounds().extent().z - 0.6).abs() < 1e-5,
+        "60 file units taken as cm"
+    );
+
+    let missing = scene_with(", body = \"lid\"").unwrap_err().to_string();
+    assert!(
+        missing.contains("objects[0].shape")
+            && missing.contains("no body named 'lid'")
+            && missing.contains("tube, ball"),
+        "{missing}"
+    );
+    let bad_unit = scene_with(", unit = \"ft\"").unwrap_err().to_string();
+    assert!(
+        bad_unit.contains("ft") && bad_unit.contains("mm"),
+        "{bad_unit}"
+    );
+    std::fs::remove_file(dir.path().join("part.step")).unwrap();
+    let no_file = scene_with("").unwrap_err().to_string();
+    assert!(
+        no_file.contains("part.step") && no_file.contains("cannot read"),
+        "{no_file}"
+    );
+}

@@ -978,11 +978,18 @@ fn listed_scene(shown: &str, file: &SceneFile, base: &Path) -> Result<Scene, Sce
         }
         let world_from_object = placement(object.translate, object.rotate_deg, object.scale)
             .map_err(|e| at(path.clone(), e))?;
-        for mut mesh in shape_meshes(&object.shape, base, &mut warnings)
-            .map_err(|e| at(format!("{path}.shape"), e))?
-        {
+        let shape_meshes = shape_meshes(&object.shape, base, &mut warnings)
+            .map_err(|e| at(format!("{path}.shape"), e))?;
+        // A STEP file's bodies keep their own names under the object's: `door/glass`.
+        let several_bodies =
+            matches!(object.shape, ShapeSpec::Step { .. }) && shape_meshes.len() > 1;
+        for mut mesh in shape_meshes {
             if let Some(name) = &object.name {
-                mesh.name = name.clone();
+                mesh.name = if several_bodies {
+                    format!("{name}/{}", mesh.name)
+                } else {
+                    name.clone()
+                };
             }
             mesh.check_topology(shown)?;
             if object.flat {
