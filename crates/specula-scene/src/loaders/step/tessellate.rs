@@ -10,7 +10,7 @@ use std::sync::Arc;
 use glam::{DMat3, DMat4, DVec2, DVec3};
 use rayon::prelude::*;
 use truck_meshalgo::tessellation::RobustMeshableShape;
-use truck_stepio::r#in::alias::{ParametricSurface, ParametricSurface3D, PolygonMesh};
+use truck_stepio::r#in::alias::{ParametricSurface, ParametricSurface3D};
 use truck_topology::compress::{CompressedEdgeIndex, CompressedFace};
 
 use super::brep::{BodyBrep, Shell};
@@ -18,24 +18,32 @@ use super::entities::Entities;
 use crate::cad::{CadFace, CadFaces};
 use crate::Mesh;
 
-/// The body's mesh in world space (`world_from_file` applied) with its CAD faces.
+/// A face's tessellation: (u, v) per vertex, triangles anticlockwise about Su × Sv.
+pub(super) struct FacePolygon {
+    pub uv: Vec<DVec2>,
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// The body's mesh in world space (`world_from_file` applied) with its CAD faces, and a
+/// warning for each face that took the grid fallback.
 pub(super) fn tessellate(
     entities: &Entities,
     name: &str,
     brep: BodyBrep,
     tolerance: f64,
     world_from_file: DMat4,
-) -> Result<Mesh, String> {
+) -> Result<(Mesh, Vec<String>), String> {
     let mut mesh = Mesh {
         name: name.to_string(),
         ..Mesh::default()
     };
+    let mut warnings = Vec::new();
     let mut faces = Vec::new();
     let mut face_of_triangle = Vec::new();
     let mut uvs = Vec::new();
     let normal_from_file = DMat3::from_mat4(world_from_file).inverse().transpose();
     for (shell, refs) in brep.shells.iter().zip(&brep.faces) {
-        let polygons: Vec<Result<PolygonMesh, String>> = (0..shell.faces.len())
+        let polygons: Vec<Result<(FacePolygon, bool), String>> = (0..shell.faces.len())
             .into_par_iter()
             .map(|f| {
                 face_polygon(shell, f, tolerance)
@@ -43,7 +51,19 @@ pub(super) fn tessellate(
             })
             .collect();
         for ((face, polygon), face_ref) in shell.faces.iter().zip(polygons).zip(refs) {
-            let polygon = polygon?;
+            let (polygon, gridded) = polygon?;
+            if gridded {
+                warnings.push(format!(
+                    "{}: truck's tessellation failed; tessellated on a (u, v) grid clipped to its trimming loops, so its rim is stepped",
+                    entities.describe(face_ref.entity)
+                ));
+            }
+            if polygon.triangles.is_empty() {
+                return Err(format!(
+                    "{}: its tessellation has no triangle (a face of no area, or trimming loops that enclose nothing)",
+                    entities.describe(face_ref.entity)
+                ));
+            }
             let face_index = faces.len() as u32;
             faces.push(CadFace {
                 entity: face_ref.entity,
@@ -51,52 +71,24 @@ pub(super) fn tessellate(
                 reversed: face_ref.reversed,
             });
             let sign = if face_ref.reversed { -1.0 } else { 1.0 };
-            let uv_coords = polygon.uv_coords();
-            let mut vertex_of = HashMap::new();
-            let mut add_vertex = |v: &truck_stepio::r#in::alias::StandardVertex| -> Option<u32> {
-                if let Some(&i) = vertex_of.get(&(v.pos, v.uv)) {
-                    return Some(i);
-                }
-                let uv = v.uv.and_then(|i| uv_coords.get(i))?;
-                let uv = DVec2::new(uv.x, uv.y);
+            let base = mesh.positions.len() as u32;
+            for &uv in &polygon.uv {
                 let p = face.surface.subs(uv.x, uv.y);
                 let n = face.surface.normal(uv.x, uv.y) * sign;
                 let p_world = world_from_file.transform_point3(DVec3::new(p.x, p.y, p.z));
                 let n_world = (normal_from_file * DVec3::new(n.x, n.y, n.z)).normalize_or_zero();
-                let i = mesh.positions.len() as u32;
                 mesh.positions.push(p_world.as_vec3());
                 mesh.normals.push(n_world.as_vec3());
                 uvs.push(uv);
-                vertex_of.insert((v.pos, v.uv), i);
-                Some(i)
-            };
-            let before = mesh.triangles.len();
-            for polygon_face in polygon.face_iter() {
-                let corners: Vec<u32> = polygon_face
-                    .iter()
-                    .map(&mut add_vertex)
-                    .collect::<Option<_>>()
-                    .ok_or_else(|| {
-                        format!(
-                            "{}: a vertex of its tessellation has no (u, v)",
-                            entities.describe(face_ref.entity)
-                        )
-                    })?;
-                for k in 1..corners.len().saturating_sub(1) {
-                    let [a, b, c] = [corners[0], corners[k], corners[k + 1]];
-                    mesh.triangles.push(if face_ref.reversed {
-                        [a, c, b]
-                    } else {
-                        [a, b, c]
-                    });
-                    face_of_triangle.push(face_index);
-                }
             }
-            if mesh.triangles.len() == before {
-                return Err(format!(
-                    "{}: its tessellation has no triangle (a face of no area, or trimming loops that enclose nothing)",
-                    entities.describe(face_ref.entity)
-                ));
+            for &[a, b, c] in &polygon.triangles {
+                let [a, b, c] = [a + base, b + base, c + base];
+                mesh.triangles.push(if face_ref.reversed {
+                    [a, c, b]
+                } else {
+                    [a, b, c]
+                });
+                face_of_triangle.push(face_index);
             }
         }
     }
@@ -106,15 +98,37 @@ pub(super) fn tessellate(
         face_of_triangle,
         uv: uvs,
     });
-    Ok(mesh)
+    Ok((mesh, warnings))
 }
 
-/// Face `f` of `shell` tessellated alone: a shell of that face, its edges and their vertices.
-fn face_polygon(shell: &Shell, f: usize, tolerance: f64) -> Result<PolygonMesh, String> {
+/// Face `f` of `shell`, tessellated by truck, or on the grid where truck's fails (`true`).
+fn face_polygon(shell: &Shell, f: usize, tolerance: f64) -> Result<(FacePolygon, bool), String> {
     let face = &shell.faces[f];
     if face.boundaries.iter().any(Vec::is_empty) {
         return Err("a trimming loop with no edge".into());
     }
+    if let Some(polygon) = truck_polygon(shell, f, tolerance)? {
+        return Ok((polygon, false));
+    }
+    let boundaries: Vec<Vec<(usize, bool)>> = face
+        .boundaries
+        .iter()
+        .map(|wire| wire.iter().map(|e| (e.index, e.orientation)).collect())
+        .collect();
+    let gridded = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        super::fallback::grid_polygon(&face.surface, &shell.edges, &boundaries, tolerance)
+    }))
+    .ok()
+    .flatten();
+    gridded.map(|polygon| (polygon, true)).ok_or_else(|| {
+        "its tessellation failed (neither truck nor the (u, v) grid could place its trimming loops on its surface); check the face in your CAD system (a sliver, or a loop off its surface)".to_string()
+    })
+}
+
+/// Face `f` tessellated alone by truck: a shell of that face, its edges and their vertices;
+/// `None` where truck could not.
+fn truck_polygon(shell: &Shell, f: usize, tolerance: f64) -> Result<Option<FacePolygon>, String> {
+    let face = &shell.faces[f];
     let mut single = Shell {
         vertices: vec![],
         edges: vec![],
@@ -159,12 +173,37 @@ fn face_polygon(shell: &Shell, f: usize, tolerance: f64) -> Result<PolygonMesh, 
         "the file broke truck's tessellation (a malformed face the reader's checks did not catch)"
             .to_string()
     })?;
-    meshed
+    let Some(polygon) = meshed
         .faces
         .into_iter()
         .next()
         .and_then(|face| face.surface)
-        .ok_or_else(|| {
-            "its tessellation failed (truck could not place its trimming loops on its surface); check the face in your CAD system (a sliver, or a loop off its surface)".to_string()
-        })
+    else {
+        return Ok(None);
+    };
+    let uv_coords = polygon.uv_coords();
+    let mut vertex_of = HashMap::new();
+    let mut result = FacePolygon {
+        uv: vec![],
+        triangles: vec![],
+    };
+    for corners in polygon.face_iter() {
+        let mut indices = Vec::with_capacity(corners.len());
+        for v in corners {
+            let Some(uv) = v.uv.and_then(|i| uv_coords.get(i)) else {
+                return Ok(None);
+            };
+            let index = *vertex_of.entry((v.pos, v.uv)).or_insert_with(|| {
+                result.uv.push(DVec2::new(uv.x, uv.y));
+                result.uv.len() as u32 - 1
+            });
+            indices.push(index);
+        }
+        for k in 1..indices.len().saturating_sub(1) {
+            result
+                .triangles
+                .push([indices[0], indices[k], indices[k + 1]]);
+        }
+    }
+    Ok(Some(result))
 }
