@@ -658,9 +658,7 @@ fn shape_meshes(
                 unit: *unit,
                 up: up.unwrap_or_default(),
             };
-            let mut step = super::step::read(&base.join(file), &options)?;
-            warnings.append(&mut step.warnings);
-            step.meshes
+            step_file(&base.join(file), &options, warnings)?
         }
         ShapeSpec::Mesh { file, fit } => {
             let (mut meshes, _, _, mut file_warnings) = super::load_mesh_file(&base.join(file))?;
@@ -671,6 +669,17 @@ fn shape_meshes(
             meshes
         }
     })
+}
+
+/// A STEP file's bodies, its warnings added to the scene's.
+fn step_file(
+    path: &Path,
+    options: &super::step::StepOptions,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<Mesh>, SceneError> {
+    let mut step = super::step::read(path, options)?;
+    warnings.append(&mut step.warnings);
+    Ok(step.meshes)
 }
 
 fn material_from_spec(
