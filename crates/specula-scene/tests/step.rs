@@ -521,3 +521,37 @@ fn a_scene_file_places_a_step_file_with_its_unit_axis_and_body() {
         "{no_file}"
     );
 }
+
+/// A closed solid whose faces run an edge the same way has a face turned inside out: loaded,
+/// with a warning naming the shell and the two faces; the example lens has none.
+#[test]
+fn a_solid_with_a_face_turned_inside_out_is_named_in_a_warning() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenes/cad/spectacle-lens.step");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let good = step::parse("lens.step", &text, &StepOptions::default()).unwrap();
+    assert!(good.warnings.is_empty(), "{:?}", good.warnings);
+    // The first face turned over: its surface's sense and its loop's both reversed, so that it
+    // still bounds its area but faces into the solid.
+    let bound = text
+        .lines()
+        .find(|l| l.contains("FACE_OUTER_BOUND"))
+        .unwrap();
+    let bound_id = bound.split(' ').next().unwrap();
+    let face = text
+        .lines()
+        .find(|l| l.contains(&format!("ADVANCED_FACE('',({bound_id})")))
+        .unwrap();
+    let turned = text
+        .replacen(bound, &bound.replace(".T.)", ".F.)"), 1)
+        .replacen(face, &face.replace(".T.)", ".F.)"), 1);
+    let file = step::parse("lens.step", &turned, &StepOptions::default()).unwrap();
+    assert_eq!(file.faces, 6);
+    let warning = file.warnings.join("\n");
+    assert!(
+        warning.contains("lens.step: #")
+            && warning.contains("= CLOSED_SHELL: faces #")
+            && warning.contains("turned inside out"),
+        "{warning}"
+    );
+}

@@ -46,6 +46,10 @@ pub(super) struct BodyBrep {
     pub shells: Vec<Shell>,
     /// Per shell, its faces in the order of `shell.faces`.
     pub faces: Vec<Vec<FaceRef>>,
+    /// What is wrong with a closed shell but does not stop it being drawn: its faces turned
+    /// inconsistently (an edge run the same way by both its faces), which turns a glass
+    /// solid's normals partly inwards.
+    pub warnings: Vec<String>,
 }
 
 pub(super) fn read_body(
@@ -67,9 +71,11 @@ pub(super) fn read_body(
     let mut brep = BodyBrep {
         shells: vec![],
         faces: vec![],
+        warnings: vec![],
     };
     for shell in shells {
-        let (_, params) = entities.simple(shell.id, &["CLOSED_SHELL", "OPEN_SHELL"], shell.id)?;
+        let (kind, params) =
+            entities.simple(shell.id, &["CLOSED_SHELL", "OPEN_SHELL"], shell.id)?;
         let mut faces = Vec::new();
         for face in field(entities, shell.id, params, 1, "a list of faces", list)? {
             let id = reference(face).ok_or_else(|| {
@@ -81,6 +87,10 @@ pub(super) fn read_body(
             let mut face = reader.face(id, shell.id)?;
             face.reversed ^= shell.reversed;
             faces.push(face);
+        }
+        if kind == "CLOSED_SHELL" {
+            brep.warnings
+                .extend(turned_faces(entities, shell.id, &reader.shell, &faces));
         }
         brep.shells.push(std::mem::replace(
             &mut reader.shell,
@@ -95,6 +105,32 @@ pub(super) fn read_body(
         brep.faces.push(faces);
     }
     Ok(brep)
+}
+
+/// A warning where two faces of a closed shell run an edge the same way: one of them is
+/// turned inside out (each edge of a consistently oriented closed shell is run once each way).
+fn turned_faces(
+    entities: &Entities,
+    shell_id: u64,
+    shell: &Shell,
+    faces: &[FaceRef],
+) -> Option<String> {
+    let mut runs: HashMap<(usize, bool), Vec<u64>> = HashMap::new();
+    for (face, face_ref) in shell.faces.iter().zip(faces) {
+        for edge in face.boundaries.iter().flatten() {
+            let forward = edge.orientation != face_ref.reversed;
+            runs.entry((edge.index, forward))
+                .or_default()
+                .push(face_ref.entity);
+        }
+    }
+    let clash = runs.values().find(|faces| faces.len() > 1)?;
+    Some(format!(
+        "{}: faces #{} and #{} run an edge the same way, so one of them is turned inside out (its normals point into the solid; glass would refract the wrong way there): check the faces' orientation in your CAD system",
+        entities.describe(shell_id),
+        clash[0],
+        clash[1]
+    ))
 }
 
 struct Reader<'a, 'e> {

@@ -157,6 +157,8 @@ pub fn parse(shown: &str, text: &str, options: &StepOptions) -> Result<StepFile,
         };
         let brep = brep::read_body(&entities, &table, &body.shells).map_err(&invalid)?;
         let faces: usize = brep.faces.iter().map(Vec::len).sum();
+        file.warnings
+            .extend(brep.warnings.iter().map(|w| format!("{shown}: {w}")));
         let tolerance = options.tolerance_mm * 1e-3 / metres_per_unit;
         let (mesh, mut face_warnings) = tessellate::tessellate(
             &entities,
