@@ -1,10 +1,10 @@
 //! Inputs the fuzzers (scripts/fuzz.sh) found crashing a loader, kept so each stays fixed:
 //! every file in tests/fuzz_regressions/ must load or give an error naming it, without a panic.
-//! The loader is chosen by the file's prefix (`gltf-`, `obj-`, `ply-`, `stl-`, `toml-`).
+//! The loader is chosen by the file's prefix (`gltf-`, `obj-`, `ply-`, `step-`, `stl-`, `toml-`).
 
 use std::path::Path;
 
-use specula_scene::loaders::{gltf_file, obj, ply, stl, toml_scene};
+use specula_scene::loaders::{gltf_file, obj, ply, step, stl, toml_scene};
 
 #[test]
 fn every_fuzz_finding_is_an_error_or_a_scene_not_a_panic() {
@@ -25,6 +25,13 @@ fn every_fuzz_finding_is_an_error_or_a_scene_not_a_panic() {
                     .map(|_| ())
                     .map_err(message),
                 "stl" => stl::parse(&name, &bytes).map(|_| ()).map_err(message),
+                "step" => step::parse(
+                    &name,
+                    &String::from_utf8_lossy(&bytes),
+                    &step::StepOptions::default(),
+                )
+                .map(|_| ())
+                .map_err(message),
                 "toml" => toml_scene::parse(&name, &String::from_utf8_lossy(&bytes), &dir)
                     .map(|_| ())
                     .map_err(message),
