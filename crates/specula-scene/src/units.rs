@@ -37,6 +37,39 @@ impl LengthUnit {
     }
 }
 
+impl std::str::FromStr for LengthUnit {
+    type Err = UnknownName;
+
+    fn from_str(name: &str) -> Result<Self, UnknownName> {
+        [
+            LengthUnit::Mm,
+            LengthUnit::Cm,
+            LengthUnit::M,
+            LengthUnit::In,
+        ]
+        .into_iter()
+        .find(|unit| unit.name() == name)
+        .ok_or_else(|| UnknownName::new(name, "\"mm\", \"cm\", \"m\" or \"in\""))
+    }
+}
+
+/// A name that is none of a setting's values; it lists them.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("\"{given}\" is not one of {allowed}")]
+pub struct UnknownName {
+    given: String,
+    allowed: &'static str,
+}
+
+impl UnknownName {
+    fn new(given: &str, allowed: &'static str) -> UnknownName {
+        UnknownName {
+            given: given.to_string(),
+            allowed,
+        }
+    }
+}
+
 /// The axis a file takes as up. World space is +Y up; many CAD systems are +Z up.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -44,6 +77,18 @@ pub enum UpAxis {
     #[default]
     Y,
     Z,
+}
+
+impl std::str::FromStr for UpAxis {
+    type Err = UnknownName;
+
+    fn from_str(name: &str) -> Result<Self, UnknownName> {
+        match name {
+            "y" => Ok(UpAxis::Y),
+            "z" => Ok(UpAxis::Z),
+            _ => Err(UnknownName::new(name, "\"y\" or \"z\"")),
+        }
+    }
 }
 
 /// World from file coordinates: scale by `metres_per_unit`, then turn a +Z-up file's +Z onto
@@ -71,5 +116,22 @@ mod tests {
         let inch = world_from_file(LengthUnit::In.metres(), UpAxis::Y)
             .transform_point3(DVec3::new(0.0, 1.0, 0.0));
         assert!((inch.y - 0.0254).abs() < 1e-15);
+    }
+
+    #[test]
+    fn names_parse_as_a_scene_file_writes_them_and_others_list_the_allowed() {
+        for unit in [
+            LengthUnit::Mm,
+            LengthUnit::Cm,
+            LengthUnit::M,
+            LengthUnit::In,
+        ] {
+            assert_eq!(unit.name().parse(), Ok(unit));
+        }
+        assert_eq!("z".parse(), Ok(UpAxis::Z));
+        let wrong = "MM".parse::<LengthUnit>().unwrap_err().to_string();
+        assert_eq!(wrong, r#""MM" is not one of "mm", "cm", "m" or "in""#);
+        let wrong = "x".parse::<UpAxis>().unwrap_err().to_string();
+        assert_eq!(wrong, r#""x" is not one of "y" or "z""#);
     }
 }

@@ -11,6 +11,7 @@ use serde::Deserialize;
 use crate::freeform::{Freeform, Polynomial, Progressive, SagGrid};
 use crate::generators::{self, LensSpec};
 use crate::material::{conductor_f0, ior_from_abbe};
+use crate::units::{LengthUnit, UpAxis};
 use crate::{
     Background, Camera, Light, Material, MaterialKind, Mesh, Prescription, Scene, SceneError,
     Texture,
@@ -331,11 +332,17 @@ pub enum ShapeSpec {
         #[serde(default = "n8")]
         resolution: u32,
     },
-    /// A mesh file (OBJ, PLY, STL), relative to the scene file. `fit` rescales it so its largest
-    /// extent is `fit` metres, centred over the origin and standing on y = 0.
+    /// A mesh file (OBJ, PLY, STL), relative to the scene file. `unit` and `up` say what its
+    /// coordinates are (default: metres, +Y up), taken to world space before the object's
+    /// placement. `fit` rescales it instead so its largest extent is `fit` metres, centred over
+    /// the origin and standing on y = 0.
     Mesh {
         file: String,
         fit: Option<f32>,
+        /// "mm", "cm", "m" or "in"; read here, not by serde, so that an error names the key.
+        unit: Option<String>,
+        /// "y" or "z".
+        up: Option<String>,
     },
     /// A STEP file's bodies (crate::loaders::step), relative to the scene file: all of them, or
     /// the one `body` names (a product, solid, surface model or shell, or `#id`). `tolerance_mm`
@@ -660,9 +667,31 @@ fn shape_meshes(
             };
             step_file(&base.join(file), &options, warnings)?
         }
-        ShapeSpec::Mesh { file, fit } => {
-            let (mut meshes, _, _, mut file_warnings) = super::load_mesh_file(&base.join(file))?;
+        ShapeSpec::Mesh {
+            file,
+            fit,
+            unit,
+            up,
+        } => {
+            let (unit, up) = file_units(unit, up)?;
+            if fit.is_some() && unit.is_some() {
+                return Err(SceneError::invalid(
+                    "unit",
+                    "give either fit or unit, not both: fit rescales the mesh whatever its unit",
+                ));
+            }
+            let path = base.join(file);
+            let (mut meshes, _, _, mut file_warnings) = super::load_mesh_file(&path)?;
             warnings.append(&mut file_warnings);
+            // Without either, the mesh stays as it always loaded (a transform would renormalise
+            // the file's normals).
+            if unit.is_some() || up != UpAxis::Y {
+                let metres_per_unit = unit.map_or(1.0, LengthUnit::metres);
+                let world_from_file = crate::units::world_from_file(metres_per_unit, up);
+                for mesh in &mut meshes {
+                    mesh.transform(world_from_file.as_mat4());
+                }
+            }
             if let Some(size) = fit {
                 fit_meshes(&mut meshes, *size);
             }
@@ -680,6 +709,23 @@ fn step_file(
     let mut step = super::step::read(path, options)?;
     warnings.append(&mut step.warnings);
     Ok(step.meshes)
+}
+
+/// A file shape's `unit` (None where not given) and `up` (+Y where not given).
+fn file_units(
+    unit: &Option<String>,
+    up: &Option<String>,
+) -> Result<(Option<LengthUnit>, UpAxis), SceneError> {
+    let unit = unit
+        .as_deref()
+        .map(str::parse)
+        .transpose()
+        .map_err(|e| SceneError::invalid("unit", e))?;
+    let up = up
+        .as_deref()
+        .map_or(Ok(UpAxis::Y), str::parse)
+        .map_err(|e| SceneError::invalid("up", e))?;
+    Ok((unit, up))
 }
 
 fn material_from_spec(
