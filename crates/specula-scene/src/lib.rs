@@ -18,6 +18,7 @@ pub mod light;
 pub mod loaders;
 pub mod material;
 pub mod mesh;
+mod plausibility;
 pub mod scene;
 pub mod spectacle;
 pub mod texture;

@@ -142,7 +142,8 @@ impl Scene {
     }
 
     /// Checks every part of the scene and drops degenerate triangles (one warning with the
-    /// count). Loaders call this last; `source` names the file in messages.
+    /// count); warns of a mirror or glass object whose size suggests a wrong length unit.
+    /// Loaders call this last; `source` names the file in messages.
     pub fn finalize(&mut self, source: &str) -> Result<(), SceneError> {
         let mut dropped = 0;
         for mesh in &mut self.meshes {
@@ -222,6 +223,12 @@ impl Scene {
         }
         if !self.ambient.is_finite() {
             return Err(SceneError::invalid(source, "ambient is not finite"));
+        }
+        // Finalizing a scene twice (as after editing a loaded one) must not repeat its warnings.
+        for warning in crate::plausibility::optic_size_warnings(self, source) {
+            if !self.warnings.contains(&warning) {
+                self.warnings.push(warning);
+            }
         }
         Ok(())
     }

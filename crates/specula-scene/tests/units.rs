@@ -1,6 +1,8 @@
-//! A mesh file's length unit and up axis in a scene file (`unit`, `up` on a mesh shape).
+//! A mesh file's length unit and up axis in a scene file (`unit`, `up` on a mesh shape), and the
+//! warnings for sizes that point at a wrong unit: they name what to do, and no shipped scene
+//! (built-in or under scenes/) gives one.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 use specula_scene::{load, Scene};
@@ -37,6 +39,15 @@ fn load_in(dir: &Path, name: &str, text: &str) -> Scene {
 
 fn part(scene: &Scene) -> &specula_scene::Mesh {
     scene.meshes.iter().find(|m| m.name == "part").unwrap()
+}
+
+/// The warnings this feature adds, told apart from every other warning by their wording.
+fn unit_warnings(scene: &Scene) -> Vec<&String> {
+    scene
+        .warnings
+        .iter()
+        .filter(|w| w.contains("is implausible") || w.contains("look like millimetres"))
+        .collect()
 }
 
 #[test]
@@ -137,5 +148,180 @@ fn a_bad_unit_or_up_names_the_key_path_and_the_allowed_values() {
     assert_mentions(
         &error_of(&write(dir.path(), "fit.toml", fitted)),
         &["fit.toml", "objects[8].shape", "fit", "unit", "not both"],
+    );
+}
+
+/// The door mirror's size, 200 × 130 mm, as a flat quad in a file in millimetres.
+const MILLIMETRE_MIRROR_OBJ: &str =
+    "v -100 -65 0\nv 100 -65 0\nv 100 65 0\nv -100 65 0\nf 1 2 3 4\n";
+
+#[test]
+fn a_mirror_in_millimetres_read_as_metres_is_warned_of_by_name_and_size() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "mirror.obj", MILLIMETRE_MIRROR_OBJ);
+    let scene = load_in(dir.path(), "s.toml", &mesh_scene("mirror.obj", "", ""));
+    let warnings = unit_warnings(&scene);
+    assert_eq!(warnings.len(), 2, "{warnings:?}");
+    assert_mentions(
+        warnings[0],
+        &[
+            "mirror.obj",
+            "200 m across",
+            "look like millimetres",
+            "unit = \"mm\"",
+        ],
+    );
+    assert_mentions(
+        warnings[1],
+        &[
+            "s.toml",
+            "mirror 'part'",
+            "200 m across",
+            "over 5 m",
+            "unit = \"mm\"",
+        ],
+    );
+    let placed = mesh_scene("mirror.obj", ", unit = \"mm\"", "");
+    let scene = load_in(dir.path(), "mm.toml", &placed);
+    assert!(unit_warnings(&scene).is_empty(), "{:?}", scene.warnings);
+}
+
+#[test]
+fn a_lens_under_a_millimetre_is_warned_of_and_a_large_diffuse_part_is_not() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "mirror.obj", MILLIMETRE_MIRROR_OBJ);
+    let text = r#"
+[camera]
+eye = [0, 1, 4]
+target = [0, 0, 0]
+[materials.glass]
+type = "dielectric"
+ior = 1.5
+[materials.paint]
+type = "diffuse"
+[[lights]]
+type = "point"
+position = [0, 3, 0]
+intensity = 5
+[[objects]]
+name = "grain"
+material = "glass"
+shape = { type = "sphere", radius = 0.0002 }
+[[objects]]
+name = "wall"
+material = "paint"
+shape = { type = "box", size = [40, 3, 0.2] }
+[[objects]]
+name = "car"
+material = "paint"
+shape = { type = "mesh", file = "mirror.obj", unit = "mm", up = "z" }
+"#;
+    let scene = load_in(dir.path(), "s.toml", text);
+    let warnings = unit_warnings(&scene);
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert_mentions(
+        warnings[0],
+        &["s.toml", "glass 'grain'", "0.000400 m across", "under 1 mm"],
+    );
+}
+
+#[test]
+fn a_bare_mesh_file_in_millimetres_is_warned_of_and_one_in_metres_is_not() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(
+        dir.path(),
+        "bracket.stl",
+        stl_of(MILLIMETRE_MIRROR_OBJ, 1.0),
+    );
+    let scene = load(path.to_str().unwrap()).unwrap();
+    let warnings = unit_warnings(&scene);
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert_mentions(
+        warnings[0],
+        &[
+            "bracket.stl",
+            "200 m across",
+            "look like millimetres",
+            "unit = \"mm\"",
+        ],
+    );
+    let path = write(
+        dir.path(),
+        "metres.stl",
+        stl_of(MILLIMETRE_MIRROR_OBJ, 1e-3),
+    );
+    let scene = load(path.to_str().unwrap()).unwrap();
+    assert!(unit_warnings(&scene).is_empty(), "{:?}", scene.warnings);
+}
+
+/// An ASCII STL of an OBJ's quad (its first two triangles), scaled by `scale`.
+fn stl_of(obj: &str, scale: f32) -> String {
+    let v: Vec<Vec3> = obj
+        .lines()
+        .filter_map(|l| l.strip_prefix("v "))
+        .map(|l| {
+            let n: Vec<f32> = l.split(' ').map(|x| x.parse().unwrap()).collect();
+            Vec3::new(n[0], n[1], n[2]) * scale
+        })
+        .collect();
+    let mut stl = String::from("solid quad\n");
+    for [a, b, c] in [[0, 1, 2], [0, 2, 3]] {
+        stl += "facet normal 0 0 1\nouter loop\n";
+        for p in [v[a], v[b], v[c]] {
+            stl += &format!("vertex {} {} {}\n", p.x, p.y, p.z);
+        }
+        stl += "endloop\nendfacet\n";
+    }
+    stl + "endsolid quad\n"
+}
+
+/// Every `.toml` under `dir`, recursively, sorted.
+fn scene_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    for entry in std::fs::read_dir(dir).unwrap().flatten() {
+        let path = entry.path();
+        if path.is_dir() {
+            scene_files(&path, out);
+        } else if path.extension().is_some_and(|e| e == "toml") {
+            out.push(path);
+        }
+    }
+    out.sort();
+}
+
+#[test]
+fn no_shipped_scene_gives_a_unit_warning() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let mut files = Vec::new();
+    scene_files(&root.join("scenes"), &mut files);
+    assert!(files.len() >= 40, "found only {files:?}");
+    // The benchmark scenes read the large meshes of ../shared, beside the repository.
+    let shared = root.join("../shared/meshes");
+    let mut loaded = 0;
+    for file in &files {
+        let text = std::fs::read_to_string(file).unwrap();
+        if text.contains("shared/meshes") && !shared.is_dir() {
+            eprintln!(
+                "{}: not loaded, {} is absent",
+                file.display(),
+                shared.display()
+            );
+            continue;
+        }
+        let scene = load(file.to_str().unwrap()).unwrap_or_else(|e| panic!("{e}"));
+        let warnings = unit_warnings(&scene);
+        assert!(warnings.is_empty(), "{}: {warnings:?}", file.display());
+        loaded += 1;
+    }
+    for name in specula_scene::builtin::names() {
+        let scene = load(name).unwrap();
+        assert!(
+            unit_warnings(&scene).is_empty(),
+            "{name}: {:?}",
+            scene.warnings
+        );
+    }
+    eprintln!(
+        "{loaded} of {} scene files loaded without a unit warning",
+        files.len()
     );
 }

@@ -49,6 +49,7 @@ pub fn load_file(path: &Path) -> Result<Scene, SceneError> {
         "step" | "stp" => step::load(path),
         _ => {
             let (meshes, materials, textures, mut warnings) = load_mesh_file(path)?;
+            warnings.extend(crate::plausibility::unitless_file_warning(&shown, &meshes));
             let mut scene = scene_from_meshes(&shown, meshes, materials, textures);
             scene.warnings.append(&mut warnings);
             scene.finalize(&shown)?;

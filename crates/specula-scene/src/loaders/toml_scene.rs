@@ -692,8 +692,15 @@ fn shape_meshes(
                     mesh.transform(world_from_file.as_mat4());
                 }
             }
-            if let Some(size) = fit {
-                fit_meshes(&mut meshes, *size);
+            match fit {
+                Some(size) => fit_meshes(&mut meshes, *size),
+                None if unit.is_none() => {
+                    warnings.extend(crate::plausibility::unitless_file_warning(
+                        &path.display().to_string(),
+                        &meshes,
+                    ))
+                }
+                None => {}
             }
             meshes
         }
