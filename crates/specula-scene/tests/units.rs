@@ -131,11 +131,12 @@ fn a_bad_unit_or_up_names_the_key_path_and_the_allowed_values() {
             ", up = \"x\"",
             vec!["objects[0].shape", "up", "\"x\"", "\"y\" or \"z\""],
         ),
-        // Not a string: serde's error, which names the line.
+        // Not a string, or a misspelt key: serde's errors, which name the line.
         (
             ", unit = 1000",
             vec!["line 11", "unit = 1000", "expected a string"],
         ),
+        (", units = \"mm\"", vec!["line 11", "unknown field `units`"]),
     ];
     for (i, (keys, parts)) in cases.iter().enumerate() {
         let name = format!("bad{i}.toml");

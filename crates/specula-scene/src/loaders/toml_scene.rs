@@ -332,18 +332,7 @@ pub enum ShapeSpec {
         #[serde(default = "n8")]
         resolution: u32,
     },
-    /// A mesh file (OBJ, PLY, STL), relative to the scene file. `unit` and `up` say what its
-    /// coordinates are (default: metres, +Y up), taken to world space before the object's
-    /// placement. `fit` rescales it instead so its largest extent is `fit` metres, centred over
-    /// the origin and standing on y = 0.
-    Mesh {
-        file: String,
-        fit: Option<f32>,
-        /// "mm", "cm", "m" or "in"; read here, not by serde, so that an error names the key.
-        unit: Option<String>,
-        /// "y" or "z".
-        up: Option<String>,
-    },
+    Mesh(MeshShape),
     /// A STEP file's bodies (crate::loaders::step), relative to the scene file: all of them, or
     /// the one `body` names (a product, solid, surface model or shell, or `#id`). `tolerance_mm`
     /// is the tessellation's chord tolerance; `unit` overrides the file's own length unit and
@@ -355,6 +344,21 @@ pub enum ShapeSpec {
         unit: Option<crate::units::LengthUnit>,
         up: Option<crate::units::UpAxis>,
     },
+}
+
+/// A mesh file (OBJ, PLY, STL), relative to the scene file. `unit` and `up` say what its
+/// coordinates are (default: metres, +Y up), taken to world space before the object's placement.
+/// `fit` rescales it instead so its largest extent is `fit` metres, centred over the origin and
+/// standing on y = 0.
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct MeshShape {
+    pub file: String,
+    pub fit: Option<f32>,
+    /// "mm", "cm", "m" or "in"; read here, not by serde, so that an error names the key.
+    pub unit: Option<String>,
+    /// "y" or "z".
+    pub up: Option<String>,
 }
 
 /// Moves and scales meshes together so their joint bounding box is centred over the origin in
@@ -667,43 +671,7 @@ fn shape_meshes(
             };
             step_file(&base.join(file), &options, warnings)?
         }
-        ShapeSpec::Mesh {
-            file,
-            fit,
-            unit,
-            up,
-        } => {
-            let (unit, up) = file_units(unit, up)?;
-            if fit.is_some() && unit.is_some() {
-                return Err(SceneError::invalid(
-                    "unit",
-                    "give either fit or unit, not both: fit rescales the mesh whatever its unit",
-                ));
-            }
-            let path = base.join(file);
-            let (mut meshes, _, _, mut file_warnings) = super::load_mesh_file(&path)?;
-            warnings.append(&mut file_warnings);
-            // Without either, the mesh stays as it always loaded (a transform would renormalise
-            // the file's normals).
-            if unit.is_some() || up != UpAxis::Y {
-                let metres_per_unit = unit.map_or(1.0, LengthUnit::metres);
-                let world_from_file = crate::units::world_from_file(metres_per_unit, up);
-                for mesh in &mut meshes {
-                    mesh.transform(world_from_file.as_mat4());
-                }
-            }
-            match fit {
-                Some(size) => fit_meshes(&mut meshes, *size),
-                None if unit.is_none() => {
-                    warnings.extend(crate::plausibility::unitless_file_warning(
-                        &path.display().to_string(),
-                        &meshes,
-                    ))
-                }
-                None => {}
-            }
-            meshes
-        }
+        ShapeSpec::Mesh(mesh) => mesh_file(mesh, base, warnings)?,
     })
 }
 
@@ -716,6 +684,43 @@ fn step_file(
     let mut step = super::step::read(path, options)?;
     warnings.append(&mut step.warnings);
     Ok(step.meshes)
+}
+
+/// A `mesh` shape's meshes: the file's, taken from its unit and up axis to metres and +Y up,
+/// or fitted to `fit` metres.
+fn mesh_file(
+    shape: &MeshShape,
+    base: &Path,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<Mesh>, SceneError> {
+    let (unit, up) = file_units(&shape.unit, &shape.up)?;
+    if shape.fit.is_some() && unit.is_some() {
+        return Err(SceneError::invalid(
+            "unit",
+            "give either fit or unit, not both: fit rescales the mesh whatever its unit",
+        ));
+    }
+    let path = base.join(&shape.file);
+    let (mut meshes, _, _, mut file_warnings) = super::load_mesh_file(&path)?;
+    warnings.append(&mut file_warnings);
+    // Without either, the mesh stays as it always loaded (a transform would renormalise
+    // the file's normals).
+    if unit.is_some() || up != UpAxis::Y {
+        let metres_per_unit = unit.map_or(1.0, LengthUnit::metres);
+        let world_from_file = crate::units::world_from_file(metres_per_unit, up);
+        for mesh in &mut meshes {
+            mesh.transform(world_from_file.as_mat4());
+        }
+    }
+    match shape.fit {
+        Some(size) => fit_meshes(&mut meshes, size),
+        None if unit.is_none() => warnings.extend(crate::plausibility::unitless_file_warning(
+            &path.display().to_string(),
+            &meshes,
+        )),
+        None => {}
+    }
+    Ok(meshes)
 }
 
 /// A file shape's `unit` (None where not given) and `up` (+Y where not given).
