@@ -64,7 +64,7 @@ pub(crate) fn unitless_file_warning(shown: &str, meshes: &[Mesh]) -> Option<Stri
         format!(
             "{shown}: the mesh is {} m across, read as metres since a mesh file gives no unit; \
              its units look like millimetres: if so, place it with unit = \"mm\" in a scene \
-             file's mesh shape",
+             file's mesh shape (or with fit = its size in metres, if its units are arbitrary)",
             three_figures(size)
         )
     })
