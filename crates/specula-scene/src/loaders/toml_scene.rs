@@ -341,8 +341,9 @@ pub enum ShapeSpec {
         file: String,
         body: Option<String>,
         tolerance_mm: Option<f64>,
-        unit: Option<crate::units::LengthUnit>,
-        up: Option<crate::units::UpAxis>,
+        /// As a mesh shape's: read by `file_units` so that an error names the key.
+        unit: Option<String>,
+        up: Option<String>,
     },
 }
 
@@ -663,11 +664,12 @@ fn shape_meshes(
             unit,
             up,
         } => {
+            let (unit, up) = file_units(unit, up)?;
             let options = super::step::StepOptions {
                 body: body.clone(),
                 tolerance_mm: tolerance_mm.unwrap_or(super::step::DEFAULT_TOLERANCE_MM),
-                unit: *unit,
-                up: up.unwrap_or_default(),
+                unit,
+                up,
             };
             step_file(&base.join(file), &options, warnings)?
         }

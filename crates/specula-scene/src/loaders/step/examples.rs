@@ -109,9 +109,12 @@ fn lens_surface(radius: f64, vertex_z: f64) -> NurbsPatch {
     patch
 }
 
+/// A control point and its weight.
+type WeightedPoint = (DVec3, f64);
+
 /// The four boundary curves of a patch (control points with weights, and knots) in the order
 /// u = u0, u = u1, v = v0, v = v1; two patches made alike give matching curves.
-fn boundaries(patch: &NurbsPatch) -> Vec<(Vec<(DVec3, f64)>, Vec<f64>)> {
+fn boundaries(patch: &NurbsPatch) -> Vec<(Vec<WeightedPoint>, Vec<f64>)> {
     let column = |j: usize| patch.control.iter().map(|row| row[j]).collect::<Vec<_>>();
     let last = patch.control[0].len() - 1;
     vec![

@@ -179,9 +179,10 @@ fn shell_ref(entities: &Entities, id: u64, referrer: u64) -> Result<ShellRef, St
         super::entities::logical,
     )?;
     let turned = shell_ref(entities, inner, id)?;
+    // Reversed when exactly one of the two turns it: the inner shell's own, or this one's .F..
     Ok(ShellRef {
         id: turned.id,
-        reversed: turned.reversed != !orientation,
+        reversed: turned.reversed == orientation,
     })
 }
 
