@@ -112,8 +112,16 @@ pub fn parse(shown: &str, text: &str, options: &StepOptions) -> Result<StepFile,
             "not a STEP file: it does not begin with ISO-10303-21;".into(),
         ));
     }
-    let exchange =
-        ruststep::parser::parse(text).map_err(|e| invalid(syntax_error(text, &e.to_string())))?;
+    check_lexically(text).map_err(&invalid)?;
+    // The check above keeps ruststep's parser from what made it panic; should a file still
+    // find a panic in it, it becomes this file's error rather than a crash.
+    let exchange = std::panic::catch_unwind(|| ruststep::parser::parse(text))
+        .map_err(|_| {
+            invalid(
+                "the file broke the STEP parser (a malformed file the checks did not catch)".into(),
+            )
+        })?
+        .map_err(|e| invalid(syntax_error(text, &e.to_string())))?;
     let entities = Entities::new(&exchange.data).map_err(&invalid)?;
     let mut table = Table::default();
     for (id, instance) in entities.instances() {
@@ -200,6 +208,61 @@ fn unplaced_assembly(shown: &str, entities: &Entities) -> Option<String> {
             "{shown}: an assembly with {placements} part placement(s) (ITEM_DEFINED_TRANSFORMATION); specula draws each part in its own coordinates, not placed. Export the parts as one part, or place them with one `step` shape each in a scene file"
         )
     })
+}
+
+/// What ruststep's parser would panic or overflow its stack on, refused with the line: an
+/// integer, exponent or instance number of more than 18 digits (it parses them into an `i64`
+/// with `expect`), lists nested deeper than 32 (it recurses once per level). Strings and
+/// comments are skipped; a real's digits may be as many as they like.
+fn check_lexically(text: &str) -> Result<(), String> {
+    const MAX_DIGITS: usize = 18;
+    const MAX_DEPTH: usize = 32;
+    let bytes = text.as_bytes();
+    let (mut line, mut depth, mut i) = (1, 0usize, 0);
+    while i < bytes.len() {
+        match bytes[i] {
+            b'\n' => line += 1,
+            b'\'' => {
+                i += 1;
+                while i < bytes.len() && bytes[i] != b'\'' {
+                    line += usize::from(bytes[i] == b'\n');
+                    i += 1;
+                }
+            }
+            b'/' if bytes.get(i + 1) == Some(&b'*') => {
+                i += 2;
+                while i + 1 < bytes.len() && !(bytes[i] == b'*' && bytes[i + 1] == b'/') {
+                    line += usize::from(bytes[i] == b'\n');
+                    i += 1;
+                }
+                i += 1;
+            }
+            b'(' => {
+                depth += 1;
+                if depth > MAX_DEPTH {
+                    return Err(format!("line {line}: parentheses nested deeper than {MAX_DEPTH}; no STEP entity nests so deep"));
+                }
+            }
+            b')' => depth = depth.saturating_sub(1),
+            b'0'..=b'9' => {
+                let start = i;
+                while i + 1 < bytes.len() && bytes[i + 1].is_ascii_digit() {
+                    i += 1;
+                }
+                let fraction = start > 0 && bytes[start - 1] == b'.';
+                let integral_of_real = bytes.get(i + 1) == Some(&b'.');
+                if i + 1 - start > MAX_DIGITS && !fraction && !integral_of_real {
+                    return Err(format!(
+                        "line {line}: a whole number of {} digits, more than the {MAX_DIGITS} an integer, an exponent or an instance number may have",
+                        i + 1 - start
+                    ));
+                }
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    Ok(())
 }
 
 /// ruststep's message cut to what a user can act on: the line where parsing stopped.
