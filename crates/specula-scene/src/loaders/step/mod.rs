@@ -18,6 +18,7 @@
 //! (`ITEM_DEFINED_TRANSFORMATION`); a file that has them gets a warning.
 
 mod brep;
+mod checks;
 mod entities;
 pub mod examples;
 mod fallback;
@@ -123,6 +124,7 @@ pub fn parse(shown: &str, text: &str, options: &StepOptions) -> Result<StepFile,
         })?
         .map_err(|e| invalid(syntax_error(text, &e.to_string())))?;
     let entities = Entities::new(&exchange.data).map_err(&invalid)?;
+    checks::check_geometry(&entities).map_err(&invalid)?;
     let mut table = Table::default();
     for (id, instance) in entities.instances() {
         table
