@@ -113,3 +113,29 @@ fn collect_reals(params: &[truck_stepio::r#in::ruststep::ast::Parameter], out: &
         }
     }
 }
+
+/// The largest radius of the file's circles, ellipses and elementary surfaces (file units):
+/// truck cuts a circle to at best a millionth of its radius (it panics below), so this bounds
+/// the chord tolerance from below.
+pub(super) fn largest_radius(entities: &Entities) -> f64 {
+    let mut largest: f64 = 0.0;
+    for (id, _) in entities.instances() {
+        for (name, radii) in [
+            ("CIRCLE", &[2][..]),
+            ("ELLIPSE", &[2, 3]),
+            ("SPHERICAL_SURFACE", &[2]),
+            ("CYLINDRICAL_SURFACE", &[2]),
+            ("CONICAL_SURFACE", &[2]),
+            ("TOROIDAL_SURFACE", &[2, 3]),
+        ] {
+            if let Some(params) = entities.record(id, name) {
+                for &i in radii {
+                    if let Some(r) = params.get(i).and_then(real).filter(|r| r.is_finite()) {
+                        largest = largest.max(r.abs());
+                    }
+                }
+            }
+        }
+    }
+    largest
+}

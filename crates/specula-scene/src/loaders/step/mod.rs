@@ -35,6 +35,10 @@ use crate::units::{world_from_file, LengthUnit, UpAxis};
 use crate::{Mesh, SceneError};
 use entities::Entities;
 
+/// truck divides a circle of radius r to a chord tolerance of at least this × r, and any
+/// curve or surface to at least this (file units); it panics when asked for less.
+const TRUCK_RELATIVE_TOLERANCE: f64 = 1.01e-6;
+
 /// The tessellation's default chord tolerance: the most a triangle strays from its face.
 pub const DEFAULT_TOLERANCE_MM: f64 = 0.05;
 
@@ -148,6 +152,7 @@ pub fn parse(shown: &str, text: &str, options: &StepOptions) -> Result<StepFile,
             )));
         }
     }
+    let largest_radius = checks::largest_radius(&entities);
     let mut file = StepFile {
         meshes: vec![],
         warnings: vec![],
@@ -169,7 +174,19 @@ pub fn parse(shown: &str, text: &str, options: &StepOptions) -> Result<StepFile,
         let faces: usize = brep.faces.iter().map(Vec::len).sum();
         file.warnings
             .extend(brep.warnings.iter().map(|w| format!("{shown}: {w}")));
-        let tolerance = options.tolerance_mm * 1e-3 / metres_per_unit;
+        let asked = options.tolerance_mm * 1e-3 / metres_per_unit;
+        let tolerance = asked
+            .max(TRUCK_RELATIVE_TOLERANCE * largest_radius)
+            .max(TRUCK_RELATIVE_TOLERANCE);
+        if tolerance > asked {
+            file.warnings.push(format!(
+                "{shown}: body '{}': chord tolerance raised from {} mm to {:.3} mm, the finest truck cuts its curves to (a millionth of its largest circle's radius, {:.0} mm, or of a file unit)",
+                body.name,
+                options.tolerance_mm,
+                tolerance * metres_per_unit * 1e3,
+                largest_radius * metres_per_unit * 1e3
+            ));
+        }
         let (mesh, mut face_warnings) = tessellate::tessellate(
             &entities,
             &body.name,
