@@ -555,3 +555,24 @@ fn a_solid_with_a_face_turned_inside_out_is_named_in_a_warning() {
         "{warning}"
     );
 }
+
+/// A tolerance finer than truck cuts curves to (a millionth of a file unit, or of a circle's
+/// radius; it panicked below that) is raised with a warning: this file is in metres.
+#[test]
+fn a_tolerance_finer_than_truck_cuts_a_large_circle_is_raised_with_a_warning() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/step/red_cube_blue_cylinder.step");
+    let text = std::fs::read_to_string(path).unwrap();
+    let options = StepOptions {
+        tolerance_mm: 1e-6,
+        ..StepOptions::default()
+    };
+    let file = step::parse("cylinder.step", &text, &options).unwrap();
+    let warning = file.warnings.join("\n");
+    assert!(
+        warning
+            .contains("body 'blue_cylinder': chord tolerance raised from 0.000001 mm to 0.001 mm"),
+        "{warning}"
+    );
+    assert_eq!(file.faces, 9);
+}
