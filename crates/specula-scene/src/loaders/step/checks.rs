@@ -3,6 +3,7 @@
 //! exhausted memory), refused before it is converted, naming the instance.
 
 use super::entities::{list, real, reference, Entities};
+use truck_stepio::r#in::ruststep::ast::Parameter;
 
 /// Coordinates beyond this (in file units) are taken as a broken number, not a part.
 const MAX_COORDINATE: f64 = 1e12;
@@ -67,6 +68,11 @@ pub(super) fn check_geometry(entities: &Entities) -> Result<(), String> {
                 }
             }
         }
+        if let Err(what) =
+            b_spline_curve(entities, id).and_then(|()| b_spline_surface(entities, id))
+        {
+            return wrong(&what);
+        }
         for name in ["RATIONAL_B_SPLINE_SURFACE", "RATIONAL_B_SPLINE_CURVE"] {
             if let Some(params) = entities.record(id, name) {
                 let mut weights = Vec::new();
@@ -76,6 +82,105 @@ pub(super) fn check_geometry(entities: &Entities) -> Result<(), String> {
                 }
             }
         }
+    }
+    Ok(())
+}
+
+/// A B-spline curve's parameters, simple or complex: degree, control points, multiplicities
+/// and knots agree (Σ multiplicities = points + degree + 1, knots rising).
+fn b_spline_curve(entities: &Entities, id: u64) -> Result<(), String> {
+    let (degree, points, multiplicities, knots) = if let Some(p) = entities
+        .record(id, "B_SPLINE_CURVE_WITH_KNOTS")
+        .filter(|p| p.len() >= 8)
+    {
+        (p.get(1), p.get(2), p.get(6), p.get(7))
+    } else if let (Some(curve), Some(k)) = (
+        entities.record(id, "B_SPLINE_CURVE"),
+        entities.record(id, "B_SPLINE_CURVE_WITH_KNOTS"),
+    ) {
+        (curve.first(), curve.get(1), k.first(), k.get(1))
+    } else {
+        return Ok(());
+    };
+    let points = points.and_then(list).map_or(0, <[_]>::len);
+    knot_vector(degree.and_then(real), points, multiplicities, knots)
+}
+
+/// A B-spline surface's parameters, simple or complex, as [`b_spline_curve`]'s in each
+/// direction, its control net rectangular.
+fn b_spline_surface(entities: &Entities, id: u64) -> Result<(), String> {
+    let (degrees, net, multiplicities, knots) = if let Some(p) = entities
+        .record(id, "B_SPLINE_SURFACE_WITH_KNOTS")
+        .filter(|p| p.len() >= 12)
+    {
+        (
+            (p.get(1), p.get(2)),
+            p.get(3),
+            (p.get(8), p.get(9)),
+            (p.get(10), p.get(11)),
+        )
+    } else if let (Some(surface), Some(k)) = (
+        entities.record(id, "B_SPLINE_SURFACE"),
+        entities.record(id, "B_SPLINE_SURFACE_WITH_KNOTS"),
+    ) {
+        (
+            (surface.first(), surface.get(1)),
+            surface.get(2),
+            (k.first(), k.get(1)),
+            (k.get(2), k.get(3)),
+        )
+    } else {
+        return Ok(());
+    };
+    let rows: Vec<usize> = net
+        .and_then(list)
+        .map(|rows| rows.iter().map(|r| list(r).map_or(0, <[_]>::len)).collect())
+        .unwrap_or_default();
+    if rows.is_empty() || rows.iter().any(|&n| n != rows[0]) {
+        return Err("a control net whose rows are not all of one length".into());
+    }
+    knot_vector(
+        degrees.0.and_then(real),
+        rows.len(),
+        multiplicities.0,
+        knots.0,
+    )?;
+    knot_vector(degrees.1.and_then(real), rows[0], multiplicities.1, knots.1)
+}
+
+fn knot_vector(
+    degree: Option<f64>,
+    points: usize,
+    multiplicities: Option<&Parameter>,
+    knots: Option<&Parameter>,
+) -> Result<(), String> {
+    let degree = degree
+        .filter(|d| d.fract() == 0.0 && (1.0..=25.0).contains(d))
+        .ok_or("a degree that is not a whole number from 1 to 25")? as usize;
+    let numbers = |p: Option<&Parameter>| -> Vec<f64> {
+        p.and_then(list)
+            .and_then(|xs| xs.iter().map(real).collect())
+            .unwrap_or_default()
+    };
+    let (multiplicities, knots) = (numbers(multiplicities), numbers(knots));
+    let total: f64 = multiplicities.iter().sum();
+    // Some writers repeat a knot rather than raise its multiplicity: non-decreasing is enough.
+    let increasing = knots.windows(2).all(|w| w[0] <= w[1])
+        && knots.iter().all(|k| k.is_finite())
+        && knots.last() > knots.first();
+    let whole = multiplicities
+        .iter()
+        .all(|&m| m.fract() == 0.0 && m >= 1.0 && m <= (degree + 1) as f64);
+    if points <= degree
+        || knots.len() < 2
+        || knots.len() != multiplicities.len()
+        || !increasing
+        || !whole
+        || total != (points + degree + 1) as f64
+    {
+        return Err(format!(
+            "a B-spline whose degree ({degree}), {points} control points, knot multiplicities and knots do not agree (the multiplicities must add up to points + degree + 1, each at most degree + 1, the knots rise)"
+        ));
     }
     Ok(())
 }
