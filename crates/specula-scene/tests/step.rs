@@ -571,7 +571,7 @@ fn a_tolerance_finer_than_truck_cuts_a_large_circle_is_raised_with_a_warning() {
     let warning = file.warnings.join("\n");
     assert!(
         warning
-            .contains("body 'blue_cylinder': chord tolerance raised from 0.000001 mm to 0.001 mm"),
+            .contains("body 'blue_cylinder': chord tolerance raised from 0.000001 mm to 0.0010 mm, a millionth of a file unit"),
         "{warning}"
     );
     assert_eq!(file.faces, 9);

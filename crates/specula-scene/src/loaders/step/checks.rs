@@ -244,3 +244,22 @@ pub(super) fn largest_radius(entities: &Entities) -> f64 {
     }
     largest
 }
+
+/// The largest coordinate of the file's points (file units): a tessellation finer than a
+/// millionth of it is finer than a part needs and, on a point flung far off by a broken file,
+/// would take minutes.
+pub(super) fn largest_coordinate(entities: &Entities) -> f64 {
+    let mut largest: f64 = 0.0;
+    for (id, _) in entities.instances() {
+        if let Some(xs) = entities
+            .record(id, "CARTESIAN_POINT")
+            .and_then(|p| p.get(1))
+            .and_then(list)
+        {
+            for x in xs.iter().filter_map(real) {
+                largest = largest.max(x.abs());
+            }
+        }
+    }
+    largest
+}

@@ -36,7 +36,8 @@ use crate::{Mesh, SceneError};
 use entities::Entities;
 
 /// truck divides a circle of radius r to a chord tolerance of at least this × r, and any
-/// curve or surface to at least this (file units); it panics when asked for less.
+/// curve or surface to at least this (file units); it panics when asked for less. The
+/// tolerance is also kept above this × the farthest point's coordinate.
 const TRUCK_RELATIVE_TOLERANCE: f64 = 1.01e-6;
 
 /// The tessellation's default chord tolerance: the most a triangle strays from its face.
@@ -153,6 +154,7 @@ pub fn parse(shown: &str, text: &str, options: &StepOptions) -> Result<StepFile,
         }
     }
     let largest_radius = checks::largest_radius(&entities);
+    let largest_coordinate = checks::largest_coordinate(&entities);
     let mut file = StepFile {
         meshes: vec![],
         warnings: vec![],
@@ -175,16 +177,34 @@ pub fn parse(shown: &str, text: &str, options: &StepOptions) -> Result<StepFile,
         file.warnings
             .extend(brep.warnings.iter().map(|w| format!("{shown}: {w}")));
         let asked = options.tolerance_mm * 1e-3 / metres_per_unit;
-        let tolerance = asked
-            .max(TRUCK_RELATIVE_TOLERANCE * largest_radius)
-            .max(TRUCK_RELATIVE_TOLERANCE);
+        let mm = |file_units: f64| file_units * metres_per_unit * 1e3;
+        // The finest tolerance truck cuts curves to, and a part needs, with why.
+        let floors = [
+            (
+                largest_radius,
+                format!("its largest circle's radius, {:.0} mm", mm(largest_radius)),
+            ),
+            (
+                largest_coordinate,
+                format!(
+                    "its farthest point's coordinate, {:.0} mm",
+                    mm(largest_coordinate)
+                ),
+            ),
+            (1.0, "a file unit".to_string()),
+        ];
+        let (floor, why) = floors
+            .iter()
+            .max_by(|a, b| a.0.total_cmp(&b.0))
+            .map(|(size, why)| (TRUCK_RELATIVE_TOLERANCE * size, why))
+            .expect("three floors");
+        let tolerance = asked.max(floor);
         if tolerance > asked {
             file.warnings.push(format!(
-                "{shown}: body '{}': chord tolerance raised from {} mm to {:.3} mm, the finest truck cuts its curves to (a millionth of its largest circle's radius, {:.0} mm, or of a file unit)",
+                "{shown}: body '{}': chord tolerance raised from {} mm to {:.4} mm, a millionth of {why}: truck cuts curves no finer",
                 body.name,
                 options.tolerance_mm,
-                tolerance * metres_per_unit * 1e3,
-                largest_radius * metres_per_unit * 1e3
+                mm(tolerance)
             ));
         }
         let (mesh, mut face_warnings) = tessellate::tessellate(
