@@ -113,6 +113,20 @@ impl fmt::Display for MaterialOverride {
     }
 }
 
+impl MaterialOverride {
+    /// The override as one word of a shell's command line: quoted where the name holds
+    /// anything but letters, digits and `_ . / # -` (a space, say), for messages that say what
+    /// to type.
+    pub fn shell_word(&self) -> String {
+        let word = self.to_string();
+        let plain = |c: char| c.is_ascii_alphanumeric() || "_./#-=:".contains(c);
+        match word.chars().all(plain) {
+            true => word,
+            false => format!("'{}'", word.replace('\'', "'\\''")),
+        }
+    }
+}
+
 impl MaterialChoice {
     /// The material, built as `toml_scene` builds its type with no colour, texture or abbe
     /// given (a test holds the two together).
@@ -252,6 +266,21 @@ mod tests {
                 ),
             );
         }
+    }
+
+    #[test]
+    fn a_shell_word_is_quoted_where_a_shell_would_split_it() {
+        let word = |object: &str| {
+            MaterialOverride {
+                object: object.into(),
+                material: MaterialChoice::Glass { ior: 1.5 },
+            }
+            .shell_word()
+        };
+        assert_eq!(word("plate"), "plate=glass:1.5");
+        assert_eq!(word("dir/part#2"), "dir/part#2=glass:1.5");
+        assert_eq!(word("door mirror"), "'door mirror=glass:1.5'");
+        assert_eq!(word("it's"), "'it'\\''s=glass:1.5'");
     }
 
     #[test]
