@@ -147,6 +147,22 @@ impl MaterialChoice {
     }
 }
 
+/// Names for a message: quoted, comma-separated, the first few only where there are many.
+pub fn names_listed<'a>(names: impl IntoIterator<Item = &'a str>) -> String {
+    let mut listed: Vec<String> = Vec::new();
+    let mut more = 0;
+    for name in names {
+        match listed.len() < LISTED_NAMES {
+            true => listed.push(format!("'{name}'")),
+            false => more += 1,
+        }
+    }
+    if more > 0 {
+        listed.push(format!("and {more} more"));
+    }
+    listed.join(", ")
+}
+
 impl Scene {
     /// The objects' names, each once, in the scene's order.
     pub fn object_names(&self) -> Vec<&str> {
@@ -159,19 +175,9 @@ impl Scene {
         names
     }
 
-    /// [`Scene::object_names`] for a message: quoted, comma-separated, the first
-    /// few only where there are many.
+    /// [`Scene::object_names`] for a message ([`names_listed`]).
     pub fn object_names_listed(&self) -> String {
-        let names = self.object_names();
-        let mut listed: Vec<String> = names
-            .iter()
-            .take(LISTED_NAMES)
-            .map(|n| format!("'{n}'"))
-            .collect();
-        if names.len() > LISTED_NAMES {
-            listed.push(format!("and {} more", names.len() - LISTED_NAMES));
-        }
-        listed.join(", ")
+        names_listed(self.object_names())
     }
 
     /// Gives each override's object its material (the last override naming an object wins),
