@@ -101,7 +101,8 @@ pub enum Wanted {
 impl Wanted {
     /// How to give object `name` this material: on the command line (`material`, which front
     /// ends show in their own words), in a scene file, and in an OBJ's MTL file (the `illum`
-    /// values `specula_scene::loaders::obj` reads).
+    /// values `specula_scene::loaders::obj` reads). Nothing else in it is a single word in
+    /// backticks, which a front end would take for an option.
     pub fn how(self, name: &str) -> String {
         use specula_scene::{MaterialChoice, MaterialOverride};
         let word = |material| {
@@ -120,8 +121,9 @@ impl Wanted {
             ),
             Wanted::SolidGlass => format!(
                 "make it one with {} (its index of refraction) on the command line, a material \
-                 of `type = \"dielectric\"` with `ior` and no `thin` in a scene file, or \
-                 `illum 4` (or 6, 7, 9) in its OBJ material with `Ni` the index (1.5 if absent)",
+                 of `type = \"dielectric\"` with `ior = 1.5` (not `thin = true`) in a scene \
+                 file, or `illum 4` (or 6, 7, 9) in its OBJ material with `Ni` the index (1.5 if \
+                 absent)",
                 word(glass)
             ),
             Wanted::MirrorOrGlass => format!(
@@ -213,5 +215,16 @@ mod tests {
             "{dial}"
         );
         assert!(dial.contains("`illum 0` (unlit)"), "{dial}");
+        // Front ends show a single lowercase word in backticks as their option: only
+        // `material` may be one.
+        for text in [wrong("x", Wanted::Mirror), lens, cover, dial] {
+            let options: Vec<&str> = text
+                .split('`')
+                .skip(1)
+                .step_by(2)
+                .filter(|w| w.chars().all(|c| c.is_ascii_lowercase() || c == '_'))
+                .collect();
+            assert!(options.iter().all(|&w| w == "material"), "{text}");
+        }
     }
 }
