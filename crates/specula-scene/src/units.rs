@@ -64,10 +64,7 @@ mod tests {
     fn a_z_up_millimetre_point_lands_y_up_in_metres() {
         let world = world_from_file(LengthUnit::Mm.metres(), UpAxis::Z)
             .transform_point3(DVec3::new(1000.0, 2000.0, 3000.0));
-        assert!(
-            (world - DVec3::new(1.0, 3.0, -2.0)).length() < 1e-12,
-            "{world}"
-        );
+        assert!((world - DVec3::new(1.0, 3.0, -2.0)).length() < 1e-12, "{world}");
         let inch = world_from_file(LengthUnit::In.metres(), UpAxis::Y)
             .transform_point3(DVec3::new(0.0, 1.0, 0.0));
         assert!((inch.y - 0.0254).abs() < 1e-15);
