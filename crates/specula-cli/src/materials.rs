@@ -11,8 +11,8 @@ pub struct Materials {
     ///
     /// Each is a scene file's material of that type with its defaults; the last given for an
     /// object wins. NAME is the object as the scene names it: an OBJ's `o` or `g` name
-    /// (`unnamed_object` where it has none), a PLY or STL file's path as given; a name the
-    /// scene lacks is an error listing its objects. With several scenes, each takes those whose
+    /// (`unnamed_object` where it has none), a PLY or STL file's path as given, a STEP body's
+    /// product name; a name the scene lacks is an error listing its objects. With several scenes, each takes those whose
     /// object it has, and a name none has is refused before any runs.
     #[arg(long = "material", value_name = "NAME=KIND", help_heading = "Scene")]
     pub materials: Vec<MaterialOverride>,

@@ -2,8 +2,8 @@
 //! STL) carries no mirror or glass, and the command line's `--material NAME=KIND` makes one.
 //!
 //! `NAME` is an object as the scene names it: an OBJ's `o` or `g` name (`unnamed_object` where
-//! it has none), a PLY or STL file's path as given, a glTF mesh's or a scene file's object
-//! name, `NAME#k` for a part split on load. Every mesh of that name takes the material. Each
+//! it has none), a PLY or STL file's path as given, a STEP body's product name, a glTF mesh's
+//! or a scene file's object name, `NAME#k` for a part split on load. Every mesh of that name takes the material. Each
 //! `KIND` builds what a scene file's material of that type builds with its defaults, so the
 //! same object renders the same whichever way it was made a mirror or glass.
 
