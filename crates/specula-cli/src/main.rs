@@ -15,6 +15,9 @@ use specula_trace::Image;
 
 mod analyze;
 mod bench;
+mod materials;
+
+use materials::Materials;
 
 #[derive(Parser)]
 #[command(
@@ -67,6 +70,8 @@ enum Command {
         /// window's width and height (full resolution once still).
         #[arg(long, default_value_t = 0.5, value_parser = parse_scale)]
         interaction_scale: f32,
+        #[command(flatten)]
+        materials: Materials,
     },
     /// Time each method: warm-up, then N frames; median and spread per method and stage, and
     /// each method's speed-up over the CPU reference and over gpu-trace (both always timed too).
@@ -124,6 +129,8 @@ struct RenderArgs {
     #[arg(help_heading = "Output", long, value_name = "DIR")]
     sequence: Option<PathBuf>,
     #[command(flatten)]
+    materials: Materials,
+    #[command(flatten)]
     distributed: DistributedArgs,
 }
 
@@ -164,6 +171,8 @@ struct CompareArgs {
     /// median.
     #[arg(help_heading = "Images and timing", long, default_value_t = specula_compare::DEFAULT_FRAMES, value_parser = clap::value_parser!(u32).range(1..=1000))]
     frames: u32,
+    #[command(flatten)]
+    materials: Materials,
 }
 
 #[derive(clap::Args)]
@@ -194,6 +203,8 @@ struct BenchArgs {
     width: u32,
     #[arg(help_heading = "Frames", short = 'H', long, value_parser = clap::value_parser!(u32).range(1..=16384))]
     height: Option<u32>,
+    #[command(flatten)]
+    materials: Materials,
 }
 
 /// Distributed vertex tracing over MPI (`mpirun -np N specula render SCENE --method
@@ -288,8 +299,11 @@ fn parse_scale(text: &str) -> Result<f32, String> {
         .ok_or_else(|| format!("expected a number from 0.125 to 1, got '{text}'"))
 }
 
-pub(crate) fn load_scene(name: &str) -> Result<Scene> {
-    let scene = specula_scene::load(name).with_context(|| format!("loading scene '{name}'"))?;
+/// Scene `name` with the `--material` overrides (with `several` scenes in the run, those whose
+/// object it has), its warnings printed.
+pub(crate) fn load_scene(name: &str, materials: &Materials, several: bool) -> Result<Scene> {
+    let mut scene = specula_scene::load(name).with_context(|| format!("loading scene '{name}'"))?;
+    materials.apply(&mut scene, several)?;
     for warning in &scene.warnings {
         eprintln!("warning: {warning}");
     }
@@ -564,12 +578,14 @@ fn run(cli: Cli) -> Result<()> {
             size,
             script,
             interaction_scale,
+            materials,
         } => Ok(specula_viewer::run(specula_viewer::Options {
             scene,
             method,
             size,
             script,
             interaction_scale,
+            materials: materials.materials,
         })?),
         Command::Bench(args) => bench(args),
         Command::Analyze(kind) => analyze::run(kind),
@@ -644,7 +660,7 @@ fn print_ray_queries() {
 /// as PNG and optionally EXR, with a line of its timings and counters; `--distributed` runs
 /// vertex tracing over MPI instead.
 fn render(args: RenderArgs) -> Result<()> {
-    let scene = load_scene(&args.scene)?;
+    let scene = load_scene(&args.scene, &args.materials, false)?;
     let (width, height) = (args.width, height_for(&scene, args.width, args.height));
     let label = Label::parse(&args.method)?;
     let method = label.to_string();
@@ -759,13 +775,14 @@ fn compare(args: CompareArgs) -> Result<()> {
     if is_suite {
         return compare_suite(&args, &methods, &infos);
     }
-    let scene = load_scene(&args.scenes[0])?;
+    let scene = load_scene(&args.scenes[0], &args.materials, false)?;
     let ctx = context_for(&infos)?;
     let bar = spinner();
     let options = compare_options(&args, &methods, &scene);
     let comparison = specula_compare::compare(&scene, &ctx, &options, &|stage| {
         bar.set_message(format!("rendering {stage}"))
-    })?;
+    })
+    .map_err(compare_error)?;
     bar.finish_and_clear();
     let html = comparison.write_report(&args.report)?;
     if let Some(json) = &args.json {
@@ -782,6 +799,16 @@ fn compare(args: CompareArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// A compare error in the command line's words: an option named `` `name` `` as its flag.
+fn compare_error(e: specula_compare::CompareError) -> anyhow::Error {
+    match e {
+        specula_compare::CompareError::EmptyMask { .. } => {
+            anyhow::anyhow!(analyze::flags_in(&e.to_string()))
+        }
+        other => other.into(),
+    }
 }
 
 /// What `compare` measures `scene` with.
@@ -806,6 +833,7 @@ fn compare_options(
 /// when any scene failed.
 fn compare_suite(args: &CompareArgs, methods: &[String], infos: &[&MethodInfo]) -> Result<()> {
     let sources = specula_compare::suite::expand_scenes(&args.scenes)?;
+    args.materials.check_in(&sources)?;
     let ctx = context_for(infos)?;
     let rows = compare_each_scene(&sources, &ctx, args, methods)?;
     let summary = specula_compare::suite::SuiteReport {
@@ -857,16 +885,18 @@ fn compare_each_scene(
         bar.set_message(source.clone());
         let outcome = specula_scene::load(source)
             .map_err(anyhow::Error::from)
-            .and_then(|scene| {
+            .and_then(|mut scene| {
+                args.materials.apply(&mut scene, true)?;
                 for warning in &scene.warnings {
                     bar.suspend(|| eprintln!("warning: {source}: {warning}"));
                 }
-                Ok(specula_compare::compare(
+                specula_compare::compare(
                     &scene,
                     ctx,
                     &compare_options(args, methods, &scene),
                     &|stage| bar.set_message(format!("{source}: {stage}")),
-                )?)
+                )
+                .map_err(compare_error)
             })
             .map_err(|e| format!("{e:#}"));
         let row = specula_compare::suite::scene_row(
@@ -915,10 +945,14 @@ fn bench(args: BenchArgs) -> Result<()> {
     let asked: Vec<&MethodInfo> = labels.iter().map(|l| l.info).collect();
     let ctx = context_for(&asked)?;
     let timed = bench::with_bases(&methods, ctx.gpu.is_some());
+    let several = args.scenes.len() > 1;
+    if several {
+        args.materials.check_in(&args.scenes)?;
+    }
     let mut runs = Vec::new();
     let mut failed = Vec::new();
     for source in &args.scenes {
-        let scene = load_scene(source)?;
+        let scene = load_scene(source, &args.materials, several)?;
         let height = height_for(&scene, args.width, args.height);
         let (scene_runs, scene_failed) = bench::run(
             scene,

@@ -745,3 +745,236 @@ fn writing_to_a_closed_pipe_ends_quietly() {
     assert!(!stderr.contains("panicked"), "{stderr}");
     assert_eq!(out.status.signal(), Some(13), "{:?}: {stderr}", out.status);
 }
+
+/// An OBJ with no materials, as a CAD export gives one: a floor, a ball and a pair of balls in
+/// one object (octahedra), each named by its `o` line.
+fn bare_obj(dir: &std::path::Path) -> std::path::PathBuf {
+    let mut text =
+        String::from("o floor\nv -2 0 -2\nv 2 0 -2\nv 2 0 2\nv -2 0 2\nf 1 3 2\nf 1 4 3\n");
+    let mut vertices = 4;
+    let mut ball = |text: &mut String, [x, y, z]: [f32; 3], r: f32| {
+        for [dx, dy, dz] in [
+            [0.0, -r, 0.0],
+            [0.0, r, 0.0],
+            [r, 0.0, 0.0],
+            [-r, 0.0, 0.0],
+            [0.0, 0.0, r],
+            [0.0, 0.0, -r],
+        ] {
+            text.push_str(&format!("v {} {} {}\n", x + dx, y + dy, z + dz));
+        }
+        let v = |i: usize| vertices + i;
+        for [a, b, c] in [[1, 3, 5], [1, 5, 4], [1, 4, 6], [1, 6, 3]] {
+            text.push_str(&format!("f {} {} {}\n", v(a), v(b), v(c)));
+        }
+        for [a, b, c] in [[2, 5, 3], [2, 4, 5], [2, 6, 4], [2, 3, 6]] {
+            text.push_str(&format!("f {} {} {}\n", v(a), v(b), v(c)));
+        }
+        vertices += 6;
+    };
+    text.push_str("o ball\n");
+    ball(&mut text, [0.0, 1.0, 0.0], 1.0);
+    text.push_str("o pair\n");
+    ball(&mut text, [-1.4, 0.3, 1.0], 0.25);
+    ball(&mut text, [1.4, 0.3, 1.0], 0.25);
+    let path = dir.join("bare.obj");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+fn run(dir: &std::path::Path, args: &[&str]) -> (bool, String) {
+    let out = specula().current_dir(dir).args(args).output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
+    (out.status.success(), stderr)
+}
+
+#[test]
+fn material_makes_an_object_of_a_bare_file_a_mirror_or_glass() {
+    let dir = tempfile::tempdir().unwrap();
+    bare_obj(dir.path());
+    let render = |out: &str, materials: &[&str]| {
+        let mut args = vec!["render", "bare.obj", "-W", "64", "-H", "48", "-o", out];
+        for m in materials {
+            args.extend(["--material", m]);
+        }
+        let (ok, stderr) = run(dir.path(), &args);
+        assert!(ok, "{args:?}: {stderr}");
+        (image::open(dir.path().join(out)).unwrap().to_rgb8(), stderr)
+    };
+    let (plain, _) = render("plain.png", &[]);
+    let (mirror, _) = render("mirror.png", &["ball=mirror"]);
+    let (glass, _) = render("glass.png", &["ball=diffuse", "ball=glass:1.5"]);
+    let differing = |a: &image::RgbImage, b: &image::RgbImage| {
+        a.pixels().zip(b.pixels()).filter(|(p, q)| p != q).count()
+    };
+    // The ball covers about 100 of the 3072 pixels (88 change as a mirror, 84 more as glass).
+    let (shows, glass_shows) = (differing(&plain, &mirror), differing(&mirror, &glass));
+    assert!(shows > 50, "the mirror does not show ({shows} pixels)");
+    assert!(
+        glass_shows > 50,
+        "the glass is the mirror ({glass_shows} pixels)"
+    );
+    // The pair is one object of two balls: made a mirror, it is split as a file's mirror is.
+    let (_, stderr) = render("pair.png", &["pair=mirror"]);
+    assert!(
+        stderr.contains("mesh 'pair' holds 2 separate objects: split into 'pair#1'...'pair#2'"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn a_bad_material_is_a_clear_error() {
+    let dir = tempfile::tempdir().unwrap();
+    bare_obj(dir.path());
+    let syntax = "expected NAME=mirror|glass:IOR|thin-glass:IOR|diffuse|unlit, got";
+    let cases: Vec<(Vec<&str>, String)> =
+        vec![
+        (
+            vec!["render", "bare.obj", "--material", "ball"],
+            format!("{syntax} 'ball'"),
+        ),
+        (
+            vec!["render", "bare.obj", "--material", "ball=chrome"],
+            format!("{syntax} 'ball=chrome'"),
+        ),
+        (
+            vec!["compare", "bare.obj", "--material", "ball=glass"],
+            format!("{syntax} 'ball=glass'"),
+        ),
+        (
+            vec!["bench", "bare.obj", "--material", "ball=glass:0"],
+            "the index of refraction must be a finite number above 0".into(),
+        ),
+        (
+            vec!["view", "bare.obj", "--material", "=mirror"],
+            format!("{syntax} '=mirror'"),
+        ),
+        (
+            vec!["analyze", "lens", "bare.obj", "--material", "ball=thin-glass:x"],
+            "the index of refraction must be a finite number above 0 (glass is about 1.5), got 'x'"
+                .into(),
+        ),
+        (
+            vec!["render", "bare.obj", "--material", "bal=mirror", "-W", "8"],
+            "--material: bare.obj: no object 'bal' to make mirror; the scene's objects are: \
+             'floor', 'ball', 'pair'"
+                .into(),
+        ),
+        (
+            vec![
+                "compare",
+                "bare.obj",
+                "door-mirror",
+                "--material",
+                "bal=mirror",
+                "--report",
+                "suite",
+            ],
+            "--material bal=mirror: none of the 2 scenes has an object 'bal'; their objects are: \
+             'floor', 'ball', 'pair', 'door mirror'"
+                .into(),
+        ),
+    ];
+    for (args, expected) in cases {
+        let (ok, stderr) = run(dir.path(), &args);
+        assert!(!ok, "{args:?} succeeded");
+        assert!(stderr.contains(&expected), "{args:?}: {stderr}");
+    }
+    // The suite was refused before it ran.
+    assert!(!dir.path().join("suite").exists());
+}
+
+#[test]
+fn compare_of_a_bare_file_says_how_to_make_a_mirror() {
+    let dir = tempfile::tempdir().unwrap();
+    bare_obj(dir.path());
+    let compare = ["compare", "bare.obj", "--methods", "vertex-tracing"];
+    let small = ["-W", "32", "-H", "24", "--frames", "1"];
+    let (ok, stderr) = run(dir.path(), &[&compare[..], &small].concat());
+    assert!(!ok);
+    assert!(
+        stderr.contains(
+            "the scene has no mirror or dielectric surface in view: nothing to compare; it has \
+             none: make an object one with --material NAME=mirror (or NAME=glass:IOR); its \
+             objects are: 'floor', 'ball', 'pair'"
+        ),
+        "{stderr}"
+    );
+    let (ok, stderr) = run(
+        dir.path(),
+        &[&compare[..], &small, &["--material", "ball=mirror"]].concat(),
+    );
+    assert!(ok, "{stderr}");
+    // Several scenes: each takes the materials whose object it has (door-mirror has no ball).
+    let (ok, stderr) = run(
+        dir.path(),
+        &[
+            &compare[..],
+            &small,
+            &[
+                "door-mirror",
+                "--material",
+                "ball=mirror",
+                "--report",
+                "suite",
+            ],
+        ]
+        .concat(),
+    );
+    assert!(ok, "{stderr}");
+    assert!(dir.path().join("suite/bare/report.html").exists());
+}
+
+#[test]
+fn an_analysis_of_an_object_that_is_not_specular_says_how_to_make_it_one() {
+    let dir = tempfile::tempdir().unwrap();
+    bare_obj(dir.path());
+    let cases = [
+        (
+            vec!["analyze", "mirror-view", "bare.obj", "--mirror", "ball"],
+            "--mirror 'ball' is diffuse, not a mirror; make it one with --material ball=mirror \
+             on the command line, a material of `type = \"mirror\"` in a scene file, or `illum 3` \
+             (or 5) in its OBJ material (F0 from `Ks`)",
+        ),
+        (
+            vec!["analyze", "lens", "bare.obj", "--lens", "ball"],
+            "--lens 'ball' is diffuse, not a refractor (a solid dielectric); make it one with \
+             --material ball=glass:1.5 (its index of refraction) on the command line",
+        ),
+        (
+            vec![
+                "analyze",
+                "glare",
+                "bare.obj",
+                "--surface",
+                "ball",
+                "--source",
+                "floor",
+            ],
+            "--surface 'ball' is diffuse, not a mirror or a glass (a surface that reflects \
+             specularly); make it one with --material ball=mirror or --material ball=glass:1.5 \
+             on the command line",
+        ),
+    ];
+    for (args, expected) in cases {
+        let (ok, stderr) = run(dir.path(), &args);
+        assert!(!ok, "{args:?} succeeded");
+        assert!(stderr.contains(expected), "{args:?}: {stderr}");
+    }
+    let (ok, stderr) = run(
+        dir.path(),
+        &[
+            "analyze",
+            "mirror-view",
+            "bare.obj",
+            "--mirror",
+            "ball",
+            "--material",
+            "ball=mirror",
+            "--eyebox",
+            "0.1,0.1,2,2",
+        ],
+    );
+    assert!(ok, "{stderr}");
+}

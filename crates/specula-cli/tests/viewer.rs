@@ -743,3 +743,67 @@ window_screenshot = "{settled}"
         "the turn changes the window"
     );
 }
+
+/// `view --material` gives the scene opened the materials `render --material` gives it: the
+/// screenshot is the renderer's image of the ball made a mirror, not of the plain file; an
+/// object the scene lacks fails the script naming the scene's objects.
+#[test]
+fn view_material_gives_the_scene_the_renderers_materials() {
+    let Some(mut view) = viewer("view --material") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let obj = dir.path().join("bare.obj");
+    // A floor and a ball (an octahedron), with no materials.
+    std::fs::write(
+        &obj,
+        "o floor\nv -2 0 -2\nv 2 0 -2\nv 2 0 2\nv -2 0 2\nf 1 3 2\nf 1 4 3\n\
+         o ball\nv 0 0 0\nv 0 2 0\nv 1 1 0\nv -1 1 0\nv 0 1 1\nv 0 1 -1\n\
+         f 5 7 9\nf 5 9 8\nf 5 8 10\nf 5 10 7\nf 6 9 7\nf 6 8 9\nf 6 10 8\nf 6 7 10\n",
+    )
+    .unwrap();
+    let shot = dir.path().join("view.png");
+    let script = dir.path().join("shot.toml");
+    std::fs::write(
+        &script,
+        format!(
+            "[[step]]\nframes = 2\n[[step]]\nscreenshot = \"{}\"\n",
+            shot.display()
+        ),
+    )
+    .unwrap();
+    let size = ["--size", "64x48", "-m", "envmap", "--script"];
+    view.arg(&obj)
+        .args(["--material", "ball=mirror"])
+        .args(size)
+        .arg(&script);
+    run_ok(view);
+    let (mirror, plain) = (dir.path().join("mirror.png"), dir.path().join("plain.png"));
+    for (out, materials) in [(&mirror, &["--material", "ball=mirror"][..]), (&plain, &[])] {
+        let mut render = specula();
+        render
+            .arg("render")
+            .arg(&obj)
+            .args(materials)
+            .args(["-m", "envmap", "-W", "64", "-H", "48", "-o"])
+            .arg(out)
+            .env("NODEVICE_SELECT", "1");
+        run_ok(render);
+    }
+    assert_eq!(difference(&mirror, &shot).differing_pixels, 0);
+    assert!(difference(&plain, &shot).differing_pixels > 50);
+
+    let mut unknown = viewer("view --material").unwrap();
+    unknown
+        .arg(&obj)
+        .args(["--material", "bal=mirror"])
+        .args(size)
+        .arg(&script);
+    let out = unknown.output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        stderr.contains("no object 'bal' to make mirror; the scene's objects are: 'floor', 'ball'"),
+        "{stderr}"
+    );
+}

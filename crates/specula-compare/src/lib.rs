@@ -57,10 +57,36 @@ pub enum CompareError {
     Gpu(#[from] specula_gpu::GpuError),
     #[error("{path}: {message}")]
     Write { path: String, message: String },
-    #[error("the scene has no mirror or dielectric surface in view: nothing to compare")]
-    EmptyMask,
+    /// Nothing to measure the methods on; `hint` says why (the mirrors and glass are out of
+    /// view, or there are none and how to make one: the option `material`, which front ends
+    /// show in their own words).
+    #[error("the scene has no mirror or dielectric surface in view: nothing to compare; {hint}")]
+    EmptyMask { hint: String },
     #[error("{folder}: the folder holds no .toml scene file")]
     NoScenes { folder: String },
+}
+
+/// [`CompareError::EmptyMask`] for `scene`: its mirrors and glass are out of view, or it has
+/// none and the error says how to make one.
+fn empty_mask(scene: &Scene) -> CompareError {
+    let mut specular: Vec<&str> = Vec::new();
+    for mesh in &scene.meshes {
+        if scene.materials[mesh.material].is_specular() && !specular.contains(&&*mesh.name) {
+            specular.push(&mesh.name);
+        }
+    }
+    let hint = match specular.as_slice() {
+        [] => format!(
+            "it has none: make an object one with `material` NAME=mirror (or NAME=glass:IOR); \
+             its objects are: {}",
+            scene.object_names_listed()
+        ),
+        names => format!(
+            "its mirrors and glass ({}) are out of the camera's view",
+            specula_scene::material_override::names_listed(names.iter().copied())
+        ),
+    };
+    CompareError::EmptyMask { hint }
 }
 
 #[derive(Clone, Debug)]
@@ -279,6 +305,10 @@ pub fn compare(
     let (width, height) = (options.width, options.height);
     // Build every technique first so an unknown name or setting fails before any long work.
     let mut techniques = techniques_for(options)?;
+    let specular = |mesh: &specula_scene::Mesh| scene.materials[mesh.material].is_specular();
+    if !scene.meshes.iter().any(specular) {
+        return Err(empty_mask(scene));
+    }
     progress("reference");
     let build_start = Instant::now();
     let live = LiveScene::new(scene.clone());
@@ -304,7 +334,7 @@ pub fn compare(
         (count(SurfaceClass::Mirror), count(SurfaceClass::Refractor));
     let mask_pixels = mirror_pixels + refractor_pixels;
     if mask_pixels == 0 {
-        return Err(CompareError::EmptyMask);
+        return Err(empty_mask(scene));
     }
 
     let mut methods = Vec::new();

@@ -308,3 +308,46 @@ fn a_failing_method_gets_its_error_in_its_row_and_the_others_still_report() {
     assert!(!dir.path().join("pvrr.png").exists());
     assert_matches_schema(&dir.path().join("report.json"));
 }
+
+/// A scene with no mirror or glass says how to make one and names its objects, before the
+/// reference is rendered; one whose mirrors are out of view says so instead.
+#[test]
+fn nothing_to_compare_says_why_and_what_to_do() {
+    let ctx = specula_methods::Context { gpu: None };
+    let options = Options {
+        width: 16,
+        height: 12,
+        methods: vec!["vertex-tracing".into()],
+        spp: 1,
+        max_depth: 8,
+        parameters: vec![],
+        frames: 1,
+    };
+    let mut scene = specula_scene::load("door-mirror").unwrap();
+    let mirror = scene.meshes.iter().position(|m| m.name == "door mirror");
+    let mut looking_away = scene.clone();
+    looking_away.camera.target = 2.0 * looking_away.camera.eye - looking_away.camera.target;
+    let away = compare(&looking_away, &ctx, &options, &|_| {})
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        away.ends_with("nothing to compare; its mirrors and glass ('door mirror') are out of the camera's view"),
+        "{away}"
+    );
+    let mirror = mirror.expect("the door mirror");
+    let diffuse = scene.materials.len();
+    scene.materials.push(specula_scene::Material::diffuse(
+        "grey",
+        glam::Vec3::splat(0.5),
+    ));
+    scene.meshes[mirror].material = diffuse;
+    let none = compare(&scene, &ctx, &options, &|_| {})
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        none.contains("make an object one with `material` NAME=mirror (or NAME=glass:IOR); its objects are: 'door mirror', "),
+        "{none}"
+    );
+}

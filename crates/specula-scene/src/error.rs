@@ -14,6 +14,15 @@ pub enum SceneError {
     Invalid { path: String, message: String },
     #[error("'{name}' is neither a built-in scene ({available}) nor a file with a known extension (.toml, .gltf, .glb, .obj, .ply, .stl, .step, .stp)")]
     UnknownScene { name: String, available: String },
+    /// A material given from outside the scene (`--material NAME=KIND`) to an object it does
+    /// not have.
+    #[error("{scene}: no object '{name}' to make {material}; the scene's objects are: {objects}")]
+    UnknownObject {
+        scene: String,
+        name: String,
+        material: String,
+        objects: String,
+    },
 }
 
 impl SceneError {

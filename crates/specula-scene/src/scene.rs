@@ -114,11 +114,16 @@ impl Scene {
     /// Replaces each mirror or glass mesh that holds several separate objects (files often merge
     /// objects by material) by one mesh per object, named `NAME#1`, `NAME#2`..., so that every
     /// technique treats each as its own reflector and the viewer can move each. See
-    /// [`Mesh::separate_objects`]; a warning says what was split.
-    fn split_separate_reflectors(&mut self, source: &str) {
+    /// [`Mesh::separate_objects`]; a warning says what was split. Only the meshes `chosen`
+    /// picks are looked at (the others were split when loaded).
+    pub(crate) fn split_separate_reflectors(
+        &mut self,
+        source: &str,
+        chosen: impl Fn(&Mesh) -> bool,
+    ) {
         let mut meshes = Vec::with_capacity(self.meshes.len());
         for mesh in std::mem::take(&mut self.meshes) {
-            let objects = match self.materials[mesh.material].is_specular() {
+            let objects = match chosen(&mesh) && self.materials[mesh.material].is_specular() {
                 true => mesh.separate_objects(),
                 false => Vec::new(),
             };
@@ -171,7 +176,7 @@ impl Scene {
             ));
         }
         self.meshes.retain(|m| !m.triangles.is_empty());
-        self.split_separate_reflectors(source);
+        self.split_separate_reflectors(source, |_| true);
         for (i, material) in self.materials.iter().enumerate() {
             if !material.color.is_finite() {
                 return Err(SceneError::invalid(

@@ -48,6 +48,9 @@ pub struct Options {
     /// The technique's resolution while the view moves, as a fraction of the window's side
     /// (the panel's "resolution while moving").
     pub interaction_scale: f32,
+    /// Materials given to the scene's objects (`--material`), applied to the scene opened at
+    /// the start; one that names an object the scene lacks is an error as the scene's own are.
+    pub materials: Vec<specula_scene::MaterialOverride>,
 }
 
 /// Opens the window and runs until it is closed (or the script ends). A scene that fails to
@@ -55,7 +58,11 @@ pub struct Options {
 pub fn run(options: Options) -> Result<(), ViewerError> {
     specula_methods::Label::parse(&options.method).map_err(SessionError::from)?;
     let steps = options.script.as_deref().map(script::load).transpose()?;
-    let (scene, source, message) = match specula_scene::load(&options.scene) {
+    let loaded = specula_scene::load(&options.scene).and_then(|mut scene| {
+        scene.apply_material_overrides(&options.materials)?;
+        Ok(scene)
+    });
+    let (scene, source, message) = match loaded {
         Ok(scene) => (scene, options.scene.clone(), None),
         Err(e) if steps.is_none() => {
             let fallback = specula_scene::builtin::DEFAULT_SCENE;

@@ -225,6 +225,7 @@ impl Options {
                 name: name(self.surface),
                 kind: describe(kind(self.surface)),
                 expected: "a mirror or a glass (a surface that reflects specularly)",
+                wanted: crate::Wanted::MirrorOrGlass,
             });
         }
         match self.source {
@@ -234,6 +235,7 @@ impl Options {
                     name: name(source),
                     kind: describe(kind(source)),
                     expected: "an emitting or lit surface (unlit or diffuse)",
+                    wanted: crate::Wanted::Emitting,
                 })
             }
             Source::Named(_) => {}
@@ -282,6 +284,7 @@ impl Options {
                 name: mesh.name.clone(),
                 kind: format!("{kind:?}").to_lowercase(),
                 expected: "an emitting or lit surface behind the cover (unlit or diffuse)",
+                wanted: crate::Wanted::Emitting,
             });
         }
         positive_luminance("symbol_luminance", display.symbol_cd_m2, true)?;

@@ -203,6 +203,7 @@ fn indices(scene: &Scene, lens: usize) -> Result<DVec3, AnalyzeError> {
                 other => format!("{other:?}").to_lowercase(),
             },
             expected: "a refractor (a solid dielectric)",
+            wanted: crate::Wanted::SolidGlass,
         }),
     }
 }

@@ -200,6 +200,7 @@ impl Options {
                 name: mesh.name.clone(),
                 kind: format!("{:?}", material.kind).to_lowercase(),
                 expected: "a mirror",
+                wanted: crate::Wanted::Mirror,
             });
         }
         if !(self.range_m.is_finite() && self.range_m > 0.0) {

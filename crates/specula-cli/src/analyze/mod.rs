@@ -30,6 +30,7 @@ pub struct Kind {
     json: Option<PathBuf>,
     report: Option<PathBuf>,
     csv: Option<PathBuf>,
+    materials: crate::Materials,
 }
 
 /// The flag of one option: its help is the declaration's doc, unit and default.
@@ -100,7 +101,7 @@ fn command(info: &'static AnalysisInfo) -> Command {
     for spec in info.all_options() {
         command = command.arg(flag(spec));
     }
-    command
+    <crate::Materials as clap::Args>::augment_args(command)
         .arg(
             Arg::new("json")
                 .long("json")
@@ -176,6 +177,7 @@ impl clap::FromArgMatches for Kind {
             json: sub.get_one::<PathBuf>("json").cloned(),
             report: sub.get_one::<PathBuf>("report").cloned(),
             csv: sub.get_one::<PathBuf>("csv").cloned(),
+            materials: crate::Materials::from_arg_matches(sub)?,
         })
     }
 
@@ -207,7 +209,7 @@ fn as_flag(name: &str) -> String {
 }
 
 /// Library text in the command line's words: an option named `` `name` `` as its flag.
-fn flags_in(text: &str) -> String {
+pub(crate) fn flags_in(text: &str) -> String {
     let mut out = String::new();
     let mut parts = text.split('`');
     out.push_str(parts.next().unwrap_or(""));
@@ -248,7 +250,7 @@ fn in_flags(e: AnalyzeError) -> anyhow::Error {
         | AnalyzeError::WrongMaterial { role, ref name, .. } => {
             let named = format!("{role} '{name}'");
             let flagged = format!("{} '{name}'", as_flag(role));
-            anyhow::anyhow!(e.to_string().replacen(&named, &flagged, 1))
+            anyhow::anyhow!(flags_in(&e.to_string().replacen(&named, &flagged, 1)))
         }
         other => other.into(),
     }
@@ -273,6 +275,9 @@ struct SceneRun {
 pub fn run(kind: Kind) -> Result<()> {
     let scenes = specula_compare::suite::expand_scenes(&kind.scenes)?;
     let several = scenes.len() > 1;
+    if several {
+        kind.materials.check_in(&scenes)?;
+    }
     if several && kind.json.is_some() {
         anyhow::bail!(
             "--json writes one scene's document: with {} scenes give --report DIR (a report per \
@@ -346,7 +351,7 @@ pub fn run(kind: Kind) -> Result<()> {
 /// One scene's run: the analysis with the command line's options, its summary printed, its
 /// JSON and report folder written (in a folder of the scene's own with several).
 fn analyse(kind: &Kind, scene_name: &str, several: bool) -> Result<SceneRun> {
-    let scene = crate::load_scene(scene_name)?;
+    let scene = crate::load_scene(scene_name, &kind.materials, several)?;
     let mut analysis = (kind.info.create)();
     let mut eyes = EyePoints::default();
     for (name, value) in &kind.values {
