@@ -136,23 +136,7 @@ pub fn parse(shown: &str, text: &str, options: &StepOptions) -> Result<StepFile,
             .push_instance(instance)
             .map_err(|e| invalid(format!("{}: {e}", entities.describe(id))))?;
     }
-    let mut bodies = structure::bodies(&entities).map_err(&invalid)?;
-    if bodies.is_empty() {
-        return Err(invalid(format!(
-            "no solid, surface model or shell among its {} instances: nothing to draw",
-            entities.len()
-        )));
-    }
-    if let Some(wanted) = &options.body {
-        let names: Vec<String> = bodies.iter().map(|b| b.name.clone()).collect();
-        bodies.retain(|b| &b.name == wanted || b.aliases.contains(wanted));
-        if bodies.is_empty() {
-            return Err(invalid(format!(
-                "no body named '{wanted}'; its bodies are: {}",
-                names.join(", ")
-            )));
-        }
-    }
+    let bodies = chosen_bodies(&entities, options).map_err(&invalid)?;
     let largest_radius = checks::largest_radius(&entities);
     let largest_coordinate = checks::largest_coordinate(&entities);
     let mut file = StepFile {
@@ -229,6 +213,31 @@ pub fn parse(shown: &str, text: &str, options: &StepOptions) -> Result<StepFile,
     }
     file.warnings.extend(unplaced_assembly(shown, &entities));
     Ok(file)
+}
+
+/// The file's bodies, or the one `options.body` names.
+fn chosen_bodies(
+    entities: &Entities,
+    options: &StepOptions,
+) -> Result<Vec<structure::Body>, String> {
+    let mut bodies = structure::bodies(entities)?;
+    if bodies.is_empty() {
+        return Err(format!(
+            "no solid, surface model or shell among its {} instances: nothing to draw",
+            entities.len()
+        ));
+    }
+    if let Some(wanted) = &options.body {
+        let names: Vec<String> = bodies.iter().map(|b| b.name.clone()).collect();
+        bodies.retain(|b| &b.name == wanted || b.aliases.contains(wanted));
+        if bodies.is_empty() {
+            return Err(format!(
+                "no body named '{wanted}'; its bodies are: {}",
+                names.join(", ")
+            ));
+        }
+    }
+    Ok(bodies)
 }
 
 /// A warning where the file places parts in an assembly: specula draws each part in its own
