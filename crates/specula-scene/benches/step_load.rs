@@ -6,8 +6,8 @@
 //!   cargo bench -p specula-scene --bench step_load
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use glam::DVec3;
-use specula_scene::loaders::step::write::{NurbsPatch, RationalArc, StepWriter};
+use specula_scene::loaders::step::examples;
+use specula_scene::loaders::step::write::{NurbsPatch, StepWriter};
 use specula_scene::loaders::step::{self, StepOptions};
 use specula_scene::units::LengthUnit;
 
@@ -26,19 +26,8 @@ fn thousand_faces() -> String {
         for j in 0..ROWS {
             let v0 = -half_height + 2.0 * half_height * j as f64 / ROWS as f64;
             let v1 = -half_height + 2.0 * half_height * (j + 1) as f64 / ROWS as f64;
-            let latitude = RationalArc::new(v0, v1, 1);
-            let profile: Vec<_> = latitude
-                .points
-                .iter()
-                .map(|&(x, y, w)| (RADIUS_MM * x, RADIUS_MM * y, w))
-                .collect();
-            let mut patch: NurbsPatch =
-                NurbsPatch::revolved(&RationalArc::new(u0, u1, 1), &profile, latitude.knots, 2);
-            for row in &mut patch.control {
-                for (p, _) in row {
-                    *p = DVec3::new(p.y, p.z, p.x - RADIUS_MM);
-                }
-            }
+            let patch = NurbsPatch::sphere_region(RADIUS_MM, (u0, u1), 1, (v0, v1))
+                .map_points(examples::facing_z(RADIUS_MM));
             faces.push(writer.patch_face(&patch));
         }
     }

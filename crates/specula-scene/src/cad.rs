@@ -11,7 +11,7 @@
 use std::sync::Arc;
 
 use glam::{DMat4, DVec2, DVec3};
-use truck_stepio::r#in::alias::{ParametricSurface, ParametricSurface3D, Surface};
+use truck_stepio::r#in::alias::{ParametricSurface, Surface};
 
 /// One face of a STEP file's B-rep.
 #[derive(Clone, Debug)]
@@ -21,7 +21,7 @@ pub struct CadFace {
     /// The face's surface in file coordinates, with STEP's `same_sense` applied: its normal
     /// Su × Sv points to the face's outside unless `reversed`.
     pub surface: Surface,
-    /// An `ORIENTED_FACE` turned the face over: its outside is −Su × Sv.
+    /// An `ORIENTED_FACE` (or a reversed shell) turned the face over: its outside is −Su × Sv.
     pub reversed: bool,
 }
 
@@ -82,15 +82,5 @@ impl CadFaces {
         let p = self.faces[face].surface.subs(uv.x, uv.y);
         self.world_from_object
             .transform_point3(DVec3::new(p.x, p.y, p.z))
-    }
-
-    /// The unit world-space normal of `face` at (u, v), on the face's outside.
-    pub fn normal_world(&self, face: usize, uv: DVec2) -> DVec3 {
-        let face = &self.faces[face];
-        let n = face.surface.normal(uv.x, uv.y) * if face.reversed { -1.0 } else { 1.0 };
-        let normal_from_object = glam::DMat3::from_mat4(self.world_from_object)
-            .inverse()
-            .transpose();
-        (normal_from_object * DVec3::new(n.x, n.y, n.z)).normalize_or_zero()
     }
 }

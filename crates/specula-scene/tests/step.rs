@@ -14,16 +14,7 @@ use specula_scene::Mesh;
 /// A sphere's band from −45° to +45° of latitude over half a turn (two spans each way round),
 /// radius `r` about `centre`.
 fn sphere_patch(r: f64, centre: DVec3) -> NurbsPatch {
-    let latitude = RationalArc::new(-FRAC_PI_4, FRAC_PI_4, 1);
-    let profile: Vec<_> = latitude
-        .points
-        .iter()
-        .map(|&(x, y, w)| (r * x, r * y, w))
-        .collect();
-    shifted(
-        NurbsPatch::revolved(&RationalArc::new(0.0, PI, 2), &profile, latitude.knots, 2),
-        centre,
-    )
+    NurbsPatch::sphere_region(r, (0.0, PI), 2, (-FRAC_PI_4, FRAC_PI_4)).map_points(|p| p + centre)
 }
 
 /// Half a cylinder of radius `r` and height `h` on +Z.
@@ -50,24 +41,6 @@ fn torus_patch(big: f64, small: f64) -> NurbsPatch {
         tube.knots,
         2,
     )
-}
-
-fn shifted(mut patch: NurbsPatch, by: DVec3) -> NurbsPatch {
-    for row in &mut patch.control {
-        for (p, _) in row {
-            *p += by;
-        }
-    }
-    patch
-}
-
-fn scaled(mut patch: NurbsPatch, by: f64) -> NurbsPatch {
-    for row in &mut patch.control {
-        for (p, _) in row {
-            *p *= by;
-        }
-    }
-    patch
 }
 
 fn file_of(name: &str, patch: &NurbsPatch, unit: LengthUnit) -> String {
@@ -197,7 +170,11 @@ fn millimetres_metres_and_inches_give_the_same_world() {
         (LengthUnit::In, 1.0 / 25.4),
         (LengthUnit::Cm, 0.1),
     ] {
-        let other = load(&file_of("ball", &scaled(patch_mm.clone(), per_mm), unit));
+        let other = load(&file_of(
+            "ball",
+            &patch_mm.clone().map_points(|p| p * per_mm),
+            unit,
+        ));
         let a = in_mm.bounds();
         let b = other.bounds();
         assert!(

@@ -4,7 +4,7 @@
 
 use glam::DVec3;
 
-use super::write::{NurbsPatch, RationalArc, StepWriter};
+use super::write::{NurbsPatch, StepWriter};
 use crate::units::LengthUnit;
 
 /// A convex spherical door-mirror glass, radius of curvature 1,600 mm, 200 mm wide and 130 mm
@@ -19,31 +19,19 @@ pub fn door_mirror() -> String {
     let mut faces = Vec::new();
     for (u0, u1) in [(-half_width, 0.0), (0.0, half_width)] {
         for (v0, v1) in [(-half_height, 0.0), (0.0, half_height)] {
-            let latitude = RationalArc::new(v0, v1, 1);
-            let profile: Vec<_> = latitude
-                .points
-                .iter()
-                .map(|&(x, y, w)| (RADIUS_MM * x, RADIUS_MM * y, w))
-                .collect();
-            let patch =
-                NurbsPatch::revolved(&RationalArc::new(u0, u1, 1), &profile, latitude.knots, 2);
-            faces.push(writer.patch_face(&facing_z(patch, RADIUS_MM)));
+            let patch = NurbsPatch::sphere_region(RADIUS_MM, (u0, u1), 1, (v0, v1));
+            faces.push(writer.patch_face(&patch.map_points(facing_z(RADIUS_MM))));
         }
     }
     writer.body("door mirror glass", &faces, false);
     writer.finish(LengthUnit::Mm)
 }
 
-/// A patch about +X (as [`NurbsPatch::revolved`] makes it) turned to face +Z, its width along
-/// X and its height along Y (x' = y, y' = z, z' = x, a rotation), and moved back by
-/// `radius` so that its middle is at the origin.
-fn facing_z(mut patch: NurbsPatch, radius: f64) -> NurbsPatch {
-    for row in &mut patch.control {
-        for (p, _) in row {
-            *p = DVec3::new(p.y, p.z, p.x - radius);
-        }
-    }
-    patch
+/// Turns a sphere region about +X (as [`NurbsPatch::sphere_region`] makes it) to face +Z, its
+/// width along X and its height along Y (x' = y, y' = z, z' = x, a rotation), and moves it back
+/// by `radius` so that its middle is at the origin.
+pub fn facing_z(radius: f64) -> impl Fn(DVec3) -> DVec3 {
+    move |p| DVec3::new(p.y, p.z, p.x - radius)
 }
 
 /// A meniscus spectacle lens as a closed solid, in millimetres, light along +Z: front radius
@@ -87,26 +75,15 @@ pub fn spectacle_lens() -> String {
 fn lens_surface(radius: f64, vertex_z: f64) -> NurbsPatch {
     let half_width = (25.0 / radius).asin();
     let half_height = (18.0 / radius).asin();
-    let latitude = RationalArc::new(-half_height, half_height, 1);
-    let profile: Vec<_> = latitude
-        .points
-        .iter()
-        .map(|&(x, y, w)| (radius * x, radius * y, w))
-        .collect();
-    let mut patch = NurbsPatch::revolved(
-        &RationalArc::new(-half_width, half_width, 1),
-        &profile,
-        latitude.knots,
-        2,
-    );
     // About +X outwards → about −Z outwards with the centre on +Z (x' = −y, y' = z, z' = −x:
     // a rotation), then moved so that the vertex is at z = vertex_z.
-    for row in &mut patch.control {
-        for (p, _) in row {
-            *p = DVec3::new(-p.y, p.z, radius + vertex_z - p.x);
-        }
-    }
-    patch
+    NurbsPatch::sphere_region(
+        radius,
+        (-half_width, half_width),
+        1,
+        (-half_height, half_height),
+    )
+    .map_points(|p| DVec3::new(-p.y, p.z, radius + vertex_z - p.x))
 }
 
 /// A control point and its weight.

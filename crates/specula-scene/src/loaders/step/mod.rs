@@ -333,7 +333,7 @@ fn syntax_error(text: &str, message: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::loaders::step::write::{NurbsPatch, RationalArc, StepWriter};
+    use crate::loaders::step::write::{NurbsPatch, StepWriter};
     use glam::DVec2;
     use truck_stepio::r#in::alias::ParametricSurface;
 
@@ -341,14 +341,7 @@ mod tests {
     /// its stepped rim, every vertex on the surface, every kept triangle inside the loop.
     #[test]
     fn the_grid_fallback_covers_the_face_truck_tessellates() {
-        let latitude = RationalArc::new(-0.5, 0.5, 1);
-        let profile: Vec<_> = latitude
-            .points
-            .iter()
-            .map(|&(x, y, w)| (50.0 * x, 50.0 * y, w))
-            .collect();
-        let patch =
-            NurbsPatch::revolved(&RationalArc::new(0.0, 1.2, 1), &profile, latitude.knots, 2);
+        let patch = NurbsPatch::sphere_region(50.0, (0.0, 1.2), 1, (-0.5, 0.5));
         let mut writer = StepWriter::new();
         let face = writer.patch_face(&patch);
         writer.body("patch", &[face], false);

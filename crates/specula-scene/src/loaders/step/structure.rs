@@ -47,7 +47,7 @@ const SHELL_TYPES: [&str; 4] = [
 /// Every body of the file, in the order of their instance numbers.
 pub(super) fn bodies(entities: &Entities) -> Result<Vec<Body>, String> {
     let owners = representation_of_items(entities);
-    let products = product_of_representations(entities)?;
+    let products = product_of_representations(entities);
     let mut bodies = Vec::new();
     let mut held_shells = HashSet::new();
     let mut ids: Vec<u64> = BODY_TYPES
@@ -212,7 +212,7 @@ fn representation_of_items(entities: &Entities) -> HashMap<u64, u64> {
 /// For each representation, the name of the product whose shape it is: directly
 /// (`SHAPE_DEFINITION_REPRESENTATION`) or through a `SHAPE_REPRESENTATION_RELATIONSHIP`
 /// without a transformation (CAD systems put the B-rep beside the product's shape that way).
-fn product_of_representations(entities: &Entities) -> Result<HashMap<u64, String>, String> {
+fn product_of_representations(entities: &Entities) -> HashMap<u64, String> {
     let mut products = HashMap::new();
     for id in entities.of_type("SHAPE_DEFINITION_REPRESENTATION") {
         let params = entities
@@ -248,7 +248,7 @@ fn product_of_representations(entities: &Entities) -> Result<HashMap<u64, String
             _ => {}
         }
     }
-    Ok(products)
+    products
 }
 
 /// PRODUCT_DEFINITION_SHAPE → PRODUCT_DEFINITION → its formation → PRODUCT's name (or id).

@@ -51,6 +51,39 @@ impl NurbsPatch {
     }
 }
 
+impl NurbsPatch {
+    /// The region of a sphere of `radius` about the origin from longitude `longitude.0` to
+    /// `longitude.1` (radians about +Z from +X, in `longitude_spans` spans) and latitude
+    /// `latitude.0` to `latitude.1` (radians from the XY plane, one span), written exactly;
+    /// its Su × Sv points out of the sphere.
+    pub fn sphere_region(
+        radius: f64,
+        longitude: (f64, f64),
+        longitude_spans: usize,
+        latitude: (f64, f64),
+    ) -> NurbsPatch {
+        let arc = RationalArc::new(latitude.0, latitude.1, 1);
+        let profile: Vec<_> = arc
+            .points
+            .iter()
+            .map(|&(x, y, w)| (radius * x, radius * y, w))
+            .collect();
+        let turn = RationalArc::new(longitude.0, longitude.1, longitude_spans);
+        NurbsPatch::revolved(&turn, &profile, arc.knots, 2)
+    }
+
+    /// The patch with every control point moved by `to` (an affine map keeps a NURBS exact),
+    /// weights kept.
+    pub fn map_points(mut self, to: impl Fn(DVec3) -> DVec3) -> NurbsPatch {
+        for row in &mut self.control {
+            for (p, _) in row {
+                *p = to(*p);
+            }
+        }
+        self
+    }
+}
+
 /// A circular arc of unit radius as a rational quadratic B-spline: control points (x, y, w)
 /// in its plane and the full knot vector; one span per quarter turn or less.
 #[derive(Clone, Debug)]
