@@ -2,9 +2,9 @@
 //! the docs' option tables made from them, and one run of each analysis through the trait
 //! equal to the functions it wraps.
 
-use std::sync::atomic::AtomicBool;
+mod by_name;
 
-use specula_analyze::analysis::{self, EyePoints, RunContext, ANALYSES};
+use specula_analyze::analysis::{self, EyePoints, ANALYSES};
 use specula_analyze::regulation::{REGULATIONS, REGULATION_NAMES};
 use specula_params::ParamSet;
 use specula_trace::SceneAccel;
@@ -139,18 +139,7 @@ fn the_viewer_page_lists_every_analysis_step_key() {
 
 /// Runs analysis `name` with `options` on `scene` through the trait.
 fn run(name: &str, scene: &specula_scene::Scene, options: &[(&str, &str)]) -> String {
-    let mut analysis = analysis::by_name(name).unwrap();
-    let mut eyes = EyePoints::default();
-    for (option, value) in options {
-        analysis.set_option(&mut eyes, option, value).unwrap();
-    }
-    let accel = SceneAccel::new(scene);
-    let cancel = AtomicBool::new(false);
-    let context = RunContext {
-        progress: &|_| {},
-        cancel: &cancel,
-    };
-    analysis.run(scene, &accel, &eyes, &context).unwrap().json
+    by_name::run_json(name, scene, options)
 }
 
 #[test]

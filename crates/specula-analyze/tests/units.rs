@@ -4,13 +4,12 @@
 //! gives the same figures both ways; without `unit` the millimetre file is a 200 m mirror and
 //! the scene says so.
 
+mod by_name;
+
 use std::path::Path;
-use std::sync::atomic::AtomicBool;
 
 use serde_json::Value;
-use specula_analyze::analysis::{self, EyePoints, RunContext};
 use specula_scene::{Mesh, Scene};
-use specula_trace::SceneAccel;
 
 /// Figures from the two files may differ by the f32 rounding of a vertex read in millimetres and
 /// scaled to metres: a relative 1e-7 a coordinate, 0.1 µm at the mirror's metre from the origin.
@@ -70,8 +69,6 @@ fn load(path: &Path) -> Scene {
 /// The figures of `mirror-view` on `scene`'s door mirror, with the options of the example in
 /// the scene file's header.
 fn mirror_view_json(scene: &Scene) -> Value {
-    let mut analysis = analysis::by_name("mirror-view").unwrap();
-    let mut eyes = EyePoints::default();
     let options = [
         ("mirror", "door mirror"),
         ("regulation", "r46-iii"),
@@ -85,17 +82,7 @@ fn mirror_view_json(scene: &Scene) -> Value {
         ("vehicle", "rear wing"),
         ("vehicle", "mirror housing"),
     ];
-    for (option, value) in options {
-        analysis.set_option(&mut eyes, option, value).unwrap();
-    }
-    let accel = SceneAccel::new(scene);
-    let cancel = AtomicBool::new(false);
-    let context = RunContext {
-        progress: &|_| {},
-        cancel: &cancel,
-    };
-    let outcome = analysis.run(scene, &accel, &eyes, &context).unwrap();
-    serde_json::from_str(&outcome.json).unwrap()
+    serde_json::from_str(&by_name::run_json("mirror-view", scene, &options)).unwrap()
 }
 
 /// Every difference between two reports, by JSON path: numbers beyond both tolerances, and
